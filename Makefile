@@ -1,0 +1,40 @@
+# MillBlocks: `make test` and (from the web issue on) `make run` set everything up themselves.
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: test lint typecheck pytest system-deps regen-golden clean
+
+# The virtual environment is rebuilt whenever the dependency pins change.
+$(STAMP): pyproject.toml constraints.txt
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[dev]'
+	touch $(STAMP)
+
+# Debian packages the tests need (listed in debian-packages.txt); installed only when missing.
+system-deps:
+	bash scripts/install-system-deps
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+typecheck: $(STAMP)
+	$(VENV)/bin/mypy
+
+# pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
+pytest: $(STAMP) system-deps
+	$(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
+
+test: lint typecheck pytest
+
+# Rewrite the expected files of the golden tests from the current code (review the diff!).
+regen-golden: $(STAMP)
+	MILLBLOCKS_REGEN_GOLDEN=1 $(PY) -m pytest tests/test_golden.py -q
+
+clean:
+	rm -rf $(VENV) .mypy_cache .pytest_cache .ruff_cache .hypothesis

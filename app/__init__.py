@@ -1,0 +1,1 @@
+"""MillBlocks: conversational mill programming (the web app arrives with the editor issue)."""

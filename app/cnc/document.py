@@ -1,0 +1,272 @@
+"""The MillBlocks program document: versioned JSON with a lossless round trip.
+
+The format is described in docs/program-format.md. `dumps` writes a deterministic text
+(fixed key order, two-space indent, trailing newline); `loads` reads it back and raises
+DocumentError naming the block and field of anything malformed. Numbers are read as
+`Decimal`, so what was typed is what is kept.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import typing
+from decimal import Decimal
+from typing import Any
+
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    BoltCircle,
+    Circle,
+    Copy,
+    DataBlock0,
+    Frame,
+    Hole,
+    HoleOp,
+    MillArc,
+    MillLine,
+    MillQcir,
+    Pos,
+    Program,
+    Rep,
+    Tool,
+    field_label,
+)
+from app.cnc.units import Units
+
+FORMAT_NAME = "millblocks-program"
+FORMAT_VERSION = 1
+
+# The JSON `type` of each block class; hole blocks use their operation (DRILL/BORE/TAP).
+_TYPE_OF: dict[type[Block], str] = {
+    Pos: "POS",
+    BoltCircle: "BOLT_CIR",
+    MillLine: "MILL_STD",
+    MillQcir: "MILL_QCIR",
+    MillArc: "MILL_ARC",
+    ArcEnd: "MILL_ARC_END",
+    Circle: "CIRCLE",
+    Frame: "FRAME",
+    Rep: "REP",
+    Copy: "COPY",
+}
+_CLASS_OF: dict[str, type[Block]] = {name: cls for cls, name in _TYPE_OF.items()}
+for _op in HoleOp:
+    _CLASS_OF[_op.value] = Hole
+
+
+class DocumentError(ValueError):
+    """A malformed document; `where` names the block and field (e.g. `block 3, FEEDR Z`)."""
+
+    def __init__(self, where: str, message: str) -> None:
+        super().__init__(f"{where}: {message}" if where else message)
+        self.where = where
+        self.message = message
+
+
+# -- writing ------------------------------------------------------------------------------
+
+
+def to_dict(program: Program) -> dict[str, Any]:
+    """The document as plain JSON data."""
+    db0 = program.block0
+    return {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "name": program.name,
+        "part_number": program.part_number,
+        "units": program.units.value,
+        "notes": program.notes,
+        "data_block_0": {
+            "x_offset": _out(db0.x_offset),
+            "y_offset": _out(db0.y_offset),
+            "current_tool": db0.current_tool,
+            "milling": db0.milling.value,
+            "z_retract": _out(db0.z_retract),
+            "tools": [_fields_out(tool) for tool in db0.tools],
+        },
+        "blocks": [_block_out(block) for block in program.blocks],
+    }
+
+
+def dumps(program: Program) -> str:
+    """The document as deterministic JSON text."""
+    return json.dumps(to_dict(program), indent=2, ensure_ascii=False) + "\n"
+
+
+def _block_out(block: Block) -> dict[str, Any]:
+    kind = block.op.value if isinstance(block, Hole) else _TYPE_OF[type(block)]
+    data: dict[str, Any] = {"type": kind}
+    data.update(_fields_out(block))
+    if isinstance(block, Hole):
+        del data["op"]
+    return data
+
+
+def _fields_out(obj: Any) -> dict[str, Any]:
+    return {f.name: _out(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+
+
+def _out(value: Any) -> Any:
+    if isinstance(value, Decimal):
+        # Programs are typed to 0.001 in / 0.01 mm, far inside a float's 15 exact digits,
+        # so a float writes the typed value exactly and reads back to the same Decimal.
+        return int(value) if value == value.to_integral_value() else float(value)
+    if isinstance(value, enum.Enum):
+        return value.value
+    return value
+
+
+# -- reading ------------------------------------------------------------------------------
+
+
+def loads(text: str) -> Program:
+    """Read a document. Raises DocumentError (line and column for bad JSON)."""
+    try:
+        data = json.loads(text, parse_float=Decimal)
+    except json.JSONDecodeError as exc:
+        raise DocumentError(
+            f"line {exc.lineno}, column {exc.colno}", f"not valid JSON: {exc.msg}"
+        ) from None
+    return from_dict(data)
+
+
+def from_dict(data: Any) -> Program:
+    """Build a Program from JSON data. Raises DocumentError naming what is wrong."""
+    if not isinstance(data, dict):
+        raise DocumentError("", "a program document is a JSON object")
+    if data.get("format") != FORMAT_NAME:
+        raise DocumentError("format", f'expected "{FORMAT_NAME}", got {data.get("format")!r}')
+    if data.get("version") != FORMAT_VERSION:
+        raise DocumentError(
+            "version",
+            f"version {data.get('version')!r} is not supported; this MillBlocks reads version "
+            f"{FORMAT_VERSION}",
+        )
+    known = {"format", "version", "name", "part_number", "units", "notes"}
+    known |= {"data_block_0", "blocks"}
+    _no_unknown("program", data, known)
+    units = _enum(Units, data.get("units", "inch"), "program, units")
+    db0_data = data.get("data_block_0", {})
+    if not isinstance(db0_data, dict):
+        raise DocumentError("Data Block 0", "expected an object")
+    tools_data = db0_data.get("tools", [])
+    if not isinstance(tools_data, list):
+        raise DocumentError("Data Block 0, tools", "expected a list of tools")
+    tools = tuple(
+        _build(Tool, item, f"Data Block 0, tool entry {n}")
+        for n, item in enumerate(tools_data, start=1)
+    )
+    db0_fields = {k: v for k, v in db0_data.items() if k != "tools"}
+    block0 = _build(DataBlock0, db0_fields, "Data Block 0", tools=tools)
+    blocks_data = data.get("blocks", [])
+    if not isinstance(blocks_data, list):
+        raise DocumentError("blocks", "expected a list of data blocks")
+    blocks = tuple(_block_in(item, n) for n, item in enumerate(blocks_data, start=1))
+    return Program(
+        name=_text(data.get("name", ""), "program, name"),
+        part_number=_text(data.get("part_number", ""), "program, part_number"),
+        units=units,
+        notes=_text(data.get("notes", ""), "program, notes"),
+        block0=block0,
+        blocks=blocks,
+    )
+
+
+def _block_in(item: Any, number: int) -> Block:
+    where = f"block {number}"
+    if not isinstance(item, dict):
+        raise DocumentError(where, "expected an object")
+    kind = item.get("type")
+    cls = _CLASS_OF.get(kind) if isinstance(kind, str) else None
+    if cls is None:
+        allowed = ", ".join(sorted(_CLASS_OF))
+        raise DocumentError(f"{where}, type", f"unknown block type {kind!r}; allowed: {allowed}")
+    fields = {k: v for k, v in item.items() if k != "type"}
+    if cls is Hole:
+        return _build(Hole, fields, where, op=HoleOp(kind))
+    return _build(cls, fields, where)
+
+
+_T = typing.TypeVar("_T")
+
+
+def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:
+    """Construct dataclass `cls` from JSON fields, converting and checking each one."""
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    _no_unknown(where, data, set(fields) - set(fixed))
+    values: dict[str, Any] = dict(fixed)
+    for name, raw in data.items():
+        label = field_label(cls, name)  # type: ignore[arg-type]
+        values[name] = _convert(raw, hints[name], f"{where}, {label}")
+    missing = [
+        field_label(cls, f.name)  # type: ignore[arg-type]
+        for f in fields.values()
+        if f.name not in values
+        and f.default is dataclasses.MISSING
+        and f.default_factory is dataclasses.MISSING
+    ]
+    if missing:
+        raise DocumentError(f"{where}, {missing[0]}", "missing; this field has no default")
+    return cls(**values)
+
+
+def _convert(raw: Any, hint: Any, where: str) -> Any:
+    options = typing.get_args(hint) if typing.get_origin(hint) in (typing.Union, _UnionType) else ()
+    if options:
+        if raw is None and type(None) in options:
+            return None
+        hint = next(o for o in options if o is not type(None))
+    if hint is bool:
+        if not isinstance(raw, bool):
+            raise DocumentError(where, f"expected true or false, got {_show(raw)}")
+        return raw
+    if hint is int:
+        if isinstance(raw, bool) or not isinstance(raw, int):
+            raise DocumentError(where, f"expected a whole number, got {_show(raw)}")
+        return raw
+    if hint is Decimal:
+        if isinstance(raw, bool) or not isinstance(raw, int | Decimal):
+            raise DocumentError(where, f"expected a number, got {_show(raw)}")
+        value = Decimal(raw)
+        if not value.is_finite():
+            raise DocumentError(where, f"expected a finite number, got {_show(raw)}")
+        return value
+    if isinstance(hint, type) and issubclass(hint, enum.Enum):
+        return _enum(hint, raw, where)
+    if hint is str:
+        return _text(raw, where)
+    raise TypeError(f"no JSON conversion for {hint!r}")
+
+
+_UnionType = type(int | None)
+_E = typing.TypeVar("_E", bound=enum.Enum)
+
+
+def _enum(cls: type[_E], raw: Any, where: str) -> _E:
+    for member in cls:
+        if member.value == raw:
+            return member
+    allowed = ", ".join(repr(m.value) for m in cls)
+    raise DocumentError(where, f"{_show(raw)} is not one of {allowed}")
+
+
+def _text(raw: Any, where: str) -> str:
+    if not isinstance(raw, str):
+        raise DocumentError(where, f"expected text, got {_show(raw)}")
+    return raw
+
+
+def _no_unknown(where: str, data: dict[str, Any], known: set[str]) -> None:
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise DocumentError(
+            where, f"unknown field {unknown[0]!r}; allowed: {', '.join(sorted(known))}"
+        )
+
+
+def _show(raw: Any) -> str:
+    return json.dumps(raw, default=str)

@@ -1,0 +1,1 @@
+"""Emitters: pure functions of a Toolpath (and options) to bytes or text."""

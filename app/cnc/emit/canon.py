@@ -1,0 +1,82 @@
+"""The canonical text dump: one canonical call per line, in the manner of LinuxCNC's saicanon.
+
+Every line starts with the block number the call came from (0 for set-up). Lengths are in
+the program's units with fixed decimals (0.0001 in, 0.001 mm), feeds in units per minute
+with the same decimals, dwells in seconds to 0.01 s. A tag, when a move has one, follows
+after `;`. The dump is a pure function of the Toolpath: same program, same bytes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+from app.cnc.toolpath import (
+    ArcFeed,
+    Dwell,
+    Feed,
+    IndexTable,
+    Move,
+    ProgramEnd,
+    ProgramStop,
+    Rapid,
+    SpindleOff,
+    SpindleOn,
+    ToolChange,
+    Toolpath,
+)
+from app.cnc.units import format_length
+
+HEADER = "# MillBlocks canonical dump v1"
+
+
+def dump(toolpath: Toolpath) -> str:
+    """The whole tool path as canonical text (ends with a newline)."""
+    return "".join(iter_lines(toolpath))
+
+
+def iter_lines(toolpath: Toolpath) -> Iterator[str]:
+    """The dump line by line, so large tool paths can be streamed."""
+    u = toolpath.units
+
+    def length(nm: int) -> str:
+        return format_length(nm, u)
+
+    yield f"{HEADER}, units {u.value}\n"
+    x, y, z = toolpath.start
+    yield f"{0:>5} SET_ORIGIN_OFFSETS({length(toolpath.origin[0])}, {length(toolpath.origin[1])})\n"
+    yield f"{0:>5} START_POSITION({length(x)}, {length(y)}, {length(z)})\n"
+    yield f"{0:>5} CURRENT_TOOL({toolpath.initial_tool})\n"
+    for move in toolpath.moves:
+        yield f"{move.block:>5} {_call(move, length)}\n"
+
+
+def _call(move: Move, length: Callable[[int], str]) -> str:
+    if isinstance(move, Rapid):
+        text = f"STRAIGHT_TRAVERSE({length(move.x)}, {length(move.y)}, {length(move.z)})"
+    elif isinstance(move, Feed):
+        text = (
+            f"STRAIGHT_FEED({length(move.x)}, {length(move.y)}, {length(move.z)}, "
+            f"F {length(move.feed)})"
+        )
+    elif isinstance(move, ArcFeed):
+        text = (
+            f"ARC_FEED({length(move.x)}, {length(move.y)}, {length(move.z)}, "
+            f"C {length(move.cx)}, {length(move.cy)}, {'CW' if move.clockwise else 'CCW'}, "
+            f"F {length(move.feed)})"
+        )
+    elif isinstance(move, Dwell):
+        return f"DWELL({move.seconds:.2f})"
+    elif isinstance(move, SpindleOn):
+        return f"SPINDLE_{'CW' if move.clockwise else 'CCW'}({move.rpm})"
+    elif isinstance(move, SpindleOff):
+        return "SPINDLE_STOP()"
+    elif isinstance(move, ToolChange):
+        return f"TOOL_CHANGE({move.tool})"
+    elif isinstance(move, ProgramStop):
+        return f"PROGRAM_STOP({move.reason})"
+    elif isinstance(move, IndexTable):
+        return "INDEX_TABLE()"
+    else:
+        assert isinstance(move, ProgramEnd)
+        return "PROGRAM_END()"
+    return f"{text}  ; {move.tag}" if move.tag else text

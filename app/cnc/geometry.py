@@ -1,0 +1,46 @@
+"""Small exact-geometry helpers shared by validation and the interpreter (lengths in nm)."""
+
+from __future__ import annotations
+
+import math
+from decimal import Decimal
+
+from app.cnc.blocks import Mode
+from app.cnc.units import Units, round_nm, to_nm
+
+
+def resolve_xy(
+    x: Decimal, y: Decimal, mode: Mode, units: Units, reference: tuple[int, int]
+) -> tuple[int, int]:
+    """A block's X/Y as an absolute point in nm: typed values, or `reference` plus them (INC)."""
+    px, py = to_nm(x, units), to_nm(y, units)
+    if mode is Mode.INC:
+        return reference[0] + px, reference[1] + py
+    return px, py
+
+
+def distance(a: tuple[int, int], b: tuple[int, int]) -> float:
+    """Euclidean distance between two XY points, in nm."""
+    return math.hypot(b[0] - a[0], b[1] - a[1])
+
+
+def bolt_circle_points(
+    centre: tuple[int, int], radius: int, holes: int, angle_deg: Decimal
+) -> list[tuple[int, int]]:
+    """Hole centres of a bolt circle, in the order the control drills them.
+
+    The angle is measured clockwise (seen from above) from the lower vertical centre line
+    (seed 001 Fig. 3-3; DESIGN.md §3): angle 0 is straight below the centre, 90° to its left.
+    Hole k is at centre + R·(−sin θk, −cos θk) with θk = A + k·360°/N, taken clockwise.
+    Each coordinate is rounded once to the nanometre.
+    """
+    points = []
+    for k in range(holes):
+        theta = math.radians(float(angle_deg) + k * 360.0 / holes)
+        points.append(
+            (
+                centre[0] + round_nm(-radius * math.sin(theta)),
+                centre[1] + round_nm(-radius * math.cos(theta)),
+            )
+        )
+    return points

@@ -1,0 +1,90 @@
+"""Problems found in a program: where (block, field), how bad, what is wrong, which rule.
+
+Every validation rule has a stable `Rule` code, so the bad-input corpus can prove that each
+rule is exercised by at least one bad program.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+
+class Severity(enum.Enum):
+    """An error stops the program from running; a warning is worth the programmer's look."""
+
+    ERROR = "error"
+    WARNING = "warning"
+
+
+class Rule(enum.Enum):
+    """Each validation rule; the value is the code the bad-input corpus refers to."""
+
+    NAME = "name"
+    PART_NUMBER = "part-number"
+    MISSING = "missing"
+    RANGE = "range"
+    RESOLUTION = "resolution"
+    FEED_STEP = "feed-step"
+    TOOL_DUPLICATE = "tool-duplicate"
+    TOOL_NO_RPM = "tool-no-rpm"
+    TOOL_NO_DIAMETER = "tool-no-diameter"
+    TOOL_CHANGE_IN_SEQUENCE = "tool-change-in-sequence"
+    LOOP_WITHOUT_REP = "loop-without-rep"
+    REP_WITHOUT_LOOP = "rep-without-loop"
+    LOOP_TOO_DEEP = "loop-too-deep"
+    LOOP_QUALIFIER = "loop-qualifier"
+    ABS_IN_LOOP = "abs-in-loop"
+    STOP_QUALIFIER = "stop-qualifier"
+    BOLT_CIR_ORDER = "bolt-cir-order"
+    MILL_ORDER = "mill-order"
+    ARC_END_ORDER = "arc-end-order"
+    QCIR_CENTRE_LINES = "qcir-centre-lines"
+    ARC_RADIUS = "arc-radius"
+    ZERO_LENGTH = "zero-length"
+    PECKS_NOT_DRILL = "pecks-not-drill"
+    COMP_NOT_DRILL = "comp-not-drill"
+    COMP_WITHOUT_MILL = "comp-without-mill"
+    DEPTH_ORDER = "depth-order"
+    TWO_AXIS_MIXED = "two-axis-mixed"
+    COPY_1 = "copy-1"
+    COPY_2 = "copy-2"
+    COPY_3 = "copy-3"
+    COPY_4 = "copy-4"
+    COPY_RANGE_ORDER = "copy-range-order"
+    COPY_PENDING = "copy-pending"
+
+
+@dataclass(frozen=True, slots=True)
+class Problem:
+    """One problem. `block` is None for the program as a whole, 0 for Data Block 0.
+
+    `field` is the control's prompt for the field at fault (`FEEDR XY`), or None when the
+    problem belongs to the whole block.
+    """
+
+    block: int | None
+    field: str | None
+    severity: Severity
+    message: str
+    rule: Rule
+
+    @property
+    def location(self) -> str:
+        """`block 12, FEEDR XY`, `Data Block 0, TOOL 3 RPM`, or `program, NAME`."""
+        if self.block is None:
+            where = "program"
+        elif self.block == 0:
+            where = "Data Block 0"
+        else:
+            where = f"block {self.block}"
+        return f"{where}, {self.field}" if self.field else where
+
+    def __str__(self) -> str:
+        prefix = "warning: " if self.severity is Severity.WARNING else ""
+        return f"{self.location}: {prefix}{self.message}"
+
+
+def has_errors(problems: list[Problem]) -> bool:
+    """True when any problem is an error."""
+    return any(p.severity is Severity.ERROR for p in problems)

@@ -1,0 +1,137 @@
+"""How the flat list of data blocks groups into the units the control runs.
+
+A program is a sequence of nodes: a single block, a bolt circle (centre block + BOLT CIR),
+a mill sequence (the DRILL that starts it + its mill blocks), or a LOOP…REP pattern whose
+body is itself a sequence of nodes (nesting up to four deep). The grouping assumes a
+program that validation accepted; `validate` reports what would make it ambiguous.
+Block indexes here are 0-based positions in `Program.blocks`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.cnc.blocks import (
+    MILL_CONTOUR_CLASSES,
+    MILL_ROUTINE_CLASSES,
+    ArcEnd,
+    Block,
+    BoltCircle,
+    Copy,
+    Hole,
+    HoleOp,
+    Rep,
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Single:
+    """One block run on its own (POS, a hole)."""
+
+    index: int
+
+
+@dataclass(frozen=True, slots=True)
+class BoltPattern:
+    """A standard hole block giving the centre and parameters, and its BOLT CIR block."""
+
+    centre: int
+    bolt: int
+
+
+@dataclass(frozen=True, slots=True)
+class MillSequence:
+    """The DRILL that sets the depth and the mill blocks cut at that depth."""
+
+    drill: int
+    mills: tuple[int, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class LoopPattern:
+    """LOOP … REP: `body` starts with the LOOP block's own node; `rep` is the REP index."""
+
+    body: tuple[Node, ...]
+    rep: int
+
+
+Node = Single | BoltPattern | MillSequence | LoopPattern
+
+
+def is_mill(block: Block) -> bool:
+    """True for a MILL line, quarter circle, arc (either block), circle or frame."""
+    return isinstance(block, MILL_CONTOUR_CLASSES + MILL_ROUTINE_CLASSES)
+
+
+def starts_mill_sequence(blocks: tuple[Block, ...], index: int) -> bool:
+    """True when block `index` is a DRILL followed by a mill block (it stays at Z DN)."""
+    block = blocks[index]
+    return (
+        isinstance(block, Hole)
+        and block.op is HoleOp.DRILL
+        and index + 1 < len(blocks)
+        and is_mill(blocks[index + 1])
+    )
+
+
+def mill_sequence_end(blocks: tuple[Block, ...], drill: int) -> int:
+    """The index after the last mill block of the sequence started at `drill`.
+
+    A sequence is either one CIRCLE/FRAME routine or a run of line, quarter-circle and arc
+    blocks; the head retracts at its end.
+    """
+    first = drill + 1
+    if isinstance(blocks[first], MILL_ROUTINE_CLASSES):
+        return first + 1
+    end = first
+    while end < len(blocks) and isinstance(blocks[end], MILL_CONTOUR_CLASSES):
+        end += 1
+    return end
+
+
+def build_nodes(blocks: tuple[Block, ...]) -> tuple[Node, ...]:
+    """Group a validated program's blocks into nodes. COPY blocks are not motion: skipped."""
+    nodes, index = _sequence(blocks, 0, inside_loop=False)
+    if index != len(blocks):
+        raise ValueError(f"block {index + 1}: REP without LOOP (validate first)")
+    return nodes
+
+
+def _sequence(
+    blocks: tuple[Block, ...], index: int, *, inside_loop: bool
+) -> tuple[tuple[Node, ...], int]:
+    nodes: list[Node] = []
+    while index < len(blocks):
+        block = blocks[index]
+        if isinstance(block, Rep):
+            if inside_loop:
+                return tuple(nodes), index
+            raise ValueError(f"block {index + 1}: REP without LOOP (validate first)")
+        if block.loop:
+            head, after_head = _node(blocks, index)
+            body, rep = _sequence(blocks, after_head, inside_loop=True)
+            if rep >= len(blocks):
+                raise ValueError(f"block {index + 1}: LOOP without REP (validate first)")
+            nodes.append(LoopPattern(body=(head, *body), rep=rep))
+            index = rep + 1
+            continue
+        if isinstance(block, Copy):
+            index += 1
+            continue
+        node, index = _node(blocks, index)
+        nodes.append(node)
+    return tuple(nodes), index
+
+
+def _node(blocks: tuple[Block, ...], index: int) -> tuple[Node, int]:
+    """The node that starts at `index` (ignoring a LOOP qualifier on it) and the next index."""
+    block = blocks[index]
+    nxt = blocks[index + 1] if index + 1 < len(blocks) else None
+    if isinstance(block, Hole) and isinstance(nxt, BoltCircle) and not nxt.loop:
+        return BoltPattern(centre=index, bolt=index + 1), index + 2
+    if starts_mill_sequence(blocks, index):
+        end = mill_sequence_end(blocks, index)
+        return MillSequence(drill=index, mills=tuple(range(index + 1, end))), end
+    if isinstance(block, ArcEnd):
+        raise ValueError(f"block {index + 1}: XY-END without its XY-CENT (validate first)")
+    return Single(index=index), index + 1

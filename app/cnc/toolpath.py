@@ -1,0 +1,164 @@
+"""The Toolpath: the canonical moves every output is made from.
+
+In the manner of LinuxCNC's canonical interface (canon.hh), a small vocabulary that every
+consumer understands. Conventions, fixed for all moves:
+
+- Lengths are integer nanometres. X and Y are part coordinates (part zero is X0 Y0; the
+  Data Block 0 offsets travel separately, in `Toolpath.origin`). Z is measured from the
+  calibrated zero of the tool in the spindle (seed 001 §3.4.5.1 "Z DN"), positive up.
+- A motion's coordinates are its end point; it starts where the previous motion ended
+  (the first at `Toolpath.start`).
+- Feeds are integer nanometres per minute. Rapids carry no feed: the control's rapid rate
+  (250 ipm on the data-block control) is a property of the machine.
+- `block` is the data block a move came from (0 for set-up, before block 1).
+- `tag` says what a move is for where consumers care: `peck-reentry`, `retract`,
+  `lead-in`, `lead-out`; empty otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from decimal import Decimal
+
+from app.cnc.units import Units
+
+Point = tuple[int, int, int]
+
+
+@dataclass(frozen=True, slots=True)
+class Rapid:
+    """STRAIGHT_TRAVERSE: a straight move at the rapid rate to (x, y, z)."""
+
+    block: int
+    x: int
+    y: int
+    z: int
+    tag: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Feed:
+    """STRAIGHT_FEED: a straight move at `feed` nm/min to (x, y, z)."""
+
+    block: int
+    x: int
+    y: int
+    z: int
+    feed: int
+    tag: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class ArcFeed:
+    """ARC_FEED: a circular move in the XY plane at constant Z to (x, y).
+
+    The centre is (cx, cy). `clockwise` is seen from above (+Z looking down). An arc whose
+    end equals its start is a full circle.
+    """
+
+    block: int
+    x: int
+    y: int
+    z: int
+    cx: int
+    cy: int
+    clockwise: bool
+    feed: int
+    tag: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Dwell:
+    """DWELL: the spindle stays where it is for `seconds`."""
+
+    block: int
+    seconds: Decimal
+
+
+@dataclass(frozen=True, slots=True)
+class SpindleOn:
+    """Start the spindle at `rpm` (always positive); `clockwise` seen from above."""
+
+    block: int
+    clockwise: bool
+    rpm: int
+
+
+@dataclass(frozen=True, slots=True)
+class SpindleOff:
+    """Stop the spindle."""
+
+    block: int
+
+
+@dataclass(frozen=True, slots=True)
+class ToolChange:
+    """Put tool `tool` in the spindle (the head is already at its retract height)."""
+
+    block: int
+    tool: int
+
+
+@dataclass(frozen=True, slots=True)
+class ProgramStop:
+    """The control stops and waits for the operator (`reason` says why)."""
+
+    block: int
+    reason: str
+
+
+@dataclass(frozen=True, slots=True)
+class IndexTable:
+    """Signal the rotary fixture to index to its next position (POS INDEX)."""
+
+    block: int
+
+
+@dataclass(frozen=True, slots=True)
+class ProgramEnd:
+    """End of program: head retracted, spindle stopped."""
+
+    block: int
+
+
+Motion = Rapid | Feed | ArcFeed
+Move = (
+    Rapid
+    | Feed
+    | ArcFeed
+    | Dwell
+    | SpindleOn
+    | SpindleOff
+    | ToolChange
+    | ProgramStop
+    | IndexTable
+    | ProgramEnd
+)
+MOTION_TYPES = (Rapid, Feed, ArcFeed)
+
+
+@dataclass(frozen=True, slots=True)
+class ToolInfo:
+    """What the tool path knows of a tool: diameter and calibration in nm, signed RPM."""
+
+    number: int
+    diameter: int | None
+    rpm: int | None
+    tcal: int | None
+
+
+@dataclass(slots=True)
+class Toolpath:
+    """The interpreter's result.
+
+    `units` is the program's unit, used for printing only. `origin` is the Data Block 0
+    offset of part zero from table zero, in nm. `start` is where the tool is before the first
+    move: over part zero at the first retract height (Z RET above tool zero).
+    """
+
+    units: Units
+    origin: tuple[int, int]
+    start: Point
+    initial_tool: int
+    tools: dict[int, ToolInfo]
+    moves: list[Move] = field(default_factory=list)

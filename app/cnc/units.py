@@ -1,0 +1,87 @@
+"""Lengths, feeds and their exact internal representation.
+
+Programs are typed in inches (to 0.001 in) or millimetres (to 0.01 mm). Loops and copies add
+offsets thousands of times, so the tool path keeps every length as an integer number of
+nanometres: 0.0001 in is exactly 2 540 nm and 0.01 mm exactly 10 000 nm, so both units and
+every resolution a target uses are represented without error (DESIGN.md §2). Geometry that
+needs trigonometry is computed in floats and rounded once, with `round_nm`.
+
+Feeds are integer nanometres per minute for the same reason (0.1 ipm = 2 540 000 nm/min).
+"""
+
+from __future__ import annotations
+
+import enum
+from decimal import Decimal
+from fractions import Fraction
+
+NM_PER_INCH = 25_400_000
+NM_PER_MM = 1_000_000
+
+
+class Units(enum.Enum):
+    """The unit a block's dimensions and feeds are typed in."""
+
+    INCH = "inch"
+    MM = "mm"
+
+    @property
+    def nm(self) -> int:
+        """Nanometres in one unit."""
+        return NM_PER_INCH if self is Units.INCH else NM_PER_MM
+
+    @property
+    def resolution(self) -> Decimal:
+        """The smallest step a dimension is programmed in (seed 001 §3.4.5.1)."""
+        return Decimal("0.001") if self is Units.INCH else Decimal("0.01")
+
+    @property
+    def symbol(self) -> str:
+        """Short name used in messages: `in` or `mm`."""
+        return "in" if self is Units.INCH else "mm"
+
+    @property
+    def feed_symbol(self) -> str:
+        """Feed unit used in messages: `ipm` or `mm/min`."""
+        return "ipm" if self is Units.INCH else "mm/min"
+
+    @property
+    def dump_places(self) -> int:
+        """Decimal places used when printing lengths of this unit (0.0001 in, 0.001 mm)."""
+        return 4 if self is Units.INCH else 3
+
+
+def to_nm(value: Decimal | int, units: Units) -> int:
+    """Convert a typed length to nanometres, rounding half-even to the nearest nanometre.
+
+    Values at the programming resolution (0.001 in, 0.01 mm) convert exactly.
+    """
+    exact = Decimal(value) * units.nm
+    return int(exact.to_integral_value())
+
+
+def round_nm(value: float | Fraction) -> int:
+    """Round a computed length (floats from trigonometry, or exact fractions) to nanometres."""
+    return round(value)
+
+
+def from_nm(nm: int, units: Units) -> Fraction:
+    """A length in nanometres as an exact fraction of `units`."""
+    return Fraction(nm, units.nm)
+
+
+def format_length(nm: int, units: Units, places: int | None = None) -> str:
+    """Format nanometres in `units` with fixed decimals, rounding half-even.
+
+    `places` defaults to the unit's dump resolution (4 for inches, 3 for mm).
+    """
+    digits = units.dump_places if places is None else places
+    value = Decimal(nm) / Decimal(units.nm)
+    quantum = Decimal(1).scaleb(-digits)
+    text = f"{value.quantize(quantum):f}"
+    return "0." + "0" * digits if text.lstrip("-") == "0." + "0" * digits else text
+
+
+def format_decimal(value: Decimal) -> str:
+    """A typed value as the machinist typed it, without exponent notation."""
+    return f"{value:f}"

@@ -1,0 +1,721 @@
+"""Validation: every problem in a program at once, each tied to its block and field.
+
+Validation is separate from interpretation (LinuxCNC's read/check/convert split): the
+interpreter assumes a program this module accepted without errors. Messages use the
+control's words where seed 001 has them (COPY 1-4, the emergency stop for a tool without
+RPM, the divot of an arc whose end is off its radius).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+from decimal import Decimal
+
+from app.cnc import limits
+from app.cnc.blocks import (
+    LOOP_CAPABLE_CLASSES,
+    MAX_TOOLS,
+    MILL_CONTOUR_CLASSES,
+    MILL_ROUTINE_CLASSES,
+    ArcEnd,
+    Block,
+    BoltCircle,
+    Circle,
+    Comp,
+    Copy,
+    DataBlock0,
+    Frame,
+    Hole,
+    HoleOp,
+    MillArc,
+    MillLine,
+    MillQcir,
+    Mode,
+    Pos,
+    Program,
+    Rep,
+    field_label,
+)
+from app.cnc.geometry import bolt_circle_points, distance, resolve_xy
+from app.cnc.problems import Problem, Rule, Severity
+from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
+from app.cnc.units import Units, format_decimal, to_nm
+
+ERROR = Severity.ERROR
+WARNING = Severity.WARNING
+
+# Fields holding signed lengths, and fields holding lengths that must be positive.
+SIGNED_LENGTHS = ("x", "y", "z_up", "z_dn", "xof", "yof")
+POSITIVE_LENGTHS = ("radius", "xl", "yw")
+COUNTS = {
+    "tool": (1, MAX_TOOLS),
+    "pecks": (1, limits.MAX_PECKS),
+    "holes": (1, limits.MAX_BOLT_HOLES),
+    "nx": (0, limits.MAX_REPEAT),
+    "ny": (0, limits.MAX_REPEAT),
+}
+
+
+def validate(program: Program) -> list[Problem]:
+    """Every problem of `program`, in block order (program and Data Block 0 first)."""
+    checker = _Checker(program)
+    checker.run()
+    return checker.problems
+
+
+class _Checker:
+    def __init__(self, program: Program) -> None:
+        self.program = program
+        self.blocks = program.blocks
+        self.problems: list[Problem] = []
+
+    def add(
+        self, block: int | None, field: str | None, severity: Severity, rule: Rule, message: str
+    ) -> None:
+        self.problems.append(Problem(block, field, severity, message, rule))
+
+    def run(self) -> None:
+        self.check_program()
+        self.check_block0(self.program.block0, self.program.units)
+        for number, block in enumerate(self.blocks, start=1):
+            self.check_fields(number, block)
+            self.check_kind_rules(number, block)
+        self.check_loops()
+        self.check_order()
+        self.check_tools()
+        self.check_geometry()
+        self.check_copy()
+        self.check_two_axis()
+        self.problems.sort(key=lambda p: -1 if p.block is None else p.block)
+
+    # -- program and Data Block 0 -------------------------------------------------------
+
+    def check_program(self) -> None:
+        if not self.program.name.strip():
+            self.add(None, "NAME", ERROR, Rule.NAME, "missing; every program needs a name")
+        part = self.program.part_number
+        if part and not (part.isdigit() and part.isascii() and len(part) <= 8):
+            self.add(
+                None,
+                "PART NO",
+                ERROR,
+                Rule.PART_NUMBER,
+                f"'{part}' is not a part number; allowed up to 8 digits",
+            )
+
+    def check_block0(self, db0: DataBlock0, units: Units) -> None:
+        for name in ("x_offset", "y_offset"):
+            self.check_length(0, field_label(db0, name), getattr(db0, name), units)
+        self.check_length(0, "Z RET", db0.z_retract, units, minimum=Decimal(0))
+        if not 0 <= db0.current_tool <= 24:
+            self.add(
+                0,
+                "CUR-TOOL",
+                ERROR,
+                Rule.RANGE,
+                f"{db0.current_tool} is outside the allowed range 0 to 24 (0 = no tool)",
+            )
+        seen: set[int] = set()
+        for tool in db0.tools:
+            where = f"TOOL {tool.number}"
+            if not 1 <= tool.number <= 24:
+                self.add(
+                    0,
+                    "TOOL #",
+                    ERROR,
+                    Rule.RANGE,
+                    f"{tool.number} is outside the allowed range 1 to 24",
+                )
+            if tool.number in seen:
+                self.add(
+                    0,
+                    where,
+                    ERROR,
+                    Rule.TOOL_DUPLICATE,
+                    f"tool {tool.number} is listed twice; each tool number once",
+                )
+            seen.add(tool.number)
+            if tool.diameter is not None:
+                self.check_length(0, f"{where} DIA", tool.diameter, units, positive=True)
+            if tool.tcal is not None:
+                self.check_length(0, f"{where} TCAL", tool.tcal, units)
+            if tool.rpm is not None and not limits.MIN_RPM <= abs(tool.rpm) <= limits.MAX_RPM:
+                self.add(
+                    0,
+                    f"{where} RPM",
+                    ERROR,
+                    Rule.RANGE,
+                    f"{tool.rpm} is outside the spindle's range; allowed 60 to 4000 "
+                    "(60-500 low gear, 500-4000 high gear), negative for reverse",
+                )
+
+    # -- fields -------------------------------------------------------------------------
+
+    def check_fields(self, number: int, block: Block) -> None:
+        units = block.units
+        for f in dataclasses.fields(block):
+            value = getattr(block, f.name)
+            if value is None or isinstance(value, bool):
+                continue
+            label = str(f.metadata.get("label", f.name))
+            if f.name in SIGNED_LENGTHS:
+                self.check_length(number, label, value, units)
+            elif f.name in POSITIVE_LENGTHS:
+                self.check_length(number, label, value, units, positive=True)
+            elif f.name == "corner_radius":
+                self.check_length(number, label, value, units, minimum=Decimal(0))
+            elif f.name == "feed_z":
+                self.check_feed(number, label, value, limits.FEED_Z[units], units)
+            elif f.name == "feed_xy":
+                self.check_feed(number, label, value, limits.FEED_XY[units], units)
+            elif f.name == "angle":
+                self.check_angle(number, label, value)
+            elif f.name in COUNTS:
+                low, high = COUNTS[f.name]
+                if not low <= value <= high:
+                    self.add(
+                        number,
+                        label,
+                        ERROR,
+                        Rule.RANGE,
+                        f"{value} is outside the allowed range {low} to {high}",
+                    )
+
+    def check_length(
+        self,
+        block: int,
+        label: str,
+        value: Decimal,
+        units: Units,
+        *,
+        positive: bool = False,
+        minimum: Decimal | None = None,
+    ) -> None:
+        shown = f"{format_decimal(value)} {units.symbol}"
+        high = limits.MAX_DIMENSION[units]
+        low = minimum if minimum is not None else -high
+        if positive and value <= 0:
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RANGE,
+                f"{shown} must be more than 0; allowed up to {high} {units.symbol}",
+            )
+        elif not low <= value <= high:
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RANGE,
+                f"{shown} is outside the allowed range {low} to {high} {units.symbol}",
+            )
+        if value != value.quantize(units.resolution):
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RESOLUTION,
+                f"{shown} has too many decimals; "
+                f"dimensions go to {units.resolution} {units.symbol}",
+            )
+
+    def check_feed(
+        self, block: int, label: str, value: Decimal, feed: limits.FeedLimits, units: Units
+    ) -> None:
+        shown = f"{format_decimal(value)} {units.feed_symbol}"
+        if not feed.low <= value <= feed.high:
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RANGE,
+                f"{shown} is outside the allowed range {feed.low} to {feed.high} "
+                f"{units.feed_symbol}",
+            )
+        if value % feed.step != 0:
+            if units is Units.MM:
+                message = f"{shown} is not a step of 2; metric feeds go in steps of 2 mm/min"
+                self.add(block, label, ERROR, Rule.FEED_STEP, message)
+            else:
+                message = f"{shown} has too many decimals; feeds go to 0.1 ipm"
+                self.add(block, label, ERROR, Rule.RESOLUTION, message)
+
+    def check_angle(self, block: int, label: str, value: Decimal) -> None:
+        if not 0 <= value <= limits.MAX_ANGLE:
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RANGE,
+                f"{format_decimal(value)}° is outside the allowed range 0 to 359.99°",
+            )
+        if value != value.quantize(limits.ANGLE_RESOLUTION):
+            self.add(
+                block,
+                label,
+                ERROR,
+                Rule.RESOLUTION,
+                f"{format_decimal(value)}° has too many decimals; angles go to 0.01°",
+            )
+
+    # -- per-block rules ----------------------------------------------------------------
+
+    def check_kind_rules(self, number: int, block: Block) -> None:
+        if block.loop and not isinstance(block, LOOP_CAPABLE_CLASSES):
+            self.add(
+                number,
+                "LOOP",
+                ERROR,
+                Rule.LOOP_QUALIFIER,
+                f"a {block.type_name} block cannot carry LOOP; "
+                "a LOOP is a POS, DRILL, BORE or TAP block",
+            )
+        if block.stop and isinstance(block, Rep | Copy | MillArc):
+            self.add(
+                number,
+                "STOP",
+                ERROR,
+                Rule.STOP_QUALIFIER,
+                f"a {block.type_name} block cannot carry STOP",
+            )
+        if isinstance(block, Rep) and block.mode is Mode.ABS:
+            self.add(
+                number,
+                "ABS/INC",
+                ERROR,
+                Rule.ABS_IN_LOOP,
+                "REP increments are always incremental (INC)",
+            )
+        if isinstance(block, Hole):
+            self.check_hole(number, block)
+
+    def check_hole(self, number: int, hole: Hole) -> None:
+        op = hole.op.value
+        if hole.pecks != 1 and hole.op is not HoleOp.DRILL:
+            self.add(
+                number,
+                "# PECK",
+                ERROR,
+                Rule.PECKS_NOT_DRILL,
+                f"{hole.pecks} pecks on a {op} block; no pecks are allowed in {op} (only DRILL)",
+            )
+        if hole.comp is not Comp.NONE and hole.op is not HoleOp.DRILL:
+            self.add(
+                number,
+                "CUTTER COMP",
+                ERROR,
+                Rule.COMP_NOT_DRILL,
+                f"cutter compensation on a {op} block; only the DRILL that starts a mill "
+                "sequence carries CUT RT or CUT LT",
+            )
+        depth = (hole.z_up, hole.z_dn, hole.feed_z)
+        if any(v is not None for v in depth) and any(v is None for v in depth):
+            missing = [
+                label
+                for label, value in zip(("Z UP", "Z DN", "FEEDR Z"), depth, strict=True)
+                if value is None
+            ]
+            self.add(
+                number,
+                missing[0],
+                ERROR,
+                Rule.MISSING,
+                f"missing; a {op} with depths needs Z UP, Z DN and FEEDR Z "
+                "(leave all three empty for a 2-axis program)",
+            )
+        if hole.z_up is not None and hole.z_dn is not None and hole.z_dn >= hole.z_up:
+            u = hole.units.symbol
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(hole.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(hole.z_up)} {u}; the tool feeds down from Z UP to Z DN",
+            )
+
+    # -- LOOP / REP ---------------------------------------------------------------------
+
+    def check_loops(self) -> None:
+        open_loops: list[int] = []
+        for number, block in enumerate(self.blocks, start=1):
+            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+                if len(open_loops) == limits.MAX_LOOP_DEPTH:
+                    self.add(
+                        number,
+                        "LOOP",
+                        ERROR,
+                        Rule.LOOP_TOO_DEEP,
+                        "a fifth LOOP inside four open ones; LOOP sequences nest at most 4 deep",
+                    )
+                open_loops.append(number)
+            if open_loops and block.mode is Mode.ABS and not isinstance(block, Copy):
+                self.add(
+                    number,
+                    "ABS/INC",
+                    ERROR,
+                    Rule.ABS_IN_LOOP,
+                    f"ABS block inside the LOOP sequence of block {open_loops[0]}; "
+                    "blocks in a LOOP sequence are incremental (INC)",
+                )
+            if isinstance(block, Rep):
+                if open_loops:
+                    open_loops.pop()
+                else:
+                    self.add(
+                        number,
+                        None,
+                        ERROR,
+                        Rule.REP_WITHOUT_LOOP,
+                        "REP without an open LOOP before it; REP closes an unmatched LOOP block",
+                    )
+        for number in open_loops:
+            self.add(
+                number,
+                "LOOP",
+                ERROR,
+                Rule.LOOP_WITHOUT_REP,
+                "LOOP without a matching REP; add a REP block to close the pattern",
+            )
+
+    # -- block order ----------------------------------------------------------------------
+
+    def check_order(self) -> None:
+        blocks = self.blocks
+        for index, block in enumerate(blocks):
+            number = index + 1
+            previous = blocks[index - 1] if index else None
+            if isinstance(block, BoltCircle):
+                ok = (
+                    isinstance(previous, Hole)
+                    and previous.op is block.op
+                    and not starts_mill_sequence(blocks, index - 1)
+                )
+                if not ok:
+                    before = previous.title if previous else "nothing"
+                    self.add(
+                        number,
+                        None,
+                        ERROR,
+                        Rule.BOLT_CIR_ORDER,
+                        f"BOLT CIR {block.op.value} must follow a standard {block.op.value} "
+                        f"block, which gives the centre; block {index} is {before}",
+                    )
+            elif isinstance(block, ArcEnd):
+                if not isinstance(previous, MillArc):
+                    self.add(
+                        number,
+                        None,
+                        ERROR,
+                        Rule.ARC_END_ORDER,
+                        "XY-END without its XY-CENT block just before it",
+                    )
+            elif isinstance(block, MillArc):
+                nxt = blocks[index + 1] if index + 1 < len(blocks) else None
+                if not isinstance(nxt, ArcEnd):
+                    self.add(
+                        number,
+                        None,
+                        ERROR,
+                        Rule.ARC_END_ORDER,
+                        "ARC XY-CENT without its XY-END block just after it",
+                    )
+            if is_mill(block) and not isinstance(block, ArcEnd):
+                self.check_mill_order(index, block, previous)
+            if (
+                isinstance(block, Hole)
+                and block.comp is not Comp.NONE
+                and block.op is HoleOp.DRILL
+                and not (index + 1 < len(blocks) and is_mill(blocks[index + 1]))
+            ):
+                self.add(
+                    number,
+                    "CUTTER COMP",
+                    WARNING,
+                    Rule.COMP_WITHOUT_MILL,
+                    "cutter compensation on a DRILL that no mill block follows; it has no effect",
+                )
+            if block.stop and self.inside_mill_sequence(index) and is_mill(blocks[index + 1]):
+                self.add(
+                    number,
+                    "STOP",
+                    ERROR,
+                    Rule.STOP_QUALIFIER,
+                    "STOP inside a mill sequence; the head retracts at a STOP, so put it on "
+                    "the sequence's last block",
+                )
+
+    def check_mill_order(self, index: int, block: Block, previous: Block | None) -> None:
+        number = index + 1
+        if isinstance(block, MILL_ROUTINE_CLASSES):
+            if not (isinstance(previous, Hole) and previous.op is HoleOp.DRILL):
+                self.add(
+                    number,
+                    None,
+                    ERROR,
+                    Rule.MILL_ORDER,
+                    f"{block.type_name} must follow the DRILL block that gives its "
+                    + ("centre" if isinstance(block, Circle) else "lower left corner"),
+                )
+            return
+        ok = (isinstance(previous, Hole) and previous.op is HoleOp.DRILL) or isinstance(
+            previous, MILL_CONTOUR_CLASSES
+        )
+        if not ok:
+            before = previous.title if previous else "nothing"
+            self.add(
+                number,
+                None,
+                ERROR,
+                Rule.MILL_ORDER,
+                f"{block.type_name} must follow a DRILL block (which sets the depth) or "
+                f"another mill block; block {index} is {before}",
+            )
+
+    def inside_mill_sequence(self, index: int) -> bool:
+        """True when block `index` is a DRILL starting a sequence or one of its mill blocks."""
+        return index + 1 < len(self.blocks) and (
+            starts_mill_sequence(self.blocks, index) or is_mill(self.blocks[index])
+        )
+
+    # -- tools ----------------------------------------------------------------------------
+
+    def check_tools(self) -> None:
+        db0 = self.program.block0
+        for number, block in enumerate(self.blocks, start=1):
+            if isinstance(block, Copy):
+                continue
+            tool_number = block.tool_number
+            if tool_number is None or not 1 <= tool_number <= 24:
+                continue
+            tool = db0.tool(tool_number)
+            if tool is None or tool.rpm is None:
+                why = "is not in the tool table" if tool is None else "has no RPM"
+                self.add(
+                    number,
+                    "TOOL #",
+                    ERROR,
+                    Rule.TOOL_NO_RPM,
+                    f"tool {tool_number} {why} in Data Block 0; the control makes an "
+                    "emergency stop when a tool without RPM is used",
+                )
+            needs_diameter = isinstance(block, Circle | Frame) or (
+                isinstance(block, Hole)
+                and block.comp is not Comp.NONE
+                and starts_mill_sequence(self.blocks, number - 1)
+            )
+            if needs_diameter and (tool is None or tool.diameter is None):
+                self.add(
+                    number,
+                    "TOOL #",
+                    ERROR,
+                    Rule.TOOL_NO_DIAMETER,
+                    f"tool {tool_number} has no DIA in Data Block 0; cutter-compensated "
+                    "milling needs the cutter's measured diameter",
+                )
+        for first, last, what in self.sequences():
+            sequence_tool = self.blocks[first].tool_number
+            for index in range(first + 1, last + 1):
+                other = self.blocks[index].tool_number
+                if other is not None and sequence_tool is not None and other != sequence_tool:
+                    self.add(
+                        index + 1,
+                        "TOOL #",
+                        ERROR,
+                        Rule.TOOL_CHANGE_IN_SEQUENCE,
+                        f"tool {other} differs from tool {sequence_tool} of the {what} starting at "
+                        f"block {first + 1}; one tool is used for the whole {what}",
+                    )
+
+    def sequences(self) -> Iterator[tuple[int, int, str]]:
+        """(first, last, name) index ranges of mill sequences and outermost LOOP sequences."""
+        blocks = self.blocks
+        for index in range(len(blocks)):
+            if starts_mill_sequence(blocks, index):
+                yield index, mill_sequence_end(blocks, index) - 1, "mill sequence"
+        depth = 0
+        start = 0
+        for index, block in enumerate(blocks):
+            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+                if depth == 0:
+                    start = index
+                depth += 1
+            elif isinstance(block, Rep) and depth:
+                depth -= 1
+                if depth == 0:
+                    yield start, index, "LOOP sequence"
+
+    # -- geometry of quarter circles and arcs -------------------------------------------
+
+    def check_geometry(self) -> None:
+        reference = (0, 0)
+        for index, block in enumerate(self.blocks):
+            number = index + 1
+            if isinstance(block, Pos | Hole | MillLine | MillQcir):
+                target = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+                if isinstance(block, MillQcir):
+                    self.check_qcir(number, block, reference, target)
+                if isinstance(block, MillLine) and target == reference:
+                    self.add(
+                        number,
+                        None,
+                        WARNING,
+                        Rule.ZERO_LENGTH,
+                        "MILL STD ends where it starts; the block cuts nothing",
+                    )
+                reference = target
+            elif isinstance(block, MillArc):
+                nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
+                centre = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+                if isinstance(nxt, ArcEnd):
+                    end = resolve_xy(nxt.x, nxt.y, nxt.mode, nxt.units, reference)
+                    self.check_arc(number, block, reference, centre, end)
+                    reference = end
+            elif isinstance(block, BoltCircle) and index > 0:
+                # The table ends over the last hole; the centre is the previous block's X/Y.
+                radius = to_nm(block.radius, block.units)
+                if block.holes >= 1 and radius > 0:
+                    points = bolt_circle_points(reference, radius, block.holes, block.angle)
+                    reference = points[-1]
+            elif isinstance(block, Rep):
+                step = resolve_xy(block.x, block.y, Mode.INC, block.units, (0, 0))
+                reference = (
+                    reference[0] + block.nx * step[0],
+                    reference[1] + block.ny * step[1],
+                )
+
+    def check_qcir(
+        self, number: int, block: MillQcir, start: tuple[int, int], end: tuple[int, int]
+    ) -> None:
+        dx, dy = end[0] - start[0], end[1] - start[1]
+        if dx == 0 or abs(dx) != abs(dy):
+            u = block.units
+            self.add(
+                number,
+                "X",
+                ERROR,
+                Rule.QCIR_CENTRE_LINES,
+                "QCIR end point is not a quarter circle from the start: its X and Y moves "
+                f"must be equal and not zero (X move {_len(dx, u)}, Y move {_len(dy, u)}); "
+                "the centre lines must be parallel to the X and Y axes",
+            )
+
+    def check_arc(
+        self,
+        number: int,
+        block: MillArc,
+        start: tuple[int, int],
+        centre: tuple[int, int],
+        end: tuple[int, int],
+    ) -> None:
+        u = block.units
+        r_start = distance(start, centre)
+        r_end = distance(centre, end)
+        if r_start == 0:
+            self.add(
+                number,
+                "X",
+                ERROR,
+                Rule.ZERO_LENGTH,
+                "the arc's centre is its start point; the radius would be zero",
+            )
+            return
+        divot = abs(r_start - r_end)
+        # Dimensions are typed to 0.001 in / 0.01 mm: a difference below half of that is
+        # rounding of a point typed as close as the control allows, not a programming error.
+        if divot > to_nm(u.resolution, u) / 2:
+            self.add(
+                number + 1,
+                "X",
+                WARNING,
+                Rule.ARC_RADIUS,
+                f"the arc's end is {_len(round(divot), u)} off its radius: start to centre "
+                f"{_len(round(r_start), u)}, centre to end {_len(round(r_end), u)}; the "
+                f"cutter path will produce a divot of {_len(round(divot), u)}",
+            )
+
+    # -- COPY -------------------------------------------------------------------------------
+
+    def check_copy(self) -> None:
+        for index, block in enumerate(self.blocks):
+            if isinstance(block, Copy):
+                for code, message in copy_errors(self.program, index + 1):
+                    self.add(index + 1, None, ERROR, code, message)
+                if block.action is None:
+                    self.add(
+                        index + 1,
+                        "EXEC/CANCEL",
+                        WARNING,
+                        Rule.COPY_PENDING,
+                        "COPY is waiting for EXEC or CANCEL; until then it makes no blocks "
+                        "and the program runs without it",
+                    )
+
+    # -- 2-axis and 3-axis ------------------------------------------------------------------
+
+    def check_two_axis(self) -> None:
+        holes = [(n, b) for n, b in enumerate(self.blocks, start=1) if isinstance(b, Hole)]
+        with_depth = [n for n, b in holes if b.has_depth]
+        without = [n for n, b in holes if not b.has_depth and b.z_up is None and b.z_dn is None]
+        if with_depth and without:
+            self.add(
+                without[0],
+                "Z DN",
+                WARNING,
+                Rule.TWO_AXIS_MIXED,
+                f"no depths here but block {with_depth[0]} has them; the control will stop "
+                "for the quill to be moved by hand at each block without depths",
+            )
+
+
+COPY_MESSAGES = {
+    Rule.COPY_1: "ERROR: COPY 1 FROM or TO block does not exist.",
+    Rule.COPY_2: "ERROR: COPY 2 INCH and METRIC blocks are mixed in the COPY range and COPY block.",
+    Rule.COPY_3: (
+        "ERROR: COPY 3 All blocks in the range are not in incremental mode; "
+        "the first block is incremental."
+    ),
+    Rule.COPY_4: "ERROR: COPY 4 COPY is being selected in an inserted data block.",
+}
+
+
+def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
+    """The COPY errors (seed 001 §3.4.6, in the control's words) of COPY block `number`."""
+    copy = program.block(number)
+    assert isinstance(copy, Copy)
+    errors: list[tuple[Rule, str]] = []
+    if number != len(program.blocks):
+        errors.append((Rule.COPY_4, COPY_MESSAGES[Rule.COPY_4]))
+    last_existing = number - 1
+    if not (1 <= copy.from_block <= last_existing and 1 <= copy.to_block <= last_existing):
+        errors.append((Rule.COPY_1, COPY_MESSAGES[Rule.COPY_1]))
+        return errors
+    if copy.from_block > copy.to_block:
+        errors.append(
+            (
+                Rule.COPY_RANGE_ORDER,
+                f"FROM block {copy.from_block} is after TO block {copy.to_block}; "
+                "the range runs from the first block to the last",
+            )
+        )
+        return errors
+    span = program.blocks[copy.from_block - 1 : copy.to_block]
+    if any(b.units is not copy.units for b in span):
+        errors.append((Rule.COPY_2, COPY_MESSAGES[Rule.COPY_2]))
+    if span[0].mode is Mode.INC and any(b.mode is Mode.ABS for b in span if _has_position(b)):
+        errors.append((Rule.COPY_3, COPY_MESSAGES[Rule.COPY_3]))
+    return errors
+
+
+def _has_position(block: Block) -> bool:
+    """True for blocks whose X/Y is a position (ABS/INC matters for them)."""
+    return isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd)
+
+
+def _len(nm: int, units: Units) -> str:
+    """A length in nm, for messages, at the unit's programming resolution."""
+    places = 3 if units is Units.INCH else 2
+    value = Decimal(nm) / units.nm
+    return f"{value.quantize(Decimal(1).scaleb(-places))} {units.symbol}"

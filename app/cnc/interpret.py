@@ -270,7 +270,7 @@ class _Interpreter:
                 end = resolve_xy(
                     end_block.x, end_block.y, end_block.mode, end_block.units, reference
                 )
-                self.arc_to(index + 2, end, centre, block.direction is Direction.CW, feed)
+                self.arc_to(number, end, centre, block.direction is Direction.CW, feed)
             reference = end
         self.reference = reference
 

@@ -46,8 +46,21 @@ def iter_lines(toolpath: Toolpath) -> Iterator[str]:
     yield f"{0:>5} SET_ORIGIN_OFFSETS({length(toolpath.origin[0])}, {length(toolpath.origin[1])})\n"
     yield f"{0:>5} START_POSITION({length(x)}, {length(y)}, {length(z)})\n"
     yield f"{0:>5} CURRENT_TOOL({toolpath.initial_tool})\n"
+    if toolpath.initial_tool:
+        yield f"{0:>5} {_tool_data(toolpath, toolpath.initial_tool, length)}\n"
     for move in toolpath.moves:
         yield f"{move.block:>5} {_call(move, length)}\n"
+        if isinstance(move, ToolChange):
+            # As LinuxCNC's USE_TOOL_LENGTH_OFFSET: Z after this line is measured from this
+            # tool's calibrated zero (TCAL), which the dump states so every target can use it.
+            yield f"{move.block:>5} {_tool_data(toolpath, move.tool, length)}\n"
+
+
+def _tool_data(toolpath: Toolpath, tool: int, length: Callable[[int], str]) -> str:
+    info = toolpath.tools.get(tool)
+    dia = "none" if info is None or info.diameter is None else length(info.diameter)
+    tcal = "uncalibrated" if info is None or info.tcal is None else length(info.tcal)
+    return f"TOOL_DATA({tool}, DIA {dia}, TCAL {tcal})"
 
 
 def _call(move: Move, length: Callable[[int], str]) -> str:

@@ -1,0 +1,88 @@
+"""The `millblocks` command line, run as a user would (click's runner, real files)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from app.cli import main
+
+GOLDEN = Path(__file__).parent / "golden"
+
+
+def run(*args: str) -> tuple[int, str, str]:
+    result = CliRunner().invoke(main, list(args))
+    return result.exit_code, result.stdout, result.stderr
+
+
+def test_check_valid_program() -> None:
+    code, out, err = run("check", str(GOLDEN / "loop-rep-grid" / "program.json"))
+    assert code == 0
+    assert out.endswith("3 blocks, 0 errors, 0 warnings\n")
+    assert err == ""
+
+
+def test_export_canon_to_file_matches_golden(tmp_path: Path) -> None:
+    out = tmp_path / "out.canon"
+    code, _, _ = run(
+        "export",
+        str(GOLDEN / "bolt-circle-drill" / "program.json"),
+        "--to",
+        "canon",
+        "-o",
+        str(out),
+    )
+    assert code == 0
+    assert out.read_text() == (GOLDEN / "bolt-circle-drill" / "expected.canon").read_text()
+
+
+def test_export_json_carries_out_copy() -> None:
+    code, out, _ = run("export", str(GOLDEN / "copy-offsets-abs" / "program.json"), "--to", "json")
+    assert code == 0
+    assert out == (GOLDEN / "copy-offsets-abs" / "expected.json").read_text()
+
+
+def test_time_states_assumptions_and_total() -> None:
+    code, out, _ = run("time", str(GOLDEN / "drill-single" / "program.json"))
+    assert code == 0
+    assert "rapids: straight lines at 250 ipm" in out
+    assert out.endswith("Total 0:08.6\n")
+
+
+def test_unreadable_file_exits_2(tmp_path: Path) -> None:
+    code, _, err = run("check", str(tmp_path / "nope.json"))
+    assert code == 2
+    assert "nope.json: cannot read" in err
+
+
+def test_bad_json_names_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "broken.json"
+    path.write_text('{\n  "format": "millblocks-program",\n  "version": 1,,\n}\n')
+    code, _, err = run("check", str(path))
+    assert code == 2
+    assert f"{path}: line 3, column 16: not valid JSON" in err
+
+
+def test_errors_block_export(tmp_path: Path) -> None:
+    program = (GOLDEN / "drill-single" / "program.json").read_text()
+    path = tmp_path / "fast.json"
+    path.write_text(program.replace('"feed_z": 5', '"feed_z": 300'))
+    code, out, err = run("export", str(path), "--to", "canon")
+    assert code == 1
+    assert out == ""
+    assert "block 1, FEEDR Z: 300 ipm is outside the allowed range 0.1 to 250 ipm" in err
+
+
+def test_output_identical_across_processes() -> None:
+    """Same program → byte-identical export with a different hash seed and time zone."""
+    outputs = []
+    for seed, tz in (("1", "UTC"), ("12345", "America/Denver")):
+        env = {**os.environ, "PYTHONHASHSEED": seed, "TZ": tz}
+        cmd = [sys.executable, "-m", "app.cli", "export"]
+        cmd += [str(GOLDEN / "mill-contour-uncompensated" / "program.json"), "--to", "canon"]
+        outputs.append(subprocess.run(cmd, env=env, capture_output=True, check=True).stdout)
+    assert outputs[0] == outputs[1] and outputs[0]

@@ -1,0 +1,59 @@
+"""Golden tests: one folder per case under tests/golden/.
+
+Each folder holds `program.json` and one `expected.<format>` per output checked:
+`expected.canon` (the canonical dump), `expected.json` (the program after COPY blocks are
+carried out) and `expected.time` (the cycle-time report).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from app.cnc import document
+from app.cnc.blocks import Program
+from app.cnc.copy import resolve_copies
+from app.cnc.emit import canon
+from app.cnc.estimate import estimate, report
+from app.cnc.interpret import interpret
+from app.cnc.problems import Severity
+from app.cnc.validate import validate
+from tests.golden_support import check_golden
+
+GOLDEN = Path(__file__).parent / "golden"
+CASES = sorted(p for p in GOLDEN.iterdir() if (p / "program.json").exists())
+
+FORMATS: dict[str, Callable[[Program], str]] = {
+    "canon": lambda p: canon.dump(interpret(p)),
+    "json": document.dumps,
+    "time": lambda p: report(estimate(interpret(p))),
+}
+
+
+def load(case: Path) -> Program:
+    return resolve_copies(document.loads((case / "program.json").read_text(encoding="utf-8")))
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_golden_case(case: Path) -> None:
+    program = load(case)
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert errors == [], "golden programs must be valid"
+    for name, render in FORMATS.items():
+        path = case / f"expected.{name}"
+        if name == "canon" or path.exists():
+            check_golden(path, render(program))
+
+
+def test_corpus_covers_every_block_type() -> None:
+    kinds = set()
+    for case in CASES:
+        for block in load(case).blocks:
+            kinds.add(block.type_name.split()[0] if block.kind == "HOLE" else block.kind)
+        raw = document.loads((case / "program.json").read_text(encoding="utf-8"))
+        kinds.update(b.kind for b in raw.blocks if b.kind == "COPY")
+    expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
+    expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
+    assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

@@ -137,8 +137,10 @@ def from_dict(data: Any) -> Program:
     """Build a Program from JSON data. Raises DocumentError naming what is wrong."""
     if not isinstance(data, dict):
         raise DocumentError("", "a program document is a JSON object")
-    if data.get("format") != FORMAT_NAME:
-        raise DocumentError("format", f'expected "{FORMAT_NAME}", got {data.get("format")!r}')
+    if "format" not in data:
+        raise DocumentError("format", f'missing; a program document has "format": "{FORMAT_NAME}"')
+    if data["format"] != FORMAT_NAME:
+        raise DocumentError("format", f'expected "{FORMAT_NAME}", got {_show(data["format"])}')
     if data.get("version") != FORMAT_VERSION:
         raise DocumentError(
             "version",
@@ -155,10 +157,7 @@ def from_dict(data: Any) -> Program:
     tools_data = db0_data.get("tools", [])
     if not isinstance(tools_data, list):
         raise DocumentError("Data Block 0, tools", "expected a list of tools")
-    tools = tuple(
-        _build(Tool, item, f"Data Block 0, tool entry {n}")
-        for n, item in enumerate(tools_data, start=1)
-    )
+    tools = tuple(_tool_in(item, n) for n, item in enumerate(tools_data, start=1))
     db0_fields = {k: v for k, v in db0_data.items() if k != "tools"}
     block0 = _build(DataBlock0, db0_fields, "Data Block 0", tools=tools)
     blocks_data = data.get("blocks", [])
@@ -173,6 +172,15 @@ def from_dict(data: Any) -> Program:
         block0=block0,
         blocks=blocks,
     )
+
+
+def _tool_in(item: Any, number: int) -> Tool:
+    where = f"Data Block 0, tool entry {number}"
+    if not isinstance(item, dict):
+        raise DocumentError(
+            where, f'expected an object like {{"number": 1, ...}}, got {_show(item)}'
+        )
+    return _build(Tool, item, where)
 
 
 def _block_in(item: Any, number: int) -> Block:
@@ -269,4 +277,7 @@ def _no_unknown(where: str, data: dict[str, Any], known: set[str]) -> None:
 
 
 def _show(raw: Any) -> str:
-    return json.dumps(raw, default=str)
+    """A JSON value as it was written: numbers bare, text quoted."""
+    return json.dumps(
+        raw, default=lambda value: float(value) if isinstance(value, Decimal) else str(value)
+    )

@@ -18,7 +18,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from decimal import Decimal
 
-from app.cnc.interpret import arc_sweep
+from app.cnc.geometry import arc_sweep
 from app.cnc.limits import RAPID_IPM
 from app.cnc.toolpath import (
     ArcFeed,

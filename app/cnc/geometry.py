@@ -44,3 +44,17 @@ def bolt_circle_points(
             )
         )
     return points
+
+
+def arc_sweep(
+    start: tuple[float, float],
+    end: tuple[float, float],
+    centre: tuple[float, float],
+    clockwise: bool,
+) -> float:
+    """The angle (radians, > 0) an arc turns through; a full circle when it ends at its start."""
+    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+    a1 = math.atan2(end[1] - centre[1], end[0] - centre[0])
+    turn = (a0 - a1) if clockwise else (a1 - a0)
+    turn %= 2 * math.pi
+    return turn if turn > 1e-12 else 2 * math.pi

@@ -26,27 +26,23 @@ assumes `validate(program)` reported no errors; a pending COPY block is skipped.
 
 from __future__ import annotations
 
-import math
 from decimal import Decimal
 from fractions import Fraction
 
 from app.cnc import limits
 from app.cnc.blocks import (
-    ArcEnd,
     Block,
     BoltCircle,
-    Direction,
     Hole,
     HoleOp,
-    MillArc,
-    MillLine,
-    MillQcir,
     Mode,
     Pos,
     Program,
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.mill import Path, plan_sequence
+from app.cnc.problems import Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.toolpath import (
     ArcFeed,
@@ -192,87 +188,87 @@ class _Interpreter:
         self.reference = points[-1]
 
     def run_mill_sequence(self, node: MillSequence) -> None:
+        """A DRILL and its mill blocks: plunge, cut every pass at each peck level, retract.
+
+        With pecks the whole sequence runs at each level; between levels the head rapids to
+        the retract height, back to the plunge point, down to the level just finished, and
+        feeds to the next (seed 001 §3.4.5.2 PECK). A 2P routine takes its levels down to
+        the roughing depth, then feeds to Z DN for the finishing pass.
+        """
         drill = self.blocks[node.drill]
         assert isinstance(drill, Hole)
         number = node.drill + 1
+        last = node.mills[-1] + 1
         start = self.resolve(drill)
-        self.reference = start
         self.use_tool(number, drill.tool)
+        plan = plan_sequence(
+            self.blocks, self.program.block0, self.program.units, node.drill, node.mills, start
+        )
+        if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
+            raise InterpretError(last, "the mill sequence cannot be cut (validate first)")
+        plunge = _round(plan.passes[0].start)
         if not drill.has_depth:
-            self.position(number, start, self.z)
+            self.position(number, plunge, self.z)
             self.moves.append(ProgramStop(number, "quill: lower the quill to depth by hand"))
-            self.contour(node, start, depth_cap=None, follow_depth=False)
-            last = node.mills[-1] + 1
+            for path in plan.passes:
+                self.cut(path, depth_cap=None, feed_z=0, follow_depth=False)
             self.moves.append(ProgramStop(last, "quill: raise the quill by hand"))
+            self.reference = plan.end
             return
         assert drill.z_up is not None and drill.z_dn is not None and drill.feed_z is not None
         units = drill.units
         z_up, z_dn = to_nm(drill.z_up, units), to_nm(drill.z_dn, units)
         feed_z = to_nm(drill.feed_z, units)
         self.retract = retract_height(z_up, self.z_retract)
-        self.position(number, start, self.retract)
+        self.position(number, plunge, self.retract)
         self.rapid_z(number, z_up)
-        levels = peck_levels(z_up, z_dn, drill.pecks)
+        levels = peck_levels(z_up, z_dn + plan.rough_allowance, drill.pecks)
+        first = plan.passes[0]
         for k, level in enumerate(levels):
             final = k == len(levels) - 1
             self.feed_to(number, (self.x, self.y, level), feed_z)
-            self.contour(node, start, depth_cap=None if final else level, feed_z=feed_z)
+            self.cut(first, depth_cap=None if final else level, feed_z=feed_z)
             if not final:
                 self.retract_up(number)
-                self.rapid_xy(number, start)
+                self.rapid_xy(number, plunge)
                 self.rapid_z(number, level, tag="peck-reentry")
-        last = node.mills[-1] + 1
+        for path in plan.passes[1:]:
+            # The finishing pass of a 2P routine: over to its plunge point, down to Z DN.
+            finish_start = _round(path.start)
+            self.feed_to(last, (finish_start[0], finish_start[1], self.z), self.feed_of(last))
+            self.feed_to(number, (self.x, self.y, z_dn), feed_z)
+            self.cut(path, depth_cap=None, feed_z=feed_z)
         self.retract_up(last)
+        self.reference = plan.end
 
-    def contour(
-        self,
-        node: MillSequence,
-        start: tuple[int, int],
-        depth_cap: int | None,
-        feed_z: int = 0,
-        follow_depth: bool = True,
+    def cut(
+        self, path: Path, depth_cap: int | None, feed_z: int, follow_depth: bool = True
     ) -> None:
-        """Cut the sequence's mill blocks from the drill point `start` at the current depth.
+        """Cut a path's elements from where the tool is (its start) at the current depth.
 
-        `depth_cap` is the peck level being cut: no block goes deeper than it. A block whose
-        Z DN differs from the current depth feeds there first at the drill's FEEDR Z. In a
+        `depth_cap` is the peck level being cut: no element goes deeper than it. An element
+        whose block has a different Z DN feeds there first at the drill's FEEDR Z. In a
         2-axis sequence (`follow_depth` False) the quill is the operator's: Z never moves.
         """
-        reference = start
-        for index in node.mills:
-            block = self.blocks[index]
-            number = index + 1
-            if isinstance(block, ArcEnd):
-                continue
-            if not isinstance(block, MillLine | MillQcir | MillArc):
-                raise InterpretError(
-                    number, f"{block.title} motion is not available yet (the milling issue)"
-                )
-            z = self.z
-            if follow_depth and block.z_dn is not None:
-                z = to_nm(block.z_dn, block.units)
-                if depth_cap is not None:
-                    z = max(z, depth_cap)
-            if z != self.z:
-                self.feed_to(number, (self.x, self.y, z), feed_z)
-            feed = to_nm(block.feed_xy, block.units)
-            if isinstance(block, MillLine):
-                end = resolve_xy(block.x, block.y, block.mode, block.units, reference)
-                self.feed_to(number, (end[0], end[1], z), feed)
-            elif isinstance(block, MillQcir):
-                end = resolve_xy(block.x, block.y, block.mode, block.units, reference)
-                centre = qcir_centre(reference, end, block.direction)
-                self.arc_to(number, end, centre, block.direction is Direction.CW, feed)
+        for element in path.elements:
+            if follow_depth and element.z_dn is not None:
+                z = element.z_dn if depth_cap is None else max(element.z_dn, depth_cap)
+                if z != self.z:
+                    self.feed_to(element.block, (self.x, self.y, z), feed_z)
+            feed = self.feed_of(element.block)
+            end = _round(element.end)
+            if element.centre is None:
+                self.feed_to(element.block, (end[0], end[1], self.z), feed, element.tag)
             else:
-                end_block = self.blocks[index + 1]
-                assert isinstance(end_block, ArcEnd)
-                centre = resolve_xy(block.x, block.y, block.mode, block.units, reference)
-                end = resolve_xy(
-                    end_block.x, end_block.y, end_block.mode, end_block.units, reference
+                self.arc_to(
+                    element.block, end, _round(element.centre), element.clockwise, feed, element.tag
                 )
-                self.arc_to(number, end, centre, block.direction is Direction.CW, feed)
-            reference = end
-        self.reference = reference
+
+    def feed_of(self, number: int) -> int:
+        """The XY feed (nm/min) of mill block `number`."""
+        block = self.blocks[number - 1]
+        feed: Decimal = getattr(block, "feed_xy")  # noqa: B009 - every mill block has one
+        return to_nm(feed, block.units)
 
     # -- operations ---------------------------------------------------------------------
 
@@ -395,31 +391,6 @@ class _Interpreter:
         self.x, self.y = end
 
 
-def qcir_centre(
-    start: tuple[int, int], end: tuple[int, int], direction: Direction
-) -> tuple[int, int]:
-    """The centre of the quarter circle from `start` to `end` in `direction`.
-
-    The centre lines are parallel to the axes (seed 001 Fig. 3-4), so the centre is one of
-    the two corners (start.x, end.y) or (end.x, start.y): the one about which the quarter
-    turn goes the requested way.
-    """
-    for centre in ((start[0], end[1]), (end[0], start[1])):
-        cross = (start[0] - centre[0]) * (end[1] - centre[1]) - (start[1] - centre[1]) * (
-            end[0] - centre[0]
-        )
-        counter_clockwise = cross > 0
-        if counter_clockwise == (direction is Direction.CCW):
-            return centre
-    raise ValueError("a quarter circle needs equal, non-zero X and Y moves")
-
-
-def arc_sweep(
-    start: tuple[int, int], end: tuple[int, int], centre: tuple[int, int], clockwise: bool
-) -> float:
-    """The angle (radians, positive) an arc turns through; a full circle when end == start."""
-    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
-    a1 = math.atan2(end[1] - centre[1], end[0] - centre[0])
-    sweep = (a0 - a1) if clockwise else (a1 - a0)
-    sweep %= 2 * math.pi
-    return sweep if sweep > 1e-12 else 2 * math.pi
+def _round(point: tuple[float, float]) -> tuple[int, int]:
+    """A computed point rounded once to the nanometre."""
+    return round(point[0]), round(point[1])

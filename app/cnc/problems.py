@@ -53,6 +53,15 @@ class Rule(enum.Enum):
     COPY_4 = "copy-4"
     COPY_RANGE_ORDER = "copy-range-order"
     COPY_PENDING = "copy-pending"
+    INSIDE_ANGLE = "inside-angle"
+    COMP_DIVOT = "comp-divot"
+    COMP_GOUGE = "comp-gouge"
+    COMP_ARC_TOO_SMALL = "comp-arc-too-small"
+    ROUTINE_TOO_SMALL = "routine-too-small"
+    FRAME_CORNER = "frame-corner"
+    CORNER_UNREACHABLE = "corner-unreachable"
+    POCKET_TOOL = "pocket-tool"
+    COMP_ON_ROUTINE = "comp-on-routine"
 
 
 @dataclass(frozen=True, slots=True)

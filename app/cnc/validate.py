@@ -24,6 +24,7 @@ from app.cnc.blocks import (
     Circle,
     Comp,
     Copy,
+    CopyAction,
     DataBlock0,
     Frame,
     Hole,
@@ -38,6 +39,7 @@ from app.cnc.blocks import (
     field_label,
 )
 from app.cnc.geometry import bolt_circle_points, distance, resolve_xy
+from app.cnc.mill import plan_sequence
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units, format_decimal, to_nm
@@ -146,8 +148,8 @@ class _Checker:
                     f"{where} RPM",
                     ERROR,
                     Rule.RANGE,
-                    f"{tool.rpm} is outside the spindle's range; allowed 60 to 4000 "
-                    "(60-500 low gear, 500-4000 high gear), negative for reverse",
+                    f"{tool.rpm} is outside the spindle's range; allowed 60 to 4000, or -60 "
+                    "to -4000 to run in reverse (60-500 low gear, 500-4000 high gear)",
                 )
 
     # -- fields -------------------------------------------------------------------------
@@ -351,15 +353,18 @@ class _Checker:
                         "a fifth LOOP inside four open ones; LOOP sequences nest at most 4 deep",
                     )
                 open_loops.append(number)
-            if open_loops and block.mode is Mode.ABS and not isinstance(block, Copy):
-                self.add(
-                    number,
-                    "ABS/INC",
-                    ERROR,
-                    Rule.ABS_IN_LOOP,
-                    f"ABS block inside the LOOP sequence of block {open_loops[0]}; "
-                    "blocks in a LOOP sequence are incremental (INC)",
-                )
+            if open_loops and block.mode is Mode.ABS and _has_position(block):
+                if open_loops[-1] == number:
+                    message = (
+                        "a LOOP block is incremental (INC): each pattern starts from where "
+                        "the one before it started, shifted by the REP increments"
+                    )
+                else:
+                    message = (
+                        f"ABS block inside the LOOP sequence of block {open_loops[0]}; "
+                        "blocks in a LOOP sequence are incremental (INC)"
+                    )
+                self.add(number, "ABS/INC", ERROR, Rule.ABS_IN_LOOP, message)
             if isinstance(block, Rep):
                 if open_loops:
                     open_loops.pop()
@@ -394,14 +399,14 @@ class _Checker:
                     and not starts_mill_sequence(blocks, index - 1)
                 )
                 if not ok:
-                    before = previous.title if previous else "nothing"
+                    before = f"block {index} is {previous.title}" if previous else "it is first"
                     self.add(
                         number,
                         None,
                         ERROR,
                         Rule.BOLT_CIR_ORDER,
                         f"BOLT CIR {block.op.value} must follow a standard {block.op.value} "
-                        f"block, which gives the centre; block {index} is {before}",
+                        f"block, which gives the centre; {before}",
                     )
             elif isinstance(block, ArcEnd):
                 if not isinstance(previous, MillArc):
@@ -437,7 +442,12 @@ class _Checker:
                     Rule.COMP_WITHOUT_MILL,
                     "cutter compensation on a DRILL that no mill block follows; it has no effect",
                 )
-            if block.stop and self.inside_mill_sequence(index) and is_mill(blocks[index + 1]):
+            if (
+                block.stop
+                and not isinstance(block, MillArc)
+                and self.inside_mill_sequence(index)
+                and is_mill(blocks[index + 1])
+            ):
                 self.add(
                     number,
                     "STOP",
@@ -464,14 +474,14 @@ class _Checker:
             previous, MILL_CONTOUR_CLASSES
         )
         if not ok:
-            before = previous.title if previous else "nothing"
+            before = f"block {index} is {previous.title}" if previous else "it is first"
             self.add(
                 number,
                 None,
                 ERROR,
                 Rule.MILL_ORDER,
                 f"{block.type_name} must follow a DRILL block (which sets the depth) or "
-                f"another mill block; block {index} is {before}",
+                f"another mill block; {before}",
             )
 
     def inside_mill_sequence(self, index: int) -> bool:
@@ -485,8 +495,6 @@ class _Checker:
     def check_tools(self) -> None:
         db0 = self.program.block0
         for number, block in enumerate(self.blocks, start=1):
-            if isinstance(block, Copy):
-                continue
             tool_number = block.tool_number
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
@@ -551,13 +559,21 @@ class _Checker:
 
     def check_geometry(self) -> None:
         reference = (0, 0)
+        depth: Decimal | None = None
         for index, block in enumerate(self.blocks):
             number = index + 1
             if isinstance(block, Pos | Hole | MillLine | MillQcir):
                 target = resolve_xy(block.x, block.y, block.mode, block.units, reference)
                 if isinstance(block, MillQcir):
                     self.check_qcir(number, block, reference, target)
-                if isinstance(block, MillLine) and target == reference:
+                plunge_only = (
+                    isinstance(block, MillLine) and block.z_dn is not None and block.z_dn != depth
+                )
+                if isinstance(block, Hole | MillLine | MillQcir) and block.z_dn is not None:
+                    depth = block.z_dn
+                if isinstance(block, Hole) and starts_mill_sequence(self.blocks, index):
+                    self.check_mill_sequence(index, target)
+                if isinstance(block, MillLine) and target == reference and not plunge_only:
                     self.add(
                         number,
                         None,
@@ -586,6 +602,38 @@ class _Checker:
                     reference[1] + block.ny * step[1],
                 )
 
+    def check_mill_sequence(self, drill_index: int, start: tuple[int, int]) -> None:
+        """Compensation limits and routine sizes, from the same geometry the interpreter cuts."""
+        blocks = self.blocks
+        end = mill_sequence_end(blocks, drill_index)
+        mills = tuple(range(drill_index + 1, end))
+        if any(isinstance(blocks[i], MillArc) for i in mills) and not isinstance(
+            blocks[end - 1], ArcEnd | MillLine | MillQcir
+        ):
+            return  # an arc without its XY-END: reported by the order check
+        drill = blocks[drill_index]
+        assert isinstance(drill, Hole)
+        if (
+            isinstance(blocks[drill_index + 1], MILL_ROUTINE_CLASSES)
+            and drill.comp is not Comp.NONE
+        ):
+            self.add(
+                drill_index + 1,
+                "CUTTER COMP",
+                WARNING,
+                Rule.COMP_ON_ROUTINE,
+                f"cutter compensation on the DRILL before a {blocks[drill_index + 1].type_name}; "
+                "CIRCLE and FRAME routines compensate by themselves, so it has no effect",
+            )
+        try:
+            plan = plan_sequence(
+                blocks, self.program.block0, self.program.units, drill_index, mills, start
+            )
+        except (ValueError, ZeroDivisionError):
+            return  # malformed geometry (a zero-length segment...) is reported elsewhere
+        for finding in plan.findings:
+            self.add(finding.block, finding.field, finding.severity, finding.rule, finding.message)
+
     def check_qcir(
         self, number: int, block: MillQcir, start: tuple[int, int], end: tuple[int, int]
     ) -> None:
@@ -594,7 +642,7 @@ class _Checker:
             u = block.units
             self.add(
                 number,
-                "X",
+                None,
                 ERROR,
                 Rule.QCIR_CENTRE_LINES,
                 "QCIR end point is not a quarter circle from the start: its X and Y moves "
@@ -628,7 +676,7 @@ class _Checker:
         if divot > to_nm(u.resolution, u) / 2:
             self.add(
                 number + 1,
-                "X",
+                None,
                 WARNING,
                 Rule.ARC_RADIUS,
                 f"the arc's end is {_len(round(divot), u)} off its radius: start to centre "
@@ -640,7 +688,7 @@ class _Checker:
 
     def check_copy(self) -> None:
         for index, block in enumerate(self.blocks):
-            if isinstance(block, Copy):
+            if isinstance(block, Copy) and block.action is not CopyAction.CANCEL:
                 for code, message in copy_errors(self.program, index + 1):
                     self.add(index + 1, None, ERROR, code, message)
                 if block.action is None:

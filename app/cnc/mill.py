@@ -1,0 +1,827 @@
+"""Milling geometry: tool-centre paths for contours and CIRCLE/FRAME routines.
+
+Seed 001 §3.4.5.2 (MILL, cutter compensation, CIRCLE/FRAME, POCKET, two-pass) and
+DESIGN.md §3 are the sources. Everything here is plane geometry in float nanometres; the
+interpreter rounds once when it emits moves. Validation and the interpreter call the same
+functions, so what is checked is what is cut.
+
+A path is a start point and a list of elements (lines, or arcs with centre and direction),
+each tagged with the block it comes from. Readings we chose (docs/readings.md):
+
+- Compensated contour: the tool plunges at the start of the first offset element (the drill
+  point moved one tool radius to the compensation side, perpendicular to the first
+  segment) and leaves at the end of the last one. Outside corners are joined by an arc of
+  the tool radius about the corner point; inside corners are trimmed to the intersection
+  of the two offset elements. The control itself looks one segment ahead and leaves a
+  divot at a non-blended inside corner with an arc; we cut the true trimmed path and warn.
+- Routines start at the middle of the side nearest the operator (−Y): the bottom of a
+  circle, the middle of a frame's lower side. INSIDE/OUTSIDE plunge 0.125 in further from
+  the finished surface (less where an inside routine has no room: at most to the centre),
+  feed in, go round once, feed back out the same way. IN/TAN and OUT/TAN enter and leave on
+  a quarter arc of 0.125 in radius (less where there is no room) tangent to the path.
+  POCKET starts like IN/TAN, goes round the wall, then steps toward the centre by the tool
+  diameter less 0.050 in until nothing is left, and retracts from the centre.
+- Two-pass: roughing 0.010 in off the wall and 0.005 in above Z DN, then the finishing
+  pass (a pocket is cleared again).
+- Direction: with a clockwise spindle, climb milling goes round an outside contour
+  clockwise and an inside one counter-clockwise; conventional the reverse; a negative RPM
+  (counter-clockwise spindle) flips both.
+Metric blocks use the same constants converted and rounded to 0.01 mm: 3.18, 1.27, 0.25
+and 0.13 mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from decimal import Decimal
+
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    Circle,
+    Comp,
+    DataBlock0,
+    Direction,
+    Frame,
+    Hole,
+    MillArc,
+    MillingMode,
+    MillLine,
+    MillQcir,
+    Placement,
+)
+from app.cnc.geometry import arc_sweep, resolve_xy
+from app.cnc.problems import Rule, Severity
+from app.cnc.units import Units, to_nm
+
+Pt = tuple[float, float]
+EPS = 1e-6  # nm: points closer than this are the same point
+BLEND_RADIANS = 1e-6  # a turn smaller than this is a tangent (blended) joint
+
+
+def constant(inches: str, millimetres: str, units: Units) -> int:
+    """A routine constant in nm, in the block's unit system."""
+    return (
+        to_nm(Decimal(inches), Units.INCH)
+        if units is Units.INCH
+        else to_nm(Decimal(millimetres), Units.MM)
+    )
+
+
+def clearance(units: Units) -> int:
+    """How far INSIDE/OUTSIDE plunge from the finished surface (0.125 in)."""
+    return constant("0.125", "3.18", units)
+
+
+def pocket_overlap(units: Units) -> int:
+    """Overlap of neighbouring pocket passes (0.050 in)."""
+    return constant("0.050", "1.27", units)
+
+
+def rough_wall(units: Units) -> int:
+    """Stock left on the wall by the roughing pass of a 2P routine (0.010 in)."""
+    return constant("0.010", "0.25", units)
+
+
+def rough_depth(units: Units) -> int:
+    """Stock left on the floor by the roughing pass of a 2P routine (0.005 in)."""
+    return constant("0.005", "0.13", units)
+
+
+@dataclass(frozen=True, slots=True)
+class Element:
+    """One piece of a path: a line to `end`, or an arc to `end` about `centre`.
+
+    `z_dn` is the programmed depth of a contour block (None: keep the current depth).
+    """
+
+    block: int
+    end: Pt
+    centre: Pt | None = None
+    clockwise: bool = False
+    tag: str = ""
+    z_dn: int | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Path:
+    """Where the tool goes down, and the elements it then cuts in order."""
+
+    start: Pt
+    elements: tuple[Element, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Finding:
+    """A problem the geometry found (validation reports it; the interpreter ignores it)."""
+
+    block: int
+    rule: Rule
+    severity: Severity
+    message: str
+    field: str | None = None
+
+
+@dataclass
+class Geometry:
+    """A path plus what was found while building it."""
+
+    path: Path
+    findings: list[Finding] = field(default_factory=list)
+
+
+# -- vectors -----------------------------------------------------------------------------
+
+
+def sub(a: Pt, b: Pt) -> Pt:
+    return (a[0] - b[0], a[1] - b[1])
+
+
+def add(a: Pt, b: Pt) -> Pt:
+    return (a[0] + b[0], a[1] + b[1])
+
+
+def scale(a: Pt, k: float) -> Pt:
+    return (a[0] * k, a[1] * k)
+
+
+def unit(a: Pt) -> Pt:
+    length = math.hypot(*a)
+    return (a[0] / length, a[1] / length)
+
+
+def cross(a: Pt, b: Pt) -> float:
+    return a[0] * b[1] - a[1] * b[0]
+
+
+def dot(a: Pt, b: Pt) -> float:
+    return a[0] * b[0] + a[1] * b[1]
+
+
+def left_normal(t: Pt) -> Pt:
+    return (-t[1], t[0])
+
+
+def close(a: Pt, b: Pt, eps: float = EPS) -> bool:
+    return math.hypot(a[0] - b[0], a[1] - b[1]) <= eps
+
+
+# -- elements ------------------------------------------------------------------------------
+
+
+def tangent(start: Pt, element: Element, at_end: bool) -> Pt:
+    """Unit direction of travel at the start or end of an element."""
+    if element.centre is None:
+        return unit(sub(element.end, start))
+    point = element.end if at_end else start
+    radial = unit(sub(point, element.centre))
+    return (radial[1], -radial[0]) if element.clockwise else left_normal(radial)
+
+
+def sweep(start: Pt, element: Element) -> float:
+    """Angle (radians, > 0) an arc element turns through; 2π when it ends where it starts."""
+    assert element.centre is not None
+    return arc_sweep(start, element.end, element.centre, element.clockwise)
+
+
+def length(start: Pt, element: Element) -> float:
+    """Path length of an element, in nm."""
+    if element.centre is None:
+        return math.dist(start, element.end)
+    return math.dist(start, element.centre) * sweep(start, element)
+
+
+def sample(path: Path, step: float) -> list[tuple[Pt, Element]]:
+    """Points along a path about `step` nm apart (both ends of each element included)."""
+    points: list[tuple[Pt, Element]] = []
+    current = path.start
+    for element in path.elements:
+        n = max(1, math.ceil(length(current, element) / step))
+        for i in range(n + 1):
+            points.append((point_at(current, element, i / n), element))
+        current = element.end
+    return points
+
+
+def point_at(start: Pt, element: Element, fraction: float) -> Pt:
+    """The point a `fraction` (0…1) of the way along an element."""
+    if element.centre is None:
+        return add(start, scale(sub(element.end, start), fraction))
+    c = element.centre
+    radius = math.dist(start, c)
+    a0 = math.atan2(start[1] - c[1], start[0] - c[0])
+    a = a0 + (-1 if element.clockwise else 1) * sweep(start, element) * fraction
+    return (c[0] + radius * math.cos(a), c[1] + radius * math.sin(a))
+
+
+def distance_to_element(p: Pt, start: Pt, element: Element) -> float:
+    """Shortest distance from point `p` to an element (line segment or arc), in nm."""
+    if element.centre is None:
+        d = sub(element.end, start)
+        denom = dot(d, d)
+        t = 0.0 if denom == 0 else max(0.0, min(1.0, dot(sub(p, start), d) / denom))
+        return math.dist(p, add(start, scale(d, t)))
+    c = element.centre
+    radius = math.dist(start, c)
+    if close(p, c):
+        return radius
+    a0 = math.atan2(start[1] - c[1], start[0] - c[0])
+    ap = math.atan2(p[1] - c[1], p[0] - c[0])
+    along = (a0 - ap) if element.clockwise else (ap - a0)
+    along %= 2 * math.pi
+    if along <= sweep(start, element) + 1e-12:
+        return abs(math.dist(p, c) - radius)
+    return min(math.dist(p, start), math.dist(p, element.end))
+
+
+def signed_area(path: Path) -> float:
+    """Signed area enclosed by a closed path (positive counter-clockwise), in nm²."""
+    total = 0.0
+    current = path.start
+    for element in path.elements:
+        total += cross(current, element.end) / 2
+        if element.centre is not None:
+            # The circular segment between the chord and the arc.
+            radius = math.dist(current, element.centre)
+            theta = sweep(current, element)
+            segment = radius * radius * (theta - math.sin(theta)) / 2
+            total += -segment if element.clockwise else segment
+        current = element.end
+    return total
+
+
+# -- cutter compensation of a contour -----------------------------------------------------
+
+
+def offset_element(start: Pt, element: Element, side: float, r: float) -> tuple[Pt, Element]:
+    """The element moved `r` to the left (`side` +1) or right (−1) of its travel."""
+    if element.centre is None:
+        n = scale(left_normal(unit(sub(element.end, start))), side * r)
+        return add(start, n), replace(element, end=add(element.end, n))
+    c = element.centre
+
+    def moved(p: Pt) -> Pt:
+        radial = unit(sub(p, c))
+        # Left of a counter-clockwise arc is toward its centre; of a clockwise one, away.
+        toward_left = scale(radial, -1.0) if not element.clockwise else radial
+        return add(p, scale(toward_left, side * r))
+
+    return moved(start), replace(element, end=moved(element.end))
+
+
+def intersections(a_start: Pt, a: Element, b_start: Pt, b: Element) -> list[Pt]:
+    """Intersections of the full line/circle carrying element `a` with that carrying `b`."""
+    if a.centre is None and b.centre is None:
+        d1, d2 = sub(a.end, a_start), sub(b.end, b_start)
+        denom = cross(d1, d2)
+        if abs(denom) < 1e-12 * math.hypot(*d1) * math.hypot(*d2):
+            return []
+        t = cross(sub(b_start, a_start), d2) / denom
+        return [add(a_start, scale(d1, t))]
+    if a.centre is None or b.centre is None:
+        line_start, line, circle_start, circle = (
+            (a_start, a, b_start, b) if a.centre is None else (b_start, b, a_start, a)
+        )
+        assert circle.centre is not None
+        return _line_circle(
+            line_start, line.end, circle.centre, math.dist(circle_start, circle.centre)
+        )
+    return _circle_circle(
+        a.centre, math.dist(a_start, a.centre), b.centre, math.dist(b_start, b.centre)
+    )
+
+
+def _line_circle(p: Pt, q: Pt, c: Pt, radius: float) -> list[Pt]:
+    d = unit(sub(q, p))
+    f = sub(p, c)
+    b = dot(f, d)
+    disc = b * b - (dot(f, f) - radius * radius)
+    if disc < 0:
+        return []
+    root = math.sqrt(disc)
+    return [add(p, scale(d, -b - root)), add(p, scale(d, -b + root))]
+
+
+def _circle_circle(c1: Pt, r1: float, c2: Pt, r2: float) -> list[Pt]:
+    d = math.dist(c1, c2)
+    if d < EPS or d > r1 + r2 or d < abs(r1 - r2):
+        return []
+    a = (r1 * r1 - r2 * r2 + d * d) / (2 * d)
+    h = math.sqrt(max(r1 * r1 - a * a, 0.0))
+    u = unit(sub(c2, c1))
+    mid = add(c1, scale(u, a))
+    n = left_normal(u)
+    return [add(mid, scale(n, h)), add(mid, scale(n, -h))]
+
+
+def compensate(
+    path: Path, comp: Comp, r: float, blocks: list[int], units: Units = Units.INCH
+) -> Geometry:
+    """The tool-centre path of a contour whose finished surface is `path`.
+
+    `blocks` gives, for each element, the block number used to name corners in findings.
+    """
+    if comp is Comp.NONE or not path.elements:
+        return Geometry(path)
+    side = 1.0 if comp is Comp.LEFT else -1.0
+    findings: list[Finding] = []
+    starts = [path.start] + [e.end for e in path.elements[:-1]]
+    offsets = [offset_element(s, e, side, r) for s, e in zip(starts, path.elements, strict=True)]
+    for start, element in zip(starts, path.elements, strict=True):
+        if element.centre is None:
+            continue
+        radius = math.dist(start, element.centre)
+        # Left of a counter-clockwise arc (right of a clockwise one) is toward its centre.
+        toward_centre = (side > 0) != element.clockwise
+        if toward_centre and radius <= r + EPS:
+            findings.append(
+                Finding(
+                    element.block,
+                    Rule.COMP_ARC_TOO_SMALL,
+                    Severity.ERROR,
+                    f"the arc's radius {_len(radius, units)} is not more than the tool radius "
+                    f"{_len(r, units)}; the tool cannot follow it on the inside",
+                )
+            )
+    if any(f.severity is Severity.ERROR for f in findings):
+        return Geometry(path, findings)
+    pieces: list[tuple[Pt, Element]] = [offsets[0]]
+    for k in range(1, len(offsets)):
+        prev_start, prev = pieces[-1]
+        next_start, nxt = offsets[k]
+        corner = starts[k]
+        t1 = tangent(starts[k - 1], path.elements[k - 1], at_end=True)
+        t2 = tangent(corner, path.elements[k], at_end=False)
+        turn = math.atan2(cross(t1, t2), dot(t1, t2))
+        here = f"the corner between blocks {blocks[k - 1]} and {blocks[k]}"
+        if abs(turn) < BLEND_RADIANS:
+            pieces.append((prev.end, nxt))
+            continue
+        if turn * side < 0:
+            # Outside corner: an arc of the tool radius about the corner point.
+            arc = Element(prev.block, next_start, centre=corner, clockwise=side > 0)
+            pieces.append((prev.end, arc))
+            pieces.append((next_start, nxt))
+            continue
+        both_lines = path.elements[k - 1].centre is None and path.elements[k].centre is None
+        inside_angle = math.degrees(math.pi - abs(turn))
+        if both_lines and inside_angle < 20 - 1e-9:
+            findings.append(
+                Finding(
+                    blocks[k],
+                    Rule.INSIDE_ANGLE,
+                    Severity.ERROR,
+                    f"{here} is an inside angle of {inside_angle:.1f}°; the tool cannot be "
+                    "on the inside of a line-to-line angle under 20° (emergency stop)",
+                )
+            )
+            pieces.append((prev.end, nxt))
+            continue
+        if not both_lines:
+            findings.append(
+                Finding(
+                    blocks[k],
+                    Rule.COMP_DIVOT,
+                    Severity.WARNING,
+                    f"{here} is a non-blended inside corner with an arc; MillBlocks cuts the "
+                    "true trimmed path, but the original control (and an events export) "
+                    "would leave a divot here",
+                )
+            )
+        candidates = intersections(prev_start, prev, next_start, nxt)
+        if not candidates:
+            findings.append(
+                Finding(
+                    blocks[k],
+                    Rule.COMP_GOUGE,
+                    Severity.WARNING,
+                    f"at {here} the offset path does not meet; the tool would cut into the part",
+                )
+            )
+            pieces.append((prev.end, Element(prev.block, next_start)))
+            pieces.append((next_start, nxt))
+            continue
+        meet = min(candidates, key=lambda p: math.dist(p, corner))
+        pieces[-1] = (prev_start, replace(prev, end=meet))
+        pieces.append((meet, nxt))
+    elements = tuple(e for _, e in pieces)
+    result = Path(pieces[0][0], elements)
+    if not any(f.severity is Severity.ERROR for f in findings):
+        findings += gouges(path, result, r, blocks, units)
+    return Geometry(result, findings)
+
+
+def gouges(finished: Path, tool: Path, r: float, blocks: list[int], units: Units) -> list[Finding]:
+    """Where the tool centre comes closer than its radius to another part of the contour."""
+    found: dict[int, Finding] = {}
+    starts = [finished.start] + [e.end for e in finished.elements[:-1]]
+    tolerance = max(r * 1e-4, 100.0)
+    for point, element in sample(tool, max(r / 8, 1000.0)):
+        for k, (s, e) in enumerate(zip(starts, finished.elements, strict=True)):
+            if k in found:
+                continue
+            gap = distance_to_element(point, s, e)
+            if gap < r - tolerance:
+                found[k] = Finding(
+                    blocks[k],
+                    Rule.COMP_GOUGE,
+                    Severity.WARNING,
+                    f"the compensated path from block {element.block} cuts into block "
+                    f"{blocks[k]} by {_len(r - gap, units)}; the control looks only one segment "
+                    "ahead, so choose another starting point or split the contour",
+                )
+    return list(found.values())
+
+
+# -- CIRCLE and FRAME routines ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Routine:
+    """What a CIRCLE/FRAME routine needs: the finished contour and how to cut it.
+
+    Lengths in nm. For a circle `centre` and `radius`; for a frame `corner` (lower left),
+    `width` (XL), `height` (YW) and `corner_radius`.
+    """
+
+    block: int
+    placement: Placement
+    clockwise: bool
+    tool_radius: int
+    units: Units
+    centre: Pt = (0.0, 0.0)
+    radius: int = 0
+    corner: Pt = (0.0, 0.0)
+    width: int = 0
+    height: int = 0
+    corner_radius: int = 0
+    is_frame: bool = False
+
+
+def routine_problems(routine: Routine) -> list[Finding]:
+    """What makes a routine impossible (errors) or imperfect (warnings)."""
+    r = routine.tool_radius
+    findings: list[Finding] = []
+    inside = routine.placement in (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
+    n = routine.block
+    size = (routine.width, routine.height) if routine.is_frame else (routine.radius,)
+    if r <= 0 or min(size) <= 0:
+        return findings  # no tool diameter, or a size out of range: reported by the field checks
+    if routine.is_frame:
+        half_short = min(routine.width, routine.height) / 2
+        if routine.corner_radius > half_short:
+            findings.append(
+                Finding(
+                    n,
+                    Rule.FRAME_CORNER,
+                    Severity.ERROR,
+                    f"corner radius {_len(routine.corner_radius, routine.units)} is too large "
+                    f"for a {_len(routine.width, routine.units)} × "
+                    f"{_len(routine.height, routine.units)} frame; allowed 0 to "
+                    f"{_len(half_short, routine.units)} (the corners must meet)",
+                    "CORNER RAD",
+                )
+            )
+        if inside and half_short <= r:
+            findings.append(_too_small(routine, "frame", half_short * 2))
+        elif (inside and 0 < routine.corner_radius < r) or (inside and routine.corner_radius == 0):
+            findings.append(
+                Finding(
+                    n,
+                    Rule.CORNER_UNREACHABLE,
+                    Severity.WARNING,
+                    f"corner radius {_len(routine.corner_radius, routine.units)} is smaller "
+                    f"than the tool radius {_len(r, routine.units)}; the tool leaves material "
+                    f"in the four corners",
+                    "CORNER RAD",
+                )
+            )
+    elif inside and routine.radius <= r:
+        findings.append(_too_small(routine, "circle", routine.radius * 2))
+    if routine.placement is Placement.POCKET and 2 * r <= pocket_overlap(routine.units):
+        findings.append(
+            Finding(
+                n,
+                Rule.POCKET_TOOL,
+                Severity.ERROR,
+                f"a {_len(2 * r, routine.units)} tool leaves no step-over: pocket passes "
+                f"overlap by {_len(pocket_overlap(routine.units), routine.units)}, so the "
+                "tool must be larger than that",
+                "TOOL #",
+            )
+        )
+    return findings
+
+
+def _too_small(routine: Routine, what: str, size: float) -> Finding:
+    u = routine.units
+    return Finding(
+        routine.block,
+        Rule.ROUTINE_TOO_SMALL,
+        Severity.ERROR,
+        f"the {what} ({_len(size, u)} across) is not larger than the "
+        f"{_len(2 * routine.tool_radius, u)} tool; the tool cannot go inside it",
+    )
+
+
+def routine_path(routine: Routine, wall_allowance: int = 0) -> Path:
+    """Lead-in, the pass (or pocket passes) and lead-out of a routine at one depth.
+
+    `wall_allowance` leaves that much stock on the wall (the roughing pass of a 2P routine).
+    """
+    inside = routine.placement in (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
+    r = routine.tool_radius + wall_allowance
+    offset = -r if inside else r
+    wall = _closed_pass(routine, offset)
+    start = wall.start
+    away = _away(routine, inside)
+    room = _room(routine, r) if inside else math.inf
+    if not wall.elements:
+        return Path(start, ())
+    n = routine.block
+    if routine.placement in (Placement.INSIDE, Placement.OUTSIDE):
+        reach = min(float(clearance(routine.units)), room)
+        plunge = add(start, scale(away, reach))
+        elements = [Element(n, start, tag="lead-in"), *wall.elements]
+        elements.append(Element(n, plunge, tag="lead-out"))
+        return Path(plunge, tuple(elements))
+    lead = min(float(clearance(routine.units)), room / 2 if inside else math.inf)
+    t = tangent(start, wall.elements[0], at_end=False)
+    lead_centre = add(start, scale(away, lead))
+    lead_cw = cross(t, away) < 0
+    plunge = add(lead_centre, scale(t, -lead))
+    lead_in = Element(n, start, centre=lead_centre, clockwise=lead_cw, tag="lead-in")
+    if routine.placement is not Placement.POCKET:
+        exit_point = add(lead_centre, scale(t, lead))
+        lead_out = Element(n, exit_point, centre=lead_centre, clockwise=lead_cw, tag="lead-out")
+        return Path(plunge, (lead_in, *wall.elements, lead_out))
+    elements = [lead_in, *wall.elements]
+    step = 2 * routine.tool_radius - pocket_overlap(routine.units)
+    depth = float(r)
+    while True:
+        depth += step
+        inner = _closed_pass(routine, -depth) if _fits(routine, depth) else None
+        if inner is None:
+            elements.extend(_pocket_finish(routine, depth - step))
+            break
+        elements.append(Element(n, inner.start, tag="step-over"))
+        elements.extend(inner.elements)
+    return Path(plunge, tuple(elements))
+
+
+def _away(routine: Routine, inside: bool) -> Pt:
+    """Unit vector at the routine's start pointing away from the finished surface."""
+    # The start is at the bottom of the contour: inside means up (+Y), outside down (−Y).
+    return (0.0, 1.0) if inside else (0.0, -1.0)
+
+
+def _room(routine: Routine, offset: float) -> float:
+    """How far the tool centre can move inward from the wall pass's start point."""
+    if routine.is_frame:
+        return min(routine.width, routine.height) / 2 - offset
+    return routine.radius - offset
+
+
+def _fits(routine: Routine, depth: float) -> bool:
+    """True when an inner pass `depth` in from the wall still encloses an area."""
+    if routine.is_frame:
+        return min(routine.width, routine.height) / 2 - depth > EPS
+    return routine.radius - depth > EPS
+
+
+def _pocket_finish(routine: Routine, last: float) -> list[Element]:
+    """What clears the middle after the last full pass, `last` in from the wall.
+
+    A circle's middle is cleared by a move to the centre; a frame's by a line along its
+    centre line (the long way), which leaves no point farther than half a step from a cut.
+    """
+    n = routine.block
+    if not routine.is_frame:
+        if routine.radius - last <= routine.tool_radius + EPS:
+            return []
+        return [Element(n, routine.centre, tag="step-over")]
+    x0, y0 = routine.corner
+    w, h = routine.width, routine.height
+    if min(w, h) / 2 - last <= routine.tool_radius + EPS:
+        return []
+    cx, cy = x0 + w / 2, y0 + h / 2
+    if w >= h:
+        return [
+            Element(n, (cx, cy), tag="step-over"),
+            Element(n, (x0 + h / 2, cy)),
+            Element(n, (x0 + w - h / 2, cy)),
+        ]
+    return [Element(n, (cx, y0 + w / 2), tag="step-over"), Element(n, (cx, y0 + h - w / 2))]
+
+
+def _closed_pass(routine: Routine, offset: float) -> Path:
+    """One closed pass `offset` outside (+) or inside (−) the finished contour.
+
+    It starts and ends at the bottom (the middle of a frame's lower side) and runs in the
+    routine's direction. A frame's corners are arcs of radius corner radius + offset, or
+    sharp where an inside offset uses the radius up.
+    """
+    n = routine.block
+    if not routine.is_frame:
+        radius = routine.radius + offset
+        cx, cy = routine.centre
+        start = (cx, cy - radius)
+        return Path(start, (Element(n, start, centre=routine.centre, clockwise=routine.clockwise),))
+    x0, y0 = routine.corner[0] - offset, routine.corner[1] - offset
+    x1 = routine.corner[0] + routine.width + offset
+    y1 = routine.corner[1] + routine.height + offset
+    rad = max(routine.corner_radius + offset, 0.0)
+    start = ((x0 + x1) / 2, y0)
+    # Counter-clockwise from the bottom middle: along the bottom, up, along the top, down.
+    turns = [
+        ((x1 - rad, y0), (x1 - rad, y0 + rad), (x1, y0 + rad)),
+        ((x1, y1 - rad), (x1 - rad, y1 - rad), (x1 - rad, y1)),
+        ((x0 + rad, y1), (x0 + rad, y1 - rad), (x0, y1 - rad)),
+        ((x0, y0 + rad), (x0 + rad, y0 + rad), (x0 + rad, y0)),
+    ]
+    elements: list[Element] = []
+    for before, centre, after in turns:
+        elements.append(Element(n, before))
+        if rad > EPS:
+            elements.append(Element(n, after, centre=centre, clockwise=False))
+    elements.append(Element(n, start))
+    ccw = Path(start, tuple(elements))
+    return reverse(ccw) if routine.clockwise else ccw
+
+
+def reverse(path: Path) -> Path:
+    """The same closed path travelled the other way."""
+    points = [path.start] + [e.end for e in path.elements]
+    elements = []
+    for k in range(len(path.elements) - 1, -1, -1):
+        e = path.elements[k]
+        elements.append(replace(e, end=points[k], clockwise=not e.clockwise))
+    return Path(points[-1], tuple(elements))
+
+
+def _len(nm: float, units: Units = Units.INCH) -> str:
+    places = 4 if units is Units.INCH else 3
+    return f"{nm / units.nm:.{places}f} {units.symbol}"
+
+
+# -- from blocks to paths -------------------------------------------------------------------
+
+
+@dataclass
+class SequencePlan:
+    """How a mill sequence is cut: one path per pass, all starting at the same depth rules.
+
+    `passes` holds the contour's tool path, or a routine's passes (the roughing pass first
+    for 2P). `rough_allowance` is how far above Z DN the roughing levels stop (0 without 2P).
+    `end` is the programmed end point, the reference for a following INC block.
+    """
+
+    passes: list[Path]
+    rough_allowance: int
+    end: tuple[int, int]
+    findings: list[Finding]
+
+
+def plan_sequence(
+    blocks: tuple[Block, ...],
+    block0: DataBlock0,
+    program_units: Units,
+    drill_index: int,
+    mills: tuple[int, ...],
+    start: tuple[int, int],
+) -> SequencePlan:
+    """The tool paths of the mill sequence started by DRILL `drill_index` at `start` (nm).
+
+    Problems found (compensation limits, routine sizes) are returned, not raised: the
+    interpreter is only called on programs whose plan has no errors.
+    """
+    drill = blocks[drill_index]
+    assert isinstance(drill, Hole)
+    tool = block0.tool(drill.tool)
+    diameter = None if tool is None or tool.diameter is None else tool.diameter
+    radius = 0 if diameter is None else to_nm(diameter, program_units) // 2
+    first = blocks[mills[0]]
+    if isinstance(first, Circle | Frame):
+        spindle_cw = tool is None or tool.rpm is None or tool.rpm > 0
+        return _plan_routine(first, mills[0] + 1, block0, spindle_cw, radius, start)
+    path, numbers, end = programmed_contour(blocks, mills, start)
+    if drill.comp is Comp.NONE or diameter is None:
+        return SequencePlan([path], 0, end, [])
+    geometry = compensate(path, drill.comp, float(radius), numbers, drill.units)
+    return SequencePlan([geometry.path], 0, end, geometry.findings)
+
+
+def _plan_routine(
+    block: Circle | Frame,
+    number: int,
+    block0: DataBlock0,
+    spindle_cw: bool,
+    tool_radius: int,
+    start: tuple[int, int],
+) -> SequencePlan:
+    units = block.units
+    inside = block.placement in (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
+    climb = block0.milling is MillingMode.CLIMB
+    outside_cw = climb == spindle_cw
+    clockwise = not outside_cw if inside else outside_cw
+    common = {
+        "block": number,
+        "placement": block.placement,
+        "clockwise": clockwise,
+        "tool_radius": tool_radius,
+        "units": units,
+    }
+    if isinstance(block, Circle):
+        routine = Routine(
+            **common,  # type: ignore[arg-type]
+            centre=(float(start[0]), float(start[1])),
+            radius=to_nm(block.radius, units),
+        )
+    else:
+        routine = Routine(
+            **common,  # type: ignore[arg-type]
+            corner=(float(start[0]), float(start[1])),
+            width=to_nm(block.xl, units),
+            height=to_nm(block.yw, units),
+            corner_radius=to_nm(block.corner_radius, units),
+            is_frame=True,
+        )
+    findings = routine_problems(routine)
+    if any(f.severity is Severity.ERROR for f in findings) or tool_radius == 0:
+        return SequencePlan([], 0, start, findings)
+    passes = [routine_path(routine)]
+    allowance = 0
+    if block.two_pass:
+        passes.insert(0, routine_path(routine, wall_allowance=rough_wall(units)))
+        allowance = rough_depth(units)
+    return SequencePlan(passes, allowance, start, findings)
+
+
+def programmed_contour(
+    blocks: tuple[Block, ...], mills: tuple[int, ...], start: tuple[int, int]
+) -> tuple[Path, list[int], tuple[int, int]]:
+    """The finished contour of line, quarter-circle and arc blocks from `start` (nm).
+
+    Returns the path, the block number of each element, and the end point.
+    """
+    reference = start
+    elements: list[Element] = []
+    numbers: list[int] = []
+    for index in mills:
+        block = blocks[index]
+        if isinstance(block, ArcEnd):
+            continue
+        assert isinstance(block, MillLine | MillQcir | MillArc)
+        z_dn = None if block.z_dn is None else to_nm(block.z_dn, block.units)
+        end = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+        centre: tuple[int, int] | None = None
+        clockwise = False
+        if isinstance(block, MillQcir):
+            centre = qcir_centre(reference, end, block.direction)
+            clockwise = block.direction is Direction.CW
+        elif isinstance(block, MillArc):
+            end_block = blocks[index + 1]
+            assert isinstance(end_block, ArcEnd)
+            centre = end
+            end = resolve_xy(end_block.x, end_block.y, end_block.mode, end_block.units, reference)
+            clockwise = block.direction is Direction.CW
+        if end == reference and centre is None:
+            reference = end
+            elements.append(Element(index + 1, _f(end), z_dn=z_dn))
+            numbers.append(index + 1)
+            continue
+        elements.append(
+            Element(
+                index + 1,
+                _f(end),
+                centre=None if centre is None else _f(centre),
+                clockwise=clockwise,
+                z_dn=z_dn,
+            )
+        )
+        numbers.append(index + 1)
+        reference = end
+    return Path(_f(start), tuple(elements)), numbers, reference
+
+
+def qcir_centre(
+    start: tuple[int, int], end: tuple[int, int], direction: Direction
+) -> tuple[int, int]:
+    """The centre of the quarter circle from `start` to `end` in `direction`.
+
+    The centre lines are parallel to the axes (seed 001 Fig. 3-4), so the centre is one of
+    the corners (start.x, end.y) or (end.x, start.y): the one about which the quarter turn
+    goes the requested way.
+    """
+    for centre in ((start[0], end[1]), (end[0], start[1])):
+        turn = (start[0] - centre[0]) * (end[1] - centre[1]) - (start[1] - centre[1]) * (
+            end[0] - centre[0]
+        )
+        if (turn > 0) == (direction is Direction.CCW):
+            return centre
+    raise ValueError("a quarter circle needs equal, non-zero X and Y moves")
+
+
+def _f(p: tuple[int, int]) -> Pt:
+    return (float(p[0]), float(p[1]))

@@ -235,7 +235,9 @@ class _Interpreter:
         for path in plan.passes[1:]:
             # The finishing pass of a 2P routine: over to its plunge point, down to Z DN.
             finish_start = _round(path.start)
-            self.feed_to(last, (finish_start[0], finish_start[1], self.z), self.feed_of(last))
+            self.feed_to(
+                last, (finish_start[0], finish_start[1], self.z), self.feed_of(last), "step-over"
+            )
             self.feed_to(number, (self.x, self.y, z_dn), feed_z)
             self.cut(path, depth_cap=None, feed_z=feed_z)
         self.retract_up(last)

@@ -413,25 +413,30 @@ def compensate(
 
 
 def gouges(finished: Path, tool: Path, r: float, blocks: list[int], units: Units) -> list[Finding]:
-    """Where the tool centre comes closer than its radius to another part of the contour."""
-    found: dict[int, Finding] = {}
+    """Where the tool centre comes closer than its radius to another part of the contour.
+
+    One warning per contour block cut into, naming the block whose path does it and the
+    deepest cut found at samples an eighth of the tool radius apart.
+    """
+    worst: dict[int, tuple[float, int]] = {}
     starts = [finished.start] + [e.end for e in finished.elements[:-1]]
     tolerance = max(r * 1e-4, 100.0)
     for point, element in sample(tool, max(r / 8, 1000.0)):
         for k, (s, e) in enumerate(zip(starts, finished.elements, strict=True)):
-            if k in found:
-                continue
-            gap = distance_to_element(point, s, e)
-            if gap < r - tolerance:
-                found[k] = Finding(
-                    blocks[k],
-                    Rule.COMP_GOUGE,
-                    Severity.WARNING,
-                    f"the compensated path from block {element.block} cuts into block "
-                    f"{blocks[k]} by {_len(r - gap, units)}; the control looks only one segment "
-                    "ahead, so choose another starting point or split the contour",
-                )
-    return list(found.values())
+            depth = r - distance_to_element(point, s, e)
+            if depth > tolerance and depth > worst.get(k, (0.0, 0))[0]:
+                worst[k] = (depth, element.block)
+    return [
+        Finding(
+            blocks[k],
+            Rule.COMP_GOUGE,
+            Severity.WARNING,
+            f"the compensated path from block {source} cuts into block {blocks[k]} by "
+            f"{_len(depth, units)}; the control looks only one segment ahead, so choose "
+            "another starting point or split the contour",
+        )
+        for k, (depth, source) in sorted(worst.items())
+    ]
 
 
 # -- CIRCLE and FRAME routines ------------------------------------------------------------
@@ -561,7 +566,7 @@ def routine_path(routine: Routine, wall_allowance: int = 0) -> Path:
     depth = float(r)
     while True:
         depth += step
-        inner = _closed_pass(routine, -depth) if _fits(routine, depth) else None
+        inner = _closed_pass(routine, -depth, -(depth - step)) if _fits(routine, depth) else None
         if inner is None:
             elements.extend(_pocket_finish(routine, depth - step))
             break
@@ -615,12 +620,15 @@ def _pocket_finish(routine: Routine, last: float) -> list[Element]:
     return [Element(n, (cx, y0 + w / 2), tag="step-over"), Element(n, (cx, y0 + h - w / 2))]
 
 
-def _closed_pass(routine: Routine, offset: float) -> Path:
+def _closed_pass(routine: Routine, offset: float, previous: float | None = None) -> Path:
     """One closed pass `offset` outside (+) or inside (−) the finished contour.
 
     It starts and ends at the bottom (the middle of a frame's lower side) and runs in the
     routine's direction. A frame's corners are arcs of radius corner radius + offset, or
-    sharp where an inside offset uses the radius up.
+    sharp where an inside offset uses the radius up. An inner pocket pass (`previous` is the
+    offset of the pass before it) reaches out from each sharp corner along the diagonal to
+    the previous pass's corner (or its arc) and back: along the diagonal two passes are
+    farther apart than the step-over, and this spike clears what lies between them.
     """
     n = routine.block
     if not routine.is_frame:
@@ -641,13 +649,36 @@ def _closed_pass(routine: Routine, offset: float) -> Path:
         ((x0, y0 + rad), (x0 + rad, y0 + rad), (x0 + rad, y0)),
     ]
     elements: list[Element] = []
+    prev_rad = 0.0 if previous is None else max(routine.corner_radius + previous, 0.0)
     for before, centre, after in turns:
         elements.append(Element(n, before))
         if rad > EPS:
             elements.append(Element(n, after, centre=centre, clockwise=False))
+        elif previous is not None:
+            fixed = _corner_centre(routine, before)
+            if prev_rad > EPS:
+                # Every round pass has this corner's arc about the finished corner's centre.
+                reach = add(fixed, scale(unit(sub(before, fixed)), prev_rad))
+            else:
+                # The previous pass's sharp corner, one step out along the diagonal.
+                step = previous - offset
+                out_x = math.copysign(step, fixed[0] - before[0])
+                out_y = math.copysign(step, fixed[1] - before[1])
+                reach = (before[0] + out_x, before[1] + out_y)
+            elements.append(Element(n, reach, tag="corner"))
+            elements.append(Element(n, before, tag="corner"))
     elements.append(Element(n, start))
     ccw = Path(start, tuple(elements))
     return reverse(ccw) if routine.clockwise else ccw
+
+
+def _corner_centre(routine: Routine, near: Pt) -> Pt:
+    """The centre of the finished frame's corner arc nearest to `near`."""
+    x0, y0 = routine.corner
+    cr = routine.corner_radius
+    cx = x0 + cr if near[0] < x0 + routine.width / 2 else x0 + routine.width - cr
+    cy = y0 + cr if near[1] < y0 + routine.height / 2 else y0 + routine.height - cr
+    return (cx, cy)
 
 
 def reverse(path: Path) -> Path:

@@ -168,7 +168,7 @@ def assert_distance(points: list[Pt], contour: LineString, expected: float, tol:
 # -- compensated contours ------------------------------------------------------------------
 
 
-CONTOURS = {
+CONTOURS: dict[str, tuple[Comp, list[Block], LineString]] = {
     # name: (comp, mill blocks after DRILL at (0, 0), shapely contour of the finished surface)
     "left-square-outside-corners": (
         Comp.RIGHT,

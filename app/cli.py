@@ -2,7 +2,8 @@
 
     millblocks check FILE              list every problem; exit 1 when any is an error
     millblocks time FILE               cycle time per block, per tool and in total
-    millblocks export FILE --to FMT    write the program as canon or json (-o OUT)
+    millblocks export FILE --to FMT    write the program in a target format (-o OUT)
+    millblocks targets [--options]     list the export targets and their options
 
 FILE is a MillBlocks JSON program. A COPY block whose operator chose EXEC or CANCEL is
 carried out as the file is read, as the control does on ENTER. Exit codes: 0 success,
@@ -11,6 +12,7 @@ carried out as the file is read, as the control does on ENTER. Exit codes: 0 suc
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -19,13 +21,12 @@ import click
 from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.copy import CopyError, resolve_copies
-from app.cnc.emit import canon
+from app.cnc.emit.target import ExportError, OptionError, targets
+from app.cnc.emit.target import export as run_export
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.problems import Problem, has_errors
 from app.cnc.validate import validate
-
-EXPORT_FORMATS = ("canon", "json")
 
 
 class ProgramFileError(click.ClickException):
@@ -101,20 +102,92 @@ def time(file: Path, tool_change_seconds: float) -> None:
     click.echo(report(estimate(interpret(program), tool_change_seconds)), nl=False)
 
 
+def _target_names() -> list[str]:
+    return list(targets())
+
+
 @main.command()
 @click.argument("file", type=click.Path(path_type=Path, dir_okay=False))
-@click.option("--to", "fmt", type=click.Choice(EXPORT_FORMATS), required=True)
+@click.option(
+    "--to",
+    "fmt",
+    required=True,
+    help="Target format; `millblocks targets` lists them.",
+)
 @click.option("-o", "--output", type=click.Path(path_type=Path, dir_okay=False), default=None)
-def export(file: Path, fmt: str, output: Path | None) -> None:
-    """Write FILE as another format (to standard output unless -o is given)."""
-    if fmt == "json":
-        text = document.dumps(load_program(file))
-    else:
-        text = canon.dump(interpret(checked(file)))
+@click.option(
+    "-O",
+    "--option",
+    "option_pairs",
+    multiple=True,
+    metavar="NAME=VALUE",
+    help="A target option (repeatable); `millblocks targets --options` lists them.",
+)
+@click.option(
+    "--profile",
+    type=click.Path(path_type=Path, dir_okay=False, exists=True),
+    default=None,
+    help='Machine profile: JSON {"options": {NAME: VALUE}}; -O overrides it.',
+)
+def export(
+    file: Path,
+    fmt: str,
+    output: Path | None,
+    option_pairs: tuple[str, ...],
+    profile: Path | None,
+) -> None:
+    """Write FILE as another format (to standard output unless -o is given).
+
+    The compatibility report (what the target could not express) goes to standard error.
+    """
+    raw = _profile_options(profile) if profile else {}
+    for pair in option_pairs:
+        name, sep, value = pair.partition("=")
+        if not sep:
+            raise click.BadParameter(f"{pair!r} is not NAME=VALUE", param_hint="-O")
+        raw[name.strip()] = value
+    program = load_program(file)
+    try:
+        result = run_export(program, fmt, raw)
+    except OptionError as exc:
+        raise click.UsageError(str(exc)) from None
+    except ExportError as exc:
+        print_problems(file, [p for p in exc.problems if p.severity.value == "error"])
+        if exc.report is not None:
+            click.echo(exc.report.text(), err=True, nl=False)
+        click.echo(f"{file}: {exc}", err=True)
+        sys.exit(1)
+    click.echo(result.report.text(), err=True, nl=False)
     if output is None:
-        click.echo(text, nl=False)
+        sys.stdout.buffer.write(result.data)
+        sys.stdout.flush()
     else:
-        output.write_text(text, encoding="utf-8")
+        output.write_bytes(result.data)
+
+
+def _profile_options(path: Path) -> dict[str, str]:
+    """A machine profile's options as text (numbers and booleans written as JSON)."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ProgramFileError(f"{path}: cannot read the profile: {exc}") from None
+    options = data.get("options", {}) if isinstance(data, dict) else None
+    if not isinstance(options, dict):
+        raise ProgramFileError(f'{path}: a profile is {{"options": {{NAME: VALUE, ...}}}}')
+    return {str(k): (json.dumps(v) if isinstance(v, bool) else str(v)) for k, v in options.items()}
+
+
+@main.command("targets")
+@click.option("--options", "show_options", is_flag=True, help="List each target's options.")
+def list_targets(show_options: bool) -> None:
+    """List the export targets (and their options)."""
+    for name, target in targets().items():
+        click.echo(f"{name:<16} {target.description}")
+        if show_options:
+            for option in target.options:
+                choices = f" ({'/'.join(option.choices)})" if option.choices else ""
+                default = option.default if option.default is not None else "-"
+                click.echo(f"    {option.name}={default}{choices}  {option.help}")
 
 
 if __name__ == "__main__":  # pragma: no cover

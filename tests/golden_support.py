@@ -13,11 +13,11 @@ from pathlib import Path
 REGENERATE = os.environ.get("MILLBLOCKS_REGEN_GOLDEN") == "1"
 
 
-def check_golden(path: Path, actual: str) -> None:
+def check_golden(path: Path, actual: str | bytes) -> None:
     """Assert `actual` equals the file at `path` (or write it when regenerating)."""
+    data = actual.encode("utf-8") if isinstance(actual, str) else actual
     if REGENERATE:
-        path.write_text(actual, encoding="utf-8")
+        path.write_bytes(data)
         return
     assert path.exists(), f"{path} is missing; run `make regen-golden` and review it"
-    expected = path.read_text(encoding="utf-8")
-    assert actual == expected, f"{path} differs from the output (diff them)"
+    assert data == path.read_bytes(), f"{path} differs from the output (diff them)"

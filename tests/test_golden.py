@@ -1,8 +1,10 @@
 """Golden tests: one folder per case under tests/golden/.
 
-Each folder holds `program.json` and one `expected.<format>` per output checked:
-`expected.canon` (the canonical dump), `expected.json` (the program after COPY blocks are
-carried out) and `expected.time` (the cycle-time report).
+Each folder holds `program.json` and one `expected.<format>` per output checked: every case
+has `expected.canon` (the canonical dump); `expected.<target>` for any export target
+(`expected.json` is the program after COPY blocks are carried out), with
+`expected.<target>.report` for its compatibility report; `expected.time` for the
+cycle-time report. Each target must have golden files (test_every_target_has_goldens).
 """
 
 from __future__ import annotations
@@ -16,11 +18,12 @@ from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.copy import resolve_copies
 from app.cnc.emit import canon
+from app.cnc.emit.target import export, targets
 from app.cnc.estimate import estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.validate import validate
-from tests.golden_support import check_golden
+from tests.golden_support import REGENERATE, check_golden
 
 GOLDEN = Path(__file__).parent / "golden"
 CASES = sorted(p for p in GOLDEN.iterdir() if (p / "program.json").exists())
@@ -45,6 +48,25 @@ def test_golden_case(case: Path) -> None:
         path = case / f"expected.{name}"
         if name == "canon" or path.exists():
             check_golden(path, render(program))
+    for name in targets():
+        path = case / f"expected.{name}"
+        wanted = path.exists() or (REGENERATE and case.name in REGENERATE_FOR.get(name, ()))
+        if name in FORMATS or not wanted:
+            continue
+        result = export(program, name)
+        check_golden(path, result.data)
+        check_golden(case / f"expected.{name}.report", result.report.text())
+
+
+# Cases whose expected files a target writes when regenerating (add a case name here to
+# give a target a new golden file; after that the file's presence keeps it checked).
+REGENERATE_FOR: dict[str, tuple[str, ...]] = {}
+
+
+def test_every_target_has_goldens() -> None:
+    for name in targets():
+        count = sum(1 for case in CASES if (case / f"expected.{name}").exists())
+        assert count >= 3, f"target {name} has {count} golden files; it needs some"
 
 
 def test_corpus_covers_every_block_type() -> None:

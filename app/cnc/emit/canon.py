@@ -8,8 +8,11 @@ after `;`. The dump is a pure function of the Toolpath: same program, same bytes
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any
 
+from app.cnc.blocks import Program
+from app.cnc.emit.target import Report, Target, register
 from app.cnc.toolpath import (
     ArcFeed,
     Dwell,
@@ -93,3 +96,17 @@ def _call(move: Move, length: Callable[[int], str]) -> str:
         assert isinstance(move, ProgramEnd)
         return "PROGRAM_END()"
     return f"{text}  ; {move.tag}" if move.tag else text
+
+
+@register
+class CanonTarget(Target):
+    """The canonical dump as an export target."""
+
+    name = "canon"
+    description = "canonical move dump (one call per line, the golden-test format)"
+    extension = "canon"
+
+    def emit(
+        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
+    ) -> bytes:
+        return dump(toolpath).encode("utf-8")

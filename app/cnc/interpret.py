@@ -53,6 +53,7 @@ from app.cnc.toolpath import (
     ProgramEnd,
     ProgramStop,
     Rapid,
+    Repetition,
     SpindleOff,
     SpindleOn,
     ToolChange,
@@ -111,6 +112,7 @@ class _Interpreter:
         self.retract = self.z_retract
         self.tool = db0.current_tool
         self.spindle_on = False
+        self.loop_depth = 0
         self.moves: list[Move] = []
         self.toolpath = Toolpath(
             units=units,
@@ -154,10 +156,25 @@ class _Interpreter:
         assert isinstance(rep, Rep)
         step_x, step_y = to_nm(rep.x, rep.units), to_nm(rep.y, rep.units)
         start = self.reference
+        self.loop_depth += 1
+        number = 0
         for j in range(rep.ny + 1):
             for i in range(rep.nx + 1):
                 self.reference = (start[0] + i * step_x, start[1] + j * step_y)
+                first = len(self.moves)
                 self.run_nodes(node.body)
+                self.toolpath.repetitions.append(
+                    Repetition(
+                        rep_block=node.rep + 1,
+                        depth=self.loop_depth,
+                        number=number,
+                        start=first,
+                        end=len(self.moves),
+                        offset=(i * step_x, j * step_y),
+                    )
+                )
+                number += 1
+        self.loop_depth -= 1
 
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
@@ -327,15 +344,26 @@ class _Interpreter:
         """Change to `tool` if another is in the spindle, and make sure the spindle turns."""
         if tool != self.tool:
             self.retract_up(number)
+            # The head stays where it is for the change, so a longer new tool's tip ends up
+            # lower: go high enough first that the new tip is still at the retract height.
+            clear = self.retract + self.tcal(tool) - self.tcal(self.tool)
+            if clear > self.z:
+                self.rapid_z(number, clear, tag="retract")
             if self.spindle_on:
                 self.moves.append(SpindleOff(number))
                 self.spindle_on = False
-            self.moves.append(ToolChange(number, tool))
+            self.z += self.tcal(self.tool) - self.tcal(tool)
+            self.moves.append(ToolChange(number, tool, self.z))
             self.tool = tool
         if not self.spindle_on:
             rpm = self.tool_rpm(tool)
             self.moves.append(SpindleOn(number, clockwise=rpm > 0, rpm=abs(rpm)))
             self.spindle_on = True
+
+    def tcal(self, tool: int) -> int:
+        """A tool's calibrated Z zero in nm (0 for no tool or an uncalibrated one)."""
+        info = self.tools.get(tool)
+        return 0 if info is None or info.tcal is None else info.tcal
 
     def tool_rpm(self, tool: int) -> int:
         info = self.tools.get(tool)

@@ -93,10 +93,16 @@ class SpindleOff:
 
 @dataclass(frozen=True, slots=True)
 class ToolChange:
-    """Put tool `tool` in the spindle (the head is already at its retract height)."""
+    """Put tool `tool` in the spindle; the head does not move.
+
+    Z is measured from each tool's calibrated zero, so the same head height reads
+    differently with the new tool: `z` is it, old Z + old TCAL − new TCAL (an uncalibrated
+    tool counts as TCAL 0, as a control without its length would).
+    """
 
     block: int
     tool: int
+    z: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,6 +144,24 @@ MOTION_TYPES = (Rapid, Feed, ArcFeed)
 
 
 @dataclass(frozen=True, slots=True)
+class Repetition:
+    """One pattern of a LOOP/REP: moves[start:end] of the tool path.
+
+    `offset` (nm) is where this pattern starts relative to the first pattern of the same
+    LOOP run; `depth` is 1 for an outermost LOOP. Emitters that draw or write repeated
+    patterns once (the SVG preview, ProtoTRAK repeats) use these, after checking that the
+    moves really are the first pattern's moved by `offset`.
+    """
+
+    rep_block: int
+    depth: int
+    number: int
+    start: int
+    end: int
+    offset: tuple[int, int]
+
+
+@dataclass(frozen=True, slots=True)
 class ToolInfo:
     """What the tool path knows of a tool: diameter and calibration in nm, signed RPM."""
 
@@ -162,3 +186,4 @@ class Toolpath:
     initial_tool: int
     tools: dict[int, ToolInfo]
     moves: list[Move] = field(default_factory=list)
+    repetitions: list[Repetition] = field(default_factory=list)

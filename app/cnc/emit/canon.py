@@ -87,7 +87,7 @@ def _call(move: Move, length: Callable[[int], str]) -> str:
     elif isinstance(move, SpindleOff):
         return "SPINDLE_STOP()"
     elif isinstance(move, ToolChange):
-        return f"TOOL_CHANGE({move.tool})"
+        return f"TOOL_CHANGE({move.tool}, Z {length(move.z)})"
     elif isinstance(move, ProgramStop):
         return f"PROGRAM_STOP({move.reason})"
     elif isinstance(move, IndexTable):

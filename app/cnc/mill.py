@@ -734,8 +734,8 @@ def plan_sequence(
     radius = 0 if diameter is None else to_nm(diameter, program_units) // 2
     first = blocks[mills[0]]
     if isinstance(first, Circle | Frame):
-        spindle_cw = tool is None or tool.rpm is None or tool.rpm > 0
-        return _plan_routine(first, mills[0] + 1, block0, spindle_cw, radius, start)
+        rpm = None if tool is None else tool.rpm
+        return _plan_routine(first, mills[0] + 1, block0, rpm, radius, start)
     path, numbers, end = programmed_contour(blocks, mills, start)
     if drill.comp is Comp.NONE or diameter is None:
         return SequencePlan([path], 0, end, [])
@@ -743,19 +743,31 @@ def plan_sequence(
     return SequencePlan([geometry.path], 0, end, geometry.findings)
 
 
+INSIDE_PLACEMENTS = (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
+
+
+def routine_clockwise(placement: Placement, milling: MillingMode, rpm: int | None) -> bool:
+    """The direction a CIRCLE/FRAME routine goes round, seen from above (DESIGN.md §3).
+
+    With a clockwise spindle (RPM positive, or not entered), climb milling goes round an
+    outside contour clockwise and an inside one (and a pocket) counter-clockwise;
+    conventional the reverse; a negative RPM (counter-clockwise spindle) flips both.
+    """
+    spindle_cw = rpm is None or rpm > 0
+    outside_cw = (milling is MillingMode.CLIMB) == spindle_cw
+    return not outside_cw if placement in INSIDE_PLACEMENTS else outside_cw
+
+
 def _plan_routine(
     block: Circle | Frame,
     number: int,
     block0: DataBlock0,
-    spindle_cw: bool,
+    rpm: int | None,
     tool_radius: int,
     start: tuple[int, int],
 ) -> SequencePlan:
     units = block.units
-    inside = block.placement in (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
-    climb = block0.milling is MillingMode.CLIMB
-    outside_cw = climb == spindle_cw
-    clockwise = not outside_cw if inside else outside_cw
+    clockwise = routine_clockwise(block.placement, block0.milling, rpm)
     common = {
         "block": number,
         "placement": block.placement,

@@ -1,0 +1,959 @@
+"""ProtoTRAK Plus events: the program as G100-G109 events for the Plus's RS-232 port.
+
+Seed 003 §1 and §2.2 (the ProtoTRAK Plus CAD/CAM Interface Manual) are the source. The
+events format is DESIGN.md §1's one structural exception: it mirrors the data blocks (a
+bolt circle is one G104, a frame one G106/G107) instead of the tool path, and is then
+checked against the tool path (`check_events`): every XY point an event puts the tool at
+must be where the tool path goes at that block, and back.
+
+The file (§2.2.3-§2.2.5): `%`, a label line `PN<part number> G20;` (G21 in mm), one event per
+line `N001 G10x <words>;`, `%`. Words follow the order of the §2.2.5 listing. Readings we
+chose where the manual is vague (docs/readings.md):
+
+- Numbers (§2.2.4): a number without a decimal point has implied decimals there
+  (`+1234` = 0.1234 in, `F1` = 0.1 ipm), so every non-zero dimension, radius, conrad,
+  finish cut and angle carries a point; trailing zeros are dropped but one decimal is kept,
+  and zero is `0`, as in the listings (`X1.2A`, `XC1.0A`, `YB0A`, `CR0`). Inch lengths to
+  0.0001 in, mm to 0.01 mm, rounded half-even; angles to 0.001°; inch feeds with one
+  decimal (`F8.0`), mm feeds whole mm/min (`F250`). T two digits, HL two, FE/LE three, RE
+  two, N three (`T01 HL05 FE001 RE02 N001`), as in §2.2.5.
+- Coordinates are written absolute with the A tag (§2.2.4), never incremental, so no event
+  depends on where the control thinks the previous one ended; XO/YO of a repeat are
+  offsets and carry no tag (§2.2.5 N006).
+- The Plus has no Z (§2.1 "a 2-axis control") and no hole event (§2.2.1 lists Position,
+  Mill, Arc, Bolthole, Repeat, Pocket and Frame): a DRILL/BORE/TAP hole is a G100 position
+  where the operator works the quill by hand. Depths, pecks, dwell, the tap's reversal,
+  retract height, spindle speeds, STOP and INDEX are reported as not carried.
+- CR (conrad) on a mill or arc event is the corner radius into the next event (§2.2.6.3:
+  CR0.841 is the fillet between N005 and N006). MillBlocks contours have sharp corners, so
+  CR0 within a mill sequence; `CR-` (not connected, as the Plus itself writes it in
+  §2.2.6.3) on its last event and before a block whose Z DN changes (§2.2.4: the Plus uses
+  the Z information to decide if movements are connected). A full-circle arc is written as
+  two half-circle events.
+- TC 0/1/2 = tool centre/right/left of the travel (§2.2.4). DR 1 = clockwise, 2 =
+  counter-clockwise: §2.2.6.3's circular pocket is `DR2 TC2` and the same part's G-code
+  (§2.2.6.1) cuts it with G03. Circle and frame routines get DR from climb/conventional and
+  the spindle direction as app/cnc/mill.py decides, and TC from inside/outside for that
+  direction; FC is the 2P finishing allowance (0.010 in, 0.25 mm) or 0. On G106/G107 CR is
+  the frame's corner radius (circles have none, §2.2.5 N009-N010).
+- G104's angle A is measured counter-clockwise from +X and the holes go counter-clockwise
+  (§2.2.6.1: `A45.0` drills X0.7955 Y0.7955 first, then X-0.5107 Y1.0024): A = 270° − θ0 for
+  a BOLT CIR whose first hole is at θ0 (DESIGN.md §3), the same first hole, the others in
+  reverse order.
+- G105 repeats events FE…LE RE more times, the k-th time shifted by k·(XO, YO) (a linear
+  series), with the T and D of the repeated events (§2.2.5 N006). A one-row LOOP/REP is one
+  G105. A grid writes each row as its events and a G105; a repeat is never repeated (nested
+  LOOP/REP expands the outer ones), nor one whose events use several tools or reach past
+  event 255 (the FE/LE range, §2.2.4): those patterns are written out, and reported.
+- Line ends are CR LF (the manual sends a DOS file with `COPY 1.CNC COM1`, §3.2); option
+  `line_end=lf` writes LF.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from decimal import ROUND_HALF_EVEN, Decimal
+from fractions import Fraction
+from typing import Any
+
+from app.cnc.blocks import (
+    Block,
+    BoltCircle,
+    Circle,
+    Comp,
+    DataBlock0,
+    Frame,
+    Hole,
+    MillArc,
+    MillLine,
+    MillQcir,
+    Placement,
+    Pos,
+    Program,
+    Rep,
+)
+from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.mill import (
+    INSIDE_PLACEMENTS,
+    clearance,
+    plan_sequence,
+    pocket_overlap,
+    programmed_contour,
+    rough_depth,
+    rough_wall,
+    routine_clockwise,
+)
+from app.cnc.problems import Rule
+from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
+from app.cnc.toolpath import ArcFeed, Feed, Rapid, Toolpath
+from app.cnc.units import Units, to_nm
+
+XY = tuple[int, int]
+Pt = tuple[float, float]
+
+# §2.2.4: inch dimensions to 0.0001 in, metric to 0.01 mm; both exact in nanometres.
+RESOLUTION_NM = {Units.INCH: 2_540, Units.MM: 10_000}
+PLACES = {Units.INCH: 4, Units.MM: 2}
+# §2.2.4 ranges: dimensions and conrad ±99.9999 in / ±9999.99 mm; feeds 0.1-99.9 ipm and
+# 5-2535 mm/min; From/To event 1-255; line numbers 0-999.
+MAX_DIMENSION_NM = {Units.INCH: 99_9999 * 2_540, Units.MM: 9999_99 * 10_000}
+FEED_RANGE_NM = {
+    Units.INCH: (2_540_000, 999 * 2_540_000),
+    Units.MM: (5 * 1_000_000, 2535 * 1_000_000),
+}
+MAX_EVENT_REFERENCE = 255
+MAX_LINE_NUMBER = 999
+
+TOOL_RIGHT, TOOL_LEFT, TOOL_CENTRE = 1, 2, 0
+TC = {Comp.NONE: TOOL_CENTRE, Comp.RIGHT: TOOL_RIGHT, Comp.LEFT: TOOL_LEFT}
+
+
+# -- events ----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Position:
+    """G100 Position event (§2.2.5 N001): go to X Y with tool T."""
+
+    block: int
+    at: XY
+    tool: int
+
+
+@dataclass(frozen=True, slots=True)
+class Mill:
+    """G101 Mill (a line), G102 Arc CW or G103 Arc CCW event (§2.2.5 N002-N004).
+
+    Lengths in nm, `feed` in nm/min. `centre` is None for a line. `comp` is TC (0 centre,
+    1 right, 2 left); `conrad` the corner radius into the next event, None for `CR-` (not
+    connected).
+    """
+
+    block: int
+    begin: XY
+    end: XY
+    centre: XY | None
+    clockwise: bool
+    comp: int
+    feed: int
+    diameter: int | None
+    conrad: int | None
+    tool: int
+
+
+@dataclass(frozen=True, slots=True)
+class Bolthole:
+    """G104 Bolthole event (§2.2.5 N005): HL holes on radius R about XC YC.
+
+    `angle` is the Plus's A: degrees counter-clockwise from +X to the first hole; the
+    others follow counter-clockwise.
+    """
+
+    block: int
+    centre: XY
+    holes: int
+    radius: int
+    angle: Decimal
+    tool: int
+
+
+@dataclass(frozen=True, slots=True)
+class Repeat:
+    """G105 Repeat event (§2.2.5 N006): events FE…LE again RE times, the k-th shifted k·(XO, YO)."""
+
+    block: int
+    first: int
+    last: int
+    offset: XY
+    repeats: int
+    tool: int
+    diameter: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class Routine:
+    """G106/G107 rectangular and G108/G109 circular pocket/frame (§2.2.5 N007-N010).
+
+    A rectangle has its lower-left corner at `point` (XB YB), the diagonal corner at
+    `diagonal` (XD YD) and corner radius `radius` (CR); a circle its centre at `point`
+    (XC YC) and radius `radius` (R). `finish` is FC, the finishing allowance, in nm.
+    """
+
+    block: int
+    rectangular: bool
+    pocket: bool
+    point: XY
+    diagonal: XY | None
+    radius: int
+    clockwise: bool
+    comp: int
+    finish: int
+    feed: int
+    diameter: int | None
+    tool: int
+
+
+Event = Position | Mill | Bolthole | Repeat | Routine
+Check = tuple[int, Pt]  # a block number and an XY point (nm) the tool is at for it
+
+
+@dataclass
+class Events:
+    """A program's events, with what the self-check needs.
+
+    `checks[i]` lists the XY points (nm, as written) event i + 1 puts the tool at, each with
+    the block whose tool path must go there. `unchecked` holds blocks whose motion the Plus
+    computes itself (compensated contours, circle and frame routines).
+    """
+
+    units: Units
+    part_number: str
+    events: list[Event] = field(default_factory=list)
+    checks: list[tuple[Check, ...]] = field(default_factory=list)
+    unchecked: set[int] = field(default_factory=set)
+
+
+# -- numbers (§2.2.4) ------------------------------------------------------------------------
+
+
+def steps(nm: int, units: Units) -> int:
+    """A length in the Plus's steps (0.0001 in, 0.01 mm), rounded half-even."""
+    return round(Fraction(nm, RESOLUTION_NM[units]))
+
+
+def written(nm: int, units: Units) -> int:
+    """A length (nm) as the file carries it: rounded to the Plus's resolution, back in nm."""
+    return steps(nm, units) * RESOLUTION_NM[units]
+
+
+def _text(value: Decimal) -> str:
+    """Trailing zeros dropped, one decimal kept (`1.0`, `-2.45`); zero is `0` (§2.2.5)."""
+    if value == 0:
+        return "0"
+    text = f"{value.normalize():f}"
+    return text if "." in text else text + ".0"
+
+
+def format_dimension(nm: int, units: Units) -> str:
+    """A length as the Plus reads it: `12.3456` in, `1234.56` mm, always with a point."""
+    return _text(Decimal(steps(nm, units)).scaleb(-PLACES[units]))
+
+
+def format_feed(nm_per_minute: int, units: Units) -> str:
+    """A feed: inch per minute with one decimal (`F8.0`), mm per minute whole (`F250`).
+
+    §2.2.4: an inch feed without a point is read in tenths (`F1` = 0.1 ipm), so it always
+    has one; a metric feed is a whole number of mm/min.
+    """
+    if units is Units.INCH:
+        tenths = round(Fraction(nm_per_minute, 2_540_000))
+        return f"{Decimal(tenths).scaleb(-1):.1f}"
+    return str(round(Fraction(nm_per_minute, 1_000_000)))
+
+
+def format_angle(degrees: Decimal) -> str:
+    """An angle in degrees to 0.001° (§2.2.4 `A-300.000`), e.g. `45.0`."""
+    return _text(degrees.quantize(Decimal("0.001"), rounding=ROUND_HALF_EVEN))
+
+
+# -- bolt circles (DESIGN.md §3) -------------------------------------------------------------
+
+
+def plus_angle(theta0: Decimal) -> Decimal:
+    """The G104 angle A for a BOLT CIR whose first hole is at `theta0`.
+
+    MillBlocks measures θ clockwise from straight below the centre; the Plus measures A
+    counter-clockwise from +X. The same first hole: A = 270° − θ0, in [0°, 360°).
+    """
+    angle = (Decimal(270) - theta0) % 360
+    return angle + 360 if angle < 0 else angle
+
+
+def millblocks_angle(a_plus: Decimal) -> Decimal:
+    """The BOLT CIR angle θ0 for a G104 angle A (the inverse, θ0 = 270° − A)."""
+    return plus_angle(a_plus)
+
+
+def plus_holes(centre: Pt, radius: float, holes: int, angle: Decimal) -> list[Pt]:
+    """Hole centres of a G104 in the Plus's order: from `angle` counter-clockwise from +X."""
+    points = []
+    for k in range(holes):
+        a = math.radians(float(angle) + k * 360.0 / holes)
+        points.append((centre[0] + radius * math.cos(a), centre[1] + radius * math.sin(a)))
+    return points
+
+
+# -- circle and frame routines ---------------------------------------------------------------
+
+
+def routine_comp(placement: Placement, clockwise: bool) -> int:
+    """TC for a routine: inside a clockwise path is to the right of the travel."""
+    inside = placement in INSIDE_PLACEMENTS
+    return TOOL_RIGHT if inside == clockwise else TOOL_LEFT
+
+
+# -- from blocks to events -------------------------------------------------------------------
+
+
+def build_events(program: Program, toolpath: Toolpath, report: Report) -> Events:
+    """The events of a validated program (COPY blocks carried out), reporting what is lost."""
+    builder = _Builder(program, toolpath, report)
+    builder.run_nodes(build_nodes(program.blocks))
+    builder.report_program()
+    return builder.result
+
+
+class _Builder:
+    def __init__(self, program: Program, toolpath: Toolpath, report: Report) -> None:
+        self.program = program
+        self.blocks = program.blocks
+        self.block0: DataBlock0 = program.block0
+        self.units = program.units
+        self.toolpath = toolpath
+        self.report = report
+        self.result = Events(program.units, program.part_number)
+        self.reference: XY = (0, 0)
+
+    @property
+    def events(self) -> list[Event]:
+        return self.result.events
+
+    def add(self, event: Event, checks: Sequence[Check] = ()) -> None:
+        self.result.events.append(event)
+        self.result.checks.append(tuple(checks))
+
+    def point(self, p: XY) -> Pt:
+        """A point as the file carries it (rounded to the Plus's resolution), for checks."""
+        return (float(written(p[0], self.units)), float(written(p[1], self.units)))
+
+    def diameter(self, tool: int) -> int | None:
+        info = self.toolpath.tools.get(tool)
+        return None if info is None else info.diameter
+
+    def resolve(self, block: Block) -> XY:
+        x: Decimal = getattr(block, "x")  # noqa: B009 - every positioned block has x and y
+        y: Decimal = getattr(block, "y")  # noqa: B009
+        return resolve_xy(x, y, block.mode, block.units, self.reference)
+
+    # -- nodes ----------------------------------------------------------------------------
+
+    def run_nodes(self, nodes: Sequence[Node]) -> None:
+        for node in nodes:
+            if isinstance(node, LoopPattern):
+                self.run_loop(node)
+            elif isinstance(node, Single):
+                self.run_single(node.index)
+            elif isinstance(node, BoltPattern):
+                self.run_bolt_circle(node)
+            else:
+                self.run_mill_sequence(node)
+
+    def run_single(self, index: int) -> None:
+        block = self.blocks[index]
+        number = index + 1
+        assert isinstance(block, Pos | Hole)
+        target = self.resolve(block)
+        self.add(Position(number, target, block.tool), [(number, self.point(target))])
+        if isinstance(block, Hole):
+            self.report_hole(
+                number,
+                block,
+                f"written as a G100 position event; the operator {_verb(block)} the hole by "
+                "hand (the Plus has no hole event, seed 003 §2.2.1)",
+            )
+        self.reference = target
+
+    def run_bolt_circle(self, node: BoltPattern) -> None:
+        centre_block = self.blocks[node.centre]
+        bolt = self.blocks[node.bolt]
+        assert isinstance(centre_block, Hole) and isinstance(bolt, BoltCircle)
+        number = node.bolt + 1
+        centre = self.resolve(centre_block)
+        radius = to_nm(bolt.radius, bolt.units)
+        angle = plus_angle(bolt.angle)
+        event = Bolthole(number, centre, bolt.holes, radius, angle, centre_block.tool)
+        holes = plus_holes(
+            self.point(centre), float(written(radius, self.units)), bolt.holes, angle
+        )
+        self.add(event, [(number, hole) for hole in holes])
+        self.report_hole(
+            node.centre + 1,
+            centre_block,
+            f"the operator {_verb(centre_block)} each hole of the G104 bolt circle by hand",
+        )
+        if bolt.holes > 2:
+            self.report.rewritten(
+                number,
+                f"angle {bolt.angle}° (clockwise from below) is A{format_angle(angle)} "
+                "(counter-clockwise from +X): the Plus takes the same first hole, then the "
+                f"other {bolt.holes - 1} counter-clockwise, the reverse of MillBlocks' order",
+            )
+        self.reference = bolt_circle_points(centre, radius, bolt.holes, bolt.angle)[-1]
+
+    def run_mill_sequence(self, node: MillSequence) -> None:
+        drill = self.blocks[node.drill]
+        assert isinstance(drill, Hole)
+        start = self.resolve(drill)
+        self.report_hole(node.drill + 1, drill, "the operator lowers the quill to depth by hand")
+        first = self.blocks[node.mills[0]]
+        if isinstance(first, Circle | Frame):
+            self.routine(node, drill, first, start)
+            self.reference = start
+        else:
+            self.contour(node, drill, start)
+
+    def run_loop(self, node: LoopPattern) -> None:
+        """LOOP…REP: G105 repeats where a linear series is exact, written out elsewhere."""
+        rep = self.blocks[node.rep]
+        assert isinstance(rep, Rep)
+        number = node.rep + 1
+        step = (to_nm(rep.x, rep.units), to_nm(rep.y, rep.units))
+        start = self.reference
+        # Rows of patterns: (offset of the row's first pattern, step along it, repeats).
+        if rep.nx == 0 and rep.ny > 0:
+            rows = [((0, 0), (0, step[1]), rep.ny)]
+        else:
+            rows = [((0, j * step[1]), (step[0], 0), rep.nx) for j in range(rep.ny + 1)]
+        if rep.nx == rep.ny == 0:
+            self.report.note(number, "NX 0, NY 0: the pattern runs once; no G105")
+        end: XY | None = None
+        for (ox, oy), (sx, sy), repeats in rows:
+            self.reference = (start[0] + ox, start[1] + oy)
+            first = len(self.events)
+            self.run_nodes(node.body)
+            if end is None:
+                end = self.reference
+            if repeats == 0:
+                continue
+            body = self.events[first:]
+            reason = self.not_repeatable(body, first + 1)
+            if reason is None:
+                tool = _tools(body).pop()
+                last = len(self.events)
+                diameter = self.diameter(tool)
+                self.add(Repeat(number, first + 1, last, (sx, sy), repeats, tool, diameter))
+                if rep.nx and rep.ny:
+                    self.report.rewritten(
+                        number,
+                        f"NX {rep.nx} × NY {rep.ny} grid: the Plus's G105 repeats along one "
+                        f"line, so each of the {rep.ny + 1} rows is written out with a G105 "
+                        "along X",
+                    )
+                continue
+            repeated = "its repeat is" if repeats == 1 else f"its {repeats} repeats are"
+            self.report.rewritten(number, f"{reason}, so {repeated} written out as events")
+            for k in range(1, repeats + 1):
+                self.reference = (start[0] + ox + k * sx, start[1] + oy + k * sy)
+                self.run_nodes(node.body)
+        assert end is not None
+        self.reference = (
+            end[0] + rep.nx * step[0],
+            end[1] + rep.ny * step[1],
+        )
+
+    def not_repeatable(self, body: Sequence[Event], first: int) -> str | None:
+        """Why events `first`… cannot be one G105 (None when they can)."""
+        if any(isinstance(event, Repeat) for event in body):
+            return "the pattern holds a G105 (nested LOOP/REP) and a repeat is not repeated"
+        tools = _tools(body)
+        if len(tools) > 1:
+            listed = " and ".join(str(t) for t in sorted(tools))
+            return f"the pattern uses tools {listed} and a G105 has one T"
+        if first + len(body) - 1 > MAX_EVENT_REFERENCE:
+            return f"FE/LE cannot refer to events above {MAX_EVENT_REFERENCE} (seed 003 §2.2.4)"
+        return None
+
+    # -- mill sequences ---------------------------------------------------------------------
+
+    def contour(self, node: MillSequence, drill: Hole, start: XY) -> None:
+        """Line, quarter-circle and arc blocks: one G101/G102/G103 per element."""
+        drill_number = node.drill + 1
+        path, _, end = programmed_contour(self.blocks, node.mills, start)
+        tool = drill.tool
+        diameter = self.diameter(tool)
+        checked = drill.comp is Comp.NONE
+        if not checked:
+            self.report_compensation(node, drill, start, diameter)
+        depth = to_nm(drill.z_dn, drill.units) if drill.z_dn is not None else None
+        events: list[Mill] = []
+        checks: list[list[Check]] = []
+        current = start
+        for element in path.elements:
+            block = self.blocks[element.block - 1]
+            assert isinstance(block, MillLine | MillQcir | MillArc)
+            target = _round(element.end)
+            if drill.has_depth and element.z_dn is not None and element.z_dn != depth:
+                depth = element.z_dn
+                if events:
+                    events[-1] = replace(events[-1], conrad=None)
+                self.report.unsupported(
+                    element.block,
+                    f"Z DN {block.z_dn}: the depth changes here; the event before "
+                    "ends not connected (CR-) and the operator moves the quill by hand",
+                )
+            if element.centre is None and target == current:
+                self.report.note(element.block, "no XY move: no event")
+                continue
+            feed = self.feed(element.block, block)
+            centre = None if element.centre is None else _round(element.centre)
+            halves: list[tuple[XY, bool]] = [(target, True)]
+            if centre is not None and target == current:
+                # A full circle: two half circles through the opposite point.
+                opposite = (2 * centre[0] - current[0], 2 * centre[1] - current[1])
+                halves = [(opposite, False), (target, True)]
+                self.report.rewritten(
+                    element.block, "a full-circle arc is written as two half-circle events"
+                )
+            for half_end, is_end in halves:
+                event = Mill(
+                    block=element.block,
+                    begin=current,
+                    end=half_end,
+                    centre=centre,
+                    clockwise=element.clockwise,
+                    comp=TC[drill.comp],
+                    feed=feed,
+                    diameter=diameter,
+                    conrad=0,
+                    tool=tool,
+                )
+                event_checks: list[Check] = []
+                if checked and not events:
+                    event_checks.append((drill_number, self.point(current)))
+                if checked and is_end:
+                    event_checks.append((element.block, self.point(half_end)))
+                events.append(event)
+                checks.append(event_checks)
+                current = half_end
+        if not events:
+            self.add(Position(drill_number, start, tool), [(drill_number, self.point(start))])
+            self.report.note(drill_number, "the mill blocks move nowhere: a G100 position only")
+        else:
+            events[-1] = replace(events[-1], conrad=None)
+        for event, event_checks in zip(events, checks, strict=True):
+            self.add(event, event_checks)
+        if not checked:
+            self.result.unchecked.update([drill_number, *(i + 1 for i in node.mills)])
+        self.reference = end
+
+    def report_compensation(
+        self, node: MillSequence, drill: Hole, start: XY, diameter: int | None
+    ) -> None:
+        number = node.drill + 1
+        side = "right" if drill.comp is Comp.RIGHT else "left"
+        dia = "" if diameter is None else f" and D{format_dimension(diameter, self.units)}"
+        self.report.note(
+            number,
+            f"cutter compensation {side}: the finished contour is written with "
+            f"TC{TC[drill.comp]}{dia}; the Plus computes the tool's offset path itself",
+        )
+        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
+        for finding in plan.findings:
+            if finding.rule is Rule.COMP_DIVOT:
+                self.report.warning(
+                    finding.block,
+                    "inside corner with an arc: the Plus compensates one event ahead and "
+                    "leaves a divot here, where MillBlocks' tool path is trimmed",
+                )
+
+    def routine(self, node: MillSequence, drill: Hole, block: Circle | Frame, start: XY) -> None:
+        """CIRCLE → G108 pocket / G109 frame; FRAME → G106 pocket / G107 frame."""
+        number = node.mills[0] + 1
+        tool_entry = self.block0.tool(drill.tool)
+        rpm = None if tool_entry is None else tool_entry.rpm
+        clockwise = routine_clockwise(block.placement, self.block0.milling, rpm)
+        pocket = block.placement is Placement.POCKET
+        finish = rough_wall(block.units) if block.two_pass else 0
+        common: dict[str, Any] = {
+            "block": number,
+            "pocket": pocket,
+            "point": start,
+            "clockwise": clockwise,
+            "comp": routine_comp(block.placement, clockwise),
+            "finish": finish,
+            "feed": self.feed(number, block),
+            "diameter": self.diameter(drill.tool),
+            "tool": drill.tool,
+        }
+        if isinstance(block, Circle):
+            radius = to_nm(block.radius, block.units)
+            event = Routine(rectangular=False, diagonal=None, radius=radius, **common)
+            name = "G108 circular pocket" if pocket else "G109 circular frame"
+        else:
+            diagonal = (
+                start[0] + to_nm(block.xl, block.units),
+                start[1] + to_nm(block.yw, block.units),
+            )
+            radius = to_nm(block.corner_radius, block.units)
+            event = Routine(rectangular=True, diagonal=diagonal, radius=radius, **common)
+            name = "G106 rectangular pocket" if pocket else "G107 rectangular frame"
+        self.add(event)
+        self.result.unchecked.update([node.drill + 1, number])
+        u = block.units
+
+        def size(nm: int) -> str:
+            return f"{format_dimension(nm, u)} {u.symbol}"
+
+        if block.placement in (Placement.INSIDE, Placement.OUTSIDE):
+            entry = f"the plunge {size(clearance(u))} off the wall and the feed straight in"
+        elif block.placement is Placement.POCKET:
+            entry = f"the tangent entry and passes overlapping {size(pocket_overlap(u))}"
+        else:
+            entry = "the tangent quarter-arc entry and exit"
+        self.report.rewritten(
+            number,
+            f"{block.type_name} is a {name}: the Plus cuts it with its own entry and "
+            f"passes, not MillBlocks' ({entry})",
+        )
+        if block.two_pass and drill.has_depth:
+            self.report.unsupported(
+                number,
+                f"2P: the roughing depth {size(rough_depth(u))} above Z DN is not carried "
+                "(no Z); the Plus finishes with FC at the depth the operator sets",
+            )
+
+    def feed(self, number: int, block: Block) -> int:
+        """A block's FEEDR XY in nm/min, limited to the Plus's range (reported)."""
+        typed: Decimal = getattr(block, "feed_xy")  # noqa: B009 - mill blocks have one
+        feed = to_nm(typed, block.units)
+        low, high = FEED_RANGE_NM[self.units]
+        if not low <= feed <= high:
+            limited = min(max(feed, low), high)
+            self.report.warning(
+                number,
+                f"FEEDR XY {typed} {block.units.feed_symbol} is outside the Plus's range "
+                f"(seed 003 §2.2.4); written as F{format_feed(limited, self.units)}",
+            )
+            return limited
+        return feed
+
+    # -- what the Plus does not carry ---------------------------------------------------
+
+    def report_hole(self, number: int, block: Hole, how: str) -> None:
+        """A hole block's Z cycle: lost when it has depths, by hand either way."""
+        if not block.has_depth:
+            self.report.note(number, f"{block.type_name}: {how}")
+            return
+        cycle = f"Z UP {block.z_up}, Z DN {block.z_dn}, FEEDR Z {block.feed_z}"
+        self.report.unsupported(
+            number, f"{block.type_name} {cycle} not carried: the Plus has no Z; {how}"
+        )
+        if block.pecks > 1:
+            self.report.unsupported(
+                number, f"{block.pecks} pecks not carried: the operator pecks by hand"
+            )
+
+    def report_program(self) -> None:
+        """Set-up data and block qualifiers the events have no place for."""
+        db0 = self.block0
+        if db0.x_offset or db0.y_offset:
+            self.report.unsupported(
+                0,
+                f"part zero offset X {db0.x_offset} Y {db0.y_offset} not carried: the "
+                "events are in part coordinates; set part zero on the Plus",
+            )
+        if any(isinstance(b, Hole) and b.has_depth for b in self.blocks):
+            self.report.unsupported(0, f"Z RET {db0.z_retract} not carried: the Plus has no Z")
+        used = _tools(self.events)
+        tools = [t for n in sorted(used) if (t := db0.tool(n)) is not None]
+        if any(t.rpm is not None for t in tools):
+            self.report.unsupported(
+                0, "spindle speeds (RPM) not carried: the Plus's spindle is set by hand"
+            )
+        if any(t.tcal is not None for t in tools):
+            self.report.unsupported(0, "tool calibrations (TCAL) not carried: the Plus has no Z")
+        for number, block in enumerate(self.blocks, start=1):
+            if block.stop:
+                self.report.unsupported(number, "STOP not carried: the Plus has no stop event")
+            if isinstance(block, Pos) and block.index:
+                self.report.unsupported(
+                    number, "INDEX not carried: the Plus has no rotary fixture signal"
+                )
+            if block.units is not self.units:
+                self.report.rewritten(
+                    number,
+                    f"typed in {block.units.symbol}: written in {_unit_name(self.units)} to "
+                    f"{format_dimension(RESOLUTION_NM[self.units], self.units)} "
+                    f"{self.units.symbol} ({_g_units(self.units)} holds for the whole file)",
+                )
+        count = len(self.events)
+        if count > MAX_LINE_NUMBER:
+            self.report.error(
+                None,
+                f"{count} events: line numbers run to {MAX_LINE_NUMBER} (seed 003 §2.2.4)",
+            )
+        elif count > MAX_EVENT_REFERENCE:
+            self.report.warning(
+                None,
+                f"{count} events: the Plus numbers events to {MAX_EVENT_REFERENCE} "
+                "(seed 003 §2.2.4 FE/LE); it may not hold this program",
+            )
+
+
+def _verb(block: Hole) -> str:
+    return {"DRILL": "drills", "BORE": "bores", "TAP": "taps"}[block.op.value]
+
+
+def _tools(events: Sequence[Event]) -> set[int]:
+    return {event.tool for event in events}
+
+
+def _round(p: Pt) -> XY:
+    return round(p[0]), round(p[1])
+
+
+def _unit_name(units: Units) -> str:
+    return "inches" if units is Units.INCH else "millimetres"
+
+
+def _g_units(units: Units) -> str:
+    return "G20" if units is Units.INCH else "G21"
+
+
+# -- the self-check ----------------------------------------------------------------------------
+
+
+def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
+    """Compare the events with the tool path; a difference is a report error.
+
+    Every XY point the tool path moves to at a block must be one of the points the events
+    put the tool at for that block (G105 repeats and G104 holes included, as the Plus
+    computes them from the written numbers), and every such point must be a position of the
+    tool path, both within half the Plus's resolution. The second test is not per block: a
+    block that finds the tool already at its point has no move of its own. Blocks whose
+    path the Plus computes itself (`events.unchecked`: compensated contours, routines) are
+    skipped; circular pockets and frames must turn the way the tool path does.
+    """
+    units = events.units
+    tolerance = RESOLUTION_NM[units] / 2 + 1
+    expected = _expected_points(events)
+    positions = _Grid(RESOLUTION_NM[units])
+    destinations: dict[int, list[Pt]] = defaultdict(list)
+    arcs: dict[int, list[ArcFeed]] = defaultdict(list)
+    x, y = toolpath.start[0], toolpath.start[1]
+    positions.add((x, y))
+    for move in toolpath.moves:
+        if isinstance(move, Rapid | Feed | ArcFeed):
+            if (move.x, move.y) != (x, y):
+                destinations[move.block].append((move.x, move.y))
+            x, y = move.x, move.y
+            if isinstance(move, ArcFeed):
+                arcs[move.block].append(move)
+            positions.add((x, y))
+
+    def where(p: Pt) -> str:
+        px, py = format_dimension(round(p[0]), units), format_dimension(round(p[1]), units)
+        return f"X{px} Y{py}"
+
+    for block, points in sorted(expected.items()):
+        missing = next((p for p in points if not positions.near(p, tolerance)), None)
+        if missing is not None:
+            report.error(
+                block,
+                f"self-check: the events put the tool at {where(missing)}, where the tool "
+                "path never goes",
+            )
+    for block, points in sorted(destinations.items()):
+        if block in events.unchecked:
+            continue
+        if block not in expected:
+            report.error(block, "self-check: the tool path moves here but no event does")
+            continue
+        grid = _Grid(RESOLUTION_NM[units])
+        for p in expected[block]:
+            grid.add(p)
+        extra = next((p for p in points if not grid.near(p, tolerance)), None)
+        if extra is not None:
+            report.error(
+                block,
+                f"self-check: the tool path goes to {where(extra)}, which no event reaches",
+            )
+    for event in events.events:
+        if isinstance(event, Routine) and not event.rectangular:
+            turns = {a.clockwise for a in arcs[event.block] if (a.cx, a.cy) == event.point}
+            if turns and turns != {event.clockwise}:
+                report.error(event.block, "self-check: DR turns the other way from the tool path")
+
+
+def _expected_points(events: Events) -> dict[int, list[Pt]]:
+    """Every block's XY points by the events, G105 repeats carried out."""
+    units = events.units
+    expected: dict[int, list[Pt]] = defaultdict(list)
+    for event, checks in zip(events.events, events.checks, strict=True):
+        for block, p in checks:
+            expected[block].append(p)
+        if isinstance(event, Repeat):
+            ox, oy = written(event.offset[0], units), written(event.offset[1], units)
+            for k in range(1, event.repeats + 1):
+                for n in range(event.first, event.last + 1):
+                    for block, (px, py) in events.checks[n - 1]:
+                        expected[block].append((px + k * ox, py + k * oy))
+    return expected
+
+
+class _Grid:
+    """Points bucketed by cell, to find one within a tolerance below the cell size fast."""
+
+    def __init__(self, cell: int) -> None:
+        self.cell = cell
+        self.cells: dict[tuple[int, int], list[Pt]] = defaultdict(list)
+
+    def key(self, p: Pt) -> tuple[int, int]:
+        return math.floor(p[0] / self.cell), math.floor(p[1] / self.cell)
+
+    def add(self, p: Pt) -> None:
+        self.cells[self.key(p)].append(p)
+
+    def near(self, p: Pt, tolerance: float) -> bool:
+        kx, ky = self.key(p)
+        return any(
+            abs(q[0] - p[0]) <= tolerance and abs(q[1] - p[1]) <= tolerance
+            for dx in (-1, 0, 1)
+            for dy in (-1, 0, 1)
+            for q in self.cells.get((kx + dx, ky + dy), ())
+        )
+
+
+# -- text (§2.2.5) -----------------------------------------------------------------------------
+
+
+def render(events: Events, line_end: str = "\r\n") -> str:
+    """The event file: `%`, the label line, one line per event, `%`."""
+    units = events.units
+    part = events.part_number or "0"
+    lines = ["%", f"PN{part} {_g_units(units)};"]
+    for number, event in enumerate(events.events, start=1):
+        lines.append(f"N{number:03d} " + " ".join(_words(event, units)) + ";")
+    lines.append("%")
+    return line_end.join(lines) + line_end
+
+
+def _words(event: Event, units: Units) -> list[str]:
+    """An event's words in the order of the §2.2.5 listing."""
+
+    def length(nm: int) -> str:
+        return format_dimension(nm, units)
+
+    def axis(name: str, nm: int) -> str:
+        return f"{name}{length(nm)}A"
+
+    def tool(number: int) -> str:
+        return f"T{number:02d}"
+
+    def diameter(nm: int | None) -> list[str]:
+        return [] if nm is None else [f"D{length(nm)}"]
+
+    if isinstance(event, Position):
+        return ["G100", axis("X", event.at[0]), axis("Y", event.at[1]), tool(event.tool)]
+    if isinstance(event, Mill):
+        ends = [
+            axis("XB", event.begin[0]),
+            axis("YB", event.begin[1]),
+            axis("XE", event.end[0]),
+            axis("YE", event.end[1]),
+        ]
+        conrad = "CR-" if event.conrad is None else f"CR{length(event.conrad)}"
+        feed = f"F{format_feed(event.feed, units)}"
+        tail = [*diameter(event.diameter), conrad, tool(event.tool)]
+        if event.centre is None:
+            return ["G101", *ends, f"TC{event.comp}", feed, *tail]
+        code = "G102" if event.clockwise else "G103"
+        centre = [axis("XC", event.centre[0]), axis("YC", event.centre[1])]
+        return [code, *ends, *centre, feed, f"TC{event.comp}", *tail]
+    if isinstance(event, Bolthole):
+        return [
+            "G104",
+            axis("XC", event.centre[0]),
+            axis("YC", event.centre[1]),
+            f"HL{event.holes:02d}",
+            f"R{length(event.radius)}",
+            f"A{format_angle(event.angle)}",
+            tool(event.tool),
+        ]
+    if isinstance(event, Repeat):
+        return [
+            "G105",
+            f"FE{event.first:03d}",
+            f"LE{event.last:03d}",
+            f"XO{length(event.offset[0])}",
+            f"YO{length(event.offset[1])}",
+            f"RE{event.repeats:02d}",
+            *diameter(event.diameter),
+            tool(event.tool),
+        ]
+    cut = [
+        f"DR{1 if event.clockwise else 2}",
+        f"TC{event.comp}",
+        f"FC{length(event.finish)}",
+        f"F{format_feed(event.feed, units)}",
+        *diameter(event.diameter),
+    ]
+    if event.rectangular:
+        assert event.diagonal is not None
+        corners = [
+            axis("XB", event.point[0]),
+            axis("YB", event.point[1]),
+            axis("XD", event.diagonal[0]),
+            axis("YD", event.diagonal[1]),
+        ]
+        code = "G106" if event.pocket else "G107"
+        return [code, *corners, *cut, f"CR{length(event.radius)}", tool(event.tool)]
+    code = "G108" if event.pocket else "G109"
+    centre = [axis("XC", event.point[0]), axis("YC", event.point[1]), f"R{length(event.radius)}"]
+    return [code, *centre, *cut, tool(event.tool)]
+
+
+def check_ranges(events: Events, report: Report) -> None:
+    """Dimensions beyond the Plus's ±99.9999 in / ±9999.99 mm (§2.2.4) are errors."""
+    units = events.units
+    limit = MAX_DIMENSION_NM[units]
+    for event in events.events:
+        values: list[int] = []
+        if isinstance(event, Position):
+            values = list(event.at)
+        elif isinstance(event, Mill):
+            values = [*event.begin, *event.end, *(event.centre or ())]
+        elif isinstance(event, Bolthole):
+            values = [*event.centre, event.radius]
+        elif isinstance(event, Repeat):
+            values = list(event.offset)
+        else:
+            values = [*event.point, *(event.diagonal or ()), event.radius]
+        worst = max((abs(v) for v in values), default=0)
+        if written(worst, units) > limit:
+            report.error(
+                event.block,
+                f"{format_dimension(worst, units)} {units.symbol} is beyond the Plus's "
+                f"±{format_dimension(limit, units)} {units.symbol} (seed 003 §2.2.4)",
+            )
+
+
+@register
+class EventsTarget(Target):
+    """ProtoTRAK Plus events G100-G109 over RS-232 (seed 003 §2.2)."""
+
+    name = "events"
+    description = "ProtoTRAK Plus events G100-G109 (RS-232, seed 003 §2.2)"
+    extension = "cnc"
+    options = (
+        Option(
+            "line_end",
+            OptionKind.CHOICE,
+            "crlf",
+            "end of line after each `;` block: crlf (a DOS file, as the manual sends) or lf",
+            choices=("crlf", "lf"),
+        ),
+    )
+
+    def emit(
+        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
+    ) -> bytes:
+        events = build_events(program, toolpath, report)
+        check_ranges(events, report)
+        check_events(events, toolpath, report)
+        line_end = "\r\n" if options.get("line_end", "crlf") == "crlf" else "\n"
+        return render(events, line_end).encode("ascii")

@@ -27,6 +27,7 @@ from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.problems import Problem, has_errors
 from app.cnc.validate import validate
+from app.storage.library import Library, LibraryError, open_library
 
 
 class ProgramFileError(click.ClickException):
@@ -52,14 +53,30 @@ def load_program(path: Path) -> Program:
         sys.exit(1)
 
 
-def print_problems(path: Path, problems: list[Problem]) -> None:
+def resolve_program(reference: str) -> Program:
+    """A program from a file path, or else from the library by id or exact name."""
+    path = Path(reference)
+    if path.exists() or reference.endswith(".json"):
+        return load_program(path)
+    try:
+        return library().find(reference).program
+    except LibraryError as exc:
+        raise ProgramFileError(f"{reference}: not a file, and {exc}") from None
+
+
+def library() -> Library:
+    """The library (DATABASE_URL, else instance/millblocks.db), migrated to the newest."""
+    return open_library()
+
+
+def print_problems(path: Path | str, problems: list[Problem]) -> None:
     for problem in problems:
         click.echo(f"{path}: {problem}", err=True)
 
 
-def checked(path: Path) -> Program:
+def checked(path: str) -> Program:
     """Load and validate; exit 1 after listing the problems when there is an error."""
-    program = load_program(path)
+    program = resolve_program(path)
     problems = validate(program)
     print_problems(path, problems)
     if has_errors(problems):
@@ -74,10 +91,10 @@ def main() -> None:
 
 
 @main.command()
-@click.argument("file", type=click.Path(path_type=Path, dir_okay=False))
-def check(file: Path) -> None:
-    """List every problem in FILE; exit 1 when any is an error."""
-    program = load_program(file)
+@click.argument("file", metavar="PROGRAM")
+def check(file: str) -> None:
+    """List every problem in PROGRAM (a file, or a library id or name); exit 1 on errors."""
+    program = resolve_program(file)
     problems = validate(program)
     print_problems(file, problems)
     errors = sum(1 for p in problems if p.severity.value == "error")
@@ -88,7 +105,7 @@ def check(file: Path) -> None:
 
 
 @main.command()
-@click.argument("file", type=click.Path(path_type=Path, dir_okay=False))
+@click.argument("file", metavar="PROGRAM")
 @click.option(
     "--tool-change-seconds",
     type=click.FloatRange(min=0),
@@ -96,8 +113,8 @@ def check(file: Path) -> None:
     show_default=True,
     help="Allowance for each manual tool change.",
 )
-def time(file: Path, tool_change_seconds: float) -> None:
-    """Estimate the cycle time of FILE per block, per tool and in total."""
+def time(file: str, tool_change_seconds: float) -> None:
+    """Estimate the cycle time of PROGRAM per block, per tool and in total."""
     program = checked(file)
     click.echo(report(estimate(interpret(program), tool_change_seconds)), nl=False)
 
@@ -107,7 +124,7 @@ def _target_names() -> list[str]:
 
 
 @main.command()
-@click.argument("file", type=click.Path(path_type=Path, dir_okay=False))
+@click.argument("file", metavar="PROGRAM")
 @click.option(
     "--to",
     "fmt",
@@ -130,15 +147,16 @@ def _target_names() -> list[str]:
     help='Machine profile: JSON {"options": {NAME: VALUE}}; -O overrides it.',
 )
 def export(
-    file: Path,
+    file: str,
     fmt: str,
     output: Path | None,
     option_pairs: tuple[str, ...],
     profile: Path | None,
 ) -> None:
-    """Write FILE as another format (to standard output unless -o is given).
+    """Write PROGRAM (a file, or a library id or name) in format FMT.
 
-    The compatibility report (what the target could not express) goes to standard error.
+    The output goes to standard output unless -o is given; the compatibility report (what
+    the target could not express) goes to standard error.
     """
     raw = _profile_options(profile) if profile else {}
     for pair in option_pairs:
@@ -146,7 +164,7 @@ def export(
         if not sep:
             raise click.BadParameter(f"{pair!r} is not NAME=VALUE", param_hint="-O")
         raw[name.strip()] = value
-    program = load_program(file)
+    program = resolve_program(file)
     try:
         result = run_export(program, fmt, raw)
     except OptionError as exc:
@@ -188,6 +206,63 @@ def list_targets(show_options: bool) -> None:
                 choices = f" ({'/'.join(option.choices)})" if option.choices else ""
                 default = option.default if option.default is not None else "-"
                 click.echo(f"    {option.name}={default}{choices}  {option.help}")
+
+
+@main.command("import")
+@click.argument("file", type=click.Path(path_type=Path, dir_okay=False, exists=True))
+@click.option("--author", default="", help="Who is importing (kept with the revision).")
+def import_program(file: Path, author: str) -> None:
+    """Add a program file to the library; prints the new program's id."""
+    program = load_program(file)
+    info = library().create(program, author=author, summary_text=f"imported from {file.name}")
+    problems = validate(program)
+    print_problems(file, problems)
+    click.echo(info.id)
+
+
+@main.command("list")
+@click.argument("query", required=False, default="")
+@click.option("--sort", type=click.Choice(["name", "part_number", "updated", "created"]))
+@click.option("--trash", is_flag=True, help="List the trash instead.")
+def list_programs(query: str, sort: str | None, trash: bool) -> None:
+    """List library programs matching QUERY (name, part number, notes, tools, block types)."""
+    for info in library().programs(query, sort or "name", trash):
+        click.echo(
+            f"{info.id:>5}  {info.name:<40} {info.part_number:<8} {info.block_count:>4} blocks"
+            f"  v{info.version}  {info.updated_at:%Y-%m-%d %H:%M}"
+        )
+
+
+@main.command()
+@click.argument("archive", type=click.Path(path_type=Path, dir_okay=False))
+def backup(archive: Path) -> None:
+    """Write the whole library to ARCHIVE (a zip of JSON documents)."""
+    with archive.open("wb") as out:
+        count = library().backup(out)
+    click.echo(f"{archive}: {count} programs")
+
+
+@main.command()
+@click.argument("archive", type=click.Path(path_type=Path, dir_okay=False, exists=True))
+def restore(archive: Path) -> None:
+    """Add every program of a backup ARCHIVE to the library (nothing is replaced)."""
+    try:
+        count = library().restore_backup(archive)
+    except LibraryError as exc:
+        raise ProgramFileError(f"{archive}: {exc}") from None
+    click.echo(f"{archive}: {count} programs restored")
+
+
+@main.group()
+def db() -> None:
+    """Database maintenance."""
+
+
+@db.command("upgrade")
+def db_upgrade() -> None:
+    """Bring the database up to date (every command does this by itself too)."""
+    library()
+    click.echo("database is up to date")
 
 
 if __name__ == "__main__":  # pragma: no cover

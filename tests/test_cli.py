@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from app.cli import main
@@ -86,3 +87,31 @@ def test_output_identical_across_processes() -> None:
         cmd += [str(GOLDEN / "mill-contour-uncompensated" / "program.json"), "--to", "canon"]
         outputs.append(subprocess.run(cmd, env=env, capture_output=True, check=True).stdout)
     assert outputs[0] == outputs[1] and outputs[0]
+
+
+def test_import_prints_the_id_and_export_by_id_or_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'lib.db'}")
+    code, out, _ = run("import", str(GOLDEN / "drill-single" / "program.json"))
+    assert code == 0
+    new_id = out.strip()
+    assert new_id.isdigit()
+    by_id = run("export", new_id, "--to", "canon")
+    by_name = run("export", "drill-single", "--to", "canon")
+    expected = (GOLDEN / "drill-single" / "expected.canon").read_text()
+    assert by_id[1] == by_name[1] == expected
+    code, out, _ = run("list", "drill")
+    assert "drill-single" in out
+    code, _, err = run("export", "no such program", "--to", "canon")
+    assert code == 2 and "no program named 'no such program'" in err
+
+
+def test_backup_and_restore_commands(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'a.db'}")
+    archive = tmp_path / "library.zip"
+    code, out, _ = run("backup", str(archive))
+    assert code == 0 and out.endswith("programs\n")
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'b.db'}")
+    code, out, _ = run("restore", str(archive))
+    assert code == 0 and "programs restored" in out

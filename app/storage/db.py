@@ -1,0 +1,80 @@
+"""Engines and migrations: where the library lives and how it is brought up to date.
+
+The default database is an SQLite file, `instance/millblocks.db` under the project folder
+(override with DATABASE_URL, e.g. `postgresql+psycopg://user@host/millblocks`). SQLite runs
+with WAL, foreign keys on and synchronous FULL: an acknowledged save survives a crash.
+`upgrade()` runs the committed Alembic migrations; every entry point calls it first.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from alembic import command
+from alembic.config import Config
+from sqlalchemy import Engine, create_engine, event
+
+ROOT = Path(__file__).resolve().parents[2]
+MIGRATIONS = ROOT / "migrations"
+DEFAULT_SQLITE = ROOT / "instance" / "millblocks.db"
+
+
+def database_url(url: str | None = None) -> str:
+    """The URL to use: the argument, else DATABASE_URL, else the default SQLite file."""
+    if url:
+        return url
+    env = os.environ.get("DATABASE_URL")
+    if env:
+        # Heroku-style postgres:// URLs name the old driver; psycopg 3 is what we ship.
+        if env.startswith("postgres://"):
+            env = "postgresql+psycopg://" + env[len("postgres://") :]
+        elif env.startswith("postgresql://"):
+            env = "postgresql+psycopg://" + env[len("postgresql://") :]
+        return env
+    DEFAULT_SQLITE.parent.mkdir(parents=True, exist_ok=True)
+    return f"sqlite:///{DEFAULT_SQLITE}"
+
+
+def make_engine(url: str | None = None) -> Engine:
+    """An engine for `url` (see `database_url`), with SQLite's safety pragmas."""
+    resolved = database_url(url)
+    if resolved.startswith("sqlite"):
+        engine = create_engine(resolved, connect_args={"timeout": 30})
+        event.listen(engine, "connect", _sqlite_pragmas)
+        return engine
+    return create_engine(resolved, pool_pre_ping=True)
+
+
+def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
+    cursor = dbapi_connection.cursor()
+    cursor.execute("PRAGMA journal_mode=WAL")
+    cursor.execute("PRAGMA foreign_keys=ON")
+    cursor.execute("PRAGMA synchronous=FULL")
+    cursor.execute("PRAGMA busy_timeout=30000")
+    cursor.close()
+
+
+def alembic_config(engine: Engine) -> Config:
+    """An Alembic configuration for the project's migrations on `engine`."""
+    config = Config()
+    config.set_main_option("script_location", str(MIGRATIONS))
+    config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
+    return config
+
+
+def upgrade(engine: Engine, revision: str = "head") -> None:
+    """Bring the database up to `revision` (an empty or older database included)."""
+    config = alembic_config(engine)
+    with engine.begin() as connection:
+        config.attributes["connection"] = connection
+        command.upgrade(config, revision)
+
+
+def downgrade(engine: Engine, revision: str) -> None:
+    """Take the database down to `revision` (used by the migration tests)."""
+    config = alembic_config(engine)
+    with engine.begin() as connection:
+        config.attributes["connection"] = connection
+        command.downgrade(config, revision)

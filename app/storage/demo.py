@@ -1,0 +1,36 @@
+"""The demo library: the seeds' sample parts, added the first time a library is opened.
+
+The programs live as JSON documents in app/demo/. A setting records that they were added,
+so a shop that deletes them does not get them back.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from typing import TYPE_CHECKING
+
+from app.cnc import document
+from app.cnc.blocks import Program
+
+if TYPE_CHECKING:
+    from app.storage.library import Library
+
+SETTING = "demo_seeded"
+
+
+def demo_programs() -> list[Program]:
+    """The demo programs, in file-name order."""
+    folder = resources.files("app") / "demo"
+    files = sorted((f for f in folder.iterdir() if f.name.endswith(".json")), key=lambda f: f.name)
+    return [document.loads(f.read_text(encoding="utf-8")) for f in files]
+
+
+def seed(library: Library) -> int:
+    """Add the demo programs unless this library already had them; returns how many."""
+    if library.setting(SETTING):
+        return 0
+    programs = demo_programs()
+    for program in programs:
+        library.create(program, author="MillBlocks", summary_text="demo program")
+    library.set_setting(SETTING, "1")
+    return len(programs)

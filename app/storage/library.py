@@ -1,0 +1,525 @@
+"""The Library: programs with revisions, the trash, search, machines, backup and restore.
+
+Every save names the version it was based on. A save based on an older version than the
+stored one is refused with `StaleSave`, whose message says who saved what meanwhile;
+nothing is overwritten and every revision is kept. Each operation is one transaction: a
+failed save or import leaves the stored program exactly as it was.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, BinaryIO
+
+from sqlalchemy import Engine, delete, func, or_, select, update
+from sqlalchemy.orm import Session, sessionmaker
+
+from app.cnc import document
+from app.cnc.blocks import Hole, Program
+from app.cnc.diff import diff, summary
+from app.storage.db import make_engine, upgrade
+from app.storage.models import MachineRow, ProgramRow, RevisionRow, SettingRow
+
+SORTS = ("name", "part_number", "updated", "created")
+BACKUP_FORMAT = "millblocks-backup"
+
+
+class LibraryError(ValueError):
+    """A library operation that cannot be done (the message says why)."""
+
+
+class NotFound(LibraryError):
+    """No such program, revision or machine."""
+
+
+class StaleSave(LibraryError):
+    """A save based on an older version: refused, with what changed meanwhile."""
+
+    def __init__(self, message: str, current_version: int, changes: list[str]) -> None:
+        super().__init__(message)
+        self.current_version = current_version
+        self.changes = changes
+
+
+@dataclass(frozen=True)
+class ProgramInfo:
+    """A library entry without its document."""
+
+    id: int
+    name: str
+    part_number: str
+    notes: str
+    units: str
+    block_count: int
+    version: int
+    created_at: datetime
+    updated_at: datetime
+    updated_by: str
+    deleted_at: datetime | None
+
+
+@dataclass(frozen=True)
+class StoredProgram:
+    """A library entry with its program."""
+
+    info: ProgramInfo
+    program: Program
+
+
+@dataclass(frozen=True)
+class RevisionInfo:
+    version: int
+    created_at: datetime
+    author: str
+    summary: str
+
+
+@dataclass(frozen=True)
+class Machine:
+    """A machine profile: the export target and its options, and serial settings."""
+
+    name: str
+    target: str
+    options: dict[str, str]
+    serial: dict[str, Any]
+    notes: str = ""
+
+
+def _now() -> datetime:
+    return datetime.now(UTC).replace(tzinfo=None, microsecond=0)
+
+
+def _info(row: ProgramRow) -> ProgramInfo:
+    return ProgramInfo(
+        id=row.id,
+        name=row.name,
+        part_number=row.part_number,
+        notes=row.notes,
+        units=row.units,
+        block_count=row.block_count,
+        version=row.version,
+        created_at=row.created_at,
+        updated_at=row.updated_at,
+        updated_by=row.updated_by,
+        deleted_at=row.deleted_at,
+    )
+
+
+def search_words(program: Program) -> str:
+    """What a content search matches: tool numbers (T3), block types, hole operations."""
+    words = set()
+    for block in program.blocks:
+        words.add(block.kind)
+        words.update(block.title.split())
+        if isinstance(block, Hole):
+            words.add(block.op.value)
+        if block.tool_number is not None:
+            words.add(f"T{block.tool_number}")
+    words.update(f"T{tool.number}" for tool in program.block0.tools)
+    return " ".join(sorted(words)).lower()
+
+
+def _columns(program: Program) -> dict[str, Any]:
+    return {
+        "name": program.name,
+        "part_number": program.part_number[:8],
+        "notes": program.notes,
+        "units": program.units.value,
+        "document": document.dumps(program),
+        "search_text": search_words(program),
+        "block_count": len(program.blocks),
+    }
+
+
+class Library:
+    """The program library on one database."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.engine = engine
+        self.sessions = sessionmaker(engine, expire_on_commit=False)
+
+    @contextmanager
+    def session(self) -> Iterator[Session]:
+        """One transaction: committed when the block ends, rolled back on any error."""
+        with self.sessions.begin() as session:
+            yield session
+
+    # -- programs -------------------------------------------------------------------------
+
+    def create(self, program: Program, author: str = "", summary_text: str = "") -> ProgramInfo:
+        """Add a program; its first revision is version 1."""
+        now = _now()
+        with self.session() as s:
+            row = ProgramRow(
+                **_columns(program),
+                version=1,
+                created_at=now,
+                updated_at=now,
+                updated_by=author,
+            )
+            s.add(row)
+            s.flush()
+            s.add(
+                RevisionRow(
+                    program_id=row.id,
+                    version=1,
+                    document=row.document,
+                    created_at=now,
+                    author=author,
+                    summary=summary_text or summary(None, program),
+                )
+            )
+            return _info(row)
+
+    def get(self, program_id: int, include_trash: bool = False) -> StoredProgram:
+        with self.session() as s:
+            row = s.get(ProgramRow, program_id)
+            if row is None or (row.deleted_at is not None and not include_trash):
+                raise NotFound(f"no program {program_id} in the library")
+            return StoredProgram(_info(row), document.loads(row.document))
+
+    def find(self, reference: str) -> StoredProgram:
+        """A program by id (digits) or by exact name (not in the trash)."""
+        if reference.isdigit():
+            return self.get(int(reference))
+        with self.session() as s:
+            rows = s.scalars(
+                select(ProgramRow).where(
+                    ProgramRow.name == reference, ProgramRow.deleted_at.is_(None)
+                )
+            ).all()
+            if not rows:
+                raise NotFound(f"no program named {reference!r} in the library")
+            if len(rows) > 1:
+                ids = ", ".join(str(r.id) for r in rows)
+                raise LibraryError(f"{len(rows)} programs are named {reference!r} (ids {ids})")
+            return StoredProgram(_info(rows[0]), document.loads(rows[0].document))
+
+    def programs(
+        self, query: str = "", sort: str = "name", trash: bool = False
+    ) -> list[ProgramInfo]:
+        """Programs matching every word of `query` in name, part number, notes or content."""
+        if sort not in SORTS:
+            raise LibraryError(f"cannot sort by {sort!r}; sorts: {', '.join(SORTS)}")
+        statement = select(ProgramRow).where(
+            ProgramRow.deleted_at.is_not(None) if trash else ProgramRow.deleted_at.is_(None)
+        )
+        for word in query.lower().split():
+            pattern = f"%{word}%"
+            statement = statement.where(
+                or_(
+                    func.lower(ProgramRow.name).like(pattern),
+                    func.lower(ProgramRow.part_number).like(pattern),
+                    func.lower(ProgramRow.notes).like(pattern),
+                    func.lower(ProgramRow.search_text).like(pattern),
+                )
+            )
+        order = {
+            "name": (func.lower(ProgramRow.name), ProgramRow.id),
+            "part_number": (ProgramRow.part_number, ProgramRow.id),
+            "updated": (ProgramRow.updated_at.desc(), ProgramRow.id.desc()),
+            "created": (ProgramRow.created_at.desc(), ProgramRow.id.desc()),
+        }[sort]
+        with self.session() as s:
+            return [_info(row) for row in s.scalars(statement.order_by(*order))]
+
+    def save(
+        self, program_id: int, program: Program, based_on: int, author: str = ""
+    ) -> ProgramInfo:
+        """Store a new version of a program, based on version `based_on`.
+
+        Raises StaleSave (nothing written) when someone saved after `based_on`.
+        """
+        now = _now()
+        with self.session() as s:
+            row = s.get(ProgramRow, program_id)
+            if row is None or row.deleted_at is not None:
+                raise NotFound(f"no program {program_id} in the library")
+            if row.version != based_on:
+                raise self._stale(s, row, based_on, program)
+            old = document.loads(row.document)
+            result = s.execute(
+                update(ProgramRow)
+                .where(ProgramRow.id == program_id, ProgramRow.version == based_on)
+                .values(
+                    **_columns(program), version=based_on + 1, updated_at=now, updated_by=author
+                )
+            )
+            if result.rowcount != 1:  # type: ignore[attr-defined]
+                s.rollback()
+                with self.session() as again:
+                    fresh = again.get(ProgramRow, program_id)
+                    assert fresh is not None
+                    raise self._stale(again, fresh, based_on, program)
+            s.add(
+                RevisionRow(
+                    program_id=program_id,
+                    version=based_on + 1,
+                    document=document.dumps(program),
+                    created_at=now,
+                    author=author,
+                    summary=summary(old, program),
+                )
+            )
+            s.flush()
+            s.refresh(row)
+            return _info(row)
+
+    def _stale(self, s: Session, row: ProgramRow, based_on: int, mine: Program) -> StaleSave:
+        base = s.scalar(
+            select(RevisionRow).where(
+                RevisionRow.program_id == row.id, RevisionRow.version == based_on
+            )
+        )
+        changes = diff(document.loads(base.document), document.loads(row.document)) if base else []
+        who = row.updated_by or "someone"
+        listed = "; ".join(changes[:6]) or "no change to the program itself"
+        message = (
+            f"not saved: {who} saved program {row.id} at {row.updated_at:%Y-%m-%d %H:%M} UTC "
+            f"(version {row.version}) after the version {based_on} you started from. "
+            f"Changed meanwhile: {listed}. Reload it and make your change again; "
+            "nothing was overwritten."
+        )
+        del mine
+        return StaleSave(message, row.version, changes)
+
+    def rename(self, program_id: int, name: str, based_on: int, author: str = "") -> ProgramInfo:
+        if not name.strip():
+            raise LibraryError("a program needs a name")
+        stored = self.get(program_id)
+        return self.save(program_id, replace(stored.program, name=name), based_on, author)
+
+    def duplicate(self, program_id: int, author: str = "", name: str | None = None) -> ProgramInfo:
+        stored = self.get(program_id)
+        copy = replace(stored.program, name=name or f"{stored.program.name} (copy)")
+        return self.create(copy, author, f"duplicated from program {program_id}")
+
+    def delete(self, program_id: int) -> None:
+        """Move a program to the trash (its revisions are kept)."""
+        with self.session() as s:
+            row = s.get(ProgramRow, program_id)
+            if row is None or row.deleted_at is not None:
+                raise NotFound(f"no program {program_id} in the library")
+            row.deleted_at = _now()
+
+    def restore(self, program_id: int) -> None:
+        """Take a program out of the trash."""
+        with self.session() as s:
+            row = s.get(ProgramRow, program_id)
+            if row is None or row.deleted_at is None:
+                raise NotFound(f"no program {program_id} in the trash")
+            row.deleted_at = None
+
+    def purge(self, program_id: int) -> None:
+        """Delete a program from the trash for good, with its revisions."""
+        with self.session() as s:
+            row = s.get(ProgramRow, program_id)
+            if row is None or row.deleted_at is None:
+                raise NotFound(f"no program {program_id} in the trash")
+            s.delete(row)
+
+    # -- revisions --------------------------------------------------------------------------
+
+    def revisions(self, program_id: int) -> list[RevisionInfo]:
+        with self.session() as s:
+            rows = s.scalars(
+                select(RevisionRow)
+                .where(RevisionRow.program_id == program_id)
+                .order_by(RevisionRow.version)
+            ).all()
+            if not rows:
+                raise NotFound(f"no program {program_id} in the library")
+            return [RevisionInfo(r.version, r.created_at, r.author, r.summary) for r in rows]
+
+    def revision(self, program_id: int, version: int) -> Program:
+        with self.session() as s:
+            row = s.scalar(
+                select(RevisionRow).where(
+                    RevisionRow.program_id == program_id, RevisionRow.version == version
+                )
+            )
+            if row is None:
+                raise NotFound(f"program {program_id} has no version {version}")
+            return document.loads(row.document)
+
+    def restore_revision(
+        self, program_id: int, version: int, based_on: int, author: str = ""
+    ) -> ProgramInfo:
+        """Make an old version current again, as a new revision (history is kept)."""
+        return self.save(program_id, self.revision(program_id, version), based_on, author)
+
+    def diff(self, program_id: int, old: int, new: int) -> list[str]:
+        """Block-level differences from version `old` to version `new`."""
+        return diff(self.revision(program_id, old), self.revision(program_id, new))
+
+    # -- machines -----------------------------------------------------------------------------
+
+    def machines(self) -> list[Machine]:
+        with self.session() as s:
+            rows = s.scalars(select(MachineRow).order_by(MachineRow.name)).all()
+            return [_machine(r) for r in rows]
+
+    def machine(self, name: str) -> Machine:
+        with self.session() as s:
+            row = s.scalar(select(MachineRow).where(MachineRow.name == name))
+            if row is None:
+                raise NotFound(f"no machine named {name!r}")
+            return _machine(row)
+
+    def save_machine(self, machine: Machine) -> None:
+        """Create or update a machine profile (by name)."""
+        if not machine.name.strip():
+            raise LibraryError("a machine needs a name")
+        now = _now()
+        with self.session() as s:
+            row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
+            if row is None:
+                row = MachineRow(name=machine.name, created_at=now)
+                s.add(row)
+            row.target = machine.target
+            row.options = json.dumps(machine.options, sort_keys=True)
+            row.serial = json.dumps(machine.serial, sort_keys=True)
+            row.notes = machine.notes
+            row.updated_at = now
+
+    def delete_machine(self, name: str) -> None:
+        with self.session() as s:
+            if s.execute(delete(MachineRow).where(MachineRow.name == name)).rowcount == 0:  # type: ignore[attr-defined]
+                raise NotFound(f"no machine named {name!r}")
+
+    # -- settings, demo, backup -----------------------------------------------------------------
+
+    def setting(self, key: str) -> str | None:
+        with self.session() as s:
+            row = s.get(SettingRow, key)
+            return None if row is None else row.value
+
+    def set_setting(self, key: str, value: str) -> None:
+        with self.session() as s:
+            row = s.get(SettingRow, key)
+            if row is None:
+                s.add(SettingRow(key=key, value=value))
+            else:
+                row.value = value
+
+    def backup(self, out: BinaryIO) -> int:
+        """Write the whole library as a zip of JSON documents; returns the program count."""
+        with self.session() as s:
+            programs = s.scalars(select(ProgramRow).order_by(ProgramRow.id)).all()
+            machines = s.scalars(select(MachineRow).order_by(MachineRow.name)).all()
+            with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+                manifest: dict[str, Any] = {"format": BACKUP_FORMAT, "version": 1, "programs": []}
+                for row in programs:
+                    revisions: list[dict[str, Any]] = []
+                    entry = {"id": row.id, "deleted": row.deleted_at is not None}
+                    for rev in row.revisions:
+                        name = f"programs/{row.id}/{rev.version}.json"
+                        _write(archive, name, rev.document)
+                        revisions.append(
+                            {
+                                "version": rev.version,
+                                "file": name,
+                                "author": rev.author,
+                                "summary": rev.summary,
+                                "created_at": rev.created_at.isoformat(),
+                            }
+                        )
+                    manifest["programs"].append({**entry, "revisions": revisions})
+                manifest["machines"] = [
+                    {
+                        "name": m.name,
+                        "target": m.target,
+                        "options": json.loads(m.options),
+                        "serial": json.loads(m.serial),
+                        "notes": m.notes,
+                    }
+                    for m in machines
+                ]
+                _write(archive, "manifest.json", json.dumps(manifest, indent=2, sort_keys=True))
+            return len(programs)
+
+    def restore_backup(self, source: BinaryIO | Path) -> int:
+        """Add every program of a backup (with its revisions) as a new library entry, and
+        create or update its machines. All or nothing: a bad archive changes nothing."""
+        try:
+            with zipfile.ZipFile(source) as archive:
+                manifest = json.loads(archive.read("manifest.json"))
+                if manifest.get("format") != BACKUP_FORMAT:
+                    raise LibraryError("not a MillBlocks backup (manifest format)")
+                loaded = []
+                for entry in manifest["programs"]:
+                    revisions = []
+                    for rev in entry["revisions"]:
+                        text = archive.read(rev["file"]).decode("utf-8")
+                        revisions.append((rev, document.loads(text), text))
+                    loaded.append((entry, revisions))
+        except (KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+            raise LibraryError(f"cannot read the backup: {exc}") from None
+        except document.DocumentError as exc:
+            raise LibraryError(f"the backup holds a bad program: {exc}") from None
+        with self.session() as s:
+            for entry, revisions in loaded:
+                last_rev, last_program, last_text = revisions[-1]
+                row = ProgramRow(
+                    **_columns(last_program),
+                    version=last_rev["version"],
+                    created_at=datetime.fromisoformat(revisions[0][0]["created_at"]),
+                    updated_at=datetime.fromisoformat(last_rev["created_at"]),
+                    updated_by=last_rev["author"],
+                    deleted_at=_now() if entry.get("deleted") else None,
+                )
+                s.add(row)
+                s.flush()
+                for rev, _program, text in revisions:
+                    s.add(
+                        RevisionRow(
+                            program_id=row.id,
+                            version=rev["version"],
+                            document=text,
+                            created_at=datetime.fromisoformat(rev["created_at"]),
+                            author=rev["author"],
+                            summary=rev["summary"],
+                        )
+                    )
+                del last_text
+        for machine in manifest.get("machines", []):
+            self.save_machine(
+                Machine(
+                    machine["name"],
+                    machine["target"],
+                    machine["options"],
+                    machine["serial"],
+                    machine.get("notes", ""),
+                )
+            )
+        return len(loaded)
+
+
+def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
+    # A fixed date keeps the archive's bytes a function of its contents.
+    info = zipfile.ZipInfo(name, date_time=(2000, 1, 1, 0, 0, 0))
+    info.compress_type = zipfile.ZIP_DEFLATED
+    archive.writestr(info, text)
+
+
+def _machine(row: MachineRow) -> Machine:
+    return Machine(row.name, row.target, json.loads(row.options), json.loads(row.serial), row.notes)
+
+
+def open_library(url: str | None = None, seed_demo: bool = True) -> Library:
+    """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
+    the demo programs added the first time."""
+    engine = make_engine(url)
+    upgrade(engine)
+    library = Library(engine)
+    if seed_demo:
+        from app.storage.demo import seed
+
+        seed(library)
+    return library

@@ -1,0 +1,85 @@
+"""SQLAlchemy 2 typed models of the library (the tables Alembic's migrations create)."""
+
+from __future__ import annotations
+
+from datetime import datetime
+
+from sqlalchemy import ForeignKey, Index, Integer, String, Text, UniqueConstraint
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
+
+
+class Base(DeclarativeBase):
+    """Declarative base; `Base.metadata` is what the migrations must match."""
+
+
+class ProgramRow(Base):
+    """A program in the library: its current document and bookkeeping.
+
+    `version` counts saves; a save names the version it was based on (optimistic
+    concurrency). `deleted_at` set means the program is in the trash. `search_text` holds
+    the words a search matches beyond name, part number and notes (tools, block types).
+    """
+
+    __tablename__ = "programs"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    part_number: Mapped[str] = mapped_column(String(8), default="")
+    notes: Mapped[str] = mapped_column(Text, default="")
+    units: Mapped[str] = mapped_column(String(8))
+    document: Mapped[str] = mapped_column(Text)
+    search_text: Mapped[str] = mapped_column(Text, default="")
+    block_count: Mapped[int] = mapped_column(Integer, default=0)
+    version: Mapped[int] = mapped_column(Integer, default=1)
+    created_at: Mapped[datetime]
+    updated_at: Mapped[datetime]
+    updated_by: Mapped[str] = mapped_column(String(100), default="")
+    deleted_at: Mapped[datetime | None] = mapped_column(default=None)
+
+    revisions: Mapped[list[RevisionRow]] = relationship(
+        back_populates="program", cascade="all, delete-orphan", order_by="RevisionRow.version"
+    )
+
+    __table_args__ = (Index("ix_programs_name", "name"), Index("ix_programs_deleted", "deleted_at"))
+
+
+class RevisionRow(Base):
+    """Every save of a program: the whole document, when, by whom, what changed."""
+
+    __tablename__ = "revisions"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    program_id: Mapped[int] = mapped_column(ForeignKey("programs.id", ondelete="CASCADE"))
+    version: Mapped[int] = mapped_column(Integer)
+    document: Mapped[str] = mapped_column(Text)
+    created_at: Mapped[datetime]
+    author: Mapped[str] = mapped_column(String(100), default="")
+    summary: Mapped[str] = mapped_column(Text, default="")
+
+    program: Mapped[ProgramRow] = relationship(back_populates="revisions")
+
+    __table_args__ = (UniqueConstraint("program_id", "version", name="uq_revision_version"),)
+
+
+class MachineRow(Base):
+    """A machine profile: its export target and options, and its serial port settings."""
+
+    __tablename__ = "machines"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True)
+    target: Mapped[str] = mapped_column(String(40))
+    options: Mapped[str] = mapped_column(Text, default="{}")
+    serial: Mapped[str] = mapped_column(Text, default="{}")
+    notes: Mapped[str] = mapped_column(Text, default="")
+    created_at: Mapped[datetime]
+    updated_at: Mapped[datetime]
+
+
+class SettingRow(Base):
+    """Library-wide facts, such as whether the demo programs were ever added."""
+
+    __tablename__ = "settings"
+
+    key: Mapped[str] = mapped_column(String(100), primary_key=True)
+    value: Mapped[str] = mapped_column(Text, default="")

@@ -60,6 +60,20 @@ def test_golden_case(case: Path) -> None:
 
 # Cases whose expected files a target writes when regenerating (add a case name here to
 # give a target a new golden file; after that the file's presence keeps it checked).
+_TAPE_CASES = (
+    "drill-12-pecks",
+    "bolt-circle-drill",
+    "loop-rep-grid",
+    "contour-cut-right",
+    "mill-contour-uncompensated",
+    "circle-inside",
+    "frame-in-tan",
+    "tap-metric",
+    "circle-inside-mm",
+    "stop-and-tool-changes",
+    "two-axis",
+    "pos-index",
+)
 _GCODE_CASES = (
     "bolt-circle-drill",
     "contour-cut-right",
@@ -75,6 +89,11 @@ REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-fanuc": _GCODE_CASES,
     "gcode-prototrak": _GCODE_CASES,
     "svg": ("loop-nested-3-deep", "contour-cut-right", "frame-pocket", "bolt-circle-drill"),
+    "tape-eia": _TAPE_CASES,
+    "tape-ascii": _TAPE_CASES,
+    "punch-eia": ("drill-single", "circle-inside-mm", "frame-in-tan", "stop-and-tool-changes"),
+    "punch-ascii": ("drill-single", "tap-metric", "contour-cut-right"),
+    "tape-svg": ("drill-single", "pos-basic", "tap-metric"),
 }
 
 

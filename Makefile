@@ -5,7 +5,10 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: test lint typecheck pytest system-deps regen-golden clean
+.PHONY: run test lint typecheck pytest system-deps regen-golden clean
+HOST ?= 127.0.0.1
+PORT ?= 5000
+WORKERS ?= 2
 
 # The virtual environment is rebuilt whenever the dependency pins change.
 $(STAMP): pyproject.toml constraints.txt
@@ -17,6 +20,13 @@ $(STAMP): pyproject.toml constraints.txt
 # Debian packages the tests need (listed in debian-packages.txt); installed only when missing.
 system-deps:
 	bash scripts/install-system-deps
+
+# The web editor on http://127.0.0.1:5000 with the library in instance/ (SQLite; set
+# DATABASE_URL for PostgreSQL). The database is migrated (and given its demo programs the
+# first time) before the workers start.
+run: $(STAMP)
+	$(VENV)/bin/millblocks db upgrade
+	$(VENV)/bin/gunicorn --bind $(HOST):$(PORT) --workers $(WORKERS) --access-logfile - 'app:create_app()'
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -28,14 +28,14 @@ from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid, Repetition, ToolChange
 from app.cnc.units import Units
 
 STYLE = """
-.mb-path path, .mb-path circle, .mb-path line {{ fill: none; stroke-width: {w}; }}
-.mb-path .rapid {{ stroke: #8a8a8a; stroke-dasharray: {dash} {gap}; }}
-.mb-path .feed {{ stroke: #0b5fbf; stroke-width: {wide}; }}
-.mb-path .swept {{ stroke: #9cc3f0; stroke-linecap: round; stroke-linejoin: round; opacity: .45; }}
-.mb-path .plunge {{ stroke: #c2410c; }}
-.mb-path .hole {{ stroke: #15803d; fill: #bbf7d0; fill-opacity: .5; }}
-.mb-path .zero {{ stroke: #b91c1c; }}
-.mb-path .grid {{ stroke: #e5e7eb; stroke-width: {thin}; }}
+path, circle, line {{ fill: none; stroke-width: {w}; }}
+path.rapid {{ stroke: #8a8a8a; stroke-dasharray: {dash} {gap}; }}
+path.feed {{ stroke: #0b5fbf; stroke-width: {wide}; }}
+path.swept {{ stroke: #9cc3f0; stroke-linecap: round; stroke-linejoin: round; opacity: .45; }}
+circle.plunge {{ stroke: #c2410c; }}
+circle.hole {{ stroke: #15803d; fill: #bbf7d0; fill-opacity: .5; }}
+g.zero line {{ stroke: #b91c1c; }}
+g.grid line {{ stroke: #e5e7eb; stroke-width: {thin}; }}
 """
 
 
@@ -58,9 +58,15 @@ class SvgTarget(Target):
         )
 
 
-def draw(toolpath: Toolpath, swept: bool = False, grid: bool = False) -> str:
-    """The SVG text of a tool path (see the module docstring)."""
-    return _Drawing(toolpath, swept, grid).render()
+def draw(
+    toolpath: Toolpath, swept: bool = False, grid: bool = False, embedded_style: bool = True
+) -> str:
+    """The SVG text of a tool path (see the module docstring).
+
+    `embedded_style` False leaves the `<style>` out, for a page whose own stylesheet
+    styles the classes (a Content-Security-Policy without inline styles forbids it there).
+    """
+    return _Drawing(toolpath, swept, grid, embedded_style).render()
 
 
 @dataclass(frozen=True, slots=True)
@@ -104,8 +110,9 @@ class _Prim:
 
 
 class _Drawing:
-    def __init__(self, toolpath: Toolpath, swept: bool, grid: bool) -> None:
+    def __init__(self, toolpath: Toolpath, swept: bool, grid: bool, embedded_style: bool) -> None:
         self.tp = toolpath
+        self.embedded_style = embedded_style
         self.unit = toolpath.units.nm
         self.places = toolpath.units.dump_places
         self.swept = swept
@@ -163,17 +170,18 @@ class _Drawing:
         # Line widths in drawing units, a fixed fraction of its size, so the drawing reads
         # the same in any viewer and at any part size.
         w = max(width, height) / 700
-        drawing.defs.add(
-            drawing.style(
-                STYLE.format(
-                    w=self.n(w),
-                    wide=self.n(1.8 * w),
-                    thin=self.n(0.5 * w),
-                    dash=self.n(4 * w),
-                    gap=self.n(3 * w),
+        if self.embedded_style:
+            drawing.defs.add(
+                drawing.style(
+                    STYLE.format(
+                        w=self.n(w),
+                        wide=self.n(1.8 * w),
+                        thin=self.n(0.5 * w),
+                        dash=self.n(4 * w),
+                        gap=self.n(3 * w),
+                    )
                 )
             )
-        )
         page = drawing.g(transform="scale(1,-1)")
         if self.grid:
             page.add(self.grid_lines(drawing, x0, y0, x1, y1))

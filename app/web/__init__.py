@@ -1,0 +1,95 @@
+"""The web app: `create_app()` (Flask's factory), one blueprint per page area.
+
+The library is opened (and migrated, and given its demo programs the first time) when the
+app is created. Every state-changing request carries a CSRF token; every response carries
+security headers with a Content-Security-Policy that allows no inline script.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from pathlib import Path
+from typing import Any
+
+from flask import Flask, Response, render_template
+from flask_wtf.csrf import CSRFError
+
+from app.storage.db import ROOT
+from app.storage.library import open_library
+from app.web import editor, export, library, machines, transfers
+from app.web.extensions import csrf, get_library
+
+__all__ = ["create_app", "get_library"]
+
+CSP = (
+    "default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+    "object-src 'none'; base-uri 'self'; form-action 'self'; frame-ancestors 'none'"
+)
+
+
+def create_app(test_config: dict[str, Any] | None = None) -> Flask:
+    """Build the app. `test_config` overrides configuration (DATABASE_URL, SECRET_KEY...)."""
+    app = Flask(
+        __name__,
+        template_folder=str(ROOT / "templates"),
+        static_folder=str(ROOT / "static"),
+        instance_path=str(ROOT / "instance"),
+    )
+    app.config.update(
+        DATABASE_URL=os.environ.get("DATABASE_URL"),
+        MAX_CONTENT_LENGTH=2 * 1024 * 1024,
+        SESSION_COOKIE_HTTPONLY=True,
+        SESSION_COOKIE_SAMESITE="Lax",
+        SESSION_COOKIE_SECURE=os.environ.get("MILLBLOCKS_HTTPS") == "1",
+        WTF_CSRF_TIME_LIMIT=None,
+        MILLBLOCKS_USER=os.environ.get("MILLBLOCKS_USER", "local"),
+    )
+    if test_config:
+        app.config.update(test_config)
+    app.config.setdefault("SECRET_KEY", None)
+    if not app.config["SECRET_KEY"]:
+        app.config["SECRET_KEY"] = _secret_key(Path(app.instance_path))
+    csrf.init_app(app)
+    app.extensions["millblocks.library"] = open_library(app.config["DATABASE_URL"])
+
+    for module in (library, editor, export, machines, transfers):
+        app.register_blueprint(module.bp)
+
+    app.after_request(_security_headers)
+    app.register_error_handler(CSRFError, _csrf_error)
+    app.register_error_handler(413, _too_large)
+    app.register_error_handler(404, _not_found)
+    return app
+
+
+def _secret_key(instance: Path) -> str:
+    """A per-installation key kept in instance/secret_key (created on first start)."""
+    instance.mkdir(parents=True, exist_ok=True)
+    path = instance / "secret_key"
+    if not path.exists():
+        path.write_text(secrets.token_hex(32))
+        path.chmod(0o600)
+    return path.read_text().strip()
+
+
+def _security_headers(response: Response) -> Response:
+    response.headers.setdefault("Content-Security-Policy", CSP)
+    response.headers.setdefault("X-Content-Type-Options", "nosniff")
+    response.headers.setdefault("Referrer-Policy", "same-origin")
+    response.headers.setdefault("X-Frame-Options", "DENY")
+    return response
+
+
+def _csrf_error(error: CSRFError) -> tuple[str, int]:
+    return render_template("errors/error.html", title="Refused", message=error.description), 400
+
+
+def _too_large(_error: Exception) -> tuple[str, int]:
+    message = "The upload is larger than the 2 MB MillBlocks accepts."
+    return render_template("errors/error.html", title="Too large", message=message), 413
+
+
+def _not_found(error: Exception) -> tuple[str, int]:
+    message = getattr(error, "description", "Not found")
+    return render_template("errors/error.html", title="Not found", message=message), 404

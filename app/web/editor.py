@@ -1,0 +1,459 @@
+"""The program editor: block list, conversational entry, Data Block 0, live preview.
+
+Each entered block is saved at once as a new revision (like ENTER on the control), based on
+the version the page was showing; a stale save is refused with what changed meanwhile.
+htmx requests get the `editor` fragment of the page back; without JavaScript every form
+posts and redirects the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
+from typing import Any
+
+from flask import Blueprint, abort, redirect, render_template, request, url_for
+from jinja2_fragments.flask import render_block
+from werkzeug.wrappers import Response
+
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    DataBlock0,
+    MillArc,
+    MillingMode,
+    Program,
+    Tool,
+    field_label,
+)
+from app.cnc.copy import CopyError, cancel_copy, execute_copy
+from app.cnc.emit.svg import draw
+from app.cnc.estimate import estimate, format_seconds
+from app.cnc.interpret import interpret
+from app.cnc.problems import Problem, Severity, has_errors
+from app.cnc.units import Units
+from app.cnc.validate import validate
+from app.storage.library import LibraryError, StaleSave, StoredProgram
+from app.web.extensions import get_library
+from app.web.forms import (
+    GROUP_KINDS,
+    KINDS,
+    defaults_for,
+    field_values,
+    kind_of,
+    offered_groups,
+    offered_kinds,
+    parse_block,
+)
+
+bp = Blueprint("editor", __name__)
+
+
+def current_user() -> str:
+    from flask import current_app
+
+    return str(current_app.config.get("MILLBLOCKS_USER", ""))
+
+
+def load(program_id: int) -> StoredProgram:
+    try:
+        return get_library().get(program_id)
+    except LibraryError:
+        abort(404, f"There is no program {program_id} in the library.")
+
+
+def is_htmx() -> bool:
+    return request.headers.get("HX-Request") == "true"
+
+
+# -- the page model -------------------------------------------------------------------------
+
+
+@dataclass
+class Entry:
+    """What the entry panel shows: a choice of type, of sub-type, or a block's fields."""
+
+    at: int  # the block number being entered (new) or edited
+    editing: bool
+    group: str = ""
+    kind: str = ""
+    loop: bool = False
+    stop: bool = False
+    values: dict[str, str] = dataclasses.field(default_factory=dict)
+    errors: dict[str, str] = dataclasses.field(default_factory=dict)
+    message: str = ""
+
+
+def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
+    """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix."""
+    shown = len(program.blocks)
+    while shown >= 0:
+        part = dataclasses.replace(program, blocks=program.blocks[:shown])
+        if not has_errors(validate(part)):
+            toolpath = interpret(part)
+            result = estimate(toolpath)
+            return draw(toolpath, embedded_style=False), result.per_block, result.total, shown
+        shown -= 1
+    return "", {}, 0.0, 0
+
+
+def block_summary(block: Block) -> str:
+    """The block's values in one line, the way the control's block list reads."""
+    parts = []
+    for f in dataclasses.fields(block):
+        if f.name in ("mode", "units", "loop", "stop", "kind"):
+            continue
+        value = getattr(block, f.name)
+        if value is None or value is False or f.name in ("op", "direction", "two_pass"):
+            continue
+        label = field_label(block, f.name)
+        if value is True:
+            parts.append(label)
+        elif isinstance(value, Decimal):
+            parts.append(f"{label} {value:f}")
+        elif hasattr(value, "value"):
+            parts.append(f"{label} {str(value.value).upper()}")
+        else:
+            parts.append(f"{label} {value}")
+    if getattr(block, "x", None) is not None and block.mode.value == "inc":
+        parts.insert(0, "INC")
+    return "  ".join(parts)
+
+
+def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
+    program = stored.program
+    problems = validate(program)
+    svg, per_block, total, shown = preview(program)
+    rows = [
+        {
+            "number": n,
+            "title": block.title,
+            "summary": block_summary(block),
+            "units": block.units.symbol,
+            "seconds": format_seconds(per_block.get(n, 0.0)) if n in per_block else "",
+            "problems": [p for p in problems if p.block == n],
+        }
+        for n, block in enumerate(program.blocks, start=1)
+    ]
+    kind = KINDS.get(entry.kind)
+    field_problems: dict[str, list[Problem]] = {}
+    if entry.editing and kind is not None:
+        block = program.blocks[entry.at - 1]
+        for spec in kind.fields:
+            try:
+                label = field_label(block, spec.name)
+            except KeyError:
+                label = spec.label
+            field_problems[spec.name] = [
+                p for p in problems if p.block == entry.at and p.field == label
+            ]
+    return {
+        "stored": stored,
+        "program": program,
+        "rows": rows,
+        "problems": problems,
+        "errors": [p for p in problems if p.severity is Severity.ERROR],
+        "svg": svg,
+        "total": format_seconds(total),
+        "shown": shown,
+        "entry": entry,
+        "kind": kind,
+        "field_problems": field_problems,
+        "groups": offered_groups(program, entry.at) if not entry.editing else [],
+        "sub_kinds": offered_kinds(program, entry.at, entry.group) if entry.group else [],
+        "group_kinds": GROUP_KINDS,
+        "kinds": KINDS,
+    }
+
+
+def render_editor(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
+    ctx = context(stored, entry)
+    if is_htmx():
+        return render_block("editor/program.html", "editor", **ctx), status
+    return render_template("editor/program.html", **ctx), status
+
+
+def entry_from_args(program: Program, args: Any) -> Entry:
+    """The entry panel asked for by query arguments (`at`, `edit`, `group`, `kind`...)."""
+    count = len(program.blocks)
+    if args.get("edit"):
+        number = _int(args.get("edit"), 1)
+        if not 1 <= number <= count:
+            abort(404, f"There is no block {number}.")
+        block = program.blocks[number - 1]
+        following = program.blocks[number] if number < count else None
+        values = field_values(block, following)
+        return Entry(
+            at=number,
+            editing=True,
+            kind=kind_of(block),
+            loop=block.loop,
+            stop=block.stop,
+            values=values,
+        )
+    at = max(1, min(_int(args.get("at"), count + 1), count + 1))
+    group = args.get("group", "")
+    kind = args.get("kind", "")
+    loop = args.get("loop") == "1"
+    stop = args.get("stop") == "1"
+    if group in ("LOOP", "STOP"):
+        loop = loop or group == "LOOP"
+        stop = stop or group == "STOP"
+        group = ""
+    entry = Entry(at=at, editing=False, group=group, loop=loop, stop=stop)
+    if group and not kind:
+        kinds = offered_kinds(program, at, group)
+        if len(kinds) == 1:
+            kind = kinds[0]
+    if kind in KINDS:
+        entry.kind = kind
+        entry.values = defaults_for(program, at, kind, loop)
+    return entry
+
+
+def _int(text: str | None, default: int) -> int:
+    try:
+        return int(text or "")
+    except ValueError:
+        return default
+
+
+# -- routes ------------------------------------------------------------------------------------
+
+
+@bp.get("/programs/<int:program_id>")
+def edit(program_id: int) -> tuple[str, int]:
+    stored = load(program_id)
+    return render_editor(stored, entry_from_args(stored.program, request.args))
+
+
+@bp.get("/programs/<int:program_id>/entry")
+def entry(program_id: int) -> tuple[str, int]:
+    """The entry panel for the choice made (a fragment for htmx, the page otherwise)."""
+    stored = load(program_id)
+    return render_editor(stored, entry_from_args(stored.program, request.args))
+
+
+@bp.post("/programs/<int:program_id>/blocks")
+def save_block(program_id: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    program = stored.program
+    form = request.form
+    kind = form.get("kind", "")
+    editing = form.get("edit", "") != ""
+    at = _int(form.get("edit") if editing else form.get("at"), len(program.blocks) + 1)
+    parsed = parse_block(kind, form)
+    entry = Entry(
+        at=at,
+        editing=editing,
+        kind=kind,
+        loop=form.get("loop") == "on",
+        stop=form.get("stop") == "on",
+        values=dict(form),
+        errors=parsed.errors,
+    )
+    if parsed.errors:
+        entry.message = "Not saved: " + "; ".join(parsed.errors.values())
+        return render_editor(stored, entry, 422)
+    blocks = list(program.blocks)
+    if editing:
+        span = 2 if isinstance(blocks[at - 1], MillArc) and len(parsed.blocks) == 2 else 1
+        if span == 2 and not (at < len(blocks) and isinstance(blocks[at], ArcEnd)):
+            span = 1
+            blocks.insert(at, parsed.blocks[1])
+        blocks[at - 1 : at - 1 + span] = parsed.blocks
+    else:
+        blocks[at - 1 : at - 1] = parsed.blocks
+    new_program = dataclasses.replace(program, blocks=tuple(blocks))
+    action = form.get("action", "")
+    if kind == "COPY" and action in ("exec", "cancel"):
+        try:
+            number = at
+            if action == "exec":
+                new_program = execute_copy(new_program, number)
+            else:
+                new_program = cancel_copy(new_program, number)
+        except CopyError as exc:
+            entry.message = f"Not done: {exc.message}"
+            entry.errors = {"from_block": exc.message}
+            return render_editor(stored, entry, 422)
+    saved = _save(stored, new_program, entry)
+    if isinstance(saved, tuple):
+        return saved
+    next_at = len(saved.program.blocks) + 1 if editing else at + len(parsed.blocks)
+    if kind == "COPY":
+        next_at = len(saved.program.blocks) + 1
+    next_entry = Entry(at=min(next_at, len(saved.program.blocks) + 1), editing=False)
+    if is_htmx():
+        return render_editor(saved, next_entry)
+    return redirect(url_for("editor.edit", program_id=program_id, at=next_entry.at))
+
+
+def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgram | tuple[str, int]:
+    """Save a new version based on the one the form showed; the editor with a message if
+    someone saved in between (nothing is overwritten)."""
+    based_on = _int(request.form.get("version"), stored.info.version)
+    library = get_library()
+    try:
+        library.save(stored.info.id, program, based_on=based_on, author=current_user())
+    except StaleSave as exc:
+        entry.message = str(exc)
+        return render_editor(library.get(stored.info.id), entry, 409)
+    return library.get(stored.info.id)
+
+
+@bp.post("/programs/<int:program_id>/blocks/<int:number>/delete")
+def delete_block(program_id: int, number: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    blocks = list(stored.program.blocks)
+    if not 1 <= number <= len(blocks):
+        abort(404, f"There is no block {number}.")
+    span = (
+        2
+        if isinstance(blocks[number - 1], MillArc)
+        and number < len(blocks)
+        and isinstance(blocks[number], ArcEnd)
+        else 1
+    )
+    del blocks[number - 1 : number - 1 + span]
+    entry = Entry(at=len(blocks) + 1, editing=False)
+    saved = _save(stored, dataclasses.replace(stored.program, blocks=tuple(blocks)), entry)
+    if isinstance(saved, tuple):
+        return saved
+    if is_htmx():
+        return render_editor(saved, entry)
+    return redirect(url_for("editor.edit", program_id=program_id))
+
+
+@bp.post("/programs/<int:program_id>/blocks/<int:number>/move")
+def move_block(program_id: int, number: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    blocks = list(stored.program.blocks)
+    if not 1 <= number <= len(blocks):
+        abort(404, f"There is no block {number}.")
+    target = number - 1 if request.form.get("direction") == "up" else number + 1
+    entry = Entry(at=len(blocks) + 1, editing=False)
+    if 1 <= target <= len(blocks):
+        blocks[number - 1], blocks[target - 1] = blocks[target - 1], blocks[number - 1]
+        saved = _save(stored, dataclasses.replace(stored.program, blocks=tuple(blocks)), entry)
+        if isinstance(saved, tuple):
+            return saved
+        stored = saved
+    if is_htmx():
+        return render_editor(stored, entry)
+    return redirect(url_for("editor.edit", program_id=program_id))
+
+
+@bp.post("/programs/<int:program_id>/header")
+def save_header(program_id: int) -> Response | tuple[str, int]:
+    """Name, part number, units and notes."""
+    stored = load(program_id)
+    form = request.form
+    units = Units.MM if form.get("units") == "mm" else Units.INCH
+    program = dataclasses.replace(
+        stored.program,
+        name=form.get("name", "").strip(),
+        part_number=form.get("part_number", "").strip(),
+        units=units,
+        notes=form.get("notes", ""),
+    )
+    entry = Entry(at=len(program.blocks) + 1, editing=False)
+    saved = _save(stored, program, entry)
+    if isinstance(saved, tuple):
+        return saved
+    return redirect(url_for("editor.edit", program_id=program_id))
+
+
+# -- Data Block 0 --------------------------------------------------------------------------------
+
+
+@bp.route("/programs/<int:program_id>/db0", methods=["GET", "POST"])
+def data_block_0(program_id: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    errors: dict[str, str] = {}
+    message = ""
+    block0 = stored.program.block0
+    if request.method == "POST":
+        block0, errors = parse_block0(request.form)
+        if not errors:
+            program = dataclasses.replace(stored.program, block0=block0)
+            try:
+                get_library().save(
+                    program_id,
+                    program,
+                    based_on=_int(request.form.get("version"), stored.info.version),
+                    author=current_user(),
+                )
+                return redirect(url_for("editor.data_block_0", program_id=program_id, saved=1))
+            except StaleSave as exc:
+                message = str(exc)
+                stored = get_library().get(program_id)
+        else:
+            message = "Not saved: " + "; ".join(errors.values())
+    problems = [p for p in validate(stored.program) if p.block == 0]
+    status = 422 if errors else 409 if message else 200
+    return (
+        render_template(
+            "editor/db0.html",
+            stored=stored,
+            block0=block0 if not errors else stored.program.block0,
+            form=request.form if errors else None,
+            errors=errors,
+            message=message,
+            problems=problems,
+            saved=request.args.get("saved") == "1",
+        ),
+        status,
+    )
+
+
+def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
+    """Data Block 0 from its form: offsets, current tool, milling, Z RET, 24 tool lines."""
+    errors: dict[str, str] = {}
+
+    def number(name: str, label: str, required: bool = True) -> Decimal | None:
+        raw = form.get(name, "").strip()
+        if raw == "":
+            if required:
+                errors[name] = f"{label}: missing; enter a value"
+            return None
+        try:
+            value = Decimal(raw)
+        except InvalidOperation:
+            errors[name] = f"{label}: {raw!r} is not a number"
+            return None
+        if not value.is_finite():
+            errors[name] = f"{label}: {raw!r} is not a number"
+            return None
+        return value
+
+    def whole(name: str, label: str) -> int | None:
+        raw = form.get(name, "").strip()
+        if raw == "":
+            return None
+        if not raw.lstrip("-").isdigit():
+            errors[name] = f"{label}: {raw!r} is not a whole number"
+            return None
+        return int(raw)
+
+    tools = []
+    for n in range(1, 25):
+        dia = number(f"dia_{n}", f"TOOL {n} DIA", False)
+        rpm = whole(f"rpm_{n}", f"TOOL {n} RPM")
+        tcal = number(f"tcal_{n}", f"TOOL {n} TCAL", False)
+        if dia is not None or rpm is not None or tcal is not None:
+            tools.append(Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal))
+    block0 = DataBlock0(
+        x_offset=number("x_offset", "X") or Decimal(0),
+        y_offset=number("y_offset", "Y") or Decimal(0),
+        current_tool=whole("current_tool", "CUR-TOOL") or 0,
+        milling=MillingMode.CLIMB if form.get("milling") == "climb" else MillingMode.CONVENTIONAL,
+        z_retract=number("z_retract", "Z RET") or Decimal(0),
+        tools=tuple(tools),
+    )
+    return block0, errors
+
+
+def problem_text(problems: list[Problem]) -> str:
+    return "; ".join(str(p) for p in problems)

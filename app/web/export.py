@@ -1,0 +1,127 @@
+"""The export page: target and options, compatibility report, text preview, tape picture,
+and downloads. Every export is made by the same registry the CLI uses."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from flask import Blueprint, Response, render_template, request
+from jinja2_fragments.flask import render_block
+
+from app.cnc.emit.target import Export, ExportError, OptionError, export, targets
+from app.storage.library import LibraryError
+from app.web.editor import is_htmx, load
+from app.web.extensions import get_library
+
+bp = Blueprint("export", __name__)
+PREVIEW_LINES = 400
+
+
+def options_from(args: Any, target_name: str) -> dict[str, str]:
+    """The target's options present in the request (`opt_<name>`), as text."""
+    target = targets().get(target_name)
+    if target is None:
+        return {}
+    raw = {}
+    for option in target.options:
+        key = f"opt_{option.name}"
+        if option.kind.value == "bool":
+            raw[option.name] = "yes" if args.get(key) == "on" else "no"
+        elif args.get(key, "") != "":
+            raw[option.name] = args[key]
+    return raw
+
+
+def _machine_options(name: str) -> tuple[str | None, dict[str, str]]:
+    if not name:
+        return None, {}
+    try:
+        machine = get_library().machine(name)
+    except LibraryError:
+        return None, {}
+    return machine.target, dict(machine.options)
+
+
+@bp.get("/programs/<int:program_id>/export")
+def page(program_id: int) -> tuple[str, int]:
+    stored = load(program_id)
+    machine_name = request.args.get("machine", "")
+    machine_target, machine_options = _machine_options(machine_name)
+    target_name = request.args.get("target") or machine_target or "gcode-linuxcnc"
+    all_targets = targets()
+    if target_name not in all_targets:
+        target_name = "gcode-linuxcnc"
+    raw = machine_options | (
+        options_from(request.args, target_name) if "go" in request.args else {}
+    )
+    result: Export | None = None
+    error = ""
+    problems: list[str] = []
+    try:
+        result = export(stored.program, target_name, raw)
+    except OptionError as exc:
+        error = str(exc)
+    except ExportError as exc:
+        error = str(exc)
+        problems = [str(p) for p in exc.problems if p.severity.value == "error"]
+        if exc.report is not None:
+            problems += [str(e) for e in exc.report.entries if e.severity.value == "error"]
+    text_preview = ""
+    picture = ""
+    if result is not None and result.media_type.startswith("text/"):
+        lines = result.data.decode("ascii", "replace").splitlines()
+        text_preview = "\n".join(lines[:PREVIEW_LINES])
+        if len(lines) > PREVIEW_LINES:
+            text_preview += f"\n… {len(lines) - PREVIEW_LINES} more lines in the download"
+    if (
+        result is not None
+        and target_name.startswith(("tape-", "punch-"))
+        and "tape-svg" in all_targets
+    ):
+        code = "ascii" if target_name.endswith("ascii") else "eia"
+        try:
+            picture = export(stored.program, "tape-svg", {"code": code}).data.decode()
+        except (OptionError, ExportError):
+            picture = ""
+    if result is not None and target_name == "svg":
+        picture = result.data.decode()
+    values = {
+        option.name: str(raw.get(option.name, option.default))
+        for option in all_targets[target_name].options
+    }
+    context = {
+        "stored": stored,
+        "targets": all_targets,
+        "target": all_targets[target_name],
+        "target_name": target_name,
+        "values": values,
+        "result": result,
+        "error": error,
+        "problems": problems,
+        "text_preview": text_preview,
+        "picture": picture,
+        "machines": get_library().machines(),
+        "machine_name": machine_name,
+        "download_query": request.query_string.decode(),
+    }
+    status = 422 if error else 200
+    if is_htmx():
+        return render_block("export/index.html", "result", **context), status
+    return render_template("export/index.html", **context), status
+
+
+@bp.get("/programs/<int:program_id>/export/download")
+def download(program_id: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    target_name = request.args.get("target", "gcode-linuxcnc")
+    _machine_target, machine_options = _machine_options(request.args.get("machine", ""))
+    raw = machine_options | options_from(request.args, target_name)
+    try:
+        result = export(stored.program, target_name, raw)
+    except (OptionError, ExportError) as exc:
+        return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
+    stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
+    filename = f"{stem}.{result.extension}"
+    response = Response(result.data, mimetype=result.media_type.split(";")[0])
+    response.headers["Content-Disposition"] = f'attachment; filename="{filename}"'
+    return response

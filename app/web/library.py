@@ -1,0 +1,113 @@
+"""The library page: list, search, sort, new program, import by upload, duplicate, trash."""
+
+from __future__ import annotations
+
+from flask import Blueprint, abort, redirect, render_template, request, url_for
+from jinja2_fragments.flask import render_block
+from werkzeug.wrappers import Response
+
+from app.cnc import document
+from app.cnc.blocks import DataBlock0, Program, Tool
+from app.cnc.units import Units
+from app.storage.library import SORTS, LibraryError
+from app.web.editor import current_user, is_htmx
+from app.web.extensions import get_library
+
+bp = Blueprint("library", __name__)
+
+
+@bp.get("/")
+def index() -> str:
+    query = request.args.get("q", "")
+    sort = request.args.get("sort", "name")
+    if sort not in SORTS:
+        sort = "name"
+    programs = get_library().programs(query, sort)
+    context = {"programs": programs, "q": query, "sort": sort, "sorts": SORTS, "message": ""}
+    if is_htmx() and request.args.get("fragment") == "list":
+        return render_block("library/index.html", "program_list", **context)
+    return render_template("library/index.html", **context)
+
+
+@bp.post("/programs")
+def create() -> Response | tuple[str, int]:
+    name = request.form.get("name", "").strip()
+    part = request.form.get("part_number", "").strip()
+    units = Units.MM if request.form.get("units") == "mm" else Units.INCH
+    if not name:
+        return _index_with("Not created: NAME is missing; every program needs a name.", 422)
+    if part and not (part.isdigit() and len(part) <= 8):
+        return _index_with(f"Not created: PART NO {part!r}: allowed up to 8 digits.", 422)
+    retract = "0.1" if units is Units.INCH else "2.5"
+    from decimal import Decimal
+
+    block0 = DataBlock0(
+        current_tool=1,
+        z_retract=Decimal(retract),
+        tools=(Tool(number=1, diameter=None, rpm=None, tcal=None),),
+    )
+    program = Program(name=name, part_number=part, units=units, block0=block0)
+    info = get_library().create(program, author=current_user())
+    return redirect(url_for("editor.data_block_0", program_id=info.id))
+
+
+@bp.post("/programs/import")
+def upload() -> Response | tuple[str, int]:
+    file = request.files.get("file")
+    if file is None or not file.filename:
+        return _index_with("Not imported: choose a file to import.", 422)
+    data = file.read()
+    try:
+        program = read_upload(data, file.filename)
+    except ValueError as exc:
+        return _index_with(f"Not imported: {file.filename}: {exc}", 422)
+    info = get_library().create(
+        program, author=current_user(), summary_text=f"imported from {file.filename}"
+    )
+    return redirect(url_for("editor.edit", program_id=info.id))
+
+
+def read_upload(data: bytes, name: str) -> Program:
+    """A program from uploaded bytes (a MillBlocks JSON document)."""
+    try:
+        return document.loads(data.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise ValueError("not a MillBlocks program document (not UTF-8 text)") from None
+
+
+@bp.post("/programs/<int:program_id>/duplicate")
+def duplicate(program_id: int) -> Response:
+    try:
+        info = get_library().duplicate(program_id, author=current_user())
+    except LibraryError as exc:
+        abort(404, str(exc))
+    return redirect(url_for("editor.edit", program_id=info.id))
+
+
+@bp.post("/programs/<int:program_id>/delete")
+def delete(program_id: int) -> Response:
+    try:
+        get_library().delete(program_id)
+    except LibraryError as exc:
+        abort(404, str(exc))
+    return redirect(url_for("library.index"))
+
+
+@bp.get("/trash")
+def trash() -> str:
+    return render_template("library/trash.html", programs=get_library().programs(trash=True))
+
+
+@bp.post("/programs/<int:program_id>/restore")
+def restore(program_id: int) -> Response:
+    try:
+        get_library().restore(program_id)
+    except LibraryError as exc:
+        abort(404, str(exc))
+    return redirect(url_for("library.trash"))
+
+
+def _index_with(message: str, status: int) -> tuple[str, int]:
+    programs = get_library().programs()
+    context = {"programs": programs, "q": "", "sort": "name", "sorts": SORTS, "message": message}
+    return render_template("library/index.html", **context), status

@@ -1,0 +1,96 @@
+"""Machine profiles: export target with its options, and serial port settings."""
+
+from __future__ import annotations
+
+import contextlib
+
+from flask import Blueprint, redirect, render_template, request, url_for
+from werkzeug.wrappers import Response
+
+from app.cnc.emit.target import OptionError, get_target
+from app.storage.library import LibraryError, Machine
+from app.web.extensions import get_library
+
+bp = Blueprint("machines", __name__)
+
+SERIAL_DEFAULTS = {
+    "port": "",
+    "baud": "4800",
+    "data_bits": "7",
+    "parity": "E",
+    "stop_bits": "1",
+    "flow": "none",
+}
+
+
+@bp.get("/machines")
+def index() -> str:
+    from app.cnc.emit.target import targets
+
+    edit = request.args.get("edit", "")
+    machine = None
+    if edit:
+        try:
+            machine = get_library().machine(edit)
+        except LibraryError:
+            machine = None
+    return render_template(
+        "machines/index.html",
+        machines=get_library().machines(),
+        targets=targets(),
+        machine=machine,
+        serial_defaults=SERIAL_DEFAULTS,
+        message="",
+    )
+
+
+@bp.post("/machines")
+def save() -> Response | tuple[str, int]:
+    from app.cnc.emit.target import targets
+
+    form = request.form
+    name = form.get("name", "").strip()
+    target = form.get("target", "")
+    options: dict[str, str] = {}
+    message = ""
+    for line in form.get("options", "").splitlines():
+        if not line.strip():
+            continue
+        key, sep, value = line.partition("=")
+        if not sep:
+            message = f"Not saved: options line {line!r} is not NAME=VALUE"
+            break
+        options[key.strip()] = value.strip()
+    if not message:
+        try:
+            get_target(target).parse_options(options)
+        except OptionError as exc:
+            message = f"Not saved: {exc}"
+    serial = {key: form.get(key, default).strip() for key, default in SERIAL_DEFAULTS.items()}
+    if not message:
+        try:
+            get_library().save_machine(
+                Machine(name, target, options, serial, form.get("notes", ""))
+            )
+        except LibraryError as exc:
+            message = f"Not saved: {exc}"
+    if message:
+        return (
+            render_template(
+                "machines/index.html",
+                machines=get_library().machines(),
+                targets=targets(),
+                machine=Machine(name, target, options, serial, form.get("notes", "")),
+                serial_defaults=SERIAL_DEFAULTS,
+                message=message,
+            ),
+            422,
+        )
+    return redirect(url_for("machines.index"))
+
+
+@bp.post("/machines/<name>/delete")
+def delete(name: str) -> Response:
+    with contextlib.suppress(LibraryError):
+        get_library().delete_machine(name)
+    return redirect(url_for("machines.index"))

@@ -1,0 +1,191 @@
+// MillBlocks editor behaviour: keyboard conversation, preview linking, zoom and pan.
+// No inline script anywhere (the Content-Security-Policy forbids it): everything is here.
+(function () {
+  "use strict";
+
+  function fields(form) {
+    return Array.from(form.querySelectorAll("[data-field], input[name=mode]")).filter(function (el) {
+      return !el.disabled && el.type !== "hidden";
+    });
+  }
+
+  // Alt+letter reaches the element with that access key on every browser (browsers disagree
+  // on the modifier, and some headless ones have none): a field gets the focus, anything
+  // else is clicked.
+  document.addEventListener("keydown", function (event) {
+    if (!event.altKey || event.ctrlKey || event.metaKey || event.key.length !== 1) { return; }
+    var el = document.querySelector('[accesskey="' + event.key.toLowerCase() + '"]');
+    if (!el) { return; }
+    event.preventDefault();
+    if (/^(INPUT|SELECT|TEXTAREA)$/.test(el.tagName) && el.type !== "checkbox") { el.focus(); }
+    else { el.click(); }
+  }, true);
+
+  // Enter moves to the next prompt, as ENTER ADV does on the control; on the last one it
+  // enters the block. Escape goes back one step.
+  document.addEventListener("keydown", function (event) {
+    var target = event.target;
+    var form = target.closest ? target.closest("form.block-form, form.db0-form") : null;
+    if (event.key === "Enter" && (event.ctrlKey || event.metaKey) && target.form) {
+      // Ctrl+Enter enters the whole form from any prompt.
+      event.preventDefault();
+      var button = target.form.querySelector("[data-submit]");
+      if (button) { button.click(); } else { target.form.requestSubmit(); }
+      return;
+    }
+    if (event.key === "Enter" && form && target.tagName !== "TEXTAREA" && target.tagName !== "BUTTON") {
+      var list = fields(form);
+      var index = list.indexOf(target);
+      if (index >= 0 && index < list.length - 1) {
+        event.preventDefault();
+        list[index + 1].focus();
+        if (list[index + 1].select) { list[index + 1].select(); }
+      } else if (index === list.length - 1) {
+        event.preventDefault();
+        var submit = form.querySelector("[data-submit]");
+        if (submit) { submit.click(); } else { form.requestSubmit(); }
+      }
+      return;
+    }
+    var typing = target.tagName === "INPUT" || target.tagName === "SELECT" || target.tagName === "TEXTAREA";
+    if (event.key === "Escape") {
+      var back = document.querySelector("#entry [data-back]");
+      if (back) { event.preventDefault(); back.click(); }
+      return;
+    }
+    if (!typing && /^[1-9]$/.test(event.key)) {
+      var choice = document.querySelector('#entry .choice[data-key="' + event.key + '"]');
+      if (choice) { event.preventDefault(); choice.click(); }
+    }
+  });
+
+  // After htmx swaps the editor in, put the cursor on the first prompt (or the first choice).
+  function focusEntry() {
+    var first = document.querySelector("#entry form.block-form .field [data-field]") ||
+      document.querySelector("#entry .choice");
+    if (first) { first.focus(); if (first.select) { first.select(); } }
+    setupPreview();
+  }
+  // Typing replaces a prompt's value, as on the control.
+  document.addEventListener("focusin", function (event) {
+    if (event.target.matches && event.target.matches("input[data-field]") && event.target.select) {
+      event.target.select();
+    }
+  });
+
+  document.addEventListener("htmx:after:swap", focusEntry);
+  document.addEventListener("htmx:afterSwap", focusEntry);
+
+  // -- the preview ---------------------------------------------------------------------
+  var view = null;
+  var reloadTimer = null;
+
+  function svgOf() { return document.querySelector("#preview svg"); }
+
+  function setupPreview() {
+    var svg = svgOf();
+    if (!svg) { return; }
+    var box = svg.getAttribute("viewBox").split(/\s+/).map(Number);
+    view = { full: box.slice(), box: box.slice() };
+    var current = document.querySelector(".block-row.current[data-block]");
+    if (current) { highlight(current.getAttribute("data-block")); }
+  }
+
+  function apply() {
+    var svg = svgOf();
+    if (svg && view) { svg.setAttribute("viewBox", view.box.join(" ")); }
+  }
+
+  function zoom(factor, cx, cy) {
+    if (!view) { return; }
+    var b = view.box;
+    if (cx === undefined) { cx = b[0] + b[2] / 2; cy = b[1] + b[3] / 2; }
+    view.box = [cx - (cx - b[0]) * factor, cy - (cy - b[1]) * factor, b[2] * factor, b[3] * factor];
+    apply();
+  }
+
+  function highlight(number) {
+    document.querySelectorAll("#preview g.block.selected, .block-row.selected").forEach(function (el) {
+      el.classList.remove("selected");
+    });
+    document.querySelectorAll('#preview g.block[data-block="' + number + '"], .block-row[data-block="' + number + '"]')
+      .forEach(function (el) { el.classList.add("selected"); });
+  }
+
+  document.addEventListener("click", function (event) {
+    var button = event.target.closest("[data-zoom]");
+    if (button) {
+      var how = button.getAttribute("data-zoom");
+      if (how === "fit" && view) { view.box = view.full.slice(); apply(); }
+      else { zoom(how === "in" ? 0.7 : 1 / 0.7); }
+      return;
+    }
+    var group = event.target.closest("#preview g.block");
+    if (group && !dragged) {
+      var number = group.getAttribute("data-block");
+      highlight(number);
+      var link = document.querySelector('.block-row[data-block="' + number + '"] .block-link');
+      if (link) { link.click(); }
+      return;
+    }
+    var row = event.target.closest(".block-row[data-block]");
+    if (row) { highlight(row.getAttribute("data-block")); }
+  });
+
+  document.addEventListener("change", function (event) {
+    if (event.target.matches("[data-swept]")) {
+      document.getElementById("preview").classList.toggle("swept", event.target.checked);
+    }
+    if (event.target.matches("select[data-reload]")) {
+      // Each target has its own options: reload the page for the chosen one, once the
+      // choice settles (typing a name into the list selects on every letter).
+      var select = event.target;
+      clearTimeout(reloadTimer);
+      reloadTimer = setTimeout(function () {
+        var form = select.form;
+        var url = new URL(form.action, location.href);
+        url.searchParams.set("target", select.value);
+        var machine = form.querySelector("select[name=machine]");
+        if (machine && machine.value) { url.searchParams.set("machine", machine.value); }
+        location.href = url.toString();
+      }, 600);
+    }
+  });
+
+  document.addEventListener("wheel", function (event) {
+    var svg = event.target.closest ? event.target.closest("#preview svg") : null;
+    if (!svg || !view) { return; }
+    event.preventDefault();
+    var point = svg.createSVGPoint();
+    point.x = event.clientX; point.y = event.clientY;
+    var p = point.matrixTransform(svg.getScreenCTM().inverse());
+    zoom(event.deltaY < 0 ? 0.85 : 1 / 0.85, p.x, p.y);
+  }, { passive: false });
+
+  var drag = null;
+  var dragged = false;
+  document.addEventListener("mousedown", function (event) {
+    var svg = event.target.closest ? event.target.closest("#preview svg") : null;
+    if (!svg || !view) { return; }
+    drag = { x: event.clientX, y: event.clientY, box: view.box.slice(), scale: view.box[2] / svg.clientWidth };
+    dragged = false;
+  });
+  document.addEventListener("mousemove", function (event) {
+    if (!drag) { return; }
+    var dx = (event.clientX - drag.x) * drag.scale;
+    var dy = (event.clientY - drag.y) * drag.scale;
+    if (Math.abs(dx) + Math.abs(dy) > drag.scale * 3) { dragged = true; }
+    view.box = [drag.box[0] - dx, drag.box[1] - dy, drag.box[2], drag.box[3]];
+    apply();
+  });
+  document.addEventListener("mouseup", function () {
+    drag = null;
+    setTimeout(function () { dragged = false; }, 0);
+  });
+
+  document.addEventListener("DOMContentLoaded", function () {
+    var active = document.activeElement;
+    if (active && active.matches("input[data-field]")) { active.select(); }
+    focusEntry();
+  });
+})();

@@ -1,0 +1,225 @@
+"""The web app through Flask's test client: pages, forms without JavaScript, CSRF,
+security headers, stale saves, exports and downloads."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from flask import Flask
+from flask.testing import FlaskClient
+from sqlalchemy import Engine
+
+from app import create_app
+from app.web import get_library
+
+
+@pytest.fixture
+def app(tmp_path: Path) -> Iterator[Flask]:
+    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "test"})
+    yield app
+    get_library_engine(app).dispose()
+
+
+def get_library_engine(app: Flask) -> Engine:
+    with app.app_context():
+        return get_library().engine
+
+
+@pytest.fixture
+def client(app: Flask) -> FlaskClient:
+    return app.test_client()
+
+
+def token(client: FlaskClient, url: str = "/") -> str:
+    page = client.get(url).get_data(as_text=True)
+    found = re.search(r'name="csrf_token" value="([^"]+)"', page)
+    assert found, "no CSRF token on the page"
+    return found.group(1)
+
+
+def test_every_page_renders(client: FlaskClient) -> None:
+    for url in (
+        "/",
+        "/trash",
+        "/machines",
+        "/transfers",
+        "/programs/1",
+        "/programs/1/db0",
+        "/programs/1/export",
+        "/programs/1/entry?group=DRILL",
+        "/programs/1/entry?kind=DRILL",
+        "/programs/1?edit=3",
+    ):
+        response = client.get(url)
+        assert response.status_code == 200, url
+        assert "MillBlocks" in response.get_data(as_text=True)
+
+
+def test_security_headers(client: FlaskClient) -> None:
+    response = client.get("/")
+    csp = response.headers["Content-Security-Policy"]
+    assert "script-src 'self'" in csp and "unsafe-inline" not in csp
+    assert "frame-ancestors 'none'" in csp
+    assert response.headers["X-Content-Type-Options"] == "nosniff"
+    assert response.headers["Referrer-Policy"] == "same-origin"
+
+
+def test_state_change_without_csrf_token_is_refused(client: FlaskClient) -> None:
+    response = client.post("/programs", data={"name": "sneaky"})
+    assert response.status_code == 400
+    assert "CSRF" in response.get_data(as_text=True)
+    assert "sneaky" not in client.get("/").get_data(as_text=True)
+
+
+def test_create_program_then_enter_a_block_without_javascript(client: FlaskClient) -> None:
+    csrf = token(client)
+    response = client.post(
+        "/programs",
+        data={"csrf_token": csrf, "name": "Plate", "part_number": "42", "units": "inch"},
+    )
+    assert response.status_code == 302
+    program_id = int(response.headers["Location"].split("/")[2])
+    response = client.post(
+        f"/programs/{program_id}/db0",
+        data={
+            "csrf_token": csrf,
+            "version": "1",
+            "x_offset": "2",
+            "y_offset": "1",
+            "current_tool": "1",
+            "milling": "climb",
+            "z_retract": "0.1",
+            "dia_1": "0.25",
+            "rpm_1": "1500",
+            "tcal_1": "0",
+        },
+    )
+    assert response.status_code == 302
+    response = client.post(
+        f"/programs/{program_id}/blocks",
+        data={
+            "csrf_token": csrf,
+            "version": "2",
+            "kind": "DRILL",
+            "at": "1",
+            "units": "inch",
+            "x": "1",
+            "y": "1",
+            "z_up": "0.1",
+            "z_dn": "-0.5",
+            "feed_z": "5",
+            "pecks": "2",
+            "tool": "1",
+        },
+    )
+    assert response.status_code == 302
+    page = client.get(f"/programs/{program_id}").get_data(as_text=True)
+    assert "X 1  Y 1  Z UP 0.1  Z DN -0.5  FEEDR Z 5  # PECK 2  TOOL # 1" in page
+    assert 'class="hole"' in page  # the preview drew the hole
+
+
+def test_bad_value_is_named_and_nothing_is_saved(client: FlaskClient) -> None:
+    csrf = token(client)
+    before = client.get("/programs/2").get_data(as_text=True)
+    response = client.post(
+        "/programs/2/blocks",
+        data={
+            "csrf_token": csrf,
+            "version": "1",
+            "kind": "POS",
+            "at": "4",
+            "x": "1",
+            "y": "abc",
+            "tool": "1",
+        },
+    )
+    assert response.status_code == 422
+    text = response.get_data(as_text=True)
+    assert "Not saved: Y: &#39;abc&#39; is not a number" in text
+    with client.application.app_context():
+        assert get_library().get(2).info.version == 1
+    assert before.count("block-row") == client.get("/programs/2").get_data(as_text=True).count(
+        "block-row"
+    )
+
+
+def test_validation_problem_is_shown_beside_its_field(client: FlaskClient) -> None:
+    csrf = token(client)
+    data = {
+        "csrf_token": csrf,
+        "version": "1",
+        "kind": "DRILL",
+        "edit": "2",
+        "units": "inch",
+        "loop": "on",
+        "mode": "inc",
+        "x": "0",
+        "y": "0",
+        "z_up": "0.1",
+        "z_dn": "-0.5",
+        "feed_z": "300",
+        "pecks": "2",
+        "tool": "1",
+    }
+    assert client.post("/programs/2/blocks", data=data).status_code == 302
+    page = client.get("/programs/2?edit=2").get_data(as_text=True)
+    field = page[page.index('for="f-feed_z"') :]
+    assert "300 ipm is outside the allowed range 0.1 to 250 ipm" in field[: field.index("</div>\n")]
+
+
+def test_stale_save_is_refused_with_what_changed(client: FlaskClient) -> None:
+    csrf = token(client)
+    base = {"csrf_token": csrf, "kind": "POS", "at": "4", "x": "5", "y": "5", "tool": "1"}
+    assert client.post("/programs/2/blocks", data={**base, "version": "1"}).status_code == 302
+    response = client.post("/programs/2/blocks", data={**base, "version": "1", "x": "6"})
+    assert response.status_code == 409
+    text = response.get_data(as_text=True)
+    assert (
+        "not saved:" in text and "block 4 POS added" in text and "nothing was overwritten" in text
+    )
+
+
+def test_export_page_and_downloads(client: FlaskClient) -> None:
+    page = client.get("/programs/3/export?target=tape-eia&go=1").get_data(as_text=True)
+    assert "Compatibility report for tape-eia" in page
+    assert "<svg" in page  # the tape picture
+    tape = client.get("/programs/3/export/download?target=tape-eia")
+    assert tape.status_code == 200
+    assert (
+        tape.headers["Content-Disposition"].endswith('.tap"')
+        or "attachment" in tape.headers["Content-Disposition"]
+    )
+    gcode = client.get("/programs/3/export/download?target=gcode-linuxcnc")
+    assert gcode.status_code == 200 and gcode.data.startswith(b"%\n")
+
+
+def test_oversized_upload_gets_413(client: FlaskClient) -> None:
+    csrf = token(client)
+    boundary = "mbtest"
+    body = (
+        (
+            f'--{boundary}\r\nContent-Disposition: form-data; name="csrf_token"\r\n\r\n{csrf}\r\n'
+            f'--{boundary}\r\nContent-Disposition: form-data; name="file"; filename="big.json"\r\n'
+            "Content-Type: application/json\r\n\r\n"
+        ).encode()
+        + b"x" * (3 * 1024 * 1024)
+        + f"\r\n--{boundary}--\r\n".encode()
+    )
+    response = client.post(
+        "/programs/import", data=body, content_type=f"multipart/form-data; boundary={boundary}"
+    )
+    assert response.status_code == 413
+    assert "larger than the 2 MB" in response.get_data(as_text=True)
+
+
+def test_markup_in_names_renders_inert(client: FlaskClient) -> None:
+    csrf = token(client)
+    client.post(
+        "/programs", data={"csrf_token": csrf, "name": "<script>alert(1)</script>", "units": "inch"}
+    )
+    page = client.get("/").get_data(as_text=True)
+    assert "<script>alert(1)</script>" not in page
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page

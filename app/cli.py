@@ -254,6 +254,35 @@ def restore(archive: Path) -> None:
 
 
 @main.group()
+def user() -> None:
+    """Accounts for serving MillBlocks on a network (MILLBLOCKS_AUTH=accounts)."""
+
+
+@user.command("add")
+@click.argument("username")
+@click.option("--role", type=click.Choice(["programmer", "operator", "admin"]), required=True)
+@click.password_option(help="The password (asked for when not given; 10 characters or more).")
+def user_add(username: str, role: str, password: str) -> None:
+    """Create an account."""
+    from app.storage.accounts import Accounts
+
+    try:
+        Accounts(library()).create(username, password, role)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"user {username} ({role}) created")
+
+
+@user.command("list")
+def user_list() -> None:
+    """List the accounts."""
+    from app.storage.accounts import Accounts
+
+    for account in Accounts(library()).users():
+        click.echo(f"{account.username:<20} {account.role}")
+
+
+@main.group()
 def db() -> None:
     """Database maintenance."""
 

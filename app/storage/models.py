@@ -83,3 +83,29 @@ class SettingRow(Base):
 
     key: Mapped[str] = mapped_column(String(100), primary_key=True)
     value: Mapped[str] = mapped_column(Text, default="")
+
+
+class UserRow(Base):
+    """An account: programmer (edits), operator (views, exports, sends), admin (all, and
+    users and machines). The password is kept only as a scrypt hash."""
+
+    __tablename__ = "users"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    username: Mapped[str] = mapped_column(String(100), unique=True)
+    password_hash: Mapped[str] = mapped_column(String(300))
+    role: Mapped[str] = mapped_column(String(20))
+    created_at: Mapped[datetime]
+
+
+class LoginAttemptRow(Base):
+    """A failed login, counted per address for the login rate limit (shared by workers)."""
+
+    __tablename__ = "login_attempts"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    address: Mapped[str] = mapped_column(String(100))
+    username: Mapped[str] = mapped_column(String(100), default="")
+    at: Mapped[datetime]
+
+    __table_args__ = (Index("ix_login_attempts_address_at", "address", "at"),)

@@ -17,7 +17,7 @@ from flask_wtf.csrf import CSRFError
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
-from app.web import editor, export, library, machines, transfers
+from app.web import auth, editor, export, library, machines, transfers
 from app.web.extensions import csrf, get_library
 
 __all__ = ["create_app", "get_library"]
@@ -44,6 +44,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         SESSION_COOKIE_SECURE=os.environ.get("MILLBLOCKS_HTTPS") == "1",
         WTF_CSRF_TIME_LIMIT=None,
         MILLBLOCKS_USER=os.environ.get("MILLBLOCKS_USER", "local"),
+        MILLBLOCKS_AUTH=os.environ.get("MILLBLOCKS_AUTH", "local"),
     )
     if test_config:
         app.config.update(test_config)
@@ -53,13 +54,17 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     csrf.init_app(app)
     app.extensions["millblocks.library"] = open_library(app.config["DATABASE_URL"])
 
-    for module in (library, editor, export, machines, transfers):
+    for module in (auth, library, editor, export, machines, transfers):
         app.register_blueprint(module.bp)
+    auth.init_app(app)
 
     app.after_request(_security_headers)
     app.register_error_handler(CSRFError, _csrf_error)
     app.register_error_handler(413, _too_large)
     app.register_error_handler(404, _not_found)
+    app.register_error_handler(403, _forbidden)
+    if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
+        raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
 
 
@@ -88,6 +93,11 @@ def _csrf_error(error: CSRFError) -> tuple[str, int]:
 def _too_large(_error: Exception) -> tuple[str, int]:
     message = "The upload is larger than the 2 MB MillBlocks accepts."
     return render_template("errors/error.html", title="Too large", message=message), 413
+
+
+def _forbidden(error: Exception) -> tuple[str, int]:
+    message = getattr(error, "description", "Not allowed")
+    return render_template("errors/error.html", title="Not allowed", message=message), 403
 
 
 def _not_found(error: Exception) -> tuple[str, int]:

@@ -51,9 +51,10 @@ bp = Blueprint("editor", __name__)
 
 
 def current_user() -> str:
-    from flask import current_app
+    """The name recorded with each revision."""
+    from app.web.auth import current_user as user
 
-    return str(current_app.config.get("MILLBLOCKS_USER", ""))
+    return user().username
 
 
 def load(program_id: int) -> StoredProgram:

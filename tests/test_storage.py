@@ -47,7 +47,14 @@ def tables(engine: Engine) -> set[str]:
 def test_upgrade_head_on_an_empty_database(database_url: str) -> None:
     engine = make_engine(database_url)
     upgrade(engine)
-    assert tables(engine) == {"programs", "revisions", "machines", "settings"}
+    assert tables(engine) == {
+        "programs",
+        "revisions",
+        "machines",
+        "settings",
+        "users",
+        "login_attempts",
+    }
     engine.dispose()
 
 
@@ -57,7 +64,14 @@ def test_downgrade_and_upgrade_round_trip(database_url: str) -> None:
     downgrade(engine, "base")
     assert tables(engine) == set()
     upgrade(engine)
-    assert tables(engine) == {"programs", "revisions", "machines", "settings"}
+    assert tables(engine) == {
+        "programs",
+        "revisions",
+        "machines",
+        "settings",
+        "users",
+        "login_attempts",
+    }
     engine.dispose()
 
 

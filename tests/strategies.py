@@ -1,0 +1,372 @@
+"""Hypothesis strategies for valid MillBlocks programs (seed 001, DESIGN.md §2-3).
+
+`programs()` builds programs that `validate()` accepts without errors, by construction rather
+than by filtering: every value is drawn at the programming resolution (0.001 in, 0.01 mm)
+and inside the control's limits, and the blocks are put together the way the control
+allows them to follow each other:
+
+- nodes: POS, a standard DRILL/BORE/TAP hole, a bolt circle (a standard hole of the same
+  operation giving the centre, then BOLT CIR), a mill sequence (a DRILL without cutter
+  compensation followed by MILL STD lines), and LOOP … REP around a head node and a body
+  of nodes, nested up to four deep;
+- every block of a LOOP sequence is INC and every block of a LOOP or mill sequence uses one
+  tool; the total pattern count of nested loops stays small (`MAX_PATTERNS`) so the tests
+  run fast;
+- the tool table lists 1-5 tools, at least one with an RPM (possibly negative), each with or
+  without a diameter and a TCAL; tools without RPM are never used;
+- STOP goes only where the control allows it (not on REP, not inside a mill sequence);
+- some programs carry warnings: cutter compensation on a DRILL that no mill block follows,
+  MILL STD lines that go nowhere, a trailing COPY still waiting for EXEC or CANCEL.
+
+Programs are inch or metric, and some mix both units block by block (the INCH/MM field).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from decimal import Decimal
+
+from hypothesis import strategies as st
+
+from app.cnc import limits
+from app.cnc.blocks import (
+    Block,
+    BoltCircle,
+    Comp,
+    Copy,
+    DataBlock0,
+    Hole,
+    HoleOp,
+    MillingMode,
+    MillLine,
+    Mode,
+    Pos,
+    Program,
+    Rep,
+    Tool,
+)
+from app.cnc.units import Units
+
+# At most this many patterns for one node, multiplied through nested LOOP/REP pairs.
+MAX_PATTERNS = 24
+# NX and NY are drawn from 0 to this (the control allows 999).
+MAX_REPEAT_DRAWN = 3
+# A bolt circle's holes × pecks × enclosing patterns stays under this, to keep tests fast.
+MAX_HOLE_LEVELS = 600
+# Nodes in one LOOP body (besides the LOOP block's own node) and at the top level.
+MAX_BODY_NODES = 2
+MAX_TOP_NODES = 5
+
+
+@dataclass(frozen=True)
+class _Context:
+    """What the blocks of one program share: its unit, usable tools, unit mixing."""
+
+    units: Units
+    tools: tuple[int, ...]
+    mixed_units: bool
+
+
+def _other(units: Units) -> Units:
+    return Units.MM if units is Units.INCH else Units.INCH
+
+
+def lengths(units: Units, low_mils: int, high_mils: int) -> st.SearchStrategy[Decimal]:
+    """Lengths at the programming resolution of `units`, from `low_mils` to `high_mils`.
+
+    The bounds are in thousandths of an inch; for millimetres they are converted and rounded
+    inwards (1 mil = 0.0254 mm), and values are drawn in 0.01 mm steps.
+    """
+    if units is Units.INCH:
+        return st.integers(low_mils, high_mils).map(lambda n: Decimal(n).scaleb(-3))
+    low = -((-low_mils * 254) // 100)
+    high = (high_mils * 254) // 100
+    return st.integers(low, high).map(lambda n: Decimal(n).scaleb(-2))
+
+
+def feeds_z(units: Units) -> st.SearchStrategy[Decimal]:
+    """FEEDR Z: 0.1-250.0 ipm in 0.1 steps, or 2-6350 mm/min in steps of 2."""
+    if units is Units.INCH:
+        return st.integers(1, 2500).map(lambda n: Decimal(n).scaleb(-1))
+    return st.integers(1, 3175).map(lambda n: Decimal(2 * n))
+
+
+def feeds_xy(units: Units) -> st.SearchStrategy[Decimal]:
+    """FEEDR XY: 0.1-100.0 ipm in 0.1 steps, or 2-2540 mm/min in steps of 2."""
+    if units is Units.INCH:
+        return st.integers(1, 1000).map(lambda n: Decimal(n).scaleb(-1))
+    return st.integers(1, 1270).map(lambda n: Decimal(2 * n))
+
+
+def rpms() -> st.SearchStrategy[int]:
+    """A spindle speed the control accepts: 60-4000, negative for counter-clockwise."""
+    return st.builds(lambda n, ccw: -n if ccw else n, st.integers(60, 4000), st.booleans())
+
+
+def angles() -> st.SearchStrategy[Decimal]:
+    """A bolt-circle angle, 0 to 359.99° in 0.01° steps."""
+    return st.integers(0, 35999).map(lambda n: Decimal(n).scaleb(-2))
+
+
+def _stops() -> st.SearchStrategy[bool]:
+    """The STOP qualifier, set now and then (shrinks to no STOP)."""
+    return st.sampled_from((False, False, False, True))
+
+
+@st.composite
+def tool_tables(draw: st.DrawFn, units: Units) -> tuple[DataBlock0, tuple[int, ...]]:
+    """Data Block 0 and the numbers of its tools that have an RPM (at least one)."""
+    numbers = draw(st.lists(st.integers(1, 24), min_size=1, max_size=5, unique=True))
+    usable = draw(st.integers(1, len(numbers)))
+    tools = tuple(
+        Tool(
+            number=number,
+            diameter=draw(st.none() | lengths(units, 1, 2000)),
+            rpm=draw(rpms()) if k < usable else None,
+            tcal=draw(st.none() | lengths(units, -10_000, 10_000)),
+        )
+        for k, number in enumerate(numbers)
+    )
+    block0 = DataBlock0(
+        x_offset=draw(lengths(units, -50_000, 50_000)),
+        y_offset=draw(lengths(units, -50_000, 50_000)),
+        current_tool=draw(st.integers(0, 24)),
+        milling=draw(st.sampled_from(MillingMode)),
+        z_retract=draw(lengths(units, 0, 1000)),
+        tools=tools,
+    )
+    return block0, tuple(numbers[:usable])
+
+
+def _block_units(draw: st.DrawFn, ctx: _Context) -> Units:
+    if ctx.mixed_units:
+        return draw(st.sampled_from((ctx.units, _other(ctx.units))))
+    return ctx.units
+
+
+def _xy(draw: st.DrawFn, units: Units, mode: Mode) -> tuple[Decimal, Decimal]:
+    """X and Y: a position within ±10 in (ABS) or a step within ±3 in (INC)."""
+    span = 10_000 if mode is Mode.ABS else 3_000
+    return draw(lengths(units, -span, span)), draw(lengths(units, -span, span))
+
+
+@st.composite
+def holes(
+    draw: st.DrawFn,
+    units: Units,
+    *,
+    op: HoleOp,
+    tool: int,
+    mode: Mode,
+    max_pecks: int = limits.MAX_PECKS,
+    allow_comp: bool = False,
+) -> Hole:
+    """A DRILL/BORE/TAP block with depths: Z DN below Z UP, pecks only on a DRILL.
+
+    Z UP is within ±2 in (so sometimes negative), the hole up to 2 in deep. `allow_comp`
+    lets a DRILL carry CUT RT/LT, which for a hole no mill block follows is a warning.
+    """
+    x, y = _xy(draw, units, mode)
+    z_up = draw(lengths(units, -2000, 2000))
+    z_dn = z_up - draw(lengths(units, 1, 2000))
+    comp = Comp.NONE
+    if allow_comp and op is HoleOp.DRILL:
+        comp = draw(st.sampled_from((Comp.NONE, Comp.NONE, Comp.RIGHT, Comp.LEFT)))
+    return Hole(
+        op=op,
+        x=x,
+        y=y,
+        z_up=z_up,
+        z_dn=z_dn,
+        feed_z=draw(feeds_z(units)),
+        pecks=draw(st.integers(1, max_pecks)) if op is HoleOp.DRILL else 1,
+        tool=tool,
+        comp=comp,
+        mode=mode,
+        units=units,
+    )
+
+
+@st.composite
+def _pos_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    units = _block_units(draw, ctx)
+    x, y = _xy(draw, units, mode)
+    pos = Pos(
+        x=x,
+        y=y,
+        index=draw(st.booleans()),
+        tool=tool,
+        mode=mode,
+        units=units,
+        stop=draw(_stops()),
+    )
+    return [pos]
+
+
+@st.composite
+def _hole_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    op = draw(st.sampled_from(HoleOp))
+    hole = draw(
+        holes(_block_units(draw, ctx), op=op, tool=tool, mode=mode, allow_comp=True),
+    )
+    return [dataclasses.replace(hole, stop=draw(_stops()))]
+
+
+@st.composite
+def _bolt_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    op = draw(st.sampled_from(HoleOp))
+    centre = draw(holes(_block_units(draw, ctx), op=op, tool=tool, mode=mode, allow_comp=True))
+    max_holes = max(1, min(limits.MAX_BOLT_HOLES, MAX_HOLE_LEVELS // (centre.pecks * mult)))
+    units = _block_units(draw, ctx)
+    bolt = BoltCircle(
+        op=op,
+        holes=draw(st.integers(1, max_holes)),
+        angle=draw(angles()),
+        radius=draw(lengths(units, 1, 5000)),
+        mode=mode,
+        units=units,
+    )
+    # STOP may sit on either block of the pair; the control stops after the whole pattern.
+    stop_on = draw(st.sampled_from((None, None, None, 0, 1)))
+    pair: list[Block] = [centre, bolt]
+    if stop_on is not None:
+        pair[stop_on] = dataclasses.replace(pair[stop_on], stop=True)
+    return pair
+
+
+@st.composite
+def _mill_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    """A DRILL starting a mill sequence, then 1-4 MILL STD lines (one unit, one tool)."""
+    units = _block_units(draw, ctx)
+    drill = draw(holes(units, op=HoleOp.DRILL, tool=tool, mode=mode))
+    z_up = drill.z_up
+    assert z_up is not None
+    sequence: list[Block] = [drill]
+    for _ in range(draw(st.integers(1, 4))):
+        line_mode = mode if mode is Mode.INC else draw(st.sampled_from(Mode))
+        x, y = _xy(draw, units, line_mode)
+        if line_mode is Mode.INC and draw(st.sampled_from((False,) * 7 + (True,))):
+            x = y = Decimal(0)  # a line that goes nowhere: a warning, and no motion
+        # A mill block may change depth: anywhere below the drill's Z UP, down to 3 in under it.
+        z_dn = draw(st.none() | lengths(units, 1, 3000).map(lambda d: z_up - d))
+        sequence.append(
+            MillLine(
+                x=x,
+                y=y,
+                z_dn=z_dn,
+                feed_xy=draw(feeds_xy(units)),
+                tool=tool,
+                mode=line_mode,
+                units=units,
+            )
+        )
+    if draw(_stops()):
+        sequence[-1] = dataclasses.replace(sequence[-1], stop=True)
+    return sequence
+
+
+_LEAF_NODES = {"pos": _pos_node, "hole": _hole_node, "bolt": _bolt_node, "mill": _mill_node}
+
+
+@st.composite
+def nodes(
+    draw: st.DrawFn,
+    ctx: _Context,
+    *,
+    tool: int | None,
+    in_loop: bool,
+    depth: int,
+    budget: int,
+    mult: int,
+) -> list[Block]:
+    """The blocks of one node.
+
+    `tool` is the LOOP sequence's tool (None at the top level: any usable tool). `depth` is
+    the number of LOOPs open around the node; `budget` the patterns a LOOP here may still
+    multiply by; `mult` the patterns of the LOOPs around it.
+    """
+    # Inside a LOOP, another LOOP is likelier, so that nests three and four deep turn up.
+    loops = 0 if depth == limits.MAX_LOOP_DEPTH else 1 if depth == 0 else 3
+    kind = draw(st.sampled_from([*_LEAF_NODES, *["loop"] * loops]))
+    if tool is None:
+        tool = draw(st.sampled_from(ctx.tools))
+    if kind != "loop":
+        mode = Mode.INC if in_loop else draw(st.sampled_from(Mode))
+        return draw(_LEAF_NODES[kind](ctx, tool, mode, mult))
+    nx = draw(st.integers(0, min(MAX_REPEAT_DRAWN, budget - 1)))
+    ny = draw(st.integers(0, min(MAX_REPEAT_DRAWN, budget // (nx + 1) - 1)))
+    count = (nx + 1) * (ny + 1)
+    head_kind = draw(st.sampled_from(sorted(_LEAF_NODES)))
+    head = draw(_LEAF_NODES[head_kind](ctx, tool, Mode.INC, mult * count))
+    head[0] = dataclasses.replace(head[0], loop=True)
+    body = draw(
+        st.lists(
+            nodes(
+                ctx,
+                tool=tool,
+                in_loop=True,
+                depth=depth + 1,
+                budget=budget // count,
+                mult=mult * count,
+            ),
+            max_size=MAX_BODY_NODES,
+        )
+    )
+    units = _block_units(draw, ctx)
+    step_x, step_y = _xy(draw, units, Mode.INC)
+    rep = Rep(x=step_x, y=step_y, nx=nx, ny=ny, units=units)
+    return [*head, *(block for node in body for block in node), rep]
+
+
+@st.composite
+def pending_copies(draw: st.DrawFn, blocks: tuple[Block, ...], tools: tuple[int, ...]) -> Copy:
+    """A COPY of one earlier block, still waiting for EXEC or CANCEL (a warning only).
+
+    A TOOL # it would change to is one with an RPM (`tools`), like any block's.
+    """
+    number = draw(st.integers(1, len(blocks)))
+    units = blocks[number - 1].units
+    return Copy(
+        from_block=number,
+        to_block=number,
+        op=draw(st.none() | st.sampled_from(HoleOp)),
+        pecks=draw(st.none() | st.integers(1, limits.MAX_PECKS)),
+        xof=draw(st.none() | lengths(units, -3000, 3000)),
+        yof=draw(st.none() | lengths(units, -3000, 3000)),
+        feed_z=draw(st.none() | feeds_z(units)),
+        feed_xy=draw(st.none() | feeds_xy(units)),
+        tool=draw(st.none() | st.sampled_from(tools)),
+        units=units,
+    )
+
+
+def names() -> st.SearchStrategy[str]:
+    """A program name: any text that is not blank."""
+    return st.text(min_size=1, max_size=20).filter(lambda s: bool(s.strip()))
+
+
+@st.composite
+def programs(draw: st.DrawFn, max_nodes: int = MAX_TOP_NODES) -> Program:
+    """A program that `validate()` accepts without errors (it may have warnings)."""
+    units = draw(st.sampled_from(Units))
+    block0, usable = draw(tool_tables(units))
+    ctx = _Context(units=units, tools=usable, mixed_units=draw(st.booleans()))
+    top = draw(
+        st.lists(
+            nodes(ctx, tool=None, in_loop=False, depth=0, budget=MAX_PATTERNS, mult=1),
+            min_size=1,
+            max_size=max_nodes,
+        )
+    )
+    blocks: tuple[Block, ...] = tuple(block for node in top for block in node)
+    if draw(st.sampled_from((False, False, False, True))):
+        blocks = (*blocks, draw(pending_copies(blocks, usable)))
+    return Program(
+        name=draw(names()),
+        part_number=draw(st.text(alphabet="0123456789", max_size=8)),
+        units=units,
+        notes=draw(st.text(max_size=40)),
+        block0=block0,
+        blocks=blocks,
+    )

@@ -73,6 +73,7 @@ _TAPE_CASES = (
     "stop-and-tool-changes",
     "two-axis",
     "pos-index",
+    "coolant-and-messages",
 )
 _GCODE_CASES = (
     "bolt-circle-drill",
@@ -83,6 +84,7 @@ _GCODE_CASES = (
     "frame-pocket",
     "circle-in-tan-mm",
     "two-axis",
+    "coolant-and-messages",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES,

@@ -69,6 +69,14 @@ class MillingMode(enum.Enum):
     CLIMB = "climb"
 
 
+class Coolant(enum.Enum):
+    """The coolant a tool runs with (Data Block 0 tool table)."""
+
+    OFF = "off"
+    FLOOD = "flood"
+    MIST = "mist"
+
+
 class CopyAction(enum.Enum):
     """The COPY block's final choice; `None` on the block means "step through again"."""
 
@@ -83,13 +91,15 @@ def _f(label: str, default: Any = dataclasses.MISSING) -> Any:
 
 @dataclass(frozen=True, kw_only=True)
 class Block:
-    """What every data block has: ABS/INC, inch/mm, and the LOOP and STOP qualifiers."""
+    """What every data block has: ABS/INC, inch/mm, the LOOP and STOP qualifiers, and an
+    optional operator message shown when the block runs (where the target can show one)."""
 
     kind: ClassVar[str] = "BLOCK"
     mode: Mode = _f("ABS/INC", Mode.ABS)
     units: Units = _f("INCH/MM", Units.INCH)
     loop: bool = _f("LOOP", False)
     stop: bool = _f("STOP", False)
+    message: str = _f("MESSAGE", "")
 
     @property
     def title(self) -> str:
@@ -349,6 +359,7 @@ class Tool:
     diameter: Decimal | None = _f("DIA", None)
     rpm: int | None = _f("RPM", None)
     tcal: Decimal | None = _f("TCAL", None)
+    coolant: Coolant = _f("COOLANT", Coolant.OFF)
 
 
 @dataclass(frozen=True, kw_only=True)

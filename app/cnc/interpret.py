@@ -46,9 +46,12 @@ from app.cnc.problems import Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.toolpath import (
     ArcFeed,
+    CoolantOff,
+    CoolantOn,
     Dwell,
     Feed,
     IndexTable,
+    Message,
     Move,
     ProgramEnd,
     ProgramStop,
@@ -104,6 +107,7 @@ class _Interpreter:
                 diameter=None if t.diameter is None else to_nm(t.diameter, units),
                 rpm=t.rpm,
                 tcal=None if t.tcal is None else to_nm(t.tcal, units),
+                coolant=t.coolant.value,
             )
             for t in db0.tools
         }
@@ -112,6 +116,7 @@ class _Interpreter:
         self.retract = self.z_retract
         self.tool = db0.current_tool
         self.spindle_on = False
+        self.coolant = "off"
         self.loop_depth = 0
         self.moves: list[Move] = []
         self.toolpath = Toolpath(
@@ -127,6 +132,7 @@ class _Interpreter:
         self.run_nodes(build_nodes(self.blocks))
         last = len(self.blocks)
         self.retract_up(last)
+        self.set_coolant(last, "off")
         if self.spindle_on:
             self.moves.append(SpindleOff(last))
         self.moves.append(ProgramEnd(last))
@@ -140,14 +146,20 @@ class _Interpreter:
                 self.run_loop(node)
                 continue
             if isinstance(node, Single):
-                self.run_single(node.index)
                 indexes = [node.index]
             elif isinstance(node, BoltPattern):
-                self.run_bolt_circle(node)
                 indexes = [node.centre, node.bolt]
             else:
-                self.run_mill_sequence(node)
                 indexes = [node.drill, *node.mills]
+            for i in indexes:
+                if self.blocks[i].message:
+                    self.moves.append(Message(i + 1, self.blocks[i].message))
+            if isinstance(node, Single):
+                self.run_single(node.index)
+            elif isinstance(node, BoltPattern):
+                self.run_bolt_circle(node)
+            else:
+                self.run_mill_sequence(node)
             if any(self.blocks[i].stop for i in indexes):
                 self.program_stop(indexes[-1] + 1)
 
@@ -335,6 +347,7 @@ class _Interpreter:
     def program_stop(self, number: int) -> None:
         """STOP: the head retracts and the spindle shuts off (seed 001 §3.4.5.3)."""
         self.retract_up(number)
+        self.set_coolant(number, "off")
         if self.spindle_on:
             self.moves.append(SpindleOff(number))
             self.spindle_on = False
@@ -344,6 +357,7 @@ class _Interpreter:
         """Change to `tool` if another is in the spindle, and make sure the spindle turns."""
         if tool != self.tool:
             self.retract_up(number)
+            self.set_coolant(number, "off")
             # The head stays where it is for the change, so a longer new tool's tip ends up
             # lower: go high enough first that the new tip is still at the retract height.
             clear = self.retract + self.tcal(tool) - self.tcal(self.tool)
@@ -359,6 +373,18 @@ class _Interpreter:
             rpm = self.tool_rpm(tool)
             self.moves.append(SpindleOn(number, clockwise=rpm > 0, rpm=abs(rpm)))
             self.spindle_on = True
+        info = self.tools.get(tool)
+        self.set_coolant(number, "off" if info is None else info.coolant)
+
+    def set_coolant(self, number: int, mode: str) -> None:
+        """Switch the coolant to `mode` (off, flood, mist) if it is not that already."""
+        if mode == self.coolant:
+            return
+        if self.coolant != "off":
+            self.moves.append(CoolantOff(number))
+        if mode != "off":
+            self.moves.append(CoolantOn(number, mode))
+        self.coolant = mode
 
     def tcal(self, tool: int) -> int:
         """A tool's calibrated Z zero in nm (0 for no tool or an uncalibrated one)."""

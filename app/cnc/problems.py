@@ -62,6 +62,7 @@ class Rule(enum.Enum):
     CORNER_UNREACHABLE = "corner-unreachable"
     POCKET_TOOL = "pocket-tool"
     COMP_ON_ROUTINE = "comp-on-routine"
+    MESSAGE = "message"
 
 
 @dataclass(frozen=True, slots=True)

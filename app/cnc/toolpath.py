@@ -114,6 +114,29 @@ class ProgramStop:
 
 
 @dataclass(frozen=True, slots=True)
+class CoolantOn:
+    """Start the coolant: `mode` is "flood" (M08) or "mist" (M07)."""
+
+    block: int
+    mode: str
+
+
+@dataclass(frozen=True, slots=True)
+class CoolantOff:
+    """Stop the coolant (M09)."""
+
+    block: int
+
+
+@dataclass(frozen=True, slots=True)
+class Message:
+    """Show `text` to the operator as the block starts (a comment; no stop)."""
+
+    block: int
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
 class IndexTable:
     """Signal the rotary fixture to index to its next position (POS INDEX)."""
 
@@ -139,6 +162,9 @@ Move = (
     | ProgramStop
     | IndexTable
     | ProgramEnd
+    | CoolantOn
+    | CoolantOff
+    | Message
 )
 MOTION_TYPES = (Rapid, Feed, ArcFeed)
 
@@ -169,6 +195,7 @@ class ToolInfo:
     diameter: int | None
     rpm: int | None
     tcal: int | None
+    coolant: str = "off"
 
 
 @dataclass(slots=True)

@@ -47,6 +47,13 @@ from app.cnc.units import Units, format_decimal, to_nm
 ERROR = Severity.ERROR
 WARNING = Severity.WARNING
 
+# Operator messages go into tape comments and G-code (MSG,…) lines: upper-case ASCII
+# letters after conversion, and no parentheses or semicolons, which end comments.
+MESSAGE_LENGTH = 60
+MESSAGE_CHARACTERS = frozenset(
+    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 .,-:/#+=*"
+)
+
 # Fields holding signed lengths, and fields holding lengths that must be positive.
 SIGNED_LENGTHS = ("x", "y", "z_up", "z_dn", "xof", "yof")
 POSITIVE_LENGTHS = ("radius", "xl", "yw")
@@ -83,6 +90,7 @@ class _Checker:
         for number, block in enumerate(self.blocks, start=1):
             self.check_fields(number, block)
             self.check_kind_rules(number, block)
+            self.check_message(number, block)
         self.check_loops()
         self.check_order()
         self.check_tools()
@@ -263,6 +271,26 @@ class _Checker:
             )
 
     # -- per-block rules ----------------------------------------------------------------
+
+    def check_message(self, number: int, block: Block) -> None:
+        text = block.message
+        if not text:
+            return
+        bad = sorted({c for c in text if c not in MESSAGE_CHARACTERS})
+        if bad or len(text) > MESSAGE_LENGTH:
+            what = (
+                f"{len(text)} characters is too long"
+                if len(text) > MESSAGE_LENGTH
+                else "has characters a control cannot show: " + " ".join(repr(c) for c in bad)
+            )
+            self.add(
+                number,
+                "MESSAGE",
+                ERROR,
+                Rule.MESSAGE,
+                f"{what}; allowed up to {MESSAGE_LENGTH} letters, digits, spaces "
+                "and . , - : / # + = *",
+            )
 
     def check_kind_rules(self, number: int, block: Block) -> None:
         if block.loop and not isinstance(block, LOOP_CAPABLE_CLASSES):

@@ -15,9 +15,12 @@ from app.cnc.blocks import Program
 from app.cnc.emit.target import Report, Target, register
 from app.cnc.toolpath import (
     ArcFeed,
+    CoolantOff,
+    CoolantOn,
     Dwell,
     Feed,
     IndexTable,
+    Message,
     Move,
     ProgramEnd,
     ProgramStop,
@@ -92,6 +95,12 @@ def _call(move: Move, length: Callable[[int], str]) -> str:
         return f"PROGRAM_STOP({move.reason})"
     elif isinstance(move, IndexTable):
         return "INDEX_TABLE()"
+    elif isinstance(move, CoolantOn):
+        return f"COOLANT_{move.mode.upper()}()"
+    elif isinstance(move, CoolantOff):
+        return "COOLANT_OFF()"
+    elif isinstance(move, Message):
+        return f"MESSAGE({move.text})"
     else:
         assert isinstance(move, ProgramEnd)
         return "PROGRAM_END()"

@@ -666,7 +666,16 @@ class _Builder:
             )
         if any(t.tcal is not None for t in tools):
             self.report.unsupported(0, "tool calibrations (TCAL) not carried: the Plus has no Z")
+        for tool in tools:
+            if tool.coolant.value != "off":
+                self.report.unsupported(
+                    0, f"tool {tool.number} coolant ({tool.coolant.value}) not carried: set by hand"
+                )
         for number, block in enumerate(self.blocks, start=1):
+            if block.message:
+                self.report.unsupported(
+                    number, f"message {block.message!r} not carried: events have no messages"
+                )
             if block.stop:
                 self.report.unsupported(number, "STOP not carried: the Plus has no stop event")
             if isinstance(block, Pos) and block.index:

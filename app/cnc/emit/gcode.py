@@ -29,9 +29,12 @@ from app.cnc.blocks import Program
 from app.cnc.emit.target import Option, OptionKind, Report, Target, register
 from app.cnc.toolpath import (
     ArcFeed,
+    CoolantOff,
+    CoolantOn,
     Dwell,
     Feed,
     IndexTable,
+    Message,
     Move,
     ProgramEnd,
     ProgramStop,
@@ -406,6 +409,16 @@ class _Writer:
                 )
             else:
                 self.line(self.code("M", int(code)), comment="INDEX")
+        elif isinstance(move, CoolantOn):
+            self.line(self.code("M", 8 if move.mode == "flood" else 7))
+        elif isinstance(move, CoolantOff):
+            self.line(self.code("M", 9))
+        elif isinstance(move, Message):
+            if self.d.setup_in_gcode:
+                # LinuxCNC shows (MSG,…) comments to the operator.
+                self.lines.append(f"(MSG,{_comment(move.text)})")
+            else:
+                self.comment(move.text)
         else:
             assert isinstance(move, ProgramEnd)
             self.line(str(self.o["end_code"]))

@@ -57,9 +57,12 @@ from app.cnc.emit.target import (
 from app.cnc.geometry import arc_sweep
 from app.cnc.toolpath import (
     ArcFeed,
+    CoolantOff,
+    CoolantOn,
     Dwell,
     Feed,
     IndexTable,
+    Message,
     Move,
     ProgramEnd,
     ProgramStop,
@@ -881,6 +884,15 @@ class _Builder:
                 "operator index the fixture (set index-m to the machine's M code)",
             )
             return [Aux(block, [("M", "00")], "INDEX THE FIXTURE" if self.comments else "")]
+        if isinstance(move, CoolantOn):
+            return [Aux(block, [("M", "08" if move.mode == "flood" else "07")])]
+        if isinstance(move, CoolantOff):
+            return [Aux(block, [("M", "09")])]
+        if isinstance(move, Message):
+            if self.comments:
+                return [Aux(block, [], move.text)]
+            report.unsupported(block, f"message {move.text!r}: EIA tape has no comments")
+            return []
         assert isinstance(move, ProgramEnd)
         return [Aux(block, [("M", f"{profile.end_code:02d}")])]
 

@@ -20,6 +20,7 @@ from werkzeug.wrappers import Response
 from app.cnc.blocks import (
     ArcEnd,
     Block,
+    Coolant,
     DataBlock0,
     MillArc,
     MillingMode,
@@ -103,7 +104,7 @@ def block_summary(block: Block) -> str:
     """The block's values in one line, the way the control's block list reads."""
     parts = []
     for f in dataclasses.fields(block):
-        if f.name in ("mode", "units", "loop", "stop", "kind"):
+        if f.name in ("mode", "units", "loop", "stop", "kind", "message"):
             continue
         value = getattr(block, f.name)
         if value is None or value is False or f.name in ("op", "direction", "two_pass"):
@@ -141,6 +142,9 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
     field_problems: dict[str, list[Problem]] = {}
     if entry.editing and kind is not None:
         block = program.blocks[entry.at - 1]
+        field_problems["message"] = [
+            p for p in problems if p.block == entry.at and p.field == "MESSAGE"
+        ]
         for spec in kind.fields:
             try:
                 label = field_label(block, spec.name)
@@ -443,8 +447,11 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
         dia = number(f"dia_{n}", f"TOOL {n} DIA", False)
         rpm = whole(f"rpm_{n}", f"TOOL {n} RPM")
         tcal = number(f"tcal_{n}", f"TOOL {n} TCAL", False)
+        coolant = {"flood": Coolant.FLOOD, "mist": Coolant.MIST}.get(
+            form.get(f"coolant_{n}", ""), Coolant.OFF
+        )
         if dia is not None or rpm is not None or tcal is not None:
-            tools.append(Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal))
+            tools.append(Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal, coolant=coolant))
     block0 = DataBlock0(
         x_offset=number("x_offset", "X") or Decimal(0),
         y_offset=number("y_offset", "Y") or Decimal(0),

@@ -395,7 +395,14 @@ def parse_block(kind_key: str, form: Mapping[str, str]) -> Parsed:
     stop = form.get("stop") == "on" and kind_key not in ("REP", "COPY")
     if errors:
         return Parsed([], errors)
-    common: dict[str, Any] = {"units": units, "mode": mode, "loop": loop, "stop": stop}
+    message = form.get("message", "").strip()
+    common: dict[str, Any] = {
+        "units": units,
+        "mode": mode,
+        "loop": loop,
+        "stop": stop,
+        "message": message,
+    }
     return Parsed(_build(kind_key, values, common, form), {})
 
 
@@ -510,7 +517,16 @@ def _build(
             )
         ]
     if kind == "REP":
-        return [Rep(units=common["units"], x=v["x"], y=v["y"], nx=v["nx"], ny=v["ny"])]
+        return [
+            Rep(
+                units=common["units"],
+                message=common["message"],
+                x=v["x"],
+                y=v["y"],
+                nx=v["nx"],
+                ny=v["ny"],
+            )
+        ]
     action = {"exec": CopyAction.EXEC, "cancel": CopyAction.CANCEL}.get(form.get("action", ""))
     return [
         Copy(

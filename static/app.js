@@ -136,6 +136,9 @@
     if (event.target.matches("[data-swept]")) {
       document.getElementById("preview").classList.toggle("swept", event.target.checked);
     }
+    if (event.target.matches("[data-grid]")) {
+      document.getElementById("preview").classList.toggle("grid", event.target.checked);
+    }
     if (event.target.matches("select[data-reload]")) {
       // Each target has its own options: reload the page for the chosen one, once the
       // choice settles (typing a name into the list selects on every letter).

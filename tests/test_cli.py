@@ -78,15 +78,25 @@ def test_errors_block_export(tmp_path: Path) -> None:
     assert "block 1, FEEDR Z: 300 ipm is outside the allowed range 0.1 to 250 ipm" in err
 
 
-def test_output_identical_across_processes() -> None:
-    """Same program → byte-identical export with a different hash seed and time zone."""
-    outputs = []
+def test_output_identical_across_processes(tmp_path: Path) -> None:
+    """Same program, same options → byte-identical export for every target, in two
+    processes with different hash seeds and time zones."""
+    script = (
+        "import sys; from pathlib import Path; from app.cnc import document; "
+        "from app.cnc.emit.target import export, targets; "
+        "p = document.loads(Path(sys.argv[1]).read_text()); out = Path(sys.argv[2]); "
+        "[(out / n).write_bytes(export(p, n).data) for n in targets()]"
+    )
+    program = GOLDEN / "coolant-and-messages" / "program.json"
+    runs = []
     for seed, tz in (("1", "UTC"), ("12345", "America/Denver")):
+        out = tmp_path / seed
+        out.mkdir()
         env = {**os.environ, "PYTHONHASHSEED": seed, "TZ": tz}
-        cmd = [sys.executable, "-m", "app.cli", "export"]
-        cmd += [str(GOLDEN / "mill-contour-uncompensated" / "program.json"), "--to", "canon"]
-        outputs.append(subprocess.run(cmd, env=env, capture_output=True, check=True).stdout)
-    assert outputs[0] == outputs[1] and outputs[0]
+        subprocess.run([sys.executable, "-c", script, str(program), str(out)], env=env, check=True)
+        runs.append({f.name: f.read_bytes() for f in sorted(out.iterdir())})
+    assert runs[0] == runs[1]
+    assert len(runs[0]) >= 12 and all(runs[0].values())
 
 
 def test_import_prints_the_id_and_export_by_id_or_name(

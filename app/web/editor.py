@@ -95,7 +95,8 @@ def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
         if not has_errors(validate(part)):
             toolpath = interpret(part)
             result = estimate(toolpath)
-            return draw(toolpath, embedded_style=False), result.per_block, result.total, shown
+            svg = draw(toolpath, grid=True, embedded_style=False)
+            return svg, result.per_block, result.total, shown
         shown -= 1
     return "", {}, 0.0, 0
 

@@ -220,6 +220,30 @@ def import_program(file: Path, author: str) -> None:
     click.echo(info.id)
 
 
+@main.command("mirror")
+@click.argument("program", metavar="PROGRAM")
+@click.option("--axis", type=click.Choice(["x", "y", "xy"]), required=True)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    help="Write the mirrored program to this JSON file instead of the library.",
+)
+def mirror_program(program: str, axis: str, output: Path | None) -> None:
+    """Make the mirror-image (left-hand) program of PROGRAM, keeping each cut's direction."""
+    from app.cnc.mirror import Axis, mirror
+
+    result = mirror(resolve_program(program), Axis(axis))
+    for note in result.notes:
+        click.echo(f"note: {note}", err=True)
+    if output is not None:
+        output.write_text(document.dumps(result.program), encoding="utf-8")
+        return
+    info = library().create(result.program, summary_text=f"mirror {axis.upper()} of {program}")
+    click.echo(info.id)
+
+
 @main.command("list")
 @click.argument("query", required=False, default="")
 @click.option("--sort", type=click.Choice(["name", "part_number", "updated", "created"]))

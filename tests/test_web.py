@@ -223,3 +223,14 @@ def test_markup_in_names_renders_inert(client: FlaskClient) -> None:
     page = client.get("/").get_data(as_text=True)
     assert "<script>alert(1)</script>" not in page
     assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page
+
+
+def test_mirror_makes_a_new_program(client: FlaskClient) -> None:
+    csrf = token(client)
+    response = client.post("/programs/3/mirror", data={"csrf_token": csrf, "axis": "x"})
+    assert response.status_code == 302
+    new_id = int(response.headers["Location"].split("/")[2])
+    with client.application.app_context():
+        stored = get_library().get(new_id)
+        original = get_library().get(3)
+    assert stored.program.name == f"{original.program.name} (mirror X)"

@@ -84,6 +84,26 @@ def duplicate(program_id: int) -> Response:
     return redirect(url_for("editor.edit", program_id=info.id))
 
 
+@bp.post("/programs/<int:program_id>/mirror")
+def mirror(program_id: int) -> Response:
+    """A new program: the mirror image in X, Y or both (each cut's direction kept)."""
+    from app.cnc.mirror import Axis
+    from app.cnc.mirror import mirror as make_mirror
+
+    axis = request.form.get("axis", "x")
+    if axis not in ("x", "y", "xy"):
+        abort(422, f"axis {axis!r} is not x, y or xy")
+    try:
+        stored = get_library().get(program_id)
+    except LibraryError as exc:
+        abort(404, str(exc))
+    result = make_mirror(stored.program, Axis(axis))
+    info = get_library().create(
+        result.program, author=current_user(), summary_text="; ".join(result.notes)
+    )
+    return redirect(url_for("editor.edit", program_id=info.id))
+
+
 @bp.post("/programs/<int:program_id>/delete")
 def delete(program_id: int) -> Response:
     try:

@@ -1,0 +1,291 @@
+"""Mirror image: the left-hand part from the right-hand program, as a new program.
+
+Reflection about part zero in X (x → −x), in Y (y → −y), or both (a half turn). The 1704
+does this with switches (seed 000 Fig. 3-9), which reverses every cut: climb milling
+becomes conventional. Here each cut keeps its milling direction instead: under a
+one-axis mirror every contour is run backwards (which also keeps the cutter compensation
+side), arcs keep their direction, and CIRCLE/FRAME routines keep climb or conventional
+because the control derives their direction from Data Block 0. Under a two-axis mirror
+(a rotation) nothing needs reversing.
+
+Positions are rewritten in absolute form outside LOOPs and as increments inside them, so
+every block lands on the mirror of the original; a BOLT CIR gets the mirrored start angle
+(the same set of holes, drilled in the other order).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
+from decimal import Decimal
+from typing import Any
+
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    BoltCircle,
+    Circle,
+    Copy,
+    Frame,
+    Hole,
+    MillArc,
+    MillLine,
+    MillQcir,
+    Mode,
+    Pos,
+    Program,
+    Rep,
+)
+from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.structure import mill_sequence_end, starts_mill_sequence
+from app.cnc.units import Units, to_nm
+
+XY = tuple[int, int]
+
+
+class Axis(enum.Enum):
+    """Which coordinates change sign."""
+
+    X = "x"
+    Y = "y"
+    XY = "xy"
+
+
+@dataclass(frozen=True)
+class Mirrored:
+    """The new program and what was done to it, in words."""
+
+    program: Program
+    notes: list[str]
+
+
+def mirror(program: Program, axis: Axis) -> Mirrored:
+    """The program of the part reflected in `axis` about part zero (see the module doc)."""
+    sx = -1 if axis in (Axis.X, Axis.XY) else 1
+    sy = -1 if axis in (Axis.Y, Axis.XY) else 1
+    reverse = axis is not Axis.XY
+
+    def m(point: XY) -> XY:
+        return (sx * point[0], sy * point[1])
+
+    targets = _targets(program.blocks)
+    blocks = list(program.blocks)
+    # Each new block with the absolute point it must reach (None: no position of its own).
+    plan: list[tuple[Block, XY | None]] = []
+    notes: list[str] = []
+    index = 0
+    while index < len(blocks):
+        block = blocks[index]
+        if starts_mill_sequence(program.blocks, index) and not isinstance(
+            blocks[index + 1], Circle | Frame
+        ):
+            end = mill_sequence_end(program.blocks, index)
+            plan += _contour(program, index, end, targets, m, reverse)
+            if reverse:
+                notes.append(
+                    f"blocks {index + 1}-{end}: the contour runs backwards so each cut keeps "
+                    "its milling direction (compensation side kept)"
+                )
+            index = end
+            continue
+        plan.append(_single(block, index, targets, m, sx, sy, blocks))
+        index += 1
+    new_blocks = _encode(plan, program.units)
+    name = f"{program.name} (mirror {axis.value.upper()})"
+    notes.insert(
+        0,
+        f"mirrored in {axis.value.upper()} about part zero; climb and conventional cuts stay "
+        "as they were (the 1704's mirror switches would turn climb into conventional)",
+    )
+    if any(isinstance(b, BoltCircle) for b in new_blocks) and reverse:
+        notes.append("bolt circles: the same holes, drilled in the other order")
+    return Mirrored(
+        dataclasses.replace(program, name=name, blocks=tuple(new_blocks)),
+        notes,
+    )
+
+
+def _single(
+    block: Block,
+    index: int,
+    targets: list[tuple[XY | None, XY | None]],
+    m: Callable[[XY], XY],
+    sx: int,
+    sy: int,
+    blocks: list[Block],
+) -> tuple[Block, XY | None]:
+    target, _ = targets[index]
+    if isinstance(block, Frame):
+        return block, None
+    if isinstance(block, Hole) and index + 1 < len(blocks) and isinstance(blocks[index + 1], Frame):
+        frame = blocks[index + 1]
+        assert isinstance(frame, Frame) and target is not None
+        corner = m(target)
+        width, height = to_nm(frame.xl, frame.units), to_nm(frame.yw, frame.units)
+        # The mirrored frame's lower-left corner moves by its own size on a flipped axis.
+        return block, (corner[0] - (width if sx < 0 else 0), corner[1] - (height if sy < 0 else 0))
+    if isinstance(block, BoltCircle):
+        angle = block.angle
+        if sx < 0 and sy < 0:
+            angle = Decimal(180) + angle
+        elif sx < 0:
+            angle = -angle
+        elif sy < 0:
+            angle = Decimal(180) - angle
+        angle %= 360
+        return dataclasses.replace(block, angle=angle + 360 if angle < 0 else angle), None
+    if isinstance(block, Rep):
+        return dataclasses.replace(block, x=sx * block.x, y=sy * block.y), None
+    if isinstance(block, Copy):
+        xof = None if block.xof is None else sx * block.xof
+        yof = None if block.yof is None else sy * block.yof
+        return dataclasses.replace(block, xof=xof, yof=yof), None
+    if target is None:
+        return block, None
+    return block, m(target)
+
+
+def _contour(
+    program: Program,
+    drill: int,
+    end: int,
+    targets: list[tuple[XY | None, XY | None]],
+    m: Callable[[XY], XY],
+    reverse: bool,
+) -> list[tuple[Block, XY | None]]:
+    """The DRILL and mill blocks of a contour, mirrored (and run backwards if `reverse`)."""
+    blocks = program.blocks
+    start, _ = targets[drill]
+    assert start is not None
+    # Segments: (kind block, its end point, its centre, the XY-END block if an arc).
+    segments: list[tuple[Block, XY, XY | None, ArcEnd | None]] = []
+    k = drill + 1
+    while k < end:
+        block = blocks[k]
+        point, centre = targets[k]
+        if isinstance(block, MillArc):
+            end_block = blocks[k + 1]
+            assert isinstance(end_block, ArcEnd)
+            arc_point, _ = targets[k + 1]
+            assert arc_point is not None
+            segments.append((block, arc_point, point, end_block))
+            k += 2
+            continue
+        assert point is not None
+        segments.append((block, point, centre, None))
+        k += 1
+    if not reverse:
+        plan: list[tuple[Block, XY | None]] = [(blocks[drill], m(start))]
+        for piece, point, centre, arc_end in segments:
+            if arc_end is not None:
+                assert centre is not None
+                plan += [(piece, m(centre)), (arc_end, m(point))]
+            else:
+                plan.append((piece, m(point)))
+        return plan
+    points = [start] + [point for _, point, _, _ in segments]
+    # A STOP belongs to the sequence's last block, whichever block that now is.
+    stop = blocks[end - 1].stop
+    segments = [
+        (
+            dataclasses.replace(b, stop=False),
+            p,
+            c,
+            None if e is None else dataclasses.replace(e, stop=False),
+        )
+        for b, p, c, e in segments
+    ]
+    plan = [(blocks[drill], m(points[-1]))]
+    for i in range(len(segments) - 1, -1, -1):
+        piece, _, centre, arc_end = segments[i]
+        back_to = m(points[i])
+        if isinstance(piece, MillArc):
+            assert centre is not None and arc_end is not None
+            plan += [(piece, m(centre)), (arc_end, back_to)]
+        elif isinstance(piece, MillQcir | MillLine):
+            plan.append((piece, back_to))
+    last_block, last_point = plan[-1]
+    plan[-1] = (dataclasses.replace(last_block, stop=stop), last_point)
+    return plan
+
+
+def _targets(blocks: tuple[Block, ...]) -> list[tuple[XY | None, XY | None]]:
+    """For each block, the absolute point it reaches in the first pattern (an ARC XY-CENT:
+    its centre), and a QCIR's centre; (None, None) for blocks without a position."""
+    from app.cnc.mill import qcir_centre
+
+    reference: XY = (0, 0)
+    found: list[tuple[XY | None, XY | None]] = []
+    for index, block in enumerate(blocks):
+        if isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd):
+            point = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+            centre = None
+            if isinstance(block, MillQcir):
+                centre = qcir_centre(reference, point, block.direction)
+            found.append((point, centre))
+            if not isinstance(block, MillArc):
+                reference = point
+        elif isinstance(block, BoltCircle) and index > 0:
+            radius = to_nm(block.radius, block.units)
+            holes = bolt_circle_points(reference, radius, block.holes, block.angle)
+            found.append((None, None))
+            reference = holes[-1]
+        elif isinstance(block, Rep):
+            step = resolve_xy(block.x, block.y, Mode.INC, block.units, (0, 0))
+            reference = (reference[0] + block.nx * step[0], reference[1] + block.ny * step[1])
+            found.append((None, None))
+        else:
+            found.append((None, None))
+    return found
+
+
+def _encode(plan: list[tuple[Block, XY | None]], units: Units) -> list[Block]:
+    """Write each planned point into its block: absolute outside LOOPs, increments inside,
+    to the block's resolution; QCIR directions follow from the new geometry."""
+    out: list[Block] = []
+    reference: XY = (0, 0)
+    open_loops = 0
+    for block, point in plan:
+        if block.loop and isinstance(block, Pos | Hole):
+            open_loops += 1
+        if point is not None:
+            inside = open_loops > 0
+            block_units = block.units
+            value = (point[0] - reference[0], point[1] - reference[1]) if inside else point
+            positioned: Any = block
+            block = dataclasses.replace(
+                positioned,
+                mode=Mode.INC if inside else Mode.ABS,
+                x=_decimal(value[0], block_units),
+                y=_decimal(value[1], block_units),
+            )
+            if not isinstance(block, MillArc):
+                reference = point
+        # A QCIR or ARC keeps its direction: a one-axis mirror turns it the other way and
+        # running it backwards turns it back; a half turn changes neither.
+        out.append(block)
+        if isinstance(block, BoltCircle) and len(out) > 1:
+            centre_block = out[-2]
+            assert isinstance(centre_block, Hole)
+            reference = _bolt_last(out, reference)
+        if isinstance(block, Rep):
+            step = resolve_xy(block.x, block.y, Mode.INC, block.units, (0, 0))
+            reference = (reference[0] + block.nx * step[0], reference[1] + block.ny * step[1])
+            open_loops = max(0, open_loops - 1)
+    del units
+    return out
+
+
+def _bolt_last(out: list[Block], centre: XY) -> XY:
+    bolt = out[-1]
+    assert isinstance(bolt, BoltCircle)
+    holes = bolt_circle_points(centre, to_nm(bolt.radius, bolt.units), bolt.holes, bolt.angle)
+    return holes[-1]
+
+
+def _decimal(nm: int, units: Units) -> Decimal:
+    """nm as a value of `units`, at the programming resolution (0.001 in / 0.01 mm)."""
+    exact = Decimal(nm) / Decimal(units.nm)
+    return exact.quantize(units.resolution)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import click
 
@@ -25,9 +26,10 @@ from app.cnc.emit.target import ExportError, OptionError, targets
 from app.cnc.emit.target import export as run_export
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
 from app.cnc.interpret import interpret
+from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.cnc.problems import Problem, has_errors
 from app.cnc.validate import validate
-from app.storage.library import Library, LibraryError, open_library
+from app.storage.library import Library, LibraryError, Machine, open_library
 
 
 class ProgramFileError(click.ClickException):
@@ -109,14 +111,19 @@ def check(file: str) -> None:
 @click.option(
     "--tool-change-seconds",
     type=click.FloatRange(min=0),
-    default=DEFAULT_TOOL_CHANGE_SECONDS,
-    show_default=True,
-    help="Allowance for each manual tool change.",
+    default=None,
+    help=f"Allowance for each manual tool change (default {DEFAULT_TOOL_CHANGE_SECONDS:g} s, "
+    "or the machine's).",
 )
-def time(file: str, tool_change_seconds: float) -> None:
+@click.option("--machine", "machine_name", default=None, help="Use a library machine's rates.")
+def time(file: str, tool_change_seconds: float | None, machine_name: str | None) -> None:
     """Estimate the cycle time of PROGRAM per block, per tool and in total."""
     program = checked(file)
-    click.echo(report(estimate(interpret(program), tool_change_seconds)), nl=False)
+    machine = None
+    if machine_name:
+        machine = _machine_model(_library_machine(machine_name).limits, machine_name)
+    result = estimate(interpret(program), tool_change_seconds, machine)
+    click.echo(report(result), nl=False)
 
 
 def _target_names() -> list[str]:
@@ -144,7 +151,13 @@ def _target_names() -> list[str]:
     "--profile",
     type=click.Path(path_type=Path, dir_okay=False, exists=True),
     default=None,
-    help='Machine profile: JSON {"options": {NAME: VALUE}}; -O overrides it.',
+    help='Machine profile: JSON {"options": {NAME: VALUE}, "limits": {...}}; -O overrides.',
+)
+@click.option(
+    "--machine",
+    "machine_name",
+    default=None,
+    help="A library machine: its options (-O overrides) and its travel limits are used.",
 )
 def export(
     file: str,
@@ -152,13 +165,24 @@ def export(
     output: Path | None,
     option_pairs: tuple[str, ...],
     profile: Path | None,
+    machine_name: str | None,
 ) -> None:
     """Write PROGRAM (a file, or a library id or name) in format FMT.
 
     The output goes to standard output unless -o is given; the compatibility report (what
     the target could not express) goes to standard error.
     """
-    raw = _profile_options(profile) if profile else {}
+    raw: dict[str, str] = {}
+    machine = None
+    if machine_name:
+        stored_machine = _library_machine(machine_name)
+        raw.update(stored_machine.options)
+        machine = _machine_model(stored_machine.limits, machine_name)
+    if profile:
+        raw.update(_profile_options(profile))
+        limits = _profile_limits(profile)
+        if limits:
+            machine = _machine_model(limits, str(profile))
     for pair in option_pairs:
         name, sep, value = pair.partition("=")
         if not sep:
@@ -166,7 +190,7 @@ def export(
         raw[name.strip()] = value
     program = resolve_program(file)
     try:
-        result = run_export(program, fmt, raw)
+        result = run_export(program, fmt, raw, machine)
     except OptionError as exc:
         raise click.UsageError(str(exc)) from None
     except ExportError as exc:
@@ -181,6 +205,28 @@ def export(
         sys.stdout.flush()
     else:
         output.write_bytes(result.data)
+
+
+def _library_machine(name: str) -> Machine:
+    try:
+        return library().machine(name)
+    except LibraryError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+def _machine_model(limits: dict[str, Any], where: str) -> MachineModel | None:
+    if not limits:
+        return None
+    try:
+        return read_machine(limits)
+    except MachineError as exc:
+        raise click.UsageError(f"{where}: limits: {exc}") from None
+
+
+def _profile_limits(path: Path) -> dict[str, Any]:
+    data = json.loads(path.read_text(encoding="utf-8"))
+    limits = data.get("limits", {}) if isinstance(data, dict) else {}
+    return limits if isinstance(limits, dict) else {}
 
 
 def _profile_options(path: Path) -> dict[str, str]:

@@ -20,6 +20,7 @@ from decimal import Decimal
 
 from app.cnc.geometry import arc_sweep
 from app.cnc.limits import RAPID_IPM
+from app.cnc.machine import MachineModel
 from app.cnc.toolpath import (
     ArcFeed,
     Dwell,
@@ -36,14 +37,28 @@ DEFAULT_TOOL_CHANGE_SECONDS = 30.0
 RAPID_NM_PER_MIN = int(RAPID_IPM) * NM_PER_INCH
 
 
-def assumptions(tool_change_seconds: float) -> list[str]:
+def assumptions(tool_change_seconds: float, machine: MachineModel | None = None) -> list[str]:
     """The estimate's assumptions, in words, for printing beside it."""
+    rapid = "250 ipm"
+    feeds = "programmed rate along the path; acceleration not modelled"
+    operator = "operator stops, STOP blocks, manual quill moves and indexing: 0 s (listed)"
+    if machine is not None:
+        unit = machine.units.feed_symbol
+        if machine.rapid is not None:
+            rapid = f"{machine.rapid} {unit} ({machine.name or 'the machine'})"
+        if machine.max_feed is not None:
+            feeds += f"; limited to the machine's {machine.max_feed} {unit}"
+        if machine.operator_seconds is not None:
+            operator = (
+                f"operator time (OTIME): {machine.operator_seconds} s at each stop and tool "
+                "change; indexing 0 s (listed)"
+            )
     return [
-        "rapids: straight lines at 250 ipm (XY and Z)",
-        "feeds: programmed rate along the path; acceleration not modelled",
+        f"rapids: straight lines at {rapid} (XY and Z)",
+        f"feeds: {feeds}",
         "hole dwell: 0.8 s",
         f"tool change: {tool_change_seconds:g} s allowance each",
-        "operator stops, STOP blocks, manual quill moves and indexing: 0 s (listed)",
+        operator,
     ]
 
 
@@ -63,19 +78,40 @@ class Estimate:
 
 
 def estimate(
-    toolpath: Toolpath, tool_change_seconds: float = DEFAULT_TOOL_CHANGE_SECONDS
+    toolpath: Toolpath,
+    tool_change_seconds: float | None = None,
+    machine: MachineModel | None = None,
 ) -> Estimate:
-    """Estimate the run time of `toolpath` (see the module docstring for the model)."""
+    """Estimate the run time of `toolpath` (see the module docstring for the model).
+
+    A `machine` sets the rapid rate, caps feeds at its maximum, and supplies its tool-change
+    and operator times (OTIME); `tool_change_seconds` overrides the tool-change time.
+    """
+    if tool_change_seconds is None:
+        known = machine.tool_change_seconds if machine is not None else None
+        tool_change_seconds = float(known) if known is not None else DEFAULT_TOOL_CHANGE_SECONDS
+    rapid_rate = RAPID_NM_PER_MIN
+    max_feed = None
+    operator = 0.0
+    if machine is not None:
+        if machine.rapid is not None:
+            rapid_rate = machine.nm(machine.rapid)
+        if machine.max_feed is not None:
+            max_feed = machine.nm(machine.max_feed)
+        if machine.operator_seconds is not None:
+            operator = float(machine.operator_seconds)
     per_block: dict[int, float] = defaultdict(float)
     per_tool: dict[int, float] = defaultdict(float)
-    result = Estimate(assumptions=assumptions(tool_change_seconds))
+    result = Estimate(assumptions=assumptions(tool_change_seconds, machine))
     x, y, z = toolpath.start
     tool = toolpath.initial_tool
     for move in toolpath.moves:
         seconds = 0.0
         if isinstance(move, Rapid | Feed):
             length = math.sqrt((move.x - x) ** 2 + (move.y - y) ** 2 + (move.z - z) ** 2)
-            rate = RAPID_NM_PER_MIN if isinstance(move, Rapid) else move.feed
+            rate = rapid_rate if isinstance(move, Rapid) else move.feed
+            if max_feed is not None and not isinstance(move, Rapid):
+                rate = min(rate, max_feed)
             seconds = 60.0 * length / rate
             if isinstance(move, Rapid):
                 result.rapid += seconds
@@ -85,17 +121,20 @@ def estimate(
         elif isinstance(move, ArcFeed):
             radius = math.hypot(x - move.cx, y - move.cy)
             sweep = arc_sweep((x, y), (move.x, move.y), (move.cx, move.cy), move.clockwise)
-            seconds = 60.0 * radius * sweep / move.feed
+            rate = move.feed if max_feed is None else min(move.feed, max_feed)
+            seconds = 60.0 * radius * sweep / rate
             result.cutting += seconds
             x, y = move.x, move.y
         elif isinstance(move, Dwell):
             seconds = float(move.seconds)
             result.dwell += seconds
         elif isinstance(move, ToolChange):
-            seconds = tool_change_seconds
+            seconds = tool_change_seconds + operator
             result.tool_changes += 1
             tool = move.tool
+            z = move.z  # the head stays; its Z reads differently with the new tool
         elif isinstance(move, ProgramStop):
+            seconds = operator
             result.operator_waits.append((move.block, move.reason))
         elif isinstance(move, IndexTable):
             result.operator_waits.append((move.block, "index the rotary table"))

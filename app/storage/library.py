@@ -12,7 +12,7 @@ import json
 import zipfile
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, BinaryIO
@@ -89,6 +89,7 @@ class Machine:
     options: dict[str, str]
     serial: dict[str, Any]
     notes: str = ""
+    limits: dict[str, Any] = field(default_factory=dict)
 
 
 def _now() -> datetime:
@@ -385,6 +386,7 @@ class Library:
             row.target = machine.target
             row.options = json.dumps(machine.options, sort_keys=True)
             row.serial = json.dumps(machine.serial, sort_keys=True)
+            row.limits = json.dumps(machine.limits, sort_keys=True)
             row.notes = machine.notes
             row.updated_at = now
 
@@ -437,6 +439,7 @@ class Library:
                         "target": m.target,
                         "options": json.loads(m.options),
                         "serial": json.loads(m.serial),
+                        "limits": json.loads(m.limits or "{}"),
                         "notes": m.notes,
                     }
                     for m in machines
@@ -496,6 +499,7 @@ class Library:
                     machine["options"],
                     machine["serial"],
                     machine.get("notes", ""),
+                    machine.get("limits", {}),
                 )
             )
         return len(loaded)
@@ -509,7 +513,14 @@ def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
 
 
 def _machine(row: MachineRow) -> Machine:
-    return Machine(row.name, row.target, json.loads(row.options), json.loads(row.serial), row.notes)
+    return Machine(
+        row.name,
+        row.target,
+        json.loads(row.options),
+        json.loads(row.serial),
+        row.notes,
+        json.loads(row.limits or "{}"),
+    )
 
 
 def open_library(url: str | None = None, seed_demo: bool = True) -> Library:

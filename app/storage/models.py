@@ -62,7 +62,8 @@ class RevisionRow(Base):
 
 
 class MachineRow(Base):
-    """A machine profile: its export target and options, and its serial port settings."""
+    """A machine profile: export target and options, serial port settings, and the
+    machine itself (travel limits, collision zone, rates: app.cnc.machine.read_machine)."""
 
     __tablename__ = "machines"
 
@@ -71,6 +72,7 @@ class MachineRow(Base):
     target: Mapped[str] = mapped_column(String(40))
     options: Mapped[str] = mapped_column(Text, default="{}")
     serial: Mapped[str] = mapped_column(Text, default="{}")
+    limits: Mapped[str] = mapped_column(Text, default="{}", server_default="{}")
     notes: Mapped[str] = mapped_column(Text, default="")
     created_at: Mapped[datetime]
     updated_at: Mapped[datetime]

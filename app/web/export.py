@@ -9,6 +9,7 @@ from flask import Blueprint, Response, render_template, request
 from jinja2_fragments.flask import render_block
 
 from app.cnc.emit.target import Export, ExportError, OptionError, export, targets
+from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.storage.library import LibraryError
 from app.web.editor import is_htmx, load
 from app.web.extensions import get_library
@@ -32,21 +33,23 @@ def options_from(args: Any, target_name: str) -> dict[str, str]:
     return raw
 
 
-def _machine_options(name: str) -> tuple[str | None, dict[str, str]]:
+def _machine_options(name: str) -> tuple[str | None, dict[str, str], MachineModel | None]:
+    """A library machine's target, options and (when it has limits) the machine model."""
     if not name:
-        return None, {}
+        return None, {}, None
     try:
         machine = get_library().machine(name)
-    except LibraryError:
-        return None, {}
-    return machine.target, dict(machine.options)
+        model = read_machine(machine.limits) if machine.limits else None
+    except (LibraryError, MachineError):
+        return None, {}, None
+    return machine.target, dict(machine.options), model
 
 
 @bp.get("/programs/<int:program_id>/export")
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     machine_name = request.args.get("machine", "")
-    machine_target, machine_options = _machine_options(machine_name)
+    machine_target, machine_options, model = _machine_options(machine_name)
     target_name = request.args.get("target") or machine_target or "gcode-linuxcnc"
     all_targets = targets()
     if target_name not in all_targets:
@@ -58,7 +61,7 @@ def page(program_id: int) -> tuple[str, int]:
     error = ""
     problems: list[str] = []
     try:
-        result = export(stored.program, target_name, raw)
+        result = export(stored.program, target_name, raw, model)
     except OptionError as exc:
         error = str(exc)
     except ExportError as exc:
@@ -114,10 +117,10 @@ def page(program_id: int) -> tuple[str, int]:
 def download(program_id: int) -> Response | tuple[str, int]:
     stored = load(program_id)
     target_name = request.args.get("target", "gcode-linuxcnc")
-    _machine_target, machine_options = _machine_options(request.args.get("machine", ""))
+    _, machine_options, model = _machine_options(request.args.get("machine", ""))
     raw = machine_options | options_from(request.args, target_name)
     try:
-        result = export(stored.program, target_name, raw)
+        result = export(stored.program, target_name, raw, model)
     except (OptionError, ExportError) as exc:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
     stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"

@@ -8,6 +8,7 @@ from flask import Blueprint, redirect, render_template, request, url_for
 from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import OptionError, get_target
+from app.cnc.machine import PRESETS, MachineError, read_machine
 from app.storage.library import LibraryError, Machine
 from app.web.extensions import get_library
 
@@ -40,6 +41,7 @@ def index() -> str:
         targets=targets(),
         machine=machine,
         serial_defaults=SERIAL_DEFAULTS,
+        presets=PRESETS,
         message="",
     )
 
@@ -67,6 +69,20 @@ def save() -> Response | tuple[str, int]:
         except OptionError as exc:
             message = f"Not saved: {exc}"
     serial = {key: form.get(key, default).strip() for key, default in SERIAL_DEFAULTS.items()}
+    limits: dict[str, object] = {}
+    for line in form.get("limits", "").splitlines():
+        if not line.strip() or message:
+            continue
+        key, sep, value = line.partition("=")
+        if not sep:
+            message = f"Not saved: limits line {line!r} is not NAME=VALUE"
+        else:
+            limits[key.strip()] = value.strip()
+    if not message and limits:
+        try:
+            read_machine(limits)
+        except MachineError as exc:
+            message = f"Not saved: limits: {exc}"
     if not message:
         try:
             get_library().save_machine(
@@ -80,8 +96,9 @@ def save() -> Response | tuple[str, int]:
                 "machines/index.html",
                 machines=get_library().machines(),
                 targets=targets(),
-                machine=Machine(name, target, options, serial, form.get("notes", "")),
+                machine=Machine(name, target, options, serial, form.get("notes", ""), limits),
                 serial_defaults=SERIAL_DEFAULTS,
+                presets=PRESETS,
                 message=message,
             ),
             422,

@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 from app.cnc.blocks import Program
 from app.cnc.copy import resolve_copies
 from app.cnc.interpret import interpret
+from app.cnc.machine import MachineModel, check_travel
 from app.cnc.problems import Problem, has_errors
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
@@ -233,11 +234,18 @@ def get_target(name: str) -> Target:
     return found
 
 
-def export(program: Program, name: str, raw_options: Mapping[str, str] | None = None) -> Export:
+def export(
+    program: Program,
+    name: str,
+    raw_options: Mapping[str, str] | None = None,
+    machine: MachineModel | None = None,
+) -> Export:
     """Export `program` (COPY blocks carried out) to target `name`.
 
-    Raises OptionError for bad options and ExportError when the program has validation
-    errors or the target reports errors (the report names each block at fault).
+    With a `machine`, every move is checked against its travel limits and collision zone,
+    and a crossing is an error naming the block. Raises OptionError for bad options and
+    ExportError when the program has validation errors or the target (or the machine)
+    reports errors.
     """
     target = get_target(name)
     options = target.parse_options(raw_options or {})
@@ -246,7 +254,11 @@ def export(program: Program, name: str, raw_options: Mapping[str, str] | None = 
     if has_errors(problems):
         raise ExportError("the program has errors; fix them before exporting", problems, None)
     report = Report(target.name)
-    data = target.emit(program, interpret(program), options, report)
+    toolpath = interpret(program)
+    if machine is not None:
+        for crossing in check_travel(toolpath, machine):
+            report.error(crossing.block, crossing.message)
+    data = target.emit(program, toolpath, options, report)
     if report.has_errors:
         raise ExportError(f"{target.name} cannot take this program", problems, report)
     return Export(target.name, data, target.extension, target.media_type, report)

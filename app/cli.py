@@ -266,6 +266,31 @@ def import_program(file: Path, author: str) -> None:
     click.echo(info.id)
 
 
+@main.command("setup-sheet")
+@click.argument("program", metavar="PROGRAM")
+@click.option("--to", "target", default=None, help="Include this target's report (tape length).")
+@click.option("--machine", "machine_name", default=None, help="A library machine (rates, target).")
+def setup_sheet_command(program: str, target: str | None, machine_name: str | None) -> None:
+    """Print the set-up sheet of PROGRAM: part zero, tools, times, the export's report."""
+    from app.cnc.setup import render_text, setup_sheet
+
+    loaded = checked(program)
+    machine = None
+    raw: dict[str, str] = {}
+    if machine_name:
+        stored_machine = _library_machine(machine_name)
+        machine = _machine_model(stored_machine.limits, machine_name)
+        raw = dict(stored_machine.options)
+        target = target or stored_machine.target
+    found = None
+    if target:
+        try:
+            found = run_export(loaded, target, raw, machine).report
+        except (OptionError, ExportError) as exc:
+            raise click.ClickException(str(exc)) from None
+    click.echo(render_text(setup_sheet(loaded, found, machine)), nl=False)
+
+
 @main.command("mirror")
 @click.argument("program", metavar="PROGRAM")
 @click.option("--axis", type=click.Choice(["x", "y", "xy"]), required=True)

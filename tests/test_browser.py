@@ -257,6 +257,8 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
         ("/transfers", "09-transfers"),
         ("/trash", "10-trash"),
         ("/programs/2", "11-demo-program"),
+        ("/programs/1/setup?target=tape-eia", "12-setup-sheet"),
+        ("/programs/1/db0", "13-data-block-0-demo"),
     ],
 )
 def test_every_page_screenshot(page: Page, server: str, path: str, name: str) -> None:

@@ -22,6 +22,7 @@ from app.cnc.emit.target import export, targets
 from app.cnc.estimate import estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
+from app.cnc.setup import render_text, setup_sheet
 from app.cnc.validate import validate
 from tests.golden_support import REGENERATE, check_golden
 
@@ -32,6 +33,8 @@ FORMATS: dict[str, Callable[[Program], str]] = {
     "canon": lambda p: canon.dump(interpret(p)),
     "json": document.dumps,
     "time": lambda p: report(estimate(interpret(p))),
+    # The set-up sheet with the 1704 ASCII tape's report (tape length included).
+    "setup": lambda p: render_text(setup_sheet(p, export(p, "tape-ascii").report)),
 }
 
 

@@ -234,3 +234,9 @@ def test_mirror_makes_a_new_program(client: FlaskClient) -> None:
         stored = get_library().get(new_id)
         original = get_library().get(3)
     assert stored.program.name == f"{original.program.name} (mirror X)"
+
+
+def test_setup_sheet_page(client: FlaskClient) -> None:
+    page = client.get("/programs/1/setup?target=tape-eia").get_data(as_text=True)
+    assert "Set-up sheet" in page and "Tape length" in page and "ft (" in page
+    assert "high gear" in page and "First cut" in page and "<svg" in page

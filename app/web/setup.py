@@ -1,0 +1,55 @@
+"""The printable set-up sheet of a program (for a target and machine, when chosen)."""
+
+from __future__ import annotations
+
+from flask import Blueprint, render_template, request
+
+from app.cnc.emit.svg import draw
+from app.cnc.emit.target import ExportError, OptionError, export, targets
+from app.cnc.interpret import interpret
+from app.cnc.problems import has_errors
+from app.cnc.setup import setup_sheet
+from app.cnc.validate import validate
+from app.web.editor import load
+from app.web.export import _machine_options
+
+bp = Blueprint("setup", __name__)
+
+
+@bp.get("/programs/<int:program_id>/setup")
+def sheet(program_id: int) -> tuple[str, int]:
+    stored = load(program_id)
+    program = stored.program
+    if has_errors(validate(program)):
+        message = "The program has errors; fix them before printing its set-up sheet."
+        return render_template("errors/error.html", title="No set-up sheet", message=message), 422
+    machine_name = request.args.get("machine", "")
+    machine_target, options, model = _machine_options(machine_name)
+    target = request.args.get("target") or machine_target or "tape-eia"
+    report = None
+    error = ""
+    try:
+        report = export(program, target, options, model).report
+    except OptionError as exc:
+        error = str(exc)
+    except ExportError as exc:
+        reasons = (
+            [str(e) for e in exc.report.entries if e.severity.value == "error"]
+            if exc.report
+            else []
+        )
+        error = "; ".join([str(exc), *reasons])
+    picture = draw(interpret(program), embedded_style=False)
+    return (
+        render_template(
+            "setup/sheet.html",
+            stored=stored,
+            sheet=setup_sheet(program, report, model),
+            picture=picture,
+            error=error,
+            targets=targets(),
+            target=target,
+            machine_name=machine_name,
+        ),
+        200,
+    )

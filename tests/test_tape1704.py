@@ -817,3 +817,24 @@ def test_svg_draws_every_hole_and_the_feed_track() -> None:
     texts = [t.text for t in root.findall(f".//{ns}text")]
     assert "DRILL-SINGLE 4711" in texts and "EOB" in texts and "ER" in texts
     assert export(program, "tape-svg").data == svg, "deterministic"
+
+
+def test_tape_search_restates_position_spindle_and_coolant_at_every_block() -> None:
+    """Seed 000 §4 tape search: with tape-search, every data block's first move writes X, Y,
+    Z, G (and F when it feeds), and the spindle and coolant in force are stated again just
+    before it, each in its own block; N is on every block."""
+    from app.cnc import document
+    from app.cnc.emit.target import export
+
+    program = document.loads(
+        (Path(__file__).parent / "golden" / "coolant-and-messages" / "program.json").read_text()
+    )
+    plain = export(program, "tape-ascii").data.decode().splitlines()
+    searched = export(program, "tape-ascii", {"tape-search": "yes"}).data.decode().splitlines()
+    blocks = [line for line in searched if line.startswith("N")]
+    assert len(blocks) > len([line for line in plain if line.startswith("N")])
+    # Block 4 starts again with the spindle (reverse, tool 3) and then a full position.
+    index = blocks.index(next(b for b in blocks if "X30000Y10000" in b))
+    assert blocks[index - 1].endswith("M04")
+    assert "G50" in blocks[index] and "Z" in blocks[index]
+    assert all(re.match(r"N\d+", line) for line in blocks)

@@ -150,6 +150,13 @@ PROFILE_OPTIONS: tuple[Option, ...] = (
     ),
     Option("sequence", _BOOL, True, "sequence numbers N (seed 002 SEQ/ON)"),
     Option(
+        "tape-search",
+        _BOOL,
+        False,
+        "every data block's first move restates X Y Z G F, spindle and coolant (seed 000 §4 "
+        "tape search: the operator can restart there); N on every block",
+    ),
+    Option(
         "sequence-start",
         _INT,
         1,
@@ -312,6 +319,7 @@ class Profile:
     tool_change_rows: int
     decel: bool
     xyz_together: bool
+    tape_search: bool = False
 
 
 def _rows(inches: Decimal) -> int:
@@ -396,6 +404,7 @@ def read_profile(program: Program, options: Mapping[str, Any]) -> Profile:
         tool_change_rows=_rows(Decimal(options["tool-change-leader"])),
         decel=bool(options["decel"]),
         xyz_together=options["xyz"] == "together",
+        tape_search=bool(options["tape-search"]),
     )
 
 
@@ -649,7 +658,7 @@ class _Builder:
                     # Touched off at its zero, preset there, straight up before anything else.
                     items.append(Aux(move.block, [("G", "94"), ("Z", "0")], preset_z=True))
                     items.append(Motion(move.block, Kind.RAPID, (x, y, z), z_only=True))
-        self.mark_restarts(items)
+        items = self.mark_restarts(items)
         return self.merge_positioning(items) if profile.xyz_together else items
 
     def quill_hole(self, stop: ProgramStop, items: list[Item], at: tuple[int, int]) -> bool:
@@ -675,19 +684,52 @@ class _Builder:
             items.append(Aux(stop.block, [("M", "50")]))
         return True
 
-    def mark_restarts(self, items: list[Item]) -> None:
+    def mark_restarts(self, items: list[Item]) -> list[Item]:
         """The first motion of the tape and the first after each tool change write every
-        axis (and G and F again): they are where an operator restarts or searches to."""
+        axis (and G and F again): they are where an operator restarts or searches to.
+
+        With tape-search, so does the first motion of every data block, and the spindle
+        and coolant in force are stated again just before it (one M code per block, as
+        the 1704 requires), so the tape can be started from any block.
+        """
         pending = True
+        searching = self.profile.tape_search
+        spindle: Aux | None = None
+        coolant: Aux | None = None
+        last_block = -1
+        out: list[Item] = []
         for item in items:
             if isinstance(item, Aux):
-                if any(word == ("M", "06") for word in item.words):
+                codes = {value for letter, value in item.words if letter == "M"}
+                if "06" in codes:
                     pending = True
+                if codes & {"03", "04"}:
+                    spindle = item
+                elif "05" in codes:
+                    spindle = None
+                if codes & {"07", "08"}:
+                    coolant = item
+                elif "09" in codes:
+                    coolant = None
+                out.append(item)
                 continue
             if item.z_only:
+                out.append(item)
                 continue
+            new_block = item.block != last_block
+            last_block = item.block
+            if searching and new_block and not pending:
+                # A searchable block: restate what the operator's restart needs.
+                out += [
+                    Aux(item.block, list(state.words), forward=False)
+                    for state in (spindle, coolant)
+                    if state is not None
+                ]
+                pending = True
             item.restart = pending
             pending = False
+            out.append(item)
+        return out
 
     def merge_positioning(self, items: list[Item]) -> list[Item]:
         """xyz=together (seed 002 XYZ/ON): the positioning rapids of one block (up, across,

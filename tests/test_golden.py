@@ -99,6 +99,7 @@ REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "punch-eia": ("drill-single", "circle-inside-mm", "frame-in-tan", "stop-and-tool-changes"),
     "punch-ascii": ("drill-single", "tap-metric", "contour-cut-right"),
     "tape-svg": ("drill-single", "pos-basic", "tap-metric"),
+    "tape-boss": ("loop-rep-grid", "contour-cut-right", "tap-metric", "coolant-and-messages"),
 }
 
 

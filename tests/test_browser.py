@@ -95,16 +95,26 @@ def answer(page: Page, *values: str) -> None:
         page.keyboard.press("Enter")
 
 
+def settle(page: Page) -> None:
+    """Wait until the swapped-in entry panel has the keyboard focus, as a user would
+    before typing on."""
+    page.wait_for_function(
+        "document.activeElement && document.activeElement.closest('#entry') !== null"
+    )
+
+
 def wait_for_block(page: Page, number: int) -> None:
     expect(page.locator(f'.block-row[data-block="{number}"]')).to_be_visible()
     expect(page.locator("#entry h2")).to_contain_text(f"Block {number + 1}")
+    settle(page)
 
 
 def choose(page: Page, *keys: str) -> None:
     for key in keys:
+        before = page.locator("#entry h2").inner_text()
         page.keyboard.press(key)
-        page.wait_for_timeout(50)
-        expect(page.locator("#entry")).to_be_visible()
+        expect(page.locator("#entry h2")).not_to_have_text(before)
+        settle(page)
 
 
 def choose_named(page: Page, title: str) -> None:

@@ -142,7 +142,12 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     page.keyboard.press("Enter")
     expect(page.locator("h1")).to_contain_text("Data Block 0")
 
-    # Data Block 0: offsets, current tool, climb, Z RET, then tools 1 and 2.
+    # Data Block 0: offsets, current tool, climb, Z RET, then tools 1 and 2. The first
+    # prompt's value is highlighted once the page is ready, so typing replaces it.
+    page.wait_for_function(
+        "(() => { const e = document.activeElement; return e && e.name === 'x_offset' "
+        "&& e.selectionStart === 0 && e.selectionEnd === e.value.length; })()"
+    )
     answer(page, "5", "3", "1", "", "0.1")
     answer(page, "0.5", "1000", "0", "0.25", "2000")
     page.keyboard.type("-1")

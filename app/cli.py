@@ -315,6 +315,52 @@ def mirror_program(program: str, axis: str, output: Path | None) -> None:
     click.echo(info.id)
 
 
+@main.command("history")
+@click.argument("program", metavar="PROGRAM")
+def history(program: str) -> None:
+    """List the saved versions of a library PROGRAM (id or name)."""
+    lib = library()
+    try:
+        stored = lib.find(program)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    for revision in lib.revisions(stored.info.id):
+        click.echo(
+            f"v{revision.version:<4} {revision.created_at:%Y-%m-%d %H:%M}  "
+            f"{revision.author or '-':<12} {revision.summary}"
+        )
+
+
+@main.command("diff")
+@click.argument("program", metavar="PROGRAM")
+@click.argument("old", type=int)
+@click.argument("new", type=int)
+def diff_versions(program: str, old: int, new: int) -> None:
+    """Block-level differences between two versions of a library PROGRAM."""
+    lib = library()
+    try:
+        stored = lib.find(program)
+        changes = lib.diff(stored.info.id, old, new)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    for line in changes or ["no differences"]:
+        click.echo(line)
+
+
+@main.command("restore-version")
+@click.argument("program", metavar="PROGRAM")
+@click.argument("version", type=int)
+def restore_version(program: str, version: int) -> None:
+    """Make an old VERSION of a library PROGRAM current again (as a new version)."""
+    lib = library()
+    try:
+        stored = lib.find(program)
+        info = lib.restore_revision(stored.info.id, version, based_on=stored.info.version)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"program {info.id}: version {version} restored as v{info.version}")
+
+
 @main.command("list")
 @click.argument("query", required=False, default="")
 @click.option("--sort", type=click.Choice(["name", "part_number", "updated", "created"]))

@@ -125,3 +125,27 @@ def test_backup_and_restore_commands(tmp_path: Path, monkeypatch: pytest.MonkeyP
     monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'b.db'}")
     code, out, _ = run("restore", str(archive))
     assert code == 0 and "programs restored" in out
+
+
+def test_history_diff_restore_commands(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'h.db'}")
+    code, out, _ = run("import", str(GOLDEN / "drill-single" / "program.json"))
+    program_id = out.strip()
+    edited = tmp_path / "edited.json"
+    edited.write_text(
+        (GOLDEN / "drill-single" / "program.json")
+        .read_text()
+        .replace('"z_dn": -0.5', '"z_dn": -0.6')
+    )
+    from app.cnc import document
+    from app.storage.library import open_library
+
+    lib = open_library(seed_demo=False)
+    lib.save(int(program_id), document.loads(edited.read_text()), based_on=1, author="ben")
+    lib.engine.dispose()
+    code, out, _ = run("history", program_id)
+    assert code == 0 and "v2" in out and "ben" in out
+    code, out, _ = run("diff", program_id, "1", "2")
+    assert out.strip() == "block 1 DRILL: Z DN -0.5 → -0.6"
+    code, out, _ = run("restore-version", program_id, "1")
+    assert code == 0 and out.strip() == f"program {program_id}: version 1 restored as v3"

@@ -242,8 +242,8 @@ def test_index_without_an_m_code_is_reported() -> None:
     program = load(GOLDEN / "pos-index")
     lost = export(program, "gcode-linuxcnc")
     assert [str(e) for e in lost.report.entries if e.severity is Severity.LOST] == [
-        "lost: block 1: INDEX: no M code for the rotary table (set index_code)",
-        "lost: block 2: INDEX: no M code for the rotary table (set index_code)",
+        "lost: block 1: INDEX: no M code for the rotary table (set index-code)",
+        "lost: block 2: INDEX: no M code for the rotary table (set index-code)",
     ]
     indexed = export(program, "gcode-linuxcnc", {"index_code": "60"})
     assert indexed.data.decode().count("M60 (INDEX)") == 2

@@ -146,7 +146,9 @@ def test_bad_value_is_named_and_nothing_is_saved(client: FlaskClient) -> None:
     )
 
 
-def test_validation_problem_is_shown_beside_its_field(client: FlaskClient) -> None:
+def test_out_of_range_value_is_refused_beside_its_field(client: FlaskClient) -> None:
+    """As the control refuses a value out of range: nothing is saved, the message stands
+    beside the field, the typed values stay in the form."""
     csrf = token(client)
     data = {
         "csrf_token": csrf,
@@ -164,10 +166,46 @@ def test_validation_problem_is_shown_beside_its_field(client: FlaskClient) -> No
         "pecks": "2",
         "tool": "1",
     }
-    assert client.post("/programs/2/blocks", data=data).status_code == 302
-    page = client.get("/programs/2?edit=2").get_data(as_text=True)
+    response = client.post("/programs/2/blocks", data=data)
+    assert response.status_code == 422
+    page = response.get_data(as_text=True)
     field = page[page.index('for="f-feed_z"') :]
-    assert "300 ipm is outside the allowed range 0.1 to 250 ipm" in field[: field.index("</div>\n")]
+    beside = field[: field.index('<div class="field">')]
+    assert "300 ipm is outside the allowed range 0.1 to 250 ipm" in beside
+    assert 'value="300"' in beside
+    with client.application.app_context():
+        assert get_library().get(2).info.version == 1
+
+
+def test_data_block_0_refuses_values_out_of_range(client: FlaskClient) -> None:
+    csrf = token(client)
+    response = client.post(
+        "/programs/2/db0",
+        data={
+            "csrf_token": csrf,
+            "version": "1",
+            "x_offset": "0",
+            "y_offset": "0",
+            "current_tool": "1",
+            "milling": "climb",
+            "z_retract": "0.1",
+            "dia_1": "0.25",
+            "rpm_1": "9000",
+        },
+    )
+    assert response.status_code == 422
+    assert "TOOL 1 RPM: 9000 is outside the spindle" in response.get_data(as_text=True)
+    with client.application.app_context():
+        assert get_library().get(2).info.version == 1
+
+
+def test_empty_name_is_refused(client: FlaskClient) -> None:
+    csrf = token(client)
+    response = client.post(
+        "/programs/2/header", data={"csrf_token": csrf, "version": "1", "name": "   "}
+    )
+    assert response.status_code == 422
+    assert "every program needs a name" in response.get_data(as_text=True)
 
 
 def test_stale_save_is_refused_with_what_changed(client: FlaskClient) -> None:
@@ -240,3 +278,34 @@ def test_setup_sheet_page(client: FlaskClient) -> None:
     page = client.get("/programs/1/setup?target=tape-eia").get_data(as_text=True)
     assert "Set-up sheet" in page and "Tape length" in page and "ft (" in page
     assert "high gear" in page and "First cut" in page and "<svg" in page
+
+
+def test_download_is_what_the_page_shows(client: FlaskClient) -> None:
+    """Opened fresh (no Preview pressed), the download link still carries every option as
+    shown, so the file equals the default export."""
+    from app.cnc.emit.target import export as make
+
+    page = client.get("/programs/3/export?target=tape-eia").get_data(as_text=True)
+    link = re.search(r'id="download" accesskey="d" href="([^"]+)"', page)
+    assert link
+    data = client.get(link.group(1).replace("&amp;", "&")).data
+    with client.application.app_context():
+        expected = make(get_library().get(3).program, "tape-eia").data
+    assert data == expected
+
+
+def test_history_diff_and_restore(client: FlaskClient) -> None:
+    csrf = token(client)
+    client.post(
+        "/programs/2/header",
+        data={"csrf_token": csrf, "version": "1", "name": "Renamed", "units": "inch"},
+    )
+    page = client.get("/programs/2/history?diff=2").get_data(as_text=True)
+    assert "name: &#39;LOOP and REP example (Fig. 3-14)&#39; → &#39;Renamed&#39;" in page
+    response = client.post(
+        "/programs/2/history/1/restore", data={"csrf_token": csrf, "version": "2"}
+    )
+    assert response.status_code == 302
+    with client.application.app_context():
+        stored = get_library().get(2)
+    assert stored.info.version == 3 and stored.program.name.startswith("LOOP and REP")

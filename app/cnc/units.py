@@ -83,5 +83,8 @@ def format_length(nm: int, units: Units, places: int | None = None) -> str:
 
 
 def format_decimal(value: Decimal) -> str:
-    """A typed value as the machinist typed it, without exponent notation."""
+    """A typed value as the machinist typed it, without exponent notation (except for
+    values too large to spell out, such as 1E+30)."""
+    if value.is_finite() and abs(value) > Decimal(10) ** 12:
+        return str(value.normalize())
     return f"{value:f}"

@@ -47,6 +47,10 @@ from app.cnc.units import Units, format_decimal, to_nm
 ERROR = Severity.ERROR
 WARNING = Severity.WARNING
 
+# Beyond this a value is only out of range: its resolution is not worth checking (and
+# Decimal cannot quantize 1e30 to 0.001).
+LARGEST = Decimal(10) ** 9
+
 # Operator messages go into tape comments and G-code (MSG,…) lines: upper-case ASCII
 # letters after conversion, and no parentheses or semicolons, which end comments.
 MESSAGE_LENGTH = 60
@@ -221,7 +225,7 @@ class _Checker:
                 Rule.RANGE,
                 f"{shown} is outside the allowed range {low} to {high} {units.symbol}",
             )
-        if value != value.quantize(units.resolution):
+        if abs(value) <= LARGEST and value != value.quantize(units.resolution):
             self.add(
                 block,
                 label,
@@ -244,7 +248,7 @@ class _Checker:
                 f"{shown} is outside the allowed range {feed.low} to {feed.high} "
                 f"{units.feed_symbol}",
             )
-        if value % feed.step != 0:
+        if abs(value) <= LARGEST and value % feed.step != 0:
             if units is Units.MM:
                 message = f"{shown} is not a step of 2; metric feeds go in steps of 2 mm/min"
                 self.add(block, label, ERROR, Rule.FEED_STEP, message)
@@ -261,7 +265,7 @@ class _Checker:
                 Rule.RANGE,
                 f"{format_decimal(value)}° is outside the allowed range 0 to 359.99°",
             )
-        if value != value.quantize(limits.ANGLE_RESOLUTION):
+        if abs(value) <= LARGEST and value != value.quantize(limits.ANGLE_RESOLUTION):
             self.add(
                 block,
                 label,

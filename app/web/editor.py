@@ -32,7 +32,7 @@ from app.cnc.copy import CopyError, cancel_copy, execute_copy
 from app.cnc.emit.svg import draw
 from app.cnc.estimate import estimate, format_seconds
 from app.cnc.interpret import interpret
-from app.cnc.problems import Problem, Severity, has_errors
+from app.cnc.problems import Problem, Rule, Severity, has_errors
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import LibraryError, StaleSave, StoredProgram
@@ -95,7 +95,7 @@ def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
         if not has_errors(validate(part)):
             toolpath = interpret(part)
             result = estimate(toolpath)
-            svg = draw(toolpath, grid=True, embedded_style=False)
+            svg = draw(toolpath, swept=True, grid=True, embedded_style=False)
             return svg, result.per_block, result.total, shown
         shown -= 1
     return "", {}, 0.0, 0
@@ -136,6 +136,7 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
             "units": block.units.symbol,
             "seconds": format_seconds(per_block.get(n, 0.0)) if n in per_block else "",
             "problems": [p for p in problems if p.block == n],
+            "has_error": any(p.block == n and p.severity is Severity.ERROR for p in problems),
         }
         for n, block in enumerate(program.blocks, start=1)
     ]
@@ -284,6 +285,13 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
             entry.message = f"Not done: {exc.message}"
             entry.errors = {"from_block": exc.message}
             return render_editor(stored, entry, 422)
+    refused = value_problems(new_program, range(at, at + len(parsed.blocks)))
+    if refused:
+        # As the control refuses an out-of-range entry: nothing is saved, the values stay
+        # in the form and each message stands beside its field.
+        entry.errors = {name: f"{p.field}: {p.message}" for name, p in refused}
+        entry.message = "Not saved: " + "; ".join(f"{p.location}: {p.message}" for _, p in refused)
+        return render_editor(stored, entry, 422)
     saved = _save(stored, new_program, entry)
     if isinstance(saved, tuple):
         return saved
@@ -294,6 +302,45 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
     if is_htmx():
         return render_editor(saved, next_entry)
     return redirect(url_for("editor.edit", program_id=program_id, at=next_entry.at))
+
+
+# The problems that are wrong values in the block itself (refused at entry, as the control
+# refuses them); the others (a LOOP still waiting for its REP…) belong to the program.
+VALUE_RULES = frozenset(
+    {
+        Rule.RANGE,
+        Rule.RESOLUTION,
+        Rule.FEED_STEP,
+        Rule.MISSING,
+        Rule.DEPTH_ORDER,
+        Rule.PECKS_NOT_DRILL,
+        Rule.MESSAGE,
+        Rule.QCIR_CENTRE_LINES,
+    }
+)
+
+
+def value_problems(program: Program, numbers: range) -> list[tuple[str, Problem]]:
+    """(form field name, problem) for the value errors of blocks `numbers` of `program`."""
+    found = []
+    for problem in validate(program):
+        number = problem.block
+        if number is not None and number in numbers and problem.rule in VALUE_RULES:
+            if problem.severity is not Severity.ERROR:
+                continue
+            block = program.blocks[number - 1]
+            name = next(
+                (
+                    f.name
+                    for f in dataclasses.fields(block)
+                    if f.metadata.get("label") == problem.field
+                ),
+                "x",
+            )
+            if isinstance(block, ArcEnd) and name in ("x", "y"):
+                name = f"end_{name}"
+            found.append((name, problem))
+    return found
 
 
 def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgram | tuple[str, int]:
@@ -365,6 +412,10 @@ def save_header(program_id: int) -> Response | tuple[str, int]:
         notes=form.get("notes", ""),
     )
     entry = Entry(at=len(program.blocks) + 1, editing=False)
+    wrong = [p for p in validate(program) if p.block is None and p.severity is Severity.ERROR]
+    if wrong:
+        message = "Not saved: " + "; ".join(str(p) for p in wrong)
+        return render_template("errors/error.html", title="Not saved", message=message), 422
     saved = _save(stored, program, entry)
     if isinstance(saved, tuple):
         return saved
@@ -382,6 +433,11 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
     block0 = stored.program.block0
     if request.method == "POST":
         block0, errors = parse_block0(request.form)
+        if not errors:
+            candidate = dataclasses.replace(stored.program, block0=block0)
+            for problem in validate(candidate):
+                if problem.block == 0 and problem.severity is Severity.ERROR:
+                    errors[_db0_field(problem.field)] = str(problem)
         if not errors:
             program = dataclasses.replace(stored.program, block0=block0)
             try:
@@ -411,6 +467,17 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
             saved=request.args.get("saved") == "1",
         ),
         status,
+    )
+
+
+def _db0_field(label: str | None) -> str:
+    """The form input of a Data Block 0 problem's field (`TOOL 3 RPM` → `rpm_3`)."""
+    text = label or ""
+    if text.startswith("TOOL ") and " " in text[5:]:
+        number, what = text[5:].split(" ", 1)
+        return {"DIA": "dia", "RPM": "rpm", "TCAL": "tcal"}.get(what, "dia") + f"_{number}"
+    return {"X": "x_offset", "Y": "y_offset", "CUR-TOOL": "current_tool", "Z RET": "z_retract"}.get(
+        text, "x_offset"
     )
 
 
@@ -466,3 +533,42 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
 
 def problem_text(problems: list[Problem]) -> str:
     return "; ".join(str(p) for p in problems)
+
+
+# -- history ------------------------------------------------------------------------------
+
+
+@bp.get("/programs/<int:program_id>/history")
+def history(program_id: int) -> str:
+    """Every saved version: when, by whom, what changed; diff and restore."""
+    stored = load(program_id)
+    library = get_library()
+    revisions = library.revisions(program_id)
+    compare = _int(request.args.get("diff"), 0)
+    changes: list[str] = []
+    if 2 <= compare <= stored.info.version:
+        changes = library.diff(program_id, compare - 1, compare)
+    return render_template(
+        "editor/history.html",
+        stored=stored,
+        revisions=list(reversed(revisions)),
+        compare=compare,
+        changes=changes,
+    )
+
+
+@bp.post("/programs/<int:program_id>/history/<int:version>/restore")
+def restore_version(program_id: int, version: int) -> Response | tuple[str, int]:
+    stored = load(program_id)
+    try:
+        get_library().restore_revision(
+            program_id,
+            version,
+            based_on=_int(request.form.get("version"), stored.info.version),
+            author=current_user(),
+        )
+    except StaleSave as exc:
+        return render_template("errors/error.html", title="Not restored", message=str(exc)), 409
+    except LibraryError as exc:
+        abort(404, str(exc))
+    return redirect(url_for("editor.history", program_id=program_id))

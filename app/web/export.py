@@ -4,6 +4,7 @@ and downloads. Every export is made by the same registry the CLI uses."""
 from __future__ import annotations
 
 from typing import Any
+from urllib.parse import urlencode
 
 from flask import Blueprint, Response, render_template, request
 from jinja2_fragments.flask import render_block
@@ -88,10 +89,22 @@ def page(program_id: int) -> tuple[str, int]:
             picture = ""
     if result is not None and target_name == "svg":
         picture = result.data.decode()
+    effective = all_targets[target_name].parse_options(raw) if not error else {}
     values = {
-        option.name: str(raw.get(option.name, option.default))
+        option.name: str(effective.get(option.name, option.default))
         for option in all_targets[target_name].options
     }
+    # The download carries every option as the page shows it, so the file is the preview.
+    query: dict[str, str] = {"target": target_name, "go": "1"}
+    if machine_name:
+        query["machine"] = machine_name
+    for option in all_targets[target_name].options:
+        value = effective.get(option.name, option.default)
+        if option.kind.value == "bool":
+            if value:
+                query[f"opt_{option.name}"] = "on"
+        elif value is not None:
+            query[f"opt_{option.name}"] = str(value)
     context = {
         "stored": stored,
         "targets": all_targets,
@@ -105,7 +118,7 @@ def page(program_id: int) -> tuple[str, int]:
         "picture": picture,
         "machines": get_library().machines(),
         "machine_name": machine_name,
-        "download_query": request.query_string.decode(),
+        "download_query": urlencode(query),
     }
     status = 422 if error else 200
     if is_htmx():

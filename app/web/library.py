@@ -23,7 +23,14 @@ def index() -> str:
     if sort not in SORTS:
         sort = "name"
     programs = get_library().programs(query, sort)
-    context = {"programs": programs, "q": query, "sort": sort, "sorts": SORTS, "message": ""}
+    context = {
+        "programs": programs,
+        "q": query,
+        "sort": sort,
+        "sorts": SORTS,
+        "message": "",
+        "form": None,
+    }
     if is_htmx() and request.args.get("fragment") == "list":
         return render_block("library/index.html", "program_list", **context)
     return render_template("library/index.html", **context)
@@ -129,5 +136,12 @@ def restore(program_id: int) -> Response:
 
 def _index_with(message: str, status: int) -> tuple[str, int]:
     programs = get_library().programs()
-    context = {"programs": programs, "q": "", "sort": "name", "sorts": SORTS, "message": message}
+    context = {
+        "programs": programs,
+        "q": "",
+        "sort": "name",
+        "sorts": SORTS,
+        "message": message,
+        "form": request.form,
+    }
     return render_template("library/index.html", **context), status

@@ -53,7 +53,7 @@ _BOSS_OPTIONS = (
     *tuple(
         o
         for o in _options(BOSS)
-        if o.name not in ("block_delete", "end_code", "canned_cycles", "peck_cycle", "index_code")
+        if o.name not in ("block-delete", "end-code", "canned-cycles", "peck-cycle", "index-code")
     ),
     Option(
         "segment",
@@ -177,11 +177,11 @@ class BossTarget(GcodeTarget):
                 if isinstance(move, IndexTable):
                     report.unsupported(move.block, "INDEX: no rotary table (set rotary=yes)")
         writer_options = dict(options) | {
-            "block_delete": False,
-            "end_code": "M02",
-            "canned_cycles": False,
-            "peck_cycle": "explicit",
-            "index_code": None,
+            "block-delete": False,
+            "end-code": "M02",
+            "canned-cycles": False,
+            "peck-cycle": "explicit",
+            "index-code": None,
         }
         writer = _BossWriter(
             BOSS, program, _machine_z(toolpath), writer_options, report, rotary=rotary

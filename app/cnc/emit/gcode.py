@@ -11,7 +11,7 @@ retract height, a BORE hole `G98 G89 … P0.8`; the writer recognises those move
 the Toolpath, so a hole whose moves differ (a retract height that changed on the way) is
 written as explicit moves. Pecks (ours return to the level just cut; G83 backs off above
 it) and TAP's feed-out to Z UP + 0.3 in are explicit moves unless the user accepts G83
-(`peck_cycle=G83`), which the compatibility report then states.
+(`peck-cycle=G83`), which the compatibility report then states.
 
 Part zero: LinuxCNC gets the Data Block 0 offsets as `G10 L2 P1` (G54) and tool lengths
 from the calibration values as `G10 L1` with `G43 H` at each tool change; the Fanuc
@@ -59,19 +59,19 @@ class Dialect:
     setup_in_gcode: bool  # G10 L2 / G10 L1 / G43 (LinuxCNC) or comments (Fanuc)
     dwell_word: str  # P (LinuxCNC, seconds) or X (Fanuc, seconds)
     keep_trailing_zeros: bool  # the default of the trailing_zeros option
-    line_numbers: bool  # the default of the sequence_numbers option
+    line_numbers: bool  # the default of the sequence-numbers option
 
 
 def _options(dialect: Dialect) -> tuple[Option, ...]:
     return (
         Option(
-            "sequence_numbers",
+            "sequence-numbers",
             OptionKind.BOOL,
             dialect.line_numbers,
             "write N numbers",
         ),
         Option(
-            "sequence_start",
+            "sequence-start",
             OptionKind.INT,
             10 if dialect.line_numbers else 1,
             "first N number",
@@ -79,7 +79,7 @@ def _options(dialect: Dialect) -> tuple[Option, ...]:
             maximum=Decimal(99999),
         ),
         Option(
-            "sequence_increment",
+            "sequence-increment",
             OptionKind.INT,
             10 if dialect.line_numbers else 1,
             "N number step",
@@ -87,7 +87,7 @@ def _options(dialect: Dialect) -> tuple[Option, ...]:
             maximum=Decimal(1000),
         ),
         Option(
-            "trailing_zeros",
+            "trailing-zeros",
             OptionKind.CHOICE,
             "keep" if dialect.keep_trailing_zeros else "drop",
             "zero suppression: keep or drop trailing zeros (the decimal point always stays)",
@@ -95,27 +95,27 @@ def _options(dialect: Dialect) -> tuple[Option, ...]:
         ),
         Option("tabs", OptionKind.BOOL, False, "separate words with tabs"),
         Option(
-            "block_delete",
+            "block-delete",
             OptionKind.BOOL,
             False,
             "write STOP blocks as /M00 so the block-delete switch can skip them",
         ),
-        Option("end_code", OptionKind.CHOICE, "M30", "end of program code", ("M30", "M02")),
+        Option("end-code", OptionKind.CHOICE, "M30", "end of program code", ("M30", "M02")),
         Option(
-            "canned_cycles",
+            "canned-cycles",
             OptionKind.BOOL,
             True,
             "write G82 where the cycle's motion is identical to the hole's",
         ),
         Option(
-            "peck_cycle",
+            "peck-cycle",
             OptionKind.CHOICE,
             "explicit",
             "pecks as explicit moves, or G83 (which backs off above each level; reported)",
             ("explicit", "G83"),
         ),
         Option(
-            "index_code",
+            "index-code",
             OptionKind.INT,
             None,
             "M code that indexes the rotary table (POS INDEX); none: reported as lost",
@@ -217,7 +217,7 @@ class _Writer:
         self.report = report
         self.units: Units = toolpath.units
         self.lines: list[str] = []
-        self.number = int(options["sequence_start"])
+        self.number = int(options["sequence-start"])
         self.motion: str | None = None
         self.feed: int | None = None
         self.x, self.y, self.z = toolpath.start
@@ -231,7 +231,7 @@ class _Writer:
 
     def length(self, nm: int) -> str:
         text = format_length(nm, self.units)
-        if self.o["trailing_zeros"] == "drop":
+        if self.o["trailing-zeros"] == "drop":
             text = text.rstrip("0")
             text = "0" if text in ("0.", "-0.") else text
         return text
@@ -243,9 +243,9 @@ class _Writer:
     def line(self, *words: str, comment: str = "") -> None:
         """One block: N number, words, comment, end of block."""
         parts = [w for w in words if w]
-        if self.o["sequence_numbers"]:
+        if self.o["sequence-numbers"]:
             parts.insert(0, f"N{self.number}")
-            self.number += int(self.o["sequence_increment"])
+            self.number += int(self.o["sequence-increment"])
         if comment:
             parts.append(f"({_comment(comment)})")
         separator = "\t" if self.o["tabs"] else (" " if self.d.spaces else "")
@@ -261,7 +261,7 @@ class _Writer:
         moves = self.tp.moves
         i = 0
         while i < len(moves):
-            consumed = self.canned_cycle(moves, i) if self.o["canned_cycles"] else 0
+            consumed = self.canned_cycle(moves, i) if self.o["canned-cycles"] else 0
             if consumed:
                 i += consumed
                 continue
@@ -398,14 +398,14 @@ class _Writer:
             self.line(self.code("G", 43), self.code("H", move.tool))
         elif isinstance(move, ProgramStop):
             stop = self.code("M", 0)
-            if move.reason == "STOP" and self.o["block_delete"]:
+            if move.reason == "STOP" and self.o["block-delete"]:
                 stop = "/" + stop
             self.line(stop, comment=move.reason)
         elif isinstance(move, IndexTable):
-            code = self.o["index_code"]
+            code = self.o["index-code"]
             if code is None:
                 self.report.unsupported(
-                    move.block, "INDEX: no M code for the rotary table (set index_code)"
+                    move.block, "INDEX: no M code for the rotary table (set index-code)"
                 )
             else:
                 self.line(self.code("M", int(code)), comment="INDEX")
@@ -421,7 +421,7 @@ class _Writer:
                 self.comment(move.text)
         else:
             assert isinstance(move, ProgramEnd)
-            self.line(str(self.o["end_code"]))
+            self.line(str(self.o["end-code"]))
 
     # -- canned cycles --------------------------------------------------------------------
 
@@ -434,7 +434,7 @@ class _Writer:
         if match is None:
             return 0
         kind, consumed, (x, y), r, bottom, feed, pecks = match
-        if pecks and self.o["peck_cycle"] != "G83":
+        if pecks and self.o["peck-cycle"] != "G83":
             return 0
         z0 = self.z
         words = self.axis_words(x, y, None)
@@ -447,7 +447,7 @@ class _Writer:
             self.report.rewritten(
                 moves[i].block,
                 "pecks written as G83, which backs off a little above each level instead of "
-                "returning to the level just cut (accepted with peck_cycle=G83)",
+                "returning to the level just cut (accepted with peck-cycle=G83)",
             )
         else:
             key = (kind, self.length(r), self.length(bottom), str(feed), str(z0))

@@ -195,7 +195,10 @@ class Target(ABC):
         """Defaults overridden by `raw` (name → text). Raises OptionError for unknown names."""
         known = {option.name: option for option in self.options}
         values = {option.name: option.default for option in self.options}
-        for name, text in raw.items():
+        for given, text in raw.items():
+            # sequence_numbers and sequence-numbers name the same option.
+            name = given.replace("_", "-")
+            name = name if name in known else given
             if name not in known:
                 allowed = ", ".join(sorted(known)) or "none"
                 raise OptionError(f"{self.name} has no option {name!r}; its options: {allowed}")

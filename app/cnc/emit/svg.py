@@ -28,7 +28,8 @@ from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid, Repetition, ToolChange
 from app.cnc.units import Units
 
 STYLE = """
-path, circle, line {{ fill: none; stroke-width: {w}; }}
+path:not(.swept), circle, line {{ fill: none; stroke-width: {w}; }}
+path.swept {{ fill: none; }}
 path.rapid {{ stroke: #8a8a8a; stroke-dasharray: {dash} {gap}; }}
 path.feed {{ stroke: #0b5fbf; stroke-width: {wide}; }}
 path.swept {{ stroke: #9cc3f0; stroke-linecap: round; stroke-linejoin: round; opacity: .45; }}
@@ -313,7 +314,9 @@ class _Drawing:
                 group.add(drawing.path(d=" ".join(path), class_=kind))
                 if kind == "feed" and self.swept and size:
                     sweep = drawing.path(d=" ".join(path), class_="swept")
-                    sweep.attribs["style"] = f"stroke-width:{self.n(size)}"
+                    # A presentation attribute, not a style: a page's Content-Security-
+                    # Policy may forbid inline styles.
+                    sweep.attribs["stroke-width"] = self.n(size)
                     group.add(sweep)
             path, kind = [], ""
 

@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint typecheck pytest system-deps regen-golden clean
+.PHONY: run test lint typecheck pytest system-deps regen-golden clean bench load
 HOST ?= 127.0.0.1
 PORT ?= 5000
 WORKERS ?= 2
@@ -43,6 +43,20 @@ pytest: $(STAMP) system-deps
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 test: lint typecheck pytest
+
+DURATION ?= 60
+
+# Benchmarks (issue 10): figures and same-run ratios into docs/benchmarks.md (~6-10 min,
+# bounded at 15). Not part of `make test`.
+bench: $(STAMP) system-deps
+	$(PY) -m pip install --quiet --no-deps -r bench/requirements.txt
+	$(PY) -m bench.run
+
+# Load test (issue 9): 20 + 5 editors for $(DURATION) s against gunicorn, on SQLite and on a
+# throwaway PostgreSQL cluster; figures into docs/load.md.
+load: $(STAMP) system-deps
+	$(PY) -m bench.load --duration $(DURATION)
+	pg_virtualenv $(PY) -m bench.load --database postgresql --duration $(DURATION)
 
 # Rewrite the expected files of the golden tests from the current code (review the diff!).
 regen-golden: $(STAMP)

@@ -309,3 +309,23 @@ def test_history_diff_and_restore(client: FlaskClient) -> None:
     with client.application.app_context():
         stored = get_library().get(2)
     assert stored.info.version == 3 and stored.program.name.startswith("LOOP and REP")
+
+
+def test_editing_a_block_that_does_not_exist_is_404(client: FlaskClient) -> None:
+    csrf = token(client)
+    for edit in ("0", "99"):
+        response = client.post(
+            "/programs/2/blocks",
+            data={
+                "csrf_token": csrf,
+                "version": "1",
+                "kind": "POS",
+                "edit": edit,
+                "x": "1",
+                "y": "1",
+                "tool": "1",
+            },
+        )
+        assert response.status_code == 404
+    with client.application.app_context():
+        assert get_library().get(2).info.version == 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import functools
 import json
 import typing
 from decimal import Decimal
@@ -201,9 +202,15 @@ def _block_in(item: Any, number: int) -> Block:
 _T = typing.TypeVar("_T")
 
 
+@functools.cache
+def _hints(cls: type) -> dict[str, Any]:
+    """A dataclass's resolved type hints (resolving them is slow; each class once)."""
+    return typing.get_type_hints(cls)
+
+
 def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:
     """Construct dataclass `cls` from JSON fields, converting and checking each one."""
-    hints = typing.get_type_hints(cls)
+    hints = _hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     _no_unknown(where, data, set(fields) - set(fixed))
     values: dict[str, Any] = dict(fixed)

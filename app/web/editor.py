@@ -88,8 +88,17 @@ class Entry:
 
 
 def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
-    """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix."""
-    shown = len(program.blocks)
+    """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix.
+
+    The search starts before the first block with an error (a prefix cannot be valid past
+    it), so a program with an early error costs a few validations, not one per block.
+    """
+    problems = validate(program)
+    errors = [p.block for p in problems if p.severity is Severity.ERROR]
+    if any(b is None or b == 0 for b in errors):
+        return "", {}, 0.0, 0
+    blocks_in_error = [b for b in errors if b is not None]
+    shown = min(blocks_in_error) - 1 if blocks_in_error else len(program.blocks)
     while shown >= 0:
         part = dataclasses.replace(program, blocks=program.blocks[:shown])
         if not has_errors(validate(part)):
@@ -184,8 +193,8 @@ def render_editor(stored: StoredProgram, entry: Entry, status: int = 200) -> tup
 def entry_from_args(program: Program, args: Any) -> Entry:
     """The entry panel asked for by query arguments (`at`, `edit`, `group`, `kind`...)."""
     count = len(program.blocks)
-    if args.get("edit"):
-        number = _int(args.get("edit"), 1)
+    if args.get("edit") is not None:
+        number = _int(args.get("edit"), 0)
         if not 1 <= number <= count:
             abort(404, f"There is no block {number}.")
         block = program.blocks[number - 1]
@@ -250,6 +259,9 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
     kind = form.get("kind", "")
     editing = form.get("edit", "") != ""
     at = _int(form.get("edit") if editing else form.get("at"), len(program.blocks) + 1)
+    last = len(program.blocks) if editing else len(program.blocks) + 1
+    if not 1 <= at <= last:
+        abort(404, f"There is no block {at} to {'edit' if editing else 'insert before'}.")
     parsed = parse_block(kind, form)
     entry = Entry(
         at=at,

@@ -1,0 +1,1 @@
+"""Benchmarks and the load test: see docs/benchmarks.md and docs/load.md."""

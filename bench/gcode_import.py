@@ -1,0 +1,287 @@
+"""G-code import: lines per second of our reader (+ interpreter) against LinuxCNC's
+`rs274 -g` and pygcode, on the same 100 000-line file.
+
+The file is written here, deterministically, in the style of our gcode-linuxcnc target
+(G20, G54 set by G10 L2, tool lengths by G10 L1 + G43 H): a grid of cells, each a bolt
+circle of G82 drilled holes, a pecked hole written as explicit moves, a circle pocket with
+G3 arcs and a short G1/G2 contour. It is padded with single-axis G1 moves to exactly the
+line count. rs274 must accept it (its exit status is checked), so all three readers see a
+valid program.
+
+- ours: `app.cnc.imports.read_program(data, name, "gcode")` (parse, motion, recognition of
+  data blocks), then `interpret()` of the program it returns. While `app.cnc.imports` has no
+  `read_program`, the row says "not available" and the others still run.
+- rs274: LinuxCNC's interpreter in batch mode (`-g`), canonical calls to /dev/null; wall
+  time of the process (its start-up, ~20 ms, is included and reported).
+- pygcode 0.2.1: `Line(text)` per line and `Machine.process_block` (its own interpreter);
+  stopped after a time limit, the rate taken on the lines it got through.
+
+Target (issue 10): our import at least as fast as rs274.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from bench.common import (
+    Result,
+    Section,
+    fmt_bytes,
+    fmt_count,
+    fmt_rate,
+    fmt_ratio,
+    fmt_seconds,
+    measure,
+    run_child,
+    table,
+)
+
+LINES = 100_000
+PYGCODE_LIMIT = 60.0
+
+HEADER = [
+    "%",
+    "(BENCH IMPORT PART 1 MILLBLOCKS)",
+    "G17 G20 G40 G80 G90 G94",
+    "G10 L2 P1 X1.0000 Y1.0000 Z0",
+    "G54",
+    "G10 L1 P1 Z0.0000 R0.1250",
+    "G43 H1",
+    "G0 Z0.1000",
+    "S1200 M3",
+]
+FOOTER = ["G0 Z0.2000", "M5", "M30", "%"]
+
+
+def _f(value: float) -> str:
+    return f"{value:.4f}"
+
+
+def _cell(cx: float, cy: float) -> list[str]:
+    """One cell of work around (cx, cy): 8-hole bolt circle, pecked hole, pocket, contour."""
+    lines = ["G0 Z0.2000", f"X{_f(cx)} Y{_f(cy - 0.5)}"]
+    for k in range(8):
+        angle = math.radians(k * 45.0)
+        x, y = cx - 0.5 * math.sin(angle), cy - 0.5 * math.cos(angle)
+        if k == 0:
+            lines.append(f"G98 G82 X{_f(x)} Y{_f(y)} R0.1000 Z-0.2000 P0.8 F5.0")
+        else:
+            lines.append(f"X{_f(x)} Y{_f(y)}")
+    lines += ["G80", f"G0 X{_f(cx)} Y{_f(cy)}", "Z0.1000"]
+    for level in (-0.1, -0.2, -0.3):
+        lines += [f"G1 Z{_f(level)} F4.5", "G0 Z0.1000", f"Z{_f(level)}"]
+    lines += [
+        "G0 Z0.2000",
+        f"X{_f(cx + 0.875)} Y{_f(cy - 0.125)}",
+        "Z0.1000",
+        "G1 Z-0.2500 F4.0",
+        f"G3 X{_f(cx + 1.0)} Y{_f(cy - 0.25)} I0.1250 J0.0000 F9.0",
+        f"X{_f(cx + 1.0)} Y{_f(cy - 0.25)} I0.0000 J0.2500",
+        f"G1 Y{_f(cy)}",
+        "G0 Z0.2000",
+        f"X{_f(cx - 0.75)} Y{_f(cy + 0.5)}",
+        "Z0.1000",
+        "G1 Z-0.1000 F4.0",
+        f"X{_f(cx - 0.25)} Y{_f(cy + 0.5)} F8.0",
+        f"G2 X{_f(cx)} Y{_f(cy + 0.25)} I0.0000 J-0.2500",
+        f"G1 X{_f(cx)} Y{_f(cy + 0.1)}",
+    ]
+    return lines
+
+
+def gcode_text(lines: int = LINES) -> str:
+    """The benchmark's G-code file, exactly `lines` lines long."""
+    body: list[str] = []
+    room = lines - len(HEADER) - len(FOOTER)
+    k = 0
+    while True:
+        cell = _cell(2.0 + 1.8 * (k % 50), 2.0 + 1.6 * (k // 50))
+        if len(body) + len(cell) > room:
+            break
+        body += cell
+        k += 1
+    step = 0
+    while len(body) < room:
+        step += 1
+        body.append(
+            f"G1 X{_f(1.0 + 0.001 * step)} F8.0" if step == 1 else f"X{_f(1.0 + 0.001 * step)}"
+        )
+    return "\n".join([*HEADER, *body, *FOOTER]) + "\n"
+
+
+def write_file(directory: Path, lines: int = LINES) -> Path:
+    path = directory / f"bench-{lines}.ngc"
+    path.write_text(gcode_text(lines))
+    return path
+
+
+# -- the readers (each in its own child process) -----------------------------------------
+
+
+def ours_case(path: str) -> Result:
+    """(child) Our reader, then our interpreter, on the file."""
+    try:
+        from app.cnc import imports
+    except ImportError as exc:
+        return {"unavailable": f"app.cnc.imports cannot be imported ({exc})"}
+    read_program = getattr(imports, "read_program", None)
+    if read_program is None:
+        return {"unavailable": "app.cnc.imports has no read_program yet"}
+    from app.cnc.blocks import Program
+    from app.cnc.interpret import interpret
+
+    data = Path(path).read_bytes()
+    result, seconds, peak = measure(lambda: read_program(data, Path(path).name, "gcode"))
+    program = result if isinstance(result, Program) else getattr(result, "program", None)
+    if not isinstance(program, Program):
+        return {"unavailable": f"read_program returned {type(result).__name__}, not a Program"}
+    started = time.perf_counter()
+    toolpath = interpret(program)
+    interpret_seconds = time.perf_counter() - started
+    return {
+        "lines": data.count(b"\n"),
+        "seconds": seconds,
+        "interpret_seconds": interpret_seconds,
+        "peak": peak,
+        "blocks": len(program.blocks),
+        "moves": len(toolpath.moves),
+    }
+
+
+def rs274_case(path: str) -> Result:
+    """(child) LinuxCNC's rs274 in batch mode; the file must be accepted."""
+    rs274 = shutil.which("rs274")
+    if rs274 is None:
+        return {"unavailable": "rs274 is not installed (Debian linuxcnc-uspace)"}
+    with tempfile.TemporaryDirectory() as tmp:
+        table_file = Path(tmp) / "tools.tbl"
+        table_file.write_text("".join(f"T{n} P{n} Z0.0000 D0.2500 ;\n" for n in range(1, 25)))
+        empty = Path(tmp) / "empty.ngc"
+        empty.write_text("%\nM2\n%\n")
+
+        def run(file: Path) -> tuple[float, subprocess.CompletedProcess[bytes]]:
+            started = time.perf_counter()
+            done = subprocess.run(
+                [rs274, "-t", str(table_file), "-g", str(file)],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.PIPE,
+                timeout=300,
+                check=False,
+            )
+            return time.perf_counter() - started, done
+
+        startup, _ = min(run(empty) for _ in range(3))
+        seconds, done = min((run(Path(path)) for _ in range(2)), key=lambda r: r[0])
+    errors = done.stderr.decode(errors="replace").strip()
+    if done.returncode != 0 or "error" in errors.lower():
+        return {"error": f"rs274 refused the file: {errors.splitlines()[-1] if errors else ''}"}
+    return {
+        "lines": Path(path).read_text().count("\n"),
+        "seconds": seconds,
+        "startup": startup,
+    }
+
+
+def pygcode_case(path: str, limit: float = PYGCODE_LIMIT) -> Result:
+    """(child) pygcode: parse every line and run it through its Machine, for at most
+    `limit` seconds."""
+    try:
+        import pygcode  # type: ignore[import-untyped]
+    except ImportError:
+        return {"unavailable": "pygcode is not installed (pip install -r bench/requirements.txt)"}
+    lines = Path(path).read_text().splitlines()
+    machine = pygcode.Machine()
+    done = 0
+    failures = 0
+    first_failure = ""
+    started = time.perf_counter()
+    for text in lines:
+        try:
+            line = pygcode.Line(text)
+            if line.block.words:
+                machine.process_block(line.block)
+        except Exception as exc:  # pygcode raises many kinds; count them, go on
+            failures += 1
+            first_failure = first_failure or f"{type(exc).__name__}: {exc}"[:100]
+        done += 1
+        if done % 500 == 0 and time.perf_counter() - started > limit:
+            break
+    seconds = time.perf_counter() - started
+    return {
+        "lines": done,
+        "of": len(lines),
+        "seconds": seconds,
+        "failures": failures,
+        "first_failure": first_failure,
+        "version": pygcode.__version__,
+    }
+
+
+def run(lines: int = LINES, timeout: float = 300.0) -> Section:
+    section = Section(f"G-code import: {fmt_count(lines)}-line file")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = write_file(Path(tmp), lines)
+        size = path.stat().st_size
+        args = {"path": str(path)}
+        results = {
+            "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
+            "ours": run_child("bench.gcode_import:ours_case", args, timeout),
+            "pygcode": run_child(
+                "bench.gcode_import:pygcode_case", {**args, "limit": PYGCODE_LIMIT}, timeout
+            ),
+        }
+    referee = results["rs274"]
+    base = referee["lines"] / referee["seconds"] if "seconds" in referee else float("nan")
+    rows: list[list[str]] = []
+    for name, r in results.items():
+        label = {
+            "rs274": "LinuxCNC `rs274 -g` (baseline)",
+            "ours": "ours: `read_program` + `interpret`",
+            "pygcode": "pygcode `Line` + `Machine.process_block`",
+        }[name]
+        if "unavailable" in r or "error" in r:
+            reason = r.get("unavailable") or r.get("error")
+            shown = "**not available**" if "unavailable" in r else "**failed**"
+            rows.append([label, f"{shown}: {reason}", "", "", ""])
+            continue
+        seconds = r["seconds"] + r.get("interpret_seconds", 0.0)
+        rate = r["lines"] / seconds
+        detail = ""
+        if name == "rs274":
+            detail = f"process start-up {fmt_seconds(r['startup'])} included"
+        elif name == "ours":
+            detail = (
+                f"read {fmt_seconds(r['seconds'])} → {r['blocks']} blocks, interpret "
+                f"{fmt_seconds(r['interpret_seconds'])} → {fmt_count(r['moves'])} moves; "
+                f"peak {fmt_bytes(r['peak'])}"
+            )
+        elif name == "pygcode":
+            detail = (
+                f"pygcode {r['version']}; {fmt_count(r['lines'])} of {fmt_count(r['of'])} lines"
+            )
+            if r["lines"] < r["of"]:
+                detail += f" in the {PYGCODE_LIMIT:.0f} s limit"
+            if r["failures"]:
+                detail += f"; {fmt_count(r['failures'])} lines raised ({r['first_failure']})"
+        rows.append([label, fmt_seconds(seconds), fmt_rate(rate), fmt_ratio(rate / base), detail])
+    section.lines += [
+        f"The file: {fmt_count(lines)} lines, {fmt_bytes(size)}, written by",
+        "`bench/gcode_import.py` (bolt circles in G82, pecked holes, G3 pockets, G1/G2",
+        "contours); *× rs274* is lines per second over rs274's, same file, same run.",
+        "",
+        *table(["reader", "time", "lines/s", "× rs274", "notes"], rows),
+    ]
+    ours = results["ours"]
+    if "seconds" in ours and "seconds" in referee:
+        rate = ours["lines"] / (ours["seconds"] + ours["interpret_seconds"])
+        section.target(
+            "G-code import, 100 000 lines", "≥ rs274", fmt_rate(rate), fmt_ratio(rate / base)
+        )
+    else:
+        section.target("G-code import, 100 000 lines", "≥ rs274", "not available", "–")
+    return section

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import functools
 import json
 import typing
 from decimal import Decimal
@@ -202,10 +201,14 @@ def _block_in(item: Any, number: int) -> Block:
 _T = typing.TypeVar("_T")
 
 
-@functools.cache
+_HINTS: dict[type, dict[str, Any]] = {}
+
+
 def _hints(cls: type) -> dict[str, Any]:
     """A dataclass's resolved type hints (resolving them is slow; each class once)."""
-    return typing.get_type_hints(cls)
+    if cls not in _HINTS:
+        _HINTS[cls] = typing.get_type_hints(cls)
+    return _HINTS[cls]
 
 
 def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:

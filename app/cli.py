@@ -4,6 +4,8 @@
     millblocks time FILE               cycle time per block, per tool and in total
     millblocks export FILE --to FMT    write the program in a target format (-o OUT)
     millblocks targets [--options]     list the export targets and their options
+    millblocks send PROG --machine M   send over RS-232 in the machine's target (logged)
+    millblocks receive --machine M     receive over RS-232 into the library (logged)
 
 FILE is a MillBlocks JSON program. A COPY block whose operator chose EXEC or CANCEL is
 carried out as the file is read, as the control does on ENTER. Exit codes: 0 success,
@@ -12,8 +14,12 @@ carried out as the file is read, as the control does on ENTER. Exit codes: 0 suc
 
 from __future__ import annotations
 
+import contextlib
 import json
+import signal
 import sys
+import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -433,6 +439,153 @@ def db_upgrade() -> None:
     """Bring the database up to date (every command does this by itself too)."""
     library()
     click.echo("database is up to date")
+
+
+# -- RS-232 transfers (issue 8) -------------------------------------------------------------
+
+
+def _interruptible() -> tuple[threading.Event, Callable[[], bool]]:
+    """Ctrl-C asks the transfer to stop (it stops within 50 ms) instead of killing it."""
+    stop = threading.Event()
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    return stop, stop.is_set
+
+
+def _progress_printer(label: str) -> Callable[[int, int | None], None]:
+    """Progress on stderr, at most every 10 % (sends) or 1 KiB (receives)."""
+    shown = {"mark": -1}
+
+    def progress(done: int, total: int | None) -> None:
+        mark = done * 10 // total if total else done // 1024
+        if mark != shown["mark"]:
+            shown["mark"] = mark
+            of = f"/{total} bytes ({done * 100 // total}%)" if total else " bytes"
+            click.echo(f"{label}: {done}{of}", err=True)
+
+    return progress
+
+
+@main.command("send")
+@click.argument("program", metavar="PROGRAM")
+@click.option("--machine", "machine_name", required=True, help="A library machine (port, target).")
+@click.option("--port", default=None, help="Another port than the machine's (e.g. /dev/ttyUSB1).")
+@click.option("--author", default="", help="Who is sending (kept in the transfer log).")
+def send_command(program: str, machine_name: str, port: str | None, author: str) -> None:
+    """Send a program to a machine over RS-232 in the machine's export target.
+
+    The transfer is logged in the library. Ctrl-C stops it (the control has a partial
+    program). Exit 1 when the send fails or is cancelled.
+    """
+    from app.dnc import TransferError, service
+    from app.storage.transfers import TransferLog
+
+    machine = _library_machine(machine_name)
+    lib = library()
+    program_id = None
+    path = Path(program)
+    if not path.exists() and not program.endswith(".json"):
+        with contextlib.suppress(LibraryError):
+            program_id = lib.find(program).info.id
+    chosen = resolve_program(program)
+    stop, cancelled = _interruptible()
+    try:
+        sent = service.send_program(
+            chosen,
+            machine,
+            port=port,
+            program_id=program_id,
+            author=author,
+            log=TransferLog(lib).log,
+            progress=_progress_printer(f"send {chosen.name}"),
+            cancel=cancelled,
+        )
+    except (TransferError, ExportError, OptionError, ValueError) as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(sent.record.summary())
+    if stop.is_set():
+        sys.exit(1)
+
+
+@main.command("receive")
+@click.option("--machine", "machine_name", required=True, help="A library machine (port, target).")
+@click.option("--port", default=None, help="Another port than the machine's.")
+@click.option(
+    "--format", "format", default=None, help="What the control sends (default: its target)."
+)
+@click.option("--name", default="", help="The new program's name.")
+@click.option(
+    "--wait",
+    "first_byte_timeout",
+    default=120.0,
+    show_default=True,
+    type=float,
+    help="Seconds to wait for the control to start sending.",
+)
+@click.option("--author", default="", help="Who is receiving (kept with the revision).")
+def receive_command(
+    machine_name: str,
+    port: str | None,
+    format: str | None,
+    name: str,
+    first_byte_timeout: float,
+    author: str,
+) -> None:
+    """Receive a program from a machine over RS-232 and add it to the library.
+
+    Start this, then start the send on the control. Prints the new program's id. A capture
+    that is not a whole program is refused (nothing saved; the raw bytes are in the
+    transfer log). Exit 1 when nothing was saved.
+    """
+    from app.dnc import TransferError, service
+    from app.storage.transfers import TransferLog
+
+    machine = _library_machine(machine_name)
+    lib = library()
+    _, cancelled = _interruptible()
+    try:
+        got = service.receive_program(
+            machine,
+            lib,
+            port=port,
+            format=format,
+            name=name,
+            author=author,
+            log=TransferLog(lib).log,
+            progress=_progress_printer("receive"),
+            cancel=cancelled,
+            first_byte_timeout=first_byte_timeout,
+        )
+    except (TransferError, ValueError) as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(got.record.summary(), err=True)
+    if got.stored is None or got.program is None:
+        sys.exit(1)
+    click.echo(got.stored.id)
+    print_problems(got.program.name, validate(got.program))
+
+
+@main.command("ports")
+def list_ports() -> None:
+    """List this computer's serial ports."""
+    from app.dnc import service
+
+    for device, description in service.available_ports():
+        click.echo(f"{device:<24} {description}")
+
+
+@main.command("transfers")
+@click.option("--limit", default=20, show_default=True, type=int)
+def list_transfers(limit: int) -> None:
+    """The newest RS-232 transfers in the log."""
+    from app.storage.transfers import TransferLog
+
+    for t in TransferLog(library()).recent(limit):
+        total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
+        error = f"  {t.error}" if t.error else ""
+        click.echo(
+            f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
+            f"{t.program_name or '-':<20} {t.bytes_done}{total} bytes  {t.outcome}{error}"
+        )
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -54,6 +54,7 @@ def test_upgrade_head_on_an_empty_database(database_url: str) -> None:
         "settings",
         "users",
         "login_attempts",
+        "transfer_log",
     }
     engine.dispose()
 
@@ -71,6 +72,7 @@ def test_downgrade_and_upgrade_round_trip(database_url: str) -> None:
         "settings",
         "users",
         "login_attempts",
+        "transfer_log",
     }
     engine.dispose()
 

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import ForeignKey, Index, Integer, String, Text, UniqueConstraint
+from sqlalchemy import (
+    Boolean,
+    ForeignKey,
+    Index,
+    Integer,
+    LargeBinary,
+    String,
+    Text,
+    UniqueConstraint,
+)
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 
@@ -111,3 +120,34 @@ class LoginAttemptRow(Base):
     at: Mapped[datetime]
 
     __table_args__ = (Index("ix_login_attempts_address_at", "address", "at"),)
+
+
+class TransferRow(Base):
+    """One RS-232 transfer: what went over which port, when, how it ended.
+
+    A running transfer's progress and a cancel asked for by another worker live here, so
+    every web worker sees them. A receive keeps its raw capture (garbage included)."""
+
+    __tablename__ = "transfer_log"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    direction: Mapped[str] = mapped_column(String(8))
+    machine: Mapped[str] = mapped_column(String(200))
+    port: Mapped[str] = mapped_column(String(200), default="")
+    target: Mapped[str] = mapped_column(String(40), default="")
+    settings: Mapped[str] = mapped_column(String(200), default="")
+    bytes_done: Mapped[int] = mapped_column(Integer, default=0)
+    bytes_total: Mapped[int | None] = mapped_column(Integer, default=None)
+    started_at: Mapped[datetime]
+    finished_at: Mapped[datetime | None] = mapped_column(default=None)
+    outcome: Mapped[str] = mapped_column(String(12), default="running")
+    error: Mapped[str] = mapped_column(Text, default="")
+    program_id: Mapped[int | None] = mapped_column(
+        ForeignKey("programs.id", ondelete="SET NULL"), default=None
+    )
+    program_name: Mapped[str] = mapped_column(String(200), default="")
+    author: Mapped[str] = mapped_column(String(100), default="")
+    raw: Mapped[bytes | None] = mapped_column(LargeBinary, default=None)
+    cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False)
+
+    __table_args__ = (Index("ix_transfer_log_started", "started_at"),)

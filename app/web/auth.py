@@ -48,6 +48,9 @@ REQUIRED = {
     "auth.set_role": "admin",
     "export.page": "export",
     "export.download": "export",
+    "transfers.send": "send",
+    "transfers.receive": "send",
+    "transfers.cancel": "send",
     "auth.logout": "view",
 }
 

@@ -9,6 +9,8 @@ from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import OptionError, get_target
 from app.cnc.machine import PRESETS, MachineError, read_machine
+from app.dnc.service import settings_of
+from app.dnc.settings import SettingsError
 from app.storage.library import LibraryError, Machine
 from app.web.extensions import get_library
 
@@ -21,7 +23,14 @@ SERIAL_DEFAULTS = {
     "parity": "E",
     "stop_bits": "1",
     "flow": "none",
+    "eol": "crlf",
+    "leader": "0",
+    "trailer": "0",
+    "cps": "",
+    "end": "%",
 }
+"""The serial settings the form shows, with the defaults a new machine starts from (the
+ProtoTRAK's 4800 7E1; app.dnc.settings says what each means)."""
 
 
 @bp.get("/machines")
@@ -85,8 +94,13 @@ def save() -> Response | tuple[str, int]:
             message = f"Not saved: limits: {exc}"
     if not message:
         try:
+            settings_of(Machine(name, target, options, serial))
+        except SettingsError as exc:
+            message = f"Not saved: serial: {exc}"
+    if not message:
+        try:
             get_library().save_machine(
-                Machine(name, target, options, serial, form.get("notes", ""))
+                Machine(name, target, options, serial, form.get("notes", ""), limits)
             )
         except LibraryError as exc:
             message = f"Not saved: {exc}"

@@ -1,16 +1,209 @@
-"""Transfers: sending to and receiving from controls over RS-232 (the page is a shell
-until the serial transfer work lands; it lists the machines that have a port)."""
+"""Transfers: sending programs to controls and receiving them back over RS-232 (issue 8).
+
+A transfer runs in a background thread (`app.dnc.jobs`); its row in the transfer log is
+what the page shows, so a poll answered by any worker process sees its progress, and a
+cancel saved by any worker reaches it within a second. Only machines configured on the
+Machines page can be used: the port comes from the machine, never from the form.
+"""
 
 from __future__ import annotations
 
-from flask import Blueprint, render_template
+from typing import Any
 
+from flask import Blueprint, abort, redirect, render_template, request, url_for
+from jinja2_fragments.flask import render_block
+from werkzeug.wrappers import Response
+
+from app.dnc import Direction, TransferRecord, jobs, service
+from app.dnc.jobs import JobState, TransferJob
+from app.dnc.settings import SettingsError, port_of
+from app.dnc.transfer import Cancel, Progress
+from app.storage.library import Library, LibraryError, Machine, NotFound
+from app.storage.transfers import TransferLog
+from app.web.auth import current_user
 from app.web.extensions import get_library
 
 bp = Blueprint("transfers", __name__)
 
+RECEIVE_FORMATS = ("json", "events", "gcode", "tape")
+"""What a capture may be read as (the default is the machine's own target)."""
+
+
+def _machines() -> list[Machine]:
+    return [m for m in get_library().machines() if m.serial.get("port")]
+
+
+def _page(message: str = "", status: int = 200) -> tuple[str, int]:
+    library = get_library()
+    transfers = TransferLog(library).recent()
+    return (
+        render_template(
+            "transfers/index.html",
+            machines=_machines(),
+            programs=library.programs(),
+            transfers=transfers,
+            running=any(t.outcome == "running" for t in transfers),
+            formats=RECEIVE_FORMATS,
+            message=message,
+            chosen_program=request.values.get("program_id", ""),
+        ),
+        status,
+    )
+
 
 @bp.get("/transfers")
-def index() -> str:
-    machines = [m for m in get_library().machines() if m.serial.get("port")]
-    return render_template("transfers/index.html", machines=machines)
+def index() -> tuple[str, int]:
+    return _page()
+
+
+@bp.get("/transfers/log")
+def log_rows() -> str:
+    """The log table alone, for the page's poll while a transfer runs."""
+    transfers = TransferLog(get_library()).recent()
+    running = any(t.outcome == "running" for t in transfers)
+    return render_block("transfers/index.html", "log", transfers=transfers, running=running)
+
+
+def _machine(name: str) -> Machine:
+    try:
+        machine = get_library().machine(name)
+    except LibraryError:
+        raise _Refused(f"no machine named {name!r}; choose one from the Machines page") from None
+    try:
+        service.settings_of(machine)
+        port_of(machine.serial)
+    except SettingsError as exc:
+        raise _Refused(f"machine {name}: {exc}") from None
+    return machine
+
+
+class _Refused(Exception):
+    """A transfer that is not started; the message says why."""
+
+
+def _start(
+    library: Library,
+    machine: Machine,
+    direction: Direction,
+    row_id: int,
+    work: Any,
+) -> TransferJob:
+    """Run `work(log, progress, cancel)` in the background, mirrored into row `row_id`."""
+    transfer_log = TransferLog(library)
+    records: list[TransferRecord] = []
+
+    def on_change(job: TransferJob) -> None:
+        if job.state is JobState.RUNNING:
+            transfer_log.progress(row_id, job.done, job.total)
+            return
+        record = job.record or (records[-1] if records else None)
+        error = job.message if job.state is JobState.FAILED else ""
+        transfer_log.finish(row_id, record, job.state.value, error)
+
+    def run(progress: Progress, cancel: Cancel) -> TransferRecord:
+        return work(records.append, progress, cancel)  # type: ignore[no-any-return]
+
+    return jobs.start(
+        run,
+        direction=direction,
+        machine=machine.name,
+        port=port_of(machine.serial),
+        on_change=on_change,
+        remote_cancel=lambda: transfer_log.get(row_id).cancel_requested,
+    )
+
+
+@bp.post("/transfers/send")
+def send() -> Response | tuple[str, int]:
+    library = get_library()
+    try:
+        machine = _machine(request.form.get("machine", ""))
+        program_id = request.form.get("program_id", "")
+        if not program_id.isdigit():
+            raise _Refused("choose a program to send")
+        stored = library.get(int(program_id))
+    except (_Refused, NotFound) as exc:
+        return _page(f"Not sent: {exc}", 422)
+    author = current_user().username
+    program = stored.program
+    row_id = TransferLog(library).begin(
+        "send",
+        machine.name,
+        port_of(machine.serial),
+        machine.target,
+        author,
+        program_id=stored.info.id,
+        program_name=program.name,
+    )
+
+    def work(log: Any, progress: Progress, cancel: Cancel) -> TransferRecord:
+        return service.send_program(
+            program,
+            machine,
+            program_id=stored.info.id,
+            author=author,
+            log=log,
+            progress=progress,
+            cancel=cancel,
+        ).record
+
+    _start(library, machine, Direction.SEND, row_id, work)
+    return redirect(url_for("transfers.index"), 303)
+
+
+@bp.post("/transfers/receive")
+def receive() -> Response | tuple[str, int]:
+    library = get_library()
+    form_format = request.form.get("format", "")
+    try:
+        machine = _machine(request.form.get("machine", ""))
+        if form_format and form_format not in RECEIVE_FORMATS:
+            raise _Refused(
+                f"format {form_format!r} is not one of {', '.join(RECEIVE_FORMATS)} "
+                "(or empty for the machine's own)"
+            )
+    except _Refused as exc:
+        return _page(f"Not started: {exc}", 422)
+    author = current_user().username
+    name = request.form.get("name", "").strip()
+    row_id = TransferLog(library).begin(
+        "receive", machine.name, port_of(machine.serial), form_format or machine.target, author
+    )
+
+    def work(log: Any, progress: Progress, cancel: Cancel) -> TransferRecord:
+        return service.receive_program(
+            machine,
+            library,
+            format=form_format or None,
+            name=name,
+            author=author,
+            log=log,
+            progress=progress,
+            cancel=cancel,
+        ).record
+
+    _start(library, machine, Direction.RECEIVE, row_id, work)
+    return redirect(url_for("transfers.index"), 303)
+
+
+@bp.post("/transfers/<int:transfer_id>/cancel")
+def cancel(transfer_id: int) -> Response:
+    try:
+        TransferLog(get_library()).cancel(transfer_id)
+    except NotFound:
+        abort(404)
+    return redirect(url_for("transfers.index"), 303)
+
+
+@bp.get("/transfers/<int:transfer_id>/raw")
+def raw(transfer_id: int) -> Response:
+    """What a receive captured, byte for byte (for a capture that was refused)."""
+    try:
+        data = TransferLog(get_library()).raw(transfer_id)
+    except NotFound as exc:
+        abort(404, str(exc))
+    return Response(
+        data,
+        mimetype="application/octet-stream",
+        headers={"Content-Disposition": f'attachment; filename="transfer-{transfer_id}.bin"'},
+    )

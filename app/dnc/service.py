@@ -1,0 +1,249 @@
+"""What the CLI and the web call: send a program to a machine, receive one into the library.
+
+Each call reads the machine's settings, does the transfer, and hands the `TransferRecord`
+to `log` (the caller's transfer-log table) whether it ended well, was cancelled or failed —
+from the moment the port is tried; errors found before that (settings, export, data) are
+raised without a record. A receive saves nothing unless the whole capture imports: garbage,
+a partial program or an import error raise, and the library is not touched.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import serial.tools.list_ports
+
+from app.cnc import document
+from app.cnc.blocks import Program
+from app.cnc.emit.target import Export, export
+from app.dnc.record import TransferRecord
+from app.dnc.settings import PortSettings, port_of
+from app.dnc.transfer import (
+    Cancel,
+    Outcome,
+    Progress,
+    ReceiveError,
+    ReceiveResult,
+    SendError,
+    SendResult,
+    TransferError,
+    receive,
+    send,
+)
+
+Log = Callable[[TransferRecord], object]
+
+
+class MachineProfile(Protocol):
+    """What a transfer needs of a machine (app.storage.library.Machine has it)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def target(self) -> str: ...
+    @property
+    def options(self) -> dict[str, str]: ...
+    @property
+    def serial(self) -> dict[str, Any]: ...
+
+
+class ProgramSink(Protocol):
+    """Where a received program goes (app.storage.library.Library has it)."""
+
+    def create(self, program: Program, author: str = "", summary_text: str = "") -> Any: ...
+
+
+class CaptureImportError(TransferError, ValueError):
+    """A capture that came whole but is not a program in the expected format (or its
+    format cannot be imported yet). Nothing was saved."""
+
+
+def settings_of(machine: MachineProfile) -> PortSettings:
+    """The machine's port settings, its own export target unless `serial` names another.
+    Raises SettingsError."""
+    return PortSettings.from_serial(machine.serial, target=machine.target)
+
+
+def available_ports() -> list[tuple[str, str]]:
+    """The serial ports this computer has, as (path, description), for a port picker."""
+    return [(p.device, p.description) for p in sorted(serial.tools.list_ports.comports())]
+
+
+@dataclass(frozen=True)
+class Sent:
+    export: Export
+    result: SendResult
+    record: TransferRecord
+
+
+def send_program(
+    program: Program,
+    machine: MachineProfile,
+    *,
+    port: str | None = None,
+    program_id: int | None = None,
+    author: str = "",
+    log: Log | None = None,
+    progress: Progress | None = None,
+    cancel: Cancel | None = None,
+    xoff_timeout: float = 30.0,
+    write_timeout: float = 10.0,
+) -> Sent:
+    """Export `program` for `machine` (its target and options) and send it to the machine's
+    port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record.
+
+    Raises SettingsError, OptionError/ExportError (the program cannot be exported) or
+    DataError before the port is tried (no record); SendError after (record logged).
+    """
+    settings = settings_of(machine)
+    path = port or port_of(machine.serial)
+    options = machine.options if settings.target == machine.target else {}
+    made = export(program, settings.target, options)
+
+    def record(result: SendResult) -> TransferRecord:
+        entry = TransferRecord.of_send(
+            result,
+            machine=machine.name,
+            program_id=program_id,
+            program_name=program.name,
+            author=author,
+        )
+        if log is not None:
+            log(entry)
+        return entry
+
+    try:
+        result = send(
+            made.data,
+            settings,
+            path,
+            progress=progress,
+            cancel=cancel,
+            xoff_timeout=xoff_timeout,
+            write_timeout=write_timeout,
+        )
+    except SendError as exc:
+        record(exc.result)
+        raise
+    return Sent(made, result, record(result))
+
+
+@dataclass(frozen=True)
+class Received:
+    """A receive: the program and what the library returned for it (None when cancelled)."""
+
+    result: ReceiveResult
+    record: TransferRecord
+    program: Program | None
+    stored: Any
+
+
+def receive_program(
+    machine: MachineProfile,
+    library: ProgramSink,
+    *,
+    port: str | None = None,
+    format: str | None = None,
+    name: str = "",
+    author: str = "",
+    log: Log | None = None,
+    progress: Progress | None = None,
+    cancel: Cancel | None = None,
+    idle_timeout: float = 5.0,
+    first_byte_timeout: float = 120.0,
+    max_bytes: int = 1_000_000,
+) -> Received:
+    """Receive a program from `machine`'s port (or `port`), import it as `format` (default:
+    the machine's target) and add it to `library` (revision summary: where it came from).
+
+    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    port) or CaptureImportError (not a program) after, with the record logged and nothing
+    saved.
+    """
+    settings = settings_of(machine)
+    path = port or port_of(machine.serial)
+
+    def record(result: ReceiveResult, **extra: Any) -> TransferRecord:
+        entry = TransferRecord.of_receive(result, machine=machine.name, author=author, **extra)
+        if log is not None:
+            log(entry)
+        return entry
+
+    try:
+        result = receive(
+            settings,
+            path,
+            idle_timeout=idle_timeout,
+            first_byte_timeout=first_byte_timeout,
+            max_bytes=max_bytes,
+            progress=progress,
+            cancel=cancel,
+        )
+    except ReceiveError as exc:
+        record(exc.result)
+        raise
+    if result.outcome is Outcome.CANCELLED:
+        return Received(result, record(result), None, None)
+    try:
+        program = program_from_capture(result, format or settings.target, name)
+    except CaptureImportError as exc:
+        record(result, error=str(exc))
+        raise
+    stored = library.create(program, author, f"received from {machine.name} on {path}")
+    entry = record(result, program_id=getattr(stored, "id", None), program_name=program.name)
+    return Received(result, entry, program, stored)
+
+
+_Reader = Callable[[bytes, str, str], Any]
+
+
+def _importer() -> _Reader | None:
+    """`app.cnc.imports.read_program(data, name, format)` when that package has it."""
+    try:
+        module = importlib.import_module("app.cnc.imports")
+    except ImportError:
+        return None
+    reader = getattr(module, "read_program", None)
+    return reader if callable(reader) else None
+
+
+def program_from_capture(result: ReceiveResult, format: str, name: str = "") -> Program:
+    """The program in a capture: `json` through app.cnc.document, anything else through
+    app.cnc.imports.read_program(data, name, format). Raises CaptureImportError saying why
+    (with the importer's message); nothing is returned half-read."""
+    if format == "json":
+        try:
+            return document.loads(result.text)
+        except document.DocumentError as exc:
+            raise CaptureImportError(
+                f"what came is not a MillBlocks program: {exc}; nothing was saved"
+            ) from None
+    reader = _importer()
+    if reader is None:
+        raise CaptureImportError(
+            f"importing {format} is not available yet (app.cnc.imports.read_program); "
+            "nothing was saved — the raw capture is in the transfer log"
+        )
+    try:
+        found = reader(result.data, name or "received", format)
+    except ValueError as exc:
+        raise CaptureImportError(
+            f"what came is not a {format} program: {exc}; nothing was saved"
+        ) from None
+    return _program_of(found)
+
+
+def _program_of(found: Any) -> Program:
+    """The Program in what an importer returns: the program, (program, report), or an
+    object with a `.program`."""
+    if isinstance(found, Program):
+        return found
+    if isinstance(found, tuple) and found and isinstance(found[0], Program):
+        return found[0]
+    program = getattr(found, "program", None)
+    if isinstance(program, Program):
+        return program
+    raise TypeError(f"app.cnc.imports.read_program returned {type(found).__name__}")

@@ -1,0 +1,179 @@
+"""The transfer log on the library's database (issue 8): every send and receive, with its
+progress while it runs and a cancel flag any web worker can set."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime
+
+from sqlalchemy import select
+
+from app.dnc.record import TransferRecord
+from app.storage.library import Library, NotFound
+from app.storage.models import TransferRow
+
+
+@dataclass(frozen=True)
+class Transfer:
+    id: int
+    direction: str
+    machine: str
+    port: str
+    target: str
+    settings: str
+    bytes_done: int
+    bytes_total: int | None
+    started_at: datetime
+    finished_at: datetime | None
+    outcome: str
+    error: str
+    program_id: int | None
+    program_name: str
+    author: str
+    has_raw: bool
+    cancel_requested: bool
+
+    @property
+    def percent(self) -> int | None:
+        if not self.bytes_total:
+            return None
+        return min(100, self.bytes_done * 100 // self.bytes_total)
+
+
+def _view(row: TransferRow) -> Transfer:
+    return Transfer(
+        row.id,
+        row.direction,
+        row.machine,
+        row.port,
+        row.target,
+        row.settings,
+        row.bytes_done,
+        row.bytes_total,
+        row.started_at,
+        row.finished_at,
+        row.outcome,
+        row.error,
+        row.program_id,
+        row.program_name,
+        row.author,
+        row.raw is not None,
+        row.cancel_requested,
+    )
+
+
+class TransferLog:
+    def __init__(self, library: Library) -> None:
+        self.library = library
+
+    def begin(
+        self,
+        direction: str,
+        machine: str,
+        port: str,
+        target: str,
+        author: str,
+        program_id: int | None = None,
+        program_name: str = "",
+    ) -> int:
+        """A running transfer's row; its id."""
+        with self.library.session() as s:
+            row = TransferRow(
+                direction=direction,
+                machine=machine,
+                port=port,
+                target=target,
+                author=author,
+                program_id=program_id,
+                program_name=program_name,
+                started_at=datetime.now(UTC).replace(tzinfo=None, microsecond=0),
+            )
+            s.add(row)
+            s.flush()
+            return row.id
+
+    def progress(
+        self,
+        transfer_id: int,
+        done: int,
+        total: int | None,
+        outcome: str = "running",
+        error: str = "",
+    ) -> None:
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is not None:
+                row.bytes_done, row.bytes_total = done, total
+                row.outcome, row.error = outcome, error or row.error
+
+    def finish(
+        self, transfer_id: int, record: TransferRecord | None, outcome: str, error: str = ""
+    ) -> None:
+        """Copy a finished transfer's record into its row (or just the outcome)."""
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is None:
+                return
+            row.outcome = outcome
+            row.error = error
+            row.finished_at = datetime.now(UTC).replace(tzinfo=None, microsecond=0)
+            if record is not None:
+                self._copy(row, record)
+
+    def log(self, record: TransferRecord) -> int:
+        """A whole transfer's row at once (the CLI's transfers)."""
+        with self.library.session() as s:
+            row = TransferRow(
+                direction=record.direction.value, machine=record.machine, started_at=record.started
+            )
+            self._copy(row, record)
+            s.add(row)
+            s.flush()
+            return row.id
+
+    @staticmethod
+    def _copy(row: TransferRow, record: TransferRecord) -> None:
+        row.port = record.port
+        row.target = record.target
+        row.settings = record.settings
+        row.bytes_done = record.bytes_done
+        row.bytes_total = record.bytes_total
+        row.started_at = record.started
+        row.finished_at = record.finished
+        row.outcome = record.outcome.value
+        row.error = record.error or row.error
+        row.program_id = record.program_id if record.program_id is not None else row.program_id
+        row.program_name = record.program_name or row.program_name
+        row.author = record.author or row.author
+        if record.raw is not None:
+            row.raw = record.raw[:1_000_000]
+
+    def cancel(self, transfer_id: int) -> None:
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is None:
+                raise NotFound(f"no transfer {transfer_id}")
+            row.cancel_requested = True
+
+    def get(self, transfer_id: int) -> Transfer:
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is None:
+                raise NotFound(f"no transfer {transfer_id}")
+            return _view(row)
+
+    def raw(self, transfer_id: int) -> bytes:
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is None or row.raw is None:
+                raise NotFound(f"transfer {transfer_id} kept no capture")
+            return bytes(row.raw)
+
+    def recent(self, limit: int = 50) -> list[Transfer]:
+        with self.library.session() as s:
+            rows = s.scalars(
+                select(TransferRow)
+                .order_by(TransferRow.started_at.desc(), TransferRow.id.desc())
+                .limit(limit)
+            )
+            return [_view(r) for r in rows]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import shutil
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -95,12 +96,21 @@ def answer(page: Page, *values: str) -> None:
         page.keyboard.press("Enter")
 
 
+def until(page: Page, expression: str, timeout: float = 10.0) -> None:
+    """Wait until `expression` is true in the page. Polled from here with `evaluate`:
+    Playwright's own wait_for_function evals its predicate inside the page, which the
+    app's Content-Security-Policy (no unsafe-eval) rightly refuses."""
+    deadline = time.monotonic() + timeout
+    while not page.evaluate(expression):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"not true after {timeout} s: {expression}")
+        time.sleep(0.02)
+
+
 def settle(page: Page) -> None:
     """Wait until the swapped-in entry panel has the keyboard focus, as a user would
     before typing on."""
-    page.wait_for_function(
-        "document.activeElement && document.activeElement.closest('#entry') !== null"
-    )
+    until(page, "document.activeElement && document.activeElement.closest('#entry') !== null")
 
 
 def wait_for_block(page: Page, number: int) -> None:
@@ -144,9 +154,10 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
 
     # Data Block 0: offsets, current tool, climb, Z RET, then tools 1 and 2. The first
     # prompt's value is highlighted once the page is ready, so typing replaces it.
-    page.wait_for_function(
+    until(
+        page,
         "(() => { const e = document.activeElement; return e && e.name === 'x_offset' "
-        "&& e.selectionStart === 0 && e.selectionEnd === e.value.length; })()"
+        "&& e.selectionStart === 0 && e.selectionEnd === e.value.length; })()",
     )
     answer(page, "5", "3", "1", "", "0.1")
     answer(page, "0.5", "1000", "0", "0.25", "2000")

@@ -465,21 +465,39 @@ def _progress_printer(label: str) -> Callable[[int, int | None], None]:
     return progress
 
 
+def _transfer_machine(name: str | None, port: str | None, target: str) -> Machine:
+    """The library machine `name`, or else a bare line on `port`: 4800 7E1, no flow
+    control, sending `target` (the ProtoTRAK Plus defaults)."""
+    if name:
+        return _library_machine(name)
+    if not port:
+        raise click.UsageError("give --machine NAME (a library machine) or --port PATH")
+    if target not in targets():
+        raise click.UsageError(f"--to {target}: not a target; see `millblocks targets`")
+    return Machine(f"port {port}", target, {}, {"port": port})
+
+
 @main.command("send")
 @click.argument("program", metavar="PROGRAM")
-@click.option("--machine", "machine_name", required=True, help="A library machine (port, target).")
+@click.option("--machine", "machine_name", default=None, help="A library machine (port, target).")
 @click.option("--port", default=None, help="Another port than the machine's (e.g. /dev/ttyUSB1).")
+@click.option(
+    "--to", "target", default="events", show_default=True, help="What to send with --port alone."
+)
 @click.option("--author", default="", help="Who is sending (kept in the transfer log).")
-def send_command(program: str, machine_name: str, port: str | None, author: str) -> None:
-    """Send a program to a machine over RS-232 in the machine's export target.
+def send_command(
+    program: str, machine_name: str | None, port: str | None, target: str, author: str
+) -> None:
+    """Send a program over RS-232: to a library machine (its port, target and line
+    settings), or to --port PATH at 4800 7E1.
 
-    The transfer is logged in the library. Ctrl-C stops it (the control has a partial
-    program). Exit 1 when the send fails or is cancelled.
+    PROGRAM is a library id or name, or a JSON file. The transfer is logged in the library.
+    Ctrl-C stops it (the control has a partial program). Exit 1 when it is cancelled.
     """
     from app.dnc import TransferError, service
     from app.storage.transfers import TransferLog
 
-    machine = _library_machine(machine_name)
+    machine = _transfer_machine(machine_name, port, target)
     lib = library()
     program_id = None
     path = Path(program)
@@ -507,7 +525,7 @@ def send_command(program: str, machine_name: str, port: str | None, author: str)
 
 
 @main.command("receive")
-@click.option("--machine", "machine_name", required=True, help="A library machine (port, target).")
+@click.option("--machine", "machine_name", default=None, help="A library machine (port, target).")
 @click.option("--port", default=None, help="Another port than the machine's.")
 @click.option(
     "--format", "format", default=None, help="What the control sends (default: its target)."
@@ -523,7 +541,7 @@ def send_command(program: str, machine_name: str, port: str | None, author: str)
 )
 @click.option("--author", default="", help="Who is receiving (kept with the revision).")
 def receive_command(
-    machine_name: str,
+    machine_name: str | None,
     port: str | None,
     format: str | None,
     name: str,
@@ -539,7 +557,7 @@ def receive_command(
     from app.dnc import TransferError, service
     from app.storage.transfers import TransferLog
 
-    machine = _library_machine(machine_name)
+    machine = _transfer_machine(machine_name, port, "events")
     lib = library()
     _, cancelled = _interruptible()
     try:
@@ -584,7 +602,8 @@ def list_transfers(limit: int) -> None:
         error = f"  {t.error}" if t.error else ""
         click.echo(
             f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
-            f"{t.program_name or '-':<20} {t.bytes_done}{total} bytes  {t.outcome}{error}"
+            f"{t.program_name or '-':<20} {t.target} {t.settings}  "
+            f"{t.bytes_done}{total} bytes  {t.outcome}{error}"
         )
 
 

@@ -207,3 +207,24 @@ def test_unknown_machine_on_the_command_line(
     result = CliRunner().invoke(main, ["send", "1", "--machine", "Nowhere"])
     assert result.exit_code == 2
     assert "no machine named 'Nowhere'" in result.output
+
+
+def test_send_to_a_bare_port_at_the_plus_defaults(
+    tmp_path: Path, pair: SocatPair, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'cli.db'}")
+    program = demo_programs()[0]
+    path = tmp_path / "part.json"
+    path.write_text(document.dumps(program), encoding="utf-8")
+    expected = export(program, "gcode-linuxcnc").data
+    with SimulatedControl(pair.control, parity="E", buffer_size=1 << 16) as control:
+        result = CliRunner().invoke(
+            main, ["send", str(path), "--port", pair.host, "--to", "gcode-linuxcnc"]
+        )
+        assert control.wait_for(len(expected), timeout=WAIT)
+    assert result.exit_code == 0, result.output
+    assert bytes(control.memory).replace(b"\r\n", b"\n") == expected
+    assert "4800 7E1" in CliRunner().invoke(main, ["transfers"]).output
+    result = CliRunner().invoke(main, ["send", str(path)])
+    assert result.exit_code == 2
+    assert "give --machine NAME (a library machine) or --port PATH" in result.output

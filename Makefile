@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint typecheck pytest system-deps regen-golden clean bench load
+.PHONY: run test lint typecheck pytest system-deps regen-golden clean bench bench-serial load
 HOST ?= 127.0.0.1
 PORT ?= 5000
 WORKERS ?= 2
@@ -51,6 +51,11 @@ DURATION ?= 60
 bench: $(STAMP) system-deps
 	$(PY) -m pip install --quiet --no-deps -r bench/requirements.txt
 	$(PY) -m bench.run
+
+# RS-232 send of a 50 KB program against the 4800-baud line rate over a socat pty pair
+# (issue 8; ~2 min); figures in docs/rs232.md.
+bench-serial: $(STAMP) system-deps
+	$(PY) -m bench.serial_send
 
 # Load test (issue 9): 20 + 5 editors for $(DURATION) s against gunicorn, on SQLite and on a
 # throwaway PostgreSQL cluster; figures into docs/load.md.

@@ -6,10 +6,13 @@
     millblocks targets [--options]     list the export targets and their options
     millblocks send PROG --machine M   send over RS-232 in the machine's target (logged)
     millblocks receive --machine M     receive over RS-232 into the library (logged)
+    millblocks import FILE             add a file to the library, with its import report
 
-FILE is a MillBlocks JSON program. A COPY block whose operator chose EXEC or CANCEL is
-carried out as the file is read, as the control does on ENTER. Exit codes: 0 success,
-1 the program has errors, 2 the file cannot be read.
+FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code or a 1704 tape (listing or
+punch image), detected from its content; `--format` forces one. An import prints its
+report (what became what, what was not carried) on stderr. A COPY block whose operator
+chose EXEC or CANCEL is carried out as the file is read, as the control does on ENTER.
+Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 """
 
 from __future__ import annotations
@@ -44,11 +47,53 @@ class ProgramFileError(click.ClickException):
     exit_code = 2
 
 
-def load_program(path: Path) -> Program:
-    """Read a program file, carrying out executed or cancelled COPY blocks."""
+FILE_FORMATS = ("json", "events", "gcode", "tape")
+_FORMAT_KEY = "millblocks.file_format"
+
+
+def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
+    """`--format`: force what a program FILE is (default: detected from its content)."""
+    return click.option(
+        "--format",
+        type=click.Choice(FILE_FORMATS),
+        default=None,
+        expose_value=False,
+        is_eager=True,
+        callback=lambda ctx, _param, value: ctx.meta.__setitem__(_FORMAT_KEY, value),
+        help="What FILE is: json, events, gcode or tape (default: detected).",
+    )(command)
+
+
+def read_file(
+    path: Path, file_format: str | None = None, options: dict[str, str] | None = None
+) -> tuple[Program, str]:
+    """A program file of any format and the format read. A MillBlocks document has its
+    executed or cancelled COPY blocks carried out; any other format is imported and its
+    report printed on stderr. Raises ProgramFileError (exit 2) naming line and column."""
+    from app.cnc.imports import detect_format, read_program
+
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ProgramFileError(f"{path}: cannot read: {exc}") from None
+    try:
+        chosen = file_format or detect_format(data)
+    except ValueError as exc:
+        raise ProgramFileError(f"{path}: {exc}") from None
+    if chosen == "json":
+        return _load_document(path, data), chosen
+    try:
+        result = read_program(data, path.stem, chosen, options or {})
+    except ValueError as exc:
+        raise ProgramFileError(f"{path}: {exc}") from None
+    click.echo(result.text(), nl=False, err=True)
+    return result.program, chosen
+
+
+def _load_document(path: Path, data: bytes) -> Program:
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise ProgramFileError(f"{path}: cannot read: {exc}") from None
     try:
         program = document.loads(text)
@@ -59,6 +104,13 @@ def load_program(path: Path) -> Program:
     except CopyError as exc:
         click.echo(f"{path}: {exc}", err=True)
         sys.exit(1)
+
+
+def load_program(path: Path) -> Program:
+    """Read a program file in the format `--format` names, else the one detected."""
+    context = click.get_current_context(silent=True)
+    file_format = context.meta.get(_FORMAT_KEY) if context is not None else None
+    return read_file(path, file_format)[0]
 
 
 def resolve_program(reference: str) -> Program:
@@ -100,6 +152,7 @@ def main() -> None:
 
 @main.command()
 @click.argument("file", metavar="PROGRAM")
+@file_format_option
 def check(file: str) -> None:
     """List every problem in PROGRAM (a file, or a library id or name); exit 1 on errors."""
     program = resolve_program(file)
@@ -114,6 +167,7 @@ def check(file: str) -> None:
 
 @main.command()
 @click.argument("file", metavar="PROGRAM")
+@file_format_option
 @click.option(
     "--tool-change-seconds",
     type=click.FloatRange(min=0),
@@ -138,6 +192,7 @@ def _target_names() -> list[str]:
 
 @main.command()
 @click.argument("file", metavar="PROGRAM")
+@file_format_option
 @click.option(
     "--to",
     "fmt",
@@ -262,18 +317,42 @@ def list_targets(show_options: bool) -> None:
 
 @main.command("import")
 @click.argument("file", type=click.Path(path_type=Path, dir_okay=False, exists=True))
+@click.option(
+    "--format",
+    "format",
+    type=click.Choice(["json", "events", "gcode", "tape"]),
+    default=None,
+    help="What the file is (default: detected from its content).",
+)
+@click.option(
+    "--option",
+    "options",
+    multiple=True,
+    metavar="NAME=VALUE",
+    help="A reader option, e.g. units=metric or resolution=option1 for a tape.",
+)
 @click.option("--author", default="", help="Who is importing (kept with the revision).")
-def import_program(file: Path, author: str) -> None:
-    """Add a program file to the library; prints the new program's id."""
-    program = load_program(file)
-    info = library().create(program, author=author, summary_text=f"imported from {file.name}")
-    problems = validate(program)
-    print_problems(file, problems)
+def import_program(file: Path, format: str | None, options: tuple[str, ...], author: str) -> None:
+    """Add a program file to the library: a MillBlocks JSON document, ProtoTRAK Plus
+    events, G-code or a 1704 tape. Prints the import report on stderr and the new
+    program's id. Exit 2, nothing saved, when the file cannot be read."""
+    reader_options: dict[str, str] = {}
+    for option in options:
+        key, sep, value = option.partition("=")
+        if not sep:
+            raise click.UsageError(f"--option {option!r}: not NAME=VALUE")
+        reader_options[key.strip()] = value.strip()
+    program, chosen = read_file(file, format, reader_options)
+    info = library().create(
+        program, author=author, summary_text=f"imported from {file.name} ({chosen})"
+    )
+    print_problems(file, validate(program))
     click.echo(info.id)
 
 
 @main.command("setup-sheet")
 @click.argument("program", metavar="PROGRAM")
+@file_format_option
 @click.option("--to", "target", default=None, help="Include this target's report (tape length).")
 @click.option("--machine", "machine_name", default=None, help="A library machine (rates, target).")
 def setup_sheet_command(program: str, target: str | None, machine_name: str | None) -> None:
@@ -299,6 +378,7 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
 
 @main.command("mirror")
 @click.argument("program", metavar="PROGRAM")
+@file_format_option
 @click.option("--axis", type=click.Choice(["x", "y", "xy"]), required=True)
 @click.option(
     "-o",
@@ -479,6 +559,7 @@ def _transfer_machine(name: str | None, port: str | None, target: str) -> Machin
 
 @main.command("send")
 @click.argument("program", metavar="PROGRAM")
+@file_format_option
 @click.option("--machine", "machine_name", default=None, help="A library machine (port, target).")
 @click.option("--port", default=None, help="Another port than the machine's (e.g. /dev/ttyUSB1).")
 @click.option(
@@ -576,6 +657,8 @@ def receive_command(
     except (TransferError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(got.record.summary(), err=True)
+    if got.report:
+        click.echo(got.report, nl=False, err=True)
     if got.stored is None or got.program is None:
         sys.exit(1)
     click.echo(got.stored.id)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -149,3 +150,44 @@ def test_history_diff_restore_commands(tmp_path: Path, monkeypatch: pytest.Monke
     assert out.strip() == "block 1 DRILL: Z DN -0.5 → -0.6"
     code, out, _ = run("restore-version", program_id, "1")
     assert code == 0 and out.strip() == f"program {program_id}: version 1 restored as v3"
+
+
+def test_import_reads_events_gcode_and_tape_with_a_report(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'lib.db'}")
+    seed = Path(__file__).parent / "imports" / "seed003-2.2.5.cnc"
+    code, out, err = run("import", str(seed))
+    assert code == 0, err
+    assert out.strip().isdigit()
+    assert err.startswith("Import report (events):\n")
+    code, out, _ = run("history", out.strip())
+    assert "imported from seed003-2.2.5.cnc (events)" in out
+    # The same file forced as G-code is refused, naming where, and nothing is saved.
+    before = run("list")[1]
+    code, out, err = run("import", str(seed), "--format", "gcode")
+    assert code == 2 and out == ""
+    assert re.search(r"seed003-2\.2\.5\.cnc: line \d+, column \d+: ", err), err
+    assert run("list")[1] == before
+    code, _, err = run("import", str(seed), "--option", "units")
+    assert code == 2 and "--option 'units': not NAME=VALUE" in err
+
+
+def test_every_file_command_takes_every_format(tmp_path: Path) -> None:
+    """check/time/export read events, G-code and tapes too, detected or forced."""
+    code, out, err = run(
+        "export", str(GOLDEN / "drill-single" / "program.json"), "--to", "gcode-linuxcnc"
+    )
+    assert code == 0, err
+    ngc = tmp_path / "part.ngc"
+    ngc.write_text(out)
+    code, out, err = run("check", str(ngc))
+    assert code == 0, err
+    assert err.startswith("Import report (gcode):\n")
+    code, out, err = run("export", str(ngc), "--to", "events")
+    assert code == 0 and out.startswith("%"), err
+    code, out, err = run("time", "--format", "gcode", str(ngc))
+    assert code == 0 and "total" in out.lower(), err
+    code, out, err = run("check", "--format", "events", str(ngc))
+    assert code == 2 and out == ""
+    assert err.startswith(f"Error: {ngc}: ")

@@ -228,3 +228,28 @@ def test_send_to_a_bare_port_at_the_plus_defaults(
     result = CliRunner().invoke(main, ["send", str(path)])
     assert result.exit_code == 2
     assert "give --machine NAME (a library machine) or --port PATH" in result.output
+
+
+def test_a_received_events_program_is_imported_with_its_report(
+    app: Flask, client: FlaskClient, pair: SocatPair
+) -> None:
+    library = library_of(app)
+    sample = demo_programs()[0]
+    events = export(sample, "events").data
+    library.save_machine(Machine("Plus", "events", {}, {"port": pair.host}))
+    with SimulatedControl(pair.control, parity="E") as control:
+        control.send_back(events, delay=0.5)
+        client.post(
+            "/transfers/receive",
+            data={"csrf_token": token(client), "machine": "Plus", "name": "From the floor"},
+        )
+        done = settled(TransferLog(library))
+    assert done.outcome == "ok", done.error
+    assert done.report.startswith("Import report (events):\n")
+    received = library.get(done.program_id or 0)
+    assert received.info.name == "From the floor"
+    # Events carry no spindle speeds: the report says what the programmer must supply.
+    assert len(received.program.blocks) >= len(sample.blocks) // 2
+    assert "needs" in done.report
+    page = client.get("/transfers").get_data(as_text=True)
+    assert "<summary>import report</summary>" in page

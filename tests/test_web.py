@@ -329,3 +329,44 @@ def test_editing_a_block_that_does_not_exist_is_404(client: FlaskClient) -> None
         assert response.status_code == 404
     with client.application.app_context():
         assert get_library().get(2).info.version == 1
+
+
+def test_importing_an_events_file_shows_its_report(client: FlaskClient, app: Flask) -> None:
+    import io
+
+    seed = (Path(__file__).parent / "imports" / "seed003-2.2.5.cnc").read_bytes()
+    csrf = token(client)
+    response = client.post(
+        "/programs/import",
+        data={"csrf_token": csrf, "file": (io.BytesIO(seed), "seed003-2.2.5.cnc"), "format": ""},
+        content_type="multipart/form-data",
+    )
+    page = response.get_data(as_text=True)
+    assert response.status_code == 201, page
+    assert "was read as <strong>events</strong>" in page and "Import report" in page
+    assert re.search(r"<td>line \d+", page) and "line 1 line 1" not in page
+    with app.app_context():
+        [new] = [p for p in get_library().programs() if p.name.lower().startswith("seed")]
+    assert f'href="/programs/{new.id}"' in page
+
+
+def test_a_file_that_cannot_be_imported_saves_nothing(client: FlaskClient, app: Flask) -> None:
+    import io
+
+    with app.app_context():
+        before = get_library().programs()
+    csrf = token(client)
+    response = client.post(
+        "/programs/import",
+        data={
+            "csrf_token": csrf,
+            "file": (io.BytesIO(b"N1 G01 X1 Y\n"), "bad.ngc"),
+            "format": "gcode",
+        },
+        content_type="multipart/form-data",
+    )
+    page = response.get_data(as_text=True)
+    assert response.status_code == 422
+    assert "Not imported: bad.ngc: line 1, column " in page
+    with app.app_context():
+        assert get_library().programs() == before

@@ -23,7 +23,8 @@ class Direction(enum.Enum):
 class TransferRecord:
     """One transfer. `bytes_done` are wire bytes sent (leader and trailer included) or
     bytes received (raw, leader included); `bytes_total` is the send's total (None for a
-    receive). Datetimes are UTC without a time zone. `raw` is the receive's capture."""
+    receive). Datetimes are UTC without a time zone. `raw` is the receive's capture;
+    `report` the import report of what it became (empty for a MillBlocks document)."""
 
     direction: Direction
     machine: str
@@ -40,6 +41,7 @@ class TransferRecord:
     program_name: str = ""
     author: str = ""
     raw: bytes | None = None
+    report: str = ""
 
     @classmethod
     def of_send(
@@ -78,6 +80,7 @@ class TransferRecord:
         program_name: str = "",
         author: str = "",
         error: str | None = None,
+        report: str = "",
     ) -> TransferRecord:
         """`error` overrides the result's (an import that failed after a good receive)."""
         failed = error is not None or result.outcome is Outcome.FAILED
@@ -97,6 +100,7 @@ class TransferRecord:
             program_name=program_name,
             author=author,
             raw=result.raw,
+            report=report,
         )
 
     @property

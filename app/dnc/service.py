@@ -9,16 +9,16 @@ a partial program or an import error raise, and the library is not touched.
 
 from __future__ import annotations
 
-import importlib
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
 import serial.tools.list_ports
 
-from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export
+from app.cnc.imports import read_program
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -139,6 +139,7 @@ class Received:
     record: TransferRecord
     program: Program | None
     stored: Any
+    report: str = ""
 
 
 def receive_program(
@@ -188,62 +189,43 @@ def receive_program(
     if result.outcome is Outcome.CANCELLED:
         return Received(result, record(result), None, None)
     try:
-        program = program_from_capture(result, format or settings.target, name)
+        program, report = import_capture(result, format or settings.target, name)
     except CaptureImportError as exc:
         record(result, error=str(exc))
         raise
+    if name:
+        program = dataclasses.replace(program, name=name)
     stored = library.create(program, author, f"received from {machine.name} on {path}")
-    entry = record(result, program_id=getattr(stored, "id", None), program_name=program.name)
-    return Received(result, entry, program, stored)
+    entry = record(
+        result, program_id=getattr(stored, "id", None), program_name=program.name, report=report
+    )
+    return Received(result, entry, program, stored, report)
 
 
-_Reader = Callable[[bytes, str, str], Any]
-
-
-def _importer() -> _Reader | None:
-    """`app.cnc.imports.read_program(data, name, format)` when that package has it."""
-    try:
-        module = importlib.import_module("app.cnc.imports")
-    except ImportError:
-        return None
-    reader = getattr(module, "read_program", None)
-    return reader if callable(reader) else None
+def import_format(target: str) -> str:
+    """The import format of what a machine whose export target is `target` sends back:
+    `gcode-*` → gcode, `tape-*` and `punch-*` → tape, else the target's own name."""
+    if target.startswith("gcode"):
+        return "gcode"
+    if target.startswith(("tape", "punch")):
+        return "tape"
+    return target
 
 
 def program_from_capture(result: ReceiveResult, format: str, name: str = "") -> Program:
-    """The program in a capture: `json` through app.cnc.document, anything else through
-    app.cnc.imports.read_program(data, name, format). Raises CaptureImportError saying why
-    (with the importer's message); nothing is returned half-read."""
-    if format == "json":
-        try:
-            return document.loads(result.text)
-        except document.DocumentError as exc:
-            raise CaptureImportError(
-                f"what came is not a MillBlocks program: {exc}; nothing was saved"
-            ) from None
-    reader = _importer()
-    if reader is None:
-        raise CaptureImportError(
-            f"importing {format} is not available yet (app.cnc.imports.read_program); "
-            "nothing was saved — the raw capture is in the transfer log"
-        )
+    """The program in a capture (see `import_capture`)."""
+    return import_capture(result, format, name)[0]
+
+
+def import_capture(result: ReceiveResult, format: str, name: str = "") -> tuple[Program, str]:
+    """The program in a capture and its import report (empty for a MillBlocks document),
+    read by app.cnc.imports as `format` (an import format or an export target's name).
+    Raises CaptureImportError saying why, with the importer's line and column; nothing is
+    returned half-read."""
+    chosen = import_format(format)
     try:
-        found = reader(result.data, name or "received", format)
+        found = read_program(result.data, name or "received", chosen)
     except ValueError as exc:
-        raise CaptureImportError(
-            f"what came is not a {format} program: {exc}; nothing was saved"
-        ) from None
-    return _program_of(found)
-
-
-def _program_of(found: Any) -> Program:
-    """The Program in what an importer returns: the program, (program, report), or an
-    object with a `.program`."""
-    if isinstance(found, Program):
-        return found
-    if isinstance(found, tuple) and found and isinstance(found[0], Program):
-        return found[0]
-    program = getattr(found, "program", None)
-    if isinstance(program, Program):
-        return program
-    raise TypeError(f"app.cnc.imports.read_program returned {type(found).__name__}")
+        what = "a MillBlocks program" if chosen == "json" else f"a {chosen} program"
+        raise CaptureImportError(f"what came is not {what}: {exc}; nothing was saved") from None
+    return found.program, ("" if found.format == "json" else found.text())

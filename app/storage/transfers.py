@@ -27,6 +27,7 @@ class Transfer:
     finished_at: datetime | None
     outcome: str
     error: str
+    report: str
     program_id: int | None
     program_name: str
     author: str
@@ -54,6 +55,7 @@ def _view(row: TransferRow) -> Transfer:
         row.finished_at,
         row.outcome,
         row.error,
+        row.report,
         row.program_id,
         row.program_name,
         row.author,
@@ -142,6 +144,7 @@ class TransferLog:
         row.finished_at = record.finished
         row.outcome = record.outcome.value
         row.error = record.error or row.error
+        row.report = record.report or row.report
         row.program_id = record.program_id if record.program_id is not None else row.program_id
         row.program_name = record.program_name or row.program_name
         row.author = record.author or row.author

@@ -6,7 +6,6 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
-from app.cnc import document
 from app.cnc.blocks import DataBlock0, Program, Tool
 from app.cnc.units import Units
 from app.storage.library import SORTS, LibraryError
@@ -58,28 +57,44 @@ def create() -> Response | tuple[str, int]:
     return redirect(url_for("editor.data_block_0", program_id=info.id))
 
 
+IMPORT_FORMATS = ("json", "events", "gcode", "tape")
+
+
 @bp.post("/programs/import")
 def upload() -> Response | tuple[str, int]:
+    """Import a MillBlocks document, ProtoTRAK Plus events, G-code or a 1704 tape; show the
+    import report. A file that cannot be read is refused whole, naming the line and column."""
+    from app.cnc.imports import read_program
+
     file = request.files.get("file")
     if file is None or not file.filename:
         return _index_with("Not imported: choose a file to import.", 422)
-    data = file.read()
+    chosen = request.form.get("format", "")
+    if chosen and chosen not in IMPORT_FORMATS:
+        return _index_with(
+            f"Not imported: format {chosen!r} is not one of {', '.join(IMPORT_FORMATS)}", 422
+        )
+    options = {
+        key: request.form[key]
+        for key in ("units", "resolution")
+        if request.form.get(key) and chosen in ("", "tape")
+    }
+    stem = file.filename.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     try:
-        program = read_upload(data, file.filename)
+        result = read_program(file.read(), stem, chosen or None, options)
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)
     info = get_library().create(
-        program, author=current_user(), summary_text=f"imported from {file.filename}"
+        result.program,
+        author=current_user(),
+        summary_text=f"imported from {file.filename} ({result.format})",
     )
-    return redirect(url_for("editor.edit", program_id=info.id))
-
-
-def read_upload(data: bytes, name: str) -> Program:
-    """A program from uploaded bytes (a MillBlocks JSON document)."""
-    try:
-        return document.loads(data.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise ValueError("not a MillBlocks program document (not UTF-8 text)") from None
+    if result.format == "json":
+        return redirect(url_for("editor.edit", program_id=info.id))
+    notes = sorted(result.report, key=lambda n: -1 if n.line is None else n.line)
+    return render_template(
+        "library/imported.html", info=info, result=result, notes=notes, filename=file.filename
+    ), 201
 
 
 @bp.post("/programs/<int:program_id>/duplicate")

@@ -1,0 +1,449 @@
+"""Operations to data blocks: the one place imported numbers are rounded.
+
+Every length becomes a block value at the programming resolution (0.001 in / 0.01 mm,
+rounded half-even) in the unit the file used at that line; every value that moves is
+reported once per source line. Blocks are absolute (ABS) — an imported program does not
+depend on the control's reference-point rules — except inside a LOOP, where the control
+requires INC: those values are differences of already rounded points, so they add up
+exactly. An arc's centre is rounded to whichever neighbouring grid point keeps its two
+radii closest (the divot validation would otherwise warn about).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field, replace
+from decimal import Decimal
+
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    BoltCircle,
+    Coolant,
+    DataBlock0,
+    Direction,
+    Hole,
+    MillArc,
+    MillingMode,
+    MillLine,
+    MillQcir,
+    Mode,
+    Pos,
+    Program,
+    Rep,
+    Tool,
+)
+from app.cnc.geometry import bolt_circle_points
+from app.cnc.imports.common import (
+    XY,
+    Notes,
+    decimal_of,
+    feed_decimal,
+    feed_nm,
+    quantize_nm,
+    resolution_nm,
+    show,
+    show_feed,
+)
+from app.cnc.imports.ops import (
+    BoltOp,
+    HoleOpR,
+    HoleSpec,
+    LoopOp,
+    MillOp,
+    Op,
+    PosOp,
+    RoutineOp,
+    all_lines,
+    anchor,
+    tool_of,
+)
+from app.cnc.imports.steps import ToolData
+from app.cnc.mill import qcir_centre
+from app.cnc.units import Units, format_decimal
+
+
+@dataclass
+class SetUp:
+    """What Data Block 0 is made from."""
+
+    units: Units
+    offsets: XY | None = None
+    initial_tool: int = 0
+    milling: MillingMode | None = None
+    z_retract: int | None = None  # nm
+    rpms: dict[int, int | None] = field(default_factory=dict)
+    tools: dict[int, ToolData] = field(default_factory=dict)
+    coolants: dict[int, str] = field(default_factory=dict)
+
+
+class Builder:
+    """Writes operations as blocks, in order, keeping the control's reference point."""
+
+    def __init__(self, notes: Notes) -> None:
+        self.notes = notes
+        self.blocks: list[Block] = []
+        self.ref: XY = (0, 0)
+        self.rounding: dict[int, list[str]] = {}
+
+    # -- numbers --------------------------------------------------------------------------
+
+    def length(self, nm: int, units: Units, line: int, label: str) -> int:
+        """`nm` rounded to the resolution (still nm); a change is logged for `line`."""
+        rounded = quantize_nm(nm, units)
+        if rounded != nm:
+            self.log(
+                line, f"{label} {show(nm, units, 6)} → {format_decimal(decimal_of(rounded, units))}"
+            )
+        return rounded
+
+    def log(self, line: int, text: str) -> None:
+        entries = self.rounding.setdefault(line, [])
+        if text not in entries:
+            entries.append(text)
+
+    def point(self, at: XY, units: Units, line: int) -> XY:
+        return (self.length(at[0], units, line, "X"), self.length(at[1], units, line, "Y"))
+
+    def place(
+        self, raw: XY, units: Units, inc: bool, line: int, origin: XY | None = None
+    ) -> tuple[Decimal, Decimal, XY]:
+        """Block X/Y for the point `raw` and where the control then is: absolute values
+        rounded, or (incremental) the move from `origin` (the reference point by default)
+        rounded — so that rounding never adds up along a LOOP's incremental blocks."""
+        if not inc:
+            at = self.point(raw, units, line)
+            return decimal_of(at[0], units), decimal_of(at[1], units), at
+        ox, oy = self.ref if origin is None else origin
+        dx = self.length(raw[0] - ox, units, line, "X increment")
+        dy = self.length(raw[1] - oy, units, line, "Y increment")
+        return decimal_of(dx, units), decimal_of(dy, units), (ox + dx, oy + dy)
+
+    def z(self, nm: int | None, units: Units, line: int, label: str) -> Decimal | None:
+        if nm is None:
+            return None
+        return decimal_of(self.length(nm, units, line, label), units)
+
+    def feed(self, nm_per_min: int, units: Units, line: int, label: str) -> Decimal:
+        value = feed_decimal(nm_per_min, units)
+        if feed_nm(value, units) != nm_per_min:
+            self.log(line, f"{label} {show_feed(nm_per_min, units)} → {format_decimal(value)}")
+        return value
+
+    def flush_rounding(self) -> None:
+        for line in sorted(self.rounding):
+            self.notes.rounded(
+                line,
+                "to the programming resolution (0.001 in / 0.01 mm, feeds 0.1 ipm / 2 mm/min): "
+                + ", ".join(self.rounding[line]),
+            )
+
+    # -- operations -------------------------------------------------------------------------
+
+    def run(self, ops: list[Op]) -> None:
+        for op in ops:
+            self.op(op, inc=False, loop=False)
+
+    def op(self, op: Op, inc: bool, loop: bool) -> None:
+        first = len(self.blocks) + 1
+        if isinstance(op, LoopOp):
+            self.loop(op, inc)
+            return
+        if isinstance(op, PosOp):
+            self.pos(op, inc, loop)
+        elif isinstance(op, HoleOpR):
+            self.hole(op.spec, op.at, op.lines[0], inc, loop, op.stop)
+        elif isinstance(op, MillOp):
+            self.mill(op, inc, loop)
+        elif isinstance(op, BoltOp):
+            self.bolt(op, inc, loop)
+        else:
+            self.routine(op, inc, loop)
+        if op.message:
+            self.blocks[first - 1] = replace(self.blocks[first - 1], message=op.message)
+        last = len(self.blocks)
+        if not loop and not inc:
+            titles = ", ".join(b.title for b in self.blocks[first - 1 :])
+            where = f"block {first}" if first == last else f"blocks {first}-{last}"
+            self.notes.became(op.lines[0], f"{self.notes.span(op.lines)} → {where}: {titles}")
+
+    def pos(self, op: PosOp, inc: bool, loop: bool) -> None:
+        x, y, at = self.place(op.at, op.units, inc, op.lines[0])
+        mode = Mode.INC if inc else Mode.ABS
+        self.blocks.append(
+            Pos(x=x, y=y, tool=op.tool, mode=mode, units=op.units, loop=loop, stop=op.stop)
+        )
+        self.ref = at
+
+    def hole(
+        self,
+        spec: HoleSpec,
+        at_nm: XY,
+        line: int,
+        inc: bool,
+        loop: bool,
+        stop: bool,
+    ) -> Hole:
+        u = spec.units
+        x, y, at = self.place(at_nm, u, inc, line)
+        block = Hole(
+            op=spec.op,
+            x=x,
+            y=y,
+            z_up=self.z(spec.z_up, u, line, "Z UP"),
+            z_dn=self.z(spec.z_dn, u, line, "Z DN"),
+            feed_z=None if spec.feed_z is None else self.feed(spec.feed_z, u, line, "FEEDR Z"),
+            pecks=spec.pecks,
+            tool=spec.tool,
+            mode=Mode.INC if inc else Mode.ABS,
+            units=u,
+            loop=loop,
+            stop=stop,
+        )
+        self.blocks.append(block)
+        self.ref = at
+        return block
+
+    def mill(self, op: MillOp, inc: bool, loop: bool) -> None:
+        u = op.spec.units
+        drill = self.hole(op.spec, op.at, op.lines[0], inc, loop, stop=False)
+        self.blocks[-1] = replace(drill, comp=op.comp)
+        here = self.ref
+        mode = Mode.INC if inc else Mode.ABS
+        tool = op.spec.tool
+        for e in op.elements:
+            x, y, end = self.place(e.end, u, inc, e.line, here)
+            z_dn = self.z(e.z_dn, u, e.line, "Z DN")
+            feed = self.feed(e.feed, u, e.line, "FEEDR XY")
+            if e.centre is None:
+                self.blocks.append(
+                    MillLine(x=x, y=y, z_dn=z_dn, feed_xy=feed, tool=tool, mode=mode, units=u)
+                )
+            else:
+                grid = here if inc else (0, 0)
+                centre = self.arc_centre(here, end, e.centre, u, e.line, grid)
+                direction = Direction.CW if e.clockwise else Direction.CCW
+                if _quarter(here, end, centre, direction):
+                    # A quarter circle on axis-parallel centre lines: the control's QCIR.
+                    self.blocks.append(
+                        MillQcir(
+                            direction=direction,
+                            x=x,
+                            y=y,
+                            z_dn=z_dn,
+                            feed_xy=feed,
+                            tool=tool,
+                            mode=mode,
+                            units=u,
+                        )
+                    )
+                    here = end
+                    continue
+                cx, cy, _ = self.place(centre, u, inc, e.line, here)
+                self.blocks.append(
+                    MillArc(
+                        direction=direction,
+                        x=cx,
+                        y=cy,
+                        z_dn=z_dn,
+                        feed_xy=feed,
+                        tool=tool,
+                        mode=mode,
+                        units=u,
+                    )
+                )
+                self.blocks.append(ArcEnd(x=x, y=y, mode=mode, units=u))
+            here = end
+        if op.stop:
+            self.blocks[-1] = replace(self.blocks[-1], stop=True)
+        self.ref = here
+
+    def arc_centre(
+        self, start: XY, end: XY, centre: XY, units: Units, line: int, grid: XY = (0, 0)
+    ) -> XY:
+        """The point of the grid (steps of the resolution from `grid`) next to `centre`
+        that keeps the arc's two radii closest."""
+        step = resolution_nm(units)
+        cx, cy = centre[0] - grid[0], centre[1] - grid[1]
+        if cx % step == 0 and cy % step == 0:
+            return centre
+        xs = sorted({grid[0] + (cx // step) * step, grid[0] - ((-cx) // step) * step})
+        ys = sorted({grid[1] + (cy // step) * step, grid[1] - ((-cy) // step) * step})
+
+        def badness(c: XY) -> tuple[float, float]:
+            mismatch = abs(math.dist(start, c) - math.dist(end, c))
+            return (round(mismatch), math.dist(c, centre))
+
+        best = min(itertools.product(xs, ys), key=badness)
+        self.log(
+            line,
+            f"arc centre X{show(centre[0], units, 6)} Y{show(centre[1], units, 6)} → "
+            f"X{show(best[0], units)} Y{show(best[1], units)}",
+        )
+        return best
+
+    def bolt(self, op: BoltOp, inc: bool, loop: bool) -> None:
+        u = op.radius_units or op.spec.units
+        self.hole(op.spec, op.centre, op.lines[0], inc, loop, stop=False)
+        centre = self.ref
+        radius = self.length(op.radius, u, op.lines[0], "RAD")
+        self.blocks.append(
+            BoltCircle(
+                op=op.spec.op,
+                holes=op.holes,
+                angle=op.angle,
+                radius=decimal_of(radius, u),
+                mode=Mode.INC if inc else Mode.ABS,
+                units=u,
+                stop=op.stop,
+            )
+        )
+        self.ref = bolt_circle_points(centre, radius, op.holes, op.angle)[-1]
+
+    def routine(self, op: RoutineOp, inc: bool, loop: bool) -> None:
+        self.hole(op.spec, op.at, op.lines[0], inc, loop, stop=False)
+        at = self.ref
+        mode = Mode.INC if inc else Mode.ABS
+        self.blocks.append(replace(op.block, mode=mode, stop=op.stop))
+        self.ref = at
+
+    def loop(self, op: LoopOp, inc: bool) -> None:
+        first = len(self.blocks) + 1
+        units = _units_of(op)
+        lines = all_lines(op)
+        if op.head_added:
+            x, y, at = self.place(anchor(op), units, True, lines[0])
+            tool = tool_of(op)
+            self.blocks.append(Pos(x=x, y=y, tool=tool, mode=Mode.INC, units=units, loop=True))
+            self.ref = at
+            self.notes.assumed(
+                lines[0],
+                "a LOOP POS at the pattern's first point carries the outer LOOP (the inner "
+                "LOOP block cannot carry both); it moves to where the pattern starts",
+            )
+        for k, body in enumerate(op.body):
+            self.op(body, inc=True, loop=(k == 0 and not op.head_added))
+        end = self.ref
+        step = (
+            quantize_nm(op.step[0], units),
+            quantize_nm(op.step[1], units),
+        )
+        self.blocks.append(
+            Rep(
+                x=decimal_of(step[0], units),
+                y=decimal_of(step[1], units),
+                nx=op.nx,
+                ny=op.ny,
+                units=units,
+            )
+        )
+        self.ref = (end[0] + op.nx * step[0], end[1] + op.ny * step[1])
+        if not inc:
+            last = len(self.blocks)
+            self.notes.became(
+                lines[0],
+                f"{self.notes.span(lines)}: the same operations {op.nx + 1} × {op.ny + 1} "
+                f"times, shifted X{show(step[0], units)} Y{show(step[1], units)} → blocks "
+                f"{first}-{last}: "
+                "LOOP … REP",
+            )
+
+
+def _quarter(start: XY, end: XY, centre: XY, direction: Direction) -> bool:
+    """True when the arc is the control's QCIR: |dx| = |dy| ≠ 0 and the centre on the
+    corner of its axis-parallel centre lines that turns the arc's way (seed 001 Fig. 3-4)."""
+    dx, dy = end[0] - start[0], end[1] - start[1]
+    if dx == 0 or abs(dx) != abs(dy):
+        return False
+    return qcir_centre(start, end, direction) == centre
+
+
+def _units_of(op: Op) -> Units:
+    if isinstance(op, LoopOp):
+        return _units_of(op.body[0])
+    if isinstance(op, PosOp):
+        return op.units
+    return op.spec.units
+
+
+def used_tools(ops: list[Op]) -> list[tuple[int, int]]:
+    """(tool, first line) of every tool the operations use, in order of first use."""
+    seen: dict[int, int] = {}
+    for op in ops:
+        if isinstance(op, LoopOp):
+            for tool, line in used_tools(op.body):
+                seen.setdefault(tool, line)
+        else:
+            seen.setdefault(tool_of(op), op.lines[0])
+    return list(seen.items())
+
+
+def block0(setup: SetUp, ops: list[Op], notes: Notes) -> DataBlock0:
+    """Data Block 0 from what the file said: offsets, tools, Z RET, climb/conventional."""
+    units = setup.units
+    used = used_tools(ops)
+    numbers = sorted({t for t, _ in used} | set(setup.tools) | set(setup.rpms))
+    if setup.initial_tool:
+        numbers = sorted({*numbers, setup.initial_tool})
+    tools: list[Tool] = []
+    first_use = dict(used)
+    for number in numbers:
+        data = setup.tools.get(number, ToolData())
+        rpm = setup.rpms.get(number)
+        diameter = None
+        if data.diameter is not None:
+            diameter = decimal_of(quantize_nm(data.diameter, units), units)
+            if quantize_nm(data.diameter, units) != data.diameter:
+                notes.rounded(
+                    None,
+                    f"tool {number} diameter {show(data.diameter, units, 6)} → "
+                    f"{format_decimal(diameter)}",
+                )
+        tcal = None
+        if data.tcal is not None:
+            tcal = decimal_of(quantize_nm(data.tcal, units), units)
+        coolant = Coolant(setup.coolants.get(number, "off"))
+        tools.append(Tool(number=number, diameter=diameter, rpm=rpm, tcal=tcal, coolant=coolant))
+        if number in first_use and rpm is None:
+            notes.needs(
+                first_use[number],
+                f"tool {number} has no spindle speed in the file: enter its RPM in Data Block "
+                "0 (the control stops when a tool without RPM is used)",
+            )
+        if not 1 <= number <= 24:
+            notes.needs(first_use.get(number), f"tool {number}: the control has tools 1 to 24")
+    offsets = setup.offsets or (0, 0)
+    x_off = decimal_of(quantize_nm(offsets[0], units), units)
+    y_off = decimal_of(quantize_nm(offsets[1], units), units)
+    z_retract = Decimal("0.1") if units is Units.INCH else Decimal("2.54")
+    if setup.z_retract is not None:
+        z_retract = decimal_of(quantize_nm(setup.z_retract, units), units)
+    initial = setup.initial_tool if 0 <= setup.initial_tool <= 24 else 0
+    return DataBlock0(
+        x_offset=x_off,
+        y_offset=y_off,
+        current_tool=initial,
+        milling=setup.milling or MillingMode.CLIMB,
+        z_retract=z_retract,
+        tools=tuple(tools),
+    )
+
+
+def make_program(
+    name: str,
+    part_number: str,
+    units: Units,
+    notes_text: str,
+    db0: DataBlock0,
+    blocks: list[Block],
+) -> Program:
+    part = part_number if part_number.isdigit() and len(part_number) <= 8 else ""
+    return Program(
+        name=name or "imported",
+        part_number=part,
+        units=units,
+        notes=notes_text,
+        block0=db0,
+        blocks=tuple(blocks),
+    )

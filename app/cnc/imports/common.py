@@ -1,0 +1,204 @@
+"""What every importer shares: the report, the one failure, and exact number handling.
+
+An import either returns a whole program with a report of what became what, or raises
+`ImportFailure` naming the line and column (or tape block and row) of the first thing it
+could not read. Nothing half-imported is ever returned (DESIGN.md §6).
+
+Lengths inside the importers are integer nanometres, as in the tool path (DESIGN.md §2);
+they become block values (`Decimal`, in a block's units) once, at the end, rounded to the
+programming resolution (0.001 in / 0.01 mm) — and every value that moves is reported.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field, replace
+from decimal import Decimal
+from fractions import Fraction
+
+from app.cnc import limits
+from app.cnc.units import Units
+
+XY = tuple[int, int]
+
+# A number with more digits than this is not a dimension anyone meant (and would make
+# floats overflow): the importers refuse it, naming where it is.
+MAX_DIGITS = 12
+# Dimensions beyond ±10 000 in (254 m) are refused as unreadable; the control's own limits
+# (99.999 in) are left to validation, so a program with a bad value can still be corrected.
+MAX_ABS_NM = 10_000 * 25_400_000
+
+
+class NoteKind(enum.Enum):
+    """What an import note tells the user."""
+
+    BECAME = "became"  # what part of the file became which blocks
+    IGNORED = "ignored"  # not understood or not carried; nothing was made of it
+    ASSUMED = "assumed"  # a reading chosen where the file is silent or the manual vague
+    ROUNDED = "rounded"  # a value moved to the program's resolution
+    NEEDS = "needs"  # something the user must supply before the program runs
+
+
+@dataclass(frozen=True)
+class ImportNote:
+    """One line of an import report. `line` is the file's line (a tape's block for a punch
+    image), None for the whole file; `where` says it in words (`line 12`, `block N003`).
+    `also` lists further lines the same note applies to (a G81 on every hole line)."""
+
+    kind: NoteKind
+    line: int | None
+    message: str
+    where: str = ""
+    also: tuple[int, ...] = ()
+    unit: str = "line"  # what `line` and `also` count: "line" or "tape block"
+
+    def __str__(self) -> str:
+        place = self.where or ("file" if self.line is None else f"line {self.line}")
+        more = ""
+        if self.also:
+            shown = ", ".join(str(n) for n in self.also[:8])
+            rest = len(self.also) - 8
+            more = f" (also {self.unit}s {shown}{f' and {rest} more' if rest > 0 else ''})"
+        return f"{self.kind.value}: {place}: {self.message}{more}"
+
+
+class ImportFailure(ValueError):
+    """A file that cannot be imported. The message names where: `line 3, column 16: …`,
+    or for a tape `block 4 (N004), row 57: …`. Nothing is returned when this is raised."""
+
+    def __init__(self, where: str, message: str, line: int | None = None) -> None:
+        super().__init__(f"{where}: {message}" if where else message)
+        self.where = where
+        self.message = message
+        self.line = line
+
+
+def failure(line: int, column: int | None, message: str) -> ImportFailure:
+    """An ImportFailure at a text position (1-based line and column)."""
+    where = f"line {line}" if column is None else f"line {line}, column {column}"
+    return ImportFailure(where, message, line)
+
+
+@dataclass
+class Notes:
+    """The report under construction; `where` turns a line number into words. The same
+    message of the same kind on several lines is one note listing them."""
+
+    entries: list[ImportNote] = field(default_factory=list)
+    labels: dict[int, str] = field(default_factory=dict)
+    unit: str = "line"  # what a number in the report counts: "line", or "tape block"
+    _index: dict[tuple[NoteKind, str], int] = field(default_factory=dict)
+    _also: dict[int, list[int]] = field(default_factory=dict)
+
+    def where(self, line: int | None) -> str:
+        if line is None:
+            return "file"
+        return self.labels.get(line, f"{self.unit} {line}")
+
+    def span(self, lines: list[int] | tuple[int, ...]) -> str:
+        """`line 4` or `lines 4-9` (`tape blocks 4-9`) for a group of source lines."""
+        if not lines:
+            return "file"
+        low, high = min(lines), max(lines)
+        return f"{self.unit} {low}" if low == high else f"{self.unit}s {low}-{high}"
+
+    def add(self, kind: NoteKind, line: int | None, message: str) -> None:
+        key = (kind, message)
+        index = self._index.get(key)
+        if index is None:
+            self._index[key] = len(self.entries)
+            self.entries.append(ImportNote(kind, line, message, self.where(line)))
+            return
+        first = self.entries[index].line
+        extra = self._also.setdefault(index, [])
+        if line is not None and line != first and line not in extra[-1:]:
+            extra.append(line)
+
+    def report(self) -> list[ImportNote]:
+        """The notes, each with the other lines it applies to."""
+        return [
+            replace(note, also=tuple(self._also.get(k, ())), unit=self.unit)
+            for k, note in enumerate(self.entries)
+        ]
+
+    def became(self, line: int | None, message: str) -> None:
+        self.add(NoteKind.BECAME, line, message)
+
+    def ignored(self, line: int | None, message: str) -> None:
+        self.add(NoteKind.IGNORED, line, message)
+
+    def assumed(self, line: int | None, message: str) -> None:
+        self.add(NoteKind.ASSUMED, line, message)
+
+    def rounded(self, line: int | None, message: str) -> None:
+        self.add(NoteKind.ROUNDED, line, message)
+
+    def needs(self, line: int | None, message: str) -> None:
+        self.add(NoteKind.NEEDS, line, message)
+
+
+# -- numbers --------------------------------------------------------------------------------
+
+
+def resolution_nm(units: Units) -> int:
+    """The programming resolution in nm: 0.001 in = 25 400 nm, 0.01 mm = 10 000 nm."""
+    return 25_400 if units is Units.INCH else 10_000
+
+
+def quantize_nm(nm: int, units: Units) -> int:
+    """`nm` rounded (half-even) to the programming resolution of `units`, still in nm."""
+    step = resolution_nm(units)
+    return round(Fraction(nm, step)) * step
+
+
+def decimal_of(nm: int, units: Units) -> Decimal:
+    """A length at the programming resolution as the block value (`Decimal`, e.g. 1.125).
+
+    `nm` must already be a multiple of the resolution (see `quantize_nm`).
+    """
+    step = resolution_nm(units)
+    places = 3 if units is Units.INCH else 2
+    return (Decimal(nm // step) if nm % step == 0 else Decimal(nm) / step).scaleb(-places)
+
+
+def show(nm: int | float, units: Units, places: int | None = None) -> str:
+    """A length for messages, in `units` with the unit's dump places (`0.7955 in`)."""
+    digits = units.dump_places if places is None else places
+    value = Decimal(round(nm)) / Decimal(units.nm)
+    text = f"{value.quantize(Decimal(1).scaleb(-digits)):f}"
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return f"{'0' if text in ('-0', '') else text} {units.symbol}"
+
+
+def feed_decimal(nm_per_min: int, units: Units) -> Decimal:
+    """A feed in nm/min as a FEEDR value: ipm to 0.1, mm/min in steps of 2 (seed 001)."""
+    step = limits.FEED_XY[units].step
+    value = Fraction(nm_per_min, units.nm) / Fraction(step)
+    return Decimal(round(value)) * step
+
+
+def feed_nm(value: Decimal, units: Units) -> int:
+    """A FEEDR value back in nm/min."""
+    return int((value * units.nm).to_integral_value())
+
+
+def show_feed(nm_per_min: int, units: Units) -> str:
+    value = Fraction(nm_per_min, units.nm)
+    text = f"{Decimal(value.numerator) / Decimal(value.denominator):.4f}".rstrip("0")
+    return f"{text.rstrip('.') or '0'} {units.feed_symbol}"
+
+
+def is_text(data: bytes) -> bool:
+    """True when `data` is UTF-8 text without NULs or control characters (but tab/CR/LF):
+    a file to read as text, not a punch image."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        return False
+    return not any(ord(ch) < 32 and ch not in "\t\r\n\f" for ch in text)
+
+
+def check_digits(digits: str) -> bool:
+    """True when a number's digits are few enough to be a real value (MAX_DIGITS)."""
+    return len(digits.lstrip("0")) <= MAX_DIGITS

@@ -1,0 +1,88 @@
+"""Motion (from G-code or a tape) to a program: segment, recognise, build.
+
+DESIGN.md §1: "G-code / 1704 tape → Toolpath → Program (recognised blocks)". The parsers
+give the motion (`steps.py`); `segment` finds operations in it, `recognise` proposes the
+blocks that make the same motion, `build` writes them, rounded once, with Data Block 0.
+"""
+
+from __future__ import annotations
+
+from app.cnc.blocks import Program
+from app.cnc.imports.build import Builder, SetUp, block0, make_program
+from app.cnc.imports.common import show
+from app.cnc.imports.recognise import (
+    RoutineFinder,
+    find_bolt_circles,
+    find_loops,
+    fit_units,
+    merge_pecks,
+)
+from app.cnc.imports.segment import segment
+from app.cnc.imports.steps import Parsed
+
+
+def program_from_motion(parsed: Parsed) -> Program:
+    """The program whose blocks make the motion of `parsed`; the report goes to its notes.
+
+    Raises ImportFailure (from segmenting) for motion no block can make.
+    """
+    notes = parsed.notes
+    found = segment(parsed)
+    tol = parsed.tolerance
+    ops = merge_pecks(found.ops, tol)
+    diameters = {n: t.diameter for n, t in parsed.tools.items() if t.diameter}
+    rpms = {n: use.rpm for n, use in found.tools.items()}
+    finder = RoutineFinder(diameters, rpms, tol, notes)
+    ops = finder.run(ops)
+    ops = find_bolt_circles(ops, tol, notes)
+    ops = fit_units(ops, tol, notes)
+    ops = find_loops(ops, tol, notes)
+    builder = Builder(notes)
+    builder.run(ops)
+    builder.flush_rounding()
+    units = parsed.units
+    z_retract = None
+    for line, z_up, height in found.retracts:
+        value = height - max(z_up, 0)
+        if value < 0:
+            continue
+        if z_retract is None:
+            z_retract = value
+            notes.became(
+                line,
+                f"the tool retracts to {show(height, units)} above tool zero: Z RET "
+                f"{show(value, units)} (Data Block 0)",
+            )
+        elif abs(value - z_retract) > tol:
+            notes.assumed(
+                line,
+                f"the tool retracts {show(value, units)} above Z UP here; Data Block 0 holds "
+                f"one Z RET ({show(z_retract, units)}): Z moves between operations differ",
+            )
+    for number, use in sorted(found.tools.items()):
+        for line, rpm in use.other_speeds:
+            notes.assumed(
+                line,
+                f"tool {number} also runs at {rpm} rpm; Data Block 0 keeps one speed per tool "
+                f"({use.rpm} rpm from line {use.line})",
+            )
+    setup = SetUp(
+        units=units,
+        offsets=parsed.offsets,
+        initial_tool=parsed.initial_tool,
+        milling=finder.milling,
+        z_retract=z_retract,
+        rpms=rpms,
+        tools=parsed.tools,
+        coolants={n: use.coolant for n, use in found.tools.items() if use.coolant},
+    )
+    db0 = block0(setup, ops, notes)
+    source = {"gcode": "G-code", "tape": "1704 tape"}.get(parsed.format, parsed.format)
+    return make_program(
+        parsed.name,
+        parsed.part_number,
+        units,
+        f"imported from {source}",
+        db0,
+        builder.blocks,
+    )

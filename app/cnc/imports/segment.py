@@ -1,0 +1,732 @@
+"""From the motion of a G-code file or tape to operations (positions, holes, mill sequences).
+
+The data-block control works in operations: position at the retract height, go down to
+Z UP at rapid, feed to Z DN, then either come back up (a hole) or cut in XY at that depth
+(a mill sequence started by a DRILL). This module finds those operations in the motion:
+
+- a **hole** is a feed straight down from where the tool arrived at rapid, perhaps in pecks
+  (back up to where feeding began and down again to the level just reached), perhaps a
+  dwell, then: rapid up (DRILL), feed back up to Z UP (BORE), or spindle reversed, feed up,
+  spindle restored (TAP); a canned cycle (G73, G81-G89) is one hole each;
+- a **mill sequence** is such a plunge followed by cuts in XY at depth (depth changes are
+  feeds in Z between cuts), ending where the tool leaves (rapid, or feed up to Z UP);
+- a **position** is a rapid in XY that no operation uses;
+- in a **2-axis** program (Z never changes) the quill is moved by hand: a position where the
+  program stops (M0) is a hole, feeds in XY are a mill sequence, and the stops for the
+  quill around it are part of it.
+
+What cannot be one of these is an error naming the line: a cut in XY in a 3-axis program
+where the tool never fed down (it reached that height at rapid), a ramp (X/Y and Z fed
+together). What is not carried (coolant, stray dwells, spindle stops) is reported.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from decimal import Decimal
+
+from app.cnc import limits
+from app.cnc.blocks import Comp, HoleOp
+from app.cnc.imports.common import (
+    XY,
+    ImportFailure,
+    Notes,
+    show,
+    show_feed,
+)
+from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, LoopOp, MillOp, Op, PosOp
+from app.cnc.imports.steps import (
+    Arc,
+    Coolant,
+    Cycle,
+    Dwell,
+    End,
+    Feed,
+    Message,
+    Parsed,
+    QuillCycle,
+    Rapid,
+    SpindleOff,
+    SpindleOn,
+    Step,
+    Stop,
+    ToolChange,
+)
+from app.cnc.interpret import peck_levels
+from app.cnc.units import Units, to_nm
+
+DWELL = limits.HOLE_DWELL_SECONDS
+TAP_OUT = {Units.INCH: to_nm(limits.TAP_FEED_OUT_INCH, Units.INCH), Units.MM: 7_620_000}
+
+# Canned cycles and the hole operation each becomes, with what differs (seed 003's tables,
+# seed 000 §4's fixed-cycle sequences). Dwell and feed-out details are reported per hole.
+CYCLE_OPS: dict[int, tuple[HoleOp, str]] = {
+    73: (HoleOp.DRILL, "G73 breaks chips with short retracts; MillBlocks pecks back to Z UP"),
+    74: (HoleOp.TAP, "G74 taps left-hand; MillBlocks' TAP reverses the tool's own direction"),
+    76: (HoleOp.BORE, "G76 fine boring orients the spindle and shifts; MillBlocks feeds out"),
+    81: (HoleOp.DRILL, "G81 does not dwell; a MillBlocks DRILL dwells 0.8 s at the bottom"),
+    82: (HoleOp.DRILL, ""),
+    83: (HoleOp.DRILL, ""),
+    84: (HoleOp.TAP, "G84 feeds out to R; a MillBlocks TAP feeds out to Z UP + 0.3 in"),
+    85: (HoleOp.BORE, "G85 does not dwell; a MillBlocks BORE dwells 0.8 s at the bottom"),
+    86: (HoleOp.BORE, "G86 stops the spindle and rapids out; a MillBlocks BORE feeds out"),
+    87: (HoleOp.BORE, "G87 (back boring / manual out) is not a MillBlocks cycle: read as BORE"),
+    88: (HoleOp.BORE, "G88 stops for a manual retract; a MillBlocks BORE feeds out"),
+    89: (HoleOp.BORE, ""),
+}
+
+
+@dataclass
+class ToolUse:
+    """What the motion says about one tool: its first spindle speed (signed) and where, and
+    the coolant it runs with."""
+
+    rpm: int | None = None
+    line: int | None = None
+    other_speeds: list[tuple[int, int]] = field(default_factory=list)
+    coolant: str | None = None
+
+
+@dataclass
+class Segmented:
+    """The operations and what the set-up needs from them."""
+
+    ops: list[Op]
+    tools: dict[int, ToolUse]
+    initial_tool: int
+    retracts: list[tuple[int, int, int]]  # (line, Z UP, height the tool rapids up to)
+    two_axis: bool
+
+
+def segment(parsed: Parsed) -> Segmented:
+    """The operations of a parsed file. Raises ImportFailure naming the line at fault."""
+    return _Segmenter(parsed).run()
+
+
+def is_two_axis(steps: list[Step]) -> bool:
+    """True when Z never changes and there are no canned cycles: the quill is by hand."""
+    heights: set[int] = set()
+    for step in steps:
+        if isinstance(step, Cycle):
+            return False
+        if isinstance(step, Rapid | Feed | Arc) and step.z is not None:
+            heights.add(step.z)
+    return len(heights) <= 1
+
+
+def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
+    """True when steps[j:] go on cutting in XY from `at` (after more feeds in Z there): a
+    feed in Z before it is a depth change, not the end of the sequence."""
+    for step in steps[j:]:
+        if isinstance(step, Feed) and (step.x, step.y) == at:
+            continue
+        return isinstance(step, Feed | Arc)
+    return False
+
+
+@dataclass
+class _Pending:
+    """A rapid in XY no operation has used yet."""
+
+    line: int
+    at: XY
+    units: Units
+    tool: int
+
+
+class _Segmenter:
+    def __init__(self, parsed: Parsed) -> None:
+        self.parsed = parsed
+        self.steps = parsed.steps
+        self.notes: Notes = parsed.notes
+        self.units = parsed.units
+        self.tol = parsed.tolerance
+        self.x, self.y = 0, 0
+        self.z: int | None = None
+        self.tool = parsed.initial_tool
+        self.spindle_cw: bool | None = None
+        self.tools: dict[int, ToolUse] = {}
+        self.ops: list[Op] = []
+        self.pending: _Pending | None = None
+        self.retracts: list[tuple[int, int, int]] = []
+        self.awaiting_retract: tuple[int, int] | None = None  # (line, Z UP) of the last op
+        self.spindle_off_line: int | None = None
+        self.quill_cycle = False
+        self.quill_stop: int | None = None  # 2-axis: a stop that lowers the quill
+        self.two_axis = is_two_axis(self.steps)
+        self.ended = False
+        self.message: tuple[int, str] | None = None
+
+    # -- the walk --------------------------------------------------------------------------
+
+    def run(self) -> Segmented:
+        if self.two_axis and any(isinstance(s, Feed | Arc) for s in self.steps):
+            self.notes.assumed(
+                None,
+                "Z never changes: a 2-axis program, the quill moved by hand (a position where "
+                "the program stops is a hole; cuts in XY are mill sequences)",
+            )
+        i = 0
+        n = len(self.steps)
+        while i < n:
+            step = self.steps[i]
+            if self.ended:
+                self.notes.ignored(step.line, "after the end of the program: not imported")
+                i += 1
+                continue
+            if not isinstance(step, SpindleOff | Stop | ToolChange | End | Coolant | Message):
+                self.note_spindle_off()
+            if isinstance(step, Rapid):
+                self.rapid(step)
+            elif isinstance(step, Feed | Arc):
+                i = self.feed(i)
+                continue
+            elif isinstance(step, Cycle):
+                self.cycle(step)
+            elif isinstance(step, Dwell):
+                self.notes.ignored(
+                    step.line,
+                    f"dwell {step.seconds} s outside a hole: MillBlocks has no dwell block",
+                )
+            elif isinstance(step, SpindleOn):
+                self.spindle(step)
+            elif isinstance(step, SpindleOff):
+                self.spindle_cw = None
+                self.spindle_off_line = step.line
+            elif isinstance(step, ToolChange):
+                self.spindle_off_line = None
+                self.change_tool(step)
+            elif isinstance(step, Stop):
+                i = self.stop(i)
+                continue
+            elif isinstance(step, QuillCycle):
+                self.quill_cycle = step.active
+            elif isinstance(step, Coolant):
+                self.coolant(step)
+            elif isinstance(step, Message):
+                if self.message is not None:
+                    self.notes.ignored(
+                        self.message[0],
+                        f"message {self.message[1]!r}: another follows before any block; "
+                        "not imported",
+                    )
+                self.message = (step.line, step.text)
+            else:
+                self.spindle_off_line = None
+                self.flush_pending()
+                self.ended = True
+            i += 1
+        self.flush_pending()
+        if self.message is not None:
+            self.notes.ignored(
+                self.message[0], f"message {self.message[1]!r} with no block after it"
+            )
+        return Segmented(
+            self.ops, self.tools, self.parsed.initial_tool, self.retracts, self.two_axis
+        )
+
+    def note_spindle_off(self) -> None:
+        if self.spindle_off_line is not None:
+            self.notes.ignored(
+                self.spindle_off_line,
+                "spindle stop (M5) with motion after it: MillBlocks stops the spindle only "
+                "for a STOP, a tool change and at the end",
+            )
+            self.spindle_off_line = None
+
+    # -- positioning -------------------------------------------------------------------------
+
+    def rapid(self, step: Rapid) -> None:
+        moved = (step.x, step.y) != (self.x, self.y)
+        if step.z is not None and self.z is not None and step.z > self.z and not moved:
+            self.record_retract(step.line, step.z)
+        if moved:
+            self.awaiting_retract = None
+            self.flush_pending()
+            self.pending = _Pending(step.line, (step.x, step.y), step.units, self.tool)
+        self.x, self.y = step.x, step.y
+        if step.z is not None:
+            self.z = step.z
+        if moved and self.quill_cycle:
+            # Seed 000 §4: G99 makes a complete down-up quill cycle at every position.
+            self.pending = None
+            spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, step.units)
+            self.add(HoleOpR([step.line], (step.x, step.y), spec))
+            self.notes.became(step.line, "G99 quill cycle at this position: a 2-axis DRILL")
+
+    def record_retract(self, line: int, height: int) -> None:
+        if self.awaiting_retract is not None:
+            op_line, z_up = self.awaiting_retract
+            self.retracts.append((op_line, z_up, height))
+            self.awaiting_retract = None
+
+    def flush_pending(self) -> None:
+        """A rapid to a point where nothing happened: the tool went there, a POS block."""
+        if self.pending is None:
+            return
+        pending, self.pending = self.pending, None
+        tool = pending.tool or self.next_tool()
+        self.add(PosOp([pending.line], pending.at, tool, pending.units))
+
+    def take_pending(self, at: XY) -> list[int]:
+        """The lines of the rapid that brought the tool to `at` (now used by an operation)."""
+        if self.pending is None:
+            return []
+        if self.pending.at != at:
+            self.flush_pending()
+            return []
+        line = self.pending.line
+        self.pending = None
+        return [line]
+
+    def next_tool(self) -> int:
+        """The first tool the program uses, for a position before any tool is named."""
+        for step in self.steps:
+            if isinstance(step, ToolChange):
+                return step.tool
+        return 1
+
+    def add(self, op: Op) -> None:
+        if self.message is not None and not isinstance(op, LoopOp):
+            op.message = self.message[1]
+            self.notes.became(
+                self.message[0], f"message {op.message!r}: the MESSAGE of the next block"
+            )
+            self.message = None
+        self.ops.append(op)
+        self.spindle_off_line = None
+
+    # -- cuts --------------------------------------------------------------------------------
+
+    def feed(self, i: int) -> int:
+        step = self.steps[i]
+        assert isinstance(step, Feed | Arc)
+        same_xy = isinstance(step, Feed) and (step.x, step.y) == (self.x, self.y)
+        if same_xy:
+            if step.z is not None and self.z is None and not self.two_axis:
+                raise ImportFailure(
+                    self.notes.where(step.line),
+                    "a feed in Z before the file gives any height: where it starts (Z UP) "
+                    "is not known",
+                    step.line,
+                )
+            if step.z is None or self.z is None or step.z == self.z:
+                return i + 1  # a feed that goes nowhere
+            if step.z < self.z:
+                if self.two_axis:
+                    return i + 1
+                return self.plunge(i)
+            self.notes.ignored(
+                step.line,
+                f"feed up to Z{show(step.z, step.units)} with no cut: MillBlocks retracts at rapid",
+            )
+            self.record_retract(step.line, step.z)
+            self.z = step.z
+            return i + 1
+        if self.two_axis:
+            return self.two_axis_sequence(i)
+        if isinstance(step, Feed) and step.z is not None and self.z is not None and step.z < self.z:
+            raise ImportFailure(
+                self.notes.where(step.line),
+                "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
+                "down, then cuts in XY at one depth",
+                step.line,
+            )
+        z = "" if self.z is None else f" at Z{show(self.z, self.units)}"
+        raise ImportFailure(
+            self.notes.where(step.line),
+            f"a cut in XY{z}, but the tool has not fed down to it (it got there at rapid): "
+            "MillBlocks mills only after a DRILL feeds to depth — is the plunge (a G1 Z "
+            "move down) missing?",
+            step.line,
+        )
+
+    def plunge(self, i: int) -> int:
+        """A feed straight down at (x, y): a hole, or the DRILL of a mill sequence."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Feed) and first.z is not None and self.z is not None
+        at = (self.x, self.y)
+        lines = self.take_pending(at)
+        z_up = self.z
+        feed_z = first.feed
+        levels: list[int] = []
+        j = i
+        n = len(steps)
+        while True:
+            # Feed down (perhaps in several moves) to the next level.
+            bottom = self.z
+            while j < n:
+                s = steps[j]
+                if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
+                    if s.feed != feed_z:
+                        self.notes.ignored(
+                            s.line,
+                            f"feed {show_feed(s.feed, s.units)} in Z differs from "
+                            f"{show_feed(feed_z, s.units)}: MillBlocks has one FEEDR Z",
+                        )
+                    bottom = s.z
+                    lines.append(s.line)
+                    j += 1
+                    continue
+                break
+            levels.append(bottom)
+            self.z = bottom
+            # A peck: rapid back up to where feeding began, down to the level, feed on.
+            up = steps[j] if j < n else None
+            down = steps[j + 1] if j + 1 < n else None
+            deeper = steps[j + 2] if j + 2 < n else None
+            if (
+                isinstance(up, Rapid)
+                and (up.x, up.y) == at
+                and up.z is not None
+                and up.z > bottom
+                and isinstance(down, Rapid)
+                and (down.x, down.y) == at
+                and down.z is not None
+                and bottom <= down.z < up.z
+                and isinstance(deeper, Feed)
+                and (deeper.x, deeper.y) == at
+                and deeper.z is not None
+                and deeper.z < down.z
+            ):
+                if abs(up.z - z_up) > self.tol or abs(down.z - bottom) > self.tol:
+                    self.notes.assumed(
+                        up.line,
+                        f"peck retract to Z{show(up.z, up.units)} and back to "
+                        f"Z{show(down.z, down.units)}: MillBlocks pecks back to Z UP "
+                        "and down to the level just reached",
+                    )
+                lines += [up.line, down.line]
+                self.z = down.z
+                j += 2
+                continue
+            break
+        spec_units = first.units
+        dwell: Decimal | None = None
+        nxt = steps[j] if j < n else None
+        if isinstance(nxt, Dwell):
+            dwell = nxt.seconds
+            lines.append(nxt.line)
+            j += 1
+            nxt = steps[j] if j < n else None
+        bottom = levels[-1]
+        # A mill sequence: cuts in XY at this depth (perhaps after a depth change).
+        if _cut_follows(steps, j, at):
+            if dwell is not None:
+                self.notes.ignored(
+                    lines[-1], f"dwell {dwell} s before milling: MillBlocks does not dwell there"
+                )
+            return self.mill_sequence(j, at, lines, z_up, levels, feed_z, spec_units)
+        op = HoleOp.DRILL
+        how = ""
+        # TAP: spindle reversed at the bottom, feed up, spindle restored.
+        if (
+            isinstance(nxt, SpindleOn)
+            and self.spindle_cw is not None
+            and nxt.clockwise != self.spindle_cw
+        ):
+            out = steps[j + 1] if j + 1 < n else None
+            if isinstance(out, Feed) and (out.x, out.y) == at and out.z is not None:
+                op = HoleOp.TAP
+                lines += [nxt.line, out.line]
+                expected = z_up + TAP_OUT[spec_units]
+                if abs(out.z - expected) > self.tol:
+                    how = (
+                        f"the tap feeds out to Z{show(out.z, out.units)}; a MillBlocks TAP "
+                        f"feeds out to Z UP + {show(TAP_OUT[spec_units], spec_units)}"
+                    )
+                self.z = out.z
+                j += 2
+                restore = steps[j] if j < n else None
+                if isinstance(restore, SpindleOn) and restore.clockwise == self.spindle_cw:
+                    lines.append(restore.line)
+                    j += 1
+                else:
+                    self.spindle_cw = not self.spindle_cw
+                if len(levels) > 1:
+                    how = "pecks in a tap: MillBlocks taps in one feed"
+                if dwell is not None:
+                    how = f"dwell {dwell} s at the bottom of a tap: MillBlocks does not dwell"
+        # BORE: feed back up to Z UP.
+        elif (
+            isinstance(nxt, Feed) and (nxt.x, nxt.y) == at and nxt.z is not None and nxt.z > bottom
+        ):
+            op = HoleOp.BORE
+            lines.append(nxt.line)
+            self.z = nxt.z
+            j += 1
+            if abs(nxt.z - z_up) > self.tol:
+                how = (
+                    f"the bore feeds out to Z{show(nxt.z, nxt.units)}; a MillBlocks BORE feeds "
+                    f"out to Z UP (Z{show(z_up, spec_units)})"
+                )
+            elif dwell is None:
+                how = "no dwell at the bottom; a MillBlocks BORE dwells 0.8 s"
+            elif dwell != DWELL:
+                how = f"dwell {dwell} s; a MillBlocks BORE dwells 0.8 s"
+            if len(levels) > 1:
+                how = "pecks in a bore: MillBlocks bores in one feed"
+        elif dwell is None:
+            how = "no dwell at the bottom; a MillBlocks DRILL dwells 0.8 s"
+        elif dwell != DWELL:
+            how = f"dwell {dwell} s; a MillBlocks DRILL dwells 0.8 s"
+        pecks = 1
+        if op is HoleOp.DRILL and len(levels) > 1:
+            pecks = len(levels)
+            even = peck_levels(z_up, bottom, pecks)
+            if any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
+                shown = ", ".join(f"Z{show(z, spec_units)}" for z in levels)
+                self.notes.assumed(
+                    lines[0],
+                    f"peck levels {shown}: a MillBlocks DRILL with {pecks} pecks spaces them "
+                    "evenly from Z UP to Z DN",
+                )
+        spec = HoleSpec(op, z_up, bottom, feed_z, pecks, self.tool, spec_units)
+        self.add(HoleOpR(sorted(set(lines)), at, spec))
+        if how:
+            self.notes.assumed(lines[0], how)
+        self.awaiting_retract = (lines[0], z_up)
+        return j
+
+    def mill_sequence(
+        self,
+        j: int,
+        at: XY,
+        lines: list[int],
+        z_up: int,
+        levels: list[int],
+        feed_z: int,
+        units: Units,
+    ) -> int:
+        steps = self.steps
+        n = len(steps)
+        bottom = levels[-1]
+        if len(levels) > 1:
+            self.notes.assumed(
+                lines[0],
+                "pecks before the first cut of a mill sequence: read as one plunge to the "
+                "last level",
+            )
+        depth = bottom
+        new_depth: int | None = None
+        elements: list[Element] = []
+        comps: set[str] = set()
+        x, y = at
+        while j < n:
+            s = steps[j]
+            if isinstance(s, Feed):
+                if (s.x, s.y) == (x, y):
+                    if s.z is None or s.z == depth:
+                        j += 1
+                        continue
+                    if not _cut_follows(steps, j + 1, (x, y)):
+                        break  # a feed in Z with no cut after it: the sequence ends
+                    if s.feed != feed_z:
+                        self.notes.ignored(
+                            s.line,
+                            f"depth change at {show_feed(s.feed, s.units)}: MillBlocks "
+                            "feeds to a new Z DN at the DRILL's FEEDR Z",
+                        )
+                    depth = s.z
+                    new_depth = s.z
+                    j += 1
+                    continue
+                if s.z is not None and s.z != depth:
+                    raise ImportFailure(
+                        self.notes.where(s.line),
+                        "X/Y and Z fed together (a ramp): MillBlocks cuts in XY at one "
+                        "depth at a time",
+                        s.line,
+                    )
+                elements.append(Element(s.line, (s.x, s.y), None, False, new_depth, s.feed))
+                comps.add(s.comp)
+            elif isinstance(s, Arc):
+                if s.z is not None and s.z != depth:
+                    raise ImportFailure(
+                        self.notes.where(s.line),
+                        "an arc at another depth (a helix): MillBlocks cuts arcs at one depth",
+                        s.line,
+                    )
+                elements.append(
+                    Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, new_depth, s.feed)
+                )
+                comps.add(s.comp)
+            else:
+                break
+            new_depth = None
+            x, y = s.x, s.y
+            j += 1
+        comp = Comp.NONE
+        if comps - {""}:
+            if len(comps) > 1:
+                first = next(e.line for e in elements)
+                raise ImportFailure(
+                    self.notes.where(first),
+                    "cutter compensation changes inside a mill sequence: MillBlocks sets it "
+                    "once, on the DRILL that starts the sequence",
+                    first,
+                )
+            comp = Comp.LEFT if comps == {"left"} else Comp.RIGHT
+            self.notes.assumed(
+                lines[0],
+                f"cutter compensation {comp.value} (G4{1 if comp is Comp.LEFT else 2}): the "
+                f"programmed contour with CUT {'LT' if comp is Comp.LEFT else 'RT'}; "
+                "MillBlocks offsets the tool itself and goes down one tool radius to the side "
+                "of the first cut",
+            )
+        self.z = depth
+        self.x, self.y = x, y
+        spec = HoleSpec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
+        all_lines = sorted({*lines, *(e.line for e in elements)})
+        self.add(MillOp(all_lines, at, spec, comp, elements))
+        self.awaiting_retract = (lines[0], z_up)
+        return j
+
+    def two_axis_sequence(self, i: int) -> int:
+        """Cuts in XY in a 2-axis program: a DRILL without depths and its mill blocks."""
+        steps = self.steps
+        n = len(steps)
+        at = (self.x, self.y)
+        lines = self.take_pending(at)
+        first = steps[i]
+        assert isinstance(first, Feed | Arc)
+        stops = 0
+        if self.quill_stop is not None:
+            lines.append(self.quill_stop)
+            stops += 1
+            self.quill_stop = None
+        elements: list[Element] = []
+        x, y = at
+        j = i
+        while j < n:
+            s = steps[j]
+            if isinstance(s, Feed):
+                if (s.x, s.y) != (x, y):
+                    elements.append(Element(s.line, (s.x, s.y), None, False, None, s.feed))
+            elif isinstance(s, Arc):
+                elements.append(
+                    Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, None, s.feed)
+                )
+            else:
+                break
+            x, y = s.x, s.y
+            j += 1
+        nxt = steps[j] if j < n else None
+        if isinstance(nxt, Stop) and not nxt.optional:
+            lines.append(nxt.line)
+            stops += 1
+            j += 1
+        if stops < 2:
+            self.notes.assumed(
+                first.line,
+                "a 2-axis mill sequence: MillBlocks stops for the operator to lower the quill "
+                "before it and to raise it after it"
+                + ("" if stops else " (the file has no stops there)"),
+            )
+        self.x, self.y = x, y
+        spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, first.units)
+        all_lines = sorted({*lines, *(e.line for e in elements)})
+        self.add(MillOp(all_lines, at, spec, Comp.NONE, elements, quill_stops=stops))
+        return j
+
+    # -- canned cycles -----------------------------------------------------------------------
+
+    def cycle(self, step: Cycle) -> None:
+        at = (step.x, step.y)
+        lines = [*self.take_pending(at), step.line]
+        op, how = CYCLE_OPS.get(step.code, (HoleOp.DRILL, ""))
+        pecks = 1
+        if step.peck > 0 and op is HoleOp.DRILL:
+            depth = step.r - step.bottom
+            pecks = max(1, math.ceil(depth / step.peck))
+            if pecks > limits.MAX_PECKS:
+                how = f"{pecks} pecks of {show(step.peck, step.units)}: more than 40"
+            elif depth % step.peck:
+                how = (
+                    f"pecks of Q{show(step.peck, step.units)} do not divide the depth "
+                    f"{show(depth, step.units)}: {pecks} even pecks"
+                )
+            elif step.code == 83:
+                how = (
+                    "G83 backs off a little above each level; MillBlocks rapids back to the "
+                    "level just cut"
+                )
+        if step.code in (82, 89) and step.dwell != DWELL:
+            dwell = "no dwell" if step.dwell is None else f"dwell {step.dwell} s"
+            how = f"G{step.code} with {dwell}; MillBlocks dwells 0.8 s at the bottom"
+        spec = HoleSpec(op, step.r, step.bottom, step.feed, pecks, self.tool, step.units)
+        self.add(HoleOpR(lines, at, spec))
+        if how:
+            self.notes.assumed(step.line, how)
+        self.retracts.append((step.line, step.r, step.clear))
+        self.awaiting_retract = None
+        self.x, self.y, self.z = step.x, step.y, step.clear
+
+    # -- spindle, tools, stops ---------------------------------------------------------------
+
+    def spindle(self, step: SpindleOn) -> None:
+        self.spindle_cw = step.clockwise
+        if step.rpm is None or self.tool == 0:
+            return
+        signed = step.rpm if step.clockwise else -step.rpm
+        use = self.tools.setdefault(self.tool, ToolUse())
+        if use.rpm is None:
+            use.rpm, use.line = signed, step.line
+        elif use.rpm != signed:
+            use.other_speeds.append((step.line, signed))
+
+    def coolant(self, step: Coolant) -> None:
+        if step.mode == "off":
+            return
+        if self.tool == 0:
+            self.notes.ignored(step.line, "coolant on before any tool: not imported")
+            return
+        use = self.tools.setdefault(self.tool, ToolUse())
+        if use.coolant is None:
+            use.coolant = step.mode
+            self.notes.became(step.line, f"{step.mode} coolant: tool {self.tool}'s COOLANT")
+        elif use.coolant != step.mode:
+            self.notes.ignored(
+                step.line,
+                f"{step.mode} coolant for tool {self.tool}, which has {use.coolant} already: "
+                "Data Block 0 keeps one coolant per tool",
+            )
+
+    def change_tool(self, step: ToolChange) -> None:
+        self.tool = step.tool
+        self.tools.setdefault(step.tool, ToolUse())
+        self.spindle_cw = None
+
+    def stop(self, i: int) -> int:
+        step = self.steps[i]
+        assert isinstance(step, Stop)
+        after_spindle_stop = self.spindle_off_line is not None
+        self.spindle_off_line = None
+        if self.two_axis and self.pending is not None and not after_spindle_stop:
+            # The quill: a hole by hand here, or the quill lowered for the cuts that follow.
+            nxt = next((s for s in self.steps[i + 1 :] if not isinstance(s, Dwell)), None)
+            if isinstance(nxt, Feed | Arc) and (nxt.x, nxt.y) != self.pending.at:
+                self.quill_stop = step.line
+                return i + 1
+            pending, self.pending = self.pending, None
+            spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, pending.units)
+            self.add(HoleOpR([pending.line, step.line], pending.at, spec))
+            if step.optional:
+                self.notes.assumed(step.line, "M1 (optional stop) read as the stop for the quill")
+            return i + 1
+        self.flush_pending()
+        last = self.ops[-1] if self.ops else None
+        if last is None or isinstance(last, LoopOp):
+            self.notes.ignored(step.line, "a stop before any block: nothing to put STOP on")
+            return i + 1
+        last.stop = True
+        self.notes.became(step.line, f"STOP on the block before ({self.notes.span(last.lines)})")
+        if step.optional:
+            self.notes.assumed(step.line, "M1 (optional stop) read as STOP")
+        if not after_spindle_stop:
+            self.notes.assumed(
+                step.line, "the spindle keeps turning in the file; at a STOP MillBlocks stops it"
+            )
+        return i + 1

@@ -1,0 +1,412 @@
+"""G-code import (RS274/NGC and Fanuc, seed 003's tables), held to seed 003's samples.
+
+§2.2.6.1 (a standard Fanuc 6 post) and §2.2.6.2 (the same post "modified" for the
+ProtoTRAK) are the sample part of §2.2.6: two tools drill five holes each on a 1.125 in
+radius, a third cuts a circular pocket and a contour. The expected programs are worked out
+by hand from the listings, next to each test; the fixture files are the listings as printed
+(tests/imports/seed003-2.2.6.*.ngc, the scan's page furniture left out).
+"""
+
+from __future__ import annotations
+
+import math
+from decimal import Decimal as D
+
+import pytest
+
+from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
+from app.cnc.imports import ImportFailure, NoteKind, read_program
+from app.cnc.problems import Severity
+from app.cnc.units import Units
+from app.cnc.validate import validate
+from tests.imports.support import describe_all, fixture_text
+
+
+def gcode(text: str) -> Program:
+    return read_program(text.encode(), "t", "gcode").program
+
+
+def report(text: str) -> list[str]:
+    return [str(n) for n in read_program(text.encode(), "t", "gcode").report]
+
+
+def failure(text: str) -> str:
+    with pytest.raises(ImportFailure) as caught:
+        read_program(text.encode(), "t", "gcode")
+    return str(caught.value)
+
+
+# -- seed 003 §2.2.6.1 --------------------------------------------------------------------
+
+# The scan printed N37/N38 as `X0Y-0.510J-0.5`: the I0 between Y-0.5 and J was read as
+# part of the number (`-0.5I0` → `-0.510`), as §2.2.6.2 (`Y-0.5 IO J-0.5`) shows.
+SCAN_FIX_2_2_6_1 = [
+    ("N37G03X0Y-0.510J-0.5F8.0", "N37G03X0Y-0.5I0J-0.5F8.0"),
+    ("N38X0Y0.510J0.5", "N38X0Y0.5I0J0.5"),
+]
+
+# Worked out from the listing:
+# - N1 G92 X0 Y0 Z0: the tool starts at part zero. No G20/G21: inches (§2.2.6.3 is G20).
+# - N3-N9: tool 1 (N4 G45 H1) at S1000 M03; G81 R0.05 Z-0.1 F5 from Z0.05 (the initial
+#   level is R): DRILL Z UP 0.05, Z DN -0.1, FEEDR Z 5. The holes X0.7955 Y0.7955,
+#   X-0.5107 Y1.0024, X-1.1111 Y-0.176, X-0.176 Y-1.1111, X1.0024 Y-0.5107 are
+#   1.125·(cos, sin) of 45°, 117°, 189°, 261°, 333°: five holes 72° apart about X0 Y0,
+#   taken counter-clockwise. A BOLT CIR (clockwise from the lower centre line) with the
+#   same first hole: θ0 = 270° − 45° = 225° (DESIGN.md §3), R 1.125, 5 holes.
+# - N13-N20: M06, then G45 H2: tool 2 (the listing writes T1 on every G45 line; the length
+#   offset names the tool), Z DN -0.6: the same bolt circle.
+# - N24-N33: tool 3 at X0 Y0, G01 Z-0.25 F5 from Z0.05: a DRILL starting a mill sequence;
+#   G01 Y0.115 F8; two G03 half circles of radius 0.115 about X0 Y0; G01 Y0.49; two half
+#   circles of 0.49: MILL STD, two ARCs, MILL STD, two ARCs.
+# - N34-N38: up, over to X0 Y0.5, down again: a new DRILL, two half circles of 0.5.
+# - N39-N47: up, over to X0 Y-2.7, down to Z-0.5: a DRILL and the contour: a half circle
+#   of 2.7 about X0 Y0 to X0 Y2.7; an arc of 0.25 about X0 Y2.45 to X-0.134 Y2.6611; a line
+#   to X-2.2953 Y1.2887; an arc about X-1.7105 Y0.3677 (I0.5848 J-0.921, radius 1.091)
+#   to X-2.4678 Y-0.4177; a line to X-0.1735 Y-2.63; an arc of 0.25 about X0 Y-2.45 back
+#   to X0 Y-2.7. Values to 0.0001 in become 0.001 in blocks (reported): 2.6611 → 2.661,
+#   -2.2953 → -2.295, 1.2887 → 1.289, -2.4678 → -2.468, -0.4177 → -0.418, -0.1735 →
+#   -0.174 (half-even); the fillet's centre to X-1.71 Y0.367, the grid point that keeps its
+#   two radii closest.
+# - N50 G28 X0 Y0: the tool goes to X0 Y0 (the intermediate point) with tool 3: a POS.
+EXPECTED_2_2_6_1 = [
+    "DRILL X0 Y0 Z0.05/-0.1 F5 T1",
+    "BOLT CIR DRILL 5 x R1.125 from 225",
+    "DRILL X0 Y0 Z0.05/-0.6 F5 T2",
+    "BOLT CIR DRILL 5 x R1.125 from 225",
+    "DRILL X0 Y0 Z0.05/-0.25 F5 T3",
+    "MILL STD X0 Y0.115 F8",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y-0.115",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y0.115",
+    "MILL STD X0 Y0.49 F8",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y-0.49",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y0.49",
+    "DRILL X0 Y0.5 Z0.05/-0.25 F5 T3",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y-0.5",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y0.5",
+    "DRILL X0 Y-2.7 Z0.05/-0.5 F5 T3",
+    "MILL ARC CC XY-CENT X0 Y0 F8",
+    "MILL ARC XY-END X0 Y2.7",
+    "MILL ARC CC XY-CENT X0 Y2.45 F8",
+    "MILL ARC XY-END X-0.134 Y2.661",
+    "MILL STD X-2.295 Y1.289 F8",
+    "MILL ARC CC XY-CENT X-1.71 Y0.367 F8",
+    "MILL ARC XY-END X-2.468 Y-0.418",
+    "MILL STD X-0.174 Y-2.63 F8",
+    "MILL ARC CC XY-CENT X0 Y-2.45 F8",
+    "MILL ARC XY-END X0 Y-2.7",
+    "POS X0 Y0 T3",
+]
+
+
+def sample_2_2_6_1() -> str:
+    text = fixture_text("seed003-2.2.6.1.ngc")
+    for printed, meant in SCAN_FIX_2_2_6_1:
+        text = text.replace(printed, meant)
+    return text
+
+
+def test_2_2_6_1_as_printed_refuses_the_scan_damaged_arc() -> None:
+    """N37 as printed ends at Y-0.510: 0.51 from the centre X0 Y0 (J-0.5 from X0 Y0.5),
+    where it starts 0.5 from it — beyond LinuxCNC's 0.0005 in and 0.1 %: an error naming
+    the line (38, as N1 is on line 2) and the column of J."""
+    message = failure(fixture_text("seed003-2.2.6.1.ngc"))
+    assert message.startswith("line 38, column 16: the arc's end is 0.01 in off its radius")
+
+
+def test_2_2_6_1_imports_to_ten_holes_and_the_contours() -> None:
+    result = read_program(sample_2_2_6_1().encode(), "sample.ngc")
+    assert result.format == "gcode"
+    program = result.program
+    assert program.name == "SAMPLE P/N" and program.units is Units.INCH
+    assert describe_all(program) == EXPECTED_2_2_6_1
+    db0 = program.block0
+    assert db0.current_tool == 1 and db0.z_retract == 0
+    assert [(t.number, t.rpm, t.diameter) for t in db0.tools] == [
+        (1, 1000, None),
+        (2, 1000, None),
+        (3, 1000, None),
+    ]
+    assert [p for p in validate(program) if p.severity is Severity.ERROR] == []
+    # The contours' radii, from the blocks (start to centre): 0.115, 0.49, 0.5, 2.7, the
+    # corner 0.25, the fillet 1.091 (0.841 + the 0.25 tool radius), the corner 0.25.
+    radii = []
+    x = y = D(0)
+    centre: tuple[D, D] | None = None
+    for block in program.blocks:
+        if isinstance(block, Hole | MillLine | ArcEnd):
+            if isinstance(block, ArcEnd):
+                assert centre is not None
+                radii.append(round(math.dist((x, y), centre), 3))
+            x, y = block.x, block.y
+        elif isinstance(block, MillArc):
+            centre = (block.x, block.y)
+    # (1.092 for the fillet: its points rounded to 0.001 in; the file's is 1.0910.)
+    assert radii == [0.115, 0.115, 0.49, 0.49, 0.5, 0.5, 2.7, 0.25, 1.092, 0.25]
+
+
+def test_2_2_6_1_report_says_how_it_was_read() -> None:
+    notes = [str(n) for n in read_program(sample_2_2_6_1().encode(), "s").report]
+    assert any("no G20/G21" in n and "inches" in n for n in notes)
+    assert any("line 5: G45 H1" in n and "§2.2.6.1" in n for n in notes)
+    assert any("line 16:" in n and "T1 selected, then H2: read as tool 2" in n for n in notes)
+    assert any("line 3: M16: not a code MillBlocks knows" in n for n in notes)
+    assert any("G81 does not dwell" in n and "also lines 7, 8, 9, 10" in n for n in notes)
+    assert any("counter-clockwise (the ProtoTRAK Plus's order)" in n for n in notes)
+    assert any("line 45" in n and "X -2.2953 in → -2.295" in n for n in notes)
+    assert any(
+        "line 13: G28" in n and "intermediate point" in n and "also lines 24, 50, 51" in n
+        for n in notes
+    )
+
+
+# -- seed 003 §2.2.6.2 --------------------------------------------------------------------
+
+# How each odd line of the ProtoTRAK dialect reads, and what makes it readable. Each is an
+# error naming the line (the first error stops the import: words are read before motion,
+# so the typos come before the missing moves); the fix is what the line is taken to mean.
+# Applied in order, they give §2.2.6.1's program.
+WALK_2_2_6_2 = [
+    # N6-N9, N17-N20: `G00 X… Y…` after `G81`. In RS274 the G00 ends the drilling cycle
+    # (no hole); the ProtoTRAK post writes the modal code on every line (§2.1 rule 1) and
+    # means a hole. Refused; with the G00 taken out the cycle drills there (§2.2.6.1).
+    (
+        "line 7, column 4: G0 right after a canned cycle",
+        [(f"N{n} G00 X", f"N{n} X") for n in (6, 7, 8, 9, 17, 19, 20)],
+    ),
+    # N18 `GOO`: the letter O twice where 00 belongs.
+    ("line 19, column 5: G needs a number; found 'OO ' (the letter O", [("N18 GOO X", "N18 X")]),
+    # N29 `IO`: the letter O where 0 belongs (also N30, N37).
+    (
+        "line 29, column 20: I needs a number; found 'O J' (the letter O",
+        [(" IO ", " I0 ")],
+    ),
+    # N27 is missing: N26 brings tool 3 down to Z0.05 at rapid and N28 cuts in XY there
+    # (the post left out the Z moves for the 2-axis Plus; a 3-axis mill would cut air).
+    (
+        "line 28: a cut in XY at Z0.05 in, but the tool has not fed down to it",
+        [("N28 G01", "N27 G01 Z-0.25 F5.0;\nN28 G01")],
+    ),
+    # N36 and N41 are missing: the same as N27.
+    (
+        "line 37: a cut in XY at Z0.05 in",
+        [("N37 G03", "N36 G01 Z-0.25 F5.0;\nN37 G03"), ("N42 G03", "N41 G01 Z-0.5 F5.0;\nN42 G03")],
+    ),
+]
+
+
+def test_2_2_6_2_each_odd_line_is_an_error_naming_it_and_how_it_reads() -> None:
+    text = fixture_text("seed003-2.2.6.2.ngc")
+    for expected, fixes in WALK_2_2_6_2:
+        message = failure(text)
+        assert message.startswith(expected), message
+        for printed, meant in fixes:
+            assert printed in text
+            text = text.replace(printed, meant)
+    program = gcode(text)
+    assert describe_all(program) == EXPECTED_2_2_6_1
+
+
+def test_2_2_6_2_dialect_label_and_semicolons() -> None:
+    """`%:SAMPLE P/N;` names the program; `;` ends each block (§2.1 rule 3)."""
+    program = gcode("%:SAMPLE P/N;\nN1 G00 G90 G92 X0 Y0 Z0;\nN2 G00 X1.0 Y2.0;\n%;\n")
+    assert program.name == "SAMPLE P/N"
+    assert describe_all(program) == ["POS X1 Y2 T1"]
+
+
+# -- codes --------------------------------------------------------------------------------
+
+HEAD = "G20 G90 G17\nG43 H1\nS1000 M3\nG0 Z0.1\n"
+
+
+def test_canned_cycles_become_hole_blocks() -> None:
+    """G81/G82/G83 → DRILL (G83's Q dividing the depth → that many pecks), G84 → TAP,
+    G85/G89 → BORE; R is Z UP, Z is Z DN, F is FEEDR Z; G98 returns to the start height,
+    whose height above Z UP is Data Block 0's Z RET."""
+    text = HEAD + (
+        "G98 G82 X1 Y1 R0.1 Z-0.5 P0.8 F5\n"
+        "G83 X2 Y1 R0.1 Z-0.5 Q0.2 F5\n"
+        "G84 X3 Y1 R0.1 Z-0.5 F20\n"
+        "G89 X4 Y1 R0.1 Z-0.5 P0.8 F3\n"
+        "G80\nM30\n"
+    )
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == [
+        "DRILL X1 Y1 Z0.1/-0.5 F5 T1",
+        "DRILL X2 Y1 Z0.1/-0.5 F5 x3 T1",
+        "TAP X3 Y1 Z0.1/-0.5 F20 T1",
+        "BORE X4 Y1 Z0.1/-0.5 F3 T1",
+    ]
+    assert result.program.block0.z_retract == 0
+    notes = [str(n) for n in result.report]
+    assert any("line 6: G83 backs off" in n for n in notes)
+    assert any("line 7: G84 feeds out to R" in n for n in notes)
+
+
+def test_explicit_drill_moves_with_pecks_are_one_drill() -> None:
+    """Rapid to Z UP, feed, back up to Z UP, down to the level, feed on, dwell 0.8 s, up:
+    a MillBlocks DRILL with 2 pecks (DESIGN.md §3), levels -0.1 and -0.3."""
+    text = HEAD + ("X1 Y1\nZ0.1\nG1 Z-0.1 F5\nG0 Z0.1\nZ-0.1\nG1 Z-0.3\nG4 P0.8\nG0 Z0.2\nM30\n")
+    assert describe_all(gcode(text)) == ["DRILL X1 Y1 Z0.1/-0.3 F5 x2 T1"]
+
+
+def test_arcs_in_i_j_and_r_forms() -> None:
+    """G2 X1 Y1 R1 from X0 Y0: the centre of the short clockwise arc is X1 Y0 — a quarter
+    circle on axis-parallel centre lines, the control's QCIR. G3 X2 Y2 R-1 from X1 Y1 is
+    the long way round (270°): centre X2 Y1, not X1 Y2. G90.1 makes I J absolute: G3 X3 Y1
+    I3 J2 from X2 Y2 is a counter-clockwise quarter about X3 Y2."""
+    text = HEAD + (
+        "G0 X0 Y0\nG1 Z-0.1 F5\nG2 X1 Y1 R1 F10\nG3 X2 Y2 R-1\nG90.1\nG3 X3 Y1 I3 J2\n"
+        "G0 Z0.1\nM30\n"
+    )
+    assert describe_all(gcode(text)) == [
+        "DRILL X0 Y0 Z0.1/-0.1 F5 T1",
+        "MILL QCIR C X1 Y1 F10",
+        "MILL ARC CC XY-CENT X2 Y1 F10",
+        "MILL ARC XY-END X2 Y2",
+        "MILL QCIR CC X3 Y1 F10",
+    ]
+
+
+def test_incremental_moves_g92_and_units() -> None:
+    """G91 moves add up; a G92 after a move shifts later coordinates (the point called X0 Y0
+    there is X3 Y1 in part coordinates); G21 makes the blocks from there millimetre
+    blocks (X25.4 Y10 mm is X101.6 mm, Y35.4 mm in part coordinates)."""
+    text = HEAD + "G91 G0 X1 Y1\nX2\nG90 G92 X0 Y0\nG0 X1 Y0\nG21 G0 X25.4 Y10\nM30\n"
+    program = gcode(text)
+    assert describe_all(program) == [
+        "POS X1 Y1 T1",
+        "POS X3 Y1 T1",
+        "POS X4 Y1 T1",
+        "POS X101.6 Y35.4 T1",
+    ]
+    assert program.blocks[-1].units is Units.MM and program.units is Units.INCH
+
+
+def test_set_up_words_fill_data_block_0() -> None:
+    """G10 L2 P1: part zero on the table; G10 L1: each tool's length (TCAL) and radius
+    (half the diameter); M7/M8: the tool's coolant; G43 H before any M6: CUR-TOOL."""
+    text = (
+        "G20\nG10 L2 P1 X4.5 Y3.25 Z0\nG10 L1 P2 Z-1.25 R0.25\nG43 H2\nS800 M3\nM8\n"
+        "G0 Z0.2\nG98 G82 X1 Y1 R0.1 Z-0.5 P0.8 F5\nG80\nM9\nM30\n"
+    )
+    db0 = gcode(text).block0
+    assert (db0.x_offset, db0.y_offset, db0.current_tool) == (D("4.5"), D("3.25"), 2)
+    tool = db0.tool(2)
+    assert tool is not None
+    assert (tool.diameter, tool.tcal, tool.rpm, tool.coolant.value) == (
+        D("0.5"),
+        D("-1.25"),
+        800,
+        "flood",
+    )
+
+
+def test_two_axis_gcode_stops_are_the_quill() -> None:
+    """Z never moves: a 2-axis program. A position where the program stops (M0) is a hole
+    made by hand (DRILL without depths); M0, cuts, M0 is a mill sequence with its quill
+    stops; M5 then M0 is a STOP."""
+    text = (
+        "G20 G90\nG43 H1\nS1200 M3\nG0 Z0.1\nX1 Y1\nX2\nM0\nX0 Y0\nM0\nG1 X1 F10\nY1\nM0\n"
+        "M5\nM0\nM30\n"
+    )
+    assert describe_all(gcode(text)) == [
+        "POS X1 Y1 T1",
+        "DRILL X2 Y1 T1",
+        "DRILL X0 Y0 T1",
+        "MILL STD X1 Y0 F10",
+        "STOP MILL STD X1 Y1 F10",
+    ]
+
+
+def test_cutter_compensation_keeps_the_programmed_contour() -> None:
+    text = HEAD + "G0 X0 Y0\nG42 G1 Z-0.2 F4\nX2 F10\nY1\nG40 G0 Z0.1\nM30\n"
+    program = gcode(text)
+    drill = program.blocks[0]
+    assert isinstance(drill, Hole) and drill.comp is Comp.RIGHT
+    assert describe_all(program)[1:] == ["MILL STD X2 Y0 F10", "MILL STD X2 Y1 F10"]
+
+
+def test_operator_messages_and_comments() -> None:
+    text = HEAD + "(MSG,CHECK CLAMPS)\nG98 G82 X1 Y1 R0.1 Z-0.5 P0.8 F5 ; first hole\nM30\n"
+    result = read_program(text.encode(), "t", "gcode")
+    assert result.program.blocks[0].message == "CHECK CLAMPS"
+    assert any("text after ';' read as a comment: 'first hole'" in str(n) for n in result.report)
+
+
+def test_unknown_codes_are_listed_with_their_line() -> None:
+    notes = report(HEAD + "G64\nM16\nG0 X1 Y1\nM123\nM30\n")
+    assert "ignored: line 5: G64: continuous mode: not carried" in notes
+    assert "ignored: line 6: M16: not a code MillBlocks knows; not imported" in notes
+    assert "ignored: line 8: M123: not a code MillBlocks knows; not imported" in notes
+
+
+def test_block_delete_numbers_and_percent() -> None:
+    result = read_program(b"%\nN10 G20 G90\n/N20 G0 X1 Y1\nN30 M30\n%\nG0 X9\n", "t", "gcode")
+    assert describe_all(result.program) == ["POS X1 Y1 T1"]
+    notes = [str(n) for n in result.report]
+    assert any("line 3: block delete" in n for n in notes)
+    assert any("line 6: after the program end: not imported" in n for n in notes)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("G20\nG0 X1 Y1 (open\n", "line 2, column 10: comment not closed"),
+        ("G20\nG0 G1 X1\n", "line 2, column 4: G0 and G1 in one block are both motion codes"),
+        ("G20\nG0 X1 X2\n", "line 2, column 7: X given twice in one block (X1 and X2)"),
+        ("G20\nG0 X#1\n", "line 2, column 5: parameters and expressions are not supported"),
+        ("G20\nG0 A10\n", "line 2, column 4: A: a rotary axis; MillBlocks has X, Y, Z"),
+        ("G20\nO100 sub\n", "line 2, column 1: O-word subroutines are not supported"),
+        ("G20\nG0 X1 $\n", "line 2, column 7: unexpected character '$'"),
+        ("G20\nG33 X1 K0.1\n", "line 2, column 1: G33: thread cutting is not supported"),
+        ("G20\nG0 Z0.1\nG1 X1 Y1\n", "line 3, column 1: a feed move with no F given yet"),
+        ("G20\nM98 P100\n", "line 2, column 1: M98: a subprogram call is not supported"),
+        (
+            "G20\nG0 Z0.1\nG1 Z-0.1 F5\nX1 Z-0.2\n",
+            "line 4: X/Y and Z fed together (a ramp)",
+        ),
+        ("G20\nG0 Z0.1\nG1 X1 Z-0.2 F5\n", "line 3: X/Y and Z fed together into the work"),
+        ("G20\nG0 X1 Y1\nG1 Z-0.2 F5\nX2\nG0 Z1\n", "line 3: a feed in Z before the file gives"),
+        (
+            "G20\nG0 Z0.1\nG1 Z-0.1 F5\nG2 X1 Y0 Z-0.2 I0.5 J0\n",
+            "line 4, column 1: a helix",
+        ),
+        ("G20\nG18\nG0 Z0.1\nG1 Z-0.1 F5\nG2 X1 I0.5\n", "line 5, column 1: an arc in the G18"),
+        ("G20\nG0 Z0.1\nG81 X1 Y1 Z-0.5 F5\n", "line 3, column 1: G81 with no R plane"),
+        ("G20\nG0 Z0.1\nG81 X1 Y1 R-0.6 Z-0.5 F5\n", "line 3, column 17: G81: Z is not below R"),
+    ],
+)
+def test_errors_name_line_and_column(text: str, message: str) -> None:
+    assert failure(text).startswith(message)
+
+
+def test_nothing_is_imported_half_way() -> None:
+    """An error on the last line: no program at all, only the error."""
+    good = HEAD + "G98 G82 X1 Y1 R0.1 Z-0.5 P0.8 F5\n" * 3
+    with pytest.raises(ImportFailure) as caught:
+        read_program((good + "G0 X1 Y1 X2\n").encode(), "t", "gcode")
+    assert caught.value.line == 8
+    assert isinstance(caught.value, ValueError)
+
+
+def test_every_note_names_its_line() -> None:
+    result = read_program(sample_2_2_6_1().encode(), "s", "gcode")
+    per_line = [n for n in result.report if n.kind is not NoteKind.ASSUMED or n.line is not None]
+    assert all(n.where for n in per_line)
+    assert all(
+        n.line is not None
+        for n in result.report
+        if n.kind in (NoteKind.IGNORED, NoteKind.ROUNDED, NoteKind.BECAME)
+    )
+
+
+def test_hole_operation_of_each_cycle() -> None:
+    for code, op in [(81, HoleOp.DRILL), (85, HoleOp.BORE), (86, HoleOp.BORE), (74, HoleOp.TAP)]:
+        block = gcode(HEAD + f"G{code} X1 Y1 R0.1 Z-0.5 F5\nM30\n").blocks[0]
+        assert isinstance(block, Hole) and block.op is op

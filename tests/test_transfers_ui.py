@@ -253,3 +253,29 @@ def test_a_received_events_program_is_imported_with_its_report(
     assert "needs" in done.report
     page = client.get("/transfers").get_data(as_text=True)
     assert "<summary>import report</summary>" in page
+
+
+def test_a_transfer_whose_process_died_is_shown_as_interrupted(
+    app: Flask, client: FlaskClient
+) -> None:
+    from datetime import timedelta
+
+    from app.storage.models import TransferRow
+
+    library = library_of(app)
+    log = TransferLog(library)
+    alive = log.begin("send", "Plus", "/dev/ttyUSB0", "events", "ann")
+    dead = log.begin("send", "Plus", "/dev/ttyUSB0", "events", "ann")
+    with library.session() as s:
+        row = s.get(TransferRow, dead)
+        assert row is not None and row.updated_at is not None
+        row.updated_at -= timedelta(minutes=5)
+    assert log.heartbeat(alive) is False
+    page = client.get("/transfers").get_data(as_text=True)
+    by_id = {t.id: t for t in log.recent()}
+    assert by_id[dead].outcome == "interrupted"
+    assert "server process running this transfer stopped" in by_id[dead].error
+    assert by_id[alive].outcome == "running"
+    assert "interrupted" in page and 'hx-trigger="every 1s"' in page
+    log.cancel(alive)
+    assert log.heartbeat(alive) is True

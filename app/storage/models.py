@@ -140,6 +140,9 @@ class TransferRow(Base):
     bytes_total: Mapped[int | None] = mapped_column(Integer, default=None)
     started_at: Mapped[datetime]
     finished_at: Mapped[datetime | None] = mapped_column(default=None)
+    # The last sign of life from the process running it: a row left "running" whose process
+    # died (a restarted server) is shown as interrupted instead of polling forever.
+    updated_at: Mapped[datetime | None] = mapped_column(default=None)
     outcome: Mapped[str] = mapped_column(String(12), default="running")
     error: Mapped[str] = mapped_column(Text, default="")
     report: Mapped[str] = mapped_column(Text, default="", server_default="")

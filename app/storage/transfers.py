@@ -4,13 +4,26 @@ progress while it runs and a cancel flag any web worker can set."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 
 from sqlalchemy import select
 
 from app.dnc.record import TransferRecord
 from app.storage.library import Library, NotFound
 from app.storage.models import TransferRow
+
+STALE = timedelta(seconds=60)
+"""A running transfer unheard of this long has lost its process (the web job reports at
+least every second, sending, receiving or waiting for the control)."""
+
+INTERRUPTED = (
+    "the server process running this transfer stopped (restarted?) before it ended; "
+    "check what the control has, and send or receive again"
+)
+
+
+def _now() -> datetime:
+    return datetime.now(UTC).replace(tzinfo=None, microsecond=0)
 
 
 @dataclass(frozen=True)
@@ -88,7 +101,8 @@ class TransferLog:
                 author=author,
                 program_id=program_id,
                 program_name=program_name,
-                started_at=datetime.now(UTC).replace(tzinfo=None, microsecond=0),
+                started_at=_now(),
+                updated_at=_now(),
             )
             s.add(row)
             s.flush()
@@ -107,6 +121,16 @@ class TransferLog:
             if row is not None:
                 row.bytes_done, row.bytes_total = done, total
                 row.outcome, row.error = outcome, error or row.error
+                row.updated_at = _now()
+
+    def heartbeat(self, transfer_id: int) -> bool:
+        """The running transfer is alive; returns whether a cancel was asked for."""
+        with self.library.session() as s:
+            row = s.get(TransferRow, transfer_id)
+            if row is None:
+                return True
+            row.updated_at = _now()
+            return row.cancel_requested
 
     def finish(
         self, transfer_id: int, record: TransferRecord | None, outcome: str, error: str = ""
@@ -118,7 +142,7 @@ class TransferLog:
                 return
             row.outcome = outcome
             row.error = error
-            row.finished_at = datetime.now(UTC).replace(tzinfo=None, microsecond=0)
+            row.finished_at = row.updated_at = _now()
             if record is not None:
                 self._copy(row, record)
 
@@ -173,10 +197,19 @@ class TransferLog:
             return bytes(row.raw)
 
     def recent(self, limit: int = 50) -> list[Transfer]:
+        """The newest transfers. A running one unheard of for `STALE` is marked
+        interrupted here (its process is gone), so no page waits on it forever."""
         with self.library.session() as s:
-            rows = s.scalars(
-                select(TransferRow)
-                .order_by(TransferRow.started_at.desc(), TransferRow.id.desc())
-                .limit(limit)
+            rows = list(
+                s.scalars(
+                    select(TransferRow)
+                    .order_by(TransferRow.started_at.desc(), TransferRow.id.desc())
+                    .limit(limit)
+                )
             )
+            cutoff = _now() - STALE
+            for row in rows:
+                if row.outcome == "running" and (row.updated_at or row.started_at) < cutoff:
+                    row.outcome, row.error = "interrupted", INTERRUPTED
+                    row.finished_at = row.updated_at or row.started_at
             return [_view(r) for r in rows]

@@ -109,7 +109,7 @@ def _start(
         machine=machine.name,
         port=port_of(machine.serial),
         on_change=on_change,
-        remote_cancel=lambda: transfer_log.get(row_id).cancel_requested,
+        remote_cancel=lambda: transfer_log.heartbeat(row_id),
     )
 
 

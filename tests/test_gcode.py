@@ -247,3 +247,16 @@ def test_index_without_an_m_code_is_reported() -> None:
     ]
     indexed = export(program, "gcode-linuxcnc", {"index_code": "60"})
     assert indexed.data.decode().count("M60 (INDEX)") == 2
+
+
+@pytest.mark.parametrize("target", ["gcode-linuxcnc", "gcode-fanuc", "gcode-prototrak"])
+def test_a_line_break_in_the_name_cannot_put_code_on_the_tape(target: str) -> None:
+    import dataclasses
+
+    program = load(GOLDEN / "drill-single")
+    hostile = dataclasses.replace(program, name="Bracket\nG0 Z-5\r\nM3")
+    text = export(hostile, target).data.decode()
+    plain = export(program, target).data.decode()
+    assert "(BRACKET G0 Z-5  M3 " in text
+    assert len(text.splitlines()) == len(plain.splitlines())
+    assert not any(line.strip().startswith("G0 Z-5") for line in text.splitlines())

@@ -548,6 +548,9 @@ def _match_hole(moves: list[Move], i: int, at: tuple[int, int, int]) -> HoleMatc
 
 
 def _comment(text: str) -> str:
-    """Comment text the controls accept: no parentheses, upper case ASCII."""
+    """Comment text the controls accept: no parentheses, upper case ASCII, one line.
+    Line breaks and other control characters become spaces: in a name or message they
+    would otherwise end the comment's block and put the rest on the tape as code."""
     cleaned = text.replace("(", "[").replace(")", "]").replace(";", ",")
+    cleaned = "".join(" " if ord(ch) < 32 or ord(ch) == 127 else ch for ch in cleaned)
     return cleaned.encode("ascii", "replace").decode("ascii").upper()

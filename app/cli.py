@@ -17,7 +17,6 @@ Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import signal
 import sys
@@ -115,13 +114,20 @@ def load_program(path: Path) -> Program:
 
 def resolve_program(reference: str) -> Program:
     """A program from a file path, or else from the library by id or exact name."""
+    return resolve_reference(reference)[0]
+
+
+def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Program, int | None]:
+    """A program from a file path (id None), or else from the library (`lib`, else the
+    configured one) by id or exact name, with its library id."""
     path = Path(reference)
     if path.exists() or reference.endswith(".json"):
-        return load_program(path)
+        return load_program(path), None
     try:
-        return library().find(reference).program
+        stored = (lib or library()).find(reference)
     except LibraryError as exc:
         raise ProgramFileError(f"{reference}: not a file, and {exc}") from None
+    return stored.program, stored.info.id
 
 
 def library() -> Library:
@@ -580,12 +586,7 @@ def send_command(
 
     machine = _transfer_machine(machine_name, port, target)
     lib = library()
-    program_id = None
-    path = Path(program)
-    if not path.exists() and not program.endswith(".json"):
-        with contextlib.suppress(LibraryError):
-            program_id = lib.find(program).info.id
-    chosen = resolve_program(program)
+    chosen, program_id = resolve_reference(program, lib)
     stop, cancelled = _interruptible()
     try:
         sent = service.send_program(

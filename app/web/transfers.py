@@ -8,7 +8,7 @@ Machines page can be used: the port comes from the machine, never from the form.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
 
 from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
@@ -16,6 +16,7 @@ from werkzeug.wrappers import Response
 
 from app.dnc import Direction, TransferRecord, jobs, service
 from app.dnc.jobs import JobState, TransferJob
+from app.dnc.service import Log
 from app.dnc.settings import SettingsError, port_of
 from app.dnc.transfer import Cancel, Progress
 from app.storage.library import Library, LibraryError, Machine, NotFound
@@ -86,7 +87,7 @@ def _start(
     machine: Machine,
     direction: Direction,
     row_id: int,
-    work: Any,
+    work: Callable[[Log, Progress, Cancel], TransferRecord],
 ) -> TransferJob:
     """Run `work(log, progress, cancel)` in the background, mirrored into row `row_id`."""
     transfer_log = TransferLog(library)
@@ -101,7 +102,7 @@ def _start(
         transfer_log.finish(row_id, record, job.state.value, error)
 
     def run(progress: Progress, cancel: Cancel) -> TransferRecord:
-        return work(records.append, progress, cancel)  # type: ignore[no-any-return]
+        return work(records.append, progress, cancel)
 
     return jobs.start(
         run,
@@ -136,7 +137,7 @@ def send() -> Response | tuple[str, int]:
         program_name=program.name,
     )
 
-    def work(log: Any, progress: Progress, cancel: Cancel) -> TransferRecord:
+    def work(log: Log, progress: Progress, cancel: Cancel) -> TransferRecord:
         return service.send_program(
             program,
             machine,
@@ -170,7 +171,7 @@ def receive() -> Response | tuple[str, int]:
         "receive", machine.name, port_of(machine.serial), form_format or machine.target, author
     )
 
-    def work(log: Any, progress: Progress, cancel: Cancel) -> TransferRecord:
+    def work(log: Log, progress: Progress, cancel: Cancel) -> TransferRecord:
         return service.receive_program(
             machine,
             library,

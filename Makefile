@@ -36,10 +36,11 @@ typecheck: $(STAMP)
 	$(VENV)/bin/mypy
 
 # The suite runs inside a throwaway PostgreSQL cluster (Debian's pg_virtualenv sets PG*),
-# so the storage tests run on SQLite and on a real PostgreSQL.
+# so the storage tests run on SQLite and on a real PostgreSQL. -t puts the cluster in a
+# temporary directory even as root, so two runs side by side do not collide.
 # pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
 pytest: $(STAMP) system-deps
-	pg_virtualenv $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
+	pg_virtualenv -t $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 test: lint typecheck pytest
@@ -61,7 +62,7 @@ bench-serial: $(STAMP) system-deps
 # throwaway PostgreSQL cluster; figures into docs/load.md.
 load: $(STAMP) system-deps
 	$(PY) -m bench.load --duration $(DURATION)
-	pg_virtualenv $(PY) -m bench.load --database postgresql --duration $(DURATION)
+	pg_virtualenv -t $(PY) -m bench.load --database postgresql --duration $(DURATION)
 
 # Rewrite the expected files of the golden tests from the current code (review the diff!).
 regen-golden: $(STAMP)

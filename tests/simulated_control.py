@@ -202,6 +202,13 @@ class SimulatedControl:
             time.sleep(0.01)
         return len(self.memory) >= count
 
+    def received(self, data: bytes, timeout: float) -> bool:
+        """Wait until as many characters as `data` has are in memory, then say whether they
+        are `data`. Give the bytes as they travel (CR LF where the sender ends lines so): a
+        count of other bytes stops the wait too early or too late."""
+        self.wait_for(len(data), timeout)
+        return bytes(self.memory) == data
+
     def wait_sent(self, timeout: float) -> bool:
         """Wait until everything given to `send_back` has gone."""
         deadline = time.monotonic() + timeout

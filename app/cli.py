@@ -314,6 +314,10 @@ def list_targets(show_options: bool) -> None:
     """List the export targets (and their options)."""
     for name, target in targets().items():
         click.echo(f"{name:<16} {target.description}")
+        needs = target.needs_for(target.parse_options({}))
+        if needs:
+            listed = "; ".join(sorted(n.value for n in needs))
+            click.echo(f"{'':<16} needs {listed}")
         if show_options:
             for option in target.options:
                 choices = f" ({'/'.join(option.choices)})" if option.choices else ""

@@ -19,11 +19,20 @@ allows them to follow each other:
   MILL STD lines that go nowhere, a trailing COPY still waiting for EXEC or CANCEL.
 
 Programs are inch or metric, and some mix both units block by block (the INCH/MM field).
+
+`shop_programs()` goes where a shop's programs go and the tests above never did (issue 16):
+mill sequences of lines, quarter circles and arcs (some over 180°, some with the end off the
+radius, a little or by a divot), cutter compensation, CIRCLE and FRAME routines (every
+placement, two-pass), lines that go nowhere inside compensated contours, TCAL on most tools,
+and tools without RPM in use (`rpm_optional`). It draws freely and leaves it to the test to
+keep only what `validate` accepts (compensation limits are geometry, not worth rebuilding
+here): `assume` on the errors that stop the tool path.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from decimal import Decimal
 
@@ -31,16 +40,23 @@ from hypothesis import strategies as st
 
 from app.cnc import limits
 from app.cnc.blocks import (
+    ArcEnd,
     Block,
     BoltCircle,
+    Circle,
     Comp,
     Copy,
     DataBlock0,
+    Direction,
+    Frame,
     Hole,
     HoleOp,
+    MillArc,
     MillingMode,
     MillLine,
+    MillQcir,
     Mode,
+    Placement,
     Pos,
     Program,
     Rep,
@@ -61,11 +77,14 @@ MAX_TOP_NODES = 5
 
 @dataclass(frozen=True)
 class _Context:
-    """What the blocks of one program share: its unit, usable tools, unit mixing."""
+    """What the blocks of one program share: its unit, usable tools, unit mixing, and
+    (shop programs) the kinds of node drawn and the tools with a diameter."""
 
     units: Units
     tools: tuple[int, ...]
     mixed_units: bool
+    kinds: tuple[str, ...] = ("pos", "hole", "bolt", "mill")
+    cutters: tuple[int, ...] = ()
 
 
 def _other(units: Units) -> Units:
@@ -266,7 +285,135 @@ def _mill_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int)
     return sequence
 
 
-_LEAF_NODES = {"pos": _pos_node, "hole": _hole_node, "bolt": _bolt_node, "mill": _mill_node}
+def _arc_end(
+    draw: st.DrawFn, units: Units, centre: tuple[int, int], clockwise: bool
+) -> tuple[int, int]:
+    """An INC arc's end (steps of the programming resolution) from its start, about `centre`
+    (steps, relative to the start): any sweep, over 180° too; the end rounded to the grid,
+    now and then pushed off the radius by a step or two (within typing) or by a divot."""
+    radius = math.hypot(*centre)
+    start_angle = math.atan2(-centre[1], -centre[0])
+    sweep = draw(st.integers(5, 355)) * math.pi / 180
+    angle = start_angle - sweep if clockwise else start_angle + sweep
+    off = draw(st.sampled_from((0, 0, 0, 0, 1, 2, 10)))  # steps off the radius
+    r = radius + off
+    return (
+        round(centre[0] + r * math.cos(angle)),
+        round(centre[1] + r * math.sin(angle)),
+    )
+
+
+@st.composite
+def _contour_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    """A DRILL (with cutter compensation when its tool has a diameter) and 1-5 mill blocks:
+    lines (some going nowhere, some changing depth), quarter circles and arcs, all INC."""
+    units = _block_units(draw, ctx)
+    comp = Comp.NONE
+    if tool in ctx.cutters:
+        comp = draw(st.sampled_from((Comp.NONE, Comp.RIGHT, Comp.LEFT)))
+    drill = dataclasses.replace(
+        draw(holes(units, op=HoleOp.DRILL, tool=tool, mode=mode)), comp=comp
+    )
+    z_up = drill.z_up
+    assert z_up is not None
+    step = units.resolution
+    sequence: list[Block] = [drill]
+    feed = draw(feeds_xy(units))
+    for _ in range(draw(st.integers(1, 5))):
+        kind = draw(st.sampled_from(("line", "line", "qcir", "arc", "nowhere")))
+        z_dn = draw(st.none() | lengths(units, 1, 1000).map(lambda d: z_up - d))
+        if kind in ("line", "nowhere"):
+            x, y = _xy(draw, units, Mode.INC) if kind == "line" else (Decimal(0), Decimal(0))
+            sequence.append(
+                MillLine(x=x, y=y, z_dn=z_dn, feed_xy=feed, tool=tool, mode=Mode.INC, units=units)
+            )
+        elif kind == "qcir":
+            d = draw(lengths(units, 10, 2000))
+            sx, sy = draw(st.sampled_from((1, -1))), draw(st.sampled_from((1, -1)))
+            direction = draw(st.sampled_from(Direction))
+            sequence.append(
+                MillQcir(
+                    direction=direction,
+                    x=sx * d,
+                    y=sy * d,
+                    z_dn=z_dn,
+                    feed_xy=feed,
+                    tool=tool,
+                    mode=Mode.INC,
+                    units=units,
+                )
+            )
+        else:
+            clockwise = draw(st.booleans())
+            steps = 1000 if units is Units.INCH else 2540
+            cx = draw(st.integers(-steps, steps))
+            cy = draw(st.integers(-steps, steps))
+            if math.hypot(cx, cy) < 20:
+                cx = 20
+            ex, ey = _arc_end(draw, units, (cx, cy), clockwise)
+            direction = Direction.CW if clockwise else Direction.CCW
+            sequence.append(
+                MillArc(
+                    direction=direction,
+                    x=cx * step,
+                    y=cy * step,
+                    z_dn=z_dn,
+                    feed_xy=feed,
+                    tool=tool,
+                    mode=Mode.INC,
+                    units=units,
+                )
+            )
+            sequence.append(ArcEnd(x=ex * step, y=ey * step, mode=Mode.INC, units=units))
+    if draw(_stops()):
+        sequence[-1] = dataclasses.replace(sequence[-1], stop=True)
+    return sequence
+
+
+@st.composite
+def _routine_node(draw: st.DrawFn, ctx: _Context, tool: int, mode: Mode, mult: int) -> list[Block]:
+    """A DRILL and a CIRCLE or FRAME routine (any placement, perhaps two-pass)."""
+    units = _block_units(draw, ctx)
+    drill = draw(holes(units, op=HoleOp.DRILL, tool=tool, mode=mode, max_pecks=3))
+    placement = draw(st.sampled_from(Placement))
+    two_pass, feed, stop = draw(st.booleans()), draw(feeds_xy(units)), draw(_stops())
+    routine: Block
+    if draw(st.booleans()):
+        radius = draw(lengths(units, 50, 3000))
+        routine = Circle(
+            placement=placement,
+            two_pass=two_pass,
+            radius=radius,
+            feed_xy=feed,
+            tool=tool,
+            units=units,
+            stop=stop,
+        )
+    else:
+        xl, yw = draw(lengths(units, 100, 4000)), draw(lengths(units, 100, 4000))
+        corner = min(draw(lengths(units, 0, 1000)), xl / 2, yw / 2)
+        routine = Frame(
+            placement=placement,
+            two_pass=two_pass,
+            xl=xl,
+            yw=yw,
+            corner_radius=corner.quantize(units.resolution, rounding="ROUND_DOWN"),
+            feed_xy=feed,
+            tool=tool,
+            units=units,
+            stop=stop,
+        )
+    return [drill, routine]
+
+
+_LEAF_NODES = {
+    "pos": _pos_node,
+    "hole": _hole_node,
+    "bolt": _bolt_node,
+    "mill": _mill_node,
+    "contour": _contour_node,
+    "routine": _routine_node,
+}
 
 
 @st.composite
@@ -288,16 +435,20 @@ def nodes(
     """
     # Inside a LOOP, another LOOP is likelier, so that nests three and four deep turn up.
     loops = 0 if depth == limits.MAX_LOOP_DEPTH else 1 if depth == 0 else 3
-    kind = draw(st.sampled_from([*_LEAF_NODES, *["loop"] * loops]))
+    kind = draw(st.sampled_from([*ctx.kinds, *["loop"] * loops]))
     if tool is None:
         tool = draw(st.sampled_from(ctx.tools))
+    if kind in ("contour", "routine") and tool not in ctx.cutters:
+        kind = "mill"  # a routine (or compensation) needs the cutter's diameter
     if kind != "loop":
         mode = Mode.INC if in_loop else draw(st.sampled_from(Mode))
         return draw(_LEAF_NODES[kind](ctx, tool, mode, mult))
     nx = draw(st.integers(0, min(MAX_REPEAT_DRAWN, budget - 1)))
     ny = draw(st.integers(0, min(MAX_REPEAT_DRAWN, budget // (nx + 1) - 1)))
     count = (nx + 1) * (ny + 1)
-    head_kind = draw(st.sampled_from(sorted(_LEAF_NODES)))
+    head_kind = draw(
+        st.sampled_from(sorted(k for k in ctx.kinds if k not in ("contour", "routine")))
+    )
     head = draw(_LEAF_NODES[head_kind](ctx, tool, Mode.INC, mult * count))
     head[0] = dataclasses.replace(head[0], loop=True)
     body = draw(
@@ -369,4 +520,51 @@ def programs(draw: st.DrawFn, max_nodes: int = MAX_TOP_NODES) -> Program:
         notes=draw(st.text(max_size=40)),
         block0=block0,
         blocks=blocks,
+    )
+
+
+@st.composite
+def shop_programs(draw: st.DrawFn, max_nodes: int = 4, *, rpm_optional: bool = False) -> Program:
+    """A program as a shop writes it (see the module docstring); it may not validate."""
+    units = draw(st.sampled_from(Units))
+    numbers = draw(st.lists(st.integers(1, 24), min_size=1, max_size=4, unique=True))
+    tools = tuple(
+        Tool(
+            number=number,
+            diameter=draw(st.none() | lengths(units, 62, 1000))
+            if k
+            else draw(lengths(units, 62, 1000)),
+            rpm=draw(st.none() | rpms()) if rpm_optional else draw(rpms()),
+            tcal=draw(lengths(units, -3000, 3000)) if draw(st.integers(0, 3)) else None,
+        )
+        for k, number in enumerate(numbers)
+    )
+    block0 = DataBlock0(
+        x_offset=draw(lengths(units, -20_000, 20_000)),
+        y_offset=draw(lengths(units, -20_000, 20_000)),
+        current_tool=draw(st.sampled_from((0, *numbers))),
+        milling=draw(st.sampled_from(MillingMode)),
+        z_retract=draw(lengths(units, 0, 500)),
+        tools=tools,
+    )
+    ctx = _Context(
+        units=units,
+        tools=tuple(numbers),
+        mixed_units=draw(st.sampled_from((False, False, True))),
+        kinds=("pos", "hole", "bolt", "contour", "contour", "routine"),
+        cutters=tuple(t.number for t in tools if t.diameter is not None),
+    )
+    top = draw(
+        st.lists(
+            nodes(ctx, tool=None, in_loop=False, depth=0, budget=6, mult=1),
+            min_size=1,
+            max_size=max_nodes,
+        )
+    )
+    return Program(
+        name="shop",
+        part_number="1704",
+        units=units,
+        block0=block0,
+        blocks=tuple(block for node in top for block in node),
     )

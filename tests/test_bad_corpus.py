@@ -2,8 +2,10 @@
 
 `tests/bad/<case>/program.json` is a readable program with (usually) exactly one fault;
 `expected` holds the problems `validate` must report, one `str(problem)` per line, in the
-order `validate` returns them. `tests/bad_documents/<case>/document.json` cannot be read at
-all; `expected` holds the exact `DocumentError` message.
+order `validate` returns them; a case with a `target` file holds the problems an export to
+that target is refused with (a need of the target, such as calibrated tools for a tape).
+`tests/bad_documents/<case>/document.json` cannot be read at all; `expected` holds the
+exact `DocumentError` message.
 
 Every expected file was written from the rule and seed 001 before running the code. Where
 the code disagrees with what a machinist expects, the case keeps the machinist's answer and
@@ -21,6 +23,7 @@ from click.testing import CliRunner
 from app.cli import main
 from app.cnc.blocks import Program
 from app.cnc.document import DocumentError, loads
+from app.cnc.emit.target import ExportError, export
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.validate import validate
 
@@ -65,7 +68,17 @@ def load_case(case: Path) -> Program:
 
 
 def problems_of(case: Path) -> list[Problem]:
-    return validate(load_case(case))
+    """What `validate` reports; or, for a case with a `target` file (a need of that export
+    target, not of the program), the problems the export is refused with."""
+    program = load_case(case)
+    if not (case / "target").is_file():
+        return validate(program)
+    target = (case / "target").read_text(encoding="utf-8").strip()
+    try:
+        export(program, target)
+    except ExportError as exc:
+        return exc.problems
+    return []
 
 
 @pytest.mark.parametrize("case", params(PROGRAM_CASES))

@@ -272,7 +272,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     with page.expect_download() as gcode:
         page.keyboard.press("Alt+d")
     text = Path(gcode.value.path()).read_text()
-    assert "G10 L2 P1 X5.0000 Y3.0000" in text and "G3 " in text
+    assert "(SET-UP: G54 = PART ZERO AT TABLE X5.0000 Y3.0000)" in text and "G3 " in text
     shot(page, "07-export-gcode")
 
 

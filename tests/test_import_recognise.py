@@ -164,12 +164,16 @@ def test_pecked_mill_sequence_is_one_drill_with_pecks() -> None:
 
 def test_routines_are_recognised_only_with_the_tool_diameter() -> None:
     """A CIRCLE INSIDE's cuts come back as the routine when the file gives the diameter
-    (LinuxCNC: G10 L1 R); the same cuts from a Fanuc file (no diameter) stay a DRILL and
-    its lines and arcs — and make the same path."""
+    (our set-up comment `T1 DIA …`, or G10 L1 R); the same cuts from a Fanuc file without
+    it (another post's) stay a DRILL and its lines and arcs — and make the same path."""
     program = load(GOLDEN / "circle-inside")
     linuxcnc = read_program(export(program, "gcode-linuxcnc").data, "c").program
-    fanuc = read_program(export(program, "gcode-fanuc").data, "c").program
+    text = export(program, "gcode-fanuc").data.decode()
+    foreign = "\n".join(line for line in text.splitlines() if "SET-UP" not in line)
+    fanuc = read_program(foreign.encode(), "c").program
     assert describe_all(linuxcnc) == describe_all(program)
+    with_comments = read_program(text.encode(), "c").program
+    assert describe_all(with_comments) == describe_all(program)
     assert [b.title for b in fanuc.blocks] == [
         "DRILL",
         "MILL STD",
@@ -198,9 +202,15 @@ def test_a_circle_that_no_routine_cuts_stays_explicit() -> None:
     ]
 
 
-def test_a_mm_block_in_an_inch_file_stays_a_mm_block() -> None:
-    """X1.9685 in is 50.0 mm to 0.0001 in; X0.3937 is 10.0 mm: the point is on the 0.01 mm
-    grid, not on the 0.001 in one: a millimetre POS, nothing rounded."""
-    program = read_program((HEAD + "G0 X1.9685 Y0.3937\nM30\n").encode(), "t", "gcode").program
-    assert describe_all(program) == ["POS X50 Y10 T1"]
-    assert program.blocks[0].units is Units.MM and program.units is Units.INCH
+def test_g20_decides_the_unit_of_every_block() -> None:
+    """G20/G21 decides (issue 16, defect 8): X1.9685 Y0.3937 in an inch file are 50 mm and
+    10 mm to 0.0001 in, but the file says inch, so the block is inch, rounded to 0.001 in,
+    and the report says so — no guessed millimetre block (which turned an inch file's
+    F5.0 into F5.0394)."""
+    result = read_program((HEAD + "G0 X1.9685 Y0.3937\nM30\n").encode(), "t", "gcode")
+    program = result.program
+    assert describe_all(program) == ["POS X1.968 Y0.394 T1"]
+    assert program.blocks[0].units is Units.INCH and program.units is Units.INCH
+    notes = [str(n) for n in result.report]
+    assert any("G20: the program and every block are inch" in n for n in notes)
+    assert any("X 1.9685 in → 1.968, Y 0.3937 in → 0.394" in n for n in notes), notes

@@ -206,8 +206,11 @@ def test_table_3_1_walk_through() -> None:
 
 
 def punched(name: str, target: str) -> tuple[bytes, str]:
+    """A punch image and the listing of the same tape (same code: an EIA tape has no
+    comments, so its Z words cannot be told from each tool's own Z as an ASCII one's can)."""
     program = load(GOLDEN / name)
-    return export(program, target).data, export(program, "tape-ascii").data.decode()
+    listing = target.replace("punch-", "tape-")
+    return export(program, target).data, export(program, listing).data.decode()
 
 
 @pytest.mark.parametrize("target", ["punch-eia", "punch-ascii"])

@@ -553,9 +553,16 @@ def test_an_uncalibrated_tool_cannot_cut() -> None:
     program = line_blocks(drill("1", "1"), tcal=None)
     with pytest.raises(ExportError) as raised:
         export(program, "tape-eia")
-    assert raised.value.report is not None
-    errors = [str(e) for e in raised.value.report.entries if e.severity.value == "error"]
-    assert errors and errors[0].startswith("error: block 1: tool 1 is not calibrated")
+    # A need of the target, once for the tool (not once per move), with the other way out.
+    assert str(raised.value) == (
+        "tape-eia needs calibrated tools (TCAL in Data Block 0); or export with z-zero=g94 "
+        "to touch off each tool at its change"
+    )
+    assert [str(p) for p in raised.value.problems] == [
+        "Data Block 0, TOOL 1 TCAL: tool 1 is not calibrated (TCAL ****) and moves down in Z "
+        "in block 1; Z words that include each tool's TCAL cannot place its tip: calibrate "
+        "it in Data Block 0"
+    ]
     # Presetting Z at each tool change needs no TCAL.
     assert "G00Z-2500" in listing(program, **{"z-zero": "g94"})
 

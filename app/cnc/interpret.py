@@ -338,11 +338,11 @@ class _Interpreter:
 
     def tap_out(self, number: int, block: Hole, z_up: int, feed: int) -> None:
         """Reverse the spindle, feed up to 0.3 in above Z UP, restore the direction."""
-        rpm = self.tool_rpm(block.tool)
-        self.moves.append(SpindleOn(number, clockwise=rpm < 0, rpm=abs(rpm)))
+        clockwise, rpm = self.spindle(block.tool)
+        self.moves.append(SpindleOn(number, clockwise=not clockwise, rpm=rpm))
         lift = limits.TAP_FEED_OUT_INCH if block.units is Units.INCH else limits.TAP_FEED_OUT_MM
         self.feed_to(number, (self.x, self.y, z_up + to_nm(lift, block.units)), feed)
-        self.moves.append(SpindleOn(number, clockwise=rpm > 0, rpm=abs(rpm)))
+        self.moves.append(SpindleOn(number, clockwise=clockwise, rpm=rpm))
 
     def program_stop(self, number: int) -> None:
         """STOP: the head retracts and the spindle shuts off (seed 001 §3.4.5.3)."""
@@ -370,8 +370,8 @@ class _Interpreter:
             self.moves.append(ToolChange(number, tool, self.z))
             self.tool = tool
         if not self.spindle_on:
-            rpm = self.tool_rpm(tool)
-            self.moves.append(SpindleOn(number, clockwise=rpm > 0, rpm=abs(rpm)))
+            clockwise, rpm = self.spindle(tool)
+            self.moves.append(SpindleOn(number, clockwise=clockwise, rpm=rpm))
             self.spindle_on = True
         info = self.tools.get(tool)
         self.set_coolant(number, "off" if info is None else info.coolant)
@@ -391,11 +391,13 @@ class _Interpreter:
         info = self.tools.get(tool)
         return 0 if info is None or info.tcal is None else info.tcal
 
-    def tool_rpm(self, tool: int) -> int:
+    def spindle(self, tool: int) -> tuple[bool, int | None]:
+        """(clockwise, speed) of a tool's spindle: the RPM's sign and size, or clockwise at
+        no known speed for a tool without RPM (a target that writes speeds refuses it)."""
         info = self.tools.get(tool)
         if info is None or info.rpm is None:
-            raise InterpretError(0, f"tool {tool} has no RPM (validate first)")
-        return info.rpm
+            return True, None
+        return info.rpm > 0, abs(info.rpm)
 
     def resolve(self, block: Block) -> tuple[int, int]:
         x: Decimal = getattr(block, "x")  # noqa: B009 - every positioned block has x and y

@@ -315,20 +315,39 @@ def _circle_circle(c1: Pt, r1: float, c2: Pt, r2: float) -> list[Pt]:
     return [add(mid, scale(n, h)), add(mid, scale(n, -h))]
 
 
+def half_step(units: Units) -> float:
+    """Half the programming resolution (0.0005 in, 0.005 mm) in nm: a difference smaller
+    than this can come from rounding typed values alone, so it is no problem to report."""
+    return to_nm(units.resolution, units) / 2
+
+
+def is_zero_length(start: Pt, element: Element) -> bool:
+    """A line that goes nowhere (a MILL STD that only changes depth, or does nothing)."""
+    return element.centre is None and close(start, element.end)
+
+
 def compensate(
     path: Path, comp: Comp, r: float, blocks: list[int], units: Units = Units.INCH
 ) -> Geometry:
     """The tool-centre path of a contour whose finished surface is `path`.
 
     `blocks` gives, for each element, the block number used to name corners in findings.
+    A line that goes nowhere keeps its place (and its depth change) where the tool is; the
+    corner is made between the elements that go somewhere. A corner whose turn is too small
+    to matter at the programming resolution (the tool radius times the turn, or the divot
+    it would leave, under half a step) is joined as a tangent: rounding a fillet's points
+    to 0.001 in must not create problems.
     """
     if comp is Comp.NONE or not path.elements:
         return Geometry(path)
     side = 1.0 if comp is Comp.LEFT else -1.0
     findings: list[Finding] = []
     starts = [path.start] + [e.end for e in path.elements[:-1]]
-    offsets = [offset_element(s, e, side, r) for s, e in zip(starts, path.elements, strict=True)]
-    for start, element in zip(starts, path.elements, strict=True):
+    real = [k for k, e in enumerate(path.elements) if not is_zero_length(starts[k], e)]
+    if not real:
+        return Geometry(path)
+    for k in real:
+        start, element = starts[k], path.elements[k]
         if element.centre is None:
             continue
         radius = math.dist(start, element.centre)
@@ -346,65 +365,97 @@ def compensate(
             )
     if any(f.severity is Severity.ERROR for f in findings):
         return Geometry(path, findings)
-    pieces: list[tuple[Pt, Element]] = [offsets[0]]
-    for k in range(1, len(offsets)):
-        prev_start, prev = pieces[-1]
+    offsets = {k: offset_element(starts[k], path.elements[k], side, r) for k in real}
+    negligible = half_step(units)
+    pieces: list[tuple[Pt, Element]] = []
+    stays: list[Element] = []  # lines that go nowhere since the last real element
+    last = -1  # the last real element joined, and its piece's index
+    last_piece = -1
+    for k, element in enumerate(path.elements):
+        if k not in offsets:
+            stays.append(element)
+            continue
         next_start, nxt = offsets[k]
+        if last < 0:
+            # Lines before the first real one: the tool waits at the plunge point.
+            pieces += [(next_start, replace(e, end=next_start)) for e in stays]
+            stays = []
+            pieces.append((next_start, nxt))
+            last, last_piece = k, len(pieces) - 1
+            continue
+        prev_start, prev = pieces[last_piece]
         corner = starts[k]
-        t1 = tangent(starts[k - 1], path.elements[k - 1], at_end=True)
-        t2 = tangent(corner, path.elements[k], at_end=False)
+        t1 = tangent(starts[last], path.elements[last], at_end=True)
+        t2 = tangent(corner, element, at_end=False)
         turn = math.atan2(cross(t1, t2), dot(t1, t2))
-        here = f"the corner between blocks {blocks[k - 1]} and {blocks[k]}"
+        here = f"the corner between blocks {blocks[last]} and {blocks[k]}"
+        outside = turn * side < 0
+        divot = r * (1 - math.cos(turn))
+        link = (
+            [(prev.end, Element(prev.block, next_start))] if not close(prev.end, next_start) else []
+        )
+        joint: list[tuple[Pt, Element]]
         if abs(turn) < BLEND_RADIANS:
-            pieces.append((prev.end, nxt))
-            continue
-        if turn * side < 0:
-            # Outside corner: an arc of the tool radius about the corner point.
-            arc = Element(prev.block, next_start, centre=corner, clockwise=side > 0)
-            pieces.append((prev.end, arc))
-            pieces.append((next_start, nxt))
-            continue
-        both_lines = path.elements[k - 1].centre is None and path.elements[k].centre is None
-        inside_angle = math.degrees(math.pi - abs(turn))
-        if both_lines and inside_angle < 20 - 1e-9:
-            findings.append(
-                Finding(
-                    blocks[k],
-                    Rule.INSIDE_ANGLE,
-                    Severity.ERROR,
-                    f"{here} is an inside angle of {inside_angle:.1f}°; the tool cannot be "
-                    "on the inside of a line-to-line angle under 20° (emergency stop)",
+            joint = [(prev.end, nxt)]
+        elif outside:
+            if r * abs(turn) <= negligible:
+                # A turn too small to matter: the arc would be shorter than half a step.
+                joint = [*link, (next_start, nxt)]
+            else:
+                # Outside corner: an arc of the tool radius about the corner point.
+                arc = Element(prev.block, next_start, centre=corner, clockwise=side > 0)
+                joint = [(prev.end, arc), (next_start, nxt)]
+        else:
+            both_lines = path.elements[last].centre is None and element.centre is None
+            inside_angle = math.degrees(math.pi - abs(turn))
+            candidates = intersections(prev_start, prev, next_start, nxt)
+            if both_lines and inside_angle < 20 - 1e-9:
+                findings.append(
+                    Finding(
+                        blocks[k],
+                        Rule.INSIDE_ANGLE,
+                        Severity.ERROR,
+                        f"{here} is an inside angle of {inside_angle:.1f}°; the tool cannot be "
+                        "on the inside of a line-to-line angle under 20° (emergency stop)",
+                    )
                 )
-            )
-            pieces.append((prev.end, nxt))
-            continue
-        if not both_lines:
-            findings.append(
-                Finding(
-                    blocks[k],
-                    Rule.COMP_DIVOT,
-                    Severity.WARNING,
-                    f"{here} is a non-blended inside corner with an arc; MillBlocks cuts the "
-                    "true trimmed path, but the original control (and an events export) "
-                    "would leave a divot here",
-                )
-            )
-        candidates = intersections(prev_start, prev, next_start, nxt)
-        if not candidates:
-            findings.append(
-                Finding(
-                    blocks[k],
-                    Rule.COMP_GOUGE,
-                    Severity.WARNING,
-                    f"at {here} the offset path does not meet; the tool would cut into the part",
-                )
-            )
-            pieces.append((prev.end, Element(prev.block, next_start)))
-            pieces.append((next_start, nxt))
-            continue
-        meet = min(candidates, key=lambda p: math.dist(p, corner))
-        pieces[-1] = (prev_start, replace(prev, end=meet))
-        pieces.append((meet, nxt))
+                joint = [(prev.end, nxt)]
+            elif not candidates:
+                if divot > negligible:
+                    findings.append(
+                        Finding(
+                            blocks[k],
+                            Rule.COMP_GOUGE,
+                            Severity.WARNING,
+                            f"at {here} the offset path does not meet; the tool would cut "
+                            "into the part",
+                        )
+                    )
+                joint = [*link, (next_start, nxt)]
+            else:
+                if not both_lines and divot > negligible:
+                    findings.append(
+                        Finding(
+                            blocks[k],
+                            Rule.COMP_DIVOT,
+                            Severity.WARNING,
+                            f"{here} is a non-blended inside corner with an arc; MillBlocks "
+                            "cuts the true trimmed path, but the original control (and an "
+                            f"events export) would leave a divot of about {_len(divot, units)} "
+                            "here",
+                        )
+                    )
+                meet = min(candidates, key=lambda p: math.dist(p, corner))
+                pieces[last_piece] = (prev_start, replace(prev, end=meet))
+                joint = [(meet, nxt)]
+        # The lines that went nowhere stay where the previous element ended.
+        at = pieces[last_piece][1].end
+        pieces += [(at, replace(e, end=at)) for e in stays]
+        stays = []
+        pieces += joint
+        last, last_piece = k, len(pieces) - 1
+    at = pieces[-1][1].end
+    pieces += [(at, replace(e, end=at)) for e in stays]
     elements = tuple(e for _, e in pieces)
     result = Path(pieces[0][0], elements)
     if not any(f.severity is Severity.ERROR for f in findings):
@@ -420,7 +471,7 @@ def gouges(finished: Path, tool: Path, r: float, blocks: list[int], units: Units
     """
     worst: dict[int, tuple[float, int]] = {}
     starts = [finished.start] + [e.end for e in finished.elements[:-1]]
-    tolerance = max(r * 1e-4, 100.0)
+    tolerance = max(r * 1e-4, half_step(units))
     for point, element in sample(tool, max(r / 8, 1000.0)):
         for k, (s, e) in enumerate(zip(starts, finished.elements, strict=True)):
             depth = r - distance_to_element(point, s, e)
@@ -658,7 +709,18 @@ def _closed_pass(routine: Routine, offset: float, previous: float | None = None)
             fixed = _corner_centre(routine, before)
             if prev_rad > EPS:
                 # Every round pass has this corner's arc about the finished corner's centre.
-                reach = add(fixed, scale(unit(sub(before, fixed)), prev_rad))
+                outward = sub(before, fixed)
+                if close(before, fixed):
+                    # The sharp corner sits on that centre: out along the corner's diagonal.
+                    mid = (
+                        routine.corner[0] + routine.width / 2,
+                        routine.corner[1] + routine.height / 2,
+                    )
+                    outward = (
+                        math.copysign(1.0, before[0] - mid[0]),
+                        math.copysign(1.0, before[1] - mid[1]),
+                    )
+                reach = add(fixed, scale(unit(outward), prev_rad))
             else:
                 # The previous pass's sharp corner, one step out along the diagonal.
                 step = previous - offset
@@ -668,7 +730,14 @@ def _closed_pass(routine: Routine, offset: float, previous: float | None = None)
             elements.append(Element(n, reach, tag="corner"))
             elements.append(Element(n, before, tag="corner"))
     elements.append(Element(n, start))
-    ccw = Path(start, tuple(elements))
+    # A side whose corner arcs meet (a corner radius of half the side) has no straight part.
+    kept: list[Element] = []
+    here = start
+    for element in elements:
+        if not is_zero_length(here, element):
+            kept.append(element)
+            here = element.end
+    ccw = Path(start, tuple(kept))
     return reverse(ccw) if routine.clockwise else ccw
 
 
@@ -829,6 +898,23 @@ def programmed_contour(
             centre = end
             end = resolve_xy(end_block.x, end_block.y, end_block.mode, end_block.units, reference)
             clockwise = block.direction is Direction.CW
+            true_centre, divot_at = true_arc(_f(reference), _f(end), _f(centre), block.units)
+            if divot_at is not None:
+                # What the control cuts (seed 001 §3.4.5.2 NOTE): the arc on the radius of
+                # its start, then the divot, a line to the programmed end.
+                elements.append(
+                    Element(index + 1, divot_at, centre=true_centre, clockwise=clockwise, z_dn=z_dn)
+                )
+                elements.append(Element(index + 1, _f(end), tag="divot"))
+                numbers += [index + 1, index + 1]
+                reference = end
+                continue
+            elements.append(
+                Element(index + 1, _f(end), centre=true_centre, clockwise=clockwise, z_dn=z_dn)
+            )
+            numbers.append(index + 1)
+            reference = end
+            continue
         if end == reference and centre is None:
             reference = end
             elements.append(Element(index + 1, _f(end), z_dn=z_dn))
@@ -846,6 +932,26 @@ def programmed_contour(
         numbers.append(index + 1)
         reference = end
     return Path(_f(start), tuple(elements)), numbers, reference
+
+
+def true_arc(start: Pt, end: Pt, centre: Pt, units: Units) -> tuple[Pt, Pt | None]:
+    """The arc the control cuts for a typed start, end and centre (nm): (centre, None) when
+    the end is on the arc's radius, or (centre, where the arc ends) when it is not.
+
+    An end off the start's radius by no more than half the programming resolution is
+    typing, not a mistake (0.001 in cannot place it better), and every reader takes it
+    (LinuxCNC allows 0.002 in; our importers the same): the arc is cut as typed. Farther
+    off, the start and centre define the radius (seed 001 §3.4.5.2 NOTE): the arc ends on
+    that radius at the end's angle, and the returned point is where the divot line, to the
+    programmed end, begins. No export then writes an arc whose end is off its radius.
+    """
+    r_start = math.dist(start, centre)
+    if r_start < EPS or close(start, end):
+        return centre, None
+    if abs(r_start - math.dist(end, centre)) <= half_step(units):
+        return centre, None
+    radial = unit(sub(end, centre))
+    return centre, add(centre, scale(radial, r_start))
 
 
 def qcir_centre(

@@ -2,12 +2,32 @@
 
 Every validation rule has a stable `Rule` code, so the bad-input corpus can prove that each
 rule is exercised by at least one bad program.
+
+Some errors stop only the consumers that need what is missing (DESIGN.md §1: "a need of
+one target never blocks another"): a tool without RPM is the data-block control's
+emergency stop and a G-code target's missing S word, but the JSON document, the ProtoTRAK
+Plus events (a 2-axis control with a manual spindle), the preview and the cycle time do not
+need speeds. Such a problem carries its `need`; `blocking` picks the errors that stop a
+consumer with given needs.
 """
 
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+
+
+class Need(enum.Enum):
+    """Something a consumer needs from a program that not every consumer needs."""
+
+    SPINDLE_SPEEDS = "spindle speeds (RPM in Data Block 0)"
+    CALIBRATED_TOOLS = "calibrated tools (TCAL in Data Block 0)"
+
+
+# What the data-block control itself (seed 001) needs to run a program: `check` and the
+# editor's verdict judge a program as that control would. (It calibrates tools at the
+# machine, so TCAL is not among them.)
+CONTROL_NEEDS = frozenset({Need.SPINDLE_SPEEDS})
 
 
 class Severity(enum.Enum):
@@ -28,6 +48,7 @@ class Rule(enum.Enum):
     FEED_STEP = "feed-step"
     TOOL_DUPLICATE = "tool-duplicate"
     TOOL_NO_RPM = "tool-no-rpm"
+    TOOL_NO_TCAL = "tool-no-tcal"
     TOOL_NO_DIAMETER = "tool-no-diameter"
     TOOL_CHANGE_IN_SEQUENCE = "tool-change-in-sequence"
     LOOP_WITHOUT_REP = "loop-without-rep"
@@ -78,6 +99,7 @@ class Problem:
     severity: Severity
     message: str
     rule: Rule
+    need: Need | None = None
 
     @property
     def location(self) -> str:
@@ -95,6 +117,14 @@ class Problem:
         return f"{self.location}: {prefix}{self.message}"
 
 
-def has_errors(problems: list[Problem]) -> bool:
-    """True when any problem is an error."""
-    return any(p.severity is Severity.ERROR for p in problems)
+def blocking(problems: list[Problem], needs: frozenset[Need] = CONTROL_NEEDS) -> list[Problem]:
+    """The errors that stop a consumer with `needs`: every error that names no need, and
+    those whose need is one of `needs` (by default the data-block control's)."""
+    return [
+        p for p in problems if p.severity is Severity.ERROR and (p.need is None or p.need in needs)
+    ]
+
+
+def has_errors(problems: list[Problem], needs: frozenset[Need] = CONTROL_NEEDS) -> bool:
+    """True when any problem is an error for a consumer with `needs` (see `blocking`)."""
+    return bool(blocking(problems, needs))

@@ -77,11 +77,14 @@ class Dwell:
 
 @dataclass(frozen=True, slots=True)
 class SpindleOn:
-    """Start the spindle at `rpm` (always positive); `clockwise` seen from above."""
+    """Start the spindle at `rpm` (always positive); `clockwise` seen from above.
+
+    `rpm` is None for a tool without RPM in Data Block 0 (a 2-axis program from ProtoTRAK
+    Plus events): the speed is set by hand, and the direction taken as clockwise."""
 
     block: int
     clockwise: bool
-    rpm: int
+    rpm: int | None
 
 
 @dataclass(frozen=True, slots=True)

@@ -40,7 +40,8 @@ from app.cnc.blocks import (
 )
 from app.cnc.geometry import bolt_circle_points, distance, resolve_xy
 from app.cnc.mill import plan_sequence
-from app.cnc.problems import Problem, Rule, Severity
+from app.cnc.needs import unmet
+from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units, format_decimal, to_nm
 
@@ -525,22 +526,14 @@ class _Checker:
     # -- tools ----------------------------------------------------------------------------
 
     def check_tools(self) -> None:
+        # The control's own needs (a tool without RPM is its emergency stop), once per tool.
+        self.problems += unmet(self.program, CONTROL_NEEDS)
         db0 = self.program.block0
         for number, block in enumerate(self.blocks, start=1):
             tool_number = block.tool_number
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            if tool is None or tool.rpm is None:
-                why = "is not in the tool table" if tool is None else "has no RPM"
-                self.add(
-                    number,
-                    "TOOL #",
-                    ERROR,
-                    Rule.TOOL_NO_RPM,
-                    f"tool {tool_number} {why} in Data Block 0; the control makes an "
-                    "emergency stop when a tool without RPM is used",
-                )
             needs_diameter = isinstance(block, Circle | Frame) or (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE

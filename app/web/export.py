@@ -90,6 +90,7 @@ def page(program_id: int) -> tuple[str, int]:
     if result is not None and target_name == "svg":
         picture = result.data.decode()
     effective = all_targets[target_name].parse_options(raw) if not error else {}
+    all_defaults = all_targets[target_name].parse_options({})
     values = {
         option.name: str(effective.get(option.name, option.default))
         for option in all_targets[target_name].options
@@ -119,6 +120,9 @@ def page(program_id: int) -> tuple[str, int]:
         "machines": get_library().machines(),
         "machine_name": machine_name,
         "download_query": urlencode(query),
+        "needs": sorted(
+            n.value for n in all_targets[target_name].needs_for(effective or all_defaults)
+        ),
     }
     status = 422 if error else 200
     if is_htmx():

@@ -44,10 +44,13 @@ BOSS = Dialect(
     end_of_block="",
     g_on_every_line=False,
     program_number=False,
-    setup_in_gcode=False,
+    can_write_offsets=False,
+    messages=False,
+    milliseconds=False,
     dwell_word="X",
     keep_trailing_zeros=False,
     line_numbers=False,
+    largest_line_number=99999,
 )
 _BOSS_OPTIONS = (
     *tuple(

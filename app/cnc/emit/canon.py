@@ -86,7 +86,8 @@ def _call(move: Move, length: Callable[[int], str]) -> str:
     elif isinstance(move, Dwell):
         return f"DWELL({move.seconds:.2f})"
     elif isinstance(move, SpindleOn):
-        return f"SPINDLE_{'CW' if move.clockwise else 'CCW'}({move.rpm})"
+        speed = "NO RPM" if move.rpm is None else move.rpm
+        return f"SPINDLE_{'CW' if move.clockwise else 'CCW'}({speed})"
     elif isinstance(move, SpindleOff):
         return "SPINDLE_STOP()"
     elif isinstance(move, ToolChange):

@@ -430,7 +430,7 @@ class _Builder:
             if repeats == 0:
                 continue
             body = self.events[first:]
-            reason = self.not_repeatable(body, first + 1)
+            reason = self.not_repeatable(body, first + 1, (sx, sy), repeats)
             if reason is None:
                 tool = _tools(body).pop()
                 last = len(self.events)
@@ -455,8 +455,17 @@ class _Builder:
             end[1] + rep.ny * step[1],
         )
 
-    def not_repeatable(self, body: Sequence[Event], first: int) -> str | None:
-        """Why events `first`… cannot be one G105 (None when they can)."""
+    def not_repeatable(
+        self, body: Sequence[Event], first: int, step: XY, repeats: int
+    ) -> str | None:
+        """Why events `first`… cannot be one G105 repeating `repeats` times by `step` (nm)
+        (None when they can)."""
+        resolution = RESOLUTION_NM[self.units]
+        if repeats > 1 and (step[0] % resolution or step[1] % resolution):
+            return (
+                f"the step is not a whole number of the file's {_resolution_text(self.units)} "
+                "(a millimetre REP in an inch program), and a G105 would add up its rounding"
+            )
         if any(isinstance(event, Repeat) for event in body):
             return "the pattern holds a G105 (nested LOOP/REP) and a repeat is not repeated"
         tools = _tools(body)
@@ -490,10 +499,16 @@ class _Builder:
                 depth = element.z_dn
                 if events:
                     events[-1] = replace(events[-1], conrad=None)
+                pieces = (
+                    "; the Plus compensates each piece on its own, so the corner here is cut "
+                    "differently"
+                    if drill.comp is not Comp.NONE
+                    else ""
+                )
                 self.report.unsupported(
                     element.block,
                     f"Z DN {block.z_dn}: the depth changes here; the event before "
-                    "ends not connected (CR-) and the operator moves the quill by hand",
+                    f"ends not connected (CR-) and the operator moves the quill by hand{pieces}",
                 )
             if element.centre is None and target == current:
                 self.report.note(element.block, "no XY move: no event")
@@ -715,6 +730,10 @@ def _round(p: Pt) -> XY:
     return round(p[0]), round(p[1])
 
 
+def _resolution_text(units: Units) -> str:
+    return "0.0001 in" if units is Units.INCH else "0.01 mm"
+
+
 def _unit_name(units: Units) -> str:
     return "inches" if units is Units.INCH else "millimetres"
 
@@ -732,13 +751,15 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
     Every XY point the tool path moves to at a block must be one of the points the events
     put the tool at for that block (G105 repeats and G104 holes included, as the Plus
     computes them from the written numbers), and every such point must be a position of the
-    tool path, both within half the Plus's resolution. The second test is not per block: a
+    tool path, both within the Plus's resolution (a written point is off by up to half of
+    it; a G104 hole, which the Plus computes from a rounded centre and a rounded radius, by
+    up to a whole step). The second test is not per block: a
     block that finds the tool already at its point has no move of its own. Blocks whose
     path the Plus computes itself (`events.unchecked`: compensated contours, routines) are
     skipped; circular pockets and frames must turn the way the tool path does.
     """
     units = events.units
-    tolerance = RESOLUTION_NM[units] / 2 + 1
+    tolerance = RESOLUTION_NM[units] + 1
     expected = _expected_points(events)
     positions = _Grid(RESOLUTION_NM[units])
     destinations: dict[int, list[Pt]] = defaultdict(list)

@@ -6,16 +6,22 @@ spaces between words, `;` at the end of each block). The G/M codes are those of 
 RS274/NGC and Fanuc tables.
 
 Canned cycles are written only where the cycle's motion is identical to the block's
-(DESIGN.md §4): a DRILL hole without pecks is `G98 G82 R<Z UP> Z<Z DN> P0.8` from its
-retract height, a BORE hole `G98 G89 … P0.8`; the writer recognises those move sequences in
-the Toolpath, so a hole whose moves differ (a retract height that changed on the way) is
-written as explicit moves. Pecks (ours return to the level just cut; G83 backs off above
+(DESIGN.md §4): a DRILL hole without pecks is `G98 G82 R<Z UP> Z<Z DN> P…` from its
+retract height (the 0.8 s dwell in the dialect's unit); the writer recognises those move
+sequences in the Toolpath, so a hole whose moves differ (a retract height that changed on
+the way) is written as explicit moves. Pecks (ours return to the level just cut; G83 backs off above
 it) and TAP's feed-out to Z UP + 0.3 in are explicit moves unless the user accepts G83
 (`peck-cycle=G83`), which the compatibility report then states.
 
-Part zero: LinuxCNC gets the Data Block 0 offsets as `G10 L2 P1` (G54) and tool lengths
-from the calibration values as `G10 L1` with `G43 H` at each tool change; the Fanuc
-dialects get them as comments for the set-up (the 6M sets offsets at the control).
+Part zero and tool lengths are the machine's own settings (DESIGN.md §1: an output never
+changes them unless asked): every dialect states them as set-up comments (G54 = part zero
+from table zero, each tool's length = its TCAL) and in the report, which the set-up sheet
+prints, and applies them with `G43 H` at each tool change. LinuxCNC's `write-offsets=yes`
+writes them as `G10 L2 P1` (G54) and `G10 L1` (the tool table), reported as a warning since
+they persist on the machine.
+
+Dwell belongs to the dialect: LinuxCNC reads G4 P and G82 P in seconds; a Fanuc reads P in
+whole milliseconds (P800) and G04 X in seconds.
 """
 
 from __future__ import annotations
@@ -27,6 +33,8 @@ from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
 from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.limits import HOLE_DWELL_SECONDS
+from app.cnc.problems import Need
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -56,10 +64,19 @@ class Dialect:
     end_of_block: str  # appended to every block
     g_on_every_line: bool  # repeat the motion G code on every motion line (seed 003 §2.1)
     program_number: bool  # an O number after the first %
-    setup_in_gcode: bool  # G10 L2 / G10 L1 / G43 (LinuxCNC) or comments (Fanuc)
-    dwell_word: str  # P (LinuxCNC, seconds) or X (Fanuc, seconds)
+    can_write_offsets: bool  # G10 L2 / G10 L1 exist (LinuxCNC), offered by write-offsets
+    messages: bool  # (MSG,…) comments are shown to the operator (LinuxCNC)
+    milliseconds: bool  # dwell as P in whole milliseconds (Fanuc), not seconds
+    dwell_word: str  # the word of a dwell in seconds: P (LinuxCNC) or X (BOSS)
     keep_trailing_zeros: bool  # the default of the trailing_zeros option
     line_numbers: bool  # the default of the sequence-numbers option
+    largest_line_number: int  # N numbers restart after this (seed 003 §2.2.4: 0-999)
+
+    def dwell(self, seconds: Decimal, cycle: bool) -> str:
+        """The dwell word of a G04 (`cycle` False) or a G82 canned cycle."""
+        if self.milliseconds:
+            return f"P{int((seconds * 1000).to_integral_value())}"
+        return f"{'P' if cycle else self.dwell_word}{seconds}"
 
 
 def _options(dialect: Dialect) -> tuple[Option, ...]:
@@ -76,7 +93,7 @@ def _options(dialect: Dialect) -> tuple[Option, ...]:
             10 if dialect.line_numbers else 1,
             "first N number",
             minimum=Decimal(0),
-            maximum=Decimal(99999),
+            maximum=Decimal(dialect.largest_line_number),
         ),
         Option(
             "sequence-increment",
@@ -114,6 +131,27 @@ def _options(dialect: Dialect) -> tuple[Option, ...]:
             "pecks as explicit moves, or G83 (which backs off above each level; reported)",
             ("explicit", "G83"),
         ),
+        *(
+            (
+                Option(
+                    "write-offsets",
+                    OptionKind.BOOL,
+                    False,
+                    "write G54 (G10 L2) and the tool table's lengths and radii (G10 L1) from "
+                    "Data Block 0: they replace the machine's own settings",
+                ),
+            )
+            if dialect.can_write_offsets
+            else ()
+        ),
+        Option(
+            "spindle-speeds",
+            OptionKind.CHOICE,
+            "program",
+            "program: every tool needs its RPM (S words); by-hand: a tool without RPM starts "
+            "its spindle with no S word and the operator sets the speed (reported)",
+            ("program", "by-hand"),
+        ),
         Option(
             "index-code",
             OptionKind.INT,
@@ -130,6 +168,14 @@ class GcodeTarget(Target):
 
     dialect: ClassVar[Dialect]
     extension = "ngc"
+    needs = frozenset({Need.SPINDLE_SPEEDS})
+
+    def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
+        # S words need speeds, unless the operator sets them by hand (reported).
+        return frozenset() if options.get("spindle-speeds") == "by-hand" else self.needs
+
+    def need_hint(self, need: Need) -> str:
+        return "or export with spindle-speeds=by-hand to set them at the control"
 
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
@@ -144,10 +190,13 @@ LINUXCNC = Dialect(
     end_of_block="",
     g_on_every_line=False,
     program_number=False,
-    setup_in_gcode=True,
+    can_write_offsets=True,
+    messages=True,
+    milliseconds=False,
     dwell_word="P",
     keep_trailing_zeros=True,
     line_numbers=False,
+    largest_line_number=99999,
 )
 FANUC = Dialect(
     two_digit_codes=True,
@@ -155,23 +204,29 @@ FANUC = Dialect(
     end_of_block="",
     g_on_every_line=False,
     program_number=True,
-    setup_in_gcode=False,
-    dwell_word="X",
+    can_write_offsets=False,
+    messages=False,
+    milliseconds=True,
+    dwell_word="P",
     keep_trailing_zeros=False,
     line_numbers=True,
+    largest_line_number=9999,
 )
+# The ProtoTRAK's "modified Fanuc 6" (seed 003 §2.1): a Fanuc 6 post's output with a G code
+# on every line, spaces between words and `;` ending each block; line numbers 0-999 (§2.2.4).
 PROTOTRAK = Dialect(
     two_digit_codes=True,
     spaces=True,
     end_of_block=";",
     g_on_every_line=True,
     program_number=False,
-    setup_in_gcode=False,
-    # The Plus has no quill to dwell with; P (seconds) keeps LinuxCNC's reader, the
-    # referee, content, where Fanuc's X word is refused.
+    can_write_offsets=False,
+    messages=False,
+    milliseconds=True,
     dwell_word="P",
     keep_trailing_zeros=False,
     line_numbers=True,
+    largest_line_number=999,
 )
 
 
@@ -244,6 +299,14 @@ class _Writer:
         """One block: N number, words, comment, end of block."""
         parts = [w for w in words if w]
         if self.o["sequence-numbers"]:
+            if self.number > self.d.largest_line_number:
+                start = int(self.o["sequence-start"])
+                self.report.note(
+                    None,
+                    f"N numbers restart at N{start} after N{self.d.largest_line_number}: the "
+                    f"control's line numbers run 0-{self.d.largest_line_number}",
+                )
+                self.number = start
             parts.insert(0, f"N{self.number}")
             self.number += int(self.o["sequence-increment"])
         if comment:
@@ -285,32 +348,7 @@ class _Writer:
         units = self.code("G", 20 if self.units is Units.INCH else 21)
         g = self.code
         self.line(g("G", 17), units, g("G", 40), g("G", 80), g("G", 90), g("G", 94))
-        ox, oy = self.tp.origin
-        if self.d.setup_in_gcode:
-            self.line("G10", "L2", "P1", f"X{self.length(ox)}", f"Y{self.length(oy)}", "Z0")
-            self.line("G54")
-            for number, tool in sorted(self.tp.tools.items()):
-                if number not in self.used_tools():
-                    continue
-                words = ["G10", "L1", f"P{number}"]
-                if tool.tcal is not None:
-                    words.append(f"Z{self.length(tool.tcal)}")
-                if tool.diameter is not None:
-                    words.append(f"R{self.length(tool.diameter // 2)}")
-                self.line(*words)
-        else:
-            self.comment(
-                f"PART ZERO AT TABLE X{self.length(ox)} Y{self.length(oy)}: SET AS WORK OFFSET"
-            )
-            for number, tool in sorted(self.tp.tools.items()):
-                if number in self.used_tools():
-                    tcal = "UNCALIBRATED" if tool.tcal is None else self.length(tool.tcal)
-                    self.comment(f"T{number} LENGTH OFFSET H{number:02d} = {tcal}")
-            self.report.note(
-                None,
-                "part zero and tool lengths are set-up comments: set the work offset and "
-                "each H offset to the tool's TCAL at the control",
-            )
+        self.setup()
         for number in sorted(self.used_tools()):
             info = self.tp.tools.get(number)
             if info is not None and info.tcal is None and self.cuts_in_z():
@@ -325,6 +363,54 @@ class _Writer:
         self.line(self.code("G", 0), f"Z{self.length(self.z)}")
         self.motion = "0"
         self.xy_known = False
+
+    def setup(self) -> None:
+        """Part zero and tool lengths: set-up comments and report notes, or (write-offsets)
+        G10 lines that set them on the machine."""
+        ox, oy = self.tp.origin
+        offset = f"X{format_length(ox, self.units)} Y{format_length(oy, self.units)}"
+        write = bool(self.o.get("write-offsets"))
+        g54 = self.code("G", 54)
+        self.comment(f"SET-UP: {g54} = PART ZERO AT TABLE {offset}")
+        self.report.note(None, f"set-up: {g54} must hold part zero, table {offset}")
+        used = sorted(n for n in self.tp.tools if n in self.used_tools())
+        for number in used:
+            tool = self.tp.tools[number]
+            # The diameter too: cutter compensation and routines were planned with it, and an
+            # importer needs it to read the tool-centre path back as the blocks it came from.
+            dia = (
+                "" if tool.diameter is None else f" DIA {format_length(tool.diameter, self.units)}"
+            )
+            if tool.tcal is None:
+                length = "measured (uncalibrated)"
+                self.comment(
+                    f"SET-UP: T{number}{dia} LENGTH H{number:02d}: UNCALIBRATED, MEASURE IT"
+                )
+            else:
+                length = format_length(tool.tcal, self.units)
+                self.comment(f"SET-UP: T{number}{dia} LENGTH H{number:02d} = {length}, ITS TCAL")
+            self.report.note(
+                None,
+                f"set-up: the length of T{number} (H{number:02d}) must be "
+                + (length if tool.tcal is None else f"{length}, its TCAL"),
+            )
+        if not write:
+            return
+        self.line("G10", "L2", "P1", f"X{self.length(ox)}", f"Y{self.length(oy)}", "Z0")
+        self.line("G54")
+        for number in used:
+            tool = self.tp.tools[number]
+            words = ["G10", "L1", f"P{number}"]
+            if tool.tcal is not None:
+                words.append(f"Z{self.length(tool.tcal)}")
+            if tool.diameter is not None:
+                words.append(f"R{self.length(tool.diameter // 2)}")
+            self.line(*words)
+        self.report.warning(
+            None,
+            "write-offsets: the program sets G54 and the tool table's lengths (G10 L2, "
+            "G10 L1); they replace the operator's own settings and stay on the machine",
+        )
 
     def used_tools(self) -> set[int]:
         used = {m.tool for m in self.tp.moves if isinstance(m, ToolChange)}
@@ -387,9 +473,16 @@ class _Writer:
             )
             self.x, self.y, self.z = move.x, move.y, move.z
         elif isinstance(move, Dwell):
-            self.line(self.code("G", 4), f"{self.d.dwell_word}{move.seconds}")
+            self.line(self.code("G", 4), self.d.dwell(move.seconds, cycle=False))
         elif isinstance(move, SpindleOn):
-            self.line(f"S{move.rpm}", self.code("M", 3 if move.clockwise else 4))
+            speed = "" if move.rpm is None else f"S{move.rpm}"
+            if move.rpm is None:
+                self.report.warning(
+                    move.block,
+                    "no RPM: the spindle starts without an S word; set its speed by hand "
+                    "(spindle-speeds=by-hand)",
+                )
+            self.line(speed, self.code("M", 3 if move.clockwise else 4))
         elif isinstance(move, SpindleOff):
             self.line(self.code("M", 5))
         elif isinstance(move, ToolChange):
@@ -414,7 +507,7 @@ class _Writer:
         elif isinstance(move, CoolantOff):
             self.line(self.code("M", 9))
         elif isinstance(move, Message):
-            if self.d.setup_in_gcode:
+            if self.d.messages:
                 # LinuxCNC shows (MSG,…) comments to the operator.
                 self.lines.append(f"(MSG,{_comment(move.text)})")
             else:
@@ -438,6 +531,10 @@ class _Writer:
             return 0
         z0 = self.z
         words = self.axis_words(x, y, None)
+        if not words:
+            # A hole where the last one was (written to the same numbers): a cycle line
+            # without axis words drills nothing, so it names the position again.
+            words = [f"X{self.length(x)}", f"Y{self.length(y)}"]
         key: tuple[str, ...]
         if kind == "G83":
             q = pecks
@@ -452,9 +549,11 @@ class _Writer:
         else:
             key = (kind, self.length(r), self.length(bottom), str(feed), str(z0))
             cycle_words = ["G98", kind, f"R{self.length(r)}", f"Z{self.length(bottom)}"]
-            cycle_words.append(f"P{Decimal('0.8')}")
+            cycle_words.append(self.d.dwell(HOLE_DWELL_SECONDS, cycle=True))
         if self.cycle == key:
-            self.line(*words)
+            # Seed 003 §2.1 rule 1 (ProtoTRAK): a G code on every line, the cycle's too.
+            again = self.code("G", int(kind[1:])) if self.d.g_on_every_line else ""
+            self.line(again, *words)
         else:
             self.end_cycle()
             self.feed = feed
@@ -530,7 +629,7 @@ def _match_hole(moves: list[Move], i: int, at: tuple[int, int, int]) -> HoleMatc
         return None
     dwell = moves[k]
     assert isinstance(dwell, Dwell)
-    if dwell.seconds != Decimal("0.8"):
+    if dwell.seconds != HOLE_DWELL_SECONDS:
         return None
     k += 1
     bottom = levels[-1]

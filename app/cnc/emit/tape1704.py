@@ -55,6 +55,7 @@ from app.cnc.emit.target import (
     register,
 )
 from app.cnc.geometry import arc_sweep
+from app.cnc.problems import Need
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -895,9 +896,8 @@ class _Builder:
         if isinstance(move, SpindleOn):
             words = [("M", "03" if move.clockwise else "04")]
             if profile.spindle_codes is None:
-                report.note(
-                    block, f"spindle {move.rpm} rpm: set by hand (no spindle speed option, no S)"
-                )
+                speed = "no RPM" if move.rpm is None else f"spindle {move.rpm} rpm"
+                report.note(block, f"{speed}: set by hand (no spindle speed option, no S)")
             elif move.rpm in profile.spindle_codes:
                 words.insert(0, ("S", f"{profile.spindle_codes[move.rpm]:02d}"))
             else:
@@ -950,24 +950,30 @@ class _Builder:
                 words.insert(0, ("T", f"{profile.tool_codes[move.tool]:02d}"))
             else:
                 report.error(move.block, f"tool-codes has no T code for tool {move.tool}")
-        info = self.toolpath.tools.get(move.tool)
-        units = self.toolpath.units
-        parts = [f"TOOL {move.tool}"]
-        if info is not None and info.diameter is not None:
-            parts.append(f"DIA {format_length(info.diameter, units)}")
         if profile.g94:
             report.note(
                 move.block,
                 f"tool {move.tool}: at M06 change the tool, touch it off at its Z zero, press "
                 "CYCLE START; G94 presets Z to zero there",
             )
-        elif info is not None and info.tcal is not None:
-            parts.append(f"TCAL {format_length(info.tcal, units)}")
-        comment = " ".join(parts) if self.comments else ""
+        described = self.tool_comment(move.tool)
+        comment = described if self.comments else ""
         if not self.comments:
-            report.note(move.block, f"M06: {' '.join(parts).lower()} (EIA carries no comment)")
+            report.note(move.block, f"M06: {described.lower()} (EIA carries no comment)")
         leader = profile.tool_change_rows if changes > 0 else 0
         return Aux(move.block, words, comment, leader_after=leader)
+
+    def tool_comment(self, tool: int) -> str:
+        """`TOOL 2 DIA 0.5000 TCAL -1.2500`: what a reader needs to know of a tool. TCAL only
+        where the Z words include it (not with G94), so an importer subtracts what was added."""
+        info = self.toolpath.tools.get(tool)
+        units = self.toolpath.units
+        parts = [f"TOOL {tool}"]
+        if info is not None and info.diameter is not None:
+            parts.append(f"DIA {format_length(info.diameter, units)}")
+        if not self.profile.g94 and info is not None and info.tcal is not None:
+            parts.append(f"TCAL {format_length(info.tcal, units)}")
+        return " ".join(parts)
 
     def stop(self, move: ProgramStop) -> list[Item]:
         """STOP is M00; a two-axis program's quill stops use the quill actuator when the
@@ -1352,13 +1358,22 @@ class _Builder:
                 )
             return []
         name = _sanitize_comment(f"{program.name} {program.part_number}")
-        lines = [f"({name})", f"(PART ZERO AT TABLE {offsets} {units.symbol.upper()})"]
+        start = format_length(tp.start[2], units)
+        lines = [
+            f"({name})",
+            f"(PART ZERO AT TABLE {offsets} {units.symbol.upper()})",
+            f"(START OVER PART ZERO, Z{start} ABOVE TOOL ZERO)",
+        ]
         if self.two_axis:
             lines.append("(TWO-AXIS PROGRAM: THE QUILL SETS DEPTH)")
         elif self.profile.g94:
             lines.append("(Z ZERO: EACH TOOL TOUCHED OFF AT ITS ZERO, G94)")
         else:
             lines.append("(Z ZERO WHERE TCAL IS 0: Z WORDS INCLUDE EACH TOOL TCAL)")
+        if tp.initial_tool:
+            # The first tool has no M06 to carry its comment: say here which tool the tape
+            # starts with, its diameter and (with TCAL) the calibration its Z words include.
+            lines.append(f"(FIRST {_sanitize_comment(self.tool_comment(tp.initial_tool))})")
         return lines
 
     def check_reader(self, tape: Tape) -> None:
@@ -1567,6 +1582,21 @@ class _TapeTarget(Target):
 
     code: ClassVar[TapeCode] = TapeCode.EIA
     options: ClassVar[tuple[Option, ...]] = PROFILE_OPTIONS
+
+    def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
+        # Without a spindle code table the tape has no S word: the speed is set by hand. Z
+        # words include each tool's TCAL unless each tool is touched off (G94).
+        needs = set()
+        if str(options["spindle-codes"]).strip():
+            needs.add(Need.SPINDLE_SPEEDS)
+        if options["z-zero"] == "tcal":
+            needs.add(Need.CALIBRATED_TOOLS)
+        return frozenset(needs)
+
+    def need_hint(self, need: Need) -> str:
+        if need is Need.CALIBRATED_TOOLS:
+            return "or export with z-zero=g94 to touch off each tool at its change"
+        return ""
 
     def tape(
         self,

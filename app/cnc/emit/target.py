@@ -23,7 +23,8 @@ from app.cnc.blocks import Program
 from app.cnc.copy import resolve_copies
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineModel, check_travel
-from app.cnc.problems import Problem, has_errors
+from app.cnc.needs import unmet
+from app.cnc.problems import Need, Problem, blocking
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
 
@@ -183,6 +184,18 @@ class Target(ABC):
     extension: ClassVar[str]
     media_type: ClassVar[str] = "text/plain; charset=us-ascii"
     options: ClassVar[tuple[Option, ...]] = ()
+    # What the target needs from a program beyond what every consumer needs (a program
+    # that lacks it is refused by this target alone, naming the blocks).
+    needs: ClassVar[frozenset[Need]] = frozenset()
+
+    def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
+        """The needs with these (parsed) options; a target whose options change what it
+        needs (a tape with spindle codes needs speeds) overrides this."""
+        return self.needs
+
+    def need_hint(self, need: Need) -> str:
+        """What else the user may do when a program lacks `need` (an option), or ""."""
+        return ""
 
     @abstractmethod
     def emit(
@@ -253,11 +266,27 @@ def export(
     target = get_target(name)
     options = target.parse_options(raw_options or {})
     program = resolve_copies(program)
-    problems = validate(program)
-    if has_errors(problems):
-        raise ExportError("the program has errors; fix them before exporting", problems, None)
+    needs = target.needs_for(options)
+    # The control's needs are checked by validation; a target has its own (and may lack
+    # some of the control's: events and JSON never need spindle speeds).
+    problems = [p for p in validate(program) if p.need is None]
+    toolpath = None if blocking(problems) else interpret(program)
+    problems += unmet(program, needs, toolpath) if toolpath is not None else []
+    stopping = blocking(problems, needs)
+    if stopping:
+        missing = sorted({p.need for p in stopping if p.need is not None}, key=lambda n: n.value)
+        if missing and all(p.need is not None for p in stopping):
+            hints = [h for h in (target.need_hint(n) for n in missing) if h]
+            message = f"{target.name} needs {', '.join(n.value for n in missing)}" + "".join(
+                f"; {h}" for h in hints
+            )
+        else:
+            message = "the program has errors; fix them before exporting"
+        raise ExportError(message, stopping, None)
     report = Report(target.name)
-    toolpath = interpret(program)
+    assert toolpath is not None
+    for need in sorted(needs, key=lambda n: n.value):
+        report.note(None, f"this target needs {need.value}: the program has them")
     if machine is not None:
         for crossing in check_travel(toolpath, machine):
             report.error(crossing.block, crossing.message)

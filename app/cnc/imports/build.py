@@ -284,7 +284,7 @@ class Builder:
         return best
 
     def bolt(self, op: BoltOp, inc: bool, loop: bool) -> None:
-        u = op.radius_units or op.spec.units
+        u = op.spec.units
         self.hole(op.spec, op.centre, op.lines[0], inc, loop, stop=False)
         centre = self.ref
         radius = self.length(op.radius, u, op.lines[0], "RAD")

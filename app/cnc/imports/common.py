@@ -140,6 +140,18 @@ class Notes:
 # -- numbers --------------------------------------------------------------------------------
 
 
+# LinuxCNC's test of an arc whose end is off its start's radius (rs274ngc's
+# CENTER_ARC_RADIUS_TOLERANCE: 0.002 in, 0.02 mm, and 0.1 % of the radius), checked against
+# `rs274` itself: the readers refuse what it refuses, and accept what it accepts.
+ARC_RADIUS_TOLERANCE = {Units.INCH: 50_800, Units.MM: 20_000}
+
+
+def arc_end_off(r_start: float, r_end: float, units: Units) -> bool:
+    """True when an arc's end is too far off its start's radius to be one arc."""
+    off = abs(r_start - r_end)
+    return off > ARC_RADIUS_TOLERANCE[units] and off > 0.001 * r_start
+
+
 def resolution_nm(units: Units) -> int:
     """The programming resolution in nm: 0.001 in = 25 400 nm, 0.01 mm = 10 000 nm."""
     return 25_400 if units is Units.INCH else 10_000

@@ -63,6 +63,7 @@ from app.cnc.imports.common import (
     XY,
     ImportFailure,
     Notes,
+    arc_end_off,
     check_digits,
     decimal_of,
     failure,
@@ -80,7 +81,7 @@ from app.cnc.imports.ops import (
     RoutineOp,
     tool_of,
 )
-from app.cnc.imports.recognise import find_loops, fit_units
+from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import rough_wall, routine_clockwise
 from app.cnc.units import Units
@@ -639,8 +640,7 @@ class _Reader:
         r1, r2 = math.dist(begin, centre), math.dist(end, centre)
         if r1 == 0:
             raise failure(block.line, block.column, "the arc's centre is its begin point")
-        limit = 12_700 if units is Units.INCH else 5_000
-        if abs(r1 - r2) > limit and abs(r1 - r2) > 0.001 * r1:
+        if arc_end_off(r1, r2, units):
             raise failure(
                 block.line,
                 block.column,
@@ -660,9 +660,7 @@ class _Reader:
             else:
                 self.take(number, event, (0, 0))
         self.close_chain()
-        # The file's own rounding: half its last digit (0.0001 in, 0.01 mm; §2.2.4).
-        tolerance = 1_270 if units is Units.INCH else 5_000
-        ops = find_loops(fit_units(self.ops, tolerance, self.notes), 0, self.notes)
+        ops = find_loops(self.ops, 0, self.notes)
         self.notes.assumed(
             None,
             "the ProtoTRAK Plus is a 2-axis control: no depths (hole blocks without Z UP, Z DN, "
@@ -981,6 +979,8 @@ class _Reader:
         units = self.units
         assert units is not None
         line = event.line
+        # A G105's D is the diameter of its tool (T), as on every other event with D.
+        self.note_diameter(event)
         first, last = event.first, event.last
         reason = self.loop_refusal(number, event)
         if reason is None:

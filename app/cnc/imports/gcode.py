@@ -38,6 +38,7 @@ from decimal import Decimal
 from app.cnc.imports.common import (
     MAX_ABS_NM,
     Notes,
+    arc_end_off,
     check_digits,
     failure,
     show,
@@ -66,6 +67,12 @@ SIMPLE = re.compile(r"(?:[ \t]*[A-Za-z][+-]?(?:\d+\.?\d*|\.\d+))+[ \t]*")
 PAIR = re.compile(r"([A-Za-z])([+-]?(?:\d+\.?\d*|\.\d+))")
 MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
 HEADER = re.compile(r"^(.*) PART (\d{1,8}|-) MILLBLOCKS$")
+# MillBlocks' set-up comments (emit/gcode.py): part zero and each tool's diameter and length.
+SETUP_ZERO = re.compile(r"^SET-UP: G0?54 = PART ZERO AT TABLE X(-?\d+\.\d+) Y(-?\d+\.\d+)$")
+SETUP_TOOL = re.compile(
+    r"^SET-UP: T(\d{1,2})(?: DIA (\d+\.\d+))? LENGTH H\d+"
+    r"(?: = (-?\d+\.\d+), ITS TCAL|: UNCALIBRATED, MEASURE IT)$"
+)
 
 # LinuxCNC's modal groups (one code of each per block), seed 003 Table 5 plus Fanuc's.
 MODAL_GROUPS: dict[str, set[str]] = {
@@ -230,6 +237,8 @@ class _Reader:
         self.decimals = 0
         self.offsets: tuple[int, int] | None = None
         self.tools: dict[int, ToolData] = {}
+        self.active_length = 0  # nm: the tool length offset in effect (G43 H: the TCAL)
+        self.start_z: int | None = None
         self.percent = 0
         self.ended_at: int | None = None
 
@@ -264,6 +273,7 @@ class _Reader:
             offsets=self.offsets,
             tools=self.tools,
             initial_tool=self.initial_tool,
+            start_z=self.start_z,
         )
 
     def read_line(self, number: int, raw: str) -> Block | None:
@@ -327,6 +337,8 @@ class _Reader:
         for comment in comments:
             if comment.upper().startswith("MSG,"):
                 self.steps.append(Message(number, comment[4:].strip()))
+            elif comment.startswith("SET-UP: "):
+                self.setup_comment(number, comment)
         if not words:
             if comments and not self.name and not self.moved and not self.steps:
                 self.title(number, comments[0])
@@ -513,6 +525,12 @@ class _Reader:
                 self.units = Units.INCH if code == "20" else Units.MM
                 if self.program_units is None:
                     self.program_units = self.units
+                    u = self.units
+                    self.notes.became(
+                        line,
+                        f"G{code}: the program and every block are {u.value} (numbers finer "
+                        f"than {u.resolution} {u.symbol} are rounded, each reported)",
+                    )
                 elif self.units is not self.program_units:
                     self.notes.assumed(
                         line,
@@ -527,6 +545,9 @@ class _Reader:
         for code in ("43", "45"):
             if code in codes:
                 self.length_offset(block, code)
+                self.apply_length(block.get("H"), block)
+        if "49" in codes:
+            self.apply_length(None, block)
         for code in ("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"):
             if code in codes:
                 self.notes.assumed(
@@ -656,6 +677,16 @@ class _Reader:
             self.tool = number
             self.steps.append(ToolChange(line, number))
 
+    def apply_length(self, h: Word | None, block: Block) -> None:
+        """G43 H / G49: the head stays where it is, so Z reads differently by the change in
+        length offset (a known TCAL from G10 L1 or the set-up comments; 0 otherwise)."""
+        number = 0 if h is None else self.integer(h, block, 0, 999)
+        data = self.tools.get(number)
+        length = 0 if data is None or data.tcal is None else data.tcal
+        if self.z is not None:
+            self.z += self.active_length - length
+        self.active_length = length
+
     def g10(self, block: Block) -> None:
         line = block.line
         lword, pword = block.get("L"), block.get("P")
@@ -677,6 +708,25 @@ class _Reader:
             )
         else:
             self.notes.ignored(line, "G10 with this L/P: not imported")
+
+    def setup_comment(self, line: int, comment: str) -> None:
+        """A MillBlocks set-up comment: part zero, or a tool's diameter and length (TCAL)."""
+        zero = SETUP_ZERO.match(comment)
+        tool = SETUP_TOOL.match(comment)
+        units = self.current_units()
+        if zero is not None:
+            self.offsets = (decimal_nm(zero.group(1), units), decimal_nm(zero.group(2), units))
+            self.notes.became(line, "the set-up comment: part zero (Data Block 0 X, Y)")
+        elif tool is not None:
+            number = int(tool.group(1))
+            dia, tcal = tool.group(2), tool.group(3)
+            self.tools[number] = ToolData(
+                diameter=None if dia is None else decimal_nm(dia, units),
+                tcal=None if tcal is None else decimal_nm(tcal, units),
+            )
+            self.notes.became(
+                line, f"the set-up comment of tool {number}: its DIA and TCAL (Data Block 0)"
+            )
 
     def g92(self, block: Block) -> None:
         line = block.line
@@ -774,6 +824,10 @@ class _Reader:
         if motion != "0":
             self.change_pending = None
         if motion == "0":
+            if not any(isinstance(s, Rapid | Feed | Arc) for s in self.steps) and not (
+                block.has("X") or block.has("Y")
+            ):
+                self.start_z = z  # the first move, up or down to where the program starts
             self.steps.append(Rapid(line, x, y, z, units))
         elif motion == "1":
             feed = self.need_feed(block)
@@ -923,6 +977,11 @@ class _Reader:
         self.cycle_drilled = True
 
 
+def decimal_nm(text: str, units: Units) -> int:
+    """A number written in a comment, in `units`, as nm."""
+    return int((Decimal(text) * units.nm).to_integral_value())
+
+
 def check_arc(
     line: int,
     column: int,
@@ -931,14 +990,12 @@ def check_arc(
     centre: tuple[int, int],
     units: Units,
 ) -> None:
-    """LinuxCNC's test: the end may be off the start's radius by 0.0005 in (0.005 mm) or by
-    0.1 % of the radius, whichever is more; beyond both it is an error naming the line."""
+    """LinuxCNC's test (`arc_end_off`): beyond it, an error naming the line."""
     r1 = math.dist(start, centre)
     r2 = math.dist(end, centre)
     if r1 == 0:
         raise failure(line, column, "the arc's centre is its start point")
-    limit = 12_700 if units is Units.INCH else 5_000
-    if abs(r1 - r2) > limit and abs(r1 - r2) > 0.001 * r1:
+    if arc_end_off(r1, r2, units):
         raise failure(
             line,
             column,

@@ -14,7 +14,6 @@ from app.cnc.imports.recognise import (
     RoutineFinder,
     find_bolt_circles,
     find_loops,
-    fit_units,
     merge_pecks,
 )
 from app.cnc.imports.segment import segment
@@ -35,7 +34,6 @@ def program_from_motion(parsed: Parsed) -> Program:
     finder = RoutineFinder(diameters, rpms, tol, notes)
     ops = finder.run(ops)
     ops = find_bolt_circles(ops, tol, notes)
-    ops = fit_units(ops, tol, notes)
     ops = find_loops(ops, tol, notes)
     builder = Builder(notes)
     builder.run(ops)
@@ -59,6 +57,15 @@ def program_from_motion(parsed: Parsed) -> Program:
                 f"the tool retracts {show(value, units)} above Z UP here; Data Block 0 holds "
                 f"one Z RET ({show(z_retract, units)}): Z moves between operations differ",
             )
+    if z_retract is None and parsed.start_z is not None and parsed.start_z >= 0:
+        # No operation retracted (one hole, a tap that feeds out above it...): a MillBlocks
+        # tool path starts Z RET above tool zero, and the file said where it started.
+        z_retract = parsed.start_z
+        notes.became(
+            None,
+            f"the tool starts {show(z_retract, units)} above tool zero: Z RET "
+            f"{show(z_retract, units)} (Data Block 0)",
+        )
     for number, use in sorted(found.tools.items()):
         for line, rpm in use.other_speeds:
             notes.assumed(

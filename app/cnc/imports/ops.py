@@ -99,7 +99,6 @@ class BoltOp:
     radius: int
     stop: bool = False
     message: str = ""
-    radius_units: Units | None = None  # the BOLT CIR block's unit, when not the hole's
 
 
 @dataclass

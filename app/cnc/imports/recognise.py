@@ -58,7 +58,6 @@ from app.cnc.imports.ops import (
     LoopOp,
     MillOp,
     Op,
-    PosOp,
     RoutineOp,
     Signature,
     anchor,
@@ -157,61 +156,6 @@ def _next_level(a: MillOp, b: MillOp, tol: int) -> bool:
 
 def _close(a: XY | Pt, b: XY | Pt, tol: float) -> bool:
     return abs(a[0] - b[0]) <= tol and abs(a[1] - b[1]) <= tol
-
-
-# -- the unit of each block ----------------------------------------------------------------
-
-
-def fit_units(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
-    """An operation whose numbers are off the program unit's grid but on the other unit's
-    (a mm block in an inch file) becomes a block in that unit, so nothing is rounded."""
-    out: list[Op] = []
-    for op in ops:
-        if not isinstance(op, PosOp | HoleOpR | MillOp | BoltOp):
-            out.append(op)
-            continue
-        units = op.units if isinstance(op, PosOp) else op.spec.units
-        other = Units.MM if units is Units.INCH else Units.INCH
-        if isinstance(op, BoltOp):
-            radius = [op.radius]
-            if not _on_grid(radius, units, tolerance) and _on_grid(radius, other, tolerance):
-                op = replace(op, radius_units=other)
-                notes.became(
-                    op.lines[0],
-                    f"{notes.span(op.lines)}: the radius is a whole number of {other.resolution} "
-                    f"{other.symbol}: a {other.value} BOLT CIR",
-                )
-        values = _lengths(op)
-        if _on_grid(values, units, tolerance) or not _on_grid(values, other, tolerance):
-            out.append(op)
-            continue
-        notes.became(
-            op.lines[0],
-            f"{notes.span(op.lines)}: the numbers are whole steps of {other.resolution} "
-            f"{other.symbol}, not of {units.resolution} {units.symbol}: {other.value} blocks",
-        )
-        if isinstance(op, PosOp):
-            out.append(replace(op, units=other))
-        else:
-            out.append(replace(op, spec=replace(op.spec, units=other)))
-    return out
-
-
-def _lengths(op: PosOp | HoleOpR | MillOp | BoltOp) -> list[int]:
-    if isinstance(op, BoltOp):
-        return [*op.centre, *(v for v in (op.spec.z_up, op.spec.z_dn) if v is not None)]
-    values = [*op.at]
-    if isinstance(op, PosOp):
-        return values
-    values += [v for v in (op.spec.z_up, op.spec.z_dn) if v is not None]
-    if isinstance(op, MillOp):
-        for e in op.elements:
-            values += [*e.end, *(e.centre or ()), *([e.z_dn] if e.z_dn is not None else [])]
-    return values
-
-
-def _on_grid(values: list[int], units: Units, tolerance: int) -> bool:
-    return all(abs(quantize_nm(v, units) - v) <= tolerance for v in values)
 
 
 # -- CIRCLE and FRAME routines --------------------------------------------------------------

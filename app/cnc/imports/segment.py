@@ -133,6 +133,7 @@ class _Pending:
     at: XY
     units: Units
     tool: int
+    rose: bool = False  # the tool went up after it (and has not come down yet)
 
 
 class _Segmenter:
@@ -241,6 +242,19 @@ class _Segmenter:
         moved = (step.x, step.y) != (self.x, self.y)
         if step.z is not None and self.z is not None and step.z > self.z and not moved:
             self.record_retract(step.line, step.z)
+            if self.pending is not None:
+                self.pending.rose = True
+        elif (
+            step.z is not None
+            and self.z is not None
+            and step.z < self.z
+            and not moved
+            and self.pending is not None
+            and self.pending.rose
+        ):
+            # Across, up to a retract height and down again: a block's own positioning
+            # rises before it goes across, so that move was a POS.
+            self.flush_pending()
         if moved:
             self.awaiting_retract = None
             self.flush_pending()
@@ -635,6 +649,9 @@ class _Segmenter:
 
     def cycle(self, step: Cycle) -> None:
         at = (step.x, step.y)
+        pending = self.pending
+        if pending is not None and pending.rose and self.z is not None and step.r < self.z:
+            self.flush_pending()  # across, up, and the cycle goes down again: a POS
         lines = [*self.take_pending(at), step.line]
         op, how = CYCLE_OPS.get(step.code, (HoleOp.DRILL, ""))
         pecks = 1

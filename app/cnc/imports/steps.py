@@ -179,7 +179,9 @@ class Parsed:
 
     `tolerance` (nm) is how far a written point may be from the true one: half a step of
     the finest numbers in the file. Recognised blocks must reproduce the motion within it.
-    `initial_tool` is the tool in the spindle at the start (0: unknown).
+    `initial_tool` is the tool in the spindle at the start (0: unknown). `start_z` is the
+    height (nm above tool zero) the file says the tool starts at, where a MillBlocks tool
+    path starts: Z RET above tool zero (None: not said).
     """
 
     format: str
@@ -192,3 +194,4 @@ class Parsed:
     offsets: XY | None = None
     tools: dict[int, ToolData] = field(default_factory=dict)
     initial_tool: int = 0
+    start_z: int | None = None

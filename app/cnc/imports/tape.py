@@ -43,12 +43,13 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal
+from typing import overload
 
 from app.cnc import limits
 from app.cnc.blocks import Program
 from app.cnc.emit import tapecode
 from app.cnc.emit.tapecode import TapeCode
-from app.cnc.imports.common import ImportFailure, Notes, is_text, show
+from app.cnc.imports.common import ImportFailure, Notes, arc_end_off, is_text, show
 from app.cnc.imports.motion import program_from_motion
 from app.cnc.imports.steps import (
     Arc,
@@ -106,12 +107,25 @@ CYCLE_NOTES = {
     89: "the dwell is the panel's timer",
 }
 HEADER = re.compile(r"PART ZERO AT TABLE X(-?\d{1,6}\.\d{1,6}) Y(-?\d{1,6}\.\d{1,6}) (IN|MM)")
-TOOL_COMMENT = re.compile(r"TOOL (\d{1,2}) DIA (\d{1,6}\.\d{1,6})(?: TCAL (-?\d{1,6}\.\d{1,6}))?")
+TOOL_COMMENT = re.compile(
+    r"(FIRST )?TOOL (\d{1,2})(?: DIA (\d{1,6}\.\d{1,6}))?(?: TCAL (-?\d{1,6}\.\d{1,6}))?$"
+)
+# MillBlocks' ASCII tapes say how their Z words were made (tape1704.header): with each
+# tool's TCAL added (the 1704 has no length offsets), or touched off with G94.
+TCAL_IN_Z = "Z WORDS INCLUDE EACH TOOL TCAL"
+START = re.compile(r"START OVER PART ZERO, Z(-?\d{1,6}\.\d{1,6}) ABOVE TOOL ZERO")
 
 
 def read_tape(data: bytes, name: str, options: Mapping[str, str]) -> tuple[Program, Notes]:
     """Read a listing or punch image. Raises ImportFailure naming block and row/line."""
-    return _TapeReader(data, name, options).run()
+    reader = _TapeReader(data, name, options)
+    return program_from_motion(reader.parse()), reader.notes
+
+
+def parse_tape(data: bytes, name: str, options: Mapping[str, str]) -> Parsed:
+    """The motion a listing or punch image describes (before it becomes blocks), Z as each
+    tool's own Z where the tape says its Z words include TCAL. Raises ImportFailure."""
+    return _TapeReader(data, name, options).parse()
 
 
 @dataclass
@@ -146,14 +160,12 @@ class _TapeReader:
 
     # -- reading the tape ---------------------------------------------------------------
 
-    def run(self) -> tuple[Program, Notes]:
+    def parse(self) -> Parsed:
         if is_text(self.data):
             self.listing(self.data.decode("utf-8").lstrip("\ufeff"))
         else:
             self.punch(self.data)
-        fmt = self.format()
-        parsed = _Interpreter(self, fmt).run()
-        return program_from_motion(parsed), self.notes
+        return _Interpreter(self, self.format()).run()
 
     def where(self, block: _Block, column: int | None = None) -> str:
         n = f" ({block.n})" if block.n else ""
@@ -288,6 +300,11 @@ class _TapeReader:
         return FORMATS[(units, resolution)]
 
 
+def step_z(step: Step) -> int | None:
+    """The Z a step moves at, if it has one."""
+    return step.z if isinstance(step, Rapid | Feed | Arc) else None
+
+
 class _Interpreter:
     """The 1704's modal state, block by block, into motion steps."""
 
@@ -315,6 +332,9 @@ class _Interpreter:
         self.cycle_z: int | None = None
         self.selected: int | None = None
         self.tool_data: dict[int, ToolData] = {}
+        self.first_tool = 0  # named by a FIRST TOOL header comment
+        self.tcal_in_z = False  # Z words are the tool's Z plus its TCAL (header comment)
+        self.start_z: int | None = None  # where the tool starts (header comment)
 
     def run(self) -> Parsed:
         for block in self.reader.blocks:
@@ -327,10 +347,16 @@ class _Interpreter:
         tolerance = max(1, self.fmt.digit_nm // 2)
         if self.fmt.name.startswith("resolution option 1"):
             tolerance = 2 * self.fmt.digit_nm // 2
-        initial = 0
-        if self.start_tool_used:
+        initial = self.first_tool
+        if self.start_tool_used and not initial:
             initial = 1
             self.notes.assumed(None, "the tape does not say which tool it starts with: tool 1")
+        if not self.tcal_in_z and any(step_z(s) is not None for s in self.steps):
+            self.notes.assumed(
+                None,
+                "the tape does not say whether its Z words include tool calibrations (TCAL): "
+                "each Z word is read as the tool's own Z",
+            )
         return Parsed(
             format="tape",
             units=self.units,
@@ -339,6 +365,7 @@ class _Interpreter:
             tolerance=tolerance,
             name=self.reader.name,
             offsets=self.offsets,
+            start_z=self.start_z,
             tools=self.tool_data,
             initial_tool=initial,
         )
@@ -407,17 +434,32 @@ class _Interpreter:
         if block.comment and letters <= {"N"} and "N" in letters:
             # A block that is only a comment: an operator message (MillBlocks' own tapes).
             self.steps.append(Message(block.index, block.comment))
-        tool = TOOL_COMMENT.search(block.comment)
+        tool = TOOL_COMMENT.match(block.comment)
         self.comment_tool = None
         if tool is not None:
-            number = int(tool.group(1))
+            number = int(tool.group(2))
             self.comment_tool = number
             self.tool_data[number] = ToolData(
-                diameter=self.comment_length(tool.group(2)),
-                tcal=None if tool.group(3) is None else self.comment_length(tool.group(3)),
+                diameter=None if tool.group(3) is None else self.comment_length(tool.group(3)),
+                tcal=None if tool.group(4) is None else self.comment_length(tool.group(4)),
             )
             self.notes.became(
                 block.index, f"the comment on tool {number}: its DIA and TCAL (Data Block 0)"
+            )
+            if tool.group(1) and not self.changed and not self.start_tool_used:
+                self.tool = number
+                self.first_tool = number
+                self.notes.became(block.index, f"the comment: the tape starts with tool {number}")
+        start = START.search(block.comment)
+        if start is not None:
+            self.start_z = self.comment_length(start.group(1))
+            self.notes.became(block.index, "the header comment: where the tool starts")
+        if TCAL_IN_Z in block.comment:
+            self.tcal_in_z = True
+            self.notes.became(
+                block.index,
+                "the header comment: Z words include each tool's TCAL; each tool's TCAL is "
+                "taken off its Z words",
             )
         if block.comment:
             header = HEADER.search(block.comment)
@@ -427,6 +469,21 @@ class _Interpreter:
                 oy = int(Decimal(header.group(2)) * units.nm)
                 self.offsets = (ox, oy)
                 self.notes.became(block.index, "the header comment: part zero (Data Block 0 X, Y)")
+
+    @overload
+    def part_z(self, z: int) -> int: ...
+    @overload
+    def part_z(self, z: None) -> None: ...
+    @overload
+    def part_z(self, z: int | None) -> int | None: ...
+
+    def part_z(self, z: int | None) -> int | None:
+        """The tool's own Z (from its calibrated zero) for a Z word of the tape: the word less
+        the TCAL of the tool in the spindle when the tape says its Z words include it."""
+        if z is None or not self.tcal_in_z:
+            return z
+        data = self.tool_data.get(self.tool)
+        return z - (0 if data is None or data.tcal is None else data.tcal)
 
     def comment_length(self, text: str) -> int:
         """A length written in a MillBlocks tape's comment (in the tape's units), in nm."""
@@ -609,11 +666,11 @@ class _Interpreter:
         if g in (2, 3, 20, 30):
             self.arc(block, words, x, y, z, g in (2, 20))
         elif g == 50:
-            self.steps.append(Rapid(line, x, y, z, self.units))
+            self.steps.append(Rapid(line, x, y, self.part_z(z), self.units))
         elif g == 80:
             r = words.get("R")
             rz = z if r is None else self.length(r[0]) + self.shift[2]
-            self.steps.append(Rapid(line, x, y, rz, self.units))
+            self.steps.append(Rapid(line, x, y, self.part_z(rz), self.units))
             z = rz
         elif g >= 81:
             self.cycle(block, words, x, y)
@@ -621,14 +678,14 @@ class _Interpreter:
         else:
             limit = limits.FEED_XY[self.units].high * self.units.nm
             if self.feed is None or self.feed > limit:
-                self.steps.append(Rapid(line, x, y, z, self.units))
+                self.steps.append(Rapid(line, x, y, self.part_z(z), self.units))
                 why = "no F given yet"
                 if self.feed is not None:
                     rate = show(self.feed, self.units)
                     why = f"F at {rate} per minute, above MillBlocks' FEEDR XY limit"
                 self.notes.assumed(line, f"G{g:02d} with {why}: read as positioning (rapid)")
             else:
-                self.steps.append(Feed(line, x, y, z, self.feed, self.units))
+                self.steps.append(Feed(line, x, y, self.part_z(z), self.feed, self.units))
         self.x, self.y, self.z = x, y, z
 
     def arc(
@@ -658,8 +715,7 @@ class _Interpreter:
         r1, r2 = math.dist(start, centre), math.dist((x, y), centre)
         if r1 == 0:
             raise self.reader.fail(block, "the arc's centre is its start point")
-        limit = 12_700 if self.units is Units.INCH else 5_000
-        if abs(r1 - r2) > limit and abs(r1 - r2) > 0.001 * r1:
+        if arc_end_off(r1, r2, self.units):
             raise self.reader.fail(
                 block,
                 f"the arc's end is {show(abs(r1 - r2), self.units)} off its radius: the start "
@@ -689,7 +745,7 @@ class _Interpreter:
         if self.feed is None:
             raise self.reader.fail(block, "an arc with no feed rate (F) given yet")
         self.steps.append(
-            Arc(line, x, y, z, centre[0], centre[1], clockwise, self.feed, self.units)
+            Arc(line, x, y, self.part_z(z), centre[0], centre[1], clockwise, self.feed, self.units)
         )
         self.x, self.y = x, y
 
@@ -712,9 +768,9 @@ class _Interpreter:
                 code,
                 x,
                 y,
-                self.cycle_r,
-                self.cycle_z,
-                self.cycle_r,
+                self.part_z(self.cycle_r),
+                self.part_z(self.cycle_z),
+                self.part_z(self.cycle_r),
                 self.feed,
                 0,
                 None,

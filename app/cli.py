@@ -9,8 +9,8 @@
     millblocks import FILE             add a file to the library, with its import report
 
 FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code, a 1704 tape (listing or
-punch image) or a DXF drawing, detected from its content; `--format` forces one. An import prints its
-report (what became what, what was not carried) on stderr. A COPY block whose operator
+punch image) or a DXF drawing, detected from its content; `--format` forces one. An import
+prints its report (what became what, what was not carried) on stderr. A COPY block whose operator
 chose EXEC or CANCEL is carried out as the file is read, as the control does on ENTER.
 Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 """

@@ -32,9 +32,11 @@ from decimal import Decimal, InvalidOperation
 from typing import Any
 
 from ezdxf import recover
+from ezdxf.document import Drawing as EzDrawing
 from ezdxf.lldxf.const import DXFError
+from ezdxf.lldxf.tagger import binary_tags_loader
 
-from app.cnc.imports.common import XY, ImportFailure, Notes, show
+from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.units import Units
 
 BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
@@ -220,8 +222,11 @@ def read_drawing(data: bytes, name: str = "", options: DxfOptions | None = None)
     `drawing_units`, or units MillBlocks has no program units for."""
     opts = options or DxfOptions()
     try:
-        doc, _auditor = recover.read(io.BytesIO(data))
-    except (DXFError, UnicodeDecodeError, ValueError) as exc:
+        if data.startswith(BINARY_SENTINEL):
+            doc = EzDrawing.load(binary_tags_loader(data))
+        else:
+            doc, _auditor = recover.read(io.BytesIO(data))
+    except (DXFError, UnicodeDecodeError, ValueError, IndexError, KeyError, TypeError) as exc:
         raise ImportFailure("", f"not a DXF drawing ezdxf can read: {exc}") from None
     notes = DxfNotes()
     scale, drawing_units = _drawing_units(doc, opts, notes)
@@ -299,7 +304,12 @@ class _Reader:
         self.circles: list[tuple[XY, int, int]] = []
 
     def nm(self, value: float) -> int:
-        return int((Decimal(repr(float(value))) * self.scale).to_integral_value())
+        """A drawing length in nm. Raises ValueError for a number no part has."""
+        number = float(value)
+        nm = Decimal(repr(number)) * self.scale if math.isfinite(number) else None
+        if nm is None or abs(nm) > MAX_ABS_NM:
+            raise ValueError(f"the number {number!r} is not a usable length")
+        return int(nm.to_integral_value())
 
     def xy(self, x: float, y: float) -> XY:
         return (self.nm(x), self.nm(y))
@@ -325,7 +335,10 @@ class _Reader:
                 index, f"a {kind} is not read (lines, arcs, circles and polylines are)"
             )
             return
-        problem = reader(entity, index)
+        try:
+            problem = reader(entity, index)
+        except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
+            raise ImportFailure(f"entity {self.notes.entities[-1]}", str(exc)) from None
         if problem:
             self.notes.ignored(index, problem)
 

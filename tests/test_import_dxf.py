@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import io
 import math
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -33,7 +34,7 @@ from app.cnc.blocks import (
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports import ImportFailure, detect_format, read_program
 from app.cnc.imports.dxf import parse_options, read_drawing
-from app.cnc.imports.dxf_blocks import as_path
+from app.cnc.imports.dxf_blocks import as_path, contour_blocks
 from app.cnc.mill import Element, programmed_contour
 from app.cnc.mill import Path as MillPath
 from app.cnc.problems import Severity
@@ -416,3 +417,29 @@ def test_cli_import_with_layer_hole_and_tolerance_options(
     refused = runner.invoke(main, ["import", str(bad)])
     assert refused.exit_code == 2
     assert "give the option drawing-units=inch" in refused.stderr
+
+
+def test_a_chosen_contour_with_its_start_direction_and_side() -> None:
+    make, options = CASES["bulge-part"]
+    drawing = read_drawing(make(), "part", parse_options(options))
+    outline = next(c for c in drawing.contours if len(c.segments) == 6)
+    blocks, report = contour_blocks(drawing, outline, start=2, clockwise=False, comp=Comp.RIGHT)
+    first = blocks[0]
+    assert isinstance(first, Hole) and first.comp is Comp.RIGHT
+    # Segment 2 of the outline starts at (3, 0), the half circle's start; counter-clockwise.
+    assert (first.x, first.y) == (Decimal("3.000"), Decimal("0.000"))
+    assert blocks[1].title == "MILL ARC CC XY-CENT"
+    assert any(n.kind.value == "became" for n in report)
+    # Clockwise from the same point: along the bottom first, the half circle last.
+    reverse, _ = contour_blocks(drawing, outline, start=2, clockwise=True)
+    assert [b.title for b in reverse] == [
+        "DRILL CUT LT",
+        "MILL STD",
+        "MILL QCIR C",
+        "MILL STD",
+        "MILL QCIR C",
+        "MILL STD",
+        "MILL ARC C XY-CENT",
+        "MILL ARC XY-END",
+    ]
+    assert isinstance(reverse[0], Hole) and (reverse[0].x, reverse[0].y) == (first.x, first.y)

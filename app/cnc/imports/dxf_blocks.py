@@ -1,6 +1,7 @@
 """A DXF drawing's contours and holes as data blocks (issue 22).
 
-    contour_ops(drawing, contour, start=0, clockwise=None, comp=None, tool=1) -> Op
+    contour_ops(drawing, contour, start=0, clockwise=None, comp=None, tool=1, inside=False) -> Op
+    contour_blocks(drawing, contour, ...same choices) -> (blocks, report)
     program_from_drawing(drawing) -> Program
 
 A contour becomes a DRILL that starts a mill sequence (CUT LT / CUT RT for the compensation
@@ -23,10 +24,17 @@ from __future__ import annotations
 
 import math
 
-from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Program
+from app.cnc.blocks import Block, Circle, Comp, Frame, HoleOp, Placement, Program
 from app.cnc.imports.build import Builder, SetUp, block0, make_program
-from app.cnc.imports.common import XY, decimal_of, feed_decimal, quantize_nm, resolution_nm
-from app.cnc.imports.dxf import Contour, Drawing, Hole, Segment
+from app.cnc.imports.common import (
+    XY,
+    ImportNote,
+    decimal_of,
+    feed_decimal,
+    quantize_nm,
+    resolution_nm,
+)
+from app.cnc.imports.dxf import Contour, Drawing, DxfNotes, Hole, Segment
 from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, RoutineOp
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.imports.steps import ToolData
@@ -96,6 +104,25 @@ def contour_ops(
         Element(s.source, s.end, s.centre, s.clockwise, None, drawing.feed) for s in segments
     ]
     return MillOp(lines, segments[0].start, spec, side, elements)
+
+
+def contour_blocks(
+    drawing: Drawing,
+    contour: Contour,
+    start: int = 0,
+    clockwise: bool | None = None,
+    comp: Comp | None = None,
+    tool: int = 1,
+    inside: bool = False,
+) -> tuple[list[Block], list[ImportNote]]:
+    """The blocks of one chosen contour (the choices as `contour_ops` takes them), numbered
+    from 1, and the report of how they were made (rounding, what became what)."""
+    notes = DxfNotes()
+    notes.entities = drawing.entities
+    builder = Builder(notes)
+    builder.run([contour_ops(drawing, contour, start, clockwise, comp, tool, inside)])
+    builder.flush_rounding()
+    return builder.blocks, notes.report()
 
 
 def _halves(circle: Segment) -> list[Segment]:

@@ -8,9 +8,9 @@
     millblocks receive --machine M     receive over RS-232 into the library (logged)
     millblocks import FILE             add a file to the library, with its import report
 
-FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code or a 1704 tape (listing or
-punch image), detected from its content; `--format` forces one. An import prints its
-report (what became what, what was not carried) on stderr. A COPY block whose operator
+FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code, a 1704 tape (listing or
+punch image) or a DXF drawing, detected from its content; `--format` forces one. An import
+prints its report (what became what, what was not carried) on stderr. A COPY block whose operator
 chose EXEC or CANCEL is carried out as the file is read, as the control does on ENTER.
 Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 """
@@ -46,7 +46,7 @@ class ProgramFileError(click.ClickException):
     exit_code = 2
 
 
-FILE_FORMATS = ("json", "events", "gcode", "tape")
+FILE_FORMATS = ("json", "events", "gcode", "tape", "dxf")
 _FORMAT_KEY = "millblocks.file_format"
 
 
@@ -59,7 +59,7 @@ def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
         expose_value=False,
         is_eager=True,
         callback=lambda ctx, _param, value: ctx.meta.__setitem__(_FORMAT_KEY, value),
-        help="What FILE is: json, events, gcode or tape (default: detected).",
+        help="What FILE is: json, events, gcode, tape or dxf (default: detected).",
     )(command)
 
 
@@ -330,7 +330,7 @@ def list_targets(show_options: bool) -> None:
 @click.option(
     "--format",
     "format",
-    type=click.Choice(["json", "events", "gcode", "tape"]),
+    type=click.Choice(FILE_FORMATS),
     default=None,
     help="What the file is (default: detected from its content).",
 )
@@ -341,17 +341,30 @@ def list_targets(show_options: bool) -> None:
     metavar="NAME=VALUE",
     help="A reader option, e.g. units=metric or resolution=option1 for a tape.",
 )
+@click.option("--layer", default=None, help="DXF: only these layers (comma-separated).")
+@click.option("--hole-diameter", default=None, help="DXF: circles this size or smaller are holes.")
+@click.option("--tolerance", default=None, help="DXF: ends this close are chained.")
 @click.option("--author", default="", help="Who is importing (kept with the revision).")
-def import_program(file: Path, format: str | None, options: tuple[str, ...], author: str) -> None:
+def import_program(
+    file: Path,
+    format: str | None,
+    options: tuple[str, ...],
+    layer: str | None,
+    hole_diameter: str | None,
+    tolerance: str | None,
+    author: str,
+) -> None:
     """Add a program file to the library: a MillBlocks JSON document, ProtoTRAK Plus
-    events, G-code or a 1704 tape. Prints the import report on stderr and the new
-    program's id. Exit 2, nothing saved, when the file cannot be read."""
+    events, G-code, a 1704 tape or a DXF drawing. Prints the import report on stderr and
+    the new program's id. Exit 2, nothing saved, when the file cannot be read."""
     reader_options: dict[str, str] = {}
     for option in options:
         key, sep, value = option.partition("=")
         if not sep:
             raise click.UsageError(f"--option {option!r}: not NAME=VALUE")
         reader_options[key.strip()] = value.strip()
+    dxf = {"layer": layer, "hole-diameter": hole_diameter, "tolerance": tolerance}
+    reader_options |= {key: given for key, given in dxf.items() if given is not None}
     program, chosen = read_file(file, format, reader_options)
     info = library().create(
         program, author=author, summary_text=f"imported from {file.name} ({chosen})"

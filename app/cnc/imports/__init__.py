@@ -3,8 +3,9 @@
     read_program(data, name="", format=None) -> ImportResult
 
 `format` is "json" (a MillBlocks program document), "events" (ProtoTRAK Plus G100-G109,
-seed 003 §2.2), "gcode" (RS274/NGC or Fanuc, seed 003's tables) or "tape" (a Tektronix
-1704 listing or punch image, EIA or ASCII, seed 000); None detects it from the content.
+seed 003 §2.2), "gcode" (RS274/NGC or Fanuc, seed 003's tables), "tape" (a Tektronix
+1704 listing or punch image, EIA or ASCII, seed 000) or "dxf" (a drawing, `dxf.py`); None
+detects it from the content.
 The result holds the program, the report (what became what, what was not understood or not
 carried, what was assumed, what was rounded, what the user must still supply — each with
 its line) and the format read. Every failure is an `ImportFailure` (a ValueError) naming
@@ -57,7 +58,8 @@ def read_program(
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
     gives no name. `options` are reader options (docs/imports.md): for a tape `units`
-    (inch/metric) and `resolution` (standard/option1/option2), as the tape target has them.
+    (inch/metric) and `resolution` (standard/option1/option2), as the tape target has them;
+    for a DXF `layer`, `hole-diameter`, `tolerance`, `units`, `drawing-units`, `feed`.
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format`, or
     content that could be either a 1704 tape or G-code when `format` is None).

@@ -1,5 +1,6 @@
 """Which reader a file needs, from its content, and the dispatch to it.
 
+- **dxf**: a binary DXF's sentinel, or text whose first group is `0` then `SECTION`.
 - **json**: text whose first character is `{` (a MillBlocks program document).
 - **tape** (punch image): bytes that are not text — a NUL, a control character other than
   tab/CR/LF, or bytes that are not UTF-8 (ASCII rows carry a parity bit, EIA rows are codes
@@ -29,12 +30,14 @@ from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.copy import CopyError, resolve_copies
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind, is_text
+from app.cnc.imports.dxf import is_dxf, parse_options, read_drawing
+from app.cnc.imports.dxf_blocks import program_from_drawing
 from app.cnc.imports.events import read_events
 from app.cnc.imports.gcode import parse_gcode
 from app.cnc.imports.motion import program_from_motion
 from app.cnc.imports.tape import read_tape
 
-FORMATS = ("json", "events", "gcode", "tape")
+FORMATS = ("json", "events", "gcode", "tape", "dxf")
 
 _EVENT = re.compile(r"(?<![A-Z0-9.])G10[0-9](?![0-9.])", re.IGNORECASE)
 _COMMENT = re.compile(r"\([^)]*\)?")
@@ -49,6 +52,8 @@ def detect_format(data: bytes) -> str:
     either a 1704 tape or G-code (or is empty)."""
     if not data.strip():
         raise ImportFailure("", "the file is empty")
+    if is_dxf(data):
+        return "dxf"
     if not is_text(data):
         return "tape"
     text = data.decode("utf-8").lstrip("\ufeff")
@@ -180,6 +185,9 @@ def read(
     chosen = detect_format(data) if format is None else format
     if chosen not in FORMATS:
         raise ImportFailure("", f"no import format {chosen!r}; formats: {', '.join(FORMATS)}")
+    if chosen == "dxf":
+        drawing = read_drawing(data, name, parse_options(options))
+        return program_from_drawing(drawing), drawing.notes.report(), chosen
     allowed = {"units", "resolution"} if chosen == "tape" else set()
     unknown = sorted(set(options) - allowed)
     if unknown:

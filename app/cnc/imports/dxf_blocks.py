@@ -1,0 +1,322 @@
+"""A DXF drawing's contours and holes as data blocks (issue 22).
+
+    contour_ops(drawing, contour, start=0, clockwise=None, comp=None, tool=1, inside=False) -> Op
+    contour_blocks(drawing, contour, ...same choices) -> (blocks, report)
+    program_from_drawing(drawing) -> Program
+
+A contour becomes a DRILL that starts a mill sequence (CUT LT / CUT RT for the compensation
+side) and MILL STD / MILL ARC + XY-END blocks (QCIR where it is one), exactly: lines and
+arcs as drawn, each value rounded once to the programming resolution (reported when it
+moves). A circle becomes DRILL + CIRCLE and an axis-parallel rectangle (sharp, or with four
+equal corner arcs) DRILL + FRAME, where the routine cuts exactly that contour (values on
+the programming grid). Holes become DRILL blocks, and BOLT CIR where three or more of one
+diameter are equally spaced on a circle.
+
+The whole-drawing conversion chooses: holes first, then inner contours, then outer ones
+(the outside profile last); climb milling with a clockwise spindle (Data Block 0's
+default): outer contours clockwise and inner ones counter-clockwise, both with the tool on
+the left (CUT LT); open contours are tool-centre paths (no compensation). Each starts at its
+lowest, then leftmost, point. The drawing has no depths, tools or speeds: the program is a
+2-axis program (as an events import is) with tool 1, and the report says what to enter.
+"""
+
+from __future__ import annotations
+
+import math
+
+from app.cnc.blocks import Block, Circle, Comp, Frame, HoleOp, Placement, Program
+from app.cnc.imports.build import Builder, SetUp, block0, make_program
+from app.cnc.imports.common import (
+    XY,
+    ImportNote,
+    decimal_of,
+    feed_decimal,
+    quantize_nm,
+    resolution_nm,
+)
+from app.cnc.imports.dxf import Contour, Drawing, DxfNotes, Hole, Segment
+from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, RoutineOp
+from app.cnc.imports.recognise import find_bolt_circles
+from app.cnc.imports.steps import ToolData
+from app.cnc.mill import Element as MillElement
+from app.cnc.mill import Path, signed_area
+from app.cnc.pocketing import regions
+
+CHORD_NM = 500  # chords within 0.5 µm of an arc when deciding which contour holds which
+
+
+def hole_spec(drawing: Drawing, tool: int = 1) -> HoleSpec:
+    """A DRILL without depths (a 2-axis block: the drawing has none), in the program's units."""
+    return HoleSpec(HoleOp.DRILL, None, None, None, 1, tool, drawing.units)
+
+
+def as_path(contour: Contour) -> Path:
+    """The contour as a `mill.Path` (float nm; elements named by entity index)."""
+    return Path(
+        _f(contour.segments[0].start),
+        tuple(
+            MillElement(
+                s.source,
+                _f(s.end),
+                centre=None if s.centre is None else _f(s.centre),
+                clockwise=s.clockwise,
+            )
+            for s in contour.segments
+        ),
+    )
+
+
+def contour_ops(
+    drawing: Drawing,
+    contour: Contour,
+    start: int = 0,
+    clockwise: bool | None = None,
+    comp: Comp | None = None,
+    tool: int = 1,
+    inside: bool = False,
+) -> Op:
+    """The operation that cuts `contour`: from the start of its segment `start` (closed
+    contours; an open one starts at either end: 0 or the last index), round it `clockwise`
+    or not (None: as drawn), the tool on the `comp` side (None: left — climb with a
+    clockwise spindle). A closed contour that a CIRCLE or FRAME routine cuts exactly becomes
+    that routine (INSIDE when `inside`, else OUTSIDE; the routine's own direction comes
+    from Data Block 0)."""
+    spec = hole_spec(drawing, tool)
+    lines = list(contour.sources)
+    routine = _routine(drawing, contour, inside, tool) if contour.closed else None
+    if routine is not None:
+        at, block = routine
+        return RoutineOp(lines, at, spec, block)
+    segments = list(contour.segments)
+    if contour.closed:
+        ccw = signed_area(as_path(contour)) > 0
+        if clockwise is not None and clockwise == ccw:
+            segments = [s.reversed() for s in reversed(segments)]
+            # Segment `start` begins where, reversed, segment n - start begins.
+            start = (len(segments) - start) % len(segments)
+        segments = segments[start:] + segments[:start]
+        if len(segments) == 1:
+            segments = _halves(segments[0])
+    elif start:
+        segments = [s.reversed() for s in reversed(segments)]
+    side = Comp.NONE if not contour.closed else (comp or Comp.LEFT)
+    elements = [
+        Element(s.source, s.end, s.centre, s.clockwise, None, drawing.feed) for s in segments
+    ]
+    return MillOp(lines, segments[0].start, spec, side, elements)
+
+
+def contour_blocks(
+    drawing: Drawing,
+    contour: Contour,
+    start: int = 0,
+    clockwise: bool | None = None,
+    comp: Comp | None = None,
+    tool: int = 1,
+    inside: bool = False,
+) -> tuple[list[Block], list[ImportNote]]:
+    """The blocks of one chosen contour (the choices as `contour_ops` takes them), numbered
+    from 1, and the report of how they were made (rounding, what became what)."""
+    notes = DxfNotes()
+    notes.entities = drawing.entities
+    builder = Builder(notes)
+    builder.run([contour_ops(drawing, contour, start, clockwise, comp, tool, inside)])
+    builder.flush_rounding()
+    return builder.blocks, notes.report()
+
+
+def _halves(circle: Segment) -> list[Segment]:
+    """A full circle as two half arcs (an arc block cannot end where it starts)."""
+    assert circle.centre is not None
+    cx, cy = circle.centre
+    sx, sy = circle.start
+    opposite = (2 * cx - sx, 2 * cy - sy)
+    return [
+        Segment(circle.start, opposite, circle.centre, circle.clockwise, circle.source),
+        Segment(opposite, circle.start, circle.centre, circle.clockwise, circle.source),
+    ]
+
+
+def _routine(
+    drawing: Drawing, contour: Contour, inside: bool, tool: int
+) -> tuple[XY, Circle | Frame] | None:
+    units = drawing.units
+    placement = Placement.INSIDE if inside else Placement.OUTSIDE
+    feed = feed_decimal(drawing.feed, units)
+
+    def on_grid(*values: int) -> bool:
+        return all(quantize_nm(v, units) == v for v in values)
+
+    if contour.is_circle:
+        segment = contour.segments[0]
+        assert segment.centre is not None
+        radius = math.dist(segment.start, segment.centre)
+        r = round(radius)
+        if abs(radius - r) > 0.5 or not on_grid(*segment.centre, r):
+            return None
+        circle = Circle(
+            placement=placement,
+            radius=decimal_of(r, units),
+            feed_xy=feed,
+            tool=tool,
+            units=units,
+        )
+        return segment.centre, circle
+    frame = _frame(contour)
+    if frame is None:
+        return None
+    x0, y0, width, height, corner = frame
+    if not on_grid(x0, y0, width, height, corner):
+        return None
+    block = Frame(
+        placement=placement,
+        xl=decimal_of(width, units),
+        yw=decimal_of(height, units),
+        corner_radius=decimal_of(corner, units),
+        feed_xy=feed,
+        tool=tool,
+        units=units,
+    )
+    return (x0, y0), block
+
+
+def _frame(contour: Contour) -> tuple[int, int, int, int, int] | None:
+    """(x0, y0, width, height, corner radius) when the contour is exactly an axis-parallel
+    rectangle, sharp or with four equal 90° corner arcs; else None."""
+    segments = contour.segments
+    xs = [p for s in segments for p in (s.start[0], s.end[0])]
+    ys = [p for s in segments for p in (s.start[1], s.end[1])]
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+    arcs = [s for s in segments if s.centre is not None]
+    lines = [s for s in segments if s.centre is None]
+    if len(lines) != 4 or len(arcs) not in (0, 4):
+        return None
+    corner = 0
+    if arcs:
+        first = arcs[0]
+        assert first.centre is not None
+        corner = abs(first.start[0] - first.centre[0]) + abs(first.start[1] - first.centre[1])
+    want_lines = {
+        frozenset({(x0 + corner, y0), (x1 - corner, y0)}),
+        frozenset({(x1, y0 + corner), (x1, y1 - corner)}),
+        frozenset({(x1 - corner, y1), (x0 + corner, y1)}),
+        frozenset({(x0, y1 - corner), (x0, y0 + corner)}),
+    }
+    if {frozenset({s.start, s.end}) for s in lines} != want_lines:
+        return None
+    want_arcs = {
+        (x0 + corner, y0 + corner),
+        (x1 - corner, y0 + corner),
+        (x1 - corner, y1 - corner),
+        (x0 + corner, y1 - corner),
+    }
+    if arcs and {s.centre for s in arcs} != want_arcs:
+        return None
+    if arcs and any(s.clockwise != arcs[0].clockwise for s in arcs):
+        return None
+    return x0, y0, x1 - x0, y1 - y0, corner
+
+
+def nesting(contours: list[Contour]) -> list[int]:
+    """How many other closed contours hold each contour (0: an outer one)."""
+    rings = [regions.polygon(as_path(c), CHORD_NM) if c.closed else [] for c in contours]
+    depths = []
+    for k, contour in enumerate(contours):
+        probe = contour.segments[0].start
+        depths.append(
+            sum(
+                1
+                for j, ring in enumerate(rings)
+                if j != k and ring and regions.inside([ring], probe)
+            )
+        )
+    return depths
+
+
+def program_from_drawing(drawing: Drawing) -> Program:
+    """Every hole and contour of the drawing as blocks (the choices in the module doc)."""
+    notes = drawing.notes
+    holes = sorted(drawing.holes, key=lambda h: (h.diameter, h.source))
+    hole_ops: list[Op] = []
+    for diameter in sorted({h.diameter for h in holes}):
+        group = [h for h in holes if h.diameter == diameter]
+        ordered = _bolt_order(group)
+        hole_ops += find_bolt_circles(
+            [HoleOpR([h.source], h.centre, hole_spec(drawing)) for h in ordered],
+            resolution_half(drawing),
+            notes,
+        )
+    depths = nesting(drawing.contours)
+    order = sorted(
+        range(len(drawing.contours)),
+        key=lambda k: (depths[k] % 2 == 0, _lowest(drawing.contours[k]), k),
+    )
+    ops = list(hole_ops)
+    for k in order:
+        contour = drawing.contours[k]
+        inside = depths[k] % 2 == 1
+        start = _start_index(contour)
+        ops.append(contour_ops(drawing, contour, start, clockwise=not inside, inside=inside))
+    builder = Builder(notes)
+    builder.run(ops)
+    builder.flush_rounding()
+    if ops:
+        notes.needs(
+            None,
+            "the drawing has no depths: the blocks have no Z UP / Z DN (a 2-axis program, the "
+            "quill moved by hand); enter them to cut under program control",
+        )
+        notes.needs(
+            None,
+            "tool 1 (every block) has no diameter in the drawing: enter it in Data Block 0 "
+            "(cutter compensation and CIRCLE/FRAME need it)",
+        )
+    else:
+        notes.assumed(None, "nothing in the drawing became a block")
+    setup = SetUp(units=drawing.units, tools={1: ToolData()} if ops else {})
+    db0 = block0(setup, ops, notes)
+    return make_program(
+        drawing.name, "", drawing.units, "imported from a DXF drawing", db0, builder.blocks
+    )
+
+
+def resolution_half(drawing: Drawing) -> int:
+    """Half a programming step (nm): holes this close to a bolt circle's are on it."""
+    return resolution_nm(drawing.units) // 2
+
+
+def _bolt_order(group: list[Hole]) -> list[Hole]:
+    """Holes of one diameter, those equally spaced about a common centre first and in
+    clockwise order from the one nearest straight below the centre (MillBlocks' BOLT CIR
+    order), the rest in drawing order."""
+    if len(group) < 3:
+        return group
+    cx = sum(h.centre[0] for h in group) / len(group)
+    cy = sum(h.centre[1] for h in group) / len(group)
+    radii = [math.dist(h.centre, (cx, cy)) for h in group]
+    if max(radii) - min(radii) > 2 * 12_700 or min(radii) == 0:
+        return group
+
+    def clockwise_from_below(h: Hole) -> float:
+        dx, dy = h.centre[0] - cx, h.centre[1] - cy
+        return math.degrees(math.atan2(-dx, -dy)) % 360
+
+    return sorted(group, key=clockwise_from_below)
+
+
+def _lowest(contour: Contour) -> tuple[int, int]:
+    low = min((s.start for s in contour.segments), key=lambda p: (p[1], p[0]))
+    return (low[1], low[0])
+
+
+def _start_index(contour: Contour) -> int:
+    """The segment that starts at the contour's lowest, then leftmost, point (closed), or
+    the end nearer the origin's side (open: the chain's own start)."""
+    if not contour.closed:
+        return 0
+    starts = [s.start for s in contour.segments]
+    return min(range(len(starts)), key=lambda k: (starts[k][1], starts[k][0], k))
+
+
+def _f(p: XY) -> tuple[float, float]:
+    return (float(p[0]), float(p[1]))

@@ -1,0 +1,381 @@
+"""Exact offset passes: Clipper's polyline rings turned back into lines and arcs.
+
+The boundary of a region shrunk by `d` (every pass of an offset pocket) is made only of
+(a) the contour's elements moved `d` into the region — a line stays a line, an arc stays an
+arc about the same centre with its radius changed by `d` — and (b) arcs of radius `d` about
+the contour's reflex corners (where the region wraps round a corner, e.g. an island's).
+These are the "carriers" of a level. Clipper gives the topology (which pieces survive, where
+the region splits); each of its ring points is matched to the carriers it lies on (within
+the matching tolerance), the ring is split into the fewest runs each on one carrier, and the
+exact element of each run ends where its carrier meets the next one. The result is checked
+against Clipper's ring point by point; when it does not hold (or a point lies on no
+carrier), the caller keeps the polyline ring, within the stated chordal tolerance.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from app.cnc.mill import (
+    Element,
+    Path,
+    Pt,
+    add,
+    cross,
+    distance_to_element,
+    dot,
+    intersections,
+    left_normal,
+    scale,
+    sub,
+    sweep,
+    tangent,
+    unit,
+)
+from app.cnc.pocketing.regions import Ring
+
+TURN_EPS = 1e-9  # a turn (sine of the angle) smaller than this is a tangent joint
+
+
+@dataclass(frozen=True)
+class Carrier:
+    """A line or circle a pass can run on, with the stretches of it that are real.
+
+    Line: through `origin` along unit `direction`; `spans` are (from, to) distances along it.
+    Circle: about `origin` with `radius`, travelled `clockwise` when the region is on the
+    left; `spans` are (start angle, turn) in radians, turn > 0 in the travel direction.
+    `sources` are the (contour, element) pairs it comes from: the element for a moved
+    element, the element after the corner for a corner arc.
+    """
+
+    origin: Pt
+    direction: Pt | None
+    radius: float
+    clockwise: bool
+    spans: tuple[tuple[float, float], ...]
+    sources: tuple[tuple[int, int], ...]
+
+    @property
+    def is_line(self) -> bool:
+        return self.direction is not None
+
+    def distance(self, p: Pt, slack: float) -> float:
+        """Distance from `p` to the carrier, or inf when `p` is beyond every span by more
+        than `slack`."""
+        if self.direction is not None:
+            q = sub(p, self.origin)
+            along = dot(q, self.direction)
+            if not any(lo - slack <= along <= hi + slack for lo, hi in self.spans):
+                return math.inf
+            return abs(cross(self.direction, q))
+        if not _within_spans(self, p, slack):
+            return math.inf
+        return abs(math.dist(p, self.origin) - self.radius)
+
+    def element_stub(self) -> tuple[Pt, Element]:
+        """A start and element on this carrier's full line/circle (for intersections)."""
+        if self.direction is not None:
+            return self.origin, Element(0, add(self.origin, self.direction))
+        start = (self.origin[0] + self.radius, self.origin[1])
+        return start, Element(0, start, centre=self.origin)
+
+    def project(self, p: Pt) -> Pt:
+        """The nearest point to `p` on the full line/circle."""
+        if self.direction is not None:
+            return add(self.origin, scale(self.direction, dot(sub(p, self.origin), self.direction)))
+        return add(self.origin, scale(unit(sub(p, self.origin)), self.radius))
+
+
+def _within_spans(carrier: Carrier, p: Pt, slack: float) -> bool:
+    angle = math.atan2(p[1] - carrier.origin[1], p[0] - carrier.origin[0])
+    slack_angle = slack / max(carrier.radius, 1.0) + 1e-9
+    for start, turn in carrier.spans:
+        if turn >= 2 * math.pi - 1e-9:
+            return True
+        along = (start - angle) if carrier.clockwise else (angle - start)
+        along %= 2 * math.pi
+        if along <= turn + slack_angle or along >= 2 * math.pi - slack_angle:
+            return True
+    return False
+
+
+def carriers(contours: Sequence[Path], d: float, tolerance: float) -> list[Carrier]:
+    """The carriers of the level `d` nm into the region, for contours oriented with the
+    region on their left. Identical lines/circles are merged (their spans joined)."""
+    found: list[Carrier] = []
+    for ci, contour in enumerate(contours):
+        starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+        for ei, (start, element) in enumerate(zip(starts, contour.elements, strict=True)):
+            moved = _moved(start, element, d, tolerance, (ci, ei))
+            if moved is not None:
+                _merge(found, moved, tolerance)
+            nxt = (ei + 1) % len(contour.elements)
+            corner = element.end
+            t1 = tangent(start, element, at_end=True)
+            t2 = tangent(corner, contour.elements[nxt], at_end=False)
+            turn = math.atan2(cross(t1, t2), dot(t1, t2))
+            if turn < -TURN_EPS:  # a right turn: a reflex corner of the region
+                n1 = left_normal(t1)
+                _merge(
+                    found,
+                    Carrier(
+                        corner,
+                        None,
+                        d,
+                        True,
+                        ((math.atan2(n1[1], n1[0]), -turn),),
+                        ((ci, nxt),),
+                    ),
+                    tolerance,
+                )
+    return found
+
+
+def _moved(
+    start: Pt, element: Element, d: float, tolerance: float, source: tuple[int, int]
+) -> Carrier | None:
+    if element.centre is None:
+        length = math.dist(start, element.end)
+        if length <= 0:
+            return None
+        u = unit(sub(element.end, start))
+        return Carrier(
+            add(start, scale(left_normal(u), d)), u, 0.0, False, ((0.0, length),), (source,)
+        )
+    c = element.centre
+    radius = math.dist(start, c)
+    # Left of a counter-clockwise arc is toward its centre; of a clockwise one, away.
+    moved = radius + d if element.clockwise else radius - d
+    if moved <= tolerance:
+        return None
+    return Carrier(
+        c,
+        None,
+        moved,
+        element.clockwise,
+        ((math.atan2(start[1] - c[1], start[0] - c[0]), sweep(start, element)),),
+        (source,),
+    )
+
+
+def _merge(found: list[Carrier], new: Carrier, tolerance: float) -> None:
+    """Add `new`, joining it to an existing carrier that is the same line or circle."""
+    for k, old in enumerate(found):
+        if new.direction is not None and old.direction is not None:
+            same = (
+                abs(cross(old.direction, new.direction)) < TURN_EPS
+                and dot(old.direction, new.direction) > 0
+                and abs(cross(old.direction, sub(new.origin, old.origin))) <= 1.0
+            )
+            if same:
+                shift = dot(sub(new.origin, old.origin), old.direction)
+                spans = tuple((lo + shift, hi + shift) for lo, hi in new.spans)
+                found[k] = Carrier(
+                    old.origin,
+                    old.direction,
+                    0.0,
+                    False,
+                    old.spans + spans,
+                    old.sources + new.sources,
+                )
+                return
+        elif new.direction is None and old.direction is None:
+            same = (
+                math.dist(old.origin, new.origin) <= 1.0
+                and abs(old.radius - new.radius) <= 1.0
+                and old.clockwise == new.clockwise
+            )
+            if same:
+                found[k] = Carrier(
+                    old.origin,
+                    None,
+                    old.radius,
+                    old.clockwise,
+                    old.spans + new.spans,
+                    old.sources + new.sources,
+                )
+                return
+    found.append(new)
+
+
+@dataclass(frozen=True)
+class ExactRing:
+    """A closed pass of exact lines and arcs and the carriers it runs on."""
+
+    path: Path
+    sources: tuple[tuple[int, int], ...]
+
+
+def exact_ring(
+    ring: Ring, level: Sequence[Carrier], tolerance: float, block: int, tag: str
+) -> ExactRing | None:
+    """The exact lines and arcs of a Clipper ring (region on its left), or None when the
+    ring cannot be matched to the level's carriers within `tolerance` nm.
+
+    Each edge of the ring (between consecutive points) is labelled with the carriers its
+    two ends and its middle lie on; the ring is split into the fewest runs of edges on one
+    carrier, and consecutive runs meet where their carriers intersect.
+    """
+    points: list[Pt] = [(float(x), float(y)) for x, y in ring]
+    n = len(points)
+    if n < 3:
+        return None
+    on = [{k for k, c in enumerate(level) if c.distance(p, tolerance) <= tolerance} for p in points]
+    labels: list[set[int]] = []
+    for i in range(n):
+        a, b = points[i], points[(i + 1) % n]
+        middle = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+        common = on[i] & on[(i + 1) % n]
+        edge = {k for k in common if level[k].distance(middle, tolerance) <= tolerance}
+        # An edge across a junction (Clipper kept no point there): either carrier may take it.
+        labels.append(edge or on[i] | on[(i + 1) % n])
+    if any(not s for s in on):
+        return None
+    runs = _runs(labels)
+    if len(runs) == 1:
+        carrier = level[runs[0][0]]
+        if carrier.is_line:
+            return None
+        start = carrier.project(_lowest(points))
+        element = Element(block, start, centre=carrier.origin, clockwise=carrier.clockwise, tag=tag)
+        return _checked(Path(start, (element,)), [points], [element], [start], tolerance, [carrier])
+    junctions: list[Pt] = []
+    for k, (label, first, length) in enumerate(runs):
+        nxt_label = runs[(k + 1) % len(runs)][0]
+        window = [points[(first + j) % n] for j in range(length + 1)]
+        after = points[(first + length + 1) % n]
+        meet = _junction(level[label], level[nxt_label], window[-1], after, tolerance)
+        if meet is None or _polyline_distance(meet, [*window, after]) > 4 * tolerance:
+            return None
+        junctions.append(meet)
+    elements: list[Element] = []
+    element_starts: list[Pt] = []
+    groups: list[list[Pt]] = []
+    used: list[Carrier] = []
+    for k, (label, first, length) in enumerate(runs):
+        start, end = junctions[k - 1], junctions[k]
+        carrier = level[label]
+        if math.dist(start, end) < 1.0:
+            continue
+        if carrier.is_line:
+            element = Element(block, end, tag=tag)
+        else:
+            element = Element(
+                block, end, centre=carrier.origin, clockwise=carrier.clockwise, tag=tag
+            )
+        elements.append(element)
+        element_starts.append(start)
+        run = [(first + j) % n for j in range(length + 1)]
+        groups.append([points[i] for i in run if label in on[i]])
+        used.append(carrier)
+    if not elements:
+        return None
+    path = Path(junctions[-1], tuple(elements))
+    return _checked(path, groups, elements, element_starts, tolerance, used)
+
+
+def _checked(
+    path: Path,
+    groups: list[list[Pt]],
+    elements: list[Element],
+    starts: list[Pt],
+    tolerance: float,
+    used: list[Carrier],
+) -> ExactRing | None:
+    for group, element, start in zip(groups, elements, starts, strict=True):
+        for p in group:
+            if distance_to_element(p, start, element) > 2 * tolerance:
+                return None
+    sources = tuple(sorted({s for c in used for s in c.sources}))
+    return ExactRing(path, sources)
+
+
+def _lowest(points: list[Pt]) -> Pt:
+    return min(points, key=lambda p: (p[1], p[0]))
+
+
+def _runs(labels: list[set[int]]) -> list[tuple[int, int, int]]:
+    """The fewest runs (carrier, first edge, number of edges) covering the cyclic sequence
+    of edge labels, each run's edges all on its carrier (greedy longest run from a place
+    where no carrier continues; optimal for this covering)."""
+    n = len(labels)
+    common = set.intersection(*labels)
+    if common:
+        return [(min(common), 0, n)]
+    start = next((i for i in range(n) if not labels[i] & labels[i - 1]), None)
+    if start is None:
+        start = min(range(n), key=lambda i: (len(labels[i]), i))
+    runs: list[tuple[int, int, int]] = []
+    i = 0
+    while i < n:
+        best, best_len = -1, 0
+        for label in sorted(labels[(start + i) % n]):
+            j = i
+            while j < n and label in labels[(start + j) % n]:
+                j += 1
+            if j - i > best_len:
+                best, best_len = label, j - i
+        runs.append((best, (start + i) % n, best_len))
+        i += best_len
+    if len(runs) > 1 and runs[0][0] == runs[-1][0]:
+        label, first, length = runs.pop()
+        runs[0] = (label, first, length + runs[0][2])
+    return runs
+
+
+def _junction(a: Carrier, b: Carrier, near: Pt, after: Pt, tolerance: float) -> Pt | None:
+    """Where carrier `a` meets carrier `b`, near the ring's change from one to the other."""
+    a_start, a_element = a.element_stub()
+    b_start, b_element = b.element_stub()
+    candidates = intersections(a_start, a_element, b_start, b_element)
+    middle = near
+    if candidates:
+        best = min(candidates, key=lambda p: math.dist(p, middle))
+        if math.dist(best, middle) <= 64 * tolerance:
+            return best
+    # Tangent carriers (a line into a corner arc, touching circles): the touching point.
+    if a.direction is not None and b.direction is not None:
+        return None
+    circle, other = (b, a) if a.direction is not None else (a, b)
+    foot = other.project(circle.origin)
+    if other.direction is None and math.dist(circle.origin, other.origin) > 0:
+        toward = unit(sub(other.origin, circle.origin))
+        options = [
+            add(circle.origin, scale(toward, circle.radius)),
+            add(circle.origin, scale(toward, -circle.radius)),
+        ]
+        touch = min(options, key=lambda p: math.dist(p, middle))
+    elif math.dist(foot, circle.origin) > 0:
+        touch = add(circle.origin, scale(unit(sub(foot, circle.origin)), circle.radius))
+    else:
+        return None
+    if (
+        a.distance(touch, 64 * tolerance) <= 2 * tolerance
+        and b.distance(touch, 64 * tolerance) <= 2 * tolerance
+    ):
+        return touch
+    return None
+
+
+def _polyline_distance(p: Pt, points: list[Pt]) -> float:
+    if len(points) == 1:
+        return math.dist(p, points[0])
+    best = math.inf
+    for a, b in itertools.pairwise(points):
+        best = min(best, distance_to_element(p, a, Element(0, b)))
+    return best
+
+
+def matched_sources(
+    ring: Ring, level: Sequence[Carrier], tolerance: float
+) -> tuple[tuple[int, int], ...]:
+    """The (contour, element) sources of every carrier some ring point lies on."""
+    found: set[tuple[int, int]] = set()
+    for x, y in ring:
+        for carrier in level:
+            if carrier.distance((float(x), float(y)), tolerance) <= tolerance:
+                found.update(carrier.sources)
+    return tuple(sorted(found))

@@ -1,0 +1,668 @@
+"""Plan an irregular pocket: offset passes from the middle out, a finishing pass at the wall
+and round each island, the links between passes, and what the planner found.
+
+The readings we chose (docs/pocketing.md):
+
+- Passes are the boundaries of the pocket region (boundary minus islands) shrunk by
+  d = tool radius (the finishing level: the finished surface), then tool radius + finish
+  allowance, and on by the step-over, until nothing is left (Clipper computes the regions;
+  `exact.py` turns each ring back into exact lines and arcs).
+- Cutting order is from the middle out: the deepest rings of a piece first, each ring then
+  the one around it, so every ring has uncut material on the same side and climb or
+  conventional milling holds for every pass: with a clockwise spindle, climb milling goes
+  round the wall-like rings counter-clockwise and round the island-like rings clockwise
+  (`app.cnc.mill.routine_clockwise`, DESIGN.md §3), conventional the reverse, a negative RPM
+  flips both. The finishing rings come last in their piece.
+- The tool goes down (plunge) at a deep point of the first innermost piece: a point where the
+  whole tool fits, as far from the walls as the region allows. Where the region had split
+  into pieces, each further innermost piece is entered the same way after a retract.
+- A ring starts at its point nearest to where the tool is. The move there is a feed when
+  the tool stays clear of walls and islands and either moves through cut material or steps
+  no farther than its diameter; otherwise the tool retracts and plunges at the ring.
+- Material the rings leave (cusps at sharp corners, a middle wider than a step) is found by
+  area (Clipper): the pocket a round tool can reach, minus the area swept by the tool. Each
+  piece wider than `RESIDUE_NM` gets an out-and-back cleanup move from the nearest ring.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+from app.cnc.blocks import MillingMode, Placement
+from app.cnc.interpret import peck_levels
+from app.cnc.mill import (
+    Element,
+    Path,
+    Pt,
+    distance_to_element,
+    length,
+    reverse,
+    routine_clockwise,
+    sample,
+    signed_area,
+    sub,
+)
+from app.cnc.pocketing import regions
+from app.cnc.pocketing.checks import contour_problems, island_problems, show, starts_of
+from app.cnc.pocketing.exact import Carrier, carriers, exact_ring, matched_sources
+from app.cnc.pocketing.model import (
+    Link,
+    LinkKind,
+    Pass,
+    PassKind,
+    PassLevel,
+    PocketFinding,
+    PocketIssue,
+    PocketPlan,
+)
+from app.cnc.problems import Severity
+from app.cnc.units import Units
+
+DEFAULT_CHORDAL_TOLERANCE = 500  # nm: arcs become chords no farther than this from the arc
+RESIDUE_NM = 5_000  # nm: uncut material narrower than this (0.0002 in) is not chased
+MAX_LEVELS = 5_000  # more offset levels than this: the step-over is too small for the pocket
+MAX_CLEANUPS = 400  # cleanup moves per pocket before the planner reports what is left
+
+
+def plan_pocket(
+    boundary: Path,
+    islands: Sequence[Path] = (),
+    *,
+    tool_radius: int,
+    step_over: int,
+    finish_allowance: int = 0,
+    milling: MillingMode = MillingMode.CLIMB,
+    rpm: int | None = None,
+    block: int = 0,
+    units: Units = Units.INCH,
+    chordal_tolerance: int = DEFAULT_CHORDAL_TOLERANCE,
+) -> PocketPlan:
+    """The passes that clear the pocket inside `boundary` around `islands`.
+
+    Contours are closed `mill.Path`s of lines and arcs in nm (either direction); an
+    element's `block` names it in findings. `tool_radius`, `step_over` (distance between
+    neighbouring rings, 0 < step-over < tool diameter) and `finish_allowance` (stock the
+    roughing rings leave on walls and islands, ≥ 0) are nm. `milling` and `rpm` (its sign
+    is the spindle direction; None is clockwise) choose each ring's direction; `block` is
+    written on every element made; `units` is for messages.
+
+    Raises nothing for bad geometry: errors come back as findings (and no passes).
+    """
+    r = float(tool_radius)
+    t = float(chordal_tolerance)
+    match = 2 * t + 2  # Clipper's points lie this close to the true offsets
+    findings = _parameter_problems(tool_radius, step_over, finish_allowance, units)
+    names = ["boundary"] + [f"island {k}" for k in range(1, len(islands) + 1)]
+    for name, contour in zip(names, [boundary, *islands], strict=True):
+        findings += contour_problems(name, contour, units)
+    if _errors(findings):
+        return PocketPlan((), tuple(findings), t)
+    # Region on the left of every element: the boundary counter-clockwise, islands clockwise.
+    contours = [_oriented(boundary, ccw=True)] + [_oriented(i, ccw=False) for i in islands]
+    rings = [regions.polygon(c, t) for c in contours]
+    findings += island_problems(rings[0], rings[1:], t)
+    if _errors(findings):
+        return PocketPlan((), tuple(findings), t)
+    region = regions.difference([rings[0]], rings[1:])
+    levels = _levels(region, r, float(step_over), float(finish_allowance), t)
+    if levels is None:
+        findings.append(_too_many_levels(step_over, units))
+        return PocketPlan((), tuple(findings), t)
+    if not levels:
+        findings.append(_tool_too_large(r, units))
+        return PocketPlan((), tuple(findings), t)
+    reachable = levels[0][1]
+    opening = regions.offset(reachable, r, t)
+    findings += _narrow(regions.difference(region, opening), contours, names, r, match, units)
+    planner = _Planner(
+        contours=contours,
+        names=names,
+        levels=levels,
+        r=r,
+        t=t,
+        match=match,
+        reverse_rings=routine_clockwise(Placement.POCKET, milling, rpm),
+        block=block,
+        safe=regions.offset(region, -(r + 2 * t), t),
+        moves=regions.offset(region, -(r - t), t),
+    )
+    planner.cut_all()
+    left = planner.clean_up(opening)
+    if left:
+        findings.append(
+            PocketFinding(
+                PocketIssue.NARROW,
+                Severity.WARNING,
+                f"{left} places of uncut material could not be reached by cleanup moves",
+            )
+        )
+    passes = planner.classify_links()
+    return PocketPlan(tuple(passes), tuple(findings), t)
+
+
+def pass_levels(
+    plan: PocketPlan, z_up: int, z_dn: int, pecks: int = 1, floor_allowance: int = 0
+) -> tuple[PassLevel, ...]:
+    """Which passes run at which depth (nm), as the manual's routines peck: the whole plan
+    at each of `pecks` levels evenly spaced from Z UP down to Z DN (+ `floor_allowance`),
+    and with a floor allowance (a 2P roughing) the whole plan once more at Z DN — the pocket
+    is cleared again (DESIGN.md §3). Between levels the interpreter retracts and goes back
+    to the first plunge point."""
+    levels = [PassLevel(z, plan.passes) for z in peck_levels(z_up, z_dn + floor_allowance, pecks)]
+    if floor_allowance > 0:
+        levels.append(PassLevel(z_dn, plan.passes))
+    return tuple(levels)
+
+
+# -- the planner -----------------------------------------------------------------------------
+
+
+Level = tuple[float, list[regions.Ring]]
+
+
+@dataclass
+class _Node:
+    level: int
+    component: regions.Component
+    children: list[_Node] = field(default_factory=list)
+
+
+@dataclass
+class _Planner:
+    contours: list[Path]
+    names: list[str]
+    levels: list[Level]
+    r: float
+    t: float
+    match: float
+    reverse_rings: bool
+    block: int
+    safe: list[regions.Ring]
+    moves: list[regions.Ring]
+    passes: list[Pass] = field(default_factory=list)
+    position: Pt | None = None
+    cleared: list[regions.Ring] = field(default_factory=list)
+    _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
+
+    # -- order -------------------------------------------------------------------------------
+
+    def cut_all(self) -> None:
+        for root in self._tree():
+            self._cut(root)
+
+    def _tree(self) -> list[_Node]:
+        layers = [
+            [_Node(k, c) for c in sorted(regions.components(rings), key=_key)]
+            for k, (_, rings) in enumerate(self.levels)
+        ]
+        for k in range(1, len(layers)):
+            for node in layers[k]:
+                for parent in layers[k - 1]:
+                    if regions.inside(parent.component.rings, node.component.outer[0]):
+                        parent.children.append(node)
+                        break
+        return layers[0]
+
+    def _cut(self, node: _Node) -> None:
+        for child in node.children:
+            self._cut(child)
+        rings = list(node.component.rings)
+        leaf_entry = not node.children
+        while rings:
+            here = self.position
+            ring = min(rings, key=lambda g: (_ring_distance(g, here), _key_ring(g)))
+            rings.remove(ring)
+            self._add_ring(node, ring, plunge_deep=leaf_entry)
+            leaf_entry = False
+
+    def _add_ring(self, node: _Node, ring: regions.Ring, plunge_deep: bool) -> None:
+        d, _ = self.levels[node.level]
+        finish = node.level == 0
+        tag = "finish" if finish else "rough"
+        level = self._level_carriers(node.level, d)
+        exact = exact_ring(ring, level, self.match, self.block, tag)
+        if exact is not None:
+            path, sources, is_exact = exact.path, exact.sources, True
+        else:
+            path = _polyline(ring, self.block, tag)
+            sources, is_exact = matched_sources(ring, level, 2 * self.match), False
+        if self.reverse_rings:
+            path = reverse(path)
+        entry, path = self._link(node, path, plunge_deep)
+        names = tuple(dict.fromkeys(self.names[c] for c, _ in sources)) if finish else ()
+        kind = PassKind.FINISH if finish else PassKind.ROUGH
+        self.passes.append(Pass(kind, path, d, is_exact, entry, names))
+        self.cleared = regions.union(self.cleared, self._swept(entry.path), self._swept(path))
+        self.position = _end(path)
+
+    def _link(self, node: _Node, ring: Path, plunge_deep: bool) -> tuple[Link, Path]:
+        """The way into a ring and the ring started where that way ends.
+
+        A retract is the last resort: first a straight feed to the ring's nearest point
+        (through cut material, or one step no longer than the tool diameter), then the same
+        from the point of the previous ring nearest to this one (going along the previous
+        ring, already cut, the shorter way round)."""
+        here = self.position
+        if here is None or plunge_deep:
+            path = ring if here is None else rotate(ring, here)
+            kind = LinkKind.PLUNGE if here is None else LinkKind.RETRACT
+            deep = regions.deep_point(node.component, self.t)
+            at = (float(deep[0]), float(deep[1]))
+            if here is None:
+                path = rotate(ring, at)
+            if at != path.start and regions.segment_inside(self.moves, at, path.start):
+                return Link(kind, Path(at, (Element(self.block, path.start, tag="link"),))), path
+            return Link(kind, Path(path.start, ())), path
+        direct = rotate(ring, here)
+        swept = self._swept(direct)
+        step = self._step(here, direct.start, swept)
+        if step is LinkKind.CLEARED:
+            return self._feed(step, Path(here, ()), direct), direct
+        previous = self.passes[-1].path
+        along, closest = _way_round(previous, ring, self.r / 8)
+        shifted = rotate(ring, closest)
+        other = self._step(closest, shifted.start, self._swept(shifted))
+        if (
+            other is not None
+            and along.elements
+            and math.dist(closest, shifted.start) < math.dist(here, direct.start)
+        ):
+            return self._feed(other, along, shifted), shifted
+        if step is not None:
+            return self._feed(step, Path(here, ()), direct), direct
+        return Link(LinkKind.RETRACT, Path(direct.start, ())), direct
+
+    def _step(self, a: Pt, b: Pt, then: list[regions.Ring]) -> LinkKind | None:
+        """CLEARED or CUTTING for a straight feed from `a` to `b` before a pass that cuts
+        `then`; None when the tool would touch a wall or island or cut farther than its
+        diameter."""
+        if math.dist(a, b) < 1.0:
+            return LinkKind.CLEARED
+        if not regions.segment_inside(self.moves, a, b):
+            return None
+        move = Path(a, (Element(self.block, b, tag="link"),))
+        if self._through_cleared(move, then):
+            return LinkKind.CLEARED
+        return LinkKind.CUTTING if math.dist(a, b) <= 2 * self.r else None
+
+    def _feed(self, kind: LinkKind, along: Path, ring: Path) -> Link:
+        elements = list(along.elements)
+        end = _end(along)
+        if math.dist(end, ring.start) >= 1.0:
+            elements.append(Element(self.block, ring.start, tag="link"))
+        return Link(kind, Path(along.start, tuple(elements)))
+
+    def _level_carriers(self, k: int, d: float) -> list[Carrier]:
+        if k not in self._carriers:
+            self._carriers[k] = carriers(self.contours, d, self.t)
+        return self._carriers[k]
+
+    # -- areas -------------------------------------------------------------------------------
+
+    def _swept(self, path: Path) -> list[regions.Ring]:
+        if not path.elements:
+            return regions.sweep_lines([[path.start]], self.r, self.t)
+        return regions.sweep_lines([regions.path_points(path, self.t)], self.r, self.t)
+
+    def _through_cleared(self, move: Path, then: list[regions.Ring]) -> bool:
+        """True when the tool moving along `move` cuts nothing but what is already cut or
+        what `then` (the pass it leads to) cuts."""
+        done = regions.offset(regions.union(self.cleared, then), self.t, self.t)
+        extra = regions.difference(self._swept(move), done)
+        return not regions.thicker_than(extra, RESIDUE_NM, self.t)
+
+    def clean_up(self, opening: list[regions.Ring]) -> int:
+        """Add cleanup moves until the tool has swept all it can reach; how many pieces of
+        material are left that no move could reach (0 normally)."""
+        swept = regions.union(*(self._swept(p.path) for p in self.passes))
+        swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
+        unreachable: list[Pt] = []
+        for _ in range(MAX_CLEANUPS):
+            residue = regions.difference(opening, swept)
+            pieces = [
+                c
+                for c in regions.components(residue)
+                if regions.thicker_than(c.rings, RESIDUE_NM, self.t)
+            ]
+            targets = []
+            for piece in pieces:
+                deep = regions.deep_point(piece, self.t)
+                target = self._reachable(deep)
+                if all(math.dist(target, u) > 1.0 for u in unreachable):
+                    targets.append(target)
+            if not targets:
+                return len(pieces)
+            for target in targets:
+                spike = self._spike(target)
+                if spike is None:
+                    unreachable.append(target)
+                    continue
+                swept = regions.union(swept, regions.sweep_lines([spike], self.r, self.t))
+        return 0
+
+    def _reachable(self, p: IPtF) -> Pt:
+        """The point nearest `p` where the tool centre may go (inside `safe`)."""
+        point = (float(p[0]), float(p[1]))
+        if regions.inside(self.safe, (round(point[0]), round(point[1]))):
+            return point
+        best, best_d = point, math.inf
+        for ring in self.safe:
+            for a, b in zip(ring, ring[1:] + ring[:1], strict=True):
+                fa, fb = (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
+                q = _closest_on_segment(point, fa, fb)
+                if math.dist(q, point) < best_d:
+                    best, best_d = q, math.dist(q, point)
+        return best
+
+    def _spike(self, target: Pt) -> list[Pt] | None:
+        """Insert an out-and-back move to `target` into the nearest pass that can reach it
+        in a straight line; the move's two points, or None."""
+        candidates: list[tuple[float, int, int, Pt]] = []
+        for i, made in enumerate(self.passes):
+            current = made.path.start
+            for j, element in enumerate(made.path.elements):
+                q = _closest_on_element(target, current, element)
+                candidates.append((math.dist(q, target), i, j, q))
+                current = element.end
+        candidates.sort()
+        for _, i, j, q in candidates[:12]:
+            if regions.segment_inside(self.moves, q, target):
+                made = self.passes[i]
+                self.passes[i] = replace(made, path=_insert_spike(made.path, j, q, target))
+                return [q, target]
+        return None
+
+    def classify_links(self) -> list[Pass]:
+        """The passes with each feed link marked CLEARED or CUTTING by the material cut
+        before it (cleanup moves included)."""
+        cleared: list[regions.Ring] = []
+        result: list[Pass] = []
+        for made in self.passes:
+            link = made.entry
+            if link.kind in (LinkKind.CLEARED, LinkKind.CUTTING):
+                self.cleared = cleared
+                then = self._swept(made.path)
+                through = not link.path.elements or self._through_cleared(link.path, then)
+                link = replace(link, kind=LinkKind.CLEARED if through else LinkKind.CUTTING)
+            result.append(replace(made, entry=link))
+            cleared = regions.union(cleared, self._swept(link.path), self._swept(made.path))
+        return result
+
+
+IPtF = tuple[int, int] | tuple[float, float]
+
+
+# -- paths ------------------------------------------------------------------------------------
+
+
+def _end(path: Path) -> Pt:
+    return path.elements[-1].end if path.elements else path.start
+
+
+def _closest_on_segment(p: Pt, a: Pt, b: Pt) -> Pt:
+    d = sub(b, a)
+    denom = d[0] * d[0] + d[1] * d[1]
+    if denom == 0:
+        return a
+    k = max(0.0, min(1.0, ((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / denom))
+    return (a[0] + d[0] * k, a[1] + d[1] * k)
+
+
+def _closest_on_element(p: Pt, start: Pt, element: Element) -> Pt:
+    if element.centre is None:
+        return _closest_on_segment(p, start, element.end)
+    c = element.centre
+    radius = math.dist(start, c)
+    if math.dist(p, c) == 0:
+        return start
+    on_circle = (
+        c[0] + (p[0] - c[0]) * radius / math.dist(p, c),
+        c[1] + (p[1] - c[1]) * radius / math.dist(p, c),
+    )
+    if distance_to_element(on_circle, start, element) <= 1e-6 * max(radius, 1.0):
+        return on_circle
+    return min((start, element.end), key=lambda q: math.dist(q, p))
+
+
+def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
+    """The shorter way along the closed `previous` path from its start to its point nearest
+    to `ring` (elements tagged "link"), and that point; points `step` apart are tried."""
+    ring_starts = starts_of(ring)
+    best: tuple[float, Pt] | None = None
+    for point, _ in sample(previous, step):
+        for start, element in zip(ring_starts, ring.elements, strict=True):
+            d = math.dist(_closest_on_element(point, start, element), point)
+            if best is None or d < best[0] - 1e-9:
+                best = (d, point)
+    assert best is not None
+    q = best[1]
+    way = Path(previous.start, _up_to(previous, q))
+    if _length(way) > _length(previous) / 2:
+        # Backward from the start to q: the forward piece from q to the start, reversed.
+        way = reverse(Path(q, _up_to(rotate(previous, q), previous.start)))
+    return Path(way.start, tuple(replace(e, tag="link") for e in way.elements)), q
+
+
+def _up_to(path: Path, point: Pt) -> tuple[Element, ...]:
+    """The elements of `path` from its start to `point` (on it), the last one cut there."""
+    starts = starts_of(path)
+    out: list[Element] = []
+    for start, element in zip(starts, path.elements, strict=True):
+        q = _closest_on_element(point, start, element)
+        if math.dist(q, point) < 1.0:
+            out += _split(start, element, point)[:1] if math.dist(start, point) >= 1.0 else []
+            return tuple(out)
+        out.append(element)
+    return tuple(out)
+
+
+def _length(path: Path) -> float:
+    total, current = 0.0, path.start
+    for element in path.elements:
+        total += length(current, element)
+        current = element.end
+    return total
+
+
+def _split(start: Pt, element: Element, at: Pt) -> list[Element]:
+    """The element cut in two at a point on it (pieces shorter than 1 nm dropped)."""
+    pieces = []
+    if math.dist(start, at) >= 1.0:
+        pieces.append(replace(element, end=at))
+    if math.dist(at, element.end) >= 1.0:
+        pieces.append(element)
+    return pieces
+
+
+def _insert_spike(path: Path, index: int, at: Pt, target: Pt) -> Path:
+    starts = starts_of(path)
+    element = path.elements[index]
+    block = element.block
+    head, tail = path.elements[:index], path.elements[index + 1 :]
+    pieces = _split(starts[index], element, at)
+    out = (Element(block, target, tag="cleanup"), Element(block, at, tag="cleanup"))
+    if not pieces or math.dist(starts[index], at) < 1.0:
+        middle = (*out, *pieces)
+    else:
+        middle = (pieces[0], *out, *pieces[1:])
+    return Path(path.start, (*head, *middle, *tail))
+
+
+def rotate(path: Path, near: Pt) -> Path:
+    """A closed path started at its point nearest to `near` (the same path otherwise)."""
+    starts = starts_of(path)
+    best = min(
+        range(len(path.elements)),
+        key=lambda k: (math.dist(_closest_on_element(near, starts[k], path.elements[k]), near), k),
+    )
+    element = path.elements[best]
+    at = _closest_on_element(near, starts[best], element)
+    if math.dist(at, starts[best]) < 1.0:
+        at = starts[best]
+        return Path(at, (*path.elements[best:], *path.elements[:best]))
+    if math.dist(at, element.end) < 1.0:
+        return Path(element.end, (*path.elements[best + 1 :], *path.elements[: best + 1]))
+    first, second = replace(element, end=at), element
+    if element.centre is not None and len(path.elements) == 1:
+        # A full circle started elsewhere is still a full circle.
+        return Path(at, (replace(element, end=at),))
+    return Path(at, (second, *path.elements[best + 1 :], *path.elements[:best], first))
+
+
+def _oriented(path: Path, ccw: bool) -> Path:
+    return path if (signed_area(path) > 0) == ccw else reverse(path)
+
+
+def _polyline(ring: regions.Ring, block: int, tag: str) -> Path:
+    points = [(float(x), float(y)) for x, y in ring]
+    return Path(points[0], tuple(Element(block, p, tag=tag) for p in [*points[1:], points[0]]))
+
+
+def _key(component: regions.Component) -> tuple[int, int]:
+    return _key_ring(component.outer)
+
+
+def _key_ring(ring: regions.Ring) -> tuple[int, int]:
+    low = min(ring, key=lambda p: (p[1], p[0]))
+    return (low[1], low[0])
+
+
+def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
+    if here is None:
+        return 0.0
+    return min(math.dist(here, p) for p in ring)
+
+
+# -- levels and findings ----------------------------------------------------------------------
+
+
+def _levels(
+    region: list[regions.Ring], r: float, step: float, allowance: float, t: float
+) -> list[Level] | None:
+    """(offset, region shrunk by it) from the finishing level inward; None when there would
+    be more than MAX_LEVELS."""
+    found: list[Level] = []
+    d = r
+    while len(found) <= MAX_LEVELS:
+        shrunk = regions.offset(region, -d, t)
+        if not shrunk:
+            return found
+        found.append((d, shrunk))
+        if len(found) == 1:
+            d = r + allowance if allowance > t else r + step
+        else:
+            d += step
+    return None
+
+
+def _narrow(
+    residue: list[regions.Ring],
+    contours: list[Path],
+    names: list[str],
+    r: float,
+    match: float,
+    units: Units,
+) -> list[PocketFinding]:
+    """Material the tool cannot reach that is more than a corner it cannot get into."""
+    found = []
+    for piece in regions.components(residue):
+        if not regions.thicker_than(piece.rings, RESIDUE_NM, match):
+            continue
+        touched = _touched(piece, contours, 4 * match)
+        if _is_corner(touched, contours):
+            continue
+        described = ", ".join(_describe(names, contours, c, e) for c, e in touched[:4])
+        if len(touched) > 4:
+            described += f" and {len(touched) - 4} more"
+        at = piece.outer[0]
+        found.append(
+            PocketFinding(
+                PocketIssue.NARROW,
+                Severity.WARNING,
+                f"the pocket is narrower than the {show(2 * r, units)} tool near X "
+                f"{show(at[0], units)} Y {show(at[1], units)} ({described}): material is "
+                "left there",
+                names[touched[0][0]] if touched else None,
+                touched[0][1] + 1 if touched else None,
+                contours[touched[0][0]].elements[touched[0][1]].block if touched else None,
+                (float(at[0]), float(at[1])),
+            )
+        )
+    return found
+
+
+def _touched(piece: regions.Component, contours: list[Path], reach: float) -> list[tuple[int, int]]:
+    points = [(float(x), float(y)) for ring in piece.rings for x, y in ring]
+    touched = []
+    for ci, contour in enumerate(contours):
+        for ei, (start, element) in enumerate(
+            zip(starts_of(contour), contour.elements, strict=True)
+        ):
+            if any(distance_to_element(p, start, element) <= reach for p in points):
+                touched.append((ci, ei))
+    return touched
+
+
+def _is_corner(touched: list[tuple[int, int]], contours: list[Path]) -> bool:
+    """One element, or two consecutive elements of one contour: a corner's fillet."""
+    if len(touched) == 1:
+        return True
+    if len(touched) != 2 or touched[0][0] != touched[1][0]:
+        return False
+    n = len(contours[touched[0][0]].elements)
+    a, b = touched[0][1], touched[1][1]
+    return (b - a) % n in (1, n - 1)
+
+
+def _describe(names: list[str], contours: list[Path], c: int, e: int) -> str:
+    block = contours[c].elements[e].block
+    return f"{names[c]} element {e + 1}" + (f" (block {block})" if block else "")
+
+
+def _parameter_problems(
+    radius: int, step: int, allowance: int, units: Units
+) -> list[PocketFinding]:
+    found = []
+    if radius <= 0:
+        found.append(
+            _step_finding(f"the tool radius must be more than 0 (it is {show(radius, units)})")
+        )
+    elif not 0 < step < 2 * radius:
+        found.append(
+            _step_finding(
+                f"the step-over {show(step, units)} must be more than 0 and less than the tool "
+                f"diameter {show(2 * radius, units)}"
+            )
+        )
+    if allowance < 0:
+        found.append(
+            _step_finding(f"the finish allowance {show(allowance, units)} must not be negative")
+        )
+    return found
+
+
+def _step_finding(message: str) -> PocketFinding:
+    return PocketFinding(PocketIssue.STEP_OVER, Severity.ERROR, message)
+
+
+def _too_many_levels(step: int, units: Units) -> PocketFinding:
+    return _step_finding(
+        f"a step-over of {show(step, units)} needs more than {MAX_LEVELS} passes for this "
+        "pocket; use a larger step-over"
+    )
+
+
+def _tool_too_large(r: float, units: Units) -> PocketFinding:
+    return PocketFinding(
+        PocketIssue.TOOL_TOO_LARGE,
+        Severity.ERROR,
+        f"boundary: the {show(2 * r, units)} tool fits nowhere inside the pocket; it is "
+        "narrower than the tool everywhere",
+        "boundary",
+    )
+
+
+def _errors(findings: list[PocketFinding]) -> bool:
+    return any(f.severity is Severity.ERROR for f in findings)

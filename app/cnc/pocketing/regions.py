@@ -1,0 +1,240 @@
+"""Offset regions in integer nanometres, with pyclipper (Clipper 6.4).
+
+Why pyclipper and not shapely: Clipper works on integer coordinates, which are what the
+tool path is made of (nanometres, DESIGN.md §2), with exact integer arithmetic for its
+topology (no float robustness surprises when passes touch or regions split); its PolyTree
+gives outer rings with their holes directly; its round joins take a stated arc tolerance;
+and it is small, well kept and made for exactly this job (offsetting and clipping for CAM).
+Keeping shapely out of the engine also keeps the tests honest: they measure the pocket with
+shapely (GEOS), a different implementation from the one that planned it.
+
+A region is a list of rings (lists of integer points). Clipper's convention, kept here:
+outer rings run counter-clockwise (positive area), hole rings clockwise, so the region is
+always on the left of a ring's travel. Curved contours become polylines whose chords stay
+within `tolerance` nm of the arc (the chordal tolerance the planner states).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, cast
+
+import pyclipper
+
+from app.cnc.mill import Element, Path, Pt, sweep
+
+IPt = tuple[int, int]
+Ring = list[IPt]
+
+
+@dataclass(frozen=True)
+class Component:
+    """One connected piece of a region: its outer ring and the holes in it."""
+
+    outer: Ring
+    holes: tuple[Ring, ...]
+
+    @property
+    def rings(self) -> list[Ring]:
+        return [self.outer, *self.holes]
+
+
+def arc_steps(radius: float, turn: float, tolerance: float) -> int:
+    """How many chords an arc of `radius` turning `turn` radians needs so that no chord is
+    farther than `tolerance` from the arc (sagitta)."""
+    if radius <= tolerance:
+        return max(1, math.ceil(turn / (math.pi / 2)))
+    step = 2 * math.acos(1 - tolerance / radius)
+    return max(1, math.ceil(turn / step))
+
+
+def element_points(start: Pt, element: Element, tolerance: float) -> list[Pt]:
+    """Points along an element after `start`, ending at its end: chords within `tolerance`."""
+    if element.centre is None:
+        return [element.end]
+    c = element.centre
+    radius = math.dist(start, c)
+    turn = sweep(start, element)
+    n = arc_steps(radius, turn, tolerance)
+    a0 = math.atan2(start[1] - c[1], start[0] - c[0])
+    sign = -1.0 if element.clockwise else 1.0
+    points = [
+        (
+            c[0] + radius * math.cos(a0 + sign * turn * i / n),
+            c[1] + radius * math.sin(a0 + sign * turn * i / n),
+        )
+        for i in range(1, n)
+    ]
+    return [*points, element.end]
+
+
+def path_points(path: Path, tolerance: float) -> list[Pt]:
+    """The start and every chord point of a path (float nm)."""
+    points = [path.start]
+    current = path.start
+    for element in path.elements:
+        points += element_points(current, element, tolerance)
+        current = element.end
+    return points
+
+
+def to_ring(points: Iterable[Pt]) -> Ring:
+    """Integer points with consecutive repeats (and a closing repeat) dropped."""
+    ring: Ring = []
+    for x, y in points:
+        p = (round(x), round(y))
+        if not ring or ring[-1] != p:
+            ring.append(p)
+    if len(ring) > 1 and ring[0] == ring[-1]:
+        ring.pop()
+    return ring
+
+
+def polygon(path: Path, tolerance: float) -> Ring:
+    """A closed path as a ring of integer points (in its own direction)."""
+    return to_ring(path_points(path, tolerance))
+
+
+def _rings(result: Any) -> list[Ring]:
+    return [[(int(x), int(y)) for x, y in ring] for ring in result]
+
+
+def clip(subject: Sequence[Ring], clip_rings: Sequence[Ring], operation: int) -> list[Ring]:
+    """A boolean operation (pyclipper.CT_*) of two regions (non-zero fill)."""
+    clipper = pyclipper.Pyclipper()
+    if subject:
+        clipper.AddPaths(subject, pyclipper.PT_SUBJECT, True)
+    if clip_rings:
+        clipper.AddPaths(clip_rings, pyclipper.PT_CLIP, True)
+    if not subject and not clip_rings:
+        return []
+    try:
+        result = clipper.Execute(operation, pyclipper.PFT_NONZERO, pyclipper.PFT_NONZERO)
+    except pyclipper.ClipperException:
+        return []  # an empty subject: nothing to clip
+    return _rings(result)
+
+
+def union(*regions: Sequence[Ring]) -> list[Ring]:
+    rings = [ring for region in regions for ring in region]
+    return clip(rings, [], pyclipper.CT_UNION) if rings else []
+
+
+def difference(a: Sequence[Ring], b: Sequence[Ring]) -> list[Ring]:
+    if not a:
+        return []
+    return clip(a, b, pyclipper.CT_DIFFERENCE) if b else union(a)
+
+
+def intersection(a: Sequence[Ring], b: Sequence[Ring]) -> list[Ring]:
+    if not a or not b:
+        return []
+    return clip(a, b, pyclipper.CT_INTERSECTION)
+
+
+def offset(region: Sequence[Ring], delta: float, tolerance: float) -> list[Ring]:
+    """The region grown by `delta` nm (shrunk when negative), round joins within
+    `tolerance` of the true arcs."""
+    if not region:
+        return []
+    offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
+    offsetter.AddPaths(region, pyclipper.JT_ROUND, pyclipper.ET_CLOSEDPOLYGON)
+    return _rings(offsetter.Execute(float(delta)))
+
+
+def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) -> list[Ring]:
+    """The area a round tool of `radius` covers moving along polylines (round ends)."""
+    offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
+    added = False
+    for points in paths:
+        ring = [(round(x), round(y)) for x, y in points]
+        if len(ring) == 1 or all(p == ring[0] for p in ring):
+            ring = [ring[0], (ring[0][0] + 1, ring[0][1])]
+        offsetter.AddPath(ring, pyclipper.JT_ROUND, pyclipper.ET_OPENROUND)
+        added = True
+    return _rings(offsetter.Execute(float(radius))) if added else []
+
+
+def components(region: Sequence[Ring]) -> list[Component]:
+    """The connected pieces of a region (outer rings with their holes), in Clipper's order."""
+    if not region:
+        return []
+    clipper = pyclipper.Pyclipper()
+    clipper.AddPaths(region, pyclipper.PT_SUBJECT, True)
+    tree = clipper.Execute2(pyclipper.CT_UNION, pyclipper.PFT_NONZERO, pyclipper.PFT_NONZERO)
+    found: list[Component] = []
+
+    def walk(node: Any) -> None:
+        for child in node.Childs:
+            if not child.IsHole:
+                holes = tuple(_rings(h.Contour for h in child.Childs))
+                found.append(Component(_rings([child.Contour])[0], holes))
+            walk(child)
+
+    walk(tree)
+    return found
+
+
+def area(region: Sequence[Ring]) -> float:
+    """Signed area in nm² (holes subtract)."""
+    return sum(float(pyclipper.Area(ring)) for ring in region)
+
+
+def inside(region: Sequence[Ring], point: IPt) -> bool:
+    """True when `point` is inside (or on the edge of) the region (non-zero winding)."""
+    winding = 0
+    for ring in region:
+        where = cast(int, pyclipper.PointInPolygon(point, ring))
+        if where == -1:
+            return True
+        if where == 1:
+            winding += 1 if pyclipper.Orientation(ring) else -1
+    return winding != 0
+
+
+def segment_inside(region: Sequence[Ring], a: Pt, b: Pt) -> bool:
+    """True when the straight move from `a` to `b` stays inside the region (within 2 nm)."""
+    ia, ib = (round(a[0]), round(a[1])), (round(b[0]), round(b[1]))
+    if ia == ib:
+        return inside(region, ia)
+    if not region:
+        return False
+    clipper = pyclipper.Pyclipper()
+    clipper.AddPath([ia, ib], pyclipper.PT_SUBJECT, False)
+    clipper.AddPaths(region, pyclipper.PT_CLIP, True)
+    tree = clipper.Execute2(pyclipper.CT_INTERSECTION, pyclipper.PFT_NONZERO, pyclipper.PFT_NONZERO)
+    kept = 0.0
+    for piece in pyclipper.OpenPathsFromPolyTree(tree):
+        kept += sum(math.dist(piece[k], piece[k + 1]) for k in range(len(piece) - 1))
+    return kept >= math.dist(ia, ib) - 2.0
+
+
+def thicker_than(region: Sequence[Ring], width: float, tolerance: float) -> bool:
+    """True when some part of the region is wider than `width` (survives shrinking by half)."""
+    return bool(offset(region, -width / 2, tolerance))
+
+
+def deep_point(component: Component, tolerance: float) -> IPt:
+    """A point well inside a component, about as far from its edges as any: the component
+    is shrunk by the largest amount that leaves something (found by halving, to within a
+    sixteenth of the depth), and the vertex-average of what is left is taken (or one of its
+    vertices, when the average falls outside it)."""
+    xs = [p[0] for p in component.outer]
+    ys = [p[1] for p in component.outer]
+    low, high = 0.0, (min(max(xs) - min(xs), max(ys) - min(ys)) / 2) + tolerance
+    rings = component.rings
+    while high - low > max(4 * tolerance, high / 16):
+        middle = (low + high) / 2
+        pieces = components(offset(component.rings, -middle, tolerance))
+        if pieces:
+            low, rings = middle, pieces[0].rings
+        else:
+            high = middle
+    outer = rings[0]
+    cx = round(sum(p[0] for p in outer) / len(outer))
+    cy = round(sum(p[1] for p in outer) / len(outer))
+    if inside(rings, (cx, cy)):
+        return (cx, cy)
+    return outer[0]

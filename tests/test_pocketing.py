@@ -1,0 +1,483 @@
+"""Irregular pockets with islands, measured with shapely (issue 22).
+
+The planner works with pyclipper; these tests sample its passes independently and measure
+the pocket with shapely (GEOS): the union of the swept tool (each pass and link buffered by
+the tool radius) must leave nothing inside the boundary minus the islands that a round tool
+of that diameter could reach (≤ 0.001 in), and must cut nothing of an island or outside the
+wall (≤ 0.0001 in).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+import shapely
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+from shapely.geometry import LineString, Point, Polygon
+
+from app.cnc.blocks import MillingMode
+from app.cnc.mill import Element, Path
+from app.cnc.pocketing import (
+    LinkKind,
+    PassKind,
+    PocketIssue,
+    PocketPlan,
+    pass_levels,
+    plan_pocket,
+)
+from app.cnc.problems import Severity
+
+IN = 25_400_000
+REACH_TOL = 25_400  # 0.001 in: uncut material a round tool could reach
+GOUGE_TOL = 2_540  # 0.0001 in: material cut from an island or beyond the wall
+Pt = tuple[float, float]
+
+
+# -- contours ------------------------------------------------------------------------------
+
+
+def polygon_path(points: list[Pt], block: int = 1) -> Path:
+    """A closed contour of lines through `points` (nm)."""
+    elements = [Element(block + k, p) for k, p in enumerate([*points[1:], points[0]])]
+    return Path(points[0], tuple(elements))
+
+
+def rect(x0: float, y0: float, x1: float, y1: float, block: int = 1) -> Path:
+    return polygon_path([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], block)
+
+
+def circle(cx: float, cy: float, radius: float, block: int = 20) -> Path:
+    start = (cx, cy - radius)
+    return Path(start, (Element(block, start, centre=(cx, cy)),))
+
+
+def obround(x0: float, x1: float, cy: float, half: float, block: int = 30) -> Path:
+    """A slot shape: two lines and two half circles (counter-clockwise)."""
+    return Path(
+        (x0, cy - half),
+        (
+            Element(block, (x1, cy - half)),
+            Element(block + 1, (x1, cy + half), centre=(x1, cy)),
+            Element(block + 2, (x0, cy + half)),
+            Element(block + 3, (x0, cy - half), centre=(x0, cy)),
+        ),
+    )
+
+
+# -- an independent walk over the passes ------------------------------------------------------
+
+
+def points_of(path: Path) -> list[Pt]:
+    """Points along a path: line ends, and arcs walked by angle in steps of 0.002 rad (chords
+    within 0.5 ppm of the radius of the arc: 16 nm on a 1.25 in radius)."""
+    points = [path.start]
+    x, y = path.start
+    for e in path.elements:
+        if e.centre is None:
+            points.append(e.end)
+        else:
+            cx, cy = e.centre
+            radius = math.dist((x, y), (cx, cy))
+            a0 = math.atan2(y - cy, x - cx)
+            a1 = math.atan2(e.end[1] - cy, e.end[0] - cx)
+            turn = (a0 - a1) if e.clockwise else (a1 - a0)
+            turn %= 2 * math.pi
+            turn = turn or 2 * math.pi
+            n = max(8, math.ceil(turn / 0.002))
+            sign = -1 if e.clockwise else 1
+            points += [
+                (
+                    cx + radius * math.cos(a0 + sign * turn * i / n),
+                    cy + radius * math.sin(a0 + sign * turn * i / n),
+                )
+                for i in range(1, n + 1)
+            ]
+            points[-1] = e.end
+        x, y = e.end
+    return points
+
+
+def shape(path: Path) -> Polygon:
+    return Polygon(points_of(path))
+
+
+def pocket_region(boundary: Path, islands: list[Path]) -> shapely.Geometry:
+    region = shape(boundary)
+    for island in islands:
+        region = region.difference(shape(island))
+    return region
+
+
+def swept(plan: PocketPlan, r: float) -> shapely.Geometry:
+    """The tool buffered along every element of every pass and link, one element at a time
+    (GEOS can lose area buffering a line that doubles back on itself, like a cleanup move)."""
+    pieces = []
+    for p in plan.passes:
+        for path in (p.entry.path, p.path):
+            pieces.append(Point(path.start).buffer(r, quad_segs=128))
+            start = path.start
+            for element in path.elements:
+                pts = points_of(Path(start, (element,)))
+                pieces.append(LineString(pts).buffer(r, quad_segs=128))
+                start = element.end
+    return shapely.union_all(pieces)
+
+
+def measure(plan: PocketPlan, boundary: Path, islands: list[Path], r: float) -> tuple[float, float]:
+    """(area of reachable material left uncut beyond 0.001 in, area cut beyond 0.0001 in
+    outside the region), in nm²."""
+    region = pocket_region(boundary, islands)
+    reachable = region.buffer(-r, quad_segs=128).buffer(r, quad_segs=128)
+    cut = swept(plan, r)
+    uncut = reachable.difference(cut.buffer(REACH_TOL, quad_segs=64))
+    gouge = cut.difference(region.buffer(GOUGE_TOL, quad_segs=128))
+    return uncut.area, gouge.area
+
+
+def assert_pocket(plan: PocketPlan, boundary: Path, islands: list[Path], r: float) -> None:
+    assert not plan.has_errors, [f.message for f in plan.findings]
+    uncut, gouge = measure(plan, boundary, islands, r)
+    # A square 0.0001 in on a side is 6.45e6 nm²; a sliver of float noise is far less.
+    assert uncut < 1e4, f"uncut material: {uncut / IN**2:.3g} in²"
+    assert gouge < 1e4, f"cut outside the region: {gouge / IN**2:.3g} in²"
+
+
+def plan(boundary: Path, islands: list[Path], r: float, **options: object) -> PocketPlan:
+    return plan_pocket(
+        boundary,
+        islands,
+        tool_radius=round(r),
+        step_over=options.pop("step_over", round(1.2 * r)),  # type: ignore[arg-type]
+        finish_allowance=options.pop("finish_allowance", 254_000),  # type: ignore[arg-type]
+        **options,  # type: ignore[arg-type]
+    )
+
+
+# -- hand-made cases --------------------------------------------------------------------------
+
+R = IN // 4  # a 0.5 in end mill
+
+
+def rectangle_with_round_island() -> tuple[Path, list[Path]]:
+    return rect(0, 0, 4 * IN, 3 * IN), [circle(2 * IN, 1.5 * IN, IN / 2)]
+
+
+def l_shape_with_two_islands() -> tuple[Path, list[Path]]:
+    boundary = polygon_path(
+        [(0, 0), (5 * IN, 0), (5 * IN, 2 * IN), (2 * IN, 2 * IN), (2 * IN, 5 * IN), (0, 5 * IN)]
+    )
+    islands = [
+        rect(3 * IN, 0.6 * IN, 3.8 * IN, 1.3 * IN, block=10),
+        circle(1 * IN, 3.5 * IN, 0.4 * IN, block=20),
+    ]
+    return boundary, islands
+
+
+def arc_bounded_boss() -> tuple[Path, list[Path]]:
+    """A round-ended pocket with a round-ended boss in it, and a bulge arc on one side."""
+    boundary = Path(
+        (0, 0),
+        (
+            Element(1, (4 * IN, 0)),
+            Element(2, (4 * IN, 2 * IN), centre=(4 * IN, 1 * IN)),
+            Element(3, (2.5 * IN, 2 * IN)),
+            # A shallow arc bulging into the pocket (clockwise in a counter-clockwise wall).
+            Element(4, (1.5 * IN, 2 * IN), centre=(2 * IN, 3 * IN), clockwise=True),
+            Element(5, (0, 2 * IN)),
+            Element(6, (0, 0), centre=(0, 1 * IN)),
+        ),
+    )
+    return boundary, [obround(1.5 * IN, 2.5 * IN, 0.9 * IN, 0.3 * IN)]
+
+
+@pytest.mark.parametrize(
+    "case", [rectangle_with_round_island, l_shape_with_two_islands, arc_bounded_boss]
+)
+def test_pocket_is_cleared_without_cutting_islands_or_walls(case: object) -> None:
+    boundary, islands = case()  # type: ignore[operator]
+    result = plan(boundary, islands, R)
+    assert_pocket(result, boundary, islands, R)
+
+
+def test_pocket_with_large_step_over_still_clears_sharp_corners() -> None:
+    # A step-over of 0.9 D leaves cusps at the rings' corners; cleanup moves must reach them.
+    boundary, islands = l_shape_with_two_islands()
+    result = plan(boundary, islands, R, step_over=round(1.8 * R), finish_allowance=0)
+    assert_pocket(result, boundary, islands, R)
+    assert any(e.tag == "cleanup" for p in result.passes for e in p.path.elements)
+
+
+def test_finish_passes_are_exact_offsets() -> None:
+    boundary, islands = rectangle_with_round_island()
+    result = plan(boundary, islands, R)
+    finish = [p for p in result.passes if p.kind is PassKind.FINISH]
+    assert {p.contours for p in finish} == {("boundary",), ("island 1",)}
+    assert all(p.exact for p in result.passes)
+    island = next(p for p in finish if p.contours == ("island 1",))
+    (arc,) = island.path.elements
+    assert arc.centre == (2 * IN, 1.5 * IN)
+    assert math.dist(island.path.start, (2 * IN, 1.5 * IN)) == pytest.approx(IN / 2 + R, abs=1e-3)
+    assert arc.end == island.path.start  # a full circle
+    wall = next(p for p in finish if p.contours == ("boundary",))
+    corners = {(round(e.end[0]), round(e.end[1])) for e in wall.path.elements}
+    assert {(R, R), (4 * IN - R, R), (4 * IN - R, 3 * IN - R), (R, 3 * IN - R)} <= corners
+    assert all(e.centre is None for e in wall.path.elements)
+
+
+def test_finish_pass_of_arc_wall_keeps_arcs_about_the_same_centres() -> None:
+    boundary, islands = arc_bounded_boss()
+    result = plan(boundary, islands, R)
+    wall = next(p for p in result.passes if p.kind is PassKind.FINISH and "boundary" in p.contours)
+    arcs = {(e.centre, e.clockwise) for e in wall.path.elements if e.centre is not None}
+    # The round ends (radius 1 in → 0.75 in) and the bulge (radius 1 in → 1.25 in).
+    assert ((4 * IN, 1 * IN), False) in {(c, cw) for c, cw in arcs} or (
+        (4 * IN, 1 * IN),
+        True,
+    ) in arcs
+    starts = [wall.path.start] + [e.end for e in wall.path.elements[:-1]]
+    radii = {
+        e.centre: round(math.dist(s, e.centre))
+        for s, e in zip(starts, wall.path.elements, strict=True)
+        if e.centre
+    }
+    assert radii[(4 * IN, 1 * IN)] == IN - R
+    assert radii[(0, 1 * IN)] == IN - R
+    assert radii[(2 * IN, 3 * IN)] == round(math.sqrt(1.25) * IN) + R
+    boss = next(p for p in result.passes if p.kind is PassKind.FINISH and "island 1" in p.contours)
+    assert boss.exact
+    # Two half circles about the boss's two centres (one cut where the pass starts).
+    assert {e.centre for e in boss.path.elements if e.centre} == {
+        (1.5 * IN, 0.9 * IN),
+        (2.5 * IN, 0.9 * IN),
+    }
+
+
+def signed_area(path: Path) -> float:
+    pts = points_of(path)
+    return sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(pts, pts[1:] + pts[:1], strict=True)) / 2
+
+
+@pytest.mark.parametrize(
+    ("milling", "rpm", "wall_ccw"),
+    [
+        (MillingMode.CLIMB, 800, True),
+        (MillingMode.CONVENTIONAL, 800, False),
+        (MillingMode.CLIMB, -800, False),
+        (MillingMode.CONVENTIONAL, -800, True),
+    ],
+)
+def test_direction_follows_milling_mode_and_spindle(
+    milling: MillingMode, rpm: int, wall_ccw: bool
+) -> None:
+    # Climb with a clockwise spindle: the wall counter-clockwise, islands clockwise (§3).
+    boundary, islands = rectangle_with_round_island()
+    result = plan(boundary, islands, R, milling=milling, rpm=rpm)
+    for p in result.passes:
+        if p.kind is PassKind.FINISH:
+            ccw = signed_area(p.path) > 0
+            assert ccw == (wall_ccw if p.contours == ("boundary",) else not wall_ccw)
+
+
+def test_plunge_where_the_tool_fits_and_links_are_named() -> None:
+    boundary, islands = rectangle_with_round_island()
+    result = plan(boundary, islands, R)
+    region = pocket_region(boundary, islands)
+    assert result.passes[0].entry.kind is LinkKind.PLUNGE
+    assert result.entry == "plunge"
+    for at in result.plunges:
+        assert Point(at).buffer(R, quad_segs=64).difference(region.buffer(GOUGE_TOL)).area < 1e4
+    # The island splits the middle: one more plunge after a retract, every other link feeds.
+    kinds = [p.entry.kind for p in result.passes]
+    assert kinds.count(LinkKind.RETRACT) == 1
+    assert set(kinds[1:]) <= {LinkKind.RETRACT, LinkKind.CLEARED, LinkKind.CUTTING}
+    # Cutting order: from the middle out, finishing passes last.
+    offsets = [p.offset for p in result.passes]
+    assert [p.kind for p in result.passes][-2:] == [PassKind.FINISH, PassKind.FINISH]
+    assert offsets[0] == max(offsets)
+
+
+def test_narrow_slot_the_tool_cannot_enter() -> None:
+    slot = rect(0, 0, 2 * IN, 0.4 * IN)  # 0.4 in wide, tool 0.5 in
+    result = plan(slot, [], R)
+    assert result.passes == ()
+    (finding,) = result.findings
+    assert finding.issue is PocketIssue.TOOL_TOO_LARGE
+    assert finding.severity is Severity.ERROR
+    assert finding.contour == "boundary"
+    assert "0.5000 in tool fits nowhere" in finding.message
+
+
+def test_narrow_branch_is_reported_and_the_rest_is_cleared() -> None:
+    # A 2 in square with a 0.3 in wide slot going off its right side.
+    boundary = polygon_path(
+        [
+            (0, 0),
+            (2 * IN, 0),
+            (2 * IN, 0.85 * IN),
+            (3 * IN, 0.85 * IN),
+            (3 * IN, 1.15 * IN),
+            (2 * IN, 1.15 * IN),
+            (2 * IN, 2 * IN),
+            (0, 2 * IN),
+        ]
+    )
+    result = plan(boundary, [], R)
+    narrow = [f for f in result.findings if f.issue is PocketIssue.NARROW]
+    assert len(narrow) == 1
+    assert narrow[0].severity is Severity.WARNING
+    assert "boundary element 4 (block 4)" in narrow[0].message  # the slot's end
+    assert_pocket(result, boundary, [], R)
+
+
+def test_island_problems_are_named() -> None:
+    boundary = rect(0, 0, 4 * IN, 3 * IN)
+    outside = circle(6 * IN, 1 * IN, IN / 2)
+    crossing = circle(4 * IN, 1.5 * IN, IN / 2)
+    result = plan(boundary, [outside], R)
+    assert [(f.issue, f.contour, f.severity) for f in result.findings] == [
+        (PocketIssue.ISLAND_OUTSIDE, "island 1", Severity.ERROR)
+    ]
+    assert result.passes == ()
+    result = plan(
+        boundary,
+        [crossing, circle(1 * IN, 1.5 * IN, IN / 2), circle(1.5 * IN, 1.5 * IN, IN / 2)],
+        R,
+    )
+    issues = [(f.issue, f.contour) for f in result.findings]
+    assert (PocketIssue.ISLAND_TOUCHES_WALL, "island 1") in issues
+    assert (PocketIssue.ISLANDS_OVERLAP, "island 2") in issues
+    islands = [crossing, circle(1 * IN, 1.5 * IN, IN / 2), circle(1.5 * IN, 1.5 * IN, IN / 2)]
+    assert_pocket(result, boundary, islands, R)
+
+
+def test_bad_contours_are_named_by_element_and_block() -> None:
+    bowtie = polygon_path([(0, 0), (2 * IN, 2 * IN), (2 * IN, 0), (0, 2 * IN)], block=7)
+    result = plan(bowtie, [], R)
+    (finding,) = result.findings
+    assert finding.issue is PocketIssue.SELF_INTERSECTING
+    assert (finding.contour, finding.element, finding.block) == ("boundary", 3, 9)
+    assert finding.message.startswith("boundary, element 3 (block 9): element 3 crosses")
+    open_path = Path((0, 0), (Element(1, (IN, 0)), Element(2, (IN, IN))))
+    (finding,) = plan(open_path, [], R).findings
+    assert finding.issue is PocketIssue.OPEN_CONTOUR
+    assert (
+        "element 2 (block 2): the contour is not closed: it ends 1.4142 in from where it starts"
+        in finding.message
+    )
+    result = plan(rect(0, 0, IN, IN), [], R, step_over=2 * R)
+    assert [f.issue for f in result.findings] == [PocketIssue.STEP_OVER]
+    assert (
+        "must be more than 0 and less than the tool diameter 0.5000 in"
+        in result.findings[0].message
+    )
+
+
+def test_same_input_same_passes() -> None:
+    boundary, islands = l_shape_with_two_islands()
+    first = plan(boundary, islands, R)
+    again = plan(boundary, islands, R)
+    assert first == again
+    assert repr(first) == repr(again)
+
+
+def test_pass_levels_repeat_the_whole_plan_per_peck() -> None:
+    boundary, islands = rectangle_with_round_island()
+    result = plan(boundary, islands, R)
+    levels = pass_levels(result, z_up=2_540_000, z_dn=-6_350_000, pecks=3)
+    # Three levels evenly spaced from Z UP 0.1 in to Z DN -0.25 in, the last at Z DN.
+    assert [lv.z for lv in levels] == [-423_333, -3_386_667, -6_350_000]
+    assert all(lv.passes == result.passes for lv in levels)
+    rough = pass_levels(result, 2_540_000, -6_350_000, pecks=2, floor_allowance=127_000)
+    # Roughing 0.005 in above Z DN, then the whole pocket again at Z DN (as 2P does).
+    assert [lv.z for lv in rough] == [-1_841_500, -6_223_000, -6_350_000]
+
+
+# -- generated pockets --------------------------------------------------------------------------
+
+
+@st.composite
+def pockets(draw: st.DrawFn) -> tuple[Path, list[Path], int, int, int]:
+    """A star-shaped boundary (some sides bulging arcs), 0-2 islands, a tool and step-over."""
+    n = draw(st.integers(3, 8))
+    gaps = draw(st.lists(st.floats(0.3, 1.0), min_size=n, max_size=n))
+    total = sum(gaps)
+    angles = [2 * math.pi * sum(gaps[:k]) / total for k in range(n)]
+    radii = draw(st.lists(st.floats(1.2, 3.0), min_size=n, max_size=n))
+    points = [
+        (round(rr * IN * math.cos(a)), round(rr * IN * math.sin(a)))
+        for rr, a in zip(radii, angles, strict=True)
+    ]
+    elements = []
+    for k in range(n):
+        a, b = points[k], points[(k + 1) % n]
+        bulge = draw(st.sampled_from([0.0, 0.0, 0.3, -0.25]))
+        if bulge == 0.0:
+            elements.append(Element(k + 1, b))
+            continue
+        # An arc through a and b whose centre sits off the chord's middle.
+        mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+        chord = math.dist(a, b)
+        nx, ny = -(b[1] - a[1]) / chord, (b[0] - a[0]) / chord
+        off = chord / (2 * math.tan(2 * math.atan(abs(bulge))))
+        sign = 1 if bulge > 0 else -1
+        centre = (round(mid[0] + sign * nx * off), round(mid[1] + sign * ny * off))
+        elements.append(Element(k + 1, b, centre=centre, clockwise=bulge < 0))
+    boundary = Path(points[0], tuple(elements))
+    islands = []
+    for j in range(draw(st.integers(0, 2))):
+        cx = draw(st.floats(-0.8, 0.8)) * IN
+        cy = draw(st.floats(-0.8, 0.8)) * IN
+        if draw(st.booleans()):
+            islands.append(
+                circle(round(cx), round(cy), round(draw(st.floats(0.15, 0.4)) * IN), block=20 + j)
+            )
+        else:
+            half = round(draw(st.floats(0.1, 0.35)) * IN)
+            islands.append(
+                rect(
+                    round(cx) - half,
+                    round(cy) - half,
+                    round(cx) + half,
+                    round(cy) + half,
+                    20 + 4 * j,
+                )
+            )
+    r = round(draw(st.floats(0.1, 0.3)) * IN)
+    step = round(draw(st.floats(0.6, 1.8)) * r)
+    allowance = draw(st.sampled_from([0, 127_000, 254_000]))
+    return boundary, islands, r, step, allowance
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(pockets())
+def test_generated_pockets_are_cleared_and_not_gouged(
+    case: tuple[Path, list[Path], int, int, int],
+) -> None:
+    boundary, islands, r, step, allowance = case
+    outline = shape(boundary)
+    assume(outline.is_valid)
+    assume(all(outline.contains(shape(i).buffer(IN / 20)) for i in islands))
+    assume(
+        not any(
+            shape(a).buffer(IN / 20).intersects(shape(b))
+            for a in islands
+            for b in islands
+            if a is not b
+        )
+    )
+    result = plan_pocket(
+        boundary, islands, tool_radius=r, step_over=step, finish_allowance=allowance
+    )
+    if result.has_errors:
+        assert [f.issue for f in result.findings if f.severity is Severity.ERROR] == [
+            PocketIssue.TOOL_TOO_LARGE
+        ]
+        assert pocket_region(boundary, islands).buffer(-r).area < (IN / 1000) ** 2
+        return
+    assert_pocket(result, boundary, islands, r)
+    again = plan_pocket(
+        boundary, islands, tool_radius=r, step_over=step, finish_allowance=allowance
+    )
+    assert again == result

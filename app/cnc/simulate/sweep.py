@@ -44,6 +44,7 @@ UNCUT = ORDER_MASK
 Z_OFFSET = 1 << 35
 BATCH_PAIRS = 1 << 19
 
+_NEVER = np.iinfo(np.int64).max  # a key larger than any cell's: changes nothing
 DISC, LINE, RAMP, ARC = 0, 1, 2, 3
 
 
@@ -363,17 +364,63 @@ def _arc_bottom(s: Segments, g: I64, b: _Batch, r2: F64, slope: F64) -> F64:
     return np.where(d2 <= r2, value, np.inf)
 
 
-def evaluate(grid: Grid, s: Segments, rows: I64) -> Iterator[tuple[I64, F64, I64]]:
-    """(cells, tool bottom in nm, segment index) for every cell the segments `rows` reach."""
+def evaluate(
+    grid: Grid, s: Segments, rows: I64, compress: bool = True
+) -> Iterator[tuple[I64, F64, I64]]:
+    """(cells, tool bottom in nm, segment index) for the cells the segments `rows` reach
+    (with `compress` False, for every cell of their boxes: +inf out of reach)."""
     cat = categories(s)[rows]
     for kind in (DISC, LINE, RAMP, ARC):
         part = rows[cat == kind]
         if not len(part):
             continue
-        for batch in _batches(grid, s, part):
-            value = _bottom(s, part, kind, batch)
-            reach = np.isfinite(value)
-            yield batch.cells[reach], value[reach], part[batch.seg[reach]]
+        if kind == DISC:
+            found = _discs(grid, s, part)
+        else:
+            found = (
+                (b.cells, _bottom(s, part, kind, b), part[b.seg]) for b in _batches(grid, s, part)
+            )
+        for cells, value, seg in found:
+            if compress:
+                reach = np.isfinite(value)
+                yield cells[reach], value[reach], seg[reach]
+            else:
+                yield cells, value, seg
+
+
+def _discs(grid: Grid, s: Segments, rows: I64) -> Iterator[tuple[I64, F64, I64]]:
+    """`evaluate` for plunges: the tool's footprint is the same shape wherever it goes
+    down, so plunges whose boxes have the same size are computed together as one
+    (plunges × rows × columns) block of squared distances, one row and one column term
+    each, with no per-cell gathering."""
+    i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
+    h, w = i1 - i0, j1 - j0
+    live = (h > 0) & (w > 0)
+    rows, i0, j0, h, w = rows[live], i0[live], j0[live], h[live], w[live]
+    if not len(rows):
+        return
+    shapes = np.stack([h, w], axis=1)
+    kinds, which = np.unique(shapes, axis=0, return_inverse=True)
+    which = which.reshape(-1)
+    res = grid.resolution
+    for k, (hh, ww) in enumerate(kinds.tolist()):
+        members = np.flatnonzero(which == k)
+        step = max(1, BATCH_PAIRS // (hh * ww))
+        for a in range(0, len(members), step):
+            m = members[a : a + step]
+            g = rows[m]
+            cols = j0[m][:, None] + np.arange(ww)
+            lines = i0[m][:, None] + np.arange(hh)
+            dx2 = ((cols + 0.5) * res + grid.x0 - s.x1[g][:, None]) ** 2
+            dy2 = ((lines + 0.5) * res + grid.y0 - s.y1[g][:, None]) ** 2
+            d2 = dy2[:, :, None] + dx2[:, None, :]
+            z = np.minimum(s.z0[g], s.z1[g])[:, None, None]
+            slope = s.slope[g][:, None, None]
+            value = z + slope * np.sqrt(d2) if slope.any() else np.broadcast_to(z, d2.shape)
+            value = np.where(d2 <= (s.radius[g] ** 2)[:, None, None], value, np.inf)
+            cells = (lines * grid.nx)[:, :, None] + cols[:, None, :]
+            seg = np.broadcast_to(g[:, None, None], d2.shape)
+            yield cells.reshape(-1), value.reshape(-1), seg.reshape(-1)
 
 
 def _apply(grid: Grid, keys: I64, s: Segments, rows: I64) -> float:
@@ -385,8 +432,10 @@ def _apply(grid: Grid, keys: I64, s: Segments, rows: I64) -> float:
     if hi <= lo:
         return 0.0
     before = _volume(grid, keys[lo:hi])
-    for cells, value, seg in evaluate(grid, s, rows):
-        key = ((np.rint(value).astype(np.int64) + Z_OFFSET) << KEY_SHIFT) | seg
+    for cells, value, seg in evaluate(grid, s, rows, compress=False):
+        reach = np.isfinite(value)
+        depth = np.rint(np.where(reach, value, 0.0)).astype(np.int64)
+        key = np.where(reach, ((depth + Z_OFFSET) << KEY_SHIFT) | seg, _NEVER)
         np.minimum.at(keys, cells, key)
     return before - _volume(grid, keys[lo:hi])
 

@@ -5,10 +5,11 @@ Four kinds of finding, each named by the block at fault:
 - **gouge**: material removed on the part's side of a finished surface, farther in than the
   tolerance: inside a compensated MILL contour (the side away from CUT RT/LT), outside an
   INSIDE/IN-TAN/POCKET routine's wall, inside an OUTSIDE/OUT-TAN one's. Checked in a band
-  one tool radius wide along the surface; the finding names the block whose move cut there.
-- **rest material**: material left where the routine's tool must have cut to Z DN: the
-  whole of a POCKET that a tool of its radius can reach (a frame's corners tighter than the
-  tool are not), and the band one tool radius wide beside the wall of every CIRCLE/FRAME.
+  two tool radii wide along a contour (one along a routine's wall), so a deeper gouge reads
+  "at least"; the finding names the block whose move cut there.
+- **rest material**: material left above Z DN inside the finished contour of a POCKET, or
+  in the band one tool radius wide beside the wall of any CIRCLE/FRAME: the corners of a
+  frame whose corner radius is smaller than the tool's, a wrong depth, a missing pass.
 - **hole depth**: a DRILL/BORE/TAP hole whose bottom at its centre is shallower or deeper
   than Z DN (a hole through the stock's bottom is through, not shallow). A drill point's
   cone is allowed for between the hole's centre and the centre of the cell it is in.
@@ -263,7 +264,7 @@ def _contour_gouges(
     tol: int,
     u: Units,
 ) -> list[Finding]:
-    band = float(contour.tool_radius)
+    band = 2.0 * contour.tool_radius
     starts = [contour.start] + [e.end for e in contour.elements[:-1]]
     pts = [p for e in contour.elements for p in (e.end, e.centre) if p is not None]
     pts.append(contour.start)
@@ -293,11 +294,12 @@ def _contour_gouges(
     findings = []
     for culprit, depth, x, y, _ in _worst(mask, inward, qx, qy, owners[rows, cols]):
         near = int(block_of[mask & (owners[rows, cols] == culprit)][0]) if culprit else 0
+        least = "at least " if depth > band - grid.resolution else ""
         findings.append(
             Finding(
                 culprit or contour.drill,
                 "gouge",
-                f"cuts {_len(depth, u)} into the finished contour of block {near} "
+                f"cuts {least}{_len(depth, u)} into the finished contour of block {near} "
                 f"(the sequence from block {contour.drill}) at {_at(x, y, u)}",
                 x,
                 y,
@@ -311,7 +313,7 @@ def _contour_gouges(
 
 def _routine_sdf(routine: Routine, qx: F64, qy: F64, corner: float) -> F64:
     """Signed distance (nm; negative inside) to the routine's finished contour, a frame's
-    corners rounded to `corner` (at least its own corner radius)."""
+    corners rounded to `corner` where that is more than its own corner radius."""
     if not routine.is_frame:
         return np.hypot(qx - routine.centre[0], qy - routine.centre[1]) - routine.radius
     hx, hy = routine.width / 2, routine.height / 2
@@ -346,9 +348,8 @@ def _routine_findings(
     h = heights[rows, cols]
     own = owners[rows, cols]
     sdf = _routine_sdf(routine, qx, qy, 0.0)
-    reach = _routine_sdf(routine, qx, qy, r) if routine.inside else sdf
     part = sdf if routine.inside else -sdf
-    tool_side = -reach if routine.inside else reach
+    tool_side = -part
     cut = h < grid.stock.top - tol
     findings = []
     gouged = (part > tol) & (part <= r) & cut
@@ -442,22 +443,20 @@ def _hole_findings(
 
 
 def _crash_findings(sim: Simulation, u: Units) -> list[Finding]:
-    worst: dict[int, tuple[int, float, float, float, float]] = {}
+    worst: dict[int, tuple[int, float, float, float]] = {}
     for crash in sim.crashes:
-        count, depth, *_ = worst.get(crash.block, (0, -1.0, 0.0, 0.0, 0.0))
+        count, depth, x, y = worst.get(crash.block, (0, -1.0, 0.0, 0.0))
         if crash.depth > depth:
-            worst[crash.block] = (count + 1, crash.depth, crash.x, crash.y, crash.z)
-        else:
-            worst[crash.block] = (count + 1, *worst[crash.block][1:])
+            depth, x, y = crash.depth, crash.x, crash.y
+        worst[crash.block] = (count + 1, depth, x, y)
     findings = []
-    for block, (count, depth, x, y, z) in sorted(worst.items()):
-        more = f" ({count} rapid moves of this block do)" if count > 1 else ""
+    for block, (count, depth, x, y) in sorted(worst.items()):
+        more = f" ({count} rapid moves of this block hit material)" if count > 1 else ""
         findings.append(
             Finding(
                 block,
                 "crash",
-                f"a rapid move goes {_len(depth, u)} into the material at {_at(x, y, u)}, "
-                f"the tool's bottom at Z {format_length(round(z), u)}{more}",
+                f"a rapid move goes {_len(depth, u)} into the material at {_at(x, y, u)}{more}",
                 x,
                 y,
             )

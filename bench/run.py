@@ -21,7 +21,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from bench import editor, exports, gcode_import, interpreter, preview
+from bench import editor, exports, gcode_import, interpreter, preview, simulate
 from bench.common import BUDGET, ROOT, Section, machine_lines, replace_between, table
 
 DOC = ROOT / "docs" / "benchmarks.md"
@@ -39,6 +39,7 @@ def sections(quick: bool) -> dict[str, Callable[[], Section]]:
         "preview": lambda: preview.run(sizes),
         "editor": lambda: editor.run(),
         "export": lambda: exports.run((10_000, 100_000) if quick else exports.SIZES),
+        "simulate": lambda: simulate.run(10_000 if quick else simulate.MOVES),
     }
 
 

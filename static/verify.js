@@ -122,7 +122,7 @@ function start(element) {
 
   let renderer;
   try {
-    renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
   } catch (error) {
     element.dataset.state = "no-webgl";
     pick.textContent = "This browser cannot show 3D (WebGL is off); the report and the PNG picture still work.";
@@ -139,20 +139,22 @@ function start(element) {
   camera.up.set(0, 0, 1);
   const controls = new OrbitControls(camera, canvas);
   const clip = new THREE.Plane(new THREE.Vector3(-1, 0, 0), 1e9);
-  const material = new THREE.MeshStandardMaterial({
-    vertexColors: true, side: THREE.DoubleSide, roughness: 0.55, metalness: 0.15, clippingPlanes: [clip],
+  const material = new THREE.MeshLambertMaterial({
+    vertexColors: true, side: THREE.DoubleSide, clippingPlanes: [clip],
   });
-  const sideMaterial = new THREE.MeshStandardMaterial({
-    color: 0x9ca3af, side: THREE.DoubleSide, roughness: 0.6, metalness: 0.1, clippingPlanes: [clip],
+  const sideMaterial = new THREE.MeshLambertMaterial({
+    color: 0x9ca3af, side: THREE.DoubleSide, clippingPlanes: [clip],
   });
   let surface = null, top = null, walls = null, floor = null;
   let frames = 0, pending = false;
 
   function draw() {
     pending = false;
+    const began = performance.now();
     renderer.render(scene, camera);
     frames += 1;
     element.dataset.frames = String(frames);
+    element.dataset.drawMs = (performance.now() - began).toFixed(1);
   }
   function requestDraw() {
     if (!pending) { pending = true; requestAnimationFrame(draw); }

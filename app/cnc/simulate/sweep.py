@@ -20,7 +20,15 @@ material (a crash), which is checked against the map as it is at that moment, an
 volume each tool removes. Segments that cannot change anything are skipped first: those
 whose tip stays above the stock, upward plunges (the tool was already lower there), rapids
 down to where the same tool has already been, and identical passes at a shallower depth
-than another one (pecks).
+than another one (pecks). Milling moves are then folded in deepest first, and a move is
+skipped when the highest material left in every tile of cells under its box is no higher
+than its tip (overlapping pocket passes, a pocket cut again): the order changes nothing but
+the work, since the result is a minimum.
+
+Per (segment, cell) pair the work is a few float32 operations on coordinates relative to
+the segment (small numbers: float32 keeps them to a few nanometres), with each segment's
+values repeated over its pairs rather than gathered; plunges of one tool share a footprint
+and are computed as blocks of row and column terms.
 
 Each cell holds one int64: (height + Z_OFFSET) << KEY_SHIFT | segment, so the minimum keeps
 the deepest cut and, for equal depths, the earliest segment that reached it: the block that
@@ -31,6 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -43,7 +52,10 @@ ORDER_MASK = (1 << KEY_SHIFT) - 1
 UNCUT = ORDER_MASK
 Z_OFFSET = 1 << 35
 BATCH_PAIRS = 1 << 19
+TILE = 16  # cells along a side of the tiles that skip moves over cleared material
+CULL_AFTER = 64  # milling moves in a stage before skipping is worth its bookkeeping
 
+_T = TypeVar("_T", bound=np.generic)
 _NEVER = np.iinfo(np.int64).max  # a key larger than any cell's: changes nothing
 DISC, LINE, RAMP, ARC = 0, 1, 2, 3
 
@@ -66,7 +78,7 @@ class Simulation:
     """The simulated part: the height map (as keys), what each tool removed, the crashes.
 
     `removed_by_tool` is in nm³ per tool number, in program order of first use; `upto` is
-    the last block simulated (None: all).
+    the last block simulated (None: all); `pairs` the (segment, cell) pairs evaluated.
     """
 
     grid: Grid
@@ -75,6 +87,7 @@ class Simulation:
     removed_by_tool: dict[int, float] = field(default_factory=dict)
     crashes: list[Crash] = field(default_factory=list)
     upto: int | None = None
+    pairs: int = 0
 
     def heights(self) -> F64:
         """The material's top per cell, nm, (ny, nx); the stock's bottom where cut through."""
@@ -122,7 +135,8 @@ def simulate(
             if crash is not None:
                 result.crashes.append(crash)
         tool = int(tools[a])
-        removed = _apply(grid, keys, segments, _collapse(segments, stage))
+        removed, pairs = _apply(grid, keys, segments, _collapse(segments, stage))
+        result.pairs += pairs
         result.removed_by_tool[tool] = result.removed_by_tool.get(tool, 0.0) + removed
     return result
 
@@ -130,15 +144,21 @@ def simulate(
 # -- which segments matter ------------------------------------------------------------------
 
 
-def categories(segments: Segments) -> npt.NDArray[np.int8]:
+def categories(segments: Segments, rows: I64 | None = None) -> npt.NDArray[np.int8]:
     """DISC (a plunge or lift: no XY motion), LINE (flat end, constant Z), RAMP (any
-    other straight move) or ARC, per segment."""
-    still = (segments.x0 == segments.x1) & (segments.y0 == segments.y1) & ~segments.arc
-    level = (segments.z0 == segments.z1) & (segments.slope == 0)
-    cat = np.full(len(segments), RAMP, dtype=np.int8)
+    other straight move) or ARC, per segment (of `rows`, when given)."""
+    s = segments
+
+    def pick(a: npt.NDArray[_T]) -> npt.NDArray[_T]:
+        return a if rows is None else a[rows]
+
+    arc = pick(s.arc)
+    still = (pick(s.x0) == pick(s.x1)) & (pick(s.y0) == pick(s.y1)) & ~arc
+    level = (pick(s.z0) == pick(s.z1)) & (pick(s.slope) == 0)
+    cat = np.full(len(arc), RAMP, dtype=np.int8)
     cat[level] = LINE
     cat[still] = DISC
-    cat[segments.arc] = ARC
+    cat[arc] = ARC
     return cat
 
 
@@ -186,7 +206,7 @@ def _collapse(s: Segments, stage: I64) -> I64:
     the deepest of identical level passes removes all the others do."""
     if len(stage) < 2:
         return stage
-    cat = categories(s.select(stage))
+    cat = categories(s, stage)
     level = np.flatnonzero(cat != RAMP)
     if len(level) < 2:
         return stage
@@ -251,15 +271,28 @@ def bounding_cells(grid: Grid, s: Segments) -> tuple[I64, I64, I64, I64]:
 
 @dataclass
 class _Batch:
-    cells: I64  # flat cell index per pair
-    seg: I64  # row in the category's segment list per pair
-    qx: F64
-    qy: F64
+    """(segment, cell) pairs: the cells, and per pair the segment (an index into the rows
+    evaluated) and the cell centre relative to the segment's reference point (its start, or
+    an arc's centre), in float32 nm: small numbers, so float32 keeps them to a few nm.
+    `count` is how many consecutive pairs each chunk has and `chunk` its segment, so
+    per-segment values reach the pairs by `np.repeat` instead of a gather per pair."""
+
+    cells: I64
+    seg: I64
+    wx: npt.NDArray[np.float32]
+    wy: npt.NDArray[np.float32]
+    chunk: I64
+    count: I64
+
+    def per_pair(self, values: npt.NDArray[_T]) -> npt.NDArray[_T]:
+        """A value per chunk's segment (indexed like `chunk`), repeated for its pairs."""
+        return np.repeat(values[self.chunk], self.count)
 
 
-def _batches(grid: Grid, s: Segments, rows: I64) -> Iterator[_Batch]:
+def _batches(grid: Grid, s: Segments, rows: I64, rx: F64, ry: F64) -> Iterator[_Batch]:
     """Pairs (segment, cell) over the bounding boxes of segments `rows`, in batches of about
-    BATCH_PAIRS; a box larger than that is cut into bands of rows. `seg` indexes `rows`."""
+    BATCH_PAIRS; a box larger than that is cut into bands of rows. `seg` indexes `rows`;
+    (rx, ry) is each row's reference point."""
     i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
     width = j1 - j0
     height = i1 - i0
@@ -277,90 +310,119 @@ def _batches(grid: Grid, s: Segments, rows: I64) -> Iterator[_Batch]:
     bottom = np.minimum(top + np.repeat(band, pieces), np.repeat(i0 + height, pieces))
     left = np.repeat(j0, pieces)
     area = (bottom - top) * w
+    res = grid.resolution
+    # The centre of each chunk's first cell relative to its segment's reference point.
+    base_x = grid.x0 + (left + 0.5) * res - rx[owner]
+    base_y = grid.y0 + (top + 0.5) * res - ry[owner]
     total = np.cumsum(area)
     cut = np.searchsorted(total, np.arange(BATCH_PAIRS, int(total[-1]), BATCH_PAIRS), "right")
     for a, b in zip([0, *cut.tolist()], [*cut.tolist(), len(area)], strict=True):
         if a >= b:
             continue
-        yield _pairs(grid, owner[a:b], top[a:b], left[a:b], w[a:b], area[a:b])
+        part = slice(a, b)
+        yield _pairs(
+            grid,
+            owner[part],
+            top[part],
+            left[part],
+            w[part],
+            area[part],
+            base_x[part],
+            base_y[part],
+        )
 
 
-def _pairs(grid: Grid, owner: I64, top: I64, left: I64, width: I64, area: I64) -> _Batch:
-    n = int(area.sum())
-    seg = np.repeat(owner, area)
-    local = np.arange(n, dtype=np.int64) - np.repeat(np.cumsum(area) - area, area)
-    w = np.repeat(width, area)
-    row = local // w
-    i = np.repeat(top, area) + row
-    j = np.repeat(left, area) + (local - row * w)
+def _pairs(
+    grid: Grid,
+    owner: I64,
+    top: I64,
+    left: I64,
+    width: I64,
+    area: I64,
+    base_x: F64,
+    base_y: F64,
+) -> _Batch:
+    """The pairs of some chunks, made row by row: each (chunk, row) strip is a run of
+    consecutive cells, so a pair costs a few repeats and adds (no division)."""
     res = grid.resolution
-    qx = (j + 0.5).astype(np.float64) * res + grid.x0
-    qy = (i + 0.5).astype(np.float64) * res + grid.y0
-    return _Batch(cells=i * grid.nx + j, seg=seg, qx=qx, qy=qy)
+    height = area // width
+    strips = int(height.sum())
+    chunk_of = np.repeat(np.arange(len(owner)), height)
+    line = np.arange(strips) - np.repeat(np.cumsum(height) - height, height)
+    w = width[chunk_of]
+    first = (top[chunk_of] + line) * grid.nx + left[chunk_of]
+    strip_x = base_x[chunk_of].astype(np.float32)
+    strip_y = (base_y[chunk_of] + line * res).astype(np.float32)
+    n = int(w.sum())
+    col = np.arange(n, dtype=np.int64) - np.repeat(np.cumsum(w) - w, w)
+    cells = np.repeat(first, w) + col
+    wx = np.repeat(strip_x, w) + col.astype(np.float32) * np.float32(res)
+    wy = np.repeat(strip_y, w)
+    strip_owner = owner[chunk_of]
+    return _Batch(cells, np.repeat(strip_owner, w), wx, wy, strip_owner, w)
 
 
 # -- the tool's bottom over each cell ------------------------------------------------------------
 
 
-def _bottom(s: Segments, rows: I64, cat: int, b: _Batch) -> F64:
-    """The lowest the tool's bottom gets over each pair's cell (nm; +inf out of reach)."""
-    g = rows[b.seg]
-    r2 = s.radius[g] ** 2
-    slope = s.slope[g]
-    wx = b.qx - s.x0[g]
-    wy = b.qy - s.y0[g]
-    if cat == DISC:
-        d2 = wx * wx + wy * wy
-        z = np.minimum(s.z0[g], s.z1[g])
-        value = z + slope * np.sqrt(d2) if slope.any() else z
-        return np.where(d2 <= r2, value, np.inf)
-    if cat == ARC:
-        return _arc_bottom(s, g, b, r2, slope)
-    dx = s.x1[g] - s.x0[g]
-    dy = s.y1[g] - s.y0[g]
+def _line_bottom(s: Segments, rows: I64, cat: int, b: _Batch) -> F64:
+    """The lowest the tool's bottom gets over each pair's cell along a straight move (nm;
+    +inf out of reach). (wx, wy) are relative to the move's start."""
+    f32 = np.float32
+    g = rows
+    dx = (s.x1[g] - s.x0[g]).astype(f32)
+    dy = (s.y1[g] - s.y0[g]).astype(f32)
     c = dx * dx + dy * dy
-    tc = (wx * dx + wy * dy) / c
+    r2 = b.per_pair((s.radius[g] ** 2).astype(f32))
+    wx, wy = b.wx, b.wy
+    pdx, pdy = b.per_pair(dx), b.per_pair(dy)
+    tc = (wx * pdx + wy * pdy) * b.per_pair(1 / c)
+    z0 = b.per_pair(s.z0[g])
     if cat == LINE:
-        t = np.clip(tc, 0.0, 1.0)
-        ex, ey = wx - t * dx, wy - t * dy
-        return np.where(ex * ex + ey * ey <= r2, s.z0[g], np.inf)
-    e2 = np.maximum(wx * wx + wy * wy - tc * tc * c, 0.0)
-    reach = np.sqrt(np.maximum(r2 - e2, 0.0) / c)
-    lo = np.maximum(tc - reach, 0.0)
-    hi = np.minimum(tc + reach, 1.0)
+        t = np.clip(tc, 0, 1)
+        ex, ey = wx - t * pdx, wy - t * pdy
+        return np.where(ex * ex + ey * ey <= r2, z0, np.inf)
+    pc = b.per_pair(c)
+    slope = b.per_pair(s.slope[g].astype(f32))
+    dz = b.per_pair((s.z1[g] - s.z0[g]).astype(f32))
+    e2 = np.maximum(wx * wx + wy * wy - tc * tc * pc, 0)
+    reach = np.sqrt(np.maximum(r2 - e2, 0) / pc)
+    lo = np.maximum(tc - reach, 0)
+    hi = np.minimum(tc + reach, 1)
     ok = (e2 <= r2) & (lo <= hi)
-    z0 = s.z0[g]
-    dz = s.z1[g] - z0
-    denom = slope * slope * c - dz * dz
+    denom = slope * slope * pc - dz * dz
     stationary = np.where(
-        denom > 0,
-        tc - dz * np.sqrt(e2) / np.sqrt(c * np.maximum(denom, 1e-300)),
-        lo,
+        denom > 0, tc - dz * np.sqrt(e2) / np.sqrt(pc * np.maximum(denom, 1e-30)), lo
     )
     stationary = np.clip(stationary, lo, hi)
 
-    def f(t: F64) -> F64:
-        return z0 + t * dz + slope * np.sqrt(c * (t - tc) ** 2 + e2)
+    def rise(t: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+        out: npt.NDArray[np.float32] = t * dz + slope * np.sqrt(pc * (t - tc) ** 2 + e2)
+        return out
 
-    value = np.minimum(np.minimum(f(lo), f(hi)), f(stationary))
-    return np.where(ok, value, np.inf)
+    lowest = np.minimum(np.minimum(rise(lo), rise(hi)), rise(stationary))
+    return np.where(ok, z0 + lowest, np.inf)
 
 
-def _arc_bottom(s: Segments, g: I64, b: _Batch, r2: F64, slope: F64) -> F64:
-    vx = b.qx - s.cx[g]
-    vy = b.qy - s.cy[g]
-    ux0, uy0 = s.x0[g] - s.cx[g], s.y0[g] - s.cy[g]
-    ux1, uy1 = s.x1[g] - s.cx[g], s.y1[g] - s.cy[g]
-    sign = np.where(s.ccw[g], 1.0, -1.0)
-    inside = (sign * (ux0 * vy - uy0 * vx) >= 0) & (sign * (vx * uy1 - vy * ux1) >= 0)
+def _arc_bottom(s: Segments, rows: I64, b: _Batch) -> F64:
+    """As `_line_bottom` for arc pieces of at most 90°; (wx, wy) relative to the centre."""
+    f32 = np.float32
+    g = rows
+    ux0, uy0 = (s.x0[g] - s.cx[g]).astype(f32), (s.y0[g] - s.cy[g]).astype(f32)
+    ux1, uy1 = (s.x1[g] - s.cx[g]).astype(f32), (s.y1[g] - s.cy[g]).astype(f32)
+    sign = np.where(s.ccw[g], f32(1), f32(-1))
+    vx, vy = b.wx, b.wy
+    p0x, p0y, p1x, p1y = (b.per_pair(a) for a in (ux0, uy0, ux1, uy1))
+    psign = b.per_pair(sign)
+    inside = (psign * (p0x * vy - p0y * vx) >= 0) & (psign * (vx * p1y - vy * p1x) >= 0)
+    ra = b.per_pair(np.sqrt(ux0 * ux0 + uy0 * uy0))
     rho = np.sqrt(vx * vx + vy * vy)
-    ra = np.sqrt(ux0 * ux0 + uy0 * uy0)
-    to_ends = np.minimum(
-        (b.qx - s.x0[g]) ** 2 + (b.qy - s.y0[g]) ** 2,
-        (b.qx - s.x1[g]) ** 2 + (b.qy - s.y1[g]) ** 2,
-    )
+    to_ends = np.minimum((vx - p0x) ** 2 + (vy - p0y) ** 2, (vx - p1x) ** 2 + (vy - p1y) ** 2)
     d2 = np.where(inside, (rho - ra) ** 2, to_ends)
-    value = s.z0[g] + slope * np.sqrt(d2) if slope.any() else s.z0[g]
+    r2 = b.per_pair((s.radius[g] ** 2).astype(f32))
+    z = b.per_pair(s.z0[g])
+    slope = s.slope[g]
+    value = z + b.per_pair(slope) * np.sqrt(d2) if slope.any() else z
     return np.where(d2 <= r2, value, np.inf)
 
 
@@ -369,16 +431,22 @@ def evaluate(
 ) -> Iterator[tuple[I64, F64, I64]]:
     """(cells, tool bottom in nm, segment index) for the cells the segments `rows` reach
     (with `compress` False, for every cell of their boxes: +inf out of reach)."""
-    cat = categories(s)[rows]
+    cat = categories(s, rows)
     for kind in (DISC, LINE, RAMP, ARC):
         part = rows[cat == kind]
         if not len(part):
             continue
         if kind == DISC:
             found = _discs(grid, s, part)
+        elif kind == ARC:
+            found = (
+                (b.cells, _arc_bottom(s, part, b), part[b.seg])
+                for b in _batches(grid, s, part, s.cx[part], s.cy[part])
+            )
         else:
             found = (
-                (b.cells, _bottom(s, part, kind, b), part[b.seg]) for b in _batches(grid, s, part)
+                (b.cells, _line_bottom(s, part, kind, b), part[b.seg])
+                for b in _batches(grid, s, part, s.x0[part], s.y0[part])
             )
         for cells, value, seg in found:
             if compress:
@@ -423,21 +491,90 @@ def _discs(grid: Grid, s: Segments, rows: I64) -> Iterator[tuple[I64, F64, I64]]
             yield cells.reshape(-1), value.reshape(-1), seg.reshape(-1)
 
 
-def _apply(grid: Grid, keys: I64, s: Segments, rows: I64) -> float:
-    """Fold segments `rows` into the map; the volume they removed (nm³)."""
+def _apply(grid: Grid, keys: I64, s: Segments, rows: I64) -> tuple[float, int]:
+    """Fold segments `rows` into the map; the volume they removed (nm³), the pairs made."""
     if not len(rows):
-        return 0.0
+        return 0.0, 0
     i0, i1, _, _ = bounding_cells(grid, s.select(rows))
     lo, hi = int(i0.min()) * grid.nx, int(i1.max()) * grid.nx
     if hi <= lo:
-        return 0.0
+        return 0.0, 0
     before = _volume(grid, keys[lo:hi])
+    cat = categories(s, rows)
+    sweeps = rows[cat != DISC]
+    if len(sweeps) >= CULL_AFTER:
+        pairs = _fold(grid, keys, s, rows[cat == DISC]) + _fold_culled(grid, keys, s, sweeps)
+    else:
+        pairs = _fold(grid, keys, s, rows)
+    return before - _volume(grid, keys[lo:hi]), pairs
+
+
+def _fold(grid: Grid, keys: I64, s: Segments, rows: I64) -> int:
+    """Fold segments `rows` into the map; how many pairs that took."""
+    pairs = 0
+    # A flat end's bottom is its tip everywhere (ramps aside): one key per segment.
+    level = not s.slope[rows].any() and not (categories(s, rows) == RAMP).any()
+    if level:
+        flat = np.full(len(s), _NEVER, dtype=np.int64)
+        low = np.rint(np.minimum(s.z0[rows], s.z1[rows])).astype(np.int64)
+        flat[rows] = ((low + Z_OFFSET) << KEY_SHIFT) | rows
     for cells, value, seg in evaluate(grid, s, rows, compress=False):
+        pairs += len(cells)
         reach = np.isfinite(value)
+        if level:
+            np.minimum.at(keys, cells, np.where(reach, flat[seg], _NEVER))
+            continue
         depth = np.rint(np.where(reach, value, 0.0)).astype(np.int64)
         key = np.where(reach, ((depth + Z_OFFSET) << KEY_SHIFT) | seg, _NEVER)
         np.minimum.at(keys, cells, key)
-    return before - _volume(grid, keys[lo:hi])
+    return pairs
+
+
+def _fold_culled(grid: Grid, keys: I64, s: Segments, rows: I64) -> int:
+    """`_fold` for many milling moves, deepest first (earliest first at equal depth), each
+    skipped when the material under its whole box is already no higher than its tip: a
+    pocket cleared before, pecks, overlapping passes. The test is against the highest
+    material per tile of TILE × TILE cells, kept up to date after each batch; it only ever
+    errs towards cutting (heights only fall), so the part is the same as without it."""
+    i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
+    low = np.minimum(s.z0[rows], s.z1[rows])
+    area = ((i1 - i0) * (j1 - j0)).tolist()
+    order = np.lexsort((rows, low)).tolist()
+    ti0, ti1 = (i0 // TILE).tolist(), ((i1 - 1) // TILE + 1).tolist()
+    tj0, tj1 = (j0 // TILE).tolist(), ((j1 - 1) // TILE + 1).tolist()
+    lows = low.tolist()
+    highest = _tile_max(grid, keys, 0, -(-grid.ny // TILE), 0, -(-grid.nx // TILE))
+    batch: list[int] = []
+    pairs = 0
+    made = 0
+    box = [grid.ny, 0, grid.nx, 0]
+
+    def flush() -> int:
+        done = _fold(grid, keys, s, rows[np.array(batch, dtype=np.int64)])
+        a, b, c, d = box[0], box[1], box[2], box[3]
+        highest[a:b, c:d] = _tile_max(grid, keys, a, b, c, d)
+        return done
+
+    for k in order:
+        if area[k] <= 0 or highest[ti0[k] : ti1[k], tj0[k] : tj1[k]].max() <= lows[k]:
+            continue
+        batch.append(k)
+        pairs += area[k]
+        box = [min(box[0], ti0[k]), max(box[1], ti1[k]), min(box[2], tj0[k]), max(box[3], tj1[k])]
+        if pairs >= BATCH_PAIRS:
+            made += flush()
+            batch, pairs, box = [], 0, [grid.ny, 0, grid.nx, 0]
+    if batch:
+        made += flush()
+    return made
+
+
+def _tile_max(grid: Grid, keys: I64, a: int, b: int, c: int, d: int) -> F64:
+    """The highest material (nm) in each tile of rows a…b, columns c…d (tile units)."""
+    top = keys.reshape(grid.ny, grid.nx)[a * TILE : b * TILE, c * TILE : d * TILE] >> KEY_SHIFT
+    rows_max = np.maximum.reduceat(top, np.arange(0, top.shape[0], TILE), axis=0)
+    tiles = np.maximum.reduceat(rows_max, np.arange(0, top.shape[1], TILE), axis=1)
+    return (tiles - Z_OFFSET).astype(np.float64)
 
 
 def _volume(grid: Grid, keys: I64) -> float:
@@ -449,15 +586,20 @@ def _volume(grid: Grid, keys: I64) -> float:
 
 def _check_rapid(grid: Grid, keys: I64, s: Segments, row: int, tolerance: float) -> Crash | None:
     """The deepest material a rapid move meets, if more than `tolerance` nm."""
+    # The deepest to the nanometre; of cells equally deep, the first (lowest row, column).
     worst: tuple[float, int, float] | None = None
     bottom = grid.stock.bottom
     for cells, value, _ in evaluate(grid, s, np.array([row], dtype=np.int64)):
         top = ((keys[cells] >> KEY_SHIFT) - Z_OFFSET).astype(np.float64)
-        depth = top - np.maximum(value, bottom)
+        depth = np.rint(top - np.maximum(value, bottom))
         depth[top <= bottom] = 0.0
-        k = int(np.argmax(depth)) if len(depth) else -1
-        if k >= 0 and depth[k] > tolerance and (worst is None or depth[k] > worst[0]):
-            worst = (float(depth[k]), int(cells[k]), float(value[k]))
+        if not len(depth) or depth.max() <= tolerance:
+            continue
+        deepest = depth == depth.max()
+        k = int(np.flatnonzero(deepest)[np.argmin(cells[deepest])])
+        candidate = (float(depth[k]), int(cells[k]), float(value[k]))
+        if worst is None or (candidate[0], -candidate[1]) > (worst[0], -worst[1]):
+            worst = candidate
     if worst is None:
         return None
     amount, cell, z = worst

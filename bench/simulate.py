@@ -205,19 +205,19 @@ def run(moves: int = MOVES, timeout: float = 600.0) -> Section:
         )
     cells = next((r for r in results.values() if "error" not in r), None)
     floor = (
-        f"{cells['nx']} × {cells['ny']} cells; the floor (one numpy pass over them) took "
+        f"{cells['nx']} × {cells['ny']} cells: "
         f"{fmt_seconds(min(r['floor_seconds'] for r in results.values() if 'error' not in r))}"
         if cells
-        else ""
+        else "no case ran"
     )
     section.lines += [
         "Each case in a fresh process; *time* is the best of up to three runs of",
-        "`sweep.simulate` (segments already made); *segments* are the adapter's rows and those",
-        "left after skipping what cannot cut (tip above the stock, lifts, plunges to where the",
-        "tool has been, shallower copies of a deeper pass); *pairs* the (segment, cell)",
-        "evaluations made (over the boxes of the moves not skipped as already cleared);",
-        "*× floor* is the time over one plain numpy",
-        f"pass writing every cell of the same grid. {floor}.",
+        "`sweep.simulate` (segments already made); *segments* are the adapter's rows and",
+        "those left after skipping what cannot cut (tip above the stock, lifts, plunges to",
+        "where the tool has been, shallower copies of a deeper pass); *pairs* the (segment,",
+        "cell) evaluations made (over the boxes of the moves not skipped as already cleared);",
+        "*× floor* is the time over one plain numpy pass writing every cell of the same grid",
+        f"({floor}).",
         "",
         *table(
             [

@@ -1,10 +1,10 @@
 """The finished part in a real browser: three.js drawing the simulated part with WebGL.
 
 Debian's Chromium renders WebGL in software here (SwiftShader), the way a machine without a
-GPU would. A machinist opens a program from the library, goes to its finished part,
-sees the part drawn, points at the pocket and reads which block cut it, replays the cut
-back to before the pocket, moves the section plane, and clicks the pocket to open its
-block. The page's console must stay free of errors (a CSP refusal would show there).
+GPU would. A machinist opens a program from the library, opens the editor's verify panel,
+goes to its finished part, sees the part drawn, points at the pocket and reads which block
+cut it, replays the cut back to before the pocket, moves the section plane, and clicks the
+pocket to open its block. The page's console must stay free of errors (a CSP refusal would show there).
 Screenshots go to test-output/screenshots/.
 """
 
@@ -85,6 +85,9 @@ def test_the_finished_part_in_3d(page: Page, server: str) -> None:
     page.goto(server + "/")
     page.get_by_role("link", name="Rectangular pocket").click()
     expect(page.locator("h1")).to_contain_text("Rectangular pocket")
+    # The editor's verify panel: opening it simulates the program and reports per block.
+    page.locator("details.verify-panel summary").click()
+    expect(page.locator(".verify-panel .verify-body")).to_contain_text("Nothing found")
     page.keyboard.press("Alt+v")
     expect(page.locator("h1")).to_contain_text("Finished part")
     expect(page.locator(".message.ok")).to_contain_text("Nothing found")

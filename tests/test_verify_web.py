@@ -113,3 +113,14 @@ def test_a_program_with_errors_is_not_simulated(app: Flask, client: FlaskClient)
 def test_the_editor_links_to_the_finished_part(app: Flask, client: FlaskClient) -> None:
     pid = add(app, "frame-pocket")
     assert f'href="/programs/{pid}/verify"' in client.get(f"/programs/{pid}").get_data(as_text=True)
+
+
+def test_the_editor_s_verify_panel_reads_the_findings_per_block(
+    app: Flask, client: FlaskClient
+) -> None:
+    pid = add(app, "contour-gouge")
+    editor = client.get(f"/programs/{pid}").get_data(as_text=True)
+    assert f'data-report="/programs/{pid}/verify/report"' in editor
+    fragment = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
+    assert 'class="finding" data-block="8"' in fragment
+    assert f'href="/programs/{pid}?edit=8"' in fragment and "MILL STD" in fragment

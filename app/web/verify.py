@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 from flask import Blueprint, Response, redirect, render_template, request, url_for
+from markupsafe import escape
 from werkzeug.wrappers import Response as BaseResponse
 
 from app.cnc.blocks import Program, Stock
@@ -23,7 +24,7 @@ from app.cnc.simulate.image import png_bytes, render
 from app.cnc.simulate.mesh import stl_bytes
 from app.cnc.simulate.stock import StockError
 from app.cnc.simulate.sweep import Simulation
-from app.cnc.simulate.verify import run_simulation, verify
+from app.cnc.simulate.verify import Verification, run_simulation, verify
 from app.cnc.validate import validate
 from app.storage.library import StaleSave, StoredProgram
 from app.web.editor import _int, current_user, load
@@ -82,6 +83,7 @@ def _render(
             program=program,
             result=result,
             report=result.text() if result else "",
+            removed=_removed(result),
             titles=titles,
             stock_fields=STOCK_FIELDS,
             values=shown,
@@ -90,6 +92,30 @@ def _render(
         ),
         status,
     )
+
+
+@bp.get("/programs/<int:program_id>/verify/report")
+def report(program_id: int) -> tuple[str, int]:
+    """Verify's findings per block, as a fragment for the editor's panel."""
+    stored = load(program_id)
+    if has_errors(validate(stored.program)):
+        return '<p class="hint">Fix the program\'s errors first.</p>', 200
+    try:
+        result = verify(stored.program)
+    except StockError as exc:
+        return f'<p class="message error">{escape(str(exc))}</p>', 200
+    titles = {n: block.title for n, block in enumerate(stored.program.blocks, start=1)}
+    html = render_template(
+        "verify/report.html", stored=stored, result=result, titles=titles, removed=_removed(result)
+    )
+    return html, 200
+
+
+def _removed(result: Verification | None) -> str:
+    if result is None:
+        return ""
+    u = result.units
+    return f"{result.simulation.removed_volume() / u.nm**3:.4f} {u.symbol}³"
 
 
 @bp.post("/programs/<int:program_id>/verify/stock")

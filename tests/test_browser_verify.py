@@ -4,8 +4,8 @@ Debian's Chromium renders WebGL in software here (SwiftShader), the way a machin
 GPU would. A machinist opens a program from the library, opens the editor's verify panel,
 goes to its finished part, sees the part drawn, points at the pocket and reads which block
 cut it, replays the cut back to before the pocket, moves the section plane, and clicks the
-pocket to open its block. The page's console must stay free of errors (a CSP refusal would show there).
-Screenshots go to test-output/screenshots/.
+pocket to open its block. The page's console must stay free of errors (a CSP refusal would
+show there). Screenshots go to test-output/screenshots/.
 """
 
 from __future__ import annotations
@@ -15,11 +15,13 @@ import shutil
 from collections.abc import Iterator
 
 import pytest
-from playwright.sync_api import Browser, ConsoleMessage, Page, expect, sync_playwright
+from playwright.sync_api import Browser, Page, expect, sync_playwright
 
-from tests.test_browser import CHROMIUM, server, shot, until
+from tests.test_browser import CHROMIUM, page, server, shot, until
 
-__all__ = ["server"]  # the module-scoped app server fixture, shared with test_browser
+# The app server and the page (which fails the test on any console error) are
+# test_browser's; the browser they use here is this module's, with software WebGL.
+__all__ = ["page", "server"]
 
 WEBGL_ARGS = [
     "--no-sandbox",
@@ -35,29 +37,12 @@ WEBGL_ARGS = [
 
 
 @pytest.fixture(scope="module")
-def gl_browser() -> Iterator[Browser]:
+def browser() -> Iterator[Browser]:
     assert shutil.which(CHROMIUM) or os.path.exists(CHROMIUM), "Debian chromium missing"
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=WEBGL_ARGS)
         yield browser
         browser.close()
-
-
-@pytest.fixture
-def page(gl_browser: Browser) -> Iterator[Page]:
-    context = gl_browser.new_context(viewport={"width": 1500, "height": 950})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda error: errors.append(str(error)))
-
-    def console(message: ConsoleMessage) -> None:
-        if message.type == "error":
-            errors.append(message.text)
-
-    page.on("console", console)
-    yield page
-    context.close()
-    assert errors == [], f"the page reported errors: {errors}"
 
 
 def view(page: Page, key: str) -> str:

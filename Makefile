@@ -66,7 +66,7 @@ load: $(STAMP) system-deps
 
 # Rewrite the expected files of the golden tests from the current code (review the diff!).
 regen-golden: $(STAMP)
-	MILLBLOCKS_REGEN_GOLDEN=1 $(PY) -m pytest tests/test_golden.py -q
+	MILLBLOCKS_REGEN_GOLDEN=1 $(PY) -m pytest tests/test_golden.py tests/test_verify.py -q -k "golden"
 
 clean:
 	rm -rf $(VENV) .mypy_cache .pytest_cache .ruff_cache .hypothesis

@@ -7,6 +7,7 @@
     millblocks send PROG --machine M   send over RS-232 in the machine's target (logged)
     millblocks receive --machine M     receive over RS-232 into the library (logged)
     millblocks import FILE             add a file to the library, with its import report
+    millblocks verify FILE             simulate the cut; gouges, rest material, holes, crashes
 
 FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code, a 1704 tape (listing or
 punch image) or a DXF drawing, detected from its content; `--format` forces one. An import
@@ -397,6 +398,65 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
         except (OptionError, ExportError) as exc:
             raise click.ClickException(str(exc)) from None
     click.echo(render_text(setup_sheet(loaded, found, machine)), nl=False)
+
+
+@main.command("verify")
+@click.argument("program", metavar="PROGRAM")
+@file_format_option
+@click.option(
+    "--resolution",
+    type=click.FloatRange(min=0, min_open=True),
+    default=None,
+    help="Cell size in the program's units (default: about 800 cells along the stock).",
+)
+@click.option(
+    "--tolerance",
+    type=click.FloatRange(min=0),
+    default=None,
+    help="What counts, in the program's units (default 0.001 in or 0.02 mm).",
+)
+@click.option("--png", type=click.Path(path_type=Path, dir_okay=False), default=None)
+@click.option("--stl", type=click.Path(path_type=Path, dir_okay=False), default=None)
+def verify_command(
+    program: str,
+    resolution: float | None,
+    tolerance: float | None,
+    png: Path | None,
+    stl: Path | None,
+) -> None:
+    """Simulate cutting PROGRAM from its stock and check the part against the blocks.
+
+    Prints the stock, the volume each tool removes and every finding (gouge, rest material,
+    hole depth, crash) by block; exit 1 when anything is found or the program has errors.
+    --png writes a picture of the part, --stl the part as an STL solid (millimetres).
+    """
+    from decimal import Decimal
+
+    from app.cnc.simulate.image import png_bytes, render
+    from app.cnc.simulate.mesh import stl_bytes
+    from app.cnc.simulate.stock import StockError
+    from app.cnc.simulate.verify import verify
+    from app.cnc.units import to_nm
+
+    loaded = checked(program)
+    units = loaded.units
+    try:
+        result = verify(
+            loaded,
+            None if resolution is None else max(1, to_nm(Decimal(str(resolution)), units)),
+            None if tolerance is None else to_nm(Decimal(str(tolerance)), units),
+        )
+    except StockError as exc:
+        click.echo(f"{program}: {exc}", err=True)
+        sys.exit(1)
+    click.echo(result.text(), nl=False)
+    sim = result.simulation
+    if png is not None:
+        png.write_bytes(png_bytes(render(sim.grid, sim.heights())))
+    if stl is not None:
+        stl.write_bytes(stl_bytes(sim.grid, sim.heights()))
+    if result.findings:
+        sys.exit(1)
 
 
 @main.command("mirror")

@@ -185,7 +185,7 @@ def _memory() -> str:
     return "unknown"
 
 
-def _git_commit() -> str:
+def git_commit() -> str:
     try:
         head = subprocess.run(
             ["git", "rev-parse", "--short", "HEAD"],
@@ -225,7 +225,7 @@ def machine_lines() -> list[str]:
         f"- System: {platform.platform()}",
         f"- Python: {platform.python_implementation()} {platform.python_version()}",
         f"- Packages: {packages}",
-        f"- Code: commit {_git_commit()}",
+        f"- Code: commit {git_commit()}",
     ]
 
 

@@ -19,10 +19,19 @@ import os
 import sys
 import time
 from collections.abc import Callable
+from datetime import UTC, datetime
 from pathlib import Path
 
-from bench import editor, exports, gcode_import, interpreter, preview
-from bench.common import BUDGET, ROOT, Section, machine_lines, replace_between, table
+from bench import editor, exports, gcode_import, interpreter, preview, simulate
+from bench.common import (
+    BUDGET,
+    ROOT,
+    Section,
+    git_commit,
+    machine_lines,
+    replace_between,
+    table,
+)
 
 DOC = ROOT / "docs" / "benchmarks.md"
 PREAMBLE = """# Benchmarks (issue 10)
@@ -39,6 +48,7 @@ def sections(quick: bool) -> dict[str, Callable[[], Section]]:
         "preview": lambda: preview.run(sizes),
         "editor": lambda: editor.run(),
         "export": lambda: exports.run((10_000, 100_000) if quick else exports.SIZES),
+        "simulate": lambda: simulate.run(10_000 if quick else simulate.MOVES),
     }
 
 
@@ -73,10 +83,69 @@ def main(argv: list[str] | None = None) -> int:
         done.append(section)
     total = time.monotonic() - started
     text = render(done, skipped, total, load_before, args.quick)
+    if args.only:
+        # Some benchmarks only: their sections and target rows replace theirs in the last
+        # full run's figures; the others stay as they were.
+        previous = read_between(args.output, "bench")
+        if previous:
+            text = merge(previous, done, render_run(total, load_before, args.quick, args.only))
     if not args.no_write:
         replace_between(args.output, "bench", text, PREAMBLE)
         print(f"written to {args.output} in {total:.0f} s", file=sys.stderr)
     return 0
+
+
+def read_between(path: Path, key: str) -> str:
+    """The text between `<!-- key:begin -->` and `<!-- key:end -->` ('' if absent)."""
+    begin, end = f"<!-- {key}:begin -->", f"<!-- {key}:end -->"
+    text = path.read_text() if path.exists() else ""
+    if begin not in text or end not in text:
+        return ""
+    return text.split(begin, 1)[1].split(end, 1)[0].strip("\n")
+
+
+def merge(previous: str, done: list[Section], note: str) -> str:
+    """`previous` generated text with the sections of `done` (and their target rows) put
+    in place of their earlier versions (or added), and `note` saying when they ran."""
+    head, *sections = previous.split("\n### ")
+    chunks = {chunk.split("\n", 1)[0]: chunk for chunk in sections}
+    targets = chunks.pop("Targets (reported, not asserted)", "Targets (reported, not asserted)\n")
+    ours = {row[0] for section in done for row in section.summary}
+    rows = [
+        line
+        for line in targets.splitlines()[1:]
+        if not any(line.startswith(f"| {what} |") for what in ours)
+    ]
+    rows = [line for line in rows if line.strip()]
+    rows += [f"| {' | '.join(row)} |" for section in done for row in section.summary]
+    if len(rows) < 2:
+        rows = table(["what", "target", "measured", "ratio"], []) + rows
+    chunks["Targets (reported, not asserted)"] = "\n".join(
+        ["Targets (reported, not asserted)", "", *rows, ""]
+    )
+    for section in done:
+        text = section.text().removeprefix("### ")
+        chunks[section.title] = text.rstrip("\n") + "\n\n" + note + "\n"
+    order = ["Targets (reported, not asserted)"] + [
+        title for title in chunks if title != "Targets (reported, not asserted)"
+    ]
+    return "\n### ".join(
+        [head.rstrip("\n") + "\n", *(chunks[t].rstrip("\n") + "\n" for t in order)]
+    )
+
+
+def render_run(
+    seconds: float, load_before: tuple[float, float, float], quick: bool, only: str
+) -> str:
+    """One line saying when and how a section alone was measured."""
+    load_after = os.getloadavg()
+    return (
+        f"*This section alone: `python -m bench.run --only {only}`"
+        f"{' --quick' if quick else ''}, {datetime.now(UTC):%Y-%m-%d %H:%M} UTC, commit "
+        f"{git_commit()}, {seconds:.0f} s; load average before "
+        f"{' / '.join(f'{x:.2f}' for x in load_before)}, after "
+        f"{' / '.join(f'{x:.2f}' for x in load_after)}.*"
+    )
 
 
 def render(

@@ -191,4 +191,23 @@
     if (active && active.matches("input[data-field]")) { active.select(); }
     focusEntry();
   });
+  // Verify in the editor: opening the panel fetches the report per block (the simulation
+  // runs on the server) and marks the rows of the blocks it names.
+  document.addEventListener("toggle", function (event) {
+    var panel = event.target;
+    if (!panel.matches || !panel.matches("details.verify-panel") || !panel.open || panel.dataset.loaded) { return; }
+    panel.dataset.loaded = "1";
+    var body = panel.querySelector(".verify-body");
+    fetch(panel.dataset.report, { credentials: "same-origin" }).then(function (response) {
+      return response.text().then(function (text) { return { ok: response.ok, text: text }; });
+    }).then(function (answer) {
+      if (!answer.ok) { body.textContent = answer.text; return; }
+      body.innerHTML = answer.text;
+      body.querySelectorAll(".finding[data-block]").forEach(function (finding) {
+        var row = document.querySelector('.block-row[data-block="' + finding.dataset.block + '"]');
+        if (row) { row.classList.add("has-findings"); }
+      });
+      panel.dataset.state = "ready";
+    });
+  }, true);
 })();

@@ -338,7 +338,7 @@ MILL_ROUTINE_CLASSES: tuple[type[Block], ...] = (Circle, Frame)
 LOOP_CAPABLE_CLASSES: tuple[type[Block], ...] = (Pos, Hole)
 
 
-def field_label(block: Block | type[Block] | DataBlock0 | Tool, name: str) -> str:
+def field_label(block: Block | type[Block] | DataBlock0 | Tool | Stock, name: str) -> str:
     """The control's prompt for field `name` of a block (e.g. `feed_z` → `FEEDR Z`)."""
     for f in dataclasses.fields(block):
         if f.name == name:
@@ -385,8 +385,27 @@ class DataBlock0:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Stock:
+    """The raw stock the part is cut from, for the simulation (not a control setting).
+
+    `x`, `y` are its lower-left corner and `z` its top face, in part coordinates; `xl`, `yw`,
+    `zh` its size along X, Y and Z (down from the top). Lengths in the program's units.
+    """
+
+    x: Decimal = _f("X")
+    y: Decimal = _f("Y")
+    z: Decimal = _f("Z TOP", Decimal(0))
+    xl: Decimal = _f("XL")
+    yw: Decimal = _f("YW")
+    zh: Decimal = _f("ZH")
+
+
+@dataclass(frozen=True, kw_only=True)
 class Program:
-    """A whole part program: identification, Data Block 0 and data blocks 1…n."""
+    """A whole part program: identification, Data Block 0 and data blocks 1…n.
+
+    `stock` is None when the simulation should size the stock from the program's extent.
+    """
 
     name: str
     part_number: str = ""
@@ -394,6 +413,7 @@ class Program:
     notes: str = ""
     block0: DataBlock0 = field(default_factory=DataBlock0)
     blocks: tuple[Block, ...] = ()
+    stock: Stock | None = None
 
     def block(self, number: int) -> Block:
         """Data block `number` (1-based). Raises IndexError when it does not exist."""

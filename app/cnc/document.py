@@ -31,6 +31,7 @@ from app.cnc.blocks import (
     Pos,
     Program,
     Rep,
+    Stock,
     Tool,
     field_label,
 )
@@ -72,7 +73,7 @@ class DocumentError(ValueError):
 def to_dict(program: Program) -> dict[str, Any]:
     """The document as plain JSON data."""
     db0 = program.block0
-    return {
+    data: dict[str, Any] = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "name": program.name,
@@ -89,6 +90,10 @@ def to_dict(program: Program) -> dict[str, Any]:
         },
         "blocks": [_block_out(block) for block in program.blocks],
     }
+    # Written only when set, so documents without a stock read and write as before.
+    if program.stock is not None:
+        data["stock"] = _fields_out(program.stock)
+    return data
 
 
 def dumps(program: Program) -> str:
@@ -148,7 +153,7 @@ def from_dict(data: Any) -> Program:
             f"{FORMAT_VERSION}",
         )
     known = {"format", "version", "name", "part_number", "units", "notes"}
-    known |= {"data_block_0", "blocks"}
+    known |= {"data_block_0", "blocks", "stock"}
     _no_unknown("program", data, known)
     units = _enum(Units, data.get("units", "inch"), "program, units")
     db0_data = data.get("data_block_0", {})
@@ -164,6 +169,9 @@ def from_dict(data: Any) -> Program:
     if not isinstance(blocks_data, list):
         raise DocumentError("blocks", "expected a list of data blocks")
     blocks = tuple(_block_in(item, n) for n, item in enumerate(blocks_data, start=1))
+    stock_data = data.get("stock")
+    if stock_data is not None and not isinstance(stock_data, dict):
+        raise DocumentError("stock", 'expected an object like {"x": 0, "y": 0, "xl": 4, ...}')
     return Program(
         name=_text(data.get("name", ""), "program, name"),
         part_number=_text(data.get("part_number", ""), "program, part_number"),
@@ -171,6 +179,7 @@ def from_dict(data: Any) -> Program:
         notes=_text(data.get("notes", ""), "program, notes"),
         block0=block0,
         blocks=blocks,
+        stock=None if stock_data is None else _build(Stock, stock_data, "stock"),
     )
 
 

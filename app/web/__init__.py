@@ -17,7 +17,7 @@ from flask_wtf.csrf import CSRFError
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
-from app.web import auth, editor, export, library, machines, setup, transfers
+from app.web import auth, editor, export, library, machines, setup, transfers, verify
 from app.web.extensions import csrf, get_library
 
 __all__ = ["create_app", "get_library"]
@@ -54,7 +54,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     csrf.init_app(app)
     app.extensions["millblocks.library"] = open_library(app.config["DATABASE_URL"])
 
-    for module in (auth, library, editor, export, machines, setup, transfers):
+    for module in (auth, library, editor, export, machines, setup, transfers, verify):
         app.register_blueprint(module.bp)
     auth.init_app(app)
 

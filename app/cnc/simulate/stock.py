@@ -1,0 +1,177 @@
+"""The stock and the grid the simulation samples it on.
+
+A height map, not dexels: every tool here is vertical (3-axis milling and drilling with end
+mills, drill points, boring bars and taps), and a vertical tool removes everything above
+its bottom surface in each column, so the material left in a column is always one interval
+[stock bottom, top]. One height per cell is then exact at the cell's centre; dexels (a list
+of intervals per column) would only pay for undercutting tools (T-slot, dovetail) or
+tilted ones, which the data-block control does not have. One int64 per cell also carries
+which move cut it last (see `KEY_SHIFT`), for "which block cut here".
+
+Cells are squares of `resolution` nm; cell (i, j) is row i (Y) and column j (X), its centre
+at (x0 + (j + ½)·res, y0 + (i + ½)·res). Arrays are (ny, nx), row-major.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from decimal import Decimal
+
+import numpy as np
+
+from app.cnc.blocks import Stock as StockBlock
+from app.cnc.simulate.segments import Segments
+from app.cnc.units import Units, format_length, to_nm
+
+
+class StockError(ValueError):
+    """A stock that cannot be simulated (names the field and what is allowed)."""
+
+
+@dataclass(frozen=True)
+class Stock:
+    """The raw block in part coordinates, nm: X x0…x1, Y y0…y1, Z bottom…top.
+
+    `given` is True when the program's own stock was used, False when it was sized from
+    the program's extent.
+    """
+
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    bottom: int
+    top: int
+    given: bool = False
+
+    def describe(self, units: Units) -> str:
+        def f(nm: int) -> str:
+            return format_length(nm, units)
+
+        how = "the program's stock" if self.given else "sized from the program's extent"
+        return (
+            f"X {f(self.x0)} to {f(self.x1)}, Y {f(self.y0)} to {f(self.y1)}, "
+            f"Z {f(self.bottom)} to {f(self.top)} {units.symbol} ({how})"
+        )
+
+
+# Margins of a stock sized from the program (what a machinist would saw off the bar).
+MARGIN = {Units.INCH: Decimal("0.1"), Units.MM: Decimal("2.5")}
+BELOW = {Units.INCH: Decimal("0.25"), Units.MM: Decimal(6)}
+ROUND_TO = {Units.INCH: Decimal("0.05"), Units.MM: Decimal(1)}
+
+
+def program_stock(stock: StockBlock, units: Units) -> Stock:
+    """The program's own stock in nm. Raises StockError for a size that is not > 0."""
+    for name, label in (("xl", "XL"), ("yw", "YW"), ("zh", "ZH")):
+        if getattr(stock, name) <= 0:
+            raise StockError(f"stock, {label}: must be more than 0, got {getattr(stock, name)}")
+    x0, y0, top = (to_nm(v, units) for v in (stock.x, stock.y, stock.z))
+    return Stock(
+        x0=x0,
+        y0=y0,
+        x1=x0 + to_nm(stock.xl, units),
+        y1=y0 + to_nm(stock.yw, units),
+        bottom=top - to_nm(stock.zh, units),
+        top=top,
+        given=True,
+    )
+
+
+def extent_stock(segments: Segments) -> Stock:
+    """A stock that holds every cut: the feed moves' reach (tool radius included) plus a
+    margin, rounded outward; its top is part Z0 and its bottom a little below the deepest
+    cut. With no cut below Z0, the reach of every move, 0.25 in (6 mm) deep."""
+    units = segments.units
+    margin = to_nm(MARGIN[units], units)
+    step = to_nm(ROUND_TO[units], units)
+    cutting = ~segments.rapid & (np.minimum(segments.z0, segments.z1) < 0)
+    rows = segments if not cutting.any() else segments.select(cutting)
+    if len(rows) == 0:
+        size = to_nm(BELOW[units], units)
+        return Stock(-size, -size, size, size, -size, 0)
+    r = rows.radius
+    xs = np.concatenate([rows.x0 - r, rows.x1 - r, rows.x0 + r, rows.x1 + r])
+    ys = np.concatenate([rows.y0 - r, rows.y1 - r, rows.y0 + r, rows.y1 + r])
+    # Arc pieces bulge past their ends by at most (1 − cos 45°)·radius: take the whole circle.
+    if rows.arc.any():
+        a = rows.arc
+        ra = np.hypot(rows.x0[a] - rows.cx[a], rows.y0[a] - rows.cy[a]) + r[a]
+        xs = np.concatenate([xs, rows.cx[a] - ra, rows.cx[a] + ra])
+        ys = np.concatenate([ys, rows.cy[a] - ra, rows.cy[a] + ra])
+    deepest = float(np.minimum(rows.z0, rows.z1).min())
+
+    def down(v: float) -> int:
+        return math.floor((v - margin) / step) * step
+
+    def up(v: float) -> int:
+        return math.ceil((v + margin) / step) * step
+
+    below = to_nm(BELOW[units], units)
+    bottom = math.floor((deepest - below) / step) * step if cutting.any() else -below
+    return Stock(down(xs.min()), down(ys.min()), up(xs.max()), up(ys.max()), bottom, 0)
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The sampling grid over a stock: `nx` × `ny` cells of `resolution` nm."""
+
+    stock: Stock
+    resolution: float
+    nx: int
+    ny: int
+
+    @property
+    def x0(self) -> float:
+        return float(self.stock.x0)
+
+    @property
+    def y0(self) -> float:
+        return float(self.stock.y0)
+
+    @property
+    def cells(self) -> int:
+        return self.nx * self.ny
+
+    def centres(self) -> tuple[np.ndarray, np.ndarray]:
+        """The X (nx) and Y (ny) coordinates of the cell centres, nm."""
+        res = self.resolution
+        xs = self.x0 + (np.arange(self.nx) + 0.5) * res
+        ys = self.y0 + (np.arange(self.ny) + 0.5) * res
+        return xs, ys
+
+    def cell_of(self, x: float, y: float) -> tuple[int, int] | None:
+        """(row, column) of the cell holding point (x, y), or None outside the grid."""
+        j = math.floor((x - self.x0) / self.resolution)
+        i = math.floor((y - self.y0) / self.resolution)
+        if 0 <= i < self.ny and 0 <= j < self.nx:
+            return i, j
+        return None
+
+
+MAX_CELLS = 25_000_000
+
+
+def make_grid(stock: Stock, resolution: int) -> Grid:
+    """The grid of `resolution` nm cells covering `stock` (whole cells; the last row and
+    column may reach past the stock by less than a cell). Raises StockError when the
+    resolution is not positive or the grid would be unreasonably large."""
+    if resolution <= 0:
+        raise StockError("the resolution must be more than 0")
+    nx = max(1, math.ceil((stock.x1 - stock.x0) / resolution))
+    ny = max(1, math.ceil((stock.y1 - stock.y0) / resolution))
+    if nx * ny > MAX_CELLS:
+        raise StockError(
+            f"{nx} × {ny} cells is more than the {MAX_CELLS:,} this simulation takes; "
+            "choose a coarser resolution"
+        )
+    return Grid(stock, float(resolution), nx, ny)
+
+
+def auto_resolution(stock: Stock, units: Units, cells_along: int = 800) -> int:
+    """A resolution (nm) giving about `cells_along` cells along the stock's longer side,
+    rounded up to 0.0005 in (0.01 mm) and never finer than that."""
+    quantum = to_nm(Decimal("0.0005") if units is Units.INCH else Decimal("0.01"), units)
+    longest = max(stock.x1 - stock.x0, stock.y1 - stock.y0)
+    return max(quantum, math.ceil(longest / cells_along / quantum) * quantum)

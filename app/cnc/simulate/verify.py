@@ -1,0 +1,464 @@
+"""Verify: the simulated part measured against what the program asks for.
+
+Four kinds of finding, each named by the block at fault:
+
+- **gouge**: material removed on the part's side of a finished surface, farther in than the
+  tolerance: inside a compensated MILL contour (the side away from CUT RT/LT), outside an
+  INSIDE/IN-TAN/POCKET routine's wall, inside an OUTSIDE/OUT-TAN one's. Checked in a band
+  two tool radii wide along a contour (one along a routine's wall), so a deeper gouge reads
+  "at least"; the finding names the block whose move cut there.
+- **rest material**: material left above Z DN inside the finished contour of a POCKET, or
+  in the band one tool radius wide beside the wall of any CIRCLE/FRAME: the corners of a
+  frame whose corner radius is smaller than the tool's, a wrong depth, a missing pass.
+- **hole depth**: a DRILL/BORE/TAP hole whose bottom at its centre is shallower or deeper
+  than Z DN (a hole through the stock's bottom is through, not shallow). A drill point's
+  cone is allowed for between the hole's centre and the centre of the cell it is in.
+- **crash**: a rapid move whose tool meets material (the simulation checks each rapid that
+  goes below the stock's top against the part as cut so far).
+
+Everything is measured at the cell centres of the simulation's grid, so a finding is at
+least one cell across. Lengths in nm inside, printed in the program's units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from decimal import Decimal
+
+import numpy as np
+
+from app.cnc.blocks import Program
+from app.cnc.interpret import interpret
+from app.cnc.mill import Element
+from app.cnc.simulate.programmed import Contour, Programmed, Routine, programmed_geometry
+from app.cnc.simulate.segments import BOOL, F64, Segments, toolpath_segments
+from app.cnc.simulate.stock import (
+    Grid,
+    Stock,
+    auto_resolution,
+    extent_stock,
+    make_grid,
+    program_stock,
+)
+from app.cnc.simulate.sweep import Simulation, simulate
+from app.cnc.units import Units, format_length, to_nm
+
+DEFAULT_TOLERANCE = {Units.INCH: Decimal("0.001"), Units.MM: Decimal("0.02")}
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One thing wrong with the simulated part: `block` is the block at fault, `kind` one of
+    gouge, rest, hole, crash; (x, y) where it is worst (nm)."""
+
+    block: int
+    kind: str
+    message: str
+    x: float
+    y: float
+
+
+@dataclass
+class Verification:
+    """A simulation and what verify found in it."""
+
+    program: Program
+    simulation: Simulation
+    findings: list[Finding] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    checked: dict[str, int] = field(default_factory=dict)
+    tolerance: int = 0
+
+    @property
+    def units(self) -> Units:
+        return self.program.units
+
+    def by_block(self) -> dict[int, list[Finding]]:
+        """Findings grouped by block, in block order."""
+        groups: dict[int, list[Finding]] = {}
+        for finding in self.findings:
+            groups.setdefault(finding.block, []).append(finding)
+        return dict(sorted(groups.items()))
+
+    def text(self) -> str:
+        """The report: stock, grid, removed volume per tool, notes, then one line a finding."""
+        u = self.units
+        grid = self.simulation.grid
+        cubic = u.nm**3
+
+        def volume(nm3: float) -> str:
+            return f"{nm3 / cubic:.4f} {u.symbol}³"
+
+        lines = [
+            f"stock: {grid.stock.describe(u)}",
+            f"grid: {grid.nx} × {grid.ny} cells of {_len(round(grid.resolution), u)}; "
+            f"tolerance {_len(self.tolerance, u)}",
+            f"removed: {volume(self.simulation.removed_volume())}"
+            + "".join(
+                f"; tool {tool} {volume(v)}"
+                for tool, v in sorted(self.simulation.removed_by_tool.items())
+            ),
+            "checked: " + ", ".join(f"{n} {what}" for what, n in self.checked.items()),
+        ]
+        lines += [f"note: {note}" for note in self.notes]
+        lines += [f"block {f.block}: {f.kind}: {f.message}" for f in self.findings]
+        count = len(self.findings)
+        lines.append(
+            "nothing found" if count == 0 else f"{count} finding{'s' if count > 1 else ''}"
+        )
+        return "\n".join(lines) + "\n"
+
+
+def stock_of(program: Program, segments: Segments) -> Stock:
+    """The program's own stock, else one sized from its extent. Raises StockError."""
+    if program.stock is not None:
+        return program_stock(program.stock, program.units)
+    return extent_stock(segments)
+
+
+def prepare(
+    program: Program, resolution: int | None = None, cells: int = 800
+) -> tuple[Grid, Segments]:
+    """The grid (the program's stock, `resolution` nm cells, or about `cells` along the
+    longer side) and the segments of a validated program. Raises StockError."""
+    segments = toolpath_segments(program, interpret(program))
+    stock = stock_of(program, segments)
+    return make_grid(stock, resolution or auto_resolution(stock, program.units, cells)), segments
+
+
+def run_simulation(
+    program: Program, resolution: int | None = None, upto: int | None = None, cells: int = 800
+) -> Simulation:
+    """Simulate a validated program up to block `upto` (None: all); see `prepare`."""
+    grid, segments = prepare(program, resolution, cells)
+    return simulate(grid, segments, upto, default_tolerance(program.units))
+
+
+def default_tolerance(units: Units) -> int:
+    """0.001 in, or 0.02 mm: in nm."""
+    return to_nm(DEFAULT_TOLERANCE[units], units)
+
+
+def verify(
+    program: Program, resolution: int | None = None, tolerance: int | None = None
+) -> Verification:
+    """Simulate a validated program and check it (see the module's note). `tolerance` (nm)
+    defaults to 0.001 in (0.02 mm). Raises StockError for a bad stock."""
+    tol = default_tolerance(program.units) if tolerance is None else tolerance
+    grid, segments = prepare(program, resolution)
+    sim = simulate(grid, segments, None, tol)
+    geometry = programmed_geometry(program)
+    result = Verification(program, sim, notes=list(segments.notes), tolerance=tol)
+    result.checked = {
+        "contours": len(geometry.contours),
+        "routines": len(geometry.routines),
+        "holes": len(geometry.holes),
+    }
+    if not (np.minimum(segments.z0, segments.z1) < grid.stock.top).any():
+        result.notes.append(
+            "no move goes below the stock's top, so nothing is cut (a 2-axis program "
+            "moves the quill by hand)"
+        )
+    _check(result, geometry, tol)
+    return result
+
+
+def _check(result: Verification, geometry: Programmed, tol: int) -> None:
+    sim = result.simulation
+    heights = sim.heights()
+    owners = sim.owner_blocks()
+    u = result.units
+    found: list[Finding] = []
+    for contour in geometry.contours:
+        found += _contour_gouges(sim.grid, heights, owners, contour, tol, u)
+    for routine in geometry.routines:
+        found += _routine_findings(sim.grid, heights, owners, routine, tol, u)
+    found += _hole_findings(sim.grid, heights, owners, geometry, tol, u)
+    found += _crash_findings(sim, u)
+    result.findings = sorted(found, key=lambda f: (f.block, f.kind, f.message))
+
+
+# -- cells near a shape --------------------------------------------------------------------
+
+
+def _window(
+    grid: Grid, x0: float, y0: float, x1: float, y1: float
+) -> tuple[slice, slice, F64, F64]:
+    """The rows and columns of cells whose centres lie in [x0, x1] × [y0, y1], and the
+    centres' coordinates as (rows, columns) arrays."""
+    res = grid.resolution
+    j0 = max(0, math.ceil((x0 - grid.x0) / res - 0.5))
+    j1 = min(grid.nx, math.floor((x1 - grid.x0) / res - 0.5) + 1)
+    i0 = max(0, math.ceil((y0 - grid.y0) / res - 0.5))
+    i1 = min(grid.ny, math.floor((y1 - grid.y0) / res - 0.5) + 1)
+    j1, i1 = max(j0, j1), max(i0, i1)
+    xs = grid.x0 + (np.arange(j0, j1) + 0.5) * res
+    ys = grid.y0 + (np.arange(i0, i1) + 0.5) * res
+    qx, qy = np.meshgrid(xs, ys)
+    return slice(i0, i1), slice(j0, j1), qx, qy
+
+
+def _worst(
+    mask: BOOL, amount: F64, qx: F64, qy: F64, owners: np.ndarray | None
+) -> list[tuple[int, float, float, float, int]]:
+    """Per owner block (0 when `owners` is None): (block, worst amount, x, y, cells)."""
+    if not mask.any():
+        return []
+    keys = owners[mask] if owners is not None else np.zeros(int(mask.sum()), dtype=np.int32)
+    values, xs, ys = amount[mask], qx[mask], qy[mask]
+    out = []
+    for block in np.unique(keys).tolist():
+        here = keys == block
+        k = int(np.argmax(np.where(here, values, -np.inf)))
+        out.append((int(block), float(values[k]), float(xs[k]), float(ys[k]), int(here.sum())))
+    return out
+
+
+def _at(x: float, y: float, u: Units) -> str:
+    return f"X {format_length(round(x), u)} Y {format_length(round(y), u)}"
+
+
+def _len(nm: float, u: Units) -> str:
+    return f"{format_length(round(nm), u)} {u.symbol}"
+
+
+# -- compensated contours ------------------------------------------------------------------
+
+
+def _element_measures(
+    qx: F64, qy: F64, start: tuple[float, float], element: Element
+) -> tuple[F64, F64, BOOL]:
+    """(distance, signed distance to the left of travel, beside the element's interior)
+    of each point to a contour element."""
+    sx, sy = start
+    ex, ey = element.end
+    if element.centre is None:
+        dx, dy = ex - sx, ey - sy
+        length = math.hypot(dx, dy) or 1.0
+        t = ((qx - sx) * dx + (qy - sy) * dy) / (length * length)
+        left = (dx * (qy - sy) - dy * (qx - sx)) / length
+        tc = np.clip(t, 0.0, 1.0)
+        dist = np.hypot(qx - (sx + tc * dx), qy - (sy + tc * dy))
+        return dist, left, (t >= 0) & (t <= 1)
+    cx, cy = element.centre
+    ra = math.hypot(sx - cx, sy - cy)
+    rho = np.hypot(qx - cx, qy - cy)
+    a0 = math.atan2(sy - cy, sx - cx)
+    a1 = math.atan2(ey - cy, ex - cx)
+    sweep = ((a0 - a1) if element.clockwise else (a1 - a0)) % (2 * math.pi) or 2 * math.pi
+    ap = np.arctan2(qy - cy, qx - cx)
+    along = ((a0 - ap) if element.clockwise else (ap - a0)) % (2 * math.pi)
+    interior = along <= sweep
+    ends = np.minimum(np.hypot(qx - sx, qy - sy), np.hypot(qx - ex, qy - ey))
+    dist = np.where(interior, np.abs(rho - ra), ends)
+    left = (rho - ra) if element.clockwise else (ra - rho)
+    return dist, left, interior
+
+
+def _contour_gouges(
+    grid: Grid,
+    heights: F64,
+    owners: np.ndarray,
+    contour: Contour,
+    tol: int,
+    u: Units,
+) -> list[Finding]:
+    band = 2.0 * contour.tool_radius
+    starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+    pts = [p for e in contour.elements for p in (e.end, e.centre) if p is not None]
+    pts.append(contour.start)
+    reach = band + max(
+        (math.dist(s, e.centre) for s, e in zip(starts, contour.elements, strict=True) if e.centre),
+        default=0.0,
+    )
+    xs, ys = [p[0] for p in pts], [p[1] for p in pts]
+    rows, cols, qx, qy = _window(
+        grid, min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach
+    )
+    if qx.size == 0:
+        return []
+    measures = [
+        _element_measures(qx, qy, s, e) for s, e in zip(starts, contour.elements, strict=True)
+    ]
+    dist = np.stack([m[0] for m in measures])
+    nearest = np.argmin(dist, axis=0)
+    pick = nearest[None, ...]
+    left = np.take_along_axis(np.stack([m[1] for m in measures]), pick, 0)[0]
+    interior = np.take_along_axis(np.stack([m[2] for m in measures]), pick, 0)[0]
+    inward = left if contour.part_left else -left
+    h = heights[rows, cols]
+    cut = h < grid.stock.top - tol
+    mask = interior & (inward > tol) & (inward <= band) & cut
+    block_of = np.array([e.block for e in contour.elements])[nearest]
+    findings = []
+    for culprit, depth, x, y, _ in _worst(mask, inward, qx, qy, owners[rows, cols]):
+        near = int(block_of[mask & (owners[rows, cols] == culprit)][0]) if culprit else 0
+        least = "at least " if depth > band - grid.resolution else ""
+        findings.append(
+            Finding(
+                culprit or contour.drill,
+                "gouge",
+                f"cuts {least}{_len(depth, u)} into the finished contour of block {near} "
+                f"(the sequence from block {contour.drill}) at {_at(x, y, u)}",
+                x,
+                y,
+            )
+        )
+    return findings
+
+
+# -- circle and frame routines -------------------------------------------------------------
+
+
+def _routine_sdf(routine: Routine, qx: F64, qy: F64, corner: float) -> F64:
+    """Signed distance (nm; negative inside) to the routine's finished contour, a frame's
+    corners rounded to `corner` where that is more than its own corner radius."""
+    if not routine.is_frame:
+        return np.hypot(qx - routine.centre[0], qy - routine.centre[1]) - routine.radius
+    hx, hy = routine.width / 2, routine.height / 2
+    cx, cy = routine.corner[0] + hx, routine.corner[1] + hy
+    r = min(max(corner, routine.corner_radius), hx, hy)
+    px = np.abs(qx - cx) - (hx - r)
+    py = np.abs(qy - cy) - (hy - r)
+    outside = np.hypot(np.maximum(px, 0), np.maximum(py, 0))
+    return outside + np.minimum(np.maximum(px, py), 0) - r
+
+
+def _routine_findings(
+    grid: Grid,
+    heights: F64,
+    owners: np.ndarray,
+    routine: Routine,
+    tol: int,
+    u: Units,
+) -> list[Finding]:
+    if routine.depth is None or routine.tool_radius <= 0:
+        return []
+    r = float(routine.tool_radius)
+    if routine.is_frame:
+        x0, y0 = routine.corner
+        x1, y1 = x0 + routine.width, y0 + routine.height
+    else:
+        (cx, cy), rad = routine.centre, routine.radius
+        x0, y0, x1, y1 = cx - rad, cy - rad, cx + rad, cy + rad
+    rows, cols, qx, qy = _window(grid, x0 - 2 * r, y0 - 2 * r, x1 + 2 * r, y1 + 2 * r)
+    if qx.size == 0:
+        return []
+    h = heights[rows, cols]
+    own = owners[rows, cols]
+    sdf = _routine_sdf(routine, qx, qy, 0.0)
+    part = sdf if routine.inside else -sdf
+    tool_side = -part
+    cut = h < grid.stock.top - tol
+    findings = []
+    gouged = (part > tol) & (part <= r) & cut
+    for culprit, depth, x, y, _ in _worst(gouged, part, qx, qy, own):
+        findings.append(
+            Finding(
+                culprit or routine.block,
+                "gouge",
+                f"cuts {_len(depth, u)} past the finished wall of block {routine.block} "
+                f"at {_at(x, y, u)}",
+                x,
+                y,
+            )
+        )
+    floor = max(routine.depth, grid.stock.bottom)
+    left = h - floor
+    must = (tool_side > tol) & (True if routine.pocket else tool_side <= r)
+    rest = must & (left > tol)
+    for _, thick, x, y, cells in _worst(rest, left, qx, qy, None):
+        where = "in the pocket" if routine.pocket else "beside the wall"
+        area = cells * grid.resolution**2
+        findings.append(
+            Finding(
+                routine.block,
+                "rest material",
+                f"{_len(thick, u)} of material left above Z DN {where} at {_at(x, y, u)} "
+                f"({area / u.nm**2:.4f} {u.symbol}² of it)",
+                x,
+                y,
+            )
+        )
+    return findings
+
+
+# -- holes and crashes ---------------------------------------------------------------------
+
+
+def _hole_findings(
+    grid: Grid,
+    heights: F64,
+    owners: np.ndarray,
+    geometry: Programmed,
+    tol: int,
+    u: Units,
+) -> list[Finding]:
+    from app.cnc.blocks import HoleOp
+    from app.cnc.simulate.segments import DRILL_SLOPE
+
+    findings = []
+    # Spot drill, drill, tap: holes at one place go as deep as the deepest of them.
+    deepest: dict[tuple[int, int], int] = {}
+    for hole in geometry.holes:
+        deepest[hole.x, hole.y] = min(hole.depth, deepest.get((hole.x, hole.y), hole.depth))
+    for hole in geometry.holes:
+        cell = grid.cell_of(hole.x, hole.y)
+        if cell is None:
+            continue
+        i, j = cell
+        cx = grid.x0 + (j + 0.5) * grid.resolution
+        cy = grid.y0 + (i + 0.5) * grid.resolution
+        slack = DRILL_SLOPE * math.hypot(cx - hole.x, cy - hole.y) if hole.op is HoleOp.DRILL else 0
+        bottom = float(heights[i, j])
+        expected = max(hole.depth, grid.stock.bottom)
+        at = _at(hole.x, hole.y, u)
+        if bottom > expected + tol + slack:
+            findings.append(
+                Finding(
+                    hole.block,
+                    "hole depth",
+                    f"the {hole.op.value} hole at {at} is {_len(bottom - expected, u)} shallower "
+                    f"than Z DN {format_length(hole.depth, u)}",
+                    hole.x,
+                    hole.y,
+                )
+            )
+        elif bottom < deepest[hole.x, hole.y] - tol and bottom > grid.stock.bottom:
+            culprit = int(owners[i, j])
+            by = f" (cut by block {culprit})" if culprit and culprit != hole.block else ""
+            findings.append(
+                Finding(
+                    culprit or hole.block,
+                    "hole depth",
+                    f"the {hole.op.value} hole of block {hole.block} at {at} is "
+                    f"{_len(deepest[hole.x, hole.y] - bottom, u)} deeper than Z DN "
+                    f"{format_length(deepest[hole.x, hole.y], u)}{by}",
+                    hole.x,
+                    hole.y,
+                )
+            )
+    return findings
+
+
+def _crash_findings(sim: Simulation, u: Units) -> list[Finding]:
+    worst: dict[int, tuple[int, float, float, float]] = {}
+    for crash in sim.crashes:
+        count, depth, x, y = worst.get(crash.block, (0, -1.0, 0.0, 0.0))
+        if crash.depth > depth:
+            depth, x, y = crash.depth, crash.x, crash.y
+        worst[crash.block] = (count + 1, depth, x, y)
+    findings = []
+    for block, (count, depth, x, y) in sorted(worst.items()):
+        more = f" ({count} rapid moves of this block hit material)" if count > 1 else ""
+        findings.append(
+            Finding(
+                block,
+                "crash",
+                f"a rapid move goes {_len(depth, u)} into the material at {_at(x, y, u)}{more}",
+                x,
+                y,
+            )
+        )
+    return findings

@@ -1,0 +1,126 @@
+"""The finished-part page over the Flask test client: the report, the surface the 3D view
+reads, the PNG and STL downloads, and the stock saved with the program."""
+
+from __future__ import annotations
+
+import struct
+from decimal import Decimal
+
+from flask import Flask
+from flask.testing import FlaskClient
+
+from app.cnc import document
+from app.web import get_library
+from tests.test_verify import CASES_DIR
+from tests.test_web import app, client, token
+
+__all__ = ["app", "client"]
+
+
+def add(app: Flask, case: str) -> int:
+    program = document.loads((CASES_DIR / case / "program.json").read_text())
+    with app.app_context():
+        return get_library().create(program).id
+
+
+def test_the_page_lists_the_findings_by_block_with_links(app: Flask, client: FlaskClient) -> None:
+    pid = add(app, "contour-gouge")
+    page = client.get(f"/programs/{pid}/verify")
+    assert page.status_code == 200
+    text = page.get_data(as_text=True)
+    assert f'href="/programs/{pid}?edit=8"' in text
+    assert "gouge: cuts at least 0.2475 in into the finished contour of block 6" in text
+    assert "/static/verify.js" in text and "<script>" not in text and "style=" not in text
+
+
+def test_the_surface_is_the_height_map_up_to_the_block_asked_for(
+    app: Flask, client: FlaskClient
+) -> None:
+    pid = add(app, "hole-milled-deeper")
+
+    def header(url: str) -> tuple[int, ...]:
+        data = client.get(url).data
+        assert data[:4] == b"MBS1"
+        nx, ny, x0, y0, res, top, bottom, upto, blocks = struct.unpack("<II5dII", data[4:60])
+        assert len(data) == 60 + 8 * nx * ny
+        assert (top, blocks) == (0.0, 3) and bottom < -0.4
+        # The grid covers the pocket of radius 0.6 about (2, 2), in inches.
+        assert x0 < 1.4 and y0 < 1.4 and x0 + nx * res > 2.6 and y0 + ny * res > 2.6
+        return nx, ny, upto
+
+    whole = header(f"/programs/{pid}/verify/surface")
+    assert whole[2] == 3
+    assert header(f"/programs/{pid}/verify/surface?upto=1")[2] == 1
+
+
+def test_png_and_stl_downloads(app: Flask, client: FlaskClient) -> None:
+    pid = add(app, "frame-pocket")
+    png = client.get(f"/programs/{pid}/verify/part.png")
+    assert png.mimetype == "image/png" and png.data.startswith(b"\x89PNG")
+    stl = client.get(f"/programs/{pid}/verify/part.stl")
+    assert stl.mimetype == "model/stl"
+    assert (
+        'filename="Frame-pocket-3-x-2--corner-radius-0-375.stl"'
+        in stl.headers["Content-Disposition"]
+    )
+    assert struct.unpack("<I", stl.data[80:84])[0] * 50 + 84 == len(stl.data)
+    sheet = client.get(f"/programs/{pid}/setup").get_data(as_text=True)
+    assert f'src="/programs/{pid}/verify/part.png"' in sheet
+
+
+def test_the_stock_is_saved_with_the_program_and_refused_when_wrong(
+    app: Flask, client: FlaskClient
+) -> None:
+    pid = add(app, "frame-pocket")
+    url = f"/programs/{pid}/verify"
+    fields = {"x": "0.5", "y": "0.5", "z": "0", "xl": "4", "yw": "3", "zh": "0.75"}
+    bad = client.post(
+        url + "/stock", data={**fields, "zh": "0", "csrf_token": token(client, url), "version": "1"}
+    )
+    assert bad.status_code == 422
+    assert "ZH: must be more than 0" in bad.get_data(as_text=True)
+    with app.app_context():
+        assert get_library().get(pid).program.stock is None
+    saved = client.post(
+        url + "/stock", data={**fields, "csrf_token": token(client, url), "version": "1"}
+    )
+    assert saved.status_code == 302
+    with app.app_context():
+        stock = get_library().get(pid).program.stock
+    assert stock is not None and stock.zh == Decimal("0.75") and stock.xl == Decimal(4)
+    page = client.get(url).get_data(as_text=True)
+    assert (
+        "X 0.5000 to 4.5000, Y 0.5000 to 3.5000, Z -0.7500 to 0.0000 in (the program&#39;s stock)"
+        in page
+    )
+    cleared = client.post(
+        url + "/stock", data={"action": "clear", "csrf_token": token(client, url), "version": "2"}
+    )
+    assert cleared.status_code == 302
+    with app.app_context():
+        assert get_library().get(pid).program.stock is None
+
+
+def test_a_program_with_errors_is_not_simulated(app: Flask, client: FlaskClient) -> None:
+    text = (CASES_DIR / "frame-pocket" / "program.json").read_text()
+    program = document.loads(text.replace('"feed_z": 5', '"feed_z": 900'))
+    with app.app_context():
+        pid = get_library().create(program).id
+    assert client.get(f"/programs/{pid}/verify").status_code == 422
+    assert client.get(f"/programs/{pid}/verify/surface").status_code == 422
+
+
+def test_the_editor_links_to_the_finished_part(app: Flask, client: FlaskClient) -> None:
+    pid = add(app, "frame-pocket")
+    assert f'href="/programs/{pid}/verify"' in client.get(f"/programs/{pid}").get_data(as_text=True)
+
+
+def test_the_editor_s_verify_panel_reads_the_findings_per_block(
+    app: Flask, client: FlaskClient
+) -> None:
+    pid = add(app, "contour-gouge")
+    editor = client.get(f"/programs/{pid}").get_data(as_text=True)
+    assert f'data-report="/programs/{pid}/verify/report"' in editor
+    fragment = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
+    assert 'class="finding" data-block="8"' in fragment
+    assert f'href="/programs/{pid}?edit=8"' in fragment and "MILL STD" in fragment

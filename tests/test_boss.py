@@ -94,10 +94,10 @@ def rotary_part(y: str = "0") -> Program:
 
 
 def test_index_turns_the_table_through_y() -> None:
-    """90° per INDEX: Y9 on BOSS 4/5, Y4.5 on BOSS 6, incremental, then back to G90."""
+    """90° per INDEX: Y9. on BOSS 4/5, Y4.5 on BOSS 6, incremental, then back to G90."""
     boss45 = export(rotary_part(), "tape-boss", {"rotary": "yes", "system": "boss45"})
     lines = boss45.data.decode().splitlines()
-    assert "G91G00Y9" in lines and lines[lines.index("G91G00Y9") + 1] == "G90"
+    assert "G91G00Y9." in lines and lines[lines.index("G91G00Y9.") + 1] == "G90"
     boss6 = export(rotary_part(), "tape-boss", {"rotary": "yes", "index-degrees": "25"})
     assert "G91G00Y1.25" in boss6.data.decode().splitlines()
     fed = export(
@@ -105,7 +105,7 @@ def test_index_turns_the_table_through_y() -> None:
         "tape-boss",
         {"rotary": "yes", "system": "boss45", "index-feed": "12", "index-radius": "4"},
     )
-    assert "G91G01Y9F171" in fed.data.decode().splitlines()
+    assert "G91G01Y9.F171" in fed.data.decode().splitlines()
 
 
 def test_y_motion_is_refused_when_y_drives_the_table() -> None:

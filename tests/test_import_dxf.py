@@ -37,7 +37,7 @@ from app.cnc.imports.dxf import parse_options, read_drawing
 from app.cnc.imports.dxf_blocks import as_path, contour_blocks
 from app.cnc.mill import Element, programmed_contour
 from app.cnc.mill import Path as MillPath
-from app.cnc.problems import Severity
+from app.cnc.problems import Rule, Severity
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
 from tests.golden_support import check_golden
@@ -160,8 +160,9 @@ def test_golden_blocks_and_report(case: str) -> None:
     check_golden(HERE / f"{case}.json", document.dumps(result.program))
     check_golden(HERE / f"{case}.report", result.text())
     errors = [p for p in validate(result.program) if p.severity is Severity.ERROR]
-    # What validation still asks for is what the report says the user must enter.
-    assert {p.field for p in errors} <= {"DIA", "RPM", "TOOL #"}
+    # What validation still asks for is what the report says the user must enter: the
+    # tool's diameter and RPM (Data Block 0, TOOL 1 RPM).
+    assert {p.rule for p in errors} <= {Rule.TOOL_NO_RPM, Rule.TOOL_NO_DIAMETER}
 
 
 def test_import_is_deterministic() -> None:

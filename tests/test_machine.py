@@ -11,7 +11,7 @@ import pytest
 from app.cnc import document
 from app.cnc.blocks import DataBlock0, Hole, HoleOp, Pos, Program, Tool
 from app.cnc.emit.target import ExportError, export
-from app.cnc.estimate import estimate
+from app.cnc.estimate import estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.machine import PRESETS, MachineError, check_travel, read_machine
 
@@ -112,8 +112,9 @@ def test_bad_machine_descriptions_are_named() -> None:
 
 def test_cycle_time_per_machine() -> None:
     """drill-single's rapids are 2.314214 in (see test_hand_derived): 0.555411 s at 250 ipm,
-    0.347132 s at the Model 800's 400 ipm. With OTIME 60 s and no stops nothing is added;
-    a 2 ipm feed cap makes the 0.6 in feed take 18 s instead of 7.2 s."""
+    0.347132 s at the Model 800's 400 ipm; a 2 ipm feed cap makes the 0.6 in feed take 18 s
+    instead of 7.2 s. OTIME (seed 002: "the additional operator time to be added to the
+    printed cycle time") is added once, however many stops and tool changes there are."""
     toolpath = interpret(document.loads((GOLDEN / "drill-single" / "program.json").read_text()))
     kt800 = estimate(toolpath, machine=PRESETS["kt-800"])
     assert kt800.rapid == pytest.approx(0.347132, abs=1e-6)
@@ -124,5 +125,10 @@ def test_cycle_time_per_machine() -> None:
         document.loads((GOLDEN / "stop-and-tool-changes" / "program.json").read_text())
     )
     base = estimate(stops).total
-    with_otime = estimate(stops, machine=read_machine({"operator_seconds": "60"})).total
-    assert with_otime - base == pytest.approx(60 * (2 + 3))  # two STOPs, three tool changes
+    with_otime = estimate(stops, machine=read_machine({"operator_seconds": "60"}))
+    # Two STOPs and three tool changes: still 60 s (it was 60 s at each: +300 s).
+    assert with_otime.total - base == pytest.approx(60)
+    assert with_otime.operator == 60 and sum(with_otime.per_block.values()) == pytest.approx(base)
+    assert "Operator time (OTIME) 1:00.0" in report(with_otime)
+    single = estimate(toolpath, machine=read_machine({"operator_seconds": "60"}))
+    assert single.total - estimate(toolpath).total == pytest.approx(60)

@@ -596,7 +596,7 @@ def test_capacity_limits_are_errors_naming_the_block() -> None:
     ]
     fast = line_blocks(drill("1", "1", feed_z="250"))
     assert report_errors(fast) == [
-        "error: block 1: feed 250.0 ipm is above the 1704's maximum 200.0 ipm"
+        "error: block 1: feed 250.0 ipm is above the 1704's maximum 200.0 ipm (inch, 0.0001 in)"
     ]
     # A 127.279 in radius (start (−40, −40) about (50, 50)): the 1704's limit is 99.9999 in.
     big = line_blocks(
@@ -827,9 +827,10 @@ def test_svg_draws_every_hole_and_the_feed_track() -> None:
 
 
 def test_tape_search_restates_position_spindle_and_coolant_at_every_block() -> None:
-    """Seed 000 §4 tape search: with tape-search, every data block's first move writes X, Y,
-    Z, G (and F when it feeds), and the spindle and coolant in force are stated again just
-    before it, each in its own block; N is on every block."""
+    """Seed 000 §4 tape search: with tape-search, every data block that starts out of the
+    work begins with a block carrying X, Y, Z, the spindle and the feed, with the coolant
+    in force in the block before it (one M code per block); N is on every block. The full
+    rules are in tests/test_shop_floor.py."""
     from app.cnc import document
     from app.cnc.emit.target import export
 
@@ -840,8 +841,8 @@ def test_tape_search_restates_position_spindle_and_coolant_at_every_block() -> N
     searched = export(program, "tape-ascii", {"tape-search": "yes"}).data.decode().splitlines()
     blocks = [line for line in searched if line.startswith("N")]
     assert len(blocks) > len([line for line in plain if line.startswith("N")])
-    # Block 4 starts again with the spindle (reverse, tool 3) and then a full position.
+    # Block 4 (the tap, tool 3 in reverse) is searched to at the tool's position with its
+    # spindle and feed; it then moves over the hole.
     index = blocks.index(next(b for b in blocks if "X30000Y10000" in b))
-    assert blocks[index - 1].endswith("M04")
-    assert "G50" in blocks[index] and "Z" in blocks[index]
+    assert re.search(r"G50X0Y0Z5750F50M04$", blocks[index - 1]), blocks[index - 1]
     assert all(re.match(r"N\d+", line) for line in blocks)

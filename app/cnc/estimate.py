@@ -8,7 +8,9 @@ Not a trajectory planner. What it assumes, stated with every estimate (`ASSUMPTI
   changes tools by hand on this control);
 - program stops, STOP blocks and manual quill moves wait for the operator: counted as 0 s
   and listed, since the operator's time cannot be known;
-- rotary-table indexing is counted as 0 s and listed.
+- rotary-table indexing is counted as 0 s and listed;
+- a machine's operator time (seed 002 OTIME: "the additional operator time to be added to
+  the printed cycle time") is added once to the total.
 """
 
 from __future__ import annotations
@@ -50,8 +52,8 @@ def assumptions(tool_change_seconds: float, machine: MachineModel | None = None)
             feeds += f"; limited to the machine's {machine.max_feed} {unit}"
         if machine.operator_seconds is not None:
             operator = (
-                f"operator time (OTIME): {machine.operator_seconds} s at each stop and tool "
-                "change; indexing 0 s (listed)"
+                f"operator time (OTIME): {machine.operator_seconds} s added once to the total; "
+                "operator stops, STOP blocks, manual quill moves and indexing: 0 s (listed)"
             )
     return [
         f"rapids: straight lines at {rapid} (XY and Z)",
@@ -73,6 +75,7 @@ class Estimate:
     cutting: float = 0.0
     dwell: float = 0.0
     tool_changes: int = 0
+    operator: float = 0.0  # OTIME, in the total but no block's
     operator_waits: list[tuple[int, str]] = field(default_factory=list)
     assumptions: list[str] = field(default_factory=list)
 
@@ -129,12 +132,11 @@ def estimate(
             seconds = float(move.seconds)
             result.dwell += seconds
         elif isinstance(move, ToolChange):
-            seconds = tool_change_seconds + operator
+            seconds = tool_change_seconds
             result.tool_changes += 1
             tool = move.tool
             z = move.z  # the head stays; its Z reads differently with the new tool
         elif isinstance(move, ProgramStop):
-            seconds = operator
             result.operator_waits.append((move.block, move.reason))
         elif isinstance(move, IndexTable):
             result.operator_waits.append((move.block, "index the rotary table"))
@@ -142,7 +144,8 @@ def estimate(
         per_tool[tool] += seconds
     result.per_block = dict(sorted(per_block.items()))
     result.per_tool = dict(sorted(per_tool.items()))
-    result.total = sum(per_block.values())
+    result.operator = operator
+    result.total = sum(per_block.values()) + operator
     return result
 
 
@@ -175,5 +178,7 @@ def report(result: Estimate) -> str:
     )
     for block, reason in result.operator_waits:
         lines.append(f"Operator wait (not timed): block {block}: {reason}")
+    if result.operator:
+        lines.append(f"Operator time (OTIME) {format_seconds(result.operator)}")
     lines.append(f"Total {format_seconds(result.total)}")
     return "\n".join(lines) + "\n"

@@ -42,7 +42,7 @@ class MachineModel:
     rapid: Decimal | None = None  # per minute, None: the data-block control's 250 ipm
     max_feed: Decimal | None = None  # per minute, linear motion
     tool_change_seconds: Decimal | None = None
-    operator_seconds: Decimal | None = None  # OTIME: each program stop and tool change
+    operator_seconds: Decimal | None = None  # OTIME: added once to the printed cycle time
 
     def nm(self, value: Decimal) -> int:
         return to_nm(value, self.units)

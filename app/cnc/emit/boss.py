@@ -9,11 +9,14 @@ segment, segments break only where the tool is up: before a rapid across at its 
 height (rule e, "a judicious choice of tool position before the $").
 
 The words are RS274-like with decimal points, G70 (inch) / G71 (metric), Z words as the
-tool's Z plus its TCAL (no length offsets are written: TLO subroutines would have to lead
-the tape). With `rotary`, the Y output drives the rotary table (§8.2-8.3): the program may
-not move in Y, and each POS INDEX turns the table by `index-degrees` (an incremental Y move
-scaled for BOSS 4/5 or BOSS 6, at rapid or, with `index-feed` and `index-radius`, at a feed
-number).
+tool's Z plus its TCAL (no length offsets are written — TLO subroutines would have to lead
+the tape — so a tool change is `Tn M06` alone, and every tool that moves down needs its
+TCAL). Every line ends in a carriage return (seed 004 §8.1.1: "M02 (cr)$ (cr)$ (cr)"),
+or CR LF with `line-end=crlf`. With `rotary`, the Y output drives the rotary table
+(§8.2-8.3): the program may not move in Y, and each POS INDEX turns the table by
+`index-degrees` (an incremental Y move scaled for BOSS 4/5 or BOSS 6, written with its
+decimal point like every length, at rapid or, with `index-feed` and `index-radius`, at a
+feed number).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from typing import Any
 from app.cnc.blocks import Program
 from app.cnc.emit.gcode import Dialect, GcodeTarget, _options, _Writer
 from app.cnc.emit.target import Option, OptionKind, Report, register
+from app.cnc.problems import Need
 from app.cnc.rotary import MAX_STEP, Boss, feed_number, y_distance
 from app.cnc.toolpath import (
     ArcFeed,
@@ -36,7 +40,7 @@ from app.cnc.toolpath import (
     ToolChange,
     Toolpath,
 )
-from app.cnc.units import Units
+from app.cnc.units import Units, to_nm
 
 BOSS = Dialect(
     two_digit_codes=True,
@@ -70,6 +74,13 @@ _BOSS_OPTIONS = (
         "system", OptionKind.CHOICE, "boss6", "control: BOSS 4/5 or BOSS 6", ("boss45", "boss6")
     ),
     Option("rotary", OptionKind.BOOL, False, "the Y output drives the rotary table"),
+    Option(
+        "line-end",
+        OptionKind.CHOICE,
+        "cr",
+        "end of each line: cr (seed 004 §8.1.1, the control's own) or crlf",
+        ("cr", "crlf"),
+    ),
     Option(
         "index-degrees",
         OptionKind.DECIMAL,
@@ -123,6 +134,11 @@ class _BossWriter(_Writer):
         if isinstance(move, IndexTable) and self.rotary is not None:
             self.index(move)
             return
+        if isinstance(move, ToolChange):
+            # Z words already include each tool's TCAL: no length offset (G43) to apply.
+            self.line(f"T{move.tool}", self.code("M", 6))
+            self.z = move.z
+            return
         super().move(move)
 
     def index(self, move: IndexTable) -> None:
@@ -131,11 +147,14 @@ class _BossWriter(_Writer):
         distance = y_distance(rotary["degrees"], rotary["boss"], self.units)
         if distance > MAX_STEP[self.units]:
             self.report.error(move.block, f"index Y{distance}: more than one step may turn")
+        # A length like every other on the tape: its decimal point always stays (Y9., not
+        # Y9, which a control reading implied decimals takes for 0.0009 in).
+        y = f"Y{self.length(to_nm(distance, self.units))}"
         words = [self.code("G", 91)]
         if rotary["feed_number"] is None:
-            words += [self.code("G", 0), f"Y{distance.normalize():f}"]
+            words += [self.code("G", 0), y]
         else:
-            words += [self.code("G", 1), f"Y{distance.normalize():f}", f"F{rotary['feed_number']}"]
+            words += [self.code("G", 1), y, f"F{rotary['feed_number']}"]
         self.line(*words)
         self.line(self.code("G", 90))
         self.motion = None
@@ -149,6 +168,10 @@ class BossTarget(GcodeTarget):
     extension = "bos"
     dialect = BOSS
     options = _BOSS_OPTIONS
+
+    def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
+        # Z words include each tool's TCAL, as on a 1704 tape.
+        return super().needs_for(options) | {Need.CALIBRATED_TOOLS}
 
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
@@ -193,9 +216,9 @@ class BossTarget(GcodeTarget):
         lines = [line for line in text.splitlines() if line != "%"]
         if any(line.startswith("/") for line in lines):
             report.error(None, "a block delete (/) cannot be used in real-time tape mode")
-        return (
-            "\n".join(segments(lines, writer.breaks, int(options["segment"]), report)) + "\n"
-        ).encode("ascii")
+        end = "\r" if options["line-end"] == "cr" else "\r\n"
+        tape = segments(lines, writer.breaks, int(options["segment"]), report)
+        return (end.join(tape) + end).encode("ascii")
 
 
 def _y_moves(toolpath: Toolpath) -> list[int]:
@@ -230,28 +253,39 @@ def _machine_z(toolpath: Toolpath) -> Toolpath:
 def segments(lines: list[str], breaks: set[int], size: int, report: Report) -> list[str]:
     """The tape: `%#0`, segments of at most `size` characters each ending `$`, and the
     `M02`, `$`, `$` ending (seed 004 §8.1.1 b, c, g). `breaks` are the line indexes where
-    a segment may end (the tool is up). One segment when `size` is 0."""
+    a segment may end (the tool is up). One segment when `size` is 0.
+
+    A segment ends at the last safe place before it would overflow. Where a stretch of
+    cutting between two safe places is itself longer than a segment, that segment is over
+    the limit — an error naming the segment and its size (the control has no room for it)
+    — and the later safe places are used as usual, so every such segment is named.
+    """
     body = [line for line in lines if line not in ("M02",)]
     cost = [len(line) + 1 for line in body]  # each line and its carriage return
+    safe = sorted(b for b in breaks if 0 < b < len(body))
     out = ["%#0"]
     used = 0
-    last_break_at_out: int | None = None
+    number = 1
+    sizes: list[int] = []
     for index, line in enumerate(body):
         if size and index in breaks and used > 0:
-            # Will the stretch up to the next break still fit? If not, end the segment here.
-            following = next((b for b in sorted(breaks) if b > index), len(body))
+            # Will the stretch up to the next safe place still fit? If not, end here.
+            following = next((b for b in safe if b > index), len(body))
             if used + sum(cost[index:following]) > size:
+                sizes.append(used)
                 out += ["$", "#0"]
                 used = 0
-                last_break_at_out = len(out)
-        if size and cost[index] + used > size and last_break_at_out != len(out):
-            report.warning(
-                None,
-                f"a stretch of cutting between two safe stops is longer than the "
-                f"{size}-character segment",
-            )
-            size = 0  # warn once; the rest goes on unsplit
+                number += 1
         out.append(line)
         used += cost[index]
+    sizes.append(used)
+    for k, length in enumerate(sizes, start=1):
+        if size and length > size:
+            report.error(
+                None,
+                f"segment {k} is {length} characters, over the {size}-character segment: it "
+                "has no place with the tool up to end it sooner (give the control's real "
+                "storage in segment, or split the cut)",
+            )
     out += ["M02", "$", "$"]
     return out

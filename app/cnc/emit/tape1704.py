@@ -55,6 +55,7 @@ from app.cnc.emit.target import (
     register,
 )
 from app.cnc.geometry import arc_sweep
+from app.cnc.needs import blocks_text
 from app.cnc.problems import Need
 from app.cnc.toolpath import (
     ArcFeed,
@@ -175,6 +176,15 @@ PROFILE_OPTIONS: tuple[Option, ...] = (
     ),
     Option("tabs", _BOOL, False, "a tab before every word but the first (seed 002 TABS)"),
     Option(
+        "zeros",
+        _CHOICE,
+        "2",
+        "seed 002 ZEROS: 2 trailing zeros only (leading dropped, as seed 000 §2 writes), 0 "
+        "leading and trailing zeros; the 1704 counts digits from the right and ignores a "
+        "point, so 1 and 3 would misplace it",
+        choices=("2", "0"),
+    ),
+    Option(
         "end-code",
         _CHOICE,
         "M30",
@@ -277,6 +287,17 @@ class TapeFormat:
         number = Fraction(value * self.feed_unit_nm, self.unit_nm)
         return f"{float(number):.1f} {self.feed_name}"
 
+    def show_programmed_feed(self, feed_nm: int) -> str:
+        """A feed of the tool path (nm/min) as programmed: `5.1 ipm`, `250 mm/min`."""
+        value = Decimal(feed_nm) / Decimal(self.unit_nm)
+        shown = value.quantize(Decimal(1) if self.metric else Decimal("0.1"))
+        return f"{shown} {self.feed_name}"
+
+    @property
+    def feed_step_text(self) -> str:
+        """The feed step of F words, e.g. `0.2 ipm`."""
+        return self.show_feed(self.feed_step).replace(".0 mm/min", " mm/min")
+
 
 FORMAT_STANDARD = TapeFormat("inch, 0.0001 in", False, 2540, 2540, 2, 4, 2_540_000, 1, 1, 2000)
 FORMAT_OPTION1 = TapeFormat(
@@ -321,6 +342,7 @@ class Profile:
     decel: bool
     xyz_together: bool
     tape_search: bool = False
+    leading_zeros: bool = False
 
 
 def _rows(inches: Decimal) -> int:
@@ -406,6 +428,7 @@ def read_profile(program: Program, options: Mapping[str, Any]) -> Profile:
         decel=bool(options["decel"]),
         xyz_together=options["xyz"] == "together",
         tape_search=bool(options["tape-search"]),
+        leading_zeros=options["zeros"] == "0",
     )
 
 
@@ -443,6 +466,7 @@ class Motion:
     z_only: bool = False
     tag: str = ""
     gcode: str = ""
+    search_feed: int = 0  # a searched block states the feed in force (nm/min) on its rapid
 
 
 @dataclass
@@ -457,6 +481,7 @@ class Aux:
     forward: bool = False
     preset_z: bool = False
     leader_after: int = 0
+    restate: bool = False  # restated for a tape search: its S is written even if the same
 
 
 Item = Motion | Aux
@@ -531,6 +556,18 @@ class Tape:
             put(line.text + tapecode.EOB_CHAR, line.leader_after)
         put("", self.trailer_rows)
         return bytes(rows), labels
+
+
+def _first_feed(items: list[Item], index: int) -> int:
+    """The feed (nm/min) of the first cut of the data block whose first motion is
+    `items[index]` (0 when the block does not cut)."""
+    block = items[index].block
+    for item in items[index:]:
+        if item.block != block:
+            break
+        if isinstance(item, Motion) and item.kind is not Kind.RAPID:
+            return item.feed
+    return 0
 
 
 def _sanitize_comment(text: str) -> str:
@@ -689,17 +726,28 @@ class _Builder:
         """The first motion of the tape and the first after each tool change write every
         axis (and G and F again): they are where an operator restarts or searches to.
 
-        With tape-search, so does the first motion of every data block, and the spindle
-        and coolant in force are stated again just before it (one M code per block, as
-        the 1704 requires), so the tape can be started from any block.
+        With tape-search (seed 000 §4: "include all data in the searched block … such as
+        feedrate, spindle rotation, and coolant") every data block that starts out of the
+        work begins with a block the operator can search to: a rapid with every axis, the
+        spindle's S and M03/M04 and the feed of the block's first cut. The coolant's M code
+        goes in the block before it (the 1704 takes one M code per block, §2), as at every
+        spindle start. A block that continues a cut (a mill block after its DRILL, an arc)
+        is not a place to restart — the tool would cut from wherever it was — so it gets
+        no such group; the report names them.
         """
         pending = True
         searching = self.profile.tape_search
         spindle: Aux | None = None
         coolant: Aux | None = None
         last_block = -1
+        here: tuple[int, int, int | None] = (
+            self.toolpath.start[0],
+            self.toolpath.start[1],
+            self.machine_z(self.toolpath.start[2], self.toolpath.initial_tool),
+        )
+        in_cut: list[int] = []  # data blocks that start in a cut: no restart there
         out: list[Item] = []
-        for item in items:
+        for index, item in enumerate(items):
             if isinstance(item, Aux):
                 codes = {value for letter, value in item.words if letter == "M"}
                 if "06" in codes:
@@ -710,27 +758,58 @@ class _Builder:
                     spindle = None
                 if codes & {"07", "08"}:
                     coolant = item
+                    # Coolant first, so the spindle start rides on the positioning rapid.
+                    if out and out[-1] is spindle:
+                        out.insert(len(out) - 1, item)
+                        continue
                 elif "09" in codes:
                     coolant = None
                 out.append(item)
                 continue
-            if item.z_only:
-                out.append(item)
-                continue
             new_block = item.block != last_block
             last_block = item.block
-            if searching and new_block and not pending:
-                # A searchable block: restate what the operator's restart needs.
-                out += [
-                    Aux(item.block, list(state.words), forward=False)
-                    for state in (spindle, coolant)
-                    if state is not None
-                ]
-                pending = True
-            item.restart = pending
-            pending = False
+            if searching and new_block and not item.z_only:
+                feed = _first_feed(items, index)
+                if item.kind is not Kind.RAPID or item.tag == "retract":
+                    in_cut.append(item.block)
+                elif pending:
+                    item.search_feed = feed  # after a tool change: it is the searched block
+                else:
+                    out += self.search_group(item, here, feed, spindle, coolant)
+                    pending = True
+            if not item.z_only:
+                item.restart = pending
+                pending = False
             out.append(item)
+            end = item.end
+            here = end if item.kind is not Kind.CYCLE else (end[0], end[1], here[2])
+        if in_cut:
+            self.report.note(
+                None,
+                f"tape search: {blocks_text(in_cut)} continue a cut and are no place to "
+                "restart; search to the N of the block that starts the cut",
+            )
         return out
+
+    def search_group(
+        self,
+        item: Motion,
+        here: tuple[int, int, int | None],
+        feed: int,
+        spindle: Aux | None,
+        coolant: Aux | None,
+    ) -> list[Item]:
+        """The blocks before `item` that let the operator start the tape there (see
+        `mark_restarts`): the coolant, then the searched positioning where the tool is,
+        carrying the spindle and the feed."""
+        group: list[Item] = []
+        if coolant is not None:
+            group.append(Aux(item.block, list(coolant.words)))
+        if spindle is not None:
+            # S (when a spindle code table gives one) and M03/M04 ride on the searched block.
+            group.append(Aux(item.block, list(spindle.words), forward=True, restate=True))
+        group.append(Motion(item.block, Kind.RAPID, here, restart=True, search_feed=feed))
+        return group
 
     def merge_positioning(self, items: list[Item]) -> list[Item]:
         """xyz=together (seed 002 XYZ/ON): the positioning rapids of one block (up, across,
@@ -1027,6 +1106,8 @@ class _Builder:
             carry_restart = False
             if item.kind in (Kind.LINE, Kind.ARC, Kind.CYCLE):
                 item.feed = self.check_feed(item.block, item.feed)
+            if item.search_feed:
+                item.search_feed = self.check_feed(item.block, item.search_feed)
             if item.kind is Kind.CYCLE:
                 item.cycle_depth = fmt.units(item.cycle_depth)
                 self.check_capacity(item.block, (0, 0, item.cycle_depth))
@@ -1047,7 +1128,13 @@ class _Builder:
                     pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
                 continue
             same_z = end[2] is None or pos[2] is None or end[2] == pos[2]
-            if (end[0], end[1]) == (pos[0], pos[1]) and same_z and not item.quill_cycle:
+            searched = item.search_feed or (item.kind is Kind.RAPID and item.restart)
+            if (
+                (end[0], end[1]) == (pos[0], pos[1])
+                and same_z
+                and not item.quill_cycle
+                and not (searched and self.profile.tape_search)
+            ):
                 carry_restart = item.restart
                 if item.kind is not Kind.RAPID:
                     report.note(item.block, "a move shorter than the tape's resolution is left out")
@@ -1068,19 +1155,28 @@ class _Builder:
                 )
 
     def check_feed(self, block: int, feed_nm: int) -> int:
+        """The F word value of a feed; a feed the tape cannot carry is an error quoting the
+        programmed feed, one it rounds is reported (never silently)."""
         fmt = self.fmt
         value = fmt.feed_value(feed_nm)
+        programmed = fmt.show_programmed_feed(feed_nm)
         if value < fmt.feed_min:
             self.report.error(
                 block,
-                f"feed {fmt.show_feed(value)} is below the 1704's minimum "
-                f"{fmt.show_feed(fmt.feed_min)}",
+                f"feed {programmed} is below the 1704's minimum {fmt.show_feed(fmt.feed_min)} "
+                f"({fmt.name})",
             )
         elif value > fmt.feed_max:
             self.report.error(
                 block,
-                f"feed {fmt.show_feed(value)} is above the 1704's maximum "
-                f"{fmt.show_feed(fmt.feed_max)}",
+                f"feed {programmed} is above the 1704's maximum {fmt.show_feed(fmt.feed_max)} "
+                f"({fmt.name})",
+            )
+        elif value * fmt.feed_unit_nm != feed_nm:
+            self.report.rewritten(
+                block,
+                f"feed {programmed} is written F{value} ({fmt.show_feed(value)}): {fmt.name} "
+                f"feeds go in steps of {fmt.feed_step_text}",
             )
         return value
 
@@ -1254,7 +1350,9 @@ class _Builder:
                     and following.kind is Kind.RAPID
                     and not any(letter == "G" for letter, _ in item.words)
                 ):
-                    carried.extend(self.spindle_words(item.words, s_code))
+                    carried.extend(
+                        item.words if item.restate else self.spindle_words(item.words, s_code)
+                    )
                     s_code = next((v for k, v in item.words if k == "S"), s_code)
                     continue
                 if g99 and item.words[-1] in (("M", "30"), ("M", "02")):
@@ -1273,6 +1371,7 @@ class _Builder:
             start = starts[index]
             if item.restart:
                 pos = [None, None, None]
+                ij = [None, None]
                 g, feed = None, None
             if item.quill_cycle != g99:
                 emit([("G", "99" if item.quill_cycle else "98")], item.block)
@@ -1300,8 +1399,11 @@ class _Builder:
                         ij[axis] = value
             feed_before = feed
             if item.kind is not Kind.RAPID and item.feed != feed:
-                words.append(("F", str(item.feed)))
+                words.append(("F", self.feed_word(item.feed)))
                 feed = item.feed
+            elif item.kind is Kind.RAPID and item.search_feed:
+                words.append(("F", self.feed_word(item.search_feed)))
+                feed = item.search_feed
             words.extend(carried)
             carried = []
             emit(words, item.block, motion=item, start=start, feed_before=feed_before)
@@ -1318,8 +1420,16 @@ class _Builder:
         return [(k, v) for k, v in words if not (k == "S" and v == s_code)]
 
     def number(self, units: int) -> str:
-        """A motion word's digits: sign only when negative, no leading zeros, no point."""
-        return ("-" if units < 0 else "") + str(abs(units))
+        """A motion word's digits: sign only when negative, no point; leading zeros only
+        with zeros=0 (then every digit of the format is punched)."""
+        digits = str(abs(units))
+        if self.profile.leading_zeros:
+            digits = digits.zfill(self.fmt.int_digits + self.fmt.frac_digits)
+        return ("-" if units < 0 else "") + digits
+
+    def feed_word(self, value: int) -> str:
+        """An F word's digits (F3.1: four, F4: four), leading zeros only with zeros=0."""
+        return str(value).zfill(4) if self.profile.leading_zeros else str(value)
 
     # -- the whole -------------------------------------------------------------------------
 

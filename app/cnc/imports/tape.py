@@ -676,13 +676,17 @@ class _Interpreter:
             self.cycle(block, words, x, y)
             return
         else:
-            limit = limits.FEED_XY[self.units].high * self.units.nm
+            # A move in Z alone is a FEEDR Z (up to 250 ipm), one across a FEEDR XY (100).
+            in_z = (x, y) == (self.x, self.y)
+            feeds = limits.FEED_Z if in_z else limits.FEED_XY
+            limit = feeds[self.units].high * self.units.nm
             if self.feed is None or self.feed > limit:
                 self.steps.append(Rapid(line, x, y, self.part_z(z), self.units))
                 why = "no F given yet"
                 if self.feed is not None:
                     rate = show(self.feed, self.units)
-                    why = f"F at {rate} per minute, above MillBlocks' FEEDR XY limit"
+                    which = "FEEDR Z" if in_z else "FEEDR XY"
+                    why = f"F at {rate} per minute, above MillBlocks' {which} limit"
                 self.notes.assumed(line, f"G{g:02d} with {why}: read as positioning (rapid)")
             else:
                 self.steps.append(Feed(line, x, y, self.part_z(z), self.feed, self.units))

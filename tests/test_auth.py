@@ -113,7 +113,7 @@ def test_login_starts_a_new_session(app: Flask) -> None:
         session["planted"] = "by an attacker"
     log_in(client, "ana")
     with client.session_transaction() as session:
-        assert "planted" not in session and "user_id" in session
+        assert "planted" not in session and "sid" in session
 
 
 def test_local_mode_serves_only_loopback(tmp_path: Path) -> None:

@@ -14,6 +14,7 @@ from typing import Any
 
 from flask import Flask, Response, render_template
 from flask_wtf.csrf import CSRFError
+from werkzeug.middleware.proxy_fix import ProxyFix
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
@@ -48,6 +49,8 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     )
     if test_config:
         app.config.update(test_config)
+    _harden_cookie(app)
+    _trust_proxy(app)
     app.config.setdefault("SECRET_KEY", None)
     if not app.config["SECRET_KEY"]:
         app.config["SECRET_KEY"] = _secret_key(Path(app.instance_path))
@@ -66,6 +69,27 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
         raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
+
+
+def _harden_cookie(app: Flask) -> None:
+    """Over HTTPS the session cookie is `__Host-millblocks`: Secure, path /, no Domain, so
+    no other site or subdomain can set or read it (ASVS 3.4.4)."""
+    app.config["SESSION_COOKIE_PATH"] = "/"
+    app.config["SESSION_COOKIE_DOMAIN"] = False
+    if app.config["SESSION_COOKIE_SECURE"] and app.config["SESSION_COOKIE_NAME"] == "session":
+        app.config["SESSION_COOKIE_NAME"] = "__Host-millblocks"
+
+
+def _trust_proxy(app: Flask) -> None:
+    """Behind N reverse proxies (MILLBLOCKS_PROXY_HOPS=N), take the client's address and
+    scheme from the last N X-Forwarded-For/-Proto entries; with 0 (the default) those
+    headers are ignored, so a client cannot choose its own address for the login limit."""
+    raw = app.config.get("MILLBLOCKS_PROXY_HOPS", os.environ.get("MILLBLOCKS_PROXY_HOPS", "0"))
+    hops = int(str(raw or "0"))
+    if hops < 0:
+        raise ValueError("MILLBLOCKS_PROXY_HOPS is the number of trusted proxies (0 or more)")
+    if hops:
+        app.wsgi_app = ProxyFix(app.wsgi_app, x_for=hops, x_proto=hops)  # type: ignore[method-assign]
 
 
 def _secret_key(instance: Path) -> str:

@@ -119,6 +119,18 @@ def test_a_role_change_ends_the_users_sessions(app: Flask) -> None:
     assert is_logged_out(ana)
 
 
+def test_a_user_named_with_a_slash_can_be_re_roled(app: Flask) -> None:
+    with app.app_context():
+        Accounts(get_library()).create("shop/night", PASSWORD, "operator")
+    ada = logged_in(app, "ada")
+    token = csrf(ada, "/users")
+    response = ada.post("/users/shop/night/role", data={"csrf_token": token, "role": "admin"})
+    assert response.status_code == 302
+    with app.app_context():
+        roles = {u.username: u.role for u in Accounts(get_library()).users()}
+    assert roles["shop/night"] == "admin"
+
+
 def test_an_admin_ends_a_users_sessions(app: Flask) -> None:
     ana = logged_in(app, "ana")
     ada = logged_in(app, "ada")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any
 
 from flask import Blueprint, abort, redirect, render_template, request, url_for
@@ -46,6 +46,8 @@ from app.web.forms import (
     offered_groups,
     offered_kinds,
     parse_block,
+    read_number,
+    read_whole,
 )
 
 bp = Blueprint("editor", __name__)
@@ -228,6 +230,20 @@ def entry_from_args(program: Program, args: Any) -> Entry:
     return entry
 
 
+MISSING_VERSION = (
+    "Not saved: the form did not say which version of the program it was based on "
+    "(version); reload the page and make the change again."
+)
+
+
+def form_version() -> int | None:
+    """The version the submitted form was based on, or None when it is missing or not a
+    whole number (such a save is refused: without it no stale save could be noticed)."""
+    raw = request.form.get("version", "")
+    value, error = read_whole(raw)
+    return None if error or value is None or value < 1 else value
+
+
 def _int(text: str | None, default: int) -> int:
     try:
         return int(text or "")
@@ -358,7 +374,10 @@ def value_problems(program: Program, numbers: range) -> list[tuple[str, Problem]
 def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgram | tuple[str, int]:
     """Save a new version based on the one the form showed; the editor with a message if
     someone saved in between (nothing is overwritten)."""
-    based_on = _int(request.form.get("version"), stored.info.version)
+    based_on = form_version()
+    if based_on is None:
+        entry.message = MISSING_VERSION
+        return render_editor(stored, entry, 422)
     library = get_library()
     try:
         library.save(stored.info.id, program, based_on=based_on, author=current_user())
@@ -445,6 +464,9 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
     block0 = stored.program.block0
     if request.method == "POST":
         block0, errors = parse_block0(request.form)
+        based_on = form_version()
+        if based_on is None:
+            errors["version"] = MISSING_VERSION.removeprefix("Not saved: ")
         if not errors:
             candidate = dataclasses.replace(stored.program, block0=block0)
             for problem in validate(candidate):
@@ -456,7 +478,7 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
                 get_library().save(
                     program_id,
                     program,
-                    based_on=_int(request.form.get("version"), stored.info.version),
+                    based_on=based_on or 0,
                     author=current_user(),
                 )
                 return redirect(url_for("editor.data_block_0", program_id=program_id, saved=1))
@@ -503,24 +525,19 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
             if required:
                 errors[name] = f"{label}: missing; enter a value"
             return None
-        try:
-            value = Decimal(raw)
-        except InvalidOperation:
-            errors[name] = f"{label}: {raw!r} is not a number"
-            return None
-        if not value.is_finite():
-            errors[name] = f"{label}: {raw!r} is not a number"
-            return None
+        value, error = read_number(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
         return value
 
     def whole(name: str, label: str) -> int | None:
         raw = form.get(name, "").strip()
         if raw == "":
             return None
-        if not raw.lstrip("-").isdigit():
-            errors[name] = f"{label}: {raw!r} is not a whole number"
-            return None
-        return int(raw)
+        value, error = read_whole(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
+        return value
 
     tools = []
     for n in range(1, 25):
@@ -571,12 +588,17 @@ def history(program_id: int) -> str:
 
 @bp.post("/programs/<int:program_id>/history/<int:version>/restore")
 def restore_version(program_id: int, version: int) -> Response | tuple[str, int]:
-    stored = load(program_id)
+    load(program_id)
+    based_on = form_version()
+    if based_on is None:
+        return render_template(
+            "errors/error.html", title="Not restored", message=MISSING_VERSION
+        ), 422
     try:
         get_library().restore_revision(
             program_id,
             version,
-            based_on=_int(request.form.get("version"), stored.info.version),
+            based_on=based_on,
             author=current_user(),
         )
     except StaleSave as exc:

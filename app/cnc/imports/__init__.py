@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.detect import FORMATS, detect_format, read
+from app.cnc.sizes import TooLarge, check_block_count, check_import_size
 
 __all__ = [
     "FORMATS",
@@ -60,7 +61,13 @@ def read_program(
     (inch/metric) and `resolution` (standard/option1/option2), as the tape target has them.
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format`, or
-    content that could be either a 1704 tape or G-code when `format` is None).
+    content that could be either a 1704 tape or G-code when `format` is None, or a file
+    past the limits of app.cnc.sizes, refused before it is parsed).
     """
-    program, notes, chosen = read(data, name, format, options or {})
+    try:
+        check_import_size(data)
+        program, notes, chosen = read(data, name, format, options or {})
+        check_block_count(len(program.blocks))
+    except TooLarge as exc:
+        raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, chosen)

@@ -59,13 +59,14 @@ from app.cnc.imports.steps import (
     ToolChange,
     ToolData,
 )
+from app.cnc.numbers import NUMBER_TEXT
 from app.cnc.units import Units
 
-NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)")
-SIMPLE = re.compile(r"(?:[ \t]*[A-Za-z][+-]?(?:\d+\.?\d*|\.\d+))+[ \t]*")
-PAIR = re.compile(r"([A-Za-z])([+-]?(?:\d+\.?\d*|\.\d+))")
+NUMBER = re.compile(NUMBER_TEXT)
+SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
+PAIR = re.compile(rf"([A-Za-z])({NUMBER_TEXT})")
 MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
-HEADER = re.compile(r"^(.*) PART (\d{1,8}|-) MILLBLOCKS$")
+HEADER = re.compile(r"^(.*) PART ([0-9]{1,8}|-) MILLBLOCKS$")
 
 # LinuxCNC's modal groups (one code of each per block), seed 003 Table 5 plus Fanuc's.
 MODAL_GROUPS: dict[str, set[str]] = {

@@ -105,8 +105,12 @@ CYCLE_NOTES = {
     88: "the dwell is the panel's timer",
     89: "the dwell is the panel's timer",
 }
-HEADER = re.compile(r"PART ZERO AT TABLE X(-?\d{1,6}\.\d{1,6}) Y(-?\d{1,6}\.\d{1,6}) (IN|MM)")
-TOOL_COMMENT = re.compile(r"TOOL (\d{1,2}) DIA (\d{1,6}\.\d{1,6})(?: TCAL (-?\d{1,6}\.\d{1,6}))?")
+HEADER = re.compile(
+    r"PART ZERO AT TABLE X(-?\d{1,6}\.\d{1,6}) Y(-?\d{1,6}\.\d{1,6}) (IN|MM)", re.ASCII
+)
+TOOL_COMMENT = re.compile(
+    r"TOOL (\d{1,2}) DIA (\d{1,6}\.\d{1,6})(?: TCAL (-?\d{1,6}\.\d{1,6}))?", re.ASCII
+)
 
 
 def read_tape(data: bytes, name: str, options: Mapping[str, str]) -> tuple[Program, Notes]:
@@ -131,7 +135,7 @@ class _Block:
         for letter, value, _ in self.words:
             if letter == "N":
                 return f"N{value}"
-        match = re.match(r"\s*N(\d+)", self.text)
+        match = re.match(r"\s*N([0-9]+)", self.text)
         return f"N{match.group(1)}" if match else ""
 
 
@@ -372,7 +376,7 @@ class _Interpreter:
             if ch not in LETTERS:
                 what = "a letter the 1704 has no word for" if ch.isalpha() else "not a tape word"
                 raise self.reader.fail(block, f"{ch!r}: {what} (N G X Y Z I J K R F S T M)", column)
-            match = re.match(r"[+-]?[\d.]*", text[pos + 1 :])
+            match = re.match(r"[+-]?[0-9.]*", text[pos + 1 :])
             assert match is not None
             value = match.group()
             digits = value.lstrip("+-").replace(".", "")

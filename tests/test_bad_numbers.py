@@ -201,6 +201,15 @@ def test_document_refuses_json_constants(constant: str) -> None:
     assert constant in str(caught.value)
 
 
+def test_document_refuses_an_exponent_decimal_cannot_hold() -> None:
+    """Found by the long fuzz run: Decimal('1e99999999999999999999') is InvalidOperation."""
+    text = (GOLDEN / "drill-single" / "program.json").read_text()
+    text = text.replace('"z_retract": ', '"z_retract": 1e99999999999999999999, "was": ', 1)
+    with pytest.raises(document.DocumentError) as caught:
+        document.loads(text)
+    assert "is out of range" in str(caught.value)
+
+
 def test_document_refuses_a_whole_number_of_5000_digits() -> None:
     text = (GOLDEN / "drill-single" / "program.json").read_text()
     text = text.replace('"current_tool": 1', '"current_tool": ' + "9" * 5000, 1)

@@ -36,7 +36,7 @@ from app.cnc.blocks import (
     Tool,
     field_label,
 )
-from app.cnc.numbers import NumberError, check_decimal, check_int
+from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
 from app.cnc.units import Units
 
@@ -129,7 +129,9 @@ def _out(value: Any) -> Any:
 def loads(text: str) -> Program:
     """Read a document. Raises DocumentError (line and column for bad JSON)."""
     try:
-        data = json.loads(text, parse_float=Decimal, parse_int=_whole, parse_constant=_no_constant)
+        data = json.loads(
+            text, parse_float=decimal_of, parse_int=_whole, parse_constant=_no_constant
+        )
     except json.JSONDecodeError as exc:
         raise DocumentError(
             f"line {exc.lineno}, column {exc.colno}", f"not valid JSON: {exc.msg}"

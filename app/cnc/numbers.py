@@ -71,14 +71,19 @@ def parse_decimal(text: str, *, exponent: bool = True) -> Decimal:
     pattern = _DECIMAL if exponent else _PLAIN
     if len(stripped) > MAX_LENGTH or pattern.fullmatch(stripped) is None:
         raise NumberError(f"{_show(stripped)} is not a number; allowed: {ALLOWED}")
+    return check_decimal(decimal_of(stripped), stripped)
+
+
+def decimal_of(text: str) -> Decimal:
+    """`Decimal(text)` for text already known to spell a number (a JSON reader's token),
+    refusing an exponent past what Decimal can hold at all (1e99999999999999999999)."""
     try:
-        value = Decimal(stripped)
-    except InvalidOperation:  # an exponent past what Decimal can hold at all
+        return Decimal(text)
+    except InvalidOperation:
         raise NumberError(
-            f"{_show(stripped)} is out of range; allowed: up to 1E+{MAX_MAGNITUDE} in size and "
+            f"{_show(text)} is out of range; allowed: up to 1E+{MAX_MAGNITUDE} in size and "
             f"{MAX_FRACTION_DIGITS} decimal places"
         ) from None
-    return check_decimal(value, stripped)
 
 
 def check_decimal(value: Decimal, text: str | None = None) -> Decimal:

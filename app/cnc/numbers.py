@@ -54,7 +54,7 @@ class NumberError(ValueError):
     """Text that is not a number MillBlocks reads; the message says what is allowed."""
 
 
-def _show(text: str) -> str:
+def quoted(text: str) -> str:
     """The text as quoted in a message (cut short: a message never echoes megabytes)."""
     return repr(text if len(text) <= MAX_LENGTH else text[:MAX_LENGTH] + "…")
 
@@ -70,7 +70,7 @@ def parse_decimal(text: str, *, exponent: bool = True) -> Decimal:
         raise NumberError(f"no number given; allowed: {ALLOWED}")
     pattern = _DECIMAL if exponent else _PLAIN
     if len(stripped) > MAX_LENGTH or pattern.fullmatch(stripped) is None:
-        raise NumberError(f"{_show(stripped)} is not a number; allowed: {ALLOWED}")
+        raise NumberError(f"{quoted(stripped)} is not a number; allowed: {ALLOWED}")
     return check_decimal(decimal_of(stripped), stripped)
 
 
@@ -81,7 +81,7 @@ def decimal_of(text: str) -> Decimal:
         return Decimal(text)
     except InvalidOperation:
         raise NumberError(
-            f"{_show(text)} is out of range; allowed: up to 1E+{MAX_MAGNITUDE} in size and "
+            f"{quoted(text)} is out of range; allowed: up to 1E+{MAX_MAGNITUDE} in size and "
             f"{MAX_FRACTION_DIGITS} decimal places"
         ) from None
 
@@ -91,7 +91,7 @@ def check_decimal(value: Decimal, text: str | None = None) -> Decimal:
 
     For numbers that arrive already parsed (a JSON document read with Decimal floats).
     """
-    shown = _show(text if text is not None else str(value))
+    shown = quoted(text if text is not None else str(value))
     if not value.is_finite():
         raise NumberError(f"{shown} is not a number; allowed: {ALLOWED}")
     if value.is_zero():
@@ -120,10 +120,10 @@ def parse_int(text: str) -> int:
     if stripped == "":
         raise NumberError(f"no number given; allowed: {ALLOWED_WHOLE}")
     if len(stripped) > MAX_LENGTH or _WHOLE.fullmatch(stripped) is None:
-        raise NumberError(f"{_show(stripped)} is not a whole number; allowed: {ALLOWED_WHOLE}")
+        raise NumberError(f"{quoted(stripped)} is not a whole number; allowed: {ALLOWED_WHOLE}")
     if len(stripped.lstrip("+-")) > MAX_WHOLE_DIGITS:
         raise NumberError(
-            f"{_show(stripped)} is too large; allowed: at most {MAX_WHOLE_DIGITS} digits"
+            f"{quoted(stripped)} is too large; allowed: at most {MAX_WHOLE_DIGITS} digits"
         )
     return int(stripped)
 

@@ -8,7 +8,7 @@ it would make. Pure: no Flask, database or serial code.
 
 from __future__ import annotations
 
-MAX_BLOCKS = 2000
+MAX_BLOCKS = 5000
 """Data blocks in one program (document, import, editor)."""
 
 MAX_IMPORT_BYTES = 2 * 1024 * 1024

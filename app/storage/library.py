@@ -24,6 +24,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from app.cnc import document
 from app.cnc.blocks import Hole, Program
 from app.cnc.diff import diff, summary
+from app.cnc.sizes import TooLarge, check_block_count
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import MachineRow, ProgramRow, RevisionRow, SettingRow
 
@@ -128,6 +129,12 @@ def search_words(program: Program) -> str:
 
 
 def _columns(program: Program) -> dict[str, Any]:
+    """The row's columns for `program`. Raises LibraryError for a program past
+    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open."""
+    try:
+        check_block_count(len(program.blocks))
+    except TooLarge as exc:
+        raise LibraryError(f"not stored: {exc}") from None
     return {
         "name": program.name,
         "part_number": program.part_number[:8],
@@ -184,7 +191,7 @@ class Library:
             row = s.get(ProgramRow, program_id)
             if row is None or (row.deleted_at is not None and not include_trash):
                 raise NotFound(f"no program {program_id} in the library")
-            return StoredProgram(_info(row), document.loads(row.document))
+            return StoredProgram(_info(row), _load(row))
 
     def find(self, reference: str) -> StoredProgram:
         """A program by id (digits) or by exact name (not in the trash)."""
@@ -201,7 +208,7 @@ class Library:
             if len(rows) > 1:
                 ids = ", ".join(str(r.id) for r in rows)
                 raise LibraryError(f"{len(rows)} programs are named {reference!r} (ids {ids})")
-            return StoredProgram(_info(rows[0]), document.loads(rows[0].document))
+            return StoredProgram(_info(rows[0]), _load(rows[0]))
 
     def programs(
         self, query: str = "", sort: str = "name", trash: bool = False
@@ -477,6 +484,15 @@ class Library:
         except SQLAlchemyError as exc:
             raise BackupError(f"the backup could not be stored: {exc.__class__.__name__}") from None
         return len(backup.programs)
+
+
+def _load(row: ProgramRow) -> Program:
+    """A stored program's document. One the library can no longer open (stored before a
+    limit existed) is a LibraryError naming the program, not a crash."""
+    try:
+        return document.loads(row.document)
+    except document.DocumentError as exc:
+        raise LibraryError(f"program {row.id} ({row.name}) cannot be opened: {exc}") from None
 
 
 def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:

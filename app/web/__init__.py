@@ -15,6 +15,7 @@ from typing import Any
 from flask import Flask, Response, render_template
 from flask_wtf.csrf import CSRFError
 from werkzeug.middleware.proxy_fix import ProxyFix
+from werkzeug.routing import IntegerConverter
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
@@ -37,6 +38,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         static_folder=str(ROOT / "static"),
         instance_path=str(ROOT / "instance"),
     )
+    app.url_map.converters["int"] = RowId
     app.config.update(
         DATABASE_URL=os.environ.get("DATABASE_URL"),
         MAX_CONTENT_LENGTH=2 * 1024 * 1024,
@@ -66,9 +68,21 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     app.register_error_handler(413, _too_large)
     app.register_error_handler(404, _not_found)
     app.register_error_handler(403, _forbidden)
+    app.register_error_handler(422, _refused)
     if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
         raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
+
+
+class RowId(IntegerConverter):
+    """`<int:…>` in a URL: at most 9 digits, so an id never overflows a database integer
+    (/programs/99999999999999999999 is a 404, not an OverflowError)."""
+
+    regex = r"\d{1,9}"
+
+    def __init__(self, map: Any, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("max", 999_999_999)
+        super().__init__(map, *args, **kwargs)
 
 
 def _harden_cookie(app: Flask) -> None:
@@ -122,6 +136,11 @@ def _too_large(_error: Exception) -> tuple[str, int]:
 def _forbidden(error: Exception) -> tuple[str, int]:
     message = getattr(error, "description", "Not allowed")
     return render_template("errors/error.html", title="Not allowed", message=message), 403
+
+
+def _refused(error: Exception) -> tuple[str, int]:
+    message = getattr(error, "description", "Refused")
+    return render_template("errors/error.html", title="Refused", message=message), 422
 
 
 def _not_found(error: Exception) -> tuple[str, int]:

@@ -35,7 +35,7 @@ from app.cnc.interpret import interpret
 from app.cnc.problems import Problem, Rule, Severity, has_errors
 from app.cnc.units import Units
 from app.cnc.validate import validate
-from app.storage.library import LibraryError, StaleSave, StoredProgram
+from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
 from app.web.extensions import get_library
 from app.web.forms import (
     GROUP_KINDS,
@@ -63,8 +63,10 @@ def current_user() -> str:
 def load(program_id: int) -> StoredProgram:
     try:
         return get_library().get(program_id)
-    except LibraryError:
+    except NotFound:
         abort(404, f"There is no program {program_id} in the library.")
+    except LibraryError as exc:
+        abort(422, str(exc))
 
 
 def is_htmx() -> bool:
@@ -87,15 +89,29 @@ class Entry:
     values: dict[str, str] = dataclasses.field(default_factory=dict)
     errors: dict[str, str] = dataclasses.field(default_factory=dict)
     message: str = ""
+    page: int = 0  # the block list's page asked for; 0: the page of block `at`
 
 
-def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
+PAGE_SIZE = 100
+"""Blocks per page of the block list: a page costs the same whatever the program's size."""
+
+
+def page_of(number: int) -> int:
+    """The page (from 1) of the block list that shows block `number`."""
+    return max(1, (number - 1) // PAGE_SIZE + 1)
+
+
+def preview(
+    program: Program, problems: list[Problem] | None = None
+) -> tuple[str, dict[int, float], float, int]:
     """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix.
 
     The search starts before the first block with an error (a prefix cannot be valid past
     it), so a program with an early error costs a few validations, not one per block.
+    `problems` are the program's own, when the caller has validated it already.
     """
-    problems = validate(program)
+    if problems is None:
+        problems = validate(program)
     errors = [p.block for p in problems if p.severity is Severity.ERROR]
     if any(b is None or b == 0 for b in errors):
         return "", {}, 0.0, 0
@@ -138,7 +154,15 @@ def block_summary(block: Block) -> str:
 def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
     program = stored.program
     problems = validate(program)
-    svg, per_block, total, shown = preview(program)
+    svg, per_block, total, shown = preview(program, problems)
+    by_block: dict[int, list[Problem]] = {}
+    for problem in problems:
+        if problem.block is not None:
+            by_block.setdefault(problem.block, []).append(problem)
+    count = len(program.blocks)
+    pages = page_of(max(count, 1))  # "new block…" ends the last page
+    page = min(entry.page or page_of(entry.at), pages)
+    first = (page - 1) * PAGE_SIZE + 1
     rows = [
         {
             "number": n,
@@ -146,10 +170,10 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
             "summary": block_summary(block),
             "units": block.units.symbol,
             "seconds": format_seconds(per_block.get(n, 0.0)) if n in per_block else "",
-            "problems": [p for p in problems if p.block == n],
-            "has_error": any(p.block == n and p.severity is Severity.ERROR for p in problems),
+            "problems": by_block.get(n, []),
+            "has_error": any(p.severity is Severity.ERROR for p in by_block.get(n, [])),
         }
-        for n, block in enumerate(program.blocks, start=1)
+        for n, block in enumerate(program.blocks[first - 1 : first - 1 + PAGE_SIZE], start=first)
     ]
     kind = KINDS.get(entry.kind)
     field_problems: dict[str, list[Problem]] = {}
@@ -170,6 +194,10 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
         "stored": stored,
         "program": program,
         "rows": rows,
+        "block_count": count,
+        "page": page,
+        "pages": pages,
+        "first": first,
         "problems": problems,
         "errors": [p for p in problems if p.severity is Severity.ERROR],
         "svg": svg,
@@ -219,7 +247,14 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         loop = loop or group == "LOOP"
         stop = stop or group == "STOP"
         group = ""
-    entry = Entry(at=at, editing=False, group=group, loop=loop, stop=stop)
+    entry = Entry(
+        at=at,
+        editing=False,
+        group=group,
+        loop=loop,
+        stop=stop,
+        page=max(0, _int(args.get("page"), 0)),
+    )
     if group and not kind:
         kinds = offered_kinds(program, at, group)
         if len(kinds) == 1:
@@ -384,6 +419,9 @@ def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgra
     except StaleSave as exc:
         entry.message = str(exc)
         return render_editor(library.get(stored.info.id), entry, 409)
+    except LibraryError as exc:  # e.g. past the block limit
+        entry.message = f"Not saved: {exc}"
+        return render_editor(stored, entry, 422)
     return library.get(stored.info.id)
 
 

@@ -346,3 +346,21 @@ def test_machine_limits_refuse_nan_and_other_digits(
     assert "Not saved: limits: " in response.get_data(as_text=True)
     with app.app_context():
         assert get_library().machines() == []
+
+
+def test_a_gcode_line_of_long_digit_runs_is_refused_without_backtracking(tmp_path: Path) -> None:
+    """Found by the long fuzz run: `C999…A999…b999…` made G-code's whole-line pattern try
+    every split of every digit run (17 s for 466 bytes, doubling with each word). In a
+    subprocess with a watchdog: before the fix this line of 40 words never finished."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "runs.ngc"
+    path.write_text("C" + "A".join(["9" * 30] * 40) + "b!\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "app.cli", "check", "--format", "gcode", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 2 and "line 1" in result.stderr

@@ -529,6 +529,33 @@ def user_add(username: str, role: str, password: str) -> None:
     click.echo(f"user {username} ({role}) created")
 
 
+@user.command("password")
+@click.argument("username")
+@click.password_option(help="The new password (asked for when not given; 10 characters or more).")
+def user_password(username: str, password: str) -> None:
+    """Set a user's password; every session of the user ends."""
+    from app.storage.accounts import Accounts
+
+    try:
+        Accounts(library()).set_password(username, password)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"password of {username} changed; every session of {username} ended")
+
+
+@user.command("end-sessions")
+@click.argument("username")
+def user_end_sessions(username: str) -> None:
+    """Log a user out everywhere (a lost badge, a shared terminal)."""
+    from app.storage.accounts import Accounts
+
+    try:
+        count = Accounts(library()).end_sessions(username)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{count} sessions of {username} ended")
+
+
 @user.command("list")
 def user_list() -> None:
     """List the accounts."""

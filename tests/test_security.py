@@ -110,6 +110,25 @@ def test_a_password_set_from_the_command_line_ends_sessions(app: Flask) -> None:
     assert is_logged_out(client)
 
 
+def test_the_command_line_ends_sessions(
+    app: Flask, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from click.testing import CliRunner
+
+    from app.cli import main
+
+    monkeypatch.setenv("DATABASE_URL", app.config["DATABASE_URL"])
+    client = logged_in(app, "ana")
+    result = CliRunner().invoke(main, ["user", "end-sessions", "ana"])
+    assert result.exit_code == 0 and "1 sessions of ana ended" in result.output
+    assert is_logged_out(client)
+    client = logged_in(app, "ana")
+    new = "changed at the console"
+    result = CliRunner().invoke(main, ["user", "password", "ana", "--password", new])
+    assert result.exit_code == 0, result.output
+    assert is_logged_out(client)
+
+
 def test_a_role_change_ends_the_users_sessions(app: Flask) -> None:
     ana = logged_in(app, "ana")
     ada = logged_in(app, "ada")

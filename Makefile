@@ -35,11 +35,12 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(VENV)/bin/mypy
 
-# The suite runs inside a throwaway PostgreSQL cluster (Debian's pg_virtualenv sets PG*),
+# The suite runs inside a throwaway PostgreSQL cluster (Debian's pg_virtualenv sets PG*; -t keeps
+# the cluster in a temporary directory, so two runs on one machine do not collide),
 # so the storage tests run on SQLite and on a real PostgreSQL.
 # pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
 pytest: $(STAMP) system-deps
-	pg_virtualenv $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
+	pg_virtualenv -t $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
 test: lint typecheck pytest

@@ -103,7 +103,15 @@ def _too_big(name: str, size: int) -> str:
 
 
 def read_backup(source: BinaryIO | Path) -> Backup:
-    """The whole backup, checked. Raises BackupError naming what is wrong."""
+    """The whole backup, checked. Raises BackupError naming what is wrong (`cannot read
+    the backup: manifest, program 2, revision 1, version: …`)."""
+    try:
+        return _read(source)
+    except BackupError as exc:
+        raise BackupError(f"cannot read the backup: {exc}") from None
+
+
+def _read(source: BinaryIO | Path) -> Backup:
     try:
         with zipfile.ZipFile(source) as archive:
             reader = _Reader(archive)

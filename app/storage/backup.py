@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import zipfile
+import zlib
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -78,9 +79,15 @@ class _Reader:
         try:
             with self.archive.open(info) as member:
                 data = member.read(limit + 1)
-        except (zipfile.BadZipFile, NotImplementedError, RuntimeError, OSError, EOFError) as exc:
-            raise BackupError(f"{name} cannot be read: {exc}") from None
-        except Exception as exc:  # zlib.error and friends: a damaged member is refused
+        except (
+            zipfile.BadZipFile,
+            zlib.error,
+            NotImplementedError,
+            RuntimeError,
+            OSError,
+            EOFError,
+        ) as exc:
+            # A damaged or encrypted member, or one in a compression we do not read.
             raise BackupError(f"{name} cannot be read: {exc}") from None
         if len(data) > limit:
             raise BackupError(_too_big(name, len(data)))

@@ -171,6 +171,17 @@ def test_a_member_whose_size_lies_is_read_no_further_than_the_limit(tmp_path: Pa
     library.engine.dispose()
 
 
+def test_a_zip_of_a_version_zipfile_cannot_read_is_refused(library: Library) -> None:
+    """Found by the long fuzz run: ZipFile() itself raised NotImplementedError."""
+    archive = bytearray(good_backup())
+    end = archive.rfind(b"PK\x01\x02")  # the last central directory entry
+    archive[end + 6 : end + 8] = (131).to_bytes(2, "little")  # version needed: 13.1
+    with pytest.raises(LibraryError) as caught:
+        library.restore_backup(io.BytesIO(bytes(archive)))
+    assert "zip file version 13.1" in str(caught.value)
+    assert library.programs() == []
+
+
 def test_cli_restore_of_a_damaged_backup_exits_2_with_a_message(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

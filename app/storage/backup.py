@@ -129,6 +129,8 @@ def _read(source: BinaryIO | Path) -> Backup:
             return _backup(reader, manifest)
     except zipfile.BadZipFile as exc:
         raise BackupError(f"not a zip archive: {exc}") from None
+    except NotImplementedError as exc:  # a zip "version needed" or method we do not read
+        raise BackupError(f"a zip archive MillBlocks cannot read: {exc}") from None
     except (OSError, EOFError, ValueError) as exc:
         if isinstance(exc, BackupError):
             raise

@@ -36,9 +36,32 @@ from app.cnc.emit.target import export as run_export
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineError, MachineModel, read_machine
+from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.problems import Problem, has_errors
 from app.cnc.validate import validate
 from app.storage.library import Library, LibraryError, Machine, open_library
+
+
+class Number(click.ParamType[Any, Any]):
+    """A number argument read by app.cnc.numbers (click's own FLOAT takes `nan` and INT
+    takes `١٢`): a float, or an int when `whole`, at least `minimum`."""
+
+    name = "number"
+
+    def __init__(self, minimum: float | None = None, whole: bool = False) -> None:
+        self.minimum = minimum
+        self.whole = whole
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return value
+        try:
+            number = parse_int(str(value)) if self.whole else parse_decimal(str(value))
+        except NumberError as exc:
+            self.fail(str(exc), param, ctx)
+        if self.minimum is not None and number < self.minimum:
+            self.fail(f"{value!r} is below the allowed minimum {self.minimum:g}", param, ctx)
+        return int(number) if self.whole else float(number)
 
 
 class ProgramFileError(click.ClickException):
@@ -177,7 +200,7 @@ def check(file: str) -> None:
 @file_format_option
 @click.option(
     "--tool-change-seconds",
-    type=click.FloatRange(min=0),
+    type=Number(minimum=0),
     default=None,
     help=f"Allowance for each manual tool change (default {DEFAULT_TOOL_CHANGE_SECONDS:g} s, "
     "or the machine's).",
@@ -502,8 +525,8 @@ def history(program: str) -> None:
 
 @main.command("diff")
 @click.argument("program", metavar="PROGRAM")
-@click.argument("old", type=int)
-@click.argument("new", type=int)
+@click.argument("old", type=Number(whole=True))
+@click.argument("new", type=Number(whole=True))
 def diff_versions(program: str, old: int, new: int) -> None:
     """Block-level differences between two versions of a library PROGRAM."""
     lib = library()
@@ -518,7 +541,7 @@ def diff_versions(program: str, old: int, new: int) -> None:
 
 @main.command("restore-version")
 @click.argument("program", metavar="PROGRAM")
-@click.argument("version", type=int)
+@click.argument("version", type=Number(whole=True))
 def restore_version(program: str, version: int) -> None:
     """Make an old VERSION of a library PROGRAM current again (as a new version)."""
     lib = library()
@@ -581,6 +604,33 @@ def user_add(username: str, role: str, password: str) -> None:
     except LibraryError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"user {username} ({role}) created")
+
+
+@user.command("password")
+@click.argument("username")
+@click.password_option(help="The new password (asked for when not given; 10 characters or more).")
+def user_password(username: str, password: str) -> None:
+    """Set a user's password; every session of the user ends."""
+    from app.storage.accounts import Accounts
+
+    try:
+        Accounts(library()).set_password(username, password)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"password of {username} changed; every session of {username} ended")
+
+
+@user.command("end-sessions")
+@click.argument("username")
+def user_end_sessions(username: str) -> None:
+    """Log a user out everywhere (a lost badge, a shared terminal)."""
+    from app.storage.accounts import Accounts
+
+    try:
+        count = Accounts(library()).end_sessions(username)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"{count} sessions of {username} ended")
 
 
 @user.command("list")
@@ -695,7 +745,7 @@ def send_command(
     "first_byte_timeout",
     default=120.0,
     show_default=True,
-    type=float,
+    type=Number(minimum=0),
     help="Seconds to wait for the control to start sending.",
 )
 @click.option("--author", default="", help="Who is receiving (kept with the revision).")
@@ -753,7 +803,7 @@ def list_ports() -> None:
 
 
 @main.command("transfers")
-@click.option("--limit", default=20, show_default=True, type=int)
+@click.option("--limit", default=20, show_default=True, type=Number(minimum=1, whole=True))
 def list_transfers(limit: int) -> None:
     """The newest RS-232 transfers in the log."""
     from app.storage.transfers import TransferLog

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -11,43 +10,21 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app import create_app
-from app.storage.accounts import Accounts
 from app.web.extensions import get_library
-
-PASSWORD = "correct horse battery"
+from tests import web_support
+from tests.web_support import PASSWORD, accounts_app, csrf, dispose
 
 
 @pytest.fixture
 def app(tmp_path: Path) -> Iterator[Flask]:
-    app = create_app(
-        {
-            "DATABASE_URL": f"sqlite:///{tmp_path / 'auth.db'}",
-            "SECRET_KEY": "test",
-            "MILLBLOCKS_AUTH": "accounts",
-        }
-    )
-    with app.app_context():
-        book = Accounts(get_library())
-        book.create("ana", PASSWORD, "programmer")
-        book.create("otto", PASSWORD, "operator")
-        book.create("ada", PASSWORD, "admin")
+    app = accounts_app(tmp_path)
     yield app
-    with app.app_context():
-        get_library().engine.dispose()
-
-
-def csrf(client: FlaskClient, url: str) -> str:
-    found = re.search(r'name="csrf_token" value="([^"]+)"', client.get(url).get_data(as_text=True))
-    assert found
-    return found.group(1)
+    dispose(app)
 
 
 def log_in(client: FlaskClient, username: str, password: str = PASSWORD) -> int:
-    token = csrf(client, "/login")
-    response = client.post(
-        "/login", data={"csrf_token": token, "username": username, "password": password}
-    )
-    return response.status_code
+    status: int = web_support.log_in(client, username, password).status_code
+    return status
 
 
 def test_pages_need_a_login(app: Flask) -> None:
@@ -113,7 +90,7 @@ def test_login_starts_a_new_session(app: Flask) -> None:
         session["planted"] = "by an attacker"
     log_in(client, "ana")
     with client.session_transaction() as session:
-        assert "planted" not in session and "user_id" in session
+        assert "planted" not in session and "sid" in session
 
 
 def test_local_mode_serves_only_loopback(tmp_path: Path) -> None:

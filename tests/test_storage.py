@@ -55,6 +55,7 @@ def test_upgrade_head_on_an_empty_database(database_url: str) -> None:
         "users",
         "login_attempts",
         "transfer_log",
+        "sessions",
     }
     engine.dispose()
 
@@ -73,6 +74,7 @@ def test_downgrade_and_upgrade_round_trip(database_url: str) -> None:
         "users",
         "login_attempts",
         "transfer_log",
+        "sessions",
     }
     engine.dispose()
 

@@ -3,7 +3,9 @@
 The format is described in docs/program-format.md. `dumps` writes a deterministic text
 (fixed key order, two-space indent, trailing newline); `loads` reads it back and raises
 DocumentError naming the block and field of anything malformed. Numbers are read as
-`Decimal`, so what was typed is what is kept.
+`Decimal`, so what was typed is what is kept, and checked by app.cnc.numbers (no NaN or
+Infinity, nothing beyond 1E+30); a document nested deeper than JSON's own reader goes, or
+with more than `MAX_BLOCKS` blocks, is refused whole.
 """
 
 from __future__ import annotations
@@ -35,6 +37,8 @@ from app.cnc.blocks import (
     Tool,
     field_label,
 )
+from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
+from app.cnc.sizes import MAX_BLOCKS
 from app.cnc.units import Units
 
 FORMAT_NAME = "millblocks-program"
@@ -130,12 +134,31 @@ def _out(value: Any) -> Any:
 def loads(text: str) -> Program:
     """Read a document. Raises DocumentError (line and column for bad JSON)."""
     try:
-        data = json.loads(text, parse_float=Decimal)
+        data = json.loads(
+            text, parse_float=decimal_of, parse_int=_whole, parse_constant=_no_constant
+        )
     except json.JSONDecodeError as exc:
         raise DocumentError(
             f"line {exc.lineno}, column {exc.colno}", f"not valid JSON: {exc.msg}"
         ) from None
+    except NumberError as exc:
+        raise DocumentError("", str(exc)) from None
+    except RecursionError:
+        # JSON's reader recurses once per level; a program document is 4 levels deep.
+        raise DocumentError("", "not a program document: nested too deeply") from None
     return from_dict(data)
+
+
+def _whole(text: str) -> int | Decimal:
+    """A JSON integer; one beyond Decimal's bounds is refused before `int()` reads it
+    (Python refuses over 4 300 digits with a ValueError of its own)."""
+    if len(text.lstrip("-")) > 31:
+        raise NumberError(f"{text[:40]}… is too large; allowed: up to 1E+30 in size")
+    return int(text)
+
+
+def _no_constant(text: str) -> Any:
+    raise NumberError(f"{text} is not a number; JSON numbers are digits, such as -1.25")
 
 
 def from_dict(data: Any) -> Program:
@@ -168,6 +191,12 @@ def from_dict(data: Any) -> Program:
     blocks_data = data.get("blocks", [])
     if not isinstance(blocks_data, list):
         raise DocumentError("blocks", "expected a list of data blocks")
+    if len(blocks_data) > MAX_BLOCKS:
+        raise DocumentError(
+            "blocks",
+            f"{len(blocks_data)} data blocks; a program has at most {MAX_BLOCKS} (the limit of "
+            "one program in MillBlocks)",
+        )
     blocks = tuple(_block_in(item, n) for n, item in enumerate(blocks_data, start=1))
     stock_data = data.get("stock")
     if stock_data is not None and not isinstance(stock_data, dict):
@@ -254,14 +283,17 @@ def _convert(raw: Any, hint: Any, where: str) -> Any:
     if hint is int:
         if isinstance(raw, bool) or not isinstance(raw, int):
             raise DocumentError(where, f"expected a whole number, got {_show(raw)}")
-        return raw
+        try:
+            return check_int(raw)
+        except NumberError as exc:
+            raise DocumentError(where, str(exc)) from None
     if hint is Decimal:
         if isinstance(raw, bool) or not isinstance(raw, int | Decimal):
             raise DocumentError(where, f"expected a number, got {_show(raw)}")
-        value = Decimal(raw)
-        if not value.is_finite():
-            raise DocumentError(where, f"expected a finite number, got {_show(raw)}")
-        return value
+        try:
+            return check_decimal(Decimal(raw))
+        except NumberError as exc:
+            raise DocumentError(where, str(exc)) from None
     if isinstance(hint, type) and issubclass(hint, enum.Enum):
         return _enum(hint, raw, where)
     if hint is str:
@@ -296,7 +328,13 @@ def _no_unknown(where: str, data: dict[str, Any], known: set[str]) -> None:
 
 
 def _show(raw: Any) -> str:
-    """A JSON value as it was written: numbers bare, text quoted."""
-    return json.dumps(
-        raw, default=lambda value: float(value) if isinstance(value, Decimal) else str(value)
-    )
+    """A JSON value as it was written: numbers bare, text quoted (cut short)."""
+    if isinstance(raw, Decimal):
+        return str(raw)
+    try:
+        text = json.dumps(
+            raw, default=lambda value: float(value) if isinstance(value, Decimal) else str(value)
+        )
+    except (RecursionError, ValueError):
+        return "a value nested too deeply"
+    return text if len(text) <= 60 else text[:60] + "…"

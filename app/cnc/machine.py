@@ -17,10 +17,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any
 
 from app.cnc.geometry import arc_sweep
+from app.cnc.numbers import NumberError, parse_decimal
 from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange, Toolpath
 from app.cnc.units import Units, format_length, to_nm
 
@@ -141,18 +142,18 @@ def _pair(raw: Any, name: str) -> tuple[Decimal, Decimal]:
     if not isinstance(raw, list | tuple) or len(raw) != 2:
         raise MachineError(f"{name}: expected two numbers (minimum and maximum), got {raw!r}")
     try:
-        return Decimal(str(raw[0])), Decimal(str(raw[1]))
-    except InvalidOperation:
-        raise MachineError(f"{name}: {raw!r} are not numbers") from None
+        return parse_decimal(str(raw[0])), parse_decimal(str(raw[1]))
+    except NumberError as exc:
+        raise MachineError(f"{name}: {exc}") from None
 
 
 def _number(data: Mapping[str, Any], name: str, default: Decimal | None) -> Decimal | None:
     if name not in data or data[name] in (None, ""):
         return default
     try:
-        value = Decimal(str(data[name]))
-    except InvalidOperation:
-        raise MachineError(f"{name}: {data[name]!r} is not a number") from None
+        value = parse_decimal(str(data[name]))
+    except NumberError as exc:
+        raise MachineError(f"{name}: {exc}") from None
     if value <= 0:
         raise MachineError(f"{name}: {value} must be more than 0")
     return value

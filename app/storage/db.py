@@ -3,18 +3,23 @@
 The default database is an SQLite file, `instance/millblocks.db` under the project folder
 (override with DATABASE_URL, e.g. `postgresql+psycopg://user@host/millblocks`). SQLite runs
 with WAL, foreign keys on and synchronous FULL: an acknowledged save survives a crash.
-`upgrade()` runs the committed Alembic migrations; every entry point calls it first.
+`upgrade()` runs the committed Alembic migrations; every entry point calls it first,
+inside `migration_lock()`, so any number of workers may start on an empty database: the
+first migrates (and seeds), the others wait for it and then find nothing left to do.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from alembic import command
 from alembic.config import Config
-from sqlalchemy import Engine, create_engine, event
+from sqlalchemy import Engine, create_engine, event, text
 
 ROOT = Path(__file__).resolve().parents[2]
 MIGRATIONS = ROOT / "migrations"
@@ -54,6 +59,42 @@ def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
     cursor.execute("PRAGMA synchronous=FULL")
     cursor.execute("PRAGMA busy_timeout=30000")
     cursor.close()
+
+
+MIGRATION_LOCK_KEY = 0x4D696C6C  # "Mill": the PostgreSQL advisory lock of migrations
+
+
+@contextmanager
+def migration_lock(engine: Engine) -> Iterator[None]:
+    """Hold the database's migration lock while the block runs (blocking until it is free).
+
+    PostgreSQL: a session-level advisory lock on a connection of its own (released when the
+    block ends, or by the server if the process dies). SQLite: an exclusive `flock` on a
+    file beside the database (released by the kernel if the process dies); an in-memory
+    database is one process's own and needs none.
+    """
+    if engine.dialect.name == "postgresql":
+        with engine.connect() as connection:
+            connection.execute(text("SELECT pg_advisory_lock(:key)"), {"key": MIGRATION_LOCK_KEY})
+            connection.commit()
+            try:
+                yield
+            finally:
+                connection.execute(
+                    text("SELECT pg_advisory_unlock(:key)"), {"key": MIGRATION_LOCK_KEY}
+                )
+                connection.commit()
+        return
+    database = engine.url.database
+    if engine.dialect.name != "sqlite" or not database or database == ":memory:":
+        yield
+        return
+    with open(f"{database}.migrate-lock", "a+b") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def alembic_config(engine: Engine) -> Config:

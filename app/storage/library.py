@@ -18,12 +18,14 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from sqlalchemy import Engine, delete, func, or_, select, update
+from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
 from app.cnc import document
 from app.cnc.blocks import Hole, Program
 from app.cnc.diff import diff, summary
-from app.storage.db import make_engine, upgrade
+from app.cnc.sizes import TooLarge, check_block_count
+from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import MachineRow, ProgramRow, RevisionRow, SettingRow
 
 SORTS = ("name", "part_number", "updated", "created")
@@ -127,6 +129,12 @@ def search_words(program: Program) -> str:
 
 
 def _columns(program: Program) -> dict[str, Any]:
+    """The row's columns for `program`. Raises LibraryError for a program past
+    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open."""
+    try:
+        check_block_count(len(program.blocks))
+    except TooLarge as exc:
+        raise LibraryError(f"not stored: {exc}") from None
     return {
         "name": program.name,
         "part_number": program.part_number[:8],
@@ -183,7 +191,7 @@ class Library:
             row = s.get(ProgramRow, program_id)
             if row is None or (row.deleted_at is not None and not include_trash):
                 raise NotFound(f"no program {program_id} in the library")
-            return StoredProgram(_info(row), document.loads(row.document))
+            return StoredProgram(_info(row), _load(row))
 
     def find(self, reference: str) -> StoredProgram:
         """A program by id (digits) or by exact name (not in the trash)."""
@@ -200,7 +208,7 @@ class Library:
             if len(rows) > 1:
                 ids = ", ".join(str(r.id) for r in rows)
                 raise LibraryError(f"{len(rows)} programs are named {reference!r} (ids {ids})")
-            return StoredProgram(_info(rows[0]), document.loads(rows[0].document))
+            return StoredProgram(_info(rows[0]), _load(rows[0]))
 
     def programs(
         self, query: str = "", sort: str = "name", trash: bool = False
@@ -377,18 +385,8 @@ class Library:
         """Create or update a machine profile (by name)."""
         if not machine.name.strip():
             raise LibraryError("a machine needs a name")
-        now = _now()
         with self.session() as s:
-            row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
-            if row is None:
-                row = MachineRow(name=machine.name, created_at=now)
-                s.add(row)
-            row.target = machine.target
-            row.options = json.dumps(machine.options, sort_keys=True)
-            row.serial = json.dumps(machine.serial, sort_keys=True)
-            row.limits = json.dumps(machine.limits, sort_keys=True)
-            row.notes = machine.notes
-            row.updated_at = now
+            _store_machine(s, machine, _now())
 
     def delete_machine(self, name: str) -> None:
         with self.session() as s:
@@ -449,60 +447,52 @@ class Library:
 
     def restore_backup(self, source: BinaryIO | Path) -> int:
         """Add every program of a backup (with its revisions) as a new library entry, and
-        create or update its machines. All or nothing: a bad archive changes nothing."""
+        create or update its machines; returns the program count. All or nothing: the
+        archive is read and checked whole first (app.storage.backup), then stored in one
+        transaction, so a bad archive changes nothing (BackupError says what is wrong)."""
+        from app.storage.backup import BackupError, read_backup
+
+        backup = read_backup(source)
+        now = _now()
         try:
-            with zipfile.ZipFile(source) as archive:
-                manifest = json.loads(archive.read("manifest.json"))
-                if manifest.get("format") != BACKUP_FORMAT:
-                    raise LibraryError("not a MillBlocks backup (manifest format)")
-                loaded = []
-                for entry in manifest["programs"]:
-                    revisions = []
-                    for rev in entry["revisions"]:
-                        text = archive.read(rev["file"]).decode("utf-8")
-                        revisions.append((rev, document.loads(text), text))
-                    loaded.append((entry, revisions))
-        except (KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
-            raise LibraryError(f"cannot read the backup: {exc}") from None
-        except document.DocumentError as exc:
-            raise LibraryError(f"the backup holds a bad program: {exc}") from None
-        with self.session() as s:
-            for entry, revisions in loaded:
-                last_rev, last_program, last_text = revisions[-1]
-                row = ProgramRow(
-                    **_columns(last_program),
-                    version=last_rev["version"],
-                    created_at=datetime.fromisoformat(revisions[0][0]["created_at"]),
-                    updated_at=datetime.fromisoformat(last_rev["created_at"]),
-                    updated_by=last_rev["author"],
-                    deleted_at=_now() if entry.get("deleted") else None,
-                )
-                s.add(row)
-                s.flush()
-                for rev, _program, text in revisions:
-                    s.add(
-                        RevisionRow(
-                            program_id=row.id,
-                            version=rev["version"],
-                            document=text,
-                            created_at=datetime.fromisoformat(rev["created_at"]),
-                            author=rev["author"],
-                            summary=rev["summary"],
-                        )
+            with self.session() as s:
+                for entry in backup.programs:
+                    first, last = entry.revisions[0], entry.revisions[-1]
+                    row = ProgramRow(
+                        **_columns(last.program),
+                        version=last.version,
+                        created_at=first.created_at,
+                        updated_at=last.created_at,
+                        updated_by=last.author,
+                        deleted_at=now if entry.deleted else None,
                     )
-                del last_text
-        for machine in manifest.get("machines", []):
-            self.save_machine(
-                Machine(
-                    machine["name"],
-                    machine["target"],
-                    machine["options"],
-                    machine["serial"],
-                    machine.get("notes", ""),
-                    machine.get("limits", {}),
-                )
-            )
-        return len(loaded)
+                    s.add(row)
+                    s.flush()
+                    for rev in entry.revisions:
+                        s.add(
+                            RevisionRow(
+                                program_id=row.id,
+                                version=rev.version,
+                                document=rev.text,
+                                created_at=rev.created_at,
+                                author=rev.author,
+                                summary=rev.summary,
+                            )
+                        )
+                for machine in backup.machines:
+                    _store_machine(s, machine, now)
+        except SQLAlchemyError as exc:
+            raise BackupError(f"the backup could not be stored: {exc.__class__.__name__}") from None
+        return len(backup.programs)
+
+
+def _load(row: ProgramRow) -> Program:
+    """A stored program's document. One the library can no longer open (stored before a
+    limit existed) is a LibraryError naming the program, not a crash."""
+    try:
+        return document.loads(row.document)
+    except document.DocumentError as exc:
+        raise LibraryError(f"program {row.id} ({row.name}) cannot be opened: {exc}") from None
 
 
 def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
@@ -510,6 +500,20 @@ def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
     info = zipfile.ZipInfo(name, date_time=(2000, 1, 1, 0, 0, 0))
     info.compress_type = zipfile.ZIP_DEFLATED
     archive.writestr(info, text)
+
+
+def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
+    """Create or update a machine profile by name, in transaction `s`."""
+    row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
+    if row is None:
+        row = MachineRow(name=machine.name, created_at=now)
+        s.add(row)
+    row.target = machine.target
+    row.options = json.dumps(machine.options, sort_keys=True)
+    row.serial = json.dumps(machine.serial, sort_keys=True)
+    row.limits = json.dumps(machine.limits, sort_keys=True)
+    row.notes = machine.notes
+    row.updated_at = now
 
 
 def _machine(row: MachineRow) -> Machine:
@@ -527,10 +531,13 @@ def open_library(url: str | None = None, seed_demo: bool = True) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
     the demo programs added the first time."""
     engine = make_engine(url)
-    upgrade(engine)
     library = Library(engine)
-    if seed_demo:
-        from app.storage.demo import seed
+    # Workers starting together: one migrates and seeds, the others wait, then find both
+    # done (migrating twice fails: "table alembic_version already exists").
+    with migration_lock(engine):
+        upgrade(engine)
+        if seed_demo:
+            from app.storage.demo import seed
 
-        seed(library)
+            seed(library)
     return library

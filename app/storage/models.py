@@ -109,8 +109,25 @@ class UserRow(Base):
     created_at: Mapped[datetime]
 
 
+class SessionRow(Base):
+    """A logged-in session. The browser's cookie holds a random id; only its SHA-256 is
+    stored, so a copy of this table logs nobody in. Deleting the row ends the session:
+    logout, a password or role change, an admin's "end sessions", the timeouts."""
+
+    __tablename__ = "sessions"
+
+    id: Mapped[str] = mapped_column(String(64), primary_key=True)
+    user_id: Mapped[int] = mapped_column(ForeignKey("users.id", ondelete="CASCADE"))
+    created_at: Mapped[datetime]
+    last_seen: Mapped[datetime]
+    address: Mapped[str] = mapped_column(String(100), default="")
+
+    __table_args__ = (Index("ix_sessions_user", "user_id"),)
+
+
 class LoginAttemptRow(Base):
-    """A failed login, counted per address for the login rate limit (shared by workers)."""
+    """A failed login, counted per account and address and per address for the login rate
+    limit (shared by workers)."""
 
     __tablename__ = "login_attempts"
 

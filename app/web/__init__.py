@@ -14,6 +14,8 @@ from typing import Any
 
 from flask import Flask, Response, render_template
 from flask_wtf.csrf import CSRFError
+from werkzeug.middleware.proxy_fix import ProxyFix
+from werkzeug.routing import IntegerConverter
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
@@ -36,6 +38,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         static_folder=str(ROOT / "static"),
         instance_path=str(ROOT / "instance"),
     )
+    app.url_map.converters["int"] = RowId
     app.config.update(
         DATABASE_URL=os.environ.get("DATABASE_URL"),
         MAX_CONTENT_LENGTH=2 * 1024 * 1024,
@@ -48,6 +51,8 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     )
     if test_config:
         app.config.update(test_config)
+    _harden_cookie(app)
+    _trust_proxy(app)
     app.config.setdefault("SECRET_KEY", None)
     if not app.config["SECRET_KEY"]:
         app.config["SECRET_KEY"] = _secret_key(Path(app.instance_path))
@@ -63,9 +68,42 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     app.register_error_handler(413, _too_large)
     app.register_error_handler(404, _not_found)
     app.register_error_handler(403, _forbidden)
+    app.register_error_handler(422, _refused)
     if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
         raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
+
+
+class RowId(IntegerConverter):
+    """`<int:…>` in a URL: at most 9 digits, so an id never overflows a database integer
+    (/programs/99999999999999999999 is a 404, not an OverflowError)."""
+
+    regex = r"\d{1,9}"
+
+    def __init__(self, map: Any, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("max", 999_999_999)
+        super().__init__(map, *args, **kwargs)
+
+
+def _harden_cookie(app: Flask) -> None:
+    """Over HTTPS the session cookie is `__Host-millblocks`: Secure, path /, no Domain, so
+    no other site or subdomain can set or read it (ASVS 3.4.4)."""
+    app.config["SESSION_COOKIE_PATH"] = "/"
+    app.config["SESSION_COOKIE_DOMAIN"] = False
+    if app.config["SESSION_COOKIE_SECURE"] and app.config["SESSION_COOKIE_NAME"] == "session":
+        app.config["SESSION_COOKIE_NAME"] = "__Host-millblocks"
+
+
+def _trust_proxy(app: Flask) -> None:
+    """Behind N reverse proxies (MILLBLOCKS_PROXY_HOPS=N), take the client's address and
+    scheme from the last N X-Forwarded-For/-Proto entries; with 0 (the default) those
+    headers are ignored, so a client cannot choose its own address for the login limit."""
+    raw = app.config.get("MILLBLOCKS_PROXY_HOPS", os.environ.get("MILLBLOCKS_PROXY_HOPS", "0"))
+    hops = int(str(raw or "0"))
+    if hops < 0:
+        raise ValueError("MILLBLOCKS_PROXY_HOPS is the number of trusted proxies (0 or more)")
+    if hops:
+        app.wsgi_app = ProxyFix(app.wsgi_app, x_for=hops, x_proto=hops)  # type: ignore[method-assign]
 
 
 def _secret_key(instance: Path) -> str:
@@ -98,6 +136,11 @@ def _too_large(_error: Exception) -> tuple[str, int]:
 def _forbidden(error: Exception) -> tuple[str, int]:
     message = getattr(error, "description", "Not allowed")
     return render_template("errors/error.html", title="Not allowed", message=message), 403
+
+
+def _refused(error: Exception) -> tuple[str, int]:
+    message = getattr(error, "description", "Refused")
+    return render_template("errors/error.html", title="Refused", message=message), 422
 
 
 def _not_found(error: Exception) -> tuple[str, int]:

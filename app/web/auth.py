@@ -1,11 +1,21 @@
 """Who may do what. Two modes (config MILLBLOCKS_AUTH):
 
 - `local` (what `make run` uses): a single local user with every capability, for a
-  server bound to 127.0.0.1; a request from any other address is refused, so serving the
-  shop network requires accounts.
+  server bound to 127.0.0.1; a request from any other address, or naming any host but
+  localhost, 127.0.0.1 or [::1] (DNS rebinding), is refused, so serving the shop network
+  requires accounts.
 - `accounts`: everyone logs in; programmers edit, operators view, export and send, admins
-  also manage users and machines. Failed logins are counted per address: the sixth within
-  15 minutes is answered 429. A login starts a new session.
+  also manage users and machines.
+
+Sessions (accounts mode) live on the server (app.storage.accounts): Flask's signed cookie
+carries only a random session id, so logout, a password change, a role change or an
+admin's "end sessions" end a session everywhere. A session ends after 30 minutes unused
+or 12 hours after login (MILLBLOCKS_SESSION_IDLE_MINUTES, MILLBLOCKS_SESSION_HOURS).
+
+The login rate limit counts failures per account and address (5 in 15 minutes, then that
+account waits at that address) and per address (20, whatever the accounts). Behind a
+reverse proxy every client has the proxy's address unless MILLBLOCKS_PROXY_HOPS trusts its
+X-Forwarded-For (app.web.create_app installs werkzeug's ProxyFix).
 
 Every endpoint needs a capability (`REQUIRED`, else `view` for reading and `edit` for
 anything that changes state), checked in one place before the view runs.
@@ -15,6 +25,7 @@ from __future__ import annotations
 
 import ipaddress
 from datetime import timedelta
+from urllib.parse import urlsplit
 
 from flask import (
     Blueprint,
@@ -39,6 +50,11 @@ bp = Blueprint("auth", __name__)
 LOCAL = User(0, "local", "admin")
 WINDOW = timedelta(minutes=15)
 MAX_FAILURES = 5
+"""Failed logins for one account from one address within WINDOW before it must wait."""
+MAX_ADDRESS_FAILURES = 20
+"""Failed logins from one address, whatever the accounts, within WINDOW."""
+IDLE_MINUTES = 30
+SESSION_HOURS = 12
 OPEN = {"auth.login", "static"}
 REQUIRED = {
     "machines.save": "admin",
@@ -46,13 +62,17 @@ REQUIRED = {
     "auth.users": "admin",
     "auth.create_user": "admin",
     "auth.set_role": "admin",
+    "auth.end_sessions": "admin",
     "export.page": "export",
     "export.download": "export",
     "transfers.send": "send",
     "transfers.receive": "send",
     "transfers.cancel": "send",
     "auth.logout": "view",
+    "auth.account": "view",
+    "auth.change_password": "view",
 }
+LOOPBACK_NAMES = frozenset({"localhost"})
 
 
 def accounts() -> Accounts:
@@ -79,20 +99,53 @@ def _is_loopback(address: str | None) -> bool:
         return False
 
 
+def _host_name(host: str) -> str:
+    """The name part of a Host header (`[::1]:5000` → `::1`, `localhost:5000` →
+    `localhost`)."""
+    host = host.strip().lower()
+    if host.startswith("["):
+        return host[1 : host.find("]")] if "]" in host else host
+    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+
+
+def is_loopback_host(host: str) -> bool:
+    """Whether a Host header names this computer's loopback: localhost, 127.x, ::1."""
+    name = _host_name(host)
+    return name in LOOPBACK_NAMES or _is_loopback(name)
+
+
+def _timeouts() -> tuple[timedelta, timedelta]:
+    config = current_app.config
+    idle = timedelta(minutes=float(config.get("MILLBLOCKS_SESSION_IDLE_MINUTES", IDLE_MINUTES)))
+    absolute = timedelta(hours=float(config.get("MILLBLOCKS_SESSION_HOURS", SESSION_HOURS)))
+    return idle, absolute
+
+
+def _local_only(message: str) -> tuple[str, int]:
+    return render_template("errors/error.html", title="Local only", message=message), 403
+
+
 def _authorise() -> Response | tuple[str, int] | None:
     endpoint = request.endpoint or ""
     if current_app.config["MILLBLOCKS_AUTH"] == "local":
         if not _is_loopback(request.remote_addr):
-            message = (
+            return _local_only(
                 "This MillBlocks serves its local user only. To serve the shop network, "
                 "start it with accounts (MILLBLOCKS_AUTH=accounts; see the README)."
             )
-            return render_template("errors/error.html", title="Local only", message=message), 403
+        if not is_loopback_host(request.host):
+            return _local_only(
+                "This MillBlocks serves its local user only and answers only to localhost, "
+                "127.0.0.1 or [::1]; open it by one of those names."
+            )
         g.user = User(0, str(current_app.config.get("MILLBLOCKS_USER", "local")), "admin")
         return None
     user = None
-    if "user_id" in session:
-        user = accounts().get(int(session["user_id"]))
+    token = session.get("sid")
+    if isinstance(token, str):
+        user = accounts().session_user(token, *_timeouts())
+        if user is None:
+            session.clear()  # ended on the server, or timed out
     if user is None:
         if endpoint in OPEN:
             return None
@@ -104,6 +157,35 @@ def _authorise() -> Response | tuple[str, int] | None:
     return None
 
 
+def safe_next(target: str) -> str:
+    """`target` when it is a path on this site, else `/` (ASVS 5.1.5).
+
+    Browsers drop tabs and newlines from a URL and read `\\` as `/`, so `/\t/evil` and
+    `/\\evil` are other sites to them; anything with a control character, a space or a
+    backslash is refused, as is anything naming a scheme or host.
+    """
+    if not target.startswith("/") or target.startswith("//"):
+        return "/"
+    if any(ord(c) <= 0x20 or c in "\\\x7f" for c in target):
+        return "/"
+    parts = urlsplit(target)
+    if parts.scheme or parts.netloc:
+        return "/"
+    return target
+
+
+def _refusal(book: Accounts, address: str, username: str) -> str:
+    """Why a login from `address` as `username` must wait, or "" when it may go on."""
+    if book.recent_failures(address, WINDOW) >= MAX_ADDRESS_FAILURES:
+        return "Too many failed logins from this address; wait 15 minutes and try again."
+    if book.recent_failures(address, WINDOW, username) >= MAX_FAILURES:
+        return (
+            f"Too many failed logins for {username} from this address; wait 15 minutes "
+            "and try again."
+        )
+    return ""
+
+
 @bp.route("/login", methods=["GET", "POST"])
 def login() -> Response | tuple[str, int]:
     if current_app.config["MILLBLOCKS_AUTH"] == "local":
@@ -112,34 +194,74 @@ def login() -> Response | tuple[str, int]:
     status = 200
     if request.method == "POST":
         address = request.remote_addr or "?"
+        username = request.form.get("username", "")
         book = accounts()
-        if book.recent_failures(address, WINDOW) >= MAX_FAILURES:
-            message = "Too many failed logins from this address; wait 15 minutes and try again."
+        message = _refusal(book, address, username)
+        if message:
             return render_template("auth/login.html", message=message), 429
-        user = book.check(request.form.get("username", ""), request.form.get("password", ""))
+        user = book.check(username, request.form.get("password", ""))
         if user is None:
-            book.failed(address, request.form.get("username", ""))
+            book.failed(address, username)
             message, status = "Wrong user name or password.", 401
         else:
-            book.clear_failures(address)
-            session.clear()  # a new session on login
-            session["user_id"] = user.id
-            target = request.args.get("next", "")
-            return redirect(
-                target if target.startswith("/") and not target.startswith("//") else "/"
-            )
+            book.clear_failures(address, username)
+            _start_session(book, user)
+            return redirect(safe_next(request.args.get("next", "")))
     return render_template("auth/login.html", message=message), status
+
+
+def _start_session(book: Accounts, user: User) -> None:
+    """A new session id for this browser (never one it brought: no session fixation)."""
+    session.clear()
+    session["sid"] = book.start_session(user, request.remote_addr or "?")
+    book.forget_expired(_timeouts()[1])
 
 
 @bp.post("/logout")
 def logout() -> Response:
+    token = session.get("sid")
+    if isinstance(token, str):
+        accounts().end_session(token)
     session.clear()
     return redirect(url_for("auth.login"))
 
 
+@bp.get("/account")
+def account() -> str:
+    return render_template("auth/account.html", message="")
+
+
+@bp.post("/account/password")
+def change_password() -> Response | tuple[str, int]:
+    """Change one's own password: every other session of the user ends, this one is
+    renewed."""
+    user = current_user()
+    book = accounts()
+    form = request.form
+    if book.check(user.username, form.get("current", "")) is None:
+        return render_template("auth/account.html", message="The current password is wrong."), 403
+    try:
+        book.set_password(user.username, form.get("new", ""))
+    except LibraryError as exc:
+        return render_template("auth/account.html", message=f"Not changed: {exc}"), 422
+    _start_session(book, user)
+    return redirect(url_for("auth.account", changed=1))
+
+
 @bp.get("/users")
 def users() -> str:
-    return render_template("auth/users.html", users=accounts().users(), roles=ROLES, message="")
+    return _users_page("")
+
+
+def _users_page(message: str) -> str:
+    book = accounts()
+    return render_template(
+        "auth/users.html",
+        users=book.users(),
+        roles=ROLES,
+        sessions=book.sessions_of(),
+        message=message,
+    )
 
 
 @bp.post("/users")
@@ -148,17 +270,25 @@ def create_user() -> Response | tuple[str, int]:
     try:
         accounts().create(form.get("username", ""), form.get("password", ""), form.get("role", ""))
     except LibraryError as exc:
-        page = render_template(
-            "auth/users.html", users=accounts().users(), roles=ROLES, message=f"Not created: {exc}"
-        )
-        return page, 422
+        return _users_page(f"Not created: {exc}"), 422
     return redirect(url_for("auth.users"))
 
 
-@bp.post("/users/<username>/role")
-def set_role(username: str) -> Response:
+@bp.post("/users/<path:username>/role")
+def set_role(username: str) -> Response | tuple[str, int]:
+    """A new role; the user's sessions end (a role is read at login)."""
     try:
         accounts().set_role(username, request.form.get("role", ""))
     except LibraryError as exc:
-        abort(422, str(exc))
+        return _users_page(f"Not changed: {exc}"), 422
+    return redirect(url_for("auth.users"))
+
+
+@bp.post("/users/<path:username>/sessions/end")
+def end_sessions(username: str) -> Response | tuple[str, int]:
+    """Log a user out everywhere (a lost badge, a shared terminal)."""
+    try:
+        accounts().end_sessions(username)
+    except LibraryError as exc:
+        return _users_page(f"Not done: {exc}"), 422
     return redirect(url_for("auth.users"))

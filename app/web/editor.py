@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any
 
 from flask import Blueprint, abort, redirect, render_template, request, url_for
@@ -35,7 +35,7 @@ from app.cnc.interpret import interpret
 from app.cnc.problems import Problem, Rule, Severity, has_errors
 from app.cnc.units import Units
 from app.cnc.validate import validate
-from app.storage.library import LibraryError, StaleSave, StoredProgram
+from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
 from app.web.extensions import get_library
 from app.web.forms import (
     GROUP_KINDS,
@@ -46,6 +46,8 @@ from app.web.forms import (
     offered_groups,
     offered_kinds,
     parse_block,
+    read_number,
+    read_whole,
 )
 
 bp = Blueprint("editor", __name__)
@@ -61,8 +63,10 @@ def current_user() -> str:
 def load(program_id: int) -> StoredProgram:
     try:
         return get_library().get(program_id)
-    except LibraryError:
+    except NotFound:
         abort(404, f"There is no program {program_id} in the library.")
+    except LibraryError as exc:
+        abort(422, str(exc))
 
 
 def is_htmx() -> bool:
@@ -85,15 +89,29 @@ class Entry:
     values: dict[str, str] = dataclasses.field(default_factory=dict)
     errors: dict[str, str] = dataclasses.field(default_factory=dict)
     message: str = ""
+    page: int = 0  # the block list's page asked for; 0: the page of block `at`
 
 
-def preview(program: Program) -> tuple[str, dict[int, float], float, int]:
+PAGE_SIZE = 100
+"""Blocks per page of the block list: a page costs the same whatever the program's size."""
+
+
+def page_of(number: int) -> int:
+    """The page (from 1) of the block list that shows block `number`."""
+    return max(1, (number - 1) // PAGE_SIZE + 1)
+
+
+def preview(
+    program: Program, problems: list[Problem] | None = None
+) -> tuple[str, dict[int, float], float, int]:
     """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix.
 
     The search starts before the first block with an error (a prefix cannot be valid past
     it), so a program with an early error costs a few validations, not one per block.
+    `problems` are the program's own, when the caller has validated it already.
     """
-    problems = validate(program)
+    if problems is None:
+        problems = validate(program)
     errors = [p.block for p in problems if p.severity is Severity.ERROR]
     if any(b is None or b == 0 for b in errors):
         return "", {}, 0.0, 0
@@ -136,7 +154,15 @@ def block_summary(block: Block) -> str:
 def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
     program = stored.program
     problems = validate(program)
-    svg, per_block, total, shown = preview(program)
+    svg, per_block, total, shown = preview(program, problems)
+    by_block: dict[int, list[Problem]] = {}
+    for problem in problems:
+        if problem.block is not None:
+            by_block.setdefault(problem.block, []).append(problem)
+    count = len(program.blocks)
+    pages = page_of(max(count, 1))  # "new block…" ends the last page
+    page = min(entry.page or page_of(entry.at), pages)
+    first = (page - 1) * PAGE_SIZE + 1
     rows = [
         {
             "number": n,
@@ -144,10 +170,10 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
             "summary": block_summary(block),
             "units": block.units.symbol,
             "seconds": format_seconds(per_block.get(n, 0.0)) if n in per_block else "",
-            "problems": [p for p in problems if p.block == n],
-            "has_error": any(p.block == n and p.severity is Severity.ERROR for p in problems),
+            "problems": by_block.get(n, []),
+            "has_error": any(p.severity is Severity.ERROR for p in by_block.get(n, [])),
         }
-        for n, block in enumerate(program.blocks, start=1)
+        for n, block in enumerate(program.blocks[first - 1 : first - 1 + PAGE_SIZE], start=first)
     ]
     kind = KINDS.get(entry.kind)
     field_problems: dict[str, list[Problem]] = {}
@@ -168,6 +194,10 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
         "stored": stored,
         "program": program,
         "rows": rows,
+        "block_count": count,
+        "page": page,
+        "pages": pages,
+        "first": first,
         "problems": problems,
         "errors": [p for p in problems if p.severity is Severity.ERROR],
         "svg": svg,
@@ -217,7 +247,14 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         loop = loop or group == "LOOP"
         stop = stop or group == "STOP"
         group = ""
-    entry = Entry(at=at, editing=False, group=group, loop=loop, stop=stop)
+    entry = Entry(
+        at=at,
+        editing=False,
+        group=group,
+        loop=loop,
+        stop=stop,
+        page=max(0, _int(args.get("page"), 0)),
+    )
     if group and not kind:
         kinds = offered_kinds(program, at, group)
         if len(kinds) == 1:
@@ -226,6 +263,20 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         entry.kind = kind
         entry.values = defaults_for(program, at, kind, loop)
     return entry
+
+
+MISSING_VERSION = (
+    "Not saved: the form did not say which version of the program it was based on "
+    "(version); reload the page and make the change again."
+)
+
+
+def form_version() -> int | None:
+    """The version the submitted form was based on, or None when it is missing or not a
+    whole number (such a save is refused: without it no stale save could be noticed)."""
+    raw = request.form.get("version", "")
+    value, error = read_whole(raw)
+    return None if error or value is None or value < 1 else value
 
 
 def _int(text: str | None, default: int) -> int:
@@ -358,13 +409,19 @@ def value_problems(program: Program, numbers: range) -> list[tuple[str, Problem]
 def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgram | tuple[str, int]:
     """Save a new version based on the one the form showed; the editor with a message if
     someone saved in between (nothing is overwritten)."""
-    based_on = _int(request.form.get("version"), stored.info.version)
+    based_on = form_version()
+    if based_on is None:
+        entry.message = MISSING_VERSION
+        return render_editor(stored, entry, 422)
     library = get_library()
     try:
         library.save(stored.info.id, program, based_on=based_on, author=current_user())
     except StaleSave as exc:
         entry.message = str(exc)
         return render_editor(library.get(stored.info.id), entry, 409)
+    except LibraryError as exc:  # e.g. past the block limit
+        entry.message = f"Not saved: {exc}"
+        return render_editor(stored, entry, 422)
     return library.get(stored.info.id)
 
 
@@ -445,6 +502,9 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
     block0 = stored.program.block0
     if request.method == "POST":
         block0, errors = parse_block0(request.form)
+        based_on = form_version()
+        if based_on is None:
+            errors["version"] = MISSING_VERSION.removeprefix("Not saved: ")
         if not errors:
             candidate = dataclasses.replace(stored.program, block0=block0)
             for problem in validate(candidate):
@@ -456,7 +516,7 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
                 get_library().save(
                     program_id,
                     program,
-                    based_on=_int(request.form.get("version"), stored.info.version),
+                    based_on=based_on or 0,
                     author=current_user(),
                 )
                 return redirect(url_for("editor.data_block_0", program_id=program_id, saved=1))
@@ -503,24 +563,19 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
             if required:
                 errors[name] = f"{label}: missing; enter a value"
             return None
-        try:
-            value = Decimal(raw)
-        except InvalidOperation:
-            errors[name] = f"{label}: {raw!r} is not a number"
-            return None
-        if not value.is_finite():
-            errors[name] = f"{label}: {raw!r} is not a number"
-            return None
+        value, error = read_number(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
         return value
 
     def whole(name: str, label: str) -> int | None:
         raw = form.get(name, "").strip()
         if raw == "":
             return None
-        if not raw.lstrip("-").isdigit():
-            errors[name] = f"{label}: {raw!r} is not a whole number"
-            return None
-        return int(raw)
+        value, error = read_whole(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
+        return value
 
     tools = []
     for n in range(1, 25):
@@ -571,12 +626,17 @@ def history(program_id: int) -> str:
 
 @bp.post("/programs/<int:program_id>/history/<int:version>/restore")
 def restore_version(program_id: int, version: int) -> Response | tuple[str, int]:
-    stored = load(program_id)
+    load(program_id)
+    based_on = form_version()
+    if based_on is None:
+        return render_template(
+            "errors/error.html", title="Not restored", message=MISSING_VERSION
+        ), 422
     try:
         get_library().restore_revision(
             program_id,
             version,
-            based_on=_int(request.form.get("version"), stored.info.version),
+            based_on=based_on,
             author=current_user(),
         )
     except StaleSave as exc:

@@ -12,6 +12,7 @@ from jinja2_fragments.flask import render_block
 from app.cnc.emit.target import Export, ExportError, OptionError, export, targets
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.storage.library import LibraryError
+from app.web.downloads import attachment
 from app.web.editor import is_htmx, load
 from app.web.extensions import get_library
 
@@ -143,5 +144,5 @@ def download(program_id: int) -> Response | tuple[str, int]:
     stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
     filename = f"{stem}.{result.extension}"
     response = Response(result.data, mimetype=result.media_type.split(";")[0])
-    response.headers["Content-Disposition"] = f'attachment; filename="{filename}"'
+    response.headers["Content-Disposition"] = attachment(filename)
     return response

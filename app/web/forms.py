@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import (
@@ -36,6 +36,7 @@ from app.cnc.blocks import (
     Program,
     Rep,
 )
+from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.units import Units
 
 
@@ -420,16 +421,24 @@ def _read(spec: FieldSpec, raw: str) -> tuple[Any, str]:
             return None, f"{raw!r} is not one of {', '.join(a for a in allowed if a)}"
         return raw, ""
     if spec.kind in ("count", "tool"):
-        if not raw.lstrip("-").isdigit():
-            return None, f"{raw!r} is not a whole number"
-        return int(raw), ""
+        return read_whole(raw)
+    return read_number(raw)
+
+
+def read_number(raw: str) -> tuple[Decimal | None, str]:
+    """(number, "") or (None, what is wrong and what is allowed): app.cnc.numbers' rules."""
     try:
-        number = Decimal(raw)
-    except InvalidOperation:
-        return None, f"{raw!r} is not a number"
-    if not number.is_finite():
-        return None, f"{raw!r} is not a number"
-    return number, ""
+        return parse_decimal(raw), ""
+    except NumberError as exc:
+        return None, str(exc)
+
+
+def read_whole(raw: str) -> tuple[int | None, str]:
+    """(whole number, "") or (None, what is wrong and what is allowed)."""
+    try:
+        return parse_int(raw), ""
+    except NumberError as exc:
+        return None, str(exc)
 
 
 def _build(

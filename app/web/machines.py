@@ -120,7 +120,7 @@ def save() -> Response | tuple[str, int]:
     return redirect(url_for("machines.index"))
 
 
-@bp.post("/machines/<name>/delete")
+@bp.post("/machines/<path:name>/delete")
 def delete(name: str) -> Response:
     with contextlib.suppress(LibraryError):
         get_library().delete_machine(name)

@@ -22,6 +22,7 @@ from app.dnc.transfer import Cancel, Progress
 from app.storage.library import Library, LibraryError, Machine, NotFound
 from app.storage.transfers import TransferLog
 from app.web.auth import current_user
+from app.web.downloads import attachment
 from app.web.extensions import get_library
 
 bp = Blueprint("transfers", __name__)
@@ -206,5 +207,5 @@ def raw(transfer_id: int) -> Response:
     return Response(
         data,
         mimetype="application/octet-stream",
-        headers={"Content-Disposition": f'attachment; filename="transfer-{transfer_id}.bin"'},
+        headers={"Content-Disposition": attachment(f"transfer-{transfer_id}.bin")},
     )

@@ -16,7 +16,7 @@ import pkgutil
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
@@ -24,6 +24,7 @@ from app.cnc.copy import resolve_copies
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineModel, check_travel
 from app.cnc.needs import unmet
+from app.cnc.numbers import NumberError, parse_decimal
 from app.cnc.problems import Need, Problem, blocking
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
@@ -76,9 +77,9 @@ class Option:
         if self.kind is OptionKind.TEXT:
             return raw
         try:
-            number = Decimal(text)
-        except InvalidOperation:
-            raise OptionError(f"option {self.name}: {raw!r} is not a number") from None
+            number = parse_decimal(text)
+        except NumberError as exc:
+            raise OptionError(f"option {self.name}: {exc}") from None
         if self.kind is OptionKind.INT and number != number.to_integral_value():
             raise OptionError(f"option {self.name}: {raw!r} is not a whole number")
         low, high = self.minimum, self.maximum

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.detect import FORMATS, detect_format, read
+from app.cnc.sizes import TooLarge, check_block_count, check_import_size
 
 __all__ = [
     "FORMATS",
@@ -62,7 +63,13 @@ def read_program(
     for a DXF `layer`, `hole-diameter`, `tolerance`, `units`, `drawing-units`, `feed`.
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format`, or
-    content that could be either a 1704 tape or G-code when `format` is None).
+    content that could be either a 1704 tape or G-code when `format` is None, or a file
+    past the limits of app.cnc.sizes, refused before it is parsed).
     """
-    program, notes, chosen = read(data, name, format, options or {})
+    try:
+        check_import_size(data)
+        program, notes, chosen = read(data, name, format, options or {})
+        check_block_count(len(program.blocks))
+    except TooLarge as exc:
+        raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, chosen)

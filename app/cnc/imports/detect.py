@@ -36,6 +36,7 @@ from app.cnc.imports.events import read_events
 from app.cnc.imports.gcode import parse_gcode
 from app.cnc.imports.motion import program_from_motion
 from app.cnc.imports.tape import read_tape
+from app.cnc.numbers import NumberError, parse_decimal
 
 FORMATS = ("json", "events", "gcode", "tape", "dxf")
 
@@ -116,10 +117,11 @@ def _block_evidence(block: str) -> tuple[str, str]:
         if up == "G" and value:
             gs.add(value)
             try:
-                code = float(value)
-            except ValueError:
+                number = parse_decimal(value, exponent=False)
+            except NumberError:
                 continue
-            if (code != int(code) or int(code) not in _TAPE_G) and not gcode:
+            integral = number == number.to_integral_value()
+            if (not integral or int(number) not in _TAPE_G) and not gcode:
                 gcode = f"G{value}, which the 1704 does not have"
         elif up == "M" and value:
             ms.add(value.rstrip("."))
@@ -153,10 +155,10 @@ def _block_evidence(block: str) -> tuple[str, str]:
 
 def _code(value: str) -> int | None:
     try:
-        number = float(value)
-    except ValueError:
+        number = parse_decimal(value, exponent=False)
+    except NumberError:
         return None
-    return int(number) if number == int(number) else None
+    return int(number) if number == number.to_integral_value() else None
 
 
 def decode_text(data: bytes) -> str:

@@ -84,6 +84,7 @@ from app.cnc.imports.ops import (
 from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import rough_wall, routine_clockwise
+from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_decimal
 from app.cnc.units import Units
 
 # Two-letter codes first, so `XB` is not read as X followed by B.
@@ -120,7 +121,7 @@ CODES = [
     "G",
 ]
 AXIS_CODES = {"X", "Y", "XB", "YB", "XE", "YE", "XC", "YC", "XD", "YD"}
-NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)")
+NUMBER = re.compile(NUMBER_TEXT)
 MAX_EVENTS_EXPANDED = 20_000
 
 
@@ -296,7 +297,7 @@ class _Reader:
             return False
         last = tokens[-1].upper()
         if last not in ("G20", "G21"):
-            if re.fullmatch(r"(N\d+\s*)?G(90|91|20|21)", stripped.upper()):
+            if re.fullmatch(r"(N[0-9]+\s*)?G(90|91|20|21)", stripped.upper()):
                 return False
             raise failure(
                 number,
@@ -306,7 +307,7 @@ class _Reader:
             )
         self.units = Units.INCH if last == "G20" else Units.MM
         title = stripped[: len(stripped) - len(tokens[-1])].strip()
-        match = re.fullmatch(r"PN\s*(\d{1,8})", title.upper())
+        match = re.fullmatch(r"PN\s*([0-9]{1,8})", title.upper())
         if match:
             self.part_number = match.group(1)
             if match.group(1) != "0":
@@ -392,7 +393,10 @@ class _Reader:
     def dim(self, block: EBlock, word: EWord) -> int:
         """A dimension, radius, conrad or offset in nm (§2.2.4 implied decimals)."""
         units = self.units_or_fail(block)
-        value = _implied(word.text, 4 if units is Units.INCH else 2)
+        try:
+            value = _implied(word.text, 4 if units is Units.INCH else 2)
+        except NumberError as exc:
+            raise failure(block.line, word.column, f"{word.code}{word.text}: {exc}") from None
         nm = int((value * units.nm).to_integral_value(rounding=ROUND_HALF_EVEN))
         if abs(nm) > MAX_ABS_NM:
             raise failure(block.line, word.column, f"{word.code}{word.text} is out of range")
@@ -602,11 +606,11 @@ class _Reader:
         if g in (106, 107):
             point = self.point(block, "XB", "YB", here, here)
             diagonal: XY | None = self.point(block, "XD", "YD", point, None)
-            radius = self.positive(block, block.words["CR"]) if "CR" in block.words else 0
             if "CR" in block.words and block.words["CR"].text == "-":
                 raise failure(
                     line, block.words["CR"].column, "CR- on a rectangle: a corner radius is needed"
                 )
+            radius = self.positive(block, block.words["CR"]) if "CR" in block.words else 0
         else:
             point = self.point(block, "XC", "YC", here, here)
             diagonal = None
@@ -1083,7 +1087,7 @@ def _has_event(text: str) -> bool:
 
 def _implied(text: str, places: int) -> Decimal:
     """§2.2.4: with a point the number is as written, without one it has `places` decimals."""
-    value = Decimal(text)
+    value = parse_decimal(text, exponent=False)
     if "." in text:
         return value
     return value.scaleb(-places)

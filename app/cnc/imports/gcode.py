@@ -60,18 +60,22 @@ from app.cnc.imports.steps import (
     ToolChange,
     ToolData,
 )
+from app.cnc.numbers import NUMBER_TEXT
 from app.cnc.units import Units
 
-NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)")
-SIMPLE = re.compile(r"(?:[ \t]*[A-Za-z][+-]?(?:\d+\.?\d*|\.\d+))+[ \t]*")
-PAIR = re.compile(r"([A-Za-z])([+-]?(?:\d+\.?\d*|\.\d+))")
+NUMBER = re.compile(NUMBER_TEXT)
+SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
+PAIR = re.compile(rf"([A-Za-z])({NUMBER_TEXT})")
 MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
-HEADER = re.compile(r"^(.*) PART (\d{1,8}|-) MILLBLOCKS$")
+HEADER = re.compile(r"^(.*) PART ([0-9]{1,8}|-) MILLBLOCKS$")
 # MillBlocks' set-up comments (emit/gcode.py): part zero and each tool's diameter and length.
-SETUP_ZERO = re.compile(r"^SET-UP: G0?54 = PART ZERO AT TABLE X(-?\d+\.\d+) Y(-?\d+\.\d+)$")
+SETUP_ZERO = re.compile(
+    r"^SET-UP: G0?54 = PART ZERO AT TABLE X(-?\d+\.\d+) Y(-?\d+\.\d+)$", re.ASCII
+)
 SETUP_TOOL = re.compile(
     r"^SET-UP: T(\d{1,2})(?: DIA (\d+\.\d+))? LENGTH H\d+"
-    r"(?: = (-?\d+\.\d+), ITS TCAL|: UNCALIBRATED, MEASURE IT)$"
+    r"(?: = (-?\d+\.\d+), ITS TCAL|: UNCALIBRATED, MEASURE IT)$",
+    re.ASCII,
 )
 
 # LinuxCNC's modal groups (one code of each per block), seed 003 Table 5 plus Fanuc's.

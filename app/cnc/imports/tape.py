@@ -106,14 +106,16 @@ CYCLE_NOTES = {
     88: "the dwell is the panel's timer",
     89: "the dwell is the panel's timer",
 }
-HEADER = re.compile(r"PART ZERO AT TABLE X(-?\d{1,6}\.\d{1,6}) Y(-?\d{1,6}\.\d{1,6}) (IN|MM)")
+HEADER = re.compile(
+    r"PART ZERO AT TABLE X(-?\d{1,6}\.\d{1,6}) Y(-?\d{1,6}\.\d{1,6}) (IN|MM)", re.ASCII
+)
 TOOL_COMMENT = re.compile(
-    r"(FIRST )?TOOL (\d{1,2})(?: DIA (\d{1,6}\.\d{1,6}))?(?: TCAL (-?\d{1,6}\.\d{1,6}))?$"
+    r"(FIRST )?TOOL (\d{1,2})(?: DIA (\d{1,6}\.\d{1,6}))?(?: TCAL (-?\d{1,6}\.\d{1,6}))?$", re.ASCII
 )
 # MillBlocks' ASCII tapes say how their Z words were made (tape1704.header): with each
 # tool's TCAL added (the 1704 has no length offsets), or touched off with G94.
 TCAL_IN_Z = "Z WORDS INCLUDE EACH TOOL TCAL"
-START = re.compile(r"START OVER PART ZERO, Z(-?\d{1,6}\.\d{1,6}) ABOVE TOOL ZERO")
+START = re.compile(r"START OVER PART ZERO, Z(-?\d{1,6}\.\d{1,6}) ABOVE TOOL ZERO", re.ASCII)
 
 
 def read_tape(data: bytes, name: str, options: Mapping[str, str]) -> tuple[Program, Notes]:
@@ -145,7 +147,7 @@ class _Block:
         for letter, value, _ in self.words:
             if letter == "N":
                 return f"N{value}"
-        match = re.match(r"\s*N(\d+)", self.text)
+        match = re.match(r"\s*N([0-9]+)", self.text)
         return f"N{match.group(1)}" if match else ""
 
 
@@ -399,7 +401,7 @@ class _Interpreter:
             if ch not in LETTERS:
                 what = "a letter the 1704 has no word for" if ch.isalpha() else "not a tape word"
                 raise self.reader.fail(block, f"{ch!r}: {what} (N G X Y Z I J K R F S T M)", column)
-            match = re.match(r"[+-]?[\d.]*", text[pos + 1 :])
+            match = re.match(r"[+-]?[0-9.]*", text[pos + 1 :])
             assert match is not None
             value = match.group()
             digits = value.lstrip("+-").replace(".", "")

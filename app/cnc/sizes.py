@@ -1,0 +1,46 @@
+"""How big a program or an import may be: the stated limits that bound one request's work.
+
+A program of up to `MAX_BLOCKS` data blocks opens, validates, previews and exports in a
+bounded time (docs/security.md gives the measurements); an import is refused, naming the
+limit, before its expensive work starts: first by its bytes and lines, then by the blocks
+it would make. Pure: no Flask, database or serial code.
+"""
+
+from __future__ import annotations
+
+MAX_BLOCKS = 5000
+"""Data blocks in one program (document, import, editor)."""
+
+MAX_IMPORT_BYTES = 2 * 1024 * 1024
+"""Bytes of one imported file (the web upload limit too)."""
+
+MAX_IMPORT_LINES = 20_000
+"""Lines (or tape blocks) of one imported file."""
+
+
+class TooLarge(ValueError):
+    """An input past one of the limits above; the message names the limit."""
+
+
+def check_import_size(data: bytes) -> None:
+    """Refuse `data` larger than the import limits (before any parsing)."""
+    if len(data) > MAX_IMPORT_BYTES:
+        raise TooLarge(
+            f"the file has {len(data):,} bytes; an import is at most {MAX_IMPORT_BYTES:,} bytes"
+        )
+    lines = data.count(b"\n") + 1
+    # A tape's blocks end in CR (ASCII) or EOB (EIA: 0x80); count those too.
+    lines = max(lines, data.count(b"\r"), data.count(b"\x80"))
+    if lines > MAX_IMPORT_LINES:
+        raise TooLarge(
+            f"the file has {lines:,} lines; an import is at most {MAX_IMPORT_LINES:,} lines "
+            f"and {MAX_BLOCKS:,} blocks"
+        )
+
+
+def check_block_count(count: int) -> None:
+    """Refuse a program of more than MAX_BLOCKS data blocks."""
+    if count > MAX_BLOCKS:
+        raise TooLarge(
+            f"the program would have {count:,} data blocks; a program has at most {MAX_BLOCKS:,}"
+        )

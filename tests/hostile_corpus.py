@@ -1,0 +1,282 @@
+"""The hostile-input corpus (issue 17): every case with its surface, input, expected status
+and expected message. tests/test_hostile_corpus.py runs them; none may answer 500 or end
+the CLI in a traceback, and every refusal names the field, line or limit.
+
+The tables below are the corpus; `cases(surface)` expands them:
+
+| surface  | what is sent                                                 | expected          |
+|----------|--------------------------------------------------------------|-------------------|
+| block    | each numeric field of each block form × HOSTILE_NUMBERS      | 422, LABEL: reason |
+| db0      | each Data Block 0 field × HOSTILE_NUMBERS                    | 422, LABEL: reason |
+| query    | editor/export/library URLs with hostile query arguments      | 200 or 404, never 500 |
+| document | a golden document with one value replaced (DOCUMENT_VALUES)   | 422, where: reason |
+| upload   | hostile files to the import form (UPLOADS)                   | 422, file: reason |
+| cli      | hostile command-line arguments and files (CLI_CASES)         | exit 2, message   |
+| backup   | damaged backup archives (tests/test_backup_restore.py's DAMAGE, and more) | exit 2 |
+| login    | hostile login forms                                          | 401 / 429         |
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from app.cnc.numbers import quoted
+from app.cnc.sizes import MAX_IMPORT_LINES
+
+# value typed into a number field → (reason for a decimal field, reason for a whole field)
+HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
+    "²": ("is not a number", "is not a whole number"),
+    "--5": ("is not a number", "is not a whole number"),
+    "１２": ("is not a number", "is not a whole number"),  # full-width
+    "٣": ("is not a number", "is not a whole number"),  # Arabic-Indic
+    "۵": ("is not a number", "is not a whole number"),  # extended Arabic-Indic
+    "1_000": ("is not a number", "is not a whole number"),
+    "NaN": ("is not a number", "is not a whole number"),
+    "-Infinity": ("is not a number", "is not a whole number"),
+    "1E+999999999": ("is too large", "is not a whole number"),
+    "1e-999999999": ("has too many decimal places", "is not a whole number"),
+    "11e99999999999999999999999": ("is out of range", "is not a whole number"),
+    "0x10": ("is not a number", "is not a whole number"),
+    "1,5": ("is not a number", "is not a whole number"),
+    "<script>alert(1)</script>": ("is not a number", "is not a whole number"),
+    "9" * 60: ("is not a number", "is not a whole number"),
+    "1 2": ("is not a number", "is not a whole number"),
+    "\u202e5": ("is not a number", "is not a whole number"),  # right-to-left override
+    "5\x00": ("is not a number", "is not a whole number"),
+}
+
+BLOCK_KINDS: tuple[str, ...] = ("POS", "DRILL", "BOLT_CIR_DRILL", "MILL_STD", "ARC_C", "CIRCLE")
+BLOCK_KINDS += ("FRAME", "REP", "COPY")
+FULL_KIND = "DRILL"
+"""The kind that gets every hostile number; the other kinds get FEW_NUMBERS (the fields
+share one reader, so the rest adds time, not evidence)."""
+FEW_NUMBERS = ("²", "--5", "１２", "1_000", "NaN", "1E+999999999")
+
+DB0_FIELDS: dict[str, tuple[str, bool]] = {
+    # form name → (label, whole number)
+    "x_offset": ("X", False),
+    "y_offset": ("Y", False),
+    "z_retract": ("Z RET", False),
+    "current_tool": ("CUR-TOOL", True),
+    "dia_1": ("TOOL 1 DIA", False),
+    "rpm_1": ("TOOL 1 RPM", True),
+    "tcal_1": ("TOOL 1 TCAL", False),
+    "dia_24": ("TOOL 24 DIA", False),
+    "rpm_24": ("TOOL 24 RPM", True),
+}
+
+# (URL, allowed statuses). Query arguments the pages read with their own rules.
+QUERIES: list[tuple[str, tuple[int, ...]]] = [
+    *[(f"/programs/2?{arg}={value}", (200, 404)) for arg in ("edit", "at", "page")
+      for value in ("²", "--5", "１", "1e999", "-1", "0", "99999999999999999999", "%00", "x")],
+    *[(f"/programs/2/entry?{arg}", (200, 404)) for arg in (
+        "group=EVIL", "kind=EVIL", "kind=BOLT_CIR_DRILL&at=1", "group=REP", "group=COPY&at=1",
+        "kind=ARC_C&at=%FF", "loop=%00", "edit=1&page=-5")],
+    *[(f"/programs/2/export?target={t}", (200, 422)) for t in (
+        "../../etc/passwd", "%00", "gcode-linuxcnc&go=1&opt_sequence-start=NaN",
+        "gcode-linuxcnc&go=1&opt_sequence-start=%EF%BC%91", "tape-eia&go=1&opt_leader=1e999999",
+        "events&machine=%2F..%2F", "svg&go=1&opt_scale=--5")],
+    *[(f"/programs/2/export/download?target={t}", (200, 422)) for t in (
+        "gcode-linuxcnc&opt_sequence-start=1_000", "nonsense", "json&opt_x=%00",
+        "tape-eia&opt_leader=%D9%A3")],
+    *[(f"/?{q}", (200,)) for q in ("q=%00", "q=" + "a" * 5000, "sort=evil", "q=%27%22<>")],
+    *[(f"/programs/2/history?diff={v}", (200,)) for v in ("²", "-1", "1e9", "99999999999")],
+    *[(u, (404,)) for u in ("/programs/99999999999999999999", "/programs/-1", "/machines/x/y")],
+    ("/programs/2/setup?target=%00", (200, 422)),
+    ("/programs/2/setup?machine=nope", (200, 422)),
+]  # fmt: skip
+
+# A value written into a golden document's field: (field path, JSON text, expected part).
+DOCUMENT_VALUES: list[tuple[str, str, str]] = (
+    [
+        (path, value, expected)
+        for path in ("blocks.0.x", "blocks.0.z_dn", "blocks.0.feed_z", "data_block_0.z_retract")
+        for value, expected in (
+            ("1e99999999999999999999", "is out of range"),
+            ("1E+999999999", "is too large"),
+            ("NaN", "NaN is not a number"),
+            ("Infinity", "Infinity is not a number"),
+            ("9" * 5000, "is too large"),
+            ('"1"', 'expected a number, got "1"'),
+            ("true", "expected a number, got true"),
+            ("[]", "expected a number, got []"),
+            ("{}", "expected a number, got {}"),
+            ('"١"', "expected a number"),
+        )
+    ]
+    + [
+        (path, value, expected)
+        for path in ("blocks.0.tool", "blocks.0.pecks", "data_block_0.current_tool")
+        for value, expected in (
+            ("1.5", "expected a whole number, got 1.5"),
+            ("9" * 20, "is too large"),
+            ("-" + "9" * 40, "is too large"),
+            ('"2"', 'expected a whole number, got "2"'),
+            ("null", "expected a whole number, got null"),
+            ("false", "expected a whole number, got false"),
+        )
+    ]
+    + [
+        ("blocks.0.type", '"EVIL"', "unknown block type 'EVIL'"),
+        ("blocks.0.type", "null", "unknown block type None"),
+        ("blocks.0.units", '"furlong"', "is not one of"),
+        ("blocks.0.mode", "7", "is not one of"),
+        ("blocks.0.evil", "1", "unknown field 'evil'"),
+        ("data_block_0.tools", '"all"', "expected a list of tools"),
+        ("data_block_0.tools.0", "5", "expected an object"),
+        ("data_block_0", "[]", "expected an object"),
+        ("blocks", "{}", "expected a list of data blocks"),
+        ("blocks.0", '"POS"', "expected an object"),
+        ("name", "5", "expected text, got 5"),
+        ("notes", "[" * 3000 + "]" * 3000, "nested too deeply"),
+        ("format", '"other"', 'expected "millblocks-program"'),
+        ("version", "2", "version 2 is not supported"),
+        ("units", "null", "is not one of"),
+    ]
+)
+
+# Uploads to the import form: (file name, bytes, expected message part); a part of None
+# means the file is a program after all (201).
+UPLOADS: list[tuple[str, bytes, str | None]] = [
+    ("empty.ngc", b"", ""),
+    ("bom.cnc", b"\xef\xbb\xbf", ""),
+    ("nul.ngc", b"G1 X1\x00 Y2\n", ""),
+    ("latin1.ngc", b"G1 X1 (caf\xe9)\n", "no End of Block"),
+    ("utf16.ngc", "G1 X1\n".encode("utf-16"), ""),
+    ("binary.tape", bytes(range(256)) * 4, ""),
+    ("damaged.cnc", b"PN2 G20;\nN001 G106 XB1.0A YB1.0A XD2.0A YD2.0A DR1 TC2 CR- FC0;\n", "CR"),
+    ("fullwidth.ngc", "G20 G90\nG0 X１ Y0\nM30\n".encode(), "line 2"),
+    ("arabic.ngc", "G20 G90\nG0 X٣ Y0\nM30\n".encode(), "line 2"),
+    ("under.ngc", b"G20 G90\nG0 X1_000 Y0\nM30\n", "line 2"),
+    ("hugeexp.ngc", b"G20 G90\nG1 X1E+999999999 F10\nM30\n", "line 2"),
+    ("longdigits.ngc", b"G20 G90\nG1 X" + b"9" * 5000 + b" F10\nM30\n", "line 2"),
+    ("longline.ngc", b"G20 G90\n(" + b"x" * 200_000 + b")\nG0 X1 Y1\nM30\n", None),
+    ("lines.ngc", b"G20\n" * (MAX_IMPORT_LINES + 1), f"at most {MAX_IMPORT_LINES:,} lines"),
+    ("crlines.tape", b"%\r" + b"N001 G00 X1000\r" * (MAX_IMPORT_LINES + 1), "lines"),
+    ("deep.json", b"{" + b'"a":[' * 1000, ""),
+    ("nan.json", b'{"format": "millblocks-program", "version": 1, "notes": NaN}', "NaN"),
+    ("bigint.json", b'{"format": "millblocks-program", "version": ' + b"9" * 5000 + b"}", ""),
+    ("events-nan.cnc", b"PN2 G20;\nN001 G100 XNaN Y1 T01;\n", "line 2"),
+    ("events-sup.cnc", "PN2 G20;\nN001 G100 X1.0A Y²A T01;\n".encode(), "line 2"),
+    ("tape-junk.tape", b"%\rN001 G00 X\xff\xfe\r", ""),
+    ("ambiguous.txt", b"N001 G00 X1000 Y2000\nM30\n", ""),
+]
+
+# CLI arguments: (argv, expected message part). Files named @name are written from UPLOADS.
+CLI_CASES: list[tuple[list[str], str]] = [
+    *[(["export", "@golden", "--to", "gcode-linuxcnc", "-O", f"sequence-start={v}"],
+       "option sequence-start") for v in ("NaN", "１", "1_0", "1E+999999999", "--5", "²", "")],
+    *[(["export", "@golden", "--to", "tape-eia", "-O", f"leader={v}"], "option leader")
+      for v in ("NaN", "Infinity", "٣", "0x10")],
+    (["export", "@golden", "--to", "no-such-target"], "no-such-target"),
+    (["export", "@golden", "--to", "gcode-linuxcnc", "-O", "no-equals"], "NAME=VALUE"),
+    *[(["time", "@golden", "--tool-change-seconds", v], "--tool-change-seconds")
+      for v in ("nan", "inf", "-1", "١", "1_0")],
+    *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS if part is not None],
+    (["check", "/nonexistent/file.json"], "/nonexistent/file.json"),
+    (["diff", "1", "²", "1"], "²"),
+    (["restore-version", "1", "--5"], "--5"),
+    (["transfers", "--limit", "١٠"], "١٠"),
+]  # fmt: skip
+
+LOGINS: list[tuple[dict[str, str], int]] = [
+    ({"username": "ana", "password": "x" * 100_000}, 401),
+    ({"username": "a" * 10_000, "password": "x"}, 401),
+    ({"username": "\x00", "password": "\x00"}, 401),
+    ({"username": "ana'; DROP TABLE users; --", "password": "x"}, 401),
+    ({"username": "ana\u202e", "password": "x"}, 401),
+    ({"username": "", "password": ""}, 401),
+    ({}, 401),
+]
+
+
+@dataclass(frozen=True)
+class Case:
+    """One hostile input and what must come back."""
+
+    surface: str
+    id: str
+    data: dict[str, Any] = field(default_factory=dict)
+    status: tuple[int, ...] = (422,)
+    message: str = ""
+
+
+def block_cases() -> list[Case]:
+    from app.web.forms import KINDS
+
+    found = []
+    for key in BLOCK_KINDS:
+        for spec in KINDS[key].fields:
+            if spec.kind in ("flag", "choice"):
+                continue
+            whole = spec.kind in ("count", "tool")
+            for value, reasons in HOSTILE_NUMBERS.items():
+                if key != FULL_KIND and value not in FEW_NUMBERS:
+                    continue
+                reason = reasons[1] if whole else reasons[0]
+                found.append(
+                    Case(
+                        "block",
+                        f"{key}-{spec.name}-{value[:12]!r}",
+                        {"kind": key, "field": spec.name, "value": value},
+                        (422,),
+                        f"{spec.label}: {quoted(value.strip())} {reason}",
+                    )
+                )
+    return found
+
+
+def db0_cases() -> list[Case]:
+    found = []
+    for name, (label, whole) in DB0_FIELDS.items():
+        for value, reasons in HOSTILE_NUMBERS.items():
+            reason = reasons[1] if whole else reasons[0]
+            found.append(
+                Case(
+                    "db0",
+                    f"{name}-{value[:12]!r}",
+                    {"field": name, "value": value},
+                    (422,),
+                    f"{label}: {quoted(value.strip())} {reason}",
+                )
+            )
+    return found
+
+
+def cases(surface: str) -> list[Case]:
+    """Every case of one surface."""
+    if surface == "block":
+        return block_cases()
+    if surface == "db0":
+        return db0_cases()
+    if surface == "query":
+        return [Case("query", url, {"url": url}, statuses) for url, statuses in QUERIES]
+    if surface == "document":
+        return [
+            Case("document", f"{path}={value[:16]}", {"path": path, "value": value}, (422,), part)
+            for path, value, part in DOCUMENT_VALUES
+        ]
+    if surface == "upload":
+        return [
+            Case(
+                "upload",
+                name,
+                {"name": name, "bytes": data},
+                (422,) if part is not None else (201,),
+                part if part is not None else "Import report",
+            )
+            for name, data, part in UPLOADS
+        ]
+    if surface == "cli":
+        return [
+            Case("cli", " ".join(argv)[:60], {"argv": argv}, (2,), part) for argv, part in CLI_CASES
+        ]
+    if surface == "login":
+        return [
+            Case("login", repr(form)[:40], {"form": form}, (status,), "") for form, status in LOGINS
+        ]
+    raise ValueError(surface)
+
+
+SURFACES = ("block", "db0", "query", "document", "upload", "cli", "login")

@@ -53,7 +53,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.geometry import arc_sweep, resolve_xy
 from app.cnc.problems import Rule, Severity
-from app.cnc.units import Units, to_nm
+from app.cnc.units import Units, message_length, to_nm
 
 Pt = tuple[float, float]
 EPS = 1e-6  # nm: points closer than this are the same point
@@ -110,6 +110,24 @@ class Path:
 
     start: Pt
     elements: tuple[Element, ...]
+
+
+def translated(path: Path, dx: float, dy: float, blocks: int = 0) -> Path:
+    """`path` moved by (dx, dy), its elements' block numbers `blocks` on."""
+
+    def at(p: Pt) -> Pt:
+        return (p[0] + dx, p[1] + dy)
+
+    elements = tuple(
+        replace(
+            e,
+            block=e.block + blocks,
+            end=at(e.end),
+            centre=None if e.centre is None else at(e.centre),
+        )
+        for e in path.elements
+    )
+    return Path(at(path.start), elements)
 
 
 @dataclass(frozen=True, slots=True)
@@ -781,6 +799,7 @@ class SequencePlan:
     rough_allowance: int
     end: tuple[int, int]
     findings: list[Finding]
+    finished: Path | None = None  # a contour's programmed path (None for a routine)
 
 
 def plan_sequence(
@@ -805,11 +824,15 @@ def plan_sequence(
     if isinstance(first, Circle | Frame):
         rpm = None if tool is None else tool.rpm
         return _plan_routine(first, mills[0] + 1, block0, rpm, radius, start)
-    path, numbers, end = programmed_contour(blocks, mills, start)
+    findings: list[Finding] = []
+    depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
+    path, numbers, end = programmed_contour(blocks, mills, start, findings, depth)
+    if any(f.severity is Severity.ERROR for f in findings):
+        return SequencePlan([], 0, end, findings, path)
     if drill.comp is Comp.NONE or diameter is None:
-        return SequencePlan([path], 0, end, [])
+        return SequencePlan([path], 0, end, findings, path)
     geometry = compensate(path, drill.comp, float(radius), numbers, drill.units)
-    return SequencePlan([geometry.path], 0, end, geometry.findings)
+    return SequencePlan([geometry.path], 0, end, findings + geometry.findings, path)
 
 
 INSIDE_PLACEMENTS = (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
@@ -871,12 +894,22 @@ def _plan_routine(
 
 
 def programmed_contour(
-    blocks: tuple[Block, ...], mills: tuple[int, ...], start: tuple[int, int]
+    blocks: tuple[Block, ...],
+    mills: tuple[int, ...],
+    start: tuple[int, int],
+    findings: list[Finding] | None = None,
+    depth: int | None = None,
 ) -> tuple[Path, list[int], tuple[int, int]]:
     """The finished contour of line, quarter-circle and arc blocks from `start` (nm).
 
-    Returns the path, the block number of each element, and the end point.
+    Returns the path, the block number of each element, and the end point. What is wrong
+    with the geometry is appended to `findings`: a quarter circle whose moves are not equal
+    (error; cut as a line so the path stays whole), an arc about its own start (error), an
+    arc's end off its radius (warning: the divot the control cuts), a MILL STD that goes
+    nowhere (warning). `depth` (nm) is the depth the tool is at when the contour starts
+    (the DRILL's Z DN): a MILL STD to a new Z DN is a plunge, not a zero-length cut.
     """
+    found: list[Finding] = [] if findings is None else findings
     reference = start
     elements: list[Element] = []
     numbers: list[int] = []
@@ -885,51 +918,104 @@ def programmed_contour(
         if isinstance(block, ArcEnd):
             continue
         assert isinstance(block, MillLine | MillQcir | MillArc)
-        z_dn = None if block.z_dn is None else to_nm(block.z_dn, block.units)
-        end = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+        number = index + 1
+        units = block.units
+        z_dn = None if block.z_dn is None else to_nm(block.z_dn, units)
+        end = resolve_xy(block.x, block.y, block.mode, units, reference)
         centre: tuple[int, int] | None = None
         clockwise = False
         if isinstance(block, MillQcir):
-            centre = qcir_centre(reference, end, block.direction)
-            clockwise = block.direction is Direction.CW
+            dx, dy = end[0] - reference[0], end[1] - reference[1]
+            if dx == 0 or abs(dx) != abs(dy):
+                found.append(
+                    Finding(
+                        number,
+                        Rule.QCIR_CENTRE_LINES,
+                        Severity.ERROR,
+                        "QCIR end point is not a quarter circle from the start: its X and Y "
+                        f"moves must be equal and not zero (X move {message_length(dx, units)}, "
+                        f"Y move {message_length(dy, units)}); the centre lines must be "
+                        "parallel to the X and Y axes",
+                    )
+                )
+            else:
+                centre = qcir_centre(reference, end, block.direction)
+                clockwise = block.direction is Direction.CW
         elif isinstance(block, MillArc):
             end_block = blocks[index + 1]
             assert isinstance(end_block, ArcEnd)
             centre = end
             end = resolve_xy(end_block.x, end_block.y, end_block.mode, end_block.units, reference)
             clockwise = block.direction is Direction.CW
-            true_centre, divot_at = true_arc(_f(reference), _f(end), _f(centre), block.units)
+            if z_dn is not None:
+                depth = z_dn
+            if centre == reference:
+                found.append(
+                    Finding(
+                        number,
+                        Rule.ZERO_LENGTH,
+                        Severity.ERROR,
+                        "the arc's centre is its start point; the radius would be zero",
+                        "X",
+                    )
+                )
+            true_centre, divot_at = true_arc(_f(reference), _f(end), _f(centre), units)
             if divot_at is not None:
+                r_start = math.dist(reference, centre)
+                r_end = math.dist(centre, end)
+                divot = round(abs(r_start - r_end))
+                found.append(
+                    Finding(
+                        number + 1,
+                        Rule.ARC_RADIUS,
+                        Severity.WARNING,
+                        f"the arc's end is {message_length(divot, units)} off its radius: start "
+                        f"to centre {message_length(round(r_start), units)}, centre to end "
+                        f"{message_length(round(r_end), units)}; the cutter path will produce "
+                        f"a divot of {message_length(divot, units)}",
+                    )
+                )
                 # What the control cuts (seed 001 §3.4.5.2 NOTE): the arc on the radius of
                 # its start, then the divot, a line to the programmed end.
                 elements.append(
-                    Element(index + 1, divot_at, centre=true_centre, clockwise=clockwise, z_dn=z_dn)
+                    Element(number, divot_at, centre=true_centre, clockwise=clockwise, z_dn=z_dn)
                 )
-                elements.append(Element(index + 1, _f(end), tag="divot"))
-                numbers += [index + 1, index + 1]
+                elements.append(Element(number, _f(end), tag="divot"))
+                numbers += [number, number]
                 reference = end
                 continue
             elements.append(
-                Element(index + 1, _f(end), centre=true_centre, clockwise=clockwise, z_dn=z_dn)
+                Element(number, _f(end), centre=true_centre, clockwise=clockwise, z_dn=z_dn)
             )
-            numbers.append(index + 1)
+            numbers.append(number)
             reference = end
             continue
+        plunge = z_dn is not None and z_dn != depth
+        if z_dn is not None:
+            depth = z_dn
         if end == reference and centre is None:
-            reference = end
-            elements.append(Element(index + 1, _f(end), z_dn=z_dn))
-            numbers.append(index + 1)
+            if isinstance(block, MillLine) and not plunge:
+                found.append(
+                    Finding(
+                        number,
+                        Rule.ZERO_LENGTH,
+                        Severity.WARNING,
+                        "MILL STD ends where it starts; the block cuts nothing",
+                    )
+                )
+            elements.append(Element(number, _f(end), z_dn=z_dn))
+            numbers.append(number)
             continue
         elements.append(
             Element(
-                index + 1,
+                number,
                 _f(end),
                 centre=None if centre is None else _f(centre),
                 clockwise=clockwise,
                 z_dn=z_dn,
             )
         )
-        numbers.append(index + 1)
+        numbers.append(number)
         reference = end
     return Path(_f(start), tuple(elements)), numbers, reference
 

@@ -20,6 +20,8 @@ from app.cnc.blocks import (
     Copy,
     Hole,
     HoleOp,
+    MillArc,
+    Pos,
     Rep,
 )
 
@@ -89,16 +91,22 @@ def mill_sequence_end(blocks: tuple[Block, ...], drill: int) -> int:
     return end
 
 
-def build_nodes(blocks: tuple[Block, ...]) -> tuple[Node, ...]:
-    """Group a validated program's blocks into nodes. COPY blocks are not motion: skipped."""
-    nodes, index = _sequence(blocks, 0, inside_loop=False)
+def build_nodes(blocks: tuple[Block, ...], *, tolerant: bool = False) -> tuple[Node, ...]:
+    """Group a validated program's blocks into nodes. COPY blocks are not motion: skipped.
+
+    Raises ValueError for a program validation refuses — unless `tolerant`: then what can
+    run still groups into nodes (a REP without its LOOP and a block that cannot stand where
+    it is are left out, a LOOP without its REP runs once), so a program with errors still
+    shows what it can (the errors are validation's to report).
+    """
+    nodes, index = _sequence(blocks, 0, inside_loop=False, tolerant=tolerant)
     if index != len(blocks):
         raise ValueError(f"block {index + 1}: REP without LOOP (validate first)")
     return nodes
 
 
 def _sequence(
-    blocks: tuple[Block, ...], index: int, *, inside_loop: bool
+    blocks: tuple[Block, ...], index: int, *, inside_loop: bool, tolerant: bool
 ) -> tuple[tuple[Node, ...], int]:
     nodes: list[Node] = []
     while index < len(blocks):
@@ -106,32 +114,61 @@ def _sequence(
         if isinstance(block, Rep):
             if inside_loop:
                 return tuple(nodes), index
+            if tolerant:
+                index += 1
+                continue
             raise ValueError(f"block {index + 1}: REP without LOOP (validate first)")
         if block.loop:
-            head, after_head = _node(blocks, index)
-            body, rep = _sequence(blocks, after_head, inside_loop=True)
+            head, after_head = _node(blocks, index, tolerant)
+            body, rep = _sequence(blocks, after_head, inside_loop=True, tolerant=tolerant)
             if rep >= len(blocks):
-                raise ValueError(f"block {index + 1}: LOOP without REP (validate first)")
-            nodes.append(LoopPattern(body=(head, *body), rep=rep))
+                if not tolerant:
+                    raise ValueError(f"block {index + 1}: LOOP without REP (validate first)")
+                nodes += [n for n in (head, *body) if n is not None]
+                return tuple(nodes), rep
+            if head is not None:
+                nodes.append(LoopPattern(body=(head, *(n for n in body if n is not None)), rep=rep))
             index = rep + 1
             continue
         if isinstance(block, Copy):
             index += 1
             continue
-        node, index = _node(blocks, index)
-        nodes.append(node)
+        node, index = _node(blocks, index, tolerant)
+        if node is not None:
+            nodes.append(node)
     return tuple(nodes), index
 
 
-def _node(blocks: tuple[Block, ...], index: int) -> tuple[Node, int]:
-    """The node that starts at `index` (ignoring a LOOP qualifier on it) and the next index."""
+def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tuple[Node | None, int]:
+    """The node that starts at `index` (ignoring a LOOP qualifier on it) and the next index;
+    None (tolerant) for a block that cannot run where it is."""
     block = blocks[index]
     nxt = blocks[index + 1] if index + 1 < len(blocks) else None
     if isinstance(block, Hole) and isinstance(nxt, BoltCircle) and not nxt.loop:
         return BoltPattern(centre=index, bolt=index + 1), index + 2
     if starts_mill_sequence(blocks, index):
         end = mill_sequence_end(blocks, index)
-        return MillSequence(drill=index, mills=tuple(range(index + 1, end))), end
+        mills = tuple(range(index + 1, end))
+        if tolerant:
+            # An arc without its XY-END (or an XY-END without its arc): the blocks before
+            # it run.
+            for k, i in enumerate(mills):
+                dangling_arc = isinstance(blocks[i], MillArc) and (
+                    i + 1 >= end or not isinstance(blocks[i + 1], ArcEnd)
+                )
+                dangling_end = isinstance(blocks[i], ArcEnd) and not isinstance(
+                    blocks[i - 1], MillArc
+                )
+                if dangling_arc or dangling_end:
+                    mills = mills[:k]
+                    break
+            if not mills:
+                return Single(index=index), end
+        return MillSequence(drill=index, mills=mills), end
     if isinstance(block, ArcEnd):
+        if tolerant:
+            return None, index + 1
         raise ValueError(f"block {index + 1}: XY-END without its XY-CENT (validate first)")
+    if tolerant and not isinstance(block, Pos | Hole):
+        return None, index + 1  # a mill block or a BOLT CIR that does not follow its block
     return Single(index=index), index + 1

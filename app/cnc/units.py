@@ -82,6 +82,13 @@ def format_length(nm: int, units: Units, places: int | None = None) -> str:
     return "0." + "0" * digits if text.lstrip("-") == "0." + "0" * digits else text
 
 
+def message_length(nm: int, units: Units) -> str:
+    """A length for a message: at the unit's programming resolution, with its symbol
+    ("0.010 in", "0.25 mm")."""
+    places = 3 if units is Units.INCH else 2
+    return f"{format_length(nm, units, places)} {units.symbol}"
+
+
 def format_decimal(value: Decimal) -> str:
     """A typed value as the machinist typed it, without exponent notation (except for
     values too large to spell out, such as 1E+30)."""

@@ -38,12 +38,11 @@ from app.cnc.blocks import (
     Rep,
     field_label,
 )
-from app.cnc.geometry import bolt_circle_points, distance, resolve_xy
-from app.cnc.mill import plan_sequence
+from app.cnc.compiler import compile_program
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
-from app.cnc.units import Units, format_decimal, to_nm
+from app.cnc.units import Units, format_decimal
 
 ERROR = Severity.ERROR
 WARNING = Severity.WARNING
@@ -96,10 +95,10 @@ class _Checker:
             self.check_fields(number, block)
             self.check_kind_rules(number, block)
             self.check_message(number, block)
+        self.check_geometry()
         self.check_loops()
         self.check_order()
         self.check_tools()
-        self.check_geometry()
         self.check_copy()
         self.check_two_axis()
         self.problems.sort(key=lambda p: -1 if p.block is None else p.block)
@@ -580,134 +579,34 @@ class _Checker:
                 if depth == 0:
                     yield start, index, "LOOP sequence"
 
-    # -- geometry of quarter circles and arcs -------------------------------------------
+    # -- geometry ------------------------------------------------------------------------
 
     def check_geometry(self) -> None:
-        reference = (0, 0)
-        depth: Decimal | None = None
-        for index, block in enumerate(self.blocks):
-            number = index + 1
-            if isinstance(block, Pos | Hole | MillLine | MillQcir):
-                target = resolve_xy(block.x, block.y, block.mode, block.units, reference)
-                if isinstance(block, MillQcir):
-                    self.check_qcir(number, block, reference, target)
-                plunge_only = (
-                    isinstance(block, MillLine) and block.z_dn is not None and block.z_dn != depth
-                )
-                if isinstance(block, Hole | MillLine | MillQcir) and block.z_dn is not None:
-                    depth = block.z_dn
-                if isinstance(block, Hole) and starts_mill_sequence(self.blocks, index):
-                    self.check_mill_sequence(index, target)
-                if isinstance(block, MillLine) and target == reference and not plunge_only:
-                    self.add(
-                        number,
-                        None,
-                        WARNING,
-                        Rule.ZERO_LENGTH,
-                        "MILL STD ends where it starts; the block cuts nothing",
-                    )
-                reference = target
-            elif isinstance(block, MillArc):
-                nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
-                centre = resolve_xy(block.x, block.y, block.mode, block.units, reference)
-                if isinstance(nxt, ArcEnd):
-                    end = resolve_xy(nxt.x, nxt.y, nxt.mode, nxt.units, reference)
-                    self.check_arc(number, block, reference, centre, end)
-                    reference = end
-            elif isinstance(block, BoltCircle) and index > 0:
-                # The table ends over the last hole; the centre is the previous block's X/Y.
-                radius = to_nm(block.radius, block.units)
-                if block.holes >= 1 and radius > 0:
-                    points = bolt_circle_points(reference, radius, block.holes, block.angle)
-                    reference = points[-1]
-            elif isinstance(block, Rep):
-                step = resolve_xy(block.x, block.y, Mode.INC, block.units, (0, 0))
-                reference = (
-                    reference[0] + block.nx * step[0],
-                    reference[1] + block.ny * step[1],
-                )
-
-    def check_mill_sequence(self, drill_index: int, start: tuple[int, int]) -> None:
-        """Compensation limits and routine sizes, from the same geometry the interpreter cuts."""
+        """The geometry's problems are the compile's (the same plan the tool path is cut
+        from: quarter circles, arcs off their radius, zero-length moves, compensation and
+        routine limits). Compiled only when every value is in range: a count out of range
+        (pecks, holes, repeats) would be work without bound, and a length out of range has
+        no geometry worth reporting until it is fixed."""
         blocks = self.blocks
-        end = mill_sequence_end(blocks, drill_index)
-        mills = tuple(range(drill_index + 1, end))
-        if any(isinstance(blocks[i], MillArc) for i in mills) and not isinstance(
-            blocks[end - 1], ArcEnd | MillLine | MillQcir
-        ):
-            return  # an arc without its XY-END: reported by the order check
-        drill = blocks[drill_index]
-        assert isinstance(drill, Hole)
-        if (
-            isinstance(blocks[drill_index + 1], MILL_ROUTINE_CLASSES)
-            and drill.comp is not Comp.NONE
-        ):
-            self.add(
-                drill_index + 1,
-                "CUTTER COMP",
-                WARNING,
-                Rule.COMP_ON_ROUTINE,
-                f"cutter compensation on the DRILL before a {blocks[drill_index + 1].type_name}; "
-                "CIRCLE and FRAME routines compensate by themselves, so it has no effect",
-            )
-        try:
-            plan = plan_sequence(
-                blocks, self.program.block0, self.program.units, drill_index, mills, start
-            )
-        except (ValueError, ZeroDivisionError):
-            return  # malformed geometry (a zero-length segment...) is reported elsewhere
-        for finding in plan.findings:
-            self.add(finding.block, finding.field, finding.severity, finding.rule, finding.message)
-
-    def check_qcir(
-        self, number: int, block: MillQcir, start: tuple[int, int], end: tuple[int, int]
-    ) -> None:
-        dx, dy = end[0] - start[0], end[1] - start[1]
-        if dx == 0 or abs(dx) != abs(dy):
-            u = block.units
-            self.add(
-                number,
-                None,
-                ERROR,
-                Rule.QCIR_CENTRE_LINES,
-                "QCIR end point is not a quarter circle from the start: its X and Y moves "
-                f"must be equal and not zero (X move {_len(dx, u)}, Y move {_len(dy, u)}); "
-                "the centre lines must be parallel to the X and Y axes",
-            )
-
-    def check_arc(
-        self,
-        number: int,
-        block: MillArc,
-        start: tuple[int, int],
-        centre: tuple[int, int],
-        end: tuple[int, int],
-    ) -> None:
-        u = block.units
-        r_start = distance(start, centre)
-        r_end = distance(centre, end)
-        if r_start == 0:
-            self.add(
-                number,
-                "X",
-                ERROR,
-                Rule.ZERO_LENGTH,
-                "the arc's centre is its start point; the radius would be zero",
-            )
+        for index, block in enumerate(blocks):
+            if (
+                isinstance(block, Hole)
+                and block.comp is not Comp.NONE
+                and starts_mill_sequence(blocks, index)
+                and isinstance(blocks[index + 1], MILL_ROUTINE_CLASSES)
+            ):
+                self.add(
+                    index + 1,
+                    "CUTTER COMP",
+                    WARNING,
+                    Rule.COMP_ON_ROUTINE,
+                    f"cutter compensation on the DRILL before a {blocks[index + 1].type_name}; "
+                    "CIRCLE and FRAME routines compensate by themselves, so it has no effect",
+                )
+        if any(p.severity is ERROR for p in self.problems):
             return
-        divot = abs(r_start - r_end)
-        # Dimensions are typed to 0.001 in / 0.01 mm: a difference below half of that is
-        # rounding of a point typed as close as the control allows, not a programming error.
-        if divot > to_nm(u.resolution, u) / 2:
-            self.add(
-                number + 1,
-                None,
-                WARNING,
-                Rule.ARC_RADIUS,
-                f"the arc's end is {_len(round(divot), u)} off its radius: start to centre "
-                f"{_len(round(r_start), u)}, centre to end {_len(round(r_end), u)}; the "
-                f"cutter path will produce a divot of {_len(round(divot), u)}",
-            )
+        for finding in compile_program(self.program).findings:
+            self.add(finding.block, finding.field, finding.severity, finding.rule, finding.message)
 
     # -- COPY -------------------------------------------------------------------------------
 
@@ -785,10 +684,3 @@ def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
 def _has_position(block: Block) -> bool:
     """True for blocks whose X/Y is a position (ABS/INC matters for them)."""
     return isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd)
-
-
-def _len(nm: int, units: Units) -> str:
-    """A length in nm, for messages, at the unit's programming resolution."""
-    places = 3 if units is Units.INCH else 2
-    value = Decimal(nm) / units.nm
-    return f"{value.quantize(Decimal(1).scaleb(-places))} {units.symbol}"

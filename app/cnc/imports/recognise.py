@@ -41,6 +41,7 @@ from app.cnc.blocks import (
     Placement,
     Tool,
 )
+from app.cnc.compiler import peck_levels
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports.common import (
     XY,
@@ -65,7 +66,6 @@ from app.cnc.imports.ops import (
     signature,
     tools_of,
 )
-from app.cnc.interpret import peck_levels
 from app.cnc.mill import INSIDE_PLACEMENTS, Path, plan_sequence, rough_depth, rough_wall
 from app.cnc.units import Units
 

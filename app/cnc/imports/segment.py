@@ -28,6 +28,7 @@ from decimal import Decimal
 
 from app.cnc import limits
 from app.cnc.blocks import Comp, HoleOp
+from app.cnc.compiler import peck_levels
 from app.cnc.imports.common import (
     XY,
     ImportFailure,
@@ -53,7 +54,6 @@ from app.cnc.imports.steps import (
     Stop,
     ToolChange,
 )
-from app.cnc.interpret import peck_levels
 from app.cnc.units import Units, to_nm
 
 DWELL = limits.HOLE_DWELL_SECONDS

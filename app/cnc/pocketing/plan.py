@@ -31,7 +31,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 from app.cnc.blocks import MillingMode, Placement
-from app.cnc.interpret import peck_levels
+from app.cnc.compiler import peck_levels
 from app.cnc.mill import (
     Element,
     Path,

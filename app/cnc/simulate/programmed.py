@@ -1,21 +1,20 @@
 """What the program asks for, for verify to measure the simulated part against.
 
 `programmed_geometry` is the one place that reads the blocks for verify: the finished
-contours of compensated MILL sequences (through app/cnc/mill.py's `programmed_contour`, as
-the interpreter plans them), the CIRCLE/FRAME routines, and every hole with its programmed
-depth. Where a block runs is found by running the interpreter and noting where it starts
-each hole and mill sequence (LOOP patterns, bolt circles and incremental positions are then
-the interpreter's, not re-derived here). Lengths in nm, part coordinates.
+contours of compensated MILL sequences and the CIRCLE/FRAME routines, and every hole with
+its programmed depth. All of it is the compiled path's: its hole and mill spans carry where
+each was cut and the contour it was planned from (LOOP patterns, bolt circles and
+incremental positions are the compiler's, not re-derived here). Lengths in nm, part
+coordinates.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from app.cnc.blocks import Circle, Comp, Frame, Hole, HoleOp, Placement, Program
-from app.cnc.interpret import _Interpreter
-from app.cnc.mill import INSIDE_PLACEMENTS, Element, programmed_contour
-from app.cnc.structure import MillSequence
+from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Program
+from app.cnc.compiler import compile_program
+from app.cnc.mill import INSIDE_PLACEMENTS, Element
 from app.cnc.units import to_nm
 
 
@@ -73,48 +72,6 @@ class Programmed:
     holes: list[HoleSpec] = field(default_factory=list)
 
 
-class _Recorder(_Interpreter):
-    """The interpreter, noting where each hole and mill sequence starts."""
-
-    def __init__(self, program: Program) -> None:
-        super().__init__(program)
-        self.found = Programmed()
-        self.seen: set[tuple[int, int, int]] = set()
-
-    def hole(self, number: int, block: Hole, target: tuple[int, int]) -> None:
-        if block.has_depth and (number, *target) not in self.seen:
-            self.seen.add((number, *target))
-            assert block.z_dn is not None
-            depth = to_nm(block.z_dn, block.units)
-            self.found.holes.append(HoleSpec(number, block.op, target[0], target[1], depth))
-        super().hole(number, block, target)
-
-    def run_mill_sequence(self, node: MillSequence) -> None:
-        drill = self.blocks[node.drill]
-        assert isinstance(drill, Hole)
-        start = self.resolve(drill)
-        info = self.tools.get(drill.tool)
-        radius = 0 if info is None or info.diameter is None else info.diameter // 2
-        depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
-        first = self.blocks[node.mills[0]]
-        if isinstance(first, Circle | Frame):
-            self.found.routines.append(_routine(first, node.mills[0] + 1, start, radius, depth))
-        elif drill.comp is not Comp.NONE and radius > 0:
-            path, _, _ = programmed_contour(self.blocks, node.mills, start)
-            self.found.contours.append(
-                Contour(
-                    drill=node.drill + 1,
-                    start=path.start,
-                    elements=path.elements,
-                    # CUT RT puts the tool right of the contour: the part is on the left.
-                    part_left=drill.comp is Comp.RIGHT,
-                    tool_radius=radius,
-                    depth=depth,
-                )
-            )
-        super().run_mill_sequence(node)
-
-
 def _routine(
     block: Circle | Frame, number: int, start: tuple[int, int], radius: int, depth: int | None
 ) -> Routine:
@@ -141,6 +98,37 @@ def _routine(
 
 def programmed_geometry(program: Program) -> Programmed:
     """The contours, routines and holes of a validated program (see the module's note)."""
-    recorder = _Recorder(program)
-    recorder.run()
-    return recorder.found
+    compiled = compile_program(program).path
+    found = Programmed()
+    seen: set[tuple[int, int, int]] = set()
+    for chunk in compiled.chunks():
+        blocks = chunk.rows["block"]
+        for hole in chunk.hole_spans():
+            number = int(blocks[hole.start])
+            if (number, hole.x, hole.y) not in seen:
+                seen.add((number, hole.x, hole.y))
+                found.holes.append(HoleSpec(number, hole.op, hole.x, hole.y, hole.bottom))
+        for mill in chunk.mills:
+            info = compiled.tools.get(mill.tool)
+            radius = 0 if info is None or info.diameter is None else info.diameter // 2
+            if mill.routine:
+                routine = program.blocks[mill.routine - 1]
+                assert isinstance(routine, Circle | Frame)
+                found.routines.append(
+                    _routine(routine, mill.routine, (mill.x, mill.y), radius, mill.depth)
+                )
+                continue
+            contour = mill.contour()
+            if mill.comp != Comp.NONE.value and radius > 0 and contour is not None:
+                found.contours.append(
+                    Contour(
+                        drill=mill.drill,
+                        start=contour.start,
+                        elements=contour.elements,
+                        # CUT RT puts the tool right of the contour: the part is on the left.
+                        part_left=mill.comp == Comp.RIGHT.value,
+                        tool_radius=radius,
+                        depth=mill.depth,
+                    )
+                )
+    return found

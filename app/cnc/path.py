@@ -1,0 +1,486 @@
+"""The compiled tool path: canonical moves in compact arrays, with the structure kept.
+
+The vocabulary is the Toolpath's (toolpath.py, in the manner of LinuxCNC's canon.hh); the
+storage is a numpy structured array, one row a move (`MOVE`), so a program of a million
+moves costs tens of megabytes at most, and usually far less: what a LOOP repeats is stored
+once and placed by translation.
+
+A compiled path is a tree of nodes:
+
+- `Piece` — rows for consecutive moves, with their spans (holes), block numbers relative
+  to `Piece.base` (the first data block it was compiled for, so a cached piece serves
+  wherever its blocks land after an edit);
+- `Run` — one node placed at several XY offsets in order (the patterns of a LOOP/REP that
+  begin in the same state), each placement translated: X, Y and arc centres move, Z and
+  everything else stays;
+- `Seq` — nodes in order.
+
+`walk(node)` yields `Chunk`s: arrays of absolute moves (translated, block numbers made
+absolute) with their hole spans, a bounded number of rows at a time, so a consumer's memory
+does not grow with the program.
+
+Row fields (lengths integer nm, part coordinates; feeds nm/min):
+
+| op | x y z | cx cy | feed | value |
+|---|---|---|---|---|
+| RAPID, FEED | end point | — | FEED's rate | — |
+| ARC_CW, ARC_CCW | end point (z constant) | centre | rate | — |
+| DWELL | — | — | — | milliseconds |
+| SPINDLE | — | — | 1 clockwise, 0 not | RPM, or -1 for none (set by hand) |
+| SPINDLE_OFF, COOLANT_OFF, INDEX, END | — | — | — | — |
+| TOOL | z: the head's Z read with the new tool | — | — | tool number |
+| STOP, MESSAGE | — | — | — | index into the piece's (the chunk's) `strings` |
+| COOLANT | — | — | — | 1 flood (M08), 2 mist (M07) |
+
+`tag` is the index of the move's purpose in `TAGS` (`retract`, `peck-reentry`, …).
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field, replace
+from decimal import Decimal
+
+import numpy as np
+import numpy.typing as npt
+
+from app.cnc.blocks import HoleOp
+from app.cnc.mill import Path, translated
+from app.cnc.toolpath import (
+    ArcFeed,
+    CoolantOff,
+    CoolantOn,
+    Dwell,
+    Feed,
+    IndexTable,
+    Message,
+    Move,
+    ProgramEnd,
+    ProgramStop,
+    Rapid,
+    Repetition,
+    SpindleOff,
+    SpindleOn,
+    ToolChange,
+    ToolInfo,
+    Toolpath,
+)
+from app.cnc.units import Units
+
+
+class Op(enum.IntEnum):
+    """What a row is (the canonical call)."""
+
+    RAPID = 0
+    FEED = 1
+    ARC_CW = 2
+    ARC_CCW = 3
+    DWELL = 4
+    SPINDLE = 5
+    SPINDLE_OFF = 6
+    TOOL = 7
+    STOP = 8
+    COOLANT = 9
+    COOLANT_OFF = 10
+    MESSAGE = 11
+    INDEX = 12
+    END = 13
+
+
+TAGS: tuple[str, ...] = (
+    "",
+    "retract",
+    "peck-retract",
+    "peck-reentry",
+    "lead-in",
+    "lead-out",
+    "step-over",
+    "corner",
+    "divot",
+)
+TAG = {name: k for k, name in enumerate(TAGS)}
+
+MOVE = np.dtype(
+    [
+        ("op", np.uint8),
+        ("tag", np.uint8),
+        ("block", np.int32),
+        ("x", np.int64),
+        ("y", np.int64),
+        ("z", np.int64),
+        ("cx", np.int64),
+        ("cy", np.int64),
+        ("feed", np.int64),
+        ("value", np.int64),
+    ]
+)
+Rows = npt.NDArray[np.void]
+# Holes, one row each (`HoleSpan` reads one): rows [start, end) of a piece or chunk make it.
+HOLE = np.dtype(
+    [
+        ("start", np.int64),
+        ("end", np.int64),
+        ("op", np.uint8),
+        ("canned", np.bool_),
+        ("x", np.int64),
+        ("y", np.int64),
+        ("z0", np.int64),
+        ("r", np.int64),
+        ("bottom", np.int64),
+        ("feed", np.int64),
+        ("pecks", np.int32),
+        ("step", np.int64),
+        ("dwell_ms", np.int32),
+    ]
+)
+HOLE_OPS = (HoleOp.DRILL, HoleOp.BORE, HoleOp.TAP)
+# The largest number of rows `walk` puts in one chunk when it repeats a piece.
+CHUNK_ROWS = 1 << 15
+
+
+@dataclass(frozen=True, slots=True)
+class HoleSpan:
+    """One hole (DRILL, BORE, TAP) in a piece: rows [start, end) make it.
+
+    In nm: (`x`, `y`) the hole, `z0` the height the tool is at when the span begins, `r`
+    Z UP, `bottom` Z DN, `feed` FEEDR Z, `step` the peck depth (0 without pecks). `canned`
+    is True when the rows are exactly a canned cycle's from `z0` with a return to `z0`
+    (G98): an optional rapid across at `z0`, a rapid down to `r`, the feeds (and pecks) to
+    `bottom`, a dwell of `dwell_ms`, a rapid up to `z0` — an emitter may write the cycle.
+    """
+
+    start: int
+    end: int
+    op: HoleOp
+    x: int
+    y: int
+    z0: int
+    r: int
+    bottom: int
+    feed: int
+    pecks: int
+    step: int
+    dwell_ms: int
+    canned: bool
+
+    @staticmethod
+    def of(row: Sequence[int]) -> HoleSpan:
+        """The hole a HOLE row (as a tuple) holds."""
+        start, end, op, canned, x, y, z0, r, bottom, feed, pecks, step, dwell = row
+        return HoleSpan(
+            start, end, HOLE_OPS[op], x, y, z0, r, bottom, feed, pecks, step, dwell, bool(canned)
+        )
+
+    def row(self) -> tuple[int | bool, ...]:
+        """The HOLE row of this hole."""
+        return (
+            self.start,
+            self.end,
+            HOLE_OPS.index(self.op),
+            self.canned,
+            self.x,
+            self.y,
+            self.z0,
+            self.r,
+            self.bottom,
+            self.feed,
+            self.pecks,
+            self.step,
+            self.dwell_ms,
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class MillSpan:
+    """One mill sequence in a piece: rows [start, end) cut it.
+
+    `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME block (0 for a
+    contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point (nm);
+    `depth` the DRILL's Z DN (None in a 2-axis program); `tool` and `comp` the DRILL's.
+    `finished` is the programmed contour (float nm) as it was planned, or None for a
+    routine; `contour()` gives it where this span is — moved by (`dx`, `dy`), its blocks
+    renumbered by `shift`.
+    """
+
+    start: int
+    end: int
+    drill: int
+    x: int
+    y: int
+    finished: Path | None
+    routine: int
+    depth: int | None
+    tool: int
+    comp: str
+    dx: int = 0
+    dy: int = 0
+    shift: int = 0
+
+    def moved(self, rows: int, dx: int, dy: int, blocks: int = 0) -> MillSpan:
+        """This span `rows` later, (dx, dy) over and `blocks` block numbers on."""
+        return replace(
+            self,
+            start=self.start + rows,
+            end=self.end + rows,
+            drill=self.drill + blocks,
+            routine=self.routine + blocks if self.routine else 0,
+            x=self.x + dx,
+            y=self.y + dy,
+            dx=self.dx + dx,
+            dy=self.dy + dy,
+            shift=self.shift + blocks,
+        )
+
+    def contour(self) -> Path | None:
+        """The programmed contour where this span cuts it (None for a routine)."""
+        if self.finished is None:
+            return None
+        if not (self.dx or self.dy or self.shift):
+            return self.finished
+        return translated(self.finished, self.dx, self.dy, self.shift)
+
+
+@dataclass(slots=True)
+class Piece:
+    """Consecutive moves: `rows` (MOVE), their `holes` and `mills`, block numbers relative
+    to `base`, and the texts STOP and MESSAGE rows refer to.
+
+    `patterns` are the LOOP patterns among the rows when a small loop was flattened into
+    one piece (rows, REP blocks relative, depth counted from the piece's own level).
+    """
+
+    rows: Rows
+    holes: npt.NDArray[np.void] = field(default_factory=lambda: np.zeros(0, dtype=HOLE))
+    mills: tuple[MillSpan, ...] = ()
+    base: int = 0
+    strings: tuple[str, ...] = ()
+    patterns: tuple[Repetition, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+
+@dataclass(slots=True)
+class Run:
+    """`node` placed at each of `offsets` (k × 2, nm) in turn, block numbers + `base`.
+
+    For the patterns of a LOOP, `rep` is its REP block (relative, like rows' blocks),
+    `first` the number of its first pattern here (a LOOP's patterns may be several runs)
+    and `origin` the offset of the LOOP's first pattern.
+    """
+
+    node: Node
+    offsets: npt.NDArray[np.int64]
+    base: int = 0
+    rep: int = 0
+    first: int = 0
+    origin: tuple[int, int] = (0, 0)
+
+
+@dataclass(slots=True)
+class Seq:
+    """Nodes in order."""
+
+    nodes: list[Node] = field(default_factory=list)
+
+
+Node = Piece | Run | Seq
+
+
+def size(node: Node) -> int:
+    """How many moves `node` makes."""
+    if isinstance(node, Piece):
+        return len(node.rows)
+    if isinstance(node, Run):
+        return size(node.node) * len(node.offsets)
+    return sum(size(n) for n in node.nodes)
+
+
+@dataclass(slots=True)
+class Chunk:
+    """Absolute moves (a MOVE array), their holes and mill sequences (row indices within
+    the chunk, blocks absolute) and the texts their STOP and MESSAGE rows refer to."""
+
+    rows: Rows
+    holes: npt.NDArray[np.void]  # HOLE rows
+    mills: list[MillSpan]
+    strings: tuple[str, ...]
+
+    def hole_spans(self) -> list[HoleSpan]:
+        """The holes as objects."""
+        return [HoleSpan.of(row) for row in self.holes.tolist()]
+
+
+def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]:
+    """The moves of `node` translated by (dx, dy) with `base` added to block numbers, as
+    chunks in order. A piece repeated by a run is tiled in chunks of about CHUNK_ROWS."""
+    if isinstance(node, Piece):
+        yield _placed(node, np.array([[dx, dy]], dtype=np.int64), base)
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            yield from walk(child, dx, dy, base)
+    elif isinstance(node.node, Piece):
+        piece = node.node
+        per = max(1, CHUNK_ROWS // max(1, len(piece.rows)))
+        offsets = node.offsets + np.array([dx, dy], dtype=np.int64)
+        for k in range(0, len(offsets), per):
+            yield _placed(piece, offsets[k : k + per], base + node.base)
+    else:
+        for ox, oy in node.offsets.tolist():
+            yield from walk(node.node, dx + ox, dy + oy, base + node.base)
+
+
+def _placed_holes(
+    holes: npt.NDArray[np.void], n: int, offsets: npt.NDArray[np.int64]
+) -> npt.NDArray[np.void]:
+    """A piece's holes for each placement in turn (rows moved on by `n` each time)."""
+    count = len(offsets)
+    if not len(holes):
+        return holes
+    placed = np.tile(holes, count) if count > 1 else holes.copy()
+    per = len(holes)
+    shift = np.repeat(np.arange(count, dtype=np.int64) * n, per)
+    placed["start"] += shift
+    placed["end"] += shift
+    placed["x"] += np.repeat(offsets[:, 0], per)
+    placed["y"] += np.repeat(offsets[:, 1], per)
+    return placed
+
+
+def _placed(piece: Piece, offsets: npt.NDArray[np.int64], base: int) -> Chunk:
+    """`piece` placed at each of `offsets` in turn, as one chunk."""
+    n = len(piece.rows)
+    count = len(offsets)
+    rows = np.tile(piece.rows, count) if count > 1 else piece.rows.copy()
+    steps_x = np.repeat(offsets[:, 0], n)
+    steps_y = np.repeat(offsets[:, 1], n)
+    rows["x"] += steps_x
+    rows["y"] += steps_y
+    rows["cx"] += steps_x
+    rows["cy"] += steps_y
+    rows["block"] += piece.base + base
+    holes = _placed_holes(piece.holes, n, offsets)
+    placed = list(enumerate(offsets.tolist())) if piece.mills else []
+    shift = piece.base + base
+    mills = [mill.moved(k * n, ox, oy, shift) for k, (ox, oy) in placed for mill in piece.mills]
+    return Chunk(rows, holes, mills, piece.strings)
+
+
+@dataclass(slots=True)
+class CompiledPath:
+    """A program's moves (`root`), where they start, and what they are done with.
+
+    `units` is the program's unit (for printing). `origin` the Data Block 0 offset of part
+    zero from table zero (nm). `start` where the tool is before the first move: over part
+    zero, Z RET above tool zero.
+    """
+
+    units: Units
+    origin: tuple[int, int]
+    start: tuple[int, int, int]
+    initial_tool: int
+    tools: dict[int, ToolInfo]
+    root: Node
+
+    def __len__(self) -> int:
+        return size(self.root)
+
+    def chunks(self) -> Iterator[Chunk]:
+        return walk(self.root)
+
+    def toolpath(self) -> Toolpath:
+        """The whole path as the Toolpath of Move objects, LOOP patterns listed: for the
+        consumers that need every move at once (small programs; the arrays are cheaper)."""
+        patterns: list[Repetition] = []
+        repetitions(self.root, 0, 0, 0, patterns)
+        return Toolpath(
+            units=self.units,
+            origin=self.origin,
+            start=self.start,
+            initial_tool=self.initial_tool,
+            tools=self.tools,
+            moves=list(self.moves()),
+            repetitions=patterns,
+        )
+
+    def moves(self) -> Iterator[Move]:
+        """The moves as the Toolpath's objects, one at a time (for the consumers that
+        walk moves; the arrays are cheaper)."""
+        for chunk in self.chunks():
+            strings = chunk.strings
+            for row in chunk.rows.tolist():
+                yield as_move(row, strings)
+
+
+def repetitions(node: Node, start: int, depth: int, base: int, out: list[Repetition]) -> int:
+    """Append the LOOP patterns of `node` (rows from `start`) to `out`; the rows it makes.
+    A pattern's offset is from its LOOP's first pattern, as the Toolpath has it."""
+    if isinstance(node, Piece):
+        shift = base + node.base
+        out.extend(
+            replace(
+                p,
+                rep_block=p.rep_block + shift,
+                depth=p.depth + depth,
+                start=p.start + start,
+                end=p.end + start,
+            )
+            for p in node.patterns
+        )
+        return len(node.rows)
+    if isinstance(node, Seq):
+        at = start
+        for child in node.nodes:
+            at += repetitions(child, at, depth, base, out)
+        return at - start
+    at = start
+    is_loop = node.rep > 0
+    origin = node.origin
+    for k, (ox, oy) in enumerate(node.offsets.tolist()):
+        number = node.first + k
+        rows = repetitions(node.node, at, depth + is_loop, base + node.base, out)
+        if is_loop:
+            out.append(
+                Repetition(
+                    node.rep + base + node.base,
+                    depth + 1,
+                    number,
+                    at,
+                    at + rows,
+                    (ox - origin[0], oy - origin[1]),
+                )
+            )
+        at += rows
+    return at - start
+
+
+def as_move(row: Sequence[int], strings: Sequence[str]) -> Move:
+    """A MOVE row (as a tuple) as the Toolpath's object."""
+    op, tag, block, x, y, z, cx, cy, feed, value = row
+    kind = Op(op)
+    if kind is Op.RAPID:
+        return Rapid(block, x, y, z, TAGS[tag])
+    if kind is Op.FEED:
+        return Feed(block, x, y, z, feed, TAGS[tag])
+    if kind is Op.ARC_CW or kind is Op.ARC_CCW:
+        return ArcFeed(block, x, y, z, cx, cy, kind is Op.ARC_CW, feed, TAGS[tag])
+    if kind is Op.DWELL:
+        return Dwell(block, Decimal(value) / 1000)
+    if kind is Op.SPINDLE:
+        return SpindleOn(block, bool(feed), None if value < 0 else value)
+    if kind is Op.SPINDLE_OFF:
+        return SpindleOff(block)
+    if kind is Op.TOOL:
+        return ToolChange(block, value, z)
+    if kind is Op.STOP:
+        return ProgramStop(block, strings[value])
+    if kind is Op.COOLANT:
+        return CoolantOn(block, "flood" if value == 1 else "mist")
+    if kind is Op.COOLANT_OFF:
+        return CoolantOff(block)
+    if kind is Op.MESSAGE:
+        return Message(block, strings[value])
+    if kind is Op.INDEX:
+        return IndexTable(block)
+    return ProgramEnd(block)

@@ -29,10 +29,8 @@ from app.cnc.blocks import (
     field_label,
 )
 from app.cnc.copy import CopyError, cancel_copy, execute_copy
-from app.cnc.emit.svg import draw
-from app.cnc.estimate import estimate, format_seconds
-from app.cnc.interpret import interpret
-from app.cnc.problems import Problem, Rule, Severity, has_errors
+from app.cnc.estimate import format_seconds
+from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
@@ -49,6 +47,7 @@ from app.web.forms import (
     read_number,
     read_whole,
 )
+from app.web.preview import preview
 
 bp = Blueprint("editor", __name__)
 
@@ -99,33 +98,6 @@ PAGE_SIZE = 100
 def page_of(number: int) -> int:
     """The page (from 1) of the block list that shows block `number`."""
     return max(1, (number - 1) // PAGE_SIZE + 1)
-
-
-def preview(
-    program: Program, problems: list[Problem] | None = None
-) -> tuple[str, dict[int, float], float, int]:
-    """(SVG, seconds per block, total seconds, blocks shown) for the longest valid prefix.
-
-    The search starts before the first block with an error (a prefix cannot be valid past
-    it), so a program with an early error costs a few validations, not one per block.
-    `problems` are the program's own, when the caller has validated it already.
-    """
-    if problems is None:
-        problems = validate(program)
-    errors = [p.block for p in problems if p.severity is Severity.ERROR]
-    if any(b is None or b == 0 for b in errors):
-        return "", {}, 0.0, 0
-    blocks_in_error = [b for b in errors if b is not None]
-    shown = min(blocks_in_error) - 1 if blocks_in_error else len(program.blocks)
-    while shown >= 0:
-        part = dataclasses.replace(program, blocks=program.blocks[:shown])
-        if not has_errors(validate(part)):
-            toolpath = interpret(part)
-            result = estimate(toolpath)
-            svg = draw(toolpath, swept=True, grid=True, embedded_style=False)
-            return svg, result.per_block, result.total, shown
-        shown -= 1
-    return "", {}, 0.0, 0
 
 
 def block_summary(block: Block) -> str:

@@ -72,18 +72,14 @@ from app.cnc.path import (
     Piece,
     Run,
     Seq,
-    repetitions,
     size,
-    walk,
 )
 from app.cnc.problems import Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
-from app.cnc.toolpath import Repetition, ToolInfo
+from app.cnc.toolpath import ToolInfo
 from app.cnc.units import Units, to_nm
 
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
-# A pattern body at most this many moves long is stored as one piece (cheaper to place).
-FLAT_ROWS = 4096
 
 Row = tuple[int, int, int, int, int, int, int, int, int, int]
 
@@ -435,7 +431,7 @@ class _Compiler:
         first = 0
         for body, offsets in runs:
             placed = Run(
-                _flat(body),
+                body,
                 np.array(offsets, dtype=np.int64),
                 rep=node.rep + 1 - self.base,
                 first=first,
@@ -468,9 +464,39 @@ class _Compiler:
         centre = self.resolve(centre_block)
         radius = to_nm(bolt.radius, bolt.units)
         points = bolt_circle_points(centre, radius, bolt.holes, bolt.angle)
-        for point in points:
-            self.hole(node.bolt + 1, centre_block, point)
+        number = node.bolt + 1
+        self.hole(number, centre_block, points[0])
+        rest = points[1:]
+        if len(rest) >= 2 and len(set(points)) == len(points):
+            # From the second hole on, each hole is entered alike (over the hole before,
+            # at the same height, tool and spindle), and a hole's moves do not depend on
+            # where across the tool comes from: one hole's moves, placed at each point.
+            self.hole_pattern(number, centre_block, rest)
+        else:
+            for point in rest:
+                self.hole(number, centre_block, point)
         self.reference = points[-1]
+
+    def hole_pattern(self, number: int, block: Hole, points: list[tuple[int, int]]) -> None:
+        """Holes at `points` (distinct, none where the tool is): the first compiled at
+        (0, 0), and placed at every point when it leaves the state it was entered in
+        (apart from where the tool is); otherwise each hole is compiled in turn."""
+        entry = self.state()
+        first = points[0]
+        if self.buffer.rows:
+            self.nodes.append(self.take())
+        self.restore(entry.shifted(-first[0], -first[1]))
+        self.hole(number, block, (0, 0))
+        piece = self.take()
+        exit_state = self.state()
+        if _alike(entry, exit_state):
+            self.nodes.append(Run(piece, np.array(points, dtype=np.int64)))
+            last = points[-1]
+            self.restore(exit_state.shifted(last[0], last[1]))
+            return
+        self.restore(entry)
+        for point in points:
+            self.hole(number, block, point)
 
     def run_mill_sequence(self, node: MillSequence) -> None:
         """A DRILL and its mill blocks: plunge, cut every pass at each peck level, retract.
@@ -779,6 +805,17 @@ class _Compiler:
         self.x, self.y = end
 
 
+def _alike(a: State, b: State) -> bool:
+    """True when two states differ at most in where the tool is in XY."""
+    return (a.z, a.tool, a.spindle_on, a.coolant, a.retract) == (
+        b.z,
+        b.tool,
+        b.spindle_on,
+        b.coolant,
+        b.retract,
+    )
+
+
 def _round(point: tuple[float, float]) -> tuple[int, int]:
     """A computed point rounded once to the nanometre."""
     return round(point[0]), round(point[1])
@@ -822,38 +859,6 @@ def _incremental(blocks: tuple[Block, ...], node: LoopPattern) -> bool:
         if hasattr(block, "x") and not isinstance(block, Rep) and block.mode is Mode.ABS:
             return False
     return True
-
-
-def _flat(node: Node) -> Node:
-    """A small sequence as one piece (cheaper to place many times); others as they are."""
-    if isinstance(node, Piece) or size(node) > FLAT_ROWS:
-        return node
-    chunks = list(walk(node))
-    rows = np.concatenate([c.rows for c in chunks]) if chunks else np.zeros(0, dtype=MOVE)
-    holes: list[np.ndarray] = []
-    mills: list[MillSpan] = []
-    strings: list[str] = []
-    offset = 0
-    for chunk in chunks:
-        remap = {}
-        for k, text in enumerate(chunk.strings):
-            if text not in strings:
-                strings.append(text)
-            remap[k] = strings.index(text)
-        if remap and any(k != v for k, v in remap.items()):
-            sub = rows[offset : offset + len(chunk.rows)]
-            texts = (sub["op"] == Op.STOP) | (sub["op"] == Op.MESSAGE)
-            sub["value"][texts] = [remap[v] for v in sub["value"][texts].tolist()]
-        moved = chunk.holes.copy()
-        moved["start"] += offset
-        moved["end"] += offset
-        holes.append(moved)
-        mills += [m.moved(offset, 0, 0) for m in chunk.mills]
-        offset += len(chunk.rows)
-    all_holes = np.concatenate(holes) if holes else np.zeros(0, dtype=HOLE)
-    patterns: list[Repetition] = []
-    repetitions(node, 0, 0, 0, patterns)
-    return Piece(rows, all_holes, tuple(mills), 0, tuple(strings), tuple(patterns))
 
 
 def _distinct(findings: list[Finding]) -> tuple[Finding, ...]:

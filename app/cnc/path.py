@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from decimal import Decimal
 
 import numpy as np
@@ -219,17 +219,20 @@ class MillSpan:
 
     def moved(self, rows: int, dx: int, dy: int, blocks: int = 0) -> MillSpan:
         """This span `rows` later, (dx, dy) over and `blocks` block numbers on."""
-        return replace(
-            self,
-            start=self.start + rows,
-            end=self.end + rows,
-            drill=self.drill + blocks,
-            routine=self.routine + blocks if self.routine else 0,
-            x=self.x + dx,
-            y=self.y + dy,
-            dx=self.dx + dx,
-            dy=self.dy + dy,
-            shift=self.shift + blocks,
+        return MillSpan(
+            self.start + rows,
+            self.end + rows,
+            self.drill + blocks,
+            self.x + dx,
+            self.y + dy,
+            self.finished,
+            self.routine + blocks if self.routine else 0,
+            self.depth,
+            self.tool,
+            self.comp,
+            self.dx + dx,
+            self.dy + dy,
+            self.shift + blocks,
         )
 
     def contour(self) -> Path | None:
@@ -244,18 +247,13 @@ class MillSpan:
 @dataclass(slots=True)
 class Piece:
     """Consecutive moves: `rows` (MOVE), their `holes` and `mills`, block numbers relative
-    to `base`, and the texts STOP and MESSAGE rows refer to.
-
-    `patterns` are the LOOP patterns among the rows when a small loop was flattened into
-    one piece (rows, REP blocks relative, depth counted from the piece's own level).
-    """
+    to `base`, and the texts STOP and MESSAGE rows refer to."""
 
     rows: Rows
     holes: npt.NDArray[np.void] = field(default_factory=lambda: np.zeros(0, dtype=HOLE))
     mills: tuple[MillSpan, ...] = ()
     base: int = 0
     strings: tuple[str, ...] = ()
-    patterns: tuple[Repetition, ...] = ()
 
     def __len__(self) -> int:
         return len(self.rows)
@@ -276,6 +274,9 @@ class Run:
     rep: int = 0
     first: int = 0
     origin: tuple[int, int] = (0, 0)
+    # Computed on first use (a node may be shared by several runs; the results are the same).
+    moves: int = field(default=-1, repr=False, compare=False)
+    flat: Piece | None = field(default=None, repr=False, compare=False)
 
 
 @dataclass(slots=True)
@@ -283,6 +284,8 @@ class Seq:
     """Nodes in order."""
 
     nodes: list[Node] = field(default_factory=list)
+    moves: int = field(default=-1, repr=False, compare=False)
+    flat: Piece | None = field(default=None, repr=False, compare=False)
 
 
 Node = Piece | Run | Seq
@@ -292,20 +295,87 @@ def size(node: Node) -> int:
     """How many moves `node` makes."""
     if isinstance(node, Piece):
         return len(node.rows)
-    if isinstance(node, Run):
-        return size(node.node) * len(node.offsets)
-    return sum(size(n) for n in node.nodes)
+    if node.moves < 0:
+        if isinstance(node, Run):
+            node.moves = size(node.node) * len(node.offsets)
+        else:
+            node.moves = sum(size(n) for n in node.nodes)
+    return node.moves
 
 
-@dataclass(slots=True)
+# A node that makes at most this many moves is walked as one piece when it is placed more
+# than once (flattened on first use): each placement is then one tiling, not a recursion.
+FLAT_ROWS = 4096
+
+
+def flattened(node: Node) -> Piece:
+    """`node`'s moves as one piece (block numbers as the node has them), kept on the node."""
+    if isinstance(node, Piece):
+        return node
+    if node.flat is not None:
+        return node.flat
+    chunks = list(walk(node))
+    rows = np.concatenate([c.rows for c in chunks]) if chunks else np.zeros(0, dtype=MOVE)
+    holes: list[npt.NDArray[np.void]] = []
+    mills: list[MillSpan] = []
+    strings: list[str] = []
+    offset = 0
+    for chunk in chunks:
+        remap = {}
+        for k, text in enumerate(chunk.strings):
+            if text not in strings:
+                strings.append(text)
+            remap[k] = strings.index(text)
+        if any(k != v for k, v in remap.items()):
+            sub = rows[offset : offset + len(chunk.rows)]
+            texts = (sub["op"] == Op.STOP) | (sub["op"] == Op.MESSAGE)
+            sub["value"][texts] = [remap[v] for v in sub["value"][texts].tolist()]
+        moved = chunk.holes.copy()
+        moved["start"] += offset
+        moved["end"] += offset
+        holes.append(moved)
+        mills += [m.moved(offset, 0, 0) for m in chunk.mills]
+        offset += len(chunk.rows)
+    all_holes = np.concatenate(holes) if holes else np.zeros(0, dtype=HOLE)
+    node.flat = Piece(rows, all_holes, tuple(mills), 0, tuple(strings))
+    return node.flat
+
+
 class Chunk:
     """Absolute moves (a MOVE array), their holes and mill sequences (row indices within
-    the chunk, blocks absolute) and the texts their STOP and MESSAGE rows refer to."""
+    the chunk, blocks absolute) and the texts their STOP and MESSAGE rows refer to.
 
-    rows: Rows
-    holes: npt.NDArray[np.void]  # HOLE rows
-    mills: list[MillSpan]
-    strings: tuple[str, ...]
+    `mills` are made on first use: most consumers never read them."""
+
+    __slots__ = ("_mills", "_placements", "holes", "rows", "strings")
+
+    def __init__(
+        self,
+        rows: Rows,
+        holes: npt.NDArray[np.void],
+        mills: list[MillSpan] | None,
+        strings: tuple[str, ...],
+        placements: tuple[Piece, npt.NDArray[np.int64], int] | None = None,
+    ) -> None:
+        self.rows = rows
+        self.holes = holes  # HOLE rows
+        self.strings = strings
+        self._mills = mills
+        self._placements = placements
+
+    @property
+    def mills(self) -> list[MillSpan]:
+        """The mill spans, in order."""
+        if self._mills is None:
+            assert self._placements is not None
+            piece, offsets, shift = self._placements
+            n = len(piece.rows)
+            self._mills = [
+                mill.moved(k * n, ox, oy, shift)
+                for k, (ox, oy) in enumerate(offsets.tolist())
+                for mill in piece.mills
+            ]
+        return self._mills
 
     def hole_spans(self) -> list[HoleSpan]:
         """The holes as objects."""
@@ -320,8 +390,8 @@ def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]
     elif isinstance(node, Seq):
         for child in node.nodes:
             yield from walk(child, dx, dy, base)
-    elif isinstance(node.node, Piece):
-        piece = node.node
+    elif isinstance(node.node, Piece) or (len(node.offsets) > 1 and size(node.node) <= FLAT_ROWS):
+        piece = flattened(node.node)
         per = max(1, CHUNK_ROWS // max(1, len(piece.rows)))
         offsets = node.offsets + np.array([dx, dy], dtype=np.int64)
         for k in range(0, len(offsets), per):
@@ -338,7 +408,13 @@ def _placed_holes(
     count = len(offsets)
     if not len(holes):
         return holes
-    placed = np.tile(holes, count) if count > 1 else holes.copy()
+    if count == 1:
+        placed = holes.copy()
+        dx, dy = offsets[0].tolist()
+        placed["x"] += dx
+        placed["y"] += dy
+        return placed
+    placed = np.tile(holes, count)
     per = len(holes)
     shift = np.repeat(np.arange(count, dtype=np.int64) * n, per)
     placed["start"] += shift
@@ -353,18 +429,29 @@ def _placed(piece: Piece, offsets: npt.NDArray[np.int64], base: int) -> Chunk:
     n = len(piece.rows)
     count = len(offsets)
     rows = np.tile(piece.rows, count) if count > 1 else piece.rows.copy()
-    steps_x = np.repeat(offsets[:, 0], n)
-    steps_y = np.repeat(offsets[:, 1], n)
-    rows["x"] += steps_x
-    rows["y"] += steps_y
-    rows["cx"] += steps_x
-    rows["cy"] += steps_y
-    rows["block"] += piece.base + base
-    holes = _placed_holes(piece.holes, n, offsets)
-    placed = list(enumerate(offsets.tolist())) if piece.mills else []
+    if count == 1:
+        # One placement (the common case in a walk): scalars, and nothing where they are 0.
+        dx, dy = offsets[0].tolist()
+        if dx:
+            rows["x"] += dx
+            rows["cx"] += dx
+        if dy:
+            rows["y"] += dy
+            rows["cy"] += dy
+    else:
+        steps_x = np.repeat(offsets[:, 0], n)
+        steps_y = np.repeat(offsets[:, 1], n)
+        rows["x"] += steps_x
+        rows["y"] += steps_y
+        rows["cx"] += steps_x
+        rows["cy"] += steps_y
     shift = piece.base + base
-    mills = [mill.moved(k * n, ox, oy, shift) for k, (ox, oy) in placed for mill in piece.mills]
-    return Chunk(rows, holes, mills, piece.strings)
+    if shift:
+        rows["block"] += shift
+    holes = _placed_holes(piece.holes, n, offsets)
+    if not piece.mills:
+        return Chunk(rows, holes, [], piece.strings)
+    return Chunk(rows, holes, None, piece.strings, (piece, offsets, shift))
 
 
 @dataclass(slots=True)
@@ -417,17 +504,6 @@ def repetitions(node: Node, start: int, depth: int, base: int, out: list[Repetit
     """Append the LOOP patterns of `node` (rows from `start`) to `out`; the rows it makes.
     A pattern's offset is from its LOOP's first pattern, as the Toolpath has it."""
     if isinstance(node, Piece):
-        shift = base + node.base
-        out.extend(
-            replace(
-                p,
-                rep_block=p.rep_block + shift,
-                depth=p.depth + depth,
-                start=p.start + start,
-                end=p.end + start,
-            )
-            for p in node.patterns
-        )
         return len(node.rows)
     if isinstance(node, Seq):
         at = start

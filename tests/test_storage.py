@@ -56,6 +56,7 @@ def test_upgrade_head_on_an_empty_database(database_url: str) -> None:
         "login_attempts",
         "transfer_log",
         "sessions",
+        "drawings",
     }
     engine.dispose()
 
@@ -75,6 +76,7 @@ def test_downgrade_and_upgrade_round_trip(database_url: str) -> None:
         "login_attempts",
         "transfer_log",
         "sessions",
+        "drawings",
     }
     engine.dispose()
 

@@ -8,12 +8,14 @@ failed save or import leaves the stored program exactly as it was.
 
 from __future__ import annotations
 
+import hashlib
 import json
+import re
 import zipfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -26,9 +28,12 @@ from app.cnc.blocks import Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.sizes import TooLarge, check_block_count
 from app.storage.db import make_engine, migration_lock, upgrade
-from app.storage.models import MachineRow, ProgramRow, RevisionRow, SettingRow
+from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
 SORTS = ("name", "part_number", "updated", "created")
+DRAWING_KEEP = timedelta(days=1)
+"""How long an uploaded drawing is kept for choosing from."""
+DRAWING_KEY = re.compile(r"[0-9a-f]{64}")
 BACKUP_FORMAT = "millblocks-backup"
 
 
@@ -407,6 +412,36 @@ class Library:
                 s.add(SettingRow(key=key, value=value))
             else:
                 row.value = value
+
+    # -- drawings being chosen from (DXF) ------------------------------------------------
+
+    def put_drawing(self, name: str, data: bytes, author: str = "") -> str:
+        """Keep an uploaded drawing; its key (the SHA-256 of `data`, hex). Drawings
+        uploaded more than DRAWING_DAYS ago are removed first."""
+        key = hashlib.sha256(data).hexdigest()
+        now = _now()
+        with self.session() as s:
+            s.execute(delete(DrawingRow).where(DrawingRow.uploaded_at < now - DRAWING_KEEP))
+            row = s.get(DrawingRow, key)
+            if row is None:
+                s.add(
+                    DrawingRow(key=key, name=name[:200], data=data, uploaded_at=now, author=author)
+                )
+            else:
+                row.uploaded_at = now
+                row.name = name[:200]
+        return key
+
+    def drawing(self, key: str) -> tuple[str, bytes]:
+        """(name, data) of the drawing `key`; NotFound when there is none (or it expired)."""
+        with self.session() as s:
+            row = s.get(DrawingRow, key) if DRAWING_KEY.fullmatch(key) else None
+            if row is None:
+                raise NotFound(
+                    "no such drawing: it was never uploaded, or it is more than a day old; "
+                    "upload it again"
+                )
+            return row.name, row.data
 
     def backup(self, out: BinaryIO) -> int:
         """Write the whole library as a zip of JSON documents; returns the program count."""

@@ -172,3 +172,20 @@ class TransferRow(Base):
     cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False)
 
     __table_args__ = (Index("ix_transfer_log_started", "started_at"),)
+
+
+class DrawingRow(Base):
+    """A DXF drawing uploaded to choose blocks from (issue 22), kept while it is being
+    chosen from: by content (`key`, the SHA-256 of `data`), so every web worker finds it
+    and uploading the same file twice stores it once. Not part of backups; drawings older
+    than a day are removed when another is uploaded."""
+
+    __tablename__ = "drawings"
+
+    key: Mapped[str] = mapped_column(String(64), primary_key=True)
+    name: Mapped[str] = mapped_column(String(200))
+    data: Mapped[bytes] = mapped_column(LargeBinary)
+    uploaded_at: Mapped[datetime]
+    author: Mapped[str] = mapped_column(String(100), default="")
+
+    __table_args__ = (Index("ix_drawings_uploaded", "uploaded_at"),)

@@ -19,7 +19,7 @@ from werkzeug.routing import IntegerConverter
 
 from app.storage.db import ROOT
 from app.storage.library import open_library
-from app.web import auth, editor, export, library, machines, setup, transfers, verify
+from app.web import auth, drawings, editor, export, library, machines, setup, transfers, verify
 from app.web.extensions import csrf, get_library
 
 __all__ = ["create_app", "get_library"]
@@ -59,7 +59,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     csrf.init_app(app)
     app.extensions["millblocks.library"] = open_library(app.config["DATABASE_URL"])
 
-    for module in (auth, library, editor, export, machines, setup, transfers, verify):
+    for module in (auth, library, editor, drawings, export, machines, setup, transfers, verify):
         app.register_blueprint(module.bp)
     auth.init_app(app)
 

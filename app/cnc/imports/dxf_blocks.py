@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import math
 
-from app.cnc.blocks import Block, Circle, Comp, Frame, HoleOp, Placement, Program
-from app.cnc.imports.build import Builder, SetUp, block0, make_program
+from app.cnc.blocks import Block, Circle, Comp, DataBlock0, Frame, HoleOp, Placement, Program
+from app.cnc.imports.build import Builder, SetUp, block0, make_program, used_tools
 from app.cnc.imports.common import (
     XY,
     ImportNote,
+    Notes,
     decimal_of,
     feed_decimal,
     quantize_nm,
@@ -260,24 +261,33 @@ def program_from_drawing(drawing: Drawing) -> Program:
     builder = Builder(notes)
     builder.run(ops)
     builder.flush_rounding()
+    if not ops:
+        notes.assumed(None, "nothing in the drawing became a block")
+    db0 = drawing_block0(drawing, ops, notes)
+    return make_program(
+        drawing.name, "", drawing.units, "imported from a DXF drawing", db0, builder.blocks
+    )
+
+
+def drawing_block0(drawing: Drawing, ops: list[Op], notes: Notes) -> DataBlock0:
+    """Data Block 0 for the blocks of `ops` (each tool they use, without diameter or RPM),
+    and the notes that say what the drawing could not give: depths, diameters."""
+    tools = [tool for tool, _ in used_tools(ops)]
     if ops:
         notes.needs(
             None,
             "the drawing has no depths: the blocks have no Z UP / Z DN (a 2-axis program, the "
             "quill moved by hand); enter them to cut under program control",
         )
-        notes.needs(
-            None,
-            "tool 1 (every block) has no diameter in the drawing: enter it in Data Block 0 "
-            "(cutter compensation and CIRCLE/FRAME need it)",
-        )
-    else:
-        notes.assumed(None, "nothing in the drawing became a block")
-    setup = SetUp(units=drawing.units, tools={1: ToolData()} if ops else {})
-    db0 = block0(setup, ops, notes)
-    return make_program(
-        drawing.name, "", drawing.units, "imported from a DXF drawing", db0, builder.blocks
-    )
+        every = " (every block)" if len(tools) == 1 else ""
+        for tool in tools:
+            notes.needs(
+                None,
+                f"tool {tool}{every} has no diameter in the drawing: enter it in Data Block 0 "
+                "(cutter compensation and CIRCLE/FRAME need it)",
+            )
+    setup = SetUp(units=drawing.units, tools={tool: ToolData() for tool in tools})
+    return block0(setup, ops, notes)
 
 
 def resolution_half(drawing: Drawing) -> int:

@@ -1,0 +1,67 @@
+"""The choosing page in a real browser (Playwright, Debian's Chromium), as a stranger uses
+it: open a drawing from the library, click the outside profile on the side where the cut
+should start, click two holes, see the blocks and the report, add them to a new program and
+land in the editor on its first block. Screenshots go to test-output/screenshots/.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from playwright.sync_api import Page, expect
+
+from tests.test_browser import browser, page, server, shot  # noqa: F401 - fixtures
+from tests.test_import_dxf import bracket
+
+
+def test_choose_a_profile_and_holes_from_a_drawing(page: Page, server: str, tmp_path: Path) -> None:  # noqa: F811
+    drawing = tmp_path / "bracket.dxf"
+    drawing.write_bytes(bracket())
+    page.goto(server + "/")
+    card = page.locator("form.card", has_text="From a drawing (DXF)")
+    card.locator('input[type="file"]').set_input_files(str(drawing))
+    card.locator('input[name="hole-diameter"]').fill("0.25")
+    card.get_by_role("button", name="Open and choose contours").click()
+    expect(page.locator("#dxf-view svg")).to_be_visible()
+    expect(page.locator(".page.drawings .hint").first).to_contain_text("3 contours, 10 holes")
+    shot(page, "drawings-1-opened")
+
+    # The outside profile is the contour of 8 segments; its right side (segment 3) is a
+    # vertical line: clicked where it is drawn.
+    profile = page.locator("#dxf-view g.contour").filter(
+        has=page.locator('.segment[data-segment="7"]')
+    )
+    profile.locator('.segment[data-segment="2"]').click(force=True)
+    number = profile.get_attribute("data-contour")
+    expect(page.locator(f'input[name="c{number}_order"]')).to_have_value("1")
+    expect(page.locator(f'select[name="c{number}_start"]')).to_have_value("3")
+    expect(page.locator("#result h2")).to_have_text("9 blocks")
+    expect(page.locator(f'#dxf-view g.contour[data-contour="{number}"]')).to_have_class(
+        "contour closed chosen"
+    )
+    # Clockwise, the tool on the right.
+    page.locator(f'select[name="c{number}_dir"]').select_option("cw")
+    page.locator(f'select[name="c{number}_comp"]').select_option("right")
+    page.locator('#dxf-view circle.hole[data-hole="0"]').click()
+    page.locator('#dxf-view circle.hole[data-hole="1"]').click()
+    expect(page.locator('input[name="h0_order"]')).to_have_value("2")
+    expect(page.locator('input[name="h1_order"]')).to_have_value("3")
+    expect(page.locator("#result h2")).to_have_text("11 blocks")
+    blocks = page.locator("#result ol.blocks li")
+    expect(blocks.nth(0)).to_contain_text("DRILL CUT RT")
+    expect(blocks.nth(0)).to_contain_text("X 6.000 Y 0.500")
+    expect(blocks.nth(9)).to_contain_text("DRILL")
+    # What was not chosen, and what the drawing held that cannot be read, is reported.
+    report = page.locator("#result table.report")
+    expect(report).to_contain_text("a hole not chosen: no blocks")
+    expect(report).to_contain_text("a SPLINE is not read")
+    expect(page.locator("#result .chosen-preview svg")).to_be_visible()
+    shot(page, "drawings-2-chosen")
+
+    page.locator('input[name="name"]').fill("Bracket from DXF")
+    page.get_by_role("button", name="Add the blocks").click()
+    expect(page).to_have_url(re.compile(r"/programs/\d+\?edit=1$"))
+    expect(page.locator('.block-row[data-block="1"]')).to_contain_text("DRILL CUT RT")
+    expect(page.locator('.block-row[data-block="11"]')).to_contain_text("DRILL")
+    shot(page, "drawings-3-in-the-editor")

@@ -531,10 +531,7 @@ class _Compiler:
             self.record_mill(node, drill, start, first_row, plan.finished)
             self.reference = plan.end
             return
-        assert drill.z_up is not None and drill.z_dn is not None and drill.feed_z is not None
-        units = drill.units
-        z_up, z_dn = to_nm(drill.z_up, units), to_nm(drill.z_dn, units)
-        feed_z = to_nm(drill.feed_z, units)
+        z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
         self.position(number, plunge, self.retract)
         self.rapid_z(number, z_up)
@@ -624,10 +621,7 @@ class _Compiler:
             self.position(number, target, self.z)
             self.stop_for(number, f"quill: {block.op.value} the hole by hand, then raise it")
             return
-        assert block.z_up is not None and block.z_dn is not None and block.feed_z is not None
-        units = block.units
-        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
-        feed = to_nm(block.feed_z, units)
+        z_up, z_dn, feed = _depths(block)
         self.retract = retract_height(z_up, self.z_retract)
         # Up first (outside the hole's span: a canned cycle starts at the height it returns
         # to), then across, down and in.
@@ -803,6 +797,13 @@ class _Compiler:
             (op, TAG[tag], number - self.base, end[0], end[1], self.z, *centre, feed, 0)
         )
         self.x, self.y = end
+
+
+def _depths(block: Hole) -> tuple[int, int, int]:
+    """Z UP, Z DN and FEEDR Z of a block with depths, in nm (and nm/min)."""
+    assert block.z_up is not None and block.z_dn is not None and block.feed_z is not None
+    units = block.units
+    return to_nm(block.z_up, units), to_nm(block.z_dn, units), to_nm(block.feed_z, units)
 
 
 def _alike(a: State, b: State) -> bool:

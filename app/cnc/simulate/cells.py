@@ -357,7 +357,9 @@ def _line_bottom(s: Segments, ramp: bool, b: _Batch) -> F64:
     pc = b.per_pair(c)
     slope = b.per_pair(s.slope.astype(f32))
     dz = b.per_pair((s.z1 - s.z0).astype(f32))
-    e2 = np.maximum(wx * wx + wy * wy - tc * tc * pc, 0)
+    # The squared distance to the line as a difference of points, not of squares (which
+    # loses micrometres to cancellation in float32 on long moves).
+    e2 = (wx - tc * pdx) ** 2 + (wy - tc * pdy) ** 2
     reach = np.sqrt(np.maximum(r2 - e2, 0) / pc)
     lo = np.maximum(tc - reach, 0)
     hi = np.minimum(tc + reach, 1)

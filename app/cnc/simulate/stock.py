@@ -27,7 +27,12 @@ from app.cnc.units import Units, format_length, to_nm
 
 
 class StockError(ValueError):
-    """A stock that cannot be simulated (names the field and what is allowed)."""
+    """A stock that cannot be simulated (names the field and what is allowed); `field` is
+    the stock's field at fault (x, y, z, xl, yw, zh), or "" for the grid."""
+
+    def __init__(self, message: str, field: str = "") -> None:
+        super().__init__(message)
+        self.field = field
 
 
 @dataclass(frozen=True)
@@ -63,11 +68,30 @@ BELOW = {Units.INCH: Decimal("0.25"), Units.MM: Decimal(6)}
 ROUND_TO = {Units.INCH: Decimal("0.05"), Units.MM: Decimal(1)}
 
 
+# The highest and lowest a stock's faces may be: the height map keeps heights in 36 bits of
+# nanometres (sweep.py), ±34 m; a round figure well inside that.
+HEIGHT_LIMIT = {Units.INCH: Decimal(1000), Units.MM: Decimal(25_400)}
+
+
 def program_stock(stock: StockBlock, units: Units) -> Stock:
-    """The program's own stock in nm. Raises StockError for a size that is not > 0."""
+    """The program's own stock in nm. Raises StockError for a size that is not > 0, or a top
+    or bottom face beyond ±HEIGHT_LIMIT."""
     for name, label in (("xl", "XL"), ("yw", "YW"), ("zh", "ZH")):
         if getattr(stock, name) <= 0:
-            raise StockError(f"stock, {label}: must be more than 0, got {getattr(stock, name)}")
+            raise StockError(
+                f"stock, {label}: must be more than 0, got {getattr(stock, name)}", name
+            )
+    limit = HEIGHT_LIMIT[units]
+    if abs(stock.z) > limit:
+        raise StockError(
+            f"stock, Z TOP: must be within ±{limit} {units.symbol}, got {stock.z}", "z"
+        )
+    if abs(stock.z - stock.zh) > limit:
+        raise StockError(
+            f"stock, ZH: the bottom (Z TOP − ZH) must be within ±{limit} {units.symbol}, "
+            f"got {stock.z - stock.zh}",
+            "zh",
+        )
     x0, y0, top = (to_nm(v, units) for v in (stock.x, stock.y, stock.z))
     return Stock(
         x0=x0,

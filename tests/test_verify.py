@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import struct
 import zlib
 from collections import Counter
@@ -211,6 +212,23 @@ def test_a_stock_of_no_size_is_refused_naming_the_field() -> None:
     flat = dataclasses.replace(program, stock=dataclasses.replace(program.stock, zh=Decimal(0)))
     with pytest.raises(StockError, match="stock, ZH: must be more than 0"):
         verify(flat)
+
+
+@pytest.mark.parametrize(
+    ("z", "zh", "message"),
+    [
+        ("2000", "1", "stock, Z TOP: must be within ±1000 in, got 2000"),
+        ("0", "1500", "stock, ZH: the bottom (Z TOP − ZH) must be within ±1000 in, got -1500"),
+    ],
+)
+def test_a_stock_beyond_the_simulation_s_heights_is_refused_naming_the_field(
+    z: str, zh: str, message: str
+) -> None:
+    program = load(CASES_DIR / "crash-tall-stock" / "program.json")
+    assert program.stock is not None
+    tall = dataclasses.replace(program.stock, z=Decimal(z), zh=Decimal(zh))
+    with pytest.raises(StockError, match=re.escape(message)):
+        verify(dataclasses.replace(program, stock=tall))
 
 
 def test_an_unknown_stock_field_is_a_document_error() -> None:

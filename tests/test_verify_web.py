@@ -101,6 +101,21 @@ def test_the_stock_is_saved_with_the_program_and_refused_when_wrong(
         assert get_library().get(pid).program.stock is None
 
 
+def test_a_stock_too_tall_to_simulate_is_refused_not_a_server_error(
+    app: Flask, client: FlaskClient
+) -> None:
+    pid = add(app, "frame-pocket")
+    url = f"/programs/{pid}/verify"
+    fields = {"x": "0.5", "y": "0.5", "z": "2000", "xl": "4", "yw": "3", "zh": "0.75"}
+    bad = client.post(
+        url + "/stock", data={**fields, "csrf_token": token(client, url), "version": "1"}
+    )
+    assert bad.status_code == 422
+    assert "Z TOP: must be within ±1000 in, got 2000" in bad.get_data(as_text=True)
+    with app.app_context():
+        assert get_library().get(pid).program.stock is None
+
+
 def test_a_program_with_errors_is_not_simulated(app: Flask, client: FlaskClient) -> None:
     text = (CASES_DIR / "frame-pocket" / "program.json").read_text()
     program = document.loads(text.replace('"feed_z": 5', '"feed_z": 900'))

@@ -22,9 +22,10 @@ from app.cnc.blocks import Program, Stock
 from app.cnc.problems import has_errors
 from app.cnc.simulate.image import png_bytes, render
 from app.cnc.simulate.mesh import stl_bytes
-from app.cnc.simulate.stock import StockError
+from app.cnc.simulate.stock import StockError, program_stock
 from app.cnc.simulate.sweep import Simulation
 from app.cnc.simulate.verify import Verification, run_simulation, verify
+from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import StaleSave, StoredProgram
 from app.web.editor import _int, current_user, load
@@ -126,7 +127,7 @@ def save_stock(program_id: int) -> BaseResponse | tuple[str, int]:
     stock: Stock | None = None
     errors: dict[str, str] = {}
     if form.get("action") != "clear":
-        stock, errors = parse_stock(form)
+        stock, errors = parse_stock(form, stored.program.units)
     values = {name: form.get(name, "") for name, _ in STOCK_FIELDS}
     if errors:
         return _render(stored, values, errors, "")
@@ -143,8 +144,9 @@ def save_stock(program_id: int) -> BaseResponse | tuple[str, int]:
     return redirect(url_for("verify.page", program_id=program_id))
 
 
-def parse_stock(form: Any) -> tuple[Stock | None, dict[str, str]]:
-    """The stock from its form; errors by field name, saying what is allowed."""
+def parse_stock(form: Any, units: Units) -> tuple[Stock | None, dict[str, str]]:
+    """The stock from its form; errors by field name, saying what is allowed (what the
+    simulation cannot take too: `program_stock`'s refusals)."""
     values: dict[str, Decimal] = {}
     errors: dict[str, str] = {}
     for name, label in STOCK_FIELDS:
@@ -167,7 +169,12 @@ def parse_stock(form: Any) -> tuple[Stock | None, dict[str, str]]:
         values[name] = value
     if errors:
         return None, errors
-    return Stock(**values), {}
+    stock = Stock(**values)
+    try:
+        program_stock(stock, units)
+    except StockError as exc:
+        return None, {exc.field: str(exc).removeprefix("stock, ")}
+    return stock, {}
 
 
 def _simulated(program_id: int, cells: int = VIEW_CELLS) -> tuple[Program, Simulation] | Response:

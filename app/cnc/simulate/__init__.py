@@ -1,9 +1,11 @@
-"""Stock-removal simulation and verify: the finished part from the tool path.
+"""Stock-removal simulation and verify: the finished part from the compiled tool path.
 
-segments.py  the tool path as numpy segment arrays (the one adapter from the Toolpath)
-stock.py     the stock and the height-map grid
-sweep.py     the vectorised sweep of each tool over the grid
+segments.py   a compiled piece's moves as numpy segment arrays (the one reader of MOVE rows)
+placements.py the compiled path as groups of one piece placed at several offsets (LOOPs)
+stock.py      the stock and the height-map grid
+cells.py      which cells a segment's tool reaches: runs of cells, or exact (segment, cell) pairs
+sweep.py      the simulation: groups folded into the height map, stamps for repeated pieces
 programmed.py what the program asks for (the one adapter from the blocks)
-verify.py    gouges, rest material, hole depths and crashes, per block
-mesh.py      STL of the simulated part          image.py  PNG picture of it
+verify.py     gouges, rest material, hole depths and crashes, per block
+mesh.py       STL of the simulated part          image.py  PNG picture of it
 """

@@ -1,13 +1,14 @@
-"""The simulator's input: the tool path as arrays of straight and circular segments.
+"""The simulator's input: the moves of a compiled piece as arrays of straight segments and
+arc pieces.
 
-`toolpath_segments` is the one place that reads the interpreter's `Toolpath`; everything
-else in this package depends only on the arrays it returns. When the tool path becomes
-compact arrays itself (compile once, per block), only this function changes.
+`piece_segments` is the one place that reads MOVE rows (app/cnc/path.py); everything else
+in this package depends only on the arrays it returns. It is vectorised: a piece of any
+length costs a few numpy passes, no Python per move.
 
-Conventions (those of app/cnc/toolpath.py): X/Y are part coordinates and Z is the tool tip
-in part Z (each tool's Z is measured from its calibrated zero), all in nanometres, kept here
-as float64 because arcs are split into pieces whose ends are computed. A segment's tool
-shape comes from the block that moves it:
+Conventions (those of the compiled path): X/Y are part coordinates and Z is the tool tip in
+part Z (each tool's Z is measured from its calibrated zero), all in nanometres, kept here as
+float64 because arcs are split into pieces whose ends are computed. A segment's tool shape
+comes from the block that moves it:
 
 - DRILL holes (and DRILL bolt circles) are cut by a drill point: a 118° cone, so the
   bottom of the tool at distance d from its axis is d / tan(59°) above the tip.
@@ -15,7 +16,7 @@ shape comes from the block that moves it:
   milling blocks (and the DRILL that starts a mill sequence: it plunges the end mill), and
   the boring bar and the tap. A tap is modelled by its diameter; its thread is not.
 - A tool without a diameter in Data Block 0 is simulated with a stated default (0.125 in,
-  3 mm in a metric program) and named in `Segments.notes`.
+  3 mm in a metric program) and named in `ToolShapes.notes()`.
 
 Arcs are split into pieces of at most 90°, so each piece's bounding box is tight and the
 sweep can test "inside the sector" with two cross products.
@@ -23,7 +24,6 @@ sweep can test "inside the sector" with two cross products.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 from decimal import Decimal
@@ -32,9 +32,9 @@ import numpy as np
 import numpy.typing as npt
 
 from app.cnc.blocks import BoltCircle, Hole, HoleOp, Program
-from app.cnc.geometry import arc_sweep
+from app.cnc.path import Op, Rows
 from app.cnc.structure import starts_mill_sequence
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange, Toolpath
+from app.cnc.toolpath import ToolInfo
 from app.cnc.units import Units, format_length, to_nm
 
 F64 = npt.NDArray[np.float64]
@@ -51,14 +51,14 @@ MAX_ARC_PIECE = math.pi / 2
 
 @dataclass
 class Segments:
-    """The tool path's motions, one row per straight segment or arc piece (lengths in nm).
+    """Motions, one row per straight segment or arc piece (lengths in nm).
 
     `x0…z1` are the start and end of the tool tip; `cx`, `cy` the centre of an arc piece
     (`arc` True; Z is then constant) and `ccw` its direction seen from above. `radius` is
     the tool's radius and `slope` its bottom's rise per unit of distance from the axis (0 for
     a flat end, `DRILL_SLOPE` for a drill point). `block` is the data block each comes from,
     `tool` the tool number, `rapid` True for moves at the rapid rate. Rows are in program
-    order. `notes` say what was assumed (a default diameter).
+    order.
     """
 
     x0: F64
@@ -76,33 +76,53 @@ class Segments:
     slope: F64
     tool: I32
     block: I32
-    units: Units = Units.INCH
-    notes: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.x0)
 
     def select(self, mask: BOOL | I64) -> Segments:
-        """The rows `mask` picks (a boolean mask or indices), notes kept."""
+        """The rows `mask` picks (a boolean mask or indices)."""
+        return Segments(**{name: getattr(self, name)[mask] for name in _FIELDS})
+
+    def translated(self, dx: float, dy: float) -> Segments:
+        """The same motions moved by (dx, dy) nm."""
+        if not (dx or dy):
+            return self
+        moved = dict(vars(self))
+        for name in ("x0", "x1", "cx"):
+            moved[name] = self.__dict__[name] + dx
+        for name in ("y0", "y1", "cy"):
+            moved[name] = self.__dict__[name] + dy
+        return Segments(**moved)
+
+    def tiled(self, offsets: I64) -> Segments:
+        """These motions placed at each of `offsets` (k × 2 nm) in turn, as one array."""
+        k = len(offsets)
+        parts = {name: np.tile(getattr(self, name), k) for name in _FIELDS}
+        dx = np.repeat(offsets[:, 0].astype(np.float64), len(self))
+        dy = np.repeat(offsets[:, 1].astype(np.float64), len(self))
+        for name in ("x0", "x1", "cx"):
+            parts[name] += dx
+        for name in ("y0", "y1", "cy"):
+            parts[name] += dy
+        return Segments(**parts)
+
+    @staticmethod
+    def empty() -> Segments:
+        f, b, i = np.zeros(0), np.zeros(0, dtype=np.bool_), np.zeros(0, dtype=np.int32)
+        return Segments(f, f, f, f, f, f, f, f, b, b, b, f, f, i, i)
+
+    @staticmethod
+    def concatenate(parts: list[Segments]) -> Segments:
+        """The rows of `parts` one after the other."""
+        if not parts:
+            return Segments.empty()
         return Segments(
-            x0=self.x0[mask],
-            y0=self.y0[mask],
-            z0=self.z0[mask],
-            x1=self.x1[mask],
-            y1=self.y1[mask],
-            z1=self.z1[mask],
-            cx=self.cx[mask],
-            cy=self.cy[mask],
-            arc=self.arc[mask],
-            ccw=self.ccw[mask],
-            rapid=self.rapid[mask],
-            radius=self.radius[mask],
-            slope=self.slope[mask],
-            tool=self.tool[mask],
-            block=self.block[mask],
-            units=self.units,
-            notes=self.notes,
+            **{name: np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS}
         )
+
+
+_FIELDS = tuple(Segments.__dataclass_fields__)
 
 
 def drill_point_blocks(program: Program) -> set[int]:
@@ -117,92 +137,149 @@ def drill_point_blocks(program: Program) -> set[int]:
     return numbers
 
 
-def toolpath_segments(program: Program, toolpath: Toolpath) -> Segments:
-    """The motions of `toolpath` (interpreted from `program`) as segment arrays."""
-    pointed = drill_point_blocks(program)
-    default = to_nm(DEFAULT_DIAMETER[program.units], program.units)
-    notes: list[str] = []
-    radius_of: dict[int, float] = {}
-    for number in sorted({toolpath.initial_tool} | _tools_used(toolpath)):
-        info = toolpath.tools.get(number)
+@dataclass
+class ToolShapes:
+    """What cuts: each tool's radius (nm; the stated default where Data Block 0 gives no
+    diameter) and which blocks drill with a point. `used` collects the tools that moved."""
+
+    tools: dict[int, ToolInfo]
+    units: Units
+    pointed: I64
+    used: set[int] = field(default_factory=set)
+
+    @staticmethod
+    def of(program: Program, tools: dict[int, ToolInfo]) -> ToolShapes:
+        pointed = np.array(sorted(drill_point_blocks(program)), dtype=np.int64)
+        return ToolShapes(tools, program.units, pointed)
+
+    @property
+    def default_diameter(self) -> int:
+        return to_nm(DEFAULT_DIAMETER[self.units], self.units)
+
+    def radius(self, tool: int) -> float:
+        """The radius the simulation gives `tool`, nm."""
+        info = self.tools.get(tool)
         diameter = None if info is None else info.diameter
         if diameter is None or diameter <= 0:
-            diameter = default
-            if number != 0:
-                notes.append(
+            diameter = self.default_diameter
+        return diameter / 2
+
+    def notes(self) -> list[str]:
+        """A note for each tool used that has no diameter (simulated with the default)."""
+        out = []
+        default = self.default_diameter
+        for number in sorted(self.used):
+            info = self.tools.get(number)
+            if number != 0 and (info is None or info.diameter is None or info.diameter <= 0):
+                out.append(
                     f"tool {number} has no diameter in Data Block 0: simulated as "
-                    f"{format_length(default, program.units)} {program.units.symbol}"
+                    f"{format_length(default, self.units)} {self.units.symbol}"
                 )
-        radius_of[number] = diameter / 2
+        return out
 
-    rows: list[tuple[float, ...]] = []
-    flags: list[tuple[int, int, int, int, int]] = []
-    x, y, z = (float(c) for c in toolpath.start)
-    tool = toolpath.initial_tool
-    for move in toolpath.moves:
-        if isinstance(move, ToolChange):
-            tool = move.tool
-            z = float(move.z)
-            continue
-        if not isinstance(move, Rapid | Feed | ArcFeed):
-            continue
-        r = radius_of.get(tool, default / 2)
-        slope = DRILL_SLOPE if move.block in pointed else 0.0
-        ex, ey, ez = float(move.x), float(move.y), float(move.z)
-        if isinstance(move, ArcFeed):
-            for piece in _arc_pieces((x, y), (ex, ey), (move.cx, move.cy), move.clockwise):
-                (px, py), (qx, qy) = piece
-                rows.append((px, py, ez, qx, qy, ez, move.cx, move.cy, r, slope))
-                flags.append((1, int(not move.clockwise), 0, tool, move.block))
-        else:
-            rows.append((x, y, z, ex, ey, ez, 0.0, 0.0, r, slope))
-            flags.append((0, 0, int(isinstance(move, Rapid)), tool, move.block))
-        x, y, z = ex, ey, ez
-    data = np.array(rows, dtype=np.float64).reshape(-1, 10)
-    flag = np.array(flags, dtype=np.int64).reshape(-1, 5)
 
-    def column(k: int) -> F64:
-        return np.ascontiguousarray(data[:, k])
+@dataclass(frozen=True)
+class Entry:
+    """Where the tool tip is (nm) and which tool is in the spindle."""
 
-    return Segments(
-        x0=column(0),
-        y0=column(1),
-        z0=column(2),
-        x1=column(3),
-        y1=column(4),
-        z1=column(5),
-        cx=column(6),
-        cy=column(7),
-        radius=column(8),
-        slope=column(9),
-        arc=flag[:, 0].astype(np.bool_),
-        ccw=flag[:, 1].astype(np.bool_),
-        rapid=flag[:, 2].astype(np.bool_),
-        tool=flag[:, 3].astype(np.int32),
-        block=flag[:, 4].astype(np.int32),
-        units=program.units,
-        notes=notes,
+    x: int
+    y: int
+    z: int
+    tool: int
+
+
+def piece_segments(
+    rows: Rows, block_shift: int, entry: Entry, shapes: ToolShapes
+) -> tuple[Segments, Entry]:
+    """The motions of MOVE `rows` (coordinates as stored; blocks + `block_shift`) entered at
+    `entry`, and where they leave the tool. TOOL rows change the tool and set Z."""
+    ops = rows["op"]
+    setter = np.flatnonzero((ops <= Op.ARC_CCW) | (ops == Op.TOOL))
+    shapes.used.add(entry.tool)
+    if not len(setter):
+        return Segments.empty(), entry
+    picked = rows[setter]
+    kind = picked["op"]
+    motion = kind <= Op.ARC_CCW
+    order = np.arange(len(picked))
+    # A TOOL row keeps X and Y: those of the last motion before it (or the entry).
+    last_motion = np.maximum.accumulate(np.where(motion, order, -1))
+    x_after = np.where(last_motion >= 0, picked["x"][last_motion], entry.x)
+    y_after = np.where(last_motion >= 0, picked["y"][last_motion], entry.y)
+    z_after = picked["z"]
+    is_tool = ~motion
+    last_tool = np.maximum.accumulate(np.where(is_tool, order, -1))
+    tool_after = np.where(last_tool >= 0, picked["value"][last_tool], entry.tool)
+    exit_entry = Entry(int(x_after[-1]), int(y_after[-1]), int(z_after[-1]), int(tool_after[-1]))
+    shapes.used.update(np.unique(tool_after).tolist())
+
+    def before(values: I64, first: int) -> I64:
+        out = np.empty_like(values)
+        out[0] = first
+        out[1:] = values[:-1]
+        return out
+
+    sx = before(x_after, entry.x)[motion].astype(np.float64)
+    sy = before(y_after, entry.y)[motion].astype(np.float64)
+    sz = before(z_after, entry.z)[motion].astype(np.float64)
+    moves = picked[motion]
+    tool = tool_after[motion]
+    ex, ey, ez = (moves[c].astype(np.float64) for c in ("x", "y", "z"))
+    cx, cy = moves["cx"].astype(np.float64), moves["cy"].astype(np.float64)
+    op = moves["op"]
+    arc = op >= Op.ARC_CW
+    ccw = op == Op.ARC_CCW
+    block = moves["block"].astype(np.int64) + block_shift
+    # Arcs in pieces of at most 90°: a move repeated once per piece.
+    pieces = np.ones(len(moves), dtype=np.int64)
+    if arc.any():
+        a0 = np.arctan2(sy - cy, sx - cx)
+        a1 = np.arctan2(ey - cy, ex - cx)
+        turn = np.where(ccw, a1 - a0, a0 - a1) % (2 * math.pi)
+        turn = np.where(turn > 1e-12, turn, 2 * math.pi)
+        pieces = np.where(arc, np.maximum(1, np.ceil(turn / MAX_ARC_PIECE - 1e-9)), 1).astype(
+            np.int64
+        )
+    take = np.repeat(np.arange(len(moves)), pieces)
+    x0, y0, x1, y1 = sx[take], sy[take], ex[take], ey[take]
+    if arc.any():
+        first = np.cumsum(pieces) - pieces
+        k = np.arange(len(take)) - first[take]
+        n = pieces[take]
+        is_arc = arc[take]
+        step = np.where(ccw, turn, -turn)[take] / n
+        radius = np.hypot(sx - cx, sy - cy)[take]
+        ccx, ccy = cx[take], cy[take]
+        start_angle = a0[take]
+        inner_start = is_arc & (k > 0)
+        ang = start_angle[inner_start] + k[inner_start] * step[inner_start]
+        x0[inner_start] = ccx[inner_start] + radius[inner_start] * np.cos(ang)
+        y0[inner_start] = ccy[inner_start] + radius[inner_start] * np.sin(ang)
+        inner_end = is_arc & (k < n - 1)
+        ang = start_angle[inner_end] + (k[inner_end] + 1) * step[inner_end]
+        x1[inner_end] = ccx[inner_end] + radius[inner_end] * np.cos(ang)
+        y1[inner_end] = ccy[inner_end] + radius[inner_end] * np.sin(ang)
+    z0 = np.where(arc, ez, sz)[take]
+    tools = tool[take]
+    kinds, which = np.unique(tools, return_inverse=True)
+    radius_of = np.array([shapes.radius(t) for t in kinds.tolist()], dtype=np.float64)[which]
+    blocks = block[take]
+    slope = np.where(np.isin(blocks, shapes.pointed), DRILL_SLOPE, 0.0)
+    segments = Segments(
+        x0=x0,
+        y0=y0,
+        z0=z0,
+        x1=x1,
+        y1=y1,
+        z1=ez[take],
+        cx=np.where(arc, cx, 0.0)[take],
+        cy=np.where(arc, cy, 0.0)[take],
+        arc=arc[take],
+        ccw=ccw[take],
+        rapid=(op == Op.RAPID)[take],
+        radius=radius_of,
+        slope=slope,
+        tool=tools.astype(np.int32),
+        block=blocks.astype(np.int32),
     )
-
-
-def _tools_used(toolpath: Toolpath) -> set[int]:
-    return {m.tool for m in toolpath.moves if isinstance(m, ToolChange)}
-
-
-def _arc_pieces(
-    start: tuple[float, float], end: tuple[float, float], centre: tuple[int, int], clockwise: bool
-) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """An arc split into equal pieces of at most 90° (the first starts, the last ends
-    exactly where the arc does)."""
-    cx, cy = float(centre[0]), float(centre[1])
-    sweep = arc_sweep(start, end, (cx, cy), clockwise)
-    n = max(1, math.ceil(sweep / MAX_ARC_PIECE - 1e-9))
-    radius = math.hypot(start[0] - cx, start[1] - cy)
-    a0 = math.atan2(start[1] - cy, start[0] - cx)
-    step = (-sweep if clockwise else sweep) / n
-    points = [start]
-    for k in range(1, n):
-        a = a0 + k * step
-        points.append((cx + radius * math.cos(a), cy + radius * math.sin(a)))
-    points.append(end)
-    return list(itertools.pairwise(points))
+    return segments, exit_entry

@@ -21,12 +21,18 @@ from decimal import Decimal
 import numpy as np
 
 from app.cnc.blocks import Stock as StockBlock
-from app.cnc.simulate.segments import Segments
+from app.cnc.simulate.placements import Placed
+from app.cnc.simulate.segments import BOOL, Segments
 from app.cnc.units import Units, format_length, to_nm
 
 
 class StockError(ValueError):
-    """A stock that cannot be simulated (names the field and what is allowed)."""
+    """A stock that cannot be simulated (names the field and what is allowed); `field` is
+    the stock's field at fault (x, y, z, xl, yw, zh), or "" for the grid."""
+
+    def __init__(self, message: str, field: str = "") -> None:
+        super().__init__(message)
+        self.field = field
 
 
 @dataclass(frozen=True)
@@ -62,11 +68,30 @@ BELOW = {Units.INCH: Decimal("0.25"), Units.MM: Decimal(6)}
 ROUND_TO = {Units.INCH: Decimal("0.05"), Units.MM: Decimal(1)}
 
 
+# The highest and lowest a stock's faces may be: the height map keeps heights in 36 bits of
+# nanometres (sweep.py), ±34 m; a round figure well inside that.
+HEIGHT_LIMIT = {Units.INCH: Decimal(1000), Units.MM: Decimal(25_400)}
+
+
 def program_stock(stock: StockBlock, units: Units) -> Stock:
-    """The program's own stock in nm. Raises StockError for a size that is not > 0."""
+    """The program's own stock in nm. Raises StockError for a size that is not > 0, or a top
+    or bottom face beyond ±HEIGHT_LIMIT."""
     for name, label in (("xl", "XL"), ("yw", "YW"), ("zh", "ZH")):
         if getattr(stock, name) <= 0:
-            raise StockError(f"stock, {label}: must be more than 0, got {getattr(stock, name)}")
+            raise StockError(
+                f"stock, {label}: must be more than 0, got {getattr(stock, name)}", name
+            )
+    limit = HEIGHT_LIMIT[units]
+    if abs(stock.z) > limit:
+        raise StockError(
+            f"stock, Z TOP: must be within ±{limit} {units.symbol}, got {stock.z}", "z"
+        )
+    if abs(stock.z - stock.zh) > limit:
+        raise StockError(
+            f"stock, ZH: the bottom (Z TOP − ZH) must be within ±{limit} {units.symbol}, "
+            f"got {stock.z - stock.zh}",
+            "zh",
+        )
     x0, y0, top = (to_nm(v, units) for v in (stock.x, stock.y, stock.z))
     return Stock(
         x0=x0,
@@ -79,28 +104,42 @@ def program_stock(stock: StockBlock, units: Units) -> Stock:
     )
 
 
-def extent_stock(segments: Segments) -> Stock:
+def extent_stock(placed: Placed, units: Units) -> Stock:
     """A stock that holds every cut: the feed moves' reach (tool radius included) plus a
     margin, rounded outward; its top is part Z0 and its bottom a little below the deepest
     cut. With no cut below Z0, the reach of every move, 0.25 in (6 mm) deep."""
-    units = segments.units
     margin = to_nm(MARGIN[units], units)
     step = to_nm(ROUND_TO[units], units)
-    cutting = ~segments.rapid & (np.minimum(segments.z0, segments.z1) < 0)
-    rows = segments if not cutting.any() else segments.select(cutting)
-    if len(rows) == 0:
+
+    def cutting(s: Segments) -> BOOL:
+        return ~s.rapid & (np.minimum(s.z0, s.z1) < 0)
+
+    any_cut = any(cutting(g.segments).any() for g in placed.groups)
+    lows: list[float] = []
+    highs: list[float] = []
+    deepest = math.inf
+    for group in placed.groups:
+        s = group.segments
+        if any_cut:
+            s = s.select(cutting(s))
+        if not len(s):
+            continue
+        r = s.radius
+        xs = np.concatenate([s.x0 - r, s.x1 - r, s.x0 + r, s.x1 + r])
+        ys = np.concatenate([s.y0 - r, s.y1 - r, s.y0 + r, s.y1 + r])
+        # Arc pieces bulge past their ends by at most (1 − cos 45°)·radius: take the circle.
+        if s.arc.any():
+            a = s.arc
+            ra = np.hypot(s.x0[a] - s.cx[a], s.y0[a] - s.cy[a]) + r[a]
+            xs = np.concatenate([xs, s.cx[a] - ra, s.cx[a] + ra])
+            ys = np.concatenate([ys, s.cy[a] - ra, s.cy[a] + ra])
+        low, high = group.offsets.min(axis=0), group.offsets.max(axis=0)
+        lows += [float(xs.min()) + float(low[0]), float(ys.min()) + float(low[1])]
+        highs += [float(xs.max()) + float(high[0]), float(ys.max()) + float(high[1])]
+        deepest = min(deepest, float(np.minimum(s.z0, s.z1).min()))
+    if not lows:
         size = to_nm(BELOW[units], units)
         return Stock(-size, -size, size, size, -size, 0)
-    r = rows.radius
-    xs = np.concatenate([rows.x0 - r, rows.x1 - r, rows.x0 + r, rows.x1 + r])
-    ys = np.concatenate([rows.y0 - r, rows.y1 - r, rows.y0 + r, rows.y1 + r])
-    # Arc pieces bulge past their ends by at most (1 − cos 45°)·radius: take the whole circle.
-    if rows.arc.any():
-        a = rows.arc
-        ra = np.hypot(rows.x0[a] - rows.cx[a], rows.y0[a] - rows.cy[a]) + r[a]
-        xs = np.concatenate([xs, rows.cx[a] - ra, rows.cx[a] + ra])
-        ys = np.concatenate([ys, rows.cy[a] - ra, rows.cy[a] + ra])
-    deepest = float(np.minimum(rows.z0, rows.z1).min())
 
     def down(v: float) -> int:
         return math.floor((v - margin) / step) * step
@@ -109,8 +148,10 @@ def extent_stock(segments: Segments) -> Stock:
         return math.ceil((v + margin) / step) * step
 
     below = to_nm(BELOW[units], units)
-    bottom = math.floor((deepest - below) / step) * step if cutting.any() else -below
-    return Stock(down(xs.min()), down(ys.min()), up(xs.max()), up(ys.max()), bottom, 0)
+    bottom = math.floor((deepest - below) / step) * step if any_cut else -below
+    x0, y0 = min(lows[0::2]), min(lows[1::2])
+    x1, y1 = max(highs[0::2]), max(highs[1::2])
+    return Stock(down(x0), down(y0), up(x1), up(y1), bottom, 0)
 
 
 @dataclass(frozen=True)

@@ -1,69 +1,74 @@
-"""Stock removal: sweep every segment's tool over the height map, in vectorised batches.
+"""Stock removal: every segment's tool swept over the height map, in vectorised batches.
 
-Exact at the cell centres, for every segment this package produces:
+Each cell holds one int64: (height + Z_OFFSET) << KEY_SHIFT | order, where `order` is the
+segment's number in program order, so the minimum keeps the deepest cut and, for equal
+depths, the earliest segment that reached it: the block that cut there. Heights are rounded
+to the nanometre. Removal is a minimum, so the order in which segments are folded in does
+not change the part; it matters only for a rapid that may hit material (a crash), which is
+checked against the map as it is at that moment, and for the volume each tool removes.
 
-- A straight move of a flat end mill removes, at a point q, everything above the lowest
-  tip height z(t) over the t where the tool's axis is within its radius of q. z is linear
-  in t, and those t are one interval [t_lo, t_hi] (where the line is within R of q), so the
-  lowest is at one of its ends.
-- A drill point adds slope·d (d: distance from the axis), so the bottom over q along the
-  move is f(t) = z0 + t·dz + slope·√(c·(t − tc)² + e²), a convex function of t: its least
-  value on [t_lo, t_hi] is at an end or at the stationary point clipped into it.
-- An arc piece (at most 90°, constant Z) is at distance |ρ − r| from q where q's angle is
-  inside the sector, else at the nearer end point.
+The work, in program order, one group of placements (placements.py) at a time:
 
-Each segment is evaluated over the cells of its bounding box; segments are grouped into
-batches of about `BATCH_PAIRS` (segment, cell) pairs so numpy, not Python, does the work per
-pair, and one `np.minimum.at` folds a batch into the map. Removal is a minimum, so the order
-of segments does not change the final part; it matters only for a rapid that may hit
-material (a crash), which is checked against the map as it is at that moment, and for the
-volume each tool removes. Segments that cannot change anything are skipped first: those
-whose tip stays above the stock, upward plunges (the tool was already lower there), rapids
-down to where the same tool has already been, and identical passes at a shallower depth
-than another one (pecks). Milling moves are then folded in deepest first, and a move is
-skipped when the highest material left in every tile of cells under its box is no higher
-than its tip (overlapping pocket passes, a pocket cut again): the order changes nothing but
-the work, since the result is a minimum.
+- Segments that cannot change anything are skipped first: those whose tip stays above the
+  stock, lifts (the tool was already lower there), rapids plunging to where the same tool
+  has already been, and identical passes at a shallower depth than another (pecks, 2P
+  floors). Every rapid left is checked for a crash before it is folded in.
+- **Stamps.** A piece placed several times (a LOOP's patterns) cuts the same shape at each
+  placement. Where the placements are whole cells apart (the usual case: REP steps are
+  multiples of the resolution), the shape is the same on the grid too: it is cut once into
+  a small map of its own (the stamp, orders counted from the piece's first segment) and
+  folded into the part at each placement with one `np.minimum` over a window, the
+  placement's first order added to the stamp's keys. Placements a fraction of a cell apart
+  sample the shape differently: they are grouped by that fraction (the phase), one stamp
+  per phase. A stamp is used only where it is cheaper than sweeping every placement, and
+  only for groups with no rapid to check (the order of cuts then matters).
+- **Sweeping** the rest: flat tools by runs of cells per grid row, the others by exact
+  (segment, cell) pairs (cells.py).
 
-Per (segment, cell) pair the work is a few float32 operations on coordinates relative to
-the segment (small numbers: float32 keeps them to a few nanometres), with each segment's
-values repeated over its pairs rather than gathered; plunges of one tool share a footprint
-and are computed as blocks of row and column terms.
-
-Each cell holds one int64: (height + Z_OFFSET) << KEY_SHIFT | segment, so the minimum keeps
-the deepest cut and, for equal depths, the earliest segment that reached it: the block that
-cut there. Heights are rounded to the nanometre.
+Memory: the map (8 bytes a cell), the stamps kept for reuse (at most `STAMP_CELLS` cells
+in all), the segments of each distinct piece, and temporaries bounded by the batch sizes
+of cells.py; the block of each segment is kept per piece, not per placement (`OrderMap`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass, field
-from typing import TypeVar
 
 import numpy as np
-import numpy.typing as npt
 
+from app.cnc.simulate.cells import (
+    DISC,
+    RAMP,
+    bounding_cells,
+    categories,
+    evaluate,
+    flat,
+    flat_spans,
+    plunges,
+)
+from app.cnc.simulate.placements import Group, Placed
 from app.cnc.simulate.segments import BOOL, F64, I32, I64, Segments
-from app.cnc.simulate.stock import Grid
+from app.cnc.simulate.stock import Grid, Stock
 
 KEY_SHIFT = 27
 ORDER_MASK = (1 << KEY_SHIFT) - 1
 UNCUT = ORDER_MASK
 Z_OFFSET = 1 << 35
-BATCH_PAIRS = 1 << 19
-TILE = 16  # cells along a side of the tiles that skip moves over cleared material
-CULL_AFTER = 64  # milling moves in a stage before skipping is worth its bookkeeping
-
-_T = TypeVar("_T", bound=np.generic)
-_NEVER = np.iinfo(np.int64).max  # a key larger than any cell's: changes nothing
-DISC, LINE, RAMP, ARC = 0, 1, 2, 3
+# A stamp's cell its piece never reaches: above every real key, even with an order added.
+BLANK = np.iinfo(np.int64).max - (1 << 40)
+STAMP_CELLS = 1 << 23  # cells of the stamps kept for reuse, all together
+PLACE_ROWS = 1 << 15  # segments swept at once when placements are swept one by one
+LEDGER_ROWS = 64  # grid rows per band of the per-tool volume ledger
+_NEVER = np.iinfo(np.int64).max  # a key above every cell's: changes nothing
+BAND_ROWS = 64  # grid rows a stamp is placed in at a time (so that they stay in the cache)
 
 
 @dataclass(frozen=True)
 class Crash:
     """A rapid move through material: `depth` nm of material at (x, y), the tool's bottom
-    at `z` there."""
+    at `z` there; `segment` is the rapid's number in program order."""
 
     block: int
     segment: int
@@ -74,20 +79,54 @@ class Crash:
 
 
 @dataclass
+class OrderMap:
+    """The block of each segment by its number in program order: per group, its first
+    number, its piece's segment count and the blocks of the piece's segments (the same for
+    every placement)."""
+
+    starts: list[int] = field(default_factory=list)
+    sizes: list[int] = field(default_factory=list)
+    blocks: list[I32] = field(default_factory=list)
+
+    def add(self, start: int, blocks: I32) -> None:
+        self.starts.append(start)
+        self.sizes.append(len(blocks))
+        self.blocks.append(blocks)
+
+    def blocks_of(self, orders: I64) -> I32:
+        """The block of each segment number in `orders`."""
+        out = np.zeros(len(orders), dtype=np.int32)
+        if not self.starts or not len(orders):
+            return out
+        starts = np.array(self.starts, dtype=np.int64)
+        group = np.searchsorted(starts, orders, "right") - 1
+        for g in np.unique(group).tolist():
+            here = group == g
+            local = (orders[here] - starts[g]) % self.sizes[g]
+            out[here] = self.blocks[g][local]
+        return out
+
+
+@dataclass
 class Simulation:
     """The simulated part: the height map (as keys), what each tool removed, the crashes.
 
-    `removed_by_tool` is in nm³ per tool number, in program order of first use; `upto` is
-    the last block simulated (None: all); `pairs` the (segment, cell) pairs evaluated.
+    `removed_by_tool` is in nm³ per tool number; `upto` is the last block simulated (None:
+    all); `segments` the segments in the program, `swept` those left to sweep after
+    skipping; `pairs` the cells written (runs, pairs and stamp windows) and `stamps` the
+    stamps made.
     """
 
     grid: Grid
     keys: I64
-    segments: Segments
+    orders: OrderMap
     removed_by_tool: dict[int, float] = field(default_factory=dict)
     crashes: list[Crash] = field(default_factory=list)
     upto: int | None = None
+    segments: int = 0
+    swept: int = 0
     pairs: int = 0
+    stamps: int = 0
 
     def heights(self) -> F64:
         """The material's top per cell, nm, (ny, nx); the stock's bottom where cut through."""
@@ -99,78 +138,387 @@ class Simulation:
         order = self.keys & ORDER_MASK
         cut = order != UNCUT
         blocks = np.zeros(self.grid.cells, dtype=np.int32)
-        blocks[cut] = self.segments.block[order[cut]]
+        blocks[cut] = self.orders.blocks_of(order[cut])
         return blocks.reshape(self.grid.ny, self.grid.nx)
 
     def removed_volume(self) -> float:
         """Material removed, nm³."""
-        stock = self.grid.stock
-        depth = stock.top - self.heights()
+        depth = self.grid.stock.top - self.heights()
         return float(depth.sum()) * self.grid.resolution**2
 
 
-def simulate(
-    grid: Grid, segments: Segments, upto: int | None = None, crash_tolerance: float = 0.0
-) -> Simulation:
-    """Cut `grid`'s stock with `segments` (those of blocks up to `upto` when given).
+def uncut_key(grid: Grid) -> int:
+    """The key of a cell nothing has cut: the stock's top, no segment."""
+    return ((grid.stock.top + Z_OFFSET) << KEY_SHIFT) | UNCUT
 
-    A rapid that meets more than `crash_tolerance` nm of material is a crash.
-    """
-    if len(segments) >= UNCUT:
-        raise ValueError(f"{len(segments)} segments: the simulation takes fewer than {UNCUT}")
-    stock = grid.stock
-    keys = np.full(grid.cells, ((stock.top + Z_OFFSET) << KEY_SHIFT) | UNCUT, dtype=np.int64)
-    result = Simulation(grid, keys, segments, upto=upto)
-    rows = _useful(grid, segments, upto)
-    checks = segments.rapid[rows]
-    tools = segments.tool[rows]
-    # Stages: runs of one tool, each rapid that needs checking on its own.
-    edge = np.flatnonzero(checks[1:] | checks[:-1] | (tools[1:] != tools[:-1])) + 1
-    starts = np.concatenate([[0], edge]) if len(rows) else np.zeros(0, dtype=np.int64)
-    ends = np.concatenate([edge, [len(rows)]]) if len(rows) else np.zeros(0, dtype=np.int64)
-    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
-        stage = rows[a:b]
-        if checks[a]:
-            crash = _check_rapid(grid, keys, segments, int(stage[0]), crash_tolerance)
-            if crash is not None:
-                result.crashes.append(crash)
-        tool = int(tools[a])
-        removed, pairs = _apply(grid, keys, segments, _collapse(segments, stage))
-        result.pairs += pairs
-        result.removed_by_tool[tool] = result.removed_by_tool.get(tool, 0.0) + removed
+
+def simulate(
+    grid: Grid, placed: Placed, upto: int | None = None, crash_tolerance: float = 0.0
+) -> Simulation:
+    """Cut `grid`'s stock with the placed segments (those of blocks up to `upto` when
+    given). A rapid that meets more than `crash_tolerance` nm of material is a crash."""
+    total = len(placed)
+    if total >= UNCUT:
+        raise ValueError(f"{total} segments: the simulation takes fewer than {UNCUT}")
+    keys = np.full(grid.cells, uncut_key(grid), dtype=np.int64)
+    result = Simulation(grid, keys, OrderMap(), upto=upto, segments=total)
+    run = _Run(grid, keys, result, crash_tolerance)
+    # How often each shape is placed at each phase in the whole program: what a stamp of
+    # it would serve.
+    for group in placed.groups:
+        shape = run.shape(group)
+        if shape.stampable:
+            kinds, counts = np.unique(run.phases(group.offsets), axis=0, return_counts=True)
+            for (fx, fy), count in zip(kinds.tolist(), counts.tolist(), strict=True):
+                key = (shape.digest, fx, fy)
+                run.uses[key] = run.uses.get(key, 0) + count
+    first = 0
+    for group in placed.groups:
+        result.orders.add(first, group.segments.block)
+        run.group(group, first)
+        first += group.count
+    run.flush()
+    run.ledger.close()
     return result
+
+
+@dataclass
+class _Shape:
+    """What of a group's segments is worth sweeping (`useful`, indices into them), named
+    by `digest` (equal digests, equal segments at equal indices); `stampable` when they
+    have no rapid to check and one tool."""
+
+    useful: I64
+    digest: bytes
+    stampable: bool
+
+
+@dataclass
+class _Pending:
+    """Placements of a stamp not yet folded into the part: their first segment numbers and
+    shifts (lattice cells)."""
+
+    stamp: _Stamp
+    firsts: I64
+    mx: I64
+    my: I64
+
+
+class _Run:
+    """One simulation's state while groups are folded in."""
+
+    def __init__(self, grid: Grid, keys: I64, result: Simulation, tolerance: float) -> None:
+        self.grid = grid
+        self.keys = keys
+        self.result = result
+        self.tolerance = tolerance
+        self.ledger = _Ledger(grid, keys, result.removed_by_tool)
+        self.shapes: dict[tuple[object, ...], _Shape] = {}
+        self.stamps: OrderedDict[tuple[object, ...], _Stamp | None] = OrderedDict()
+        self.uses: dict[tuple[object, ...], int] = {}
+        # Stamp placements wait here until something needs the part as it is (a crash
+        # check, another tool's volume, the end), then go in together, band by band.
+        self.pending: list[_Pending] = []
+        self.scratch = np.zeros(0, dtype=np.int64)
+
+    def shape(self, group: Group) -> _Shape:
+        found = self.shapes.get(group.key)
+        if found is None:
+            s = group.segments
+            useful = _useful(self.grid, s, self.result.upto)
+            tools = s.tool[useful]
+            stampable = bool(len(useful)) and not s.rapid[useful].any()
+            stampable = stampable and bool((tools == tools[0]).all())
+            found = _Shape(useful, _digest(s, useful), stampable)
+            self.shapes[group.key] = found
+        return found
+
+    def phases(self, offsets: I64) -> I64:
+        """Per placement (k × 2): where the grid's cell centres fall on the placed piece,
+        as the fraction of a cell (nm) its lattice starts at; equal phases, equal
+        sampling."""
+        res = round(self.grid.resolution)
+        stock = self.grid.stock
+        return np.stack([(stock.x0 - offsets[:, 0]) % res, (stock.y0 - offsets[:, 1]) % res], 1)
+
+    def use(self, tool: int) -> None:
+        """The segments folded in next are `tool`'s."""
+        if tool != self.ledger.tool:
+            self.flush()
+            self.ledger.use(tool)
+
+    def group(self, group: Group, first: int) -> None:
+        shape = self.shape(group)
+        useful = shape.useful
+        if not len(useful):
+            return
+        s = group.segments
+        k = len(group.offsets)
+        n = len(s)
+        if shape.stampable:
+            self.use(int(s.tool[useful[0]]))
+            self._stamped(group, shape, first)
+            return
+        # One placement after another, a crash check before each rapid, each change of
+        # tool told to the volume ledger.
+        tools = s.tool[useful]
+        checks = s.rapid[useful]
+        edge = np.flatnonzero(checks[1:] | checks[:-1] | (tools[1:] != tools[:-1])) + 1
+        stages = np.split(np.arange(len(useful)), edge)
+        if len(stages) == 1:
+            self.use(int(tools[0]))
+            everywhere = np.arange(k, dtype=np.int64)
+            self._sweep_placements(s.select(useful), useful, group.offsets, everywhere, first, n)
+            return
+        for p, (ox, oy) in enumerate(group.offsets.tolist()):
+            placed = s.translated(ox, oy)
+            for stage in stages:
+                rows = useful[stage]
+                self.use(int(s.tool[rows[0]]))
+                orders = first + p * n + rows
+                if s.rapid[rows[0]]:
+                    self.flush()
+                    self._check(placed.select(rows[:1]), int(orders[0]))
+                self._sweep(placed.select(rows), orders)
+
+    # -- sweeping --------------------------------------------------------------------------
+
+    def _sweep_placements(
+        self, s: Segments, local: I64, offsets: I64, index: I64, first: int, n: int
+    ) -> None:
+        """Segments `s` (numbered `local` in their piece of `n`) at each of `offsets`, the
+        placements `index` of a group numbered from `first`, swept in batches."""
+        per = max(1, PLACE_ROWS // max(1, len(s)))
+        for a in range(0, len(offsets), per):
+            part = slice(a, a + per)
+            orders = (first + index[part, None] * n + local).reshape(-1)
+            self._sweep(s.tiled(offsets[part]), orders)
+
+    def _sweep(self, s: Segments, orders: I64) -> None:
+        """Fold segments `s` (numbered `orders`) into the map."""
+        rows = _collapse(s)
+        s, orders = s.select(rows), orders[rows]
+        i0, i1, j0, j1 = bounding_cells(self.grid, s)
+        live = (i1 > i0) & (j1 > j0)
+        if not live.any():
+            return
+        self.ledger.touch(int(i0[live].min()), int(i1[live].max()))
+        self.result.swept += len(s)
+        self.result.pairs += fold(self.grid, self.keys, s, orders)
+
+    def _stamped(self, group: Group, shape: _Shape, first: int) -> None:
+        """A group without rapids to check, of one tool: by stamps where they pay."""
+        grid = self.grid
+        useful = shape.useful
+        s = group.segments.select(useful)
+        res = round(grid.resolution)
+        offsets = group.offsets
+        n = len(group.segments)
+        kinds, which = np.unique(self.phases(offsets), axis=0, return_inverse=True)
+        which = which.reshape(-1)
+        for k, (fx, fy) in enumerate(kinds.tolist()):
+            members = np.flatnonzero(which == k)
+            stamp = self._stamp(shape, s, fx, fy)
+            if stamp is None:
+                self._sweep_placements(s, useful, offsets[members], members, first, n)
+                continue
+            mx = (grid.stock.x0 - offsets[members, 0] - fx) // res
+            my = (grid.stock.y0 - offsets[members, 1] - fy) // res
+            self.pending.append(_Pending(stamp, first + members * n, mx, my))
+            if sum(p.stamp.keys.size for p in self.pending) > STAMP_CELLS:
+                self.flush()
+
+    def _stamp(self, shape: _Shape, s: Segments, fx: int, fy: int) -> _Stamp | None:
+        """The stamp of `s` (a group's useful segments, piece coordinates) for placements
+        of phase (fx, fy); None where sweeping each placement is cheaper."""
+        key = (shape.digest, fx, fy)
+        if key in self.stamps:
+            self.stamps.move_to_end(key)
+            return self.stamps[key]
+        uses = self.uses.get(key, 1)
+        stamp = _Stamp.make(self.grid, s, shape.useful, fx, fy, uses) if uses > 1 else None
+        if stamp is not None:
+            self.result.stamps += 1
+            self.result.swept += stamp.swept
+            self.result.pairs += stamp.pairs
+        self.stamps[key] = stamp
+        while sum(v.keys.size for v in self.stamps.values() if v) > STAMP_CELLS:
+            self.stamps.popitem(last=False)
+        return stamp
+
+    def flush(self) -> None:
+        """Fold the waiting stamp placements into the part."""
+        if self.pending:
+            self.result.pairs += _place(self, self.pending)
+            self.pending = []
+
+    def _check(self, rapid: Segments, order: int) -> None:
+        crash = check_rapid(self.grid, self.keys, rapid, self.tolerance)
+        if crash is not None:
+            self.result.crashes.append(
+                Crash(int(rapid.block[0]), order, crash[0], crash[1], crash[2], crash[3])
+            )
+
+
+def _digest(s: Segments, useful: I64) -> bytes:
+    """A name for segments `useful` of `s` (equal names, equal segments at equal
+    indices)."""
+    sub = s.select(useful)
+    h = hashlib.blake2b(useful.tobytes(), digest_size=16)
+    for name in Segments.__dataclass_fields__:
+        h.update(np.ascontiguousarray(getattr(sub, name)).tobytes())
+    return h.digest()
+
+
+@dataclass
+class _Stamp:
+    """A piece's cut on a map of its own: `keys` (rows × columns, BLANK where it does not
+    reach) over lattice cells from (`row`, `col`) on — lattice cell L of a placement whose
+    shift is m is the part's cell L − m. `swept` and `pairs` are what making it took."""
+
+    keys: I64
+    row: int
+    col: int
+    swept: int
+    pairs: int
+
+    @staticmethod
+    def make(grid: Grid, s: Segments, local: I64, fx: int, fy: int, count: int) -> _Stamp | None:
+        """The stamp of segments `s` (numbered `local`) on the lattice of phase (fx, fy),
+        or None when sweeping its `count` placements directly costs less."""
+        res = round(grid.resolution)
+        reach = s.radius + np.where(s.arc, np.hypot(s.x0 - s.cx, s.y0 - s.cy), 0.0)
+        xs = np.concatenate([s.x0, s.x1, np.where(s.arc, s.cx, s.x0)])
+        ys = np.concatenate([s.y0, s.y1, np.where(s.arc, s.cy, s.y0)])
+        far = np.concatenate([s.radius, s.radius, reach])
+        col = int(np.floor((float((xs - far).min()) - fx) / res)) - 1
+        row = int(np.floor((float((ys - far).min()) - fy) / res)) - 1
+        nx = int(np.ceil((float((xs + far).max()) - fx) / res)) + 1 - col
+        ny = int(np.ceil((float((ys + far).max()) - fy) / res)) + 1 - row
+        lattice = _lattice(grid, fx + col * res, fy + row * res, nx, ny)
+        i0, i1, j0, j1 = bounding_cells(lattice, s)
+        pairs = int(((i1 - i0) * (j1 - j0)).sum())
+        # Sweeping costs every placement its pairs; a stamp, its pairs once and a window
+        # per placement.
+        if nx * ny > grid.cells or nx * ny * count + pairs >= pairs * count:
+            return None
+        keys = np.full(lattice.cells, BLANK, dtype=np.int64)
+        rows = _collapse(s)
+        made = fold(lattice, keys, s.select(rows), local[rows])
+        plane = keys.reshape(ny, nx)
+        cut = plane != BLANK
+        used_rows = np.flatnonzero(cut.any(axis=1))
+        used_cols = np.flatnonzero(cut.any(axis=0))
+        if not len(used_rows):
+            return _Stamp(np.zeros((0, 0), dtype=np.int64), row, col, len(rows), made)
+        r0, r1 = int(used_rows[0]), int(used_rows[-1]) + 1
+        c0, c1 = int(used_cols[0]), int(used_cols[-1]) + 1
+        cropped = np.ascontiguousarray(plane[r0:r1, c0:c1])
+        return _Stamp(cropped, row + r0, col + c0, len(rows), made)
+
+
+def _place(run: _Run, pending: list[_Pending]) -> int:
+    """Fold stamp placements into the part; the cells written. The part is visited in
+    bands of rows, each band taking every placement that reaches it while it is in the
+    cache (the minimum does not care about the order)."""
+    grid = run.grid
+    stamps = [p.stamp for p in pending for _ in range(len(p.firsts))]
+    firsts = np.concatenate([p.firsts for p in pending])
+    heights = np.array([s.keys.shape[0] for s in stamps], dtype=np.int64)
+    widths = np.array([s.keys.shape[1] for s in stamps], dtype=np.int64)
+    tops = np.array([s.row for s in stamps], dtype=np.int64) - np.concatenate(
+        [p.my for p in pending]
+    )
+    lefts = np.array([s.col for s in stamps], dtype=np.int64) - np.concatenate(
+        [p.mx for p in pending]
+    )
+    r0, r1 = np.maximum(tops, 0), np.minimum(tops + heights, grid.ny)
+    c0, c1 = np.maximum(lefts, 0), np.minimum(lefts + widths, grid.nx)
+    live = np.flatnonzero((r0 < r1) & (c0 < c1))
+    if not len(live):
+        return 0
+    low, high = int(r0[live].min()), int(r1[live].max())
+    run.ledger.touch(low, high)
+    width = int(widths[live].max())
+    if len(run.scratch) < BAND_ROWS * width:
+        run.scratch = np.empty(BAND_ROWS * width, dtype=np.int64)
+    part = run.keys.reshape(grid.ny, grid.nx)
+    made = 0
+    for band in range(low, high, BAND_ROWS):
+        end = band + BAND_ROWS
+        here = live[(r0[live] < end) & (r1[live] > band)]
+        for p in here.tolist():
+            a, b = max(int(r0[p]), band), min(int(r1[p]), end)
+            c, d = int(c0[p]), int(c1[p])
+            top, left = int(tops[p]), int(lefts[p])
+            piece = stamps[p].keys[a - top : b - top, c - left : d - left]
+            # The stamp's keys numbered for this placement (in a buffer kept between
+            # calls), then the minimum with the part.
+            numbered = run.scratch[: piece.size].reshape(piece.shape)
+            np.add(piece, int(firsts[p]), out=numbered)
+            window = part[a:b, c:d]
+            np.minimum(window, numbered, out=window)
+            made += piece.size
+    return made
+
+
+def _lattice(grid: Grid, x0: int, y0: int, nx: int, ny: int) -> Grid:
+    """A grid of `grid`'s cell size whose first cell's corner is (x0, y0) (nm)."""
+    res = round(grid.resolution)
+    stock = grid.stock
+    box = Stock(x0, y0, x0 + nx * res, y0 + ny * res, stock.bottom, stock.top, stock.given)
+    return Grid(box, grid.resolution, nx, ny)
+
+
+# -- folding segments into a map -------------------------------------------------------------
+
+
+def fold(grid: Grid, keys: I64, s: Segments, orders: I64) -> int:
+    """Fold segments `s` (numbered `orders`) into `keys`, a map over `grid`: flat tools by
+    runs of cells, the others by pairs. The cells written."""
+    made = 0
+    level = flat(s)
+    if level.any():
+        rows = np.flatnonzero(level)
+        sub = s.select(rows)
+        low = np.rint(np.minimum(sub.z0, sub.z1)).astype(np.int64)
+        key = ((low + Z_OFFSET) << KEY_SHIFT) | orders[rows]
+        for spans in flat_spans(grid, sub):
+            for part in spans.parts():
+                cells = part.cells(grid.nx)
+                np.minimum.at(keys, cells, np.repeat(key[part.seg], part.hi - part.lo))
+                made += len(cells)
+    cone = ~level & (categories(s) == DISC)
+    if cone.any():
+        # Drill points going down: the key of the tip, raised by the cone per cell.
+        rows = np.flatnonzero(cone)
+        sub = s.select(rows)
+        tip = np.rint(np.minimum(sub.z0, sub.z1)).astype(np.int64)
+        base = ((tip + Z_OFFSET) << KEY_SHIFT) | orders[rows]
+        for block in plunges(grid, sub):
+            key = (block.rise << KEY_SHIFT) + base[block.seg][:, None, None]
+            key[block.rise < 0] = _NEVER
+            np.minimum.at(keys, block.cells.reshape(-1), key.reshape(-1))
+            made += key.size
+    rest = ~level & ~cone
+    if rest.any():
+        rows = np.flatnonzero(rest)
+        for cells, value, seg in evaluate(grid, s.select(rows)):
+            depth = np.rint(value).astype(np.int64)
+            np.minimum.at(keys, cells, ((depth + Z_OFFSET) << KEY_SHIFT) | orders[rows[seg]])
+            made += len(cells)
+    return made
 
 
 # -- which segments matter ------------------------------------------------------------------
 
 
-def categories(segments: Segments, rows: I64 | None = None) -> npt.NDArray[np.int8]:
-    """DISC (a plunge or lift: no XY motion), LINE (flat end, constant Z), RAMP (any
-    other straight move) or ARC, per segment (of `rows`, when given)."""
-    s = segments
-
-    def pick(a: npt.NDArray[_T]) -> npt.NDArray[_T]:
-        return a if rows is None else a[rows]
-
-    arc = pick(s.arc)
-    still = (pick(s.x0) == pick(s.x1)) & (pick(s.y0) == pick(s.y1)) & ~arc
-    level = (pick(s.z0) == pick(s.z1)) & (pick(s.slope) == 0)
-    cat = np.full(len(arc), RAMP, dtype=np.int8)
-    cat[level] = LINE
-    cat[still] = DISC
-    cat[arc] = ARC
-    return cat
-
-
-def _useful(grid: Grid, segments: Segments, upto: int | None) -> I64:
+def _useful(grid: Grid, s: Segments, upto: int | None) -> I64:
     """Indices of the segments that may remove material or hit it, in program order;
     rapids among them are the ones to check for a crash."""
-    s = segments
     keep = np.minimum(s.z0, s.z1) < grid.stock.top
     if upto is not None:
         keep &= s.block <= upto
-    i0, i1, j0, j1 = bounding_cells(grid, s)
-    keep &= (i1 > i0) & (j1 > j0)
     cat = categories(s)
     keep &= ~((cat == DISC) & (s.z1 > s.z0))
     # A rapid plunge to where the same tool has been at this XY before clears nothing new.
@@ -201,20 +549,19 @@ def _been_there(s: Segments, disc: I64) -> BOOL:
     return seen
 
 
-def _collapse(s: Segments, stage: I64) -> I64:
-    """`stage` without passes that repeat another's XY path higher up (pecks, 2P floors):
-    the deepest of identical level passes removes all the others do."""
-    if len(stage) < 2:
-        return stage
-    cat = categories(s, stage)
+def _collapse(s: Segments) -> I64:
+    """Indices of `s` without the passes that repeat another's XY path higher up (pecks,
+    2P floors): the deepest of identical level passes removes all the others do."""
+    if len(s) < 2:
+        return np.arange(len(s))
+    cat = categories(s)
     level = np.flatnonzero(cat != RAMP)
     if len(level) < 2:
-        return stage
-    rows = stage[level]
+        return np.arange(len(s))
     table = np.stack(
         [
-            *(s.x0[rows], s.y0[rows], s.x1[rows], s.y1[rows], s.cx[rows], s.cy[rows]),
-            *(s.ccw[rows].astype(np.float64), s.radius[rows], s.slope[rows]),
+            *(s.x0[level], s.y0[level], s.x1[level], s.y1[level], s.cx[level], s.cy[level]),
+            *(s.ccw[level].astype(np.float64), s.radius[level], s.slope[level]),
         ],
         axis=1,
     )
@@ -223,373 +570,81 @@ def _collapse(s: Segments, stage: I64) -> I64:
     table[plunge, 0:2] = table[plunge, 2:4]
     _, group = np.unique(table, axis=0, return_inverse=True)
     group = group.reshape(-1)
-    depth = np.minimum(s.z0[rows], s.z1[rows])
-    order = np.lexsort((rows, depth, group))
+    depth = np.minimum(s.z0[level], s.z1[level])
+    order = np.lexsort((level, depth, group))
     first = np.ones(len(order), dtype=np.bool_)
     first[1:] = group[order][1:] != group[order][:-1]
-    kept = np.zeros(len(stage), dtype=np.bool_)
+    kept = np.zeros(len(s), dtype=np.bool_)
     kept[cat == RAMP] = True
     kept[level[order[first]]] = True
-    return stage[kept]
+    return np.flatnonzero(kept)
 
 
-# -- bounding boxes and (segment, cell) pairs -------------------------------------------------
+# -- what each tool removed ------------------------------------------------------------------
 
 
-def bounding_cells(grid: Grid, s: Segments) -> tuple[I64, I64, I64, I64]:
-    """Per segment, the rows i0…i1 and columns j0…j1 (end exclusive) of the cells whose
-    centres its tool can reach, clipped to the grid."""
-    r = s.radius
-    xmin, xmax = np.minimum(s.x0, s.x1), np.maximum(s.x0, s.x1)
-    ymin, ymax = np.minimum(s.y0, s.y1), np.maximum(s.y0, s.y1)
-    if s.arc.any():
-        # An arc piece of at most 90° lies in the triangle of its ends and the meeting
-        # point of its end tangents.
-        a = s.arc
-        ux, uy = s.x0[a] - s.cx[a], s.y0[a] - s.cy[a]
-        vx, vy = s.x1[a] - s.cx[a], s.y1[a] - s.cy[a]
-        mx, my = ux + vx, uy + vy
-        norm = np.hypot(mx, my)
-        ra = np.hypot(ux, uy)
-        cos_half = np.where(norm > 0, norm / (2 * np.maximum(ra, 1e-9)), 1.0)
-        scale = np.where(norm > 0, ra / np.maximum(cos_half, 1e-9) / np.maximum(norm, 1e-9), 0)
-        tx, ty = s.cx[a] + mx * scale, s.cy[a] + my * scale
-        xmin[a], xmax[a] = np.minimum(xmin[a], tx), np.maximum(xmax[a], tx)
-        ymin[a], ymax[a] = np.minimum(ymin[a], ty), np.maximum(ymax[a], ty)
-    res = grid.resolution
-    j0 = np.ceil((xmin - r - grid.x0) / res - 0.5)
-    j1 = np.floor((xmax + r - grid.x0) / res - 0.5) + 1
-    i0 = np.ceil((ymin - r - grid.y0) / res - 0.5)
-    i1 = np.floor((ymax + r - grid.y0) / res - 0.5) + 1
-    return (
-        np.clip(i0, 0, grid.ny).astype(np.int64),
-        np.clip(i1, 0, grid.ny).astype(np.int64),
-        np.clip(j0, 0, grid.nx).astype(np.int64),
-        np.clip(j1, 0, grid.nx).astype(np.int64),
-    )
+class _Ledger:
+    """The volume each tool removes: the material in the bands of rows a tool run touches,
+    measured when it first touches them and again when the run ends."""
+
+    def __init__(self, grid: Grid, keys: I64, removed: dict[int, float]) -> None:
+        self.grid = grid
+        self.keys = keys
+        self.removed = removed
+        self.tool: int | None = None
+        self.counted = np.zeros(-(-grid.ny // LEDGER_ROWS), dtype=np.bool_)
+        self.before = 0.0
+
+    def use(self, tool: int) -> None:
+        """The segments folded in next are `tool`'s."""
+        if tool != self.tool:
+            self.close()
+            self.tool = tool
+
+    def touch(self, i0: int, i1: int) -> None:
+        """Rows i0 … i1 are about to be cut (by the tool in use)."""
+        if self.tool is not None:
+            self.removed.setdefault(self.tool, 0.0)
+        b0, b1 = i0 // LEDGER_ROWS, -(-i1 // LEDGER_ROWS)
+        fresh = np.flatnonzero(~self.counted[b0:b1]) + b0
+        for band in fresh.tolist():
+            self.before += self._band(band)
+        self.counted[fresh] = True
+
+    def close(self) -> None:
+        """The current tool's run has ended: add what it removed."""
+        if self.tool is None or not self.counted.any():
+            return
+        after = sum(self._band(b) for b in np.flatnonzero(self.counted).tolist())
+        self.removed[self.tool] += self.before - after
+        self.counted[:] = False
+        self.before = 0.0
+
+    def _band(self, band: int) -> float:
+        nx = self.grid.nx
+        lo = band * LEDGER_ROWS * nx
+        return volume(self.grid, self.keys[lo : lo + LEDGER_ROWS * nx])
 
 
-@dataclass
-class _Batch:
-    """(segment, cell) pairs: the cells, and per pair the segment (an index into the rows
-    evaluated) and the cell centre relative to the segment's reference point (its start, or
-    an arc's centre), in float32 nm: small numbers, so float32 keeps them to a few nm.
-    `count` is how many consecutive pairs each chunk has and `chunk` its segment, so
-    per-segment values reach the pairs by `np.repeat` instead of a gather per pair."""
-
-    cells: I64
-    seg: I64
-    wx: npt.NDArray[np.float32]
-    wy: npt.NDArray[np.float32]
-    chunk: I64
-    count: I64
-
-    def per_pair(self, values: npt.NDArray[_T]) -> npt.NDArray[_T]:
-        """A value per chunk's segment (indexed like `chunk`), repeated for its pairs."""
-        return np.repeat(values[self.chunk], self.count)
-
-
-def _batches(grid: Grid, s: Segments, rows: I64, rx: F64, ry: F64) -> Iterator[_Batch]:
-    """Pairs (segment, cell) over the bounding boxes of segments `rows`, in batches of about
-    BATCH_PAIRS; a box larger than that is cut into bands of rows. `seg` indexes `rows`;
-    (rx, ry) is each row's reference point."""
-    i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
-    width = j1 - j0
-    height = i1 - i0
-    live = np.flatnonzero((width > 0) & (height > 0))
-    if not len(live):
-        return
-    width, height, i0, j0 = width[live], height[live], i0[live], j0[live]
-    band = np.maximum(1, BATCH_PAIRS // width)
-    pieces = -(-height // band)
-    owner = np.repeat(live, pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    k = np.arange(len(owner)) - first
-    w = np.repeat(width, pieces)
-    top = np.repeat(i0, pieces) + k * np.repeat(band, pieces)
-    bottom = np.minimum(top + np.repeat(band, pieces), np.repeat(i0 + height, pieces))
-    left = np.repeat(j0, pieces)
-    area = (bottom - top) * w
-    res = grid.resolution
-    # The centre of each chunk's first cell relative to its segment's reference point.
-    base_x = grid.x0 + (left + 0.5) * res - rx[owner]
-    base_y = grid.y0 + (top + 0.5) * res - ry[owner]
-    total = np.cumsum(area)
-    cut = np.searchsorted(total, np.arange(BATCH_PAIRS, int(total[-1]), BATCH_PAIRS), "right")
-    for a, b in zip([0, *cut.tolist()], [*cut.tolist(), len(area)], strict=True):
-        if a >= b:
-            continue
-        part = slice(a, b)
-        yield _pairs(
-            grid,
-            owner[part],
-            top[part],
-            left[part],
-            w[part],
-            area[part],
-            base_x[part],
-            base_y[part],
-        )
-
-
-def _pairs(
-    grid: Grid,
-    owner: I64,
-    top: I64,
-    left: I64,
-    width: I64,
-    area: I64,
-    base_x: F64,
-    base_y: F64,
-) -> _Batch:
-    """The pairs of some chunks, made row by row: each (chunk, row) strip is a run of
-    consecutive cells, so a pair costs a few repeats and adds (no division)."""
-    res = grid.resolution
-    height = area // width
-    strips = int(height.sum())
-    chunk_of = np.repeat(np.arange(len(owner)), height)
-    line = np.arange(strips) - np.repeat(np.cumsum(height) - height, height)
-    w = width[chunk_of]
-    first = (top[chunk_of] + line) * grid.nx + left[chunk_of]
-    strip_x = base_x[chunk_of].astype(np.float32)
-    strip_y = (base_y[chunk_of] + line * res).astype(np.float32)
-    n = int(w.sum())
-    col = np.arange(n, dtype=np.int64) - np.repeat(np.cumsum(w) - w, w)
-    cells = np.repeat(first, w) + col
-    wx = np.repeat(strip_x, w) + col.astype(np.float32) * np.float32(res)
-    wy = np.repeat(strip_y, w)
-    strip_owner = owner[chunk_of]
-    return _Batch(cells, np.repeat(strip_owner, w), wx, wy, strip_owner, w)
-
-
-# -- the tool's bottom over each cell ------------------------------------------------------------
-
-
-def _line_bottom(s: Segments, rows: I64, cat: int, b: _Batch) -> F64:
-    """The lowest the tool's bottom gets over each pair's cell along a straight move (nm;
-    +inf out of reach). (wx, wy) are relative to the move's start."""
-    f32 = np.float32
-    g = rows
-    dx = (s.x1[g] - s.x0[g]).astype(f32)
-    dy = (s.y1[g] - s.y0[g]).astype(f32)
-    c = dx * dx + dy * dy
-    r2 = b.per_pair((s.radius[g] ** 2).astype(f32))
-    wx, wy = b.wx, b.wy
-    pdx, pdy = b.per_pair(dx), b.per_pair(dy)
-    tc = (wx * pdx + wy * pdy) * b.per_pair(1 / c)
-    z0 = b.per_pair(s.z0[g])
-    if cat == LINE:
-        t = np.clip(tc, 0, 1)
-        ex, ey = wx - t * pdx, wy - t * pdy
-        return np.where(ex * ex + ey * ey <= r2, z0, np.inf)
-    pc = b.per_pair(c)
-    slope = b.per_pair(s.slope[g].astype(f32))
-    dz = b.per_pair((s.z1[g] - s.z0[g]).astype(f32))
-    e2 = np.maximum(wx * wx + wy * wy - tc * tc * pc, 0)
-    reach = np.sqrt(np.maximum(r2 - e2, 0) / pc)
-    lo = np.maximum(tc - reach, 0)
-    hi = np.minimum(tc + reach, 1)
-    ok = (e2 <= r2) & (lo <= hi)
-    denom = slope * slope * pc - dz * dz
-    stationary = np.where(
-        denom > 0, tc - dz * np.sqrt(e2) / np.sqrt(pc * np.maximum(denom, 1e-30)), lo
-    )
-    stationary = np.clip(stationary, lo, hi)
-
-    def rise(t: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
-        out: npt.NDArray[np.float32] = t * dz + slope * np.sqrt(pc * (t - tc) ** 2 + e2)
-        return out
-
-    lowest = np.minimum(np.minimum(rise(lo), rise(hi)), rise(stationary))
-    return np.where(ok, z0 + lowest, np.inf)
-
-
-def _arc_bottom(s: Segments, rows: I64, b: _Batch) -> F64:
-    """As `_line_bottom` for arc pieces of at most 90°; (wx, wy) relative to the centre."""
-    f32 = np.float32
-    g = rows
-    ux0, uy0 = (s.x0[g] - s.cx[g]).astype(f32), (s.y0[g] - s.cy[g]).astype(f32)
-    ux1, uy1 = (s.x1[g] - s.cx[g]).astype(f32), (s.y1[g] - s.cy[g]).astype(f32)
-    sign = np.where(s.ccw[g], f32(1), f32(-1))
-    vx, vy = b.wx, b.wy
-    p0x, p0y, p1x, p1y = (b.per_pair(a) for a in (ux0, uy0, ux1, uy1))
-    psign = b.per_pair(sign)
-    inside = (psign * (p0x * vy - p0y * vx) >= 0) & (psign * (vx * p1y - vy * p1x) >= 0)
-    ra = b.per_pair(np.sqrt(ux0 * ux0 + uy0 * uy0))
-    rho = np.sqrt(vx * vx + vy * vy)
-    to_ends = np.minimum((vx - p0x) ** 2 + (vy - p0y) ** 2, (vx - p1x) ** 2 + (vy - p1y) ** 2)
-    d2 = np.where(inside, (rho - ra) ** 2, to_ends)
-    r2 = b.per_pair((s.radius[g] ** 2).astype(f32))
-    z = b.per_pair(s.z0[g])
-    slope = s.slope[g]
-    value = z + b.per_pair(slope) * np.sqrt(d2) if slope.any() else z
-    return np.where(d2 <= r2, value, np.inf)
-
-
-def evaluate(
-    grid: Grid, s: Segments, rows: I64, compress: bool = True
-) -> Iterator[tuple[I64, F64, I64]]:
-    """(cells, tool bottom in nm, segment index) for the cells the segments `rows` reach
-    (with `compress` False, for every cell of their boxes: +inf out of reach)."""
-    cat = categories(s, rows)
-    for kind in (DISC, LINE, RAMP, ARC):
-        part = rows[cat == kind]
-        if not len(part):
-            continue
-        if kind == DISC:
-            found = _discs(grid, s, part)
-        elif kind == ARC:
-            found = (
-                (b.cells, _arc_bottom(s, part, b), part[b.seg])
-                for b in _batches(grid, s, part, s.cx[part], s.cy[part])
-            )
-        else:
-            found = (
-                (b.cells, _line_bottom(s, part, kind, b), part[b.seg])
-                for b in _batches(grid, s, part, s.x0[part], s.y0[part])
-            )
-        for cells, value, seg in found:
-            if compress:
-                reach = np.isfinite(value)
-                yield cells[reach], value[reach], seg[reach]
-            else:
-                yield cells, value, seg
-
-
-def _discs(grid: Grid, s: Segments, rows: I64) -> Iterator[tuple[I64, F64, I64]]:
-    """`evaluate` for plunges: the tool's footprint is the same shape wherever it goes
-    down, so plunges whose boxes have the same size are computed together as one
-    (plunges × rows × columns) block of squared distances, one row and one column term
-    each, with no per-cell gathering."""
-    i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
-    h, w = i1 - i0, j1 - j0
-    live = (h > 0) & (w > 0)
-    rows, i0, j0, h, w = rows[live], i0[live], j0[live], h[live], w[live]
-    if not len(rows):
-        return
-    shapes = np.stack([h, w], axis=1)
-    kinds, which = np.unique(shapes, axis=0, return_inverse=True)
-    which = which.reshape(-1)
-    res = grid.resolution
-    for k, (hh, ww) in enumerate(kinds.tolist()):
-        members = np.flatnonzero(which == k)
-        step = max(1, BATCH_PAIRS // (hh * ww))
-        for a in range(0, len(members), step):
-            m = members[a : a + step]
-            g = rows[m]
-            cols = j0[m][:, None] + np.arange(ww)
-            lines = i0[m][:, None] + np.arange(hh)
-            dx2 = ((cols + 0.5) * res + grid.x0 - s.x1[g][:, None]) ** 2
-            dy2 = ((lines + 0.5) * res + grid.y0 - s.y1[g][:, None]) ** 2
-            d2 = dy2[:, :, None] + dx2[:, None, :]
-            z = np.minimum(s.z0[g], s.z1[g])[:, None, None]
-            slope = s.slope[g][:, None, None]
-            value = z + slope * np.sqrt(d2) if slope.any() else np.broadcast_to(z, d2.shape)
-            value = np.where(d2 <= (s.radius[g] ** 2)[:, None, None], value, np.inf)
-            cells = (lines * grid.nx)[:, :, None] + cols[:, None, :]
-            seg = np.broadcast_to(g[:, None, None], d2.shape)
-            yield cells.reshape(-1), value.reshape(-1), seg.reshape(-1)
-
-
-def _apply(grid: Grid, keys: I64, s: Segments, rows: I64) -> tuple[float, int]:
-    """Fold segments `rows` into the map; the volume they removed (nm³), the pairs made."""
-    if not len(rows):
-        return 0.0, 0
-    i0, i1, _, _ = bounding_cells(grid, s.select(rows))
-    lo, hi = int(i0.min()) * grid.nx, int(i1.max()) * grid.nx
-    if hi <= lo:
-        return 0.0, 0
-    before = _volume(grid, keys[lo:hi])
-    cat = categories(s, rows)
-    sweeps = rows[cat != DISC]
-    if len(sweeps) >= CULL_AFTER:
-        pairs = _fold(grid, keys, s, rows[cat == DISC]) + _fold_culled(grid, keys, s, sweeps)
-    else:
-        pairs = _fold(grid, keys, s, rows)
-    return before - _volume(grid, keys[lo:hi]), pairs
-
-
-def _fold(grid: Grid, keys: I64, s: Segments, rows: I64) -> int:
-    """Fold segments `rows` into the map; how many pairs that took."""
-    pairs = 0
-    # A flat end's bottom is its tip everywhere (ramps aside): one key per segment.
-    level = not s.slope[rows].any() and not (categories(s, rows) == RAMP).any()
-    if level:
-        flat = np.full(len(s), _NEVER, dtype=np.int64)
-        low = np.rint(np.minimum(s.z0[rows], s.z1[rows])).astype(np.int64)
-        flat[rows] = ((low + Z_OFFSET) << KEY_SHIFT) | rows
-    for cells, value, seg in evaluate(grid, s, rows, compress=False):
-        pairs += len(cells)
-        reach = np.isfinite(value)
-        if level:
-            np.minimum.at(keys, cells, np.where(reach, flat[seg], _NEVER))
-            continue
-        depth = np.rint(np.where(reach, value, 0.0)).astype(np.int64)
-        key = np.where(reach, ((depth + Z_OFFSET) << KEY_SHIFT) | seg, _NEVER)
-        np.minimum.at(keys, cells, key)
-    return pairs
-
-
-def _fold_culled(grid: Grid, keys: I64, s: Segments, rows: I64) -> int:
-    """`_fold` for many milling moves, deepest first (earliest first at equal depth), each
-    skipped when the material under its whole box is already no higher than its tip: a
-    pocket cleared before, pecks, overlapping passes. The test is against the highest
-    material per tile of TILE × TILE cells, kept up to date after each batch; it only ever
-    errs towards cutting (heights only fall), so the part is the same as without it."""
-    i0, i1, j0, j1 = bounding_cells(grid, s.select(rows))
-    low = np.minimum(s.z0[rows], s.z1[rows])
-    area = ((i1 - i0) * (j1 - j0)).tolist()
-    order = np.lexsort((rows, low)).tolist()
-    ti0, ti1 = (i0 // TILE).tolist(), ((i1 - 1) // TILE + 1).tolist()
-    tj0, tj1 = (j0 // TILE).tolist(), ((j1 - 1) // TILE + 1).tolist()
-    lows = low.tolist()
-    highest = _tile_max(grid, keys, 0, -(-grid.ny // TILE), 0, -(-grid.nx // TILE))
-    batch: list[int] = []
-    pairs = 0
-    made = 0
-    box = [grid.ny, 0, grid.nx, 0]
-
-    def flush() -> int:
-        done = _fold(grid, keys, s, rows[np.array(batch, dtype=np.int64)])
-        a, b, c, d = box[0], box[1], box[2], box[3]
-        highest[a:b, c:d] = _tile_max(grid, keys, a, b, c, d)
-        return done
-
-    for k in order:
-        if area[k] <= 0 or highest[ti0[k] : ti1[k], tj0[k] : tj1[k]].max() <= lows[k]:
-            continue
-        batch.append(k)
-        pairs += area[k]
-        box = [min(box[0], ti0[k]), max(box[1], ti1[k]), min(box[2], tj0[k]), max(box[3], tj1[k])]
-        if pairs >= BATCH_PAIRS:
-            made += flush()
-            batch, pairs, box = [], 0, [grid.ny, 0, grid.nx, 0]
-    if batch:
-        made += flush()
-    return made
-
-
-def _tile_max(grid: Grid, keys: I64, a: int, b: int, c: int, d: int) -> F64:
-    """The highest material (nm) in each tile of rows a…b, columns c…d (tile units)."""
-    top = keys.reshape(grid.ny, grid.nx)[a * TILE : b * TILE, c * TILE : d * TILE] >> KEY_SHIFT
-    rows_max = np.maximum.reduceat(top, np.arange(0, top.shape[0], TILE), axis=0)
-    tiles = np.maximum.reduceat(rows_max, np.arange(0, top.shape[1], TILE), axis=1)
-    return (tiles - Z_OFFSET).astype(np.float64)
-
-
-def _volume(grid: Grid, keys: I64) -> float:
+def volume(grid: Grid, keys: I64) -> float:
     """Material in the cells of `keys`, nm³ above the stock's bottom."""
     z = (keys >> KEY_SHIFT) - Z_OFFSET
     material = np.maximum(z, grid.stock.bottom) - grid.stock.bottom
     return float(material.sum()) * grid.resolution**2
 
 
-def _check_rapid(grid: Grid, keys: I64, s: Segments, row: int, tolerance: float) -> Crash | None:
-    """The deepest material a rapid move meets, if more than `tolerance` nm."""
+# -- crashes ---------------------------------------------------------------------------------
+
+
+def check_rapid(
+    grid: Grid, keys: I64, rapid: Segments, tolerance: float
+) -> tuple[float, float, float, float] | None:
+    """(depth, x, y, z): the deepest material the one rapid move `rapid` meets, where, and
+    its tool's bottom there, if more than `tolerance` nm."""
     # The deepest to the nanometre; of cells equally deep, the first (lowest row, column).
     worst: tuple[float, int, float] | None = None
     bottom = grid.stock.bottom
-    for cells, value, _ in evaluate(grid, s, np.array([row], dtype=np.int64)):
+    for cells, value, _ in evaluate(grid, rapid):
         top = ((keys[cells] >> KEY_SHIFT) - Z_OFFSET).astype(np.float64)
         depth = np.rint(top - np.maximum(value, bottom))
         depth[top <= bottom] = 0.0
@@ -605,11 +660,4 @@ def _check_rapid(grid: Grid, keys: I64, s: Segments, row: int, tolerance: float)
     amount, cell, z = worst
     i, j = divmod(cell, grid.nx)
     res = grid.resolution
-    return Crash(
-        block=int(s.block[row]),
-        segment=row,
-        depth=amount,
-        x=grid.x0 + (j + 0.5) * res,
-        y=grid.y0 + (i + 0.5) * res,
-        z=z,
-    )
+    return amount, grid.x0 + (j + 0.5) * res, grid.y0 + (i + 0.5) * res, z

@@ -29,10 +29,11 @@ from decimal import Decimal
 import numpy as np
 
 from app.cnc.blocks import Program
-from app.cnc.interpret import interpret
+from app.cnc.compiler import compile_program
 from app.cnc.mill import Element
+from app.cnc.simulate.placements import Placed, place
 from app.cnc.simulate.programmed import Contour, Programmed, Routine, programmed_geometry
-from app.cnc.simulate.segments import BOOL, F64, Segments, toolpath_segments
+from app.cnc.simulate.segments import BOOL, F64
 from app.cnc.simulate.stock import (
     Grid,
     Stock,
@@ -110,29 +111,29 @@ class Verification:
         return "\n".join(lines) + "\n"
 
 
-def stock_of(program: Program, segments: Segments) -> Stock:
+def stock_of(program: Program, placed: Placed) -> Stock:
     """The program's own stock, else one sized from its extent. Raises StockError."""
     if program.stock is not None:
         return program_stock(program.stock, program.units)
-    return extent_stock(segments)
+    return extent_stock(placed, program.units)
 
 
 def prepare(
     program: Program, resolution: int | None = None, cells: int = 800
-) -> tuple[Grid, Segments]:
+) -> tuple[Grid, Placed]:
     """The grid (the program's stock, `resolution` nm cells, or about `cells` along the
-    longer side) and the segments of a validated program. Raises StockError."""
-    segments = toolpath_segments(program, interpret(program))
-    stock = stock_of(program, segments)
-    return make_grid(stock, resolution or auto_resolution(stock, program.units, cells)), segments
+    longer side) and the placed segments of a validated program. Raises StockError."""
+    placed = place(program, compile_program(program).path)
+    stock = stock_of(program, placed)
+    return make_grid(stock, resolution or auto_resolution(stock, program.units, cells)), placed
 
 
 def run_simulation(
     program: Program, resolution: int | None = None, upto: int | None = None, cells: int = 800
 ) -> Simulation:
     """Simulate a validated program up to block `upto` (None: all); see `prepare`."""
-    grid, segments = prepare(program, resolution, cells)
-    return simulate(grid, segments, upto, default_tolerance(program.units))
+    grid, placed = prepare(program, resolution, cells)
+    return simulate(grid, placed, upto, default_tolerance(program.units))
 
 
 def default_tolerance(units: Units) -> int:
@@ -146,16 +147,17 @@ def verify(
     """Simulate a validated program and check it (see the module's note). `tolerance` (nm)
     defaults to 0.001 in (0.02 mm). Raises StockError for a bad stock."""
     tol = default_tolerance(program.units) if tolerance is None else tolerance
-    grid, segments = prepare(program, resolution)
-    sim = simulate(grid, segments, None, tol)
+    grid, placed = prepare(program, resolution)
+    sim = simulate(grid, placed, None, tol)
     geometry = programmed_geometry(program)
-    result = Verification(program, sim, notes=list(segments.notes), tolerance=tol)
+    result = Verification(program, sim, notes=placed.shapes.notes(), tolerance=tol)
     result.checked = {
         "contours": len(geometry.contours),
         "routines": len(geometry.routines),
         "holes": len(geometry.holes),
     }
-    if not (np.minimum(segments.z0, segments.z1) < grid.stock.top).any():
+    top = grid.stock.top
+    if not any((np.minimum(g.segments.z0, g.segments.z1) < top).any() for g in placed.groups):
         result.notes.append(
             "no move goes below the stock's top, so nothing is cut (a 2-axis program "
             "moves the quill by hand)"

@@ -1,0 +1,135 @@
+"""The compiled path as groups of identical motions placed by translation.
+
+A LOOP's patterns are stored once in the compiled path (`path.Run`: one piece, several
+offsets); the simulation keeps that: `place` walks the path's tree and gives, in program
+order, `Group`s — the segments of one piece in the piece's own coordinates and the offsets
+it is placed at. A piece placed once is a group of one. Segments are made once per piece
+and entry state, however often the piece is placed, so the work and the memory of this
+step grow with the program's distinct pieces, not with its moves.
+
+A Run's placements are entered in the same state relative to their offset (the compiler
+groups them that way); `place` checks it (the end of one placement must lead to the entry
+of the next) and splits a group where it does not hold.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.cnc.blocks import Program
+from app.cnc.path import CompiledPath, Node, Piece, Seq
+from app.cnc.simulate.segments import I64, Entry, Segments, ToolShapes, piece_segments
+
+
+@dataclass
+class Group:
+    """`segments` (piece coordinates) placed at each of `offsets` (k × 2, nm) in turn;
+    `key` names the segments: equal keys, equal segments (the same moves, entered alike)."""
+
+    segments: Segments
+    offsets: I64
+    key: tuple[object, ...]
+
+    @property
+    def count(self) -> int:
+        """How many segments the group makes: one piece's times its placements."""
+        return len(self.segments) * len(self.offsets)
+
+    def absolute(self) -> Segments:
+        """Every placement's segments in part coordinates, in order."""
+        if len(self.offsets) == 1:
+            ox, oy = self.offsets[0].tolist()
+            return self.segments.translated(ox, oy)
+        return self.segments.tiled(self.offsets)
+
+
+@dataclass
+class Placed:
+    """A program's motions as groups in program order, and the tool shapes they use."""
+
+    groups: list[Group]
+    shapes: ToolShapes
+
+    def __len__(self) -> int:
+        return sum(g.count for g in self.groups)
+
+    def absolute(self) -> Segments:
+        """All segments in part coordinates (for small programs and tests: this array grows
+        with the program)."""
+        return Segments.concatenate([g.absolute() for g in self.groups])
+
+
+def place(program: Program, path: CompiledPath) -> Placed:
+    """The motions of `path` (compiled from `program`) as placed groups."""
+    shapes = ToolShapes.of(program, path.tools)
+    walker = _Walker(shapes, Entry(*path.start, path.initial_tool))
+    walker.visit(path.root, 0, 0, 0)
+    return Placed(walker.groups, shapes)
+
+
+class _Walker:
+    def __init__(self, shapes: ToolShapes, entry: Entry) -> None:
+        self.shapes = shapes
+        self.at = entry
+        self.groups: list[Group] = []
+        self.made: dict[tuple[object, ...], tuple[Segments, Entry]] = {}
+        # Pieces by content: the compiler may hold equal pieces as distinct objects (one
+        # per Run of a LOOP's rows). Ids are kept with their pieces, so none is reused.
+        self.digests: dict[int, tuple[Piece, bytes]] = {}
+
+    def visit(self, node: Node, dx: int, dy: int, base: int) -> None:
+        if isinstance(node, Piece):
+            self.piece(node, np.array([[dx, dy]], dtype=np.int64), base)
+        elif isinstance(node, Seq):
+            for child in node.nodes:
+                self.visit(child, dx, dy, base)
+        elif isinstance(node.node, Piece):
+            offsets = node.offsets + np.array([dx, dy], dtype=np.int64)
+            self.piece(node.node, offsets, base + node.base)
+        else:
+            for ox, oy in node.offsets.tolist():
+                self.visit(node.node, dx + ox, dy + oy, base + node.base)
+
+    def piece(self, piece: Piece, offsets: I64, base: int) -> None:
+        """`piece` placed at `offsets`, in groups of placements entered alike."""
+        for group in self._groups(piece, offsets, base):
+            if len(group.segments):
+                self.groups.append(group)
+
+    def _groups(self, piece: Piece, offsets: I64, base: int) -> Iterator[Group]:
+        while len(offsets):
+            ox, oy = offsets[0].tolist()
+            here = self.at
+            entry = Entry(here.x - ox, here.y - oy, here.z, here.tool)
+            key = (self._digest(piece), base + piece.base, entry.x, entry.y, entry.z, entry.tool)
+            found = self.made.get(key)
+            if found is None:
+                found = piece_segments(piece.rows, base + piece.base, entry, self.shapes)
+                self.made[key] = found
+            segments, leave = found
+            # Placement p + 1 is entered where placement p leaves: alike when that is the
+            # entry moved by the step between their offsets.
+            step = offsets[:-1] - offsets[1:]
+            alike = (
+                (leave.x + step[:, 0] == entry.x)
+                & (leave.y + step[:, 1] == entry.y)
+                & (leave.z == entry.z)
+                & (leave.tool == entry.tool)
+            )
+            count = 1 + (int(np.argmin(alike)) if not alike.all() else len(alike))
+            last = offsets[count - 1].tolist()
+            self.at = Entry(leave.x + last[0], leave.y + last[1], leave.z, leave.tool)
+            yield Group(segments, offsets[:count], key)
+            offsets = offsets[count:]
+
+    def _digest(self, piece: Piece) -> bytes:
+        """A name for the piece's moves (equal moves, equal names)."""
+        known = self.digests.get(id(piece))
+        if known is None:
+            digest = hashlib.blake2b(piece.rows.tobytes(), digest_size=16).digest()
+            known = self.digests[id(piece)] = (piece, digest)
+        return known[1]

@@ -14,52 +14,18 @@ import dataclasses
 import enum
 import json
 import typing
+from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import (
-    ArcEnd,
-    Block,
-    BoltCircle,
-    Circle,
-    Copy,
-    DataBlock0,
-    Frame,
-    Hole,
-    HoleOp,
-    MillArc,
-    MillLine,
-    MillQcir,
-    Pos,
-    Program,
-    Rep,
-    Stock,
-    Tool,
-    field_label,
-)
+from app.cnc.blocks import Block, DataBlock0, Program, Stock, Tool, field_label
+from app.cnc.kinds import REGISTRY
 from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
 from app.cnc.units import Units
 
 FORMAT_NAME = "millblocks-program"
 FORMAT_VERSION = 1
-
-# The JSON `type` of each block class; hole blocks use their operation (DRILL/BORE/TAP).
-_TYPE_OF: dict[type[Block], str] = {
-    Pos: "POS",
-    BoltCircle: "BOLT_CIR",
-    MillLine: "MILL_STD",
-    MillQcir: "MILL_QCIR",
-    MillArc: "MILL_ARC",
-    ArcEnd: "MILL_ARC_END",
-    Circle: "CIRCLE",
-    Frame: "FRAME",
-    Rep: "REP",
-    Copy: "COPY",
-}
-_CLASS_OF: dict[str, type[Block]] = {name: cls for cls, name in _TYPE_OF.items()}
-for _op in HoleOp:
-    _CLASS_OF[_op.value] = Hole
 
 
 class DocumentError(ValueError):
@@ -106,16 +72,17 @@ def dumps(program: Program) -> str:
 
 
 def _block_out(block: Block) -> dict[str, Any]:
-    kind = block.op.value if isinstance(block, Hole) else _TYPE_OF[type(block)]
-    data: dict[str, Any] = {"type": kind}
+    # The JSON `type` names the kind and stands for the field values it fixes (DRILL: op).
+    kind = REGISTRY.document_of(block)
+    data: dict[str, Any] = {"type": kind.name}
     data.update(_fields_out(block))
-    if isinstance(block, Hole):
-        del data["op"]
+    for name, _ in kind.fixed:
+        del data[name]
     return data
 
 
 def _fields_out(obj: Any) -> dict[str, Any]:
-    return {f.name: _out(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    return {f.name: _out(getattr(obj, f.name)) for f in REGISTRY.fields(type(obj))}
 
 
 def _out(value: Any) -> Any:
@@ -226,45 +193,57 @@ def _block_in(item: Any, number: int) -> Block:
     if not isinstance(item, dict):
         raise DocumentError(where, "expected an object")
     kind = item.get("type")
-    cls = _CLASS_OF.get(kind) if isinstance(kind, str) else None
-    if cls is None:
-        allowed = ", ".join(sorted(_CLASS_OF))
+    types = REGISTRY.documents()
+    found = types.get(kind) if isinstance(kind, str) else None
+    if found is None:
+        allowed = ", ".join(sorted(types))
         raise DocumentError(f"{where}, type", f"unknown block type {kind!r}; allowed: {allowed}")
+    cls, fixed = found
     fields = {k: v for k, v in item.items() if k != "type"}
-    if cls is Hole:
-        return _build(Hole, fields, where, op=HoleOp(kind))
-    return _build(cls, fields, where)
+    return _build(cls, fields, where, **fixed)
 
 
 _T = typing.TypeVar("_T")
 
 
-_HINTS: dict[type, dict[str, Any]] = {}
+@dataclass(frozen=True)
+class _Shape:
+    """What reading a dataclass from JSON needs, worked out once per class: its resolved
+    type hints (slow to resolve), its field names and those that have no default."""
+
+    hints: dict[str, Any]
+    names: frozenset[str]
+    required: tuple[str, ...]
 
 
-def _hints(cls: type) -> dict[str, Any]:
-    """A dataclass's resolved type hints (resolving them is slow; each class once)."""
-    if cls not in _HINTS:
-        _HINTS[cls] = typing.get_type_hints(cls)
-    return _HINTS[cls]
+_SHAPES: dict[type, _Shape] = {}
+
+
+def _shape(cls: type) -> _Shape:
+    found = _SHAPES.get(cls)
+    if found is None:
+        fields = dataclasses.fields(cls)
+        found = _SHAPES[cls] = _Shape(
+            typing.get_type_hints(cls),
+            frozenset(f.name for f in fields),
+            tuple(
+                f.name
+                for f in fields
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            ),
+        )
+    return found
 
 
 def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:
     """Construct dataclass `cls` from JSON fields, converting and checking each one."""
-    hints = _hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    _no_unknown(where, data, set(fields) - set(fixed))
+    shape = _shape(cls)
+    _no_unknown(where, data, set(shape.names - set(fixed)))
     values: dict[str, Any] = dict(fixed)
     for name, raw in data.items():
         label = field_label(cls, name)  # type: ignore[arg-type]
-        values[name] = _convert(raw, hints[name], f"{where}, {label}")
-    missing = [
-        field_label(cls, f.name)  # type: ignore[arg-type]
-        for f in fields.values()
-        if f.name not in values
-        and f.default is dataclasses.MISSING
-        and f.default_factory is dataclasses.MISSING
-    ]
+        values[name] = _convert(raw, shape.hints[name], f"{where}, {label}")
+    missing = [field_label(cls, name) for name in shape.required if name not in values]  # type: ignore[arg-type]
     if missing:
         raise DocumentError(f"{where}, {missing[0]}", "missing; this field has no default")
     return cls(**values)

@@ -8,14 +8,11 @@ RPM, the divot of an arc whose end is off its radius).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterator
 from decimal import Decimal
 
 from app.cnc import limits
 from app.cnc.blocks import (
-    LOOP_CAPABLE_CLASSES,
-    MAX_TOOLS,
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
     ArcEnd,
@@ -30,15 +27,13 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     MillArc,
-    MillLine,
-    MillQcir,
     Mode,
-    Pos,
     Program,
     Rep,
     field_label,
 )
 from app.cnc.compiler import compile_program
+from app.cnc.kinds import REGISTRY, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
@@ -58,16 +53,7 @@ MESSAGE_CHARACTERS = frozenset(
     "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 .,-:/#+=*"
 )
 
-# Fields holding signed lengths, and fields holding lengths that must be positive.
-SIGNED_LENGTHS = ("x", "y", "z_up", "z_dn", "xof", "yof")
-POSITIVE_LENGTHS = ("radius", "xl", "yw")
-COUNTS = {
-    "tool": (1, MAX_TOOLS),
-    "pecks": (1, limits.MAX_PECKS),
-    "holes": (1, limits.MAX_BOLT_HOLES),
-    "nx": (0, limits.MAX_REPEAT),
-    "ny": (0, limits.MAX_REPEAT),
-}
+WHOLE = (Value.COUNT, Value.TOOL)
 
 
 def validate(program: Program) -> list[Problem]:
@@ -167,26 +153,25 @@ class _Checker:
     # -- fields -------------------------------------------------------------------------
 
     def check_fields(self, number: int, block: Block) -> None:
+        """Each value against its declaration (app.cnc.kinds: value kind and limits)."""
         units = block.units
-        for f in dataclasses.fields(block):
+        for f in REGISTRY.fields(type(block)):
             value = getattr(block, f.name)
             if value is None or isinstance(value, bool):
                 continue
-            label = str(f.metadata.get("label", f.name))
-            if f.name in SIGNED_LENGTHS:
-                self.check_length(number, label, value, units)
-            elif f.name in POSITIVE_LENGTHS:
-                self.check_length(number, label, value, units, positive=True)
-            elif f.name == "corner_radius":
-                self.check_length(number, label, value, units, minimum=Decimal(0))
-            elif f.name == "feed_z":
-                self.check_feed(number, label, value, limits.FEED_Z[units], units)
-            elif f.name == "feed_xy":
-                self.check_feed(number, label, value, limits.FEED_XY[units], units)
-            elif f.name == "angle":
+            declared = f.prompt
+            label = declared.label
+            if declared.value is Value.LENGTH:
+                minimum = None if declared.low is None else Decimal(declared.low)
+                self.check_length(
+                    number, label, value, units, positive=declared.positive, minimum=minimum
+                )
+            elif declared.value is Value.FEED and declared.feed is not None:
+                self.check_feed(number, label, value, declared.feed[units], units)
+            elif declared.value is Value.ANGLE:
                 self.check_angle(number, label, value)
-            elif f.name in COUNTS:
-                low, high = COUNTS[f.name]
+            elif declared.value in WHOLE and declared.low is not None and declared.high is not None:
+                low, high = declared.low, declared.high
                 if not low <= value <= high:
                     self.add(
                         number,
@@ -297,7 +282,8 @@ class _Checker:
             )
 
     def check_kind_rules(self, number: int, block: Block) -> None:
-        if block.loop and not isinstance(block, LOOP_CAPABLE_CLASSES):
+        kind = REGISTRY.of(block)
+        if block.loop and not kind.loopable:
             self.add(
                 number,
                 "LOOP",
@@ -306,7 +292,7 @@ class _Checker:
                 f"a {block.type_name} block cannot carry LOOP; "
                 "a LOOP is a POS, DRILL, BORE or TAP block",
             )
-        if block.stop and isinstance(block, Rep | Copy | MillArc):
+        if block.stop and not kind.stoppable:
             self.add(
                 number,
                 "STOP",
@@ -375,7 +361,7 @@ class _Checker:
     def check_loops(self) -> None:
         open_loops: list[int] = []
         for number, block in enumerate(self.blocks, start=1):
-            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+            if block.loop and REGISTRY.of(block).loopable:
                 if len(open_loops) == limits.MAX_LOOP_DEPTH:
                     self.add(
                         number,
@@ -570,7 +556,7 @@ class _Checker:
         depth = 0
         start = 0
         for index, block in enumerate(blocks):
-            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+            if block.loop and REGISTRY.of(block).loopable:
                 if depth == 0:
                     start = index
                 depth += 1
@@ -683,4 +669,4 @@ def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
 
 def _has_position(block: Block) -> bool:
     """True for blocks whose X/Y is a position (ABS/INC matters for them)."""
-    return isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd)
+    return REGISTRY.of(block).positioned

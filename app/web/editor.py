@@ -9,6 +9,7 @@ posts and redirects the same way.
 from __future__ import annotations
 
 import dataclasses
+import enum
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
@@ -18,28 +19,27 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import (
-    ArcEnd,
     Block,
     Coolant,
     DataBlock0,
-    MillArc,
     MillingMode,
+    Mode,
     Program,
     Tool,
-    field_label,
 )
 from app.cnc.copy import CopyError, cancel_copy, execute_copy
 from app.cnc.estimate import format_seconds
+from app.cnc.kinds import REGISTRY
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
 from app.web.extensions import get_library
 from app.web.forms import (
-    GROUP_KINDS,
-    KINDS,
     defaults_for,
+    entry_forms,
     field_values,
+    group_kinds,
     kind_of,
     offered_groups,
     offered_kinds,
@@ -101,26 +101,32 @@ def page_of(number: int) -> int:
 
 
 def block_summary(block: Block) -> str:
-    """The block's values in one line, the way the control's block list reads."""
+    """The block's values in one line, the way the control's block list reads: what its
+    entry form asks for (its type and sub-type are in its title)."""
     parts = []
-    for f in dataclasses.fields(block):
-        if f.name in ("mode", "units", "loop", "stop", "kind", "message"):
-            continue
+    for f in REGISTRY.prompted(type(block), REGISTRY.sub_kind_of(block)):
         value = getattr(block, f.name)
-        if value is None or value is False or f.name in ("op", "direction", "two_pass"):
+        if value is None or value is False:
             continue
-        label = field_label(block, f.name)
+        label = f.label
         if value is True:
             parts.append(label)
         elif isinstance(value, Decimal):
             parts.append(f"{label} {value:f}")
-        elif hasattr(value, "value"):
+        elif isinstance(value, enum.Enum):
             parts.append(f"{label} {str(value.value).upper()}")
         else:
             parts.append(f"{label} {value}")
-    if getattr(block, "x", None) is not None and block.mode.value == "inc":
+    if REGISTRY.of(block).positioned and block.mode is Mode.INC:
         parts.insert(0, "INC")
     return "  ".join(parts)
+
+
+def follower(blocks: tuple[Block, ...] | list[Block], number: int) -> int:
+    """1 when block `number` is entered together with the block after it (an ARC XY-CENT
+    and its XY-END), else 0."""
+    then = REGISTRY.sub_kind_of(blocks[number - 1]).then
+    return int(then is not None and number < len(blocks) and isinstance(blocks[number], then))
 
 
 def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
@@ -147,20 +153,19 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
         }
         for n, block in enumerate(program.blocks[first - 1 : first - 1 + PAGE_SIZE], start=first)
     ]
-    kind = KINDS.get(entry.kind)
+    kind = entry_forms().get(entry.kind)
     field_problems: dict[str, list[Problem]] = {}
     if entry.editing and kind is not None:
-        block = program.blocks[entry.at - 1]
         field_problems["message"] = [
             p for p in problems if p.block == entry.at and p.field == "MESSAGE"
         ]
         for spec in kind.fields:
-            try:
-                label = field_label(block, spec.name)
-            except KeyError:
-                label = spec.label
+            number, name = entry.at, spec.name
+            if name.startswith("end_"):
+                number, name = entry.at + 1, name.removeprefix("end_")
+            label = REGISTRY.label(type(program.blocks[number - 1]), name)
             field_problems[spec.name] = [
-                p for p in problems if p.block == entry.at and p.field == label
+                p for p in problems if p.block == number and p.field == label
             ]
     return {
         "stored": stored,
@@ -180,8 +185,8 @@ def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
         "field_problems": field_problems,
         "groups": offered_groups(program, entry.at) if not entry.editing else [],
         "sub_kinds": offered_kinds(program, entry.at, entry.group) if entry.group else [],
-        "group_kinds": GROUP_KINDS,
-        "kinds": KINDS,
+        "group_kinds": group_kinds(),
+        "kinds": entry_forms(),
     }
 
 
@@ -231,7 +236,7 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         kinds = offered_kinds(program, at, group)
         if len(kinds) == 1:
             kind = kinds[0]
-    if kind in KINDS:
+    if kind in entry_forms():
         entry.kind = kind
         entry.values = defaults_for(program, at, kind, loop)
     return entry
@@ -300,9 +305,10 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
         return render_editor(stored, entry, 422)
     blocks = list(program.blocks)
     if editing:
-        span = 2 if isinstance(blocks[at - 1], MillArc) and len(parsed.blocks) == 2 else 1
-        if span == 2 and not (at < len(blocks) and isinstance(blocks[at], ArcEnd)):
-            span = 1
+        # An ARC is entered as its XY-CENT and XY-END blocks: both are replaced (the
+        # XY-END is added when it was missing).
+        span = 1 + (follower(blocks, at) if len(parsed.blocks) == 2 else 0)
+        if len(parsed.blocks) == 2 and span == 1:
             blocks.insert(at, parsed.blocks[1])
         blocks[at - 1 : at - 1 + span] = parsed.blocks
     else:
@@ -364,17 +370,9 @@ def value_problems(program: Program, numbers: range) -> list[tuple[str, Problem]
             if problem.severity is not Severity.ERROR:
                 continue
             block = program.blocks[number - 1]
-            name = next(
-                (
-                    f.name
-                    for f in dataclasses.fields(block)
-                    if f.metadata.get("label") == problem.field
-                ),
-                "x",
-            )
-            if isinstance(block, ArcEnd) and name in ("x", "y"):
-                name = f"end_{name}"
-            found.append((name, problem))
+            name = REGISTRY.name_of(type(block), problem.field or "") or "x"
+            # The second block of a two-block entry (an ARC's XY-END) has `end_` fields.
+            found.append(("end_" + name if number > numbers.start else name, problem))
     return found
 
 
@@ -403,13 +401,7 @@ def delete_block(program_id: int, number: int) -> Response | tuple[str, int]:
     blocks = list(stored.program.blocks)
     if not 1 <= number <= len(blocks):
         abort(404, f"There is no block {number}.")
-    span = (
-        2
-        if isinstance(blocks[number - 1], MillArc)
-        and number < len(blocks)
-        and isinstance(blocks[number], ArcEnd)
-        else 1
-    )
+    span = 1 + follower(blocks, number)
     del blocks[number - 1 : number - 1 + span]
     entry = Entry(at=len(blocks) + 1, editing=False)
     saved = _save(stored, dataclasses.replace(stored.program, blocks=tuple(blocks)), entry)

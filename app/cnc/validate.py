@@ -8,8 +8,12 @@ RPM, the divot of an arc whose end is off its radius).
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator
+from dataclasses import replace
 from decimal import Decimal
+from typing import Any
 
 from app.cnc import limits
 from app.cnc.blocks import (
@@ -56,11 +60,91 @@ MESSAGE_CHARACTERS = frozenset(
 WHOLE = (Value.COUNT, Value.TOOL)
 
 
+class _Shown:
+    """A value with its unit as a message shows it, formatted only if a message uses it."""
+
+    def __init__(self, value: Decimal, symbol: str) -> None:
+        self.value = value
+        self.symbol = symbol
+
+    def __format__(self, spec: str) -> str:
+        return f"{format_decimal(self.value)} {self.symbol}"
+
+
 def validate(program: Program) -> list[Problem]:
-    """Every problem of `program`, in block order (program and Data Block 0 first)."""
+    """Every problem of `program`, in block order (program and Data Block 0 first).
+
+    A program is a value: the same Program object validated again (the editor does, several
+    times per request) gets the answer it got, from a small memo of recent programs."""
+    key = _identity(program)
+    with _LOCK:
+        hit = _RECENT.get(key)
+        if hit is not None and _identity(hit[0]) == key:
+            _RECENT.move_to_end(key)
+            return list(hit[1])
     checker = _Checker(program)
     checker.run()
+    with _LOCK:
+        _RECENT[key] = (program, tuple(checker.problems))
+        while len(_RECENT) > RECENT_PROGRAMS:
+            _RECENT.popitem(last=False)
     return checker.problems
+
+
+def _identity(program: Program) -> tuple[Any, ...]:
+    """What validation reads of a program, by object for its parts: a copy with the same
+    blocks, Data Block 0 and stock (the preview makes one) is the same program to it."""
+    return (
+        id(program.blocks),
+        id(program.block0),
+        id(program.stock),
+        program.name,
+        program.part_number,
+        program.units,
+    )
+
+
+# The memo keeps each program it answers for alive, so no id in a key is reused while the
+# entry is in.
+RECENT_PROGRAMS = 8
+_NOTHING = Program(name="")
+_RECENT: OrderedDict[tuple[Any, ...], tuple[Program, tuple[Problem, ...]]] = OrderedDict()
+_LOCK = threading.Lock()
+_OWN: dict[tuple[Any, ...], tuple[Problem, ...]] = {}
+OWN_BLOCKS = 1 << 15
+# The same block objects come back (a program is edited one block at a time): by identity.
+_SEEN: dict[int, tuple[Block, tuple[Problem, ...]]] = {}
+
+
+def _own_problems(block: Block) -> tuple[Problem, ...]:
+    """What is wrong with a block by itself (its values, qualifiers and message), as
+    problems of block 0. A block says the same wherever it stands, so each distinct block is
+    checked once. The key keeps each value as typed: 1.0 and 1.00 are equal Decimals, but a
+    message shows the one typed."""
+    seen = _SEEN.get(id(block))
+    if seen is not None and seen[0] is block:
+        return seen[1]
+    key = (type(block), *(_as_typed(getattr(block, f.name)) for f in REGISTRY.fields(type(block))))
+    found = _OWN.get(key)
+    if found is None:
+        checker = _Checker(_NOTHING)
+        checker.check_fields(0, block)
+        checker.check_kind_rules(0, block)
+        checker.check_message(0, block)
+        found = tuple(checker.problems)
+        with _LOCK:
+            if len(_OWN) >= OWN_BLOCKS:
+                _OWN.clear()
+            _OWN[key] = found
+    with _LOCK:
+        if len(_SEEN) >= OWN_BLOCKS:
+            _SEEN.clear()
+        _SEEN[id(block)] = (block, found)
+    return found
+
+
+def _as_typed(value: Any) -> Any:
+    return (value.as_tuple(), str(value)) if isinstance(value, Decimal) else value
 
 
 class _Checker:
@@ -78,9 +162,7 @@ class _Checker:
         self.check_program()
         self.check_block0(self.program.block0, self.program.units)
         for number, block in enumerate(self.blocks, start=1):
-            self.check_fields(number, block)
-            self.check_kind_rules(number, block)
-            self.check_message(number, block)
+            self.problems += [replace(p, block=number) for p in _own_problems(block)]
         self.check_geometry()
         self.check_loops()
         self.check_order()
@@ -191,8 +273,8 @@ class _Checker:
         positive: bool = False,
         minimum: Decimal | None = None,
     ) -> None:
-        shown = f"{format_decimal(value)} {units.symbol}"
         high = limits.MAX_DIMENSION[units]
+        shown = _Shown(value, units.symbol)
         low = minimum if minimum is not None else -high
         if positive and value <= 0:
             self.add(
@@ -223,7 +305,7 @@ class _Checker:
     def check_feed(
         self, block: int, label: str, value: Decimal, feed: limits.FeedLimits, units: Units
     ) -> None:
-        shown = f"{format_decimal(value)} {units.feed_symbol}"
+        shown = _Shown(value, units.feed_symbol)
         if not feed.low <= value <= feed.high:
             self.add(
                 block,

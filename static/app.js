@@ -60,12 +60,44 @@
     }
   });
 
-  // After htmx swaps the editor in, put the cursor on the first prompt (or the first choice).
+  // After htmx swaps a part of the editor in, put the cursor on the first prompt (or the
+  // first choice), and keep the block list in step with the entry panel.
+  var shownList = null;
   function focusEntry() {
     var first = document.querySelector("#entry form.block-form .field [data-field]") ||
       document.querySelector("#entry .choice");
     if (first) { first.focus(); if (first.select) { first.select(); } }
+    syncList();
+    var blocks = document.getElementById("blocks");
+    if (blocks !== shownList) { shownList = blocks; showFocus(); }
   }
+
+  // The row of the block being edited (or "new block…" when entering at the end) is the
+  // current one; the entry panel says which, since a choice swaps in the panel alone.
+  function syncList() {
+    var entry = document.getElementById("entry");
+    if (!entry) { return; }
+    var at = entry.getAttribute("data-at");
+    var editing = entry.getAttribute("data-editing") === "1";
+    document.querySelectorAll(".block-row.current").forEach(function (el) { el.classList.remove("current"); });
+    var current = editing ? document.getElementById("b-" + at) :
+      document.querySelector('.block-row.new[data-new="' + at + '"]');
+    if (current) { current.classList.add("current"); }
+  }
+
+  // The list shows the block it was asked to stay at (the edited one) after it is drawn
+  // anew: scrolled within the list, not the page.
+  function showFocus() {
+    var blocks = document.getElementById("blocks");
+    var list = blocks && blocks.querySelector(".block-list");
+    var row = blocks && document.getElementById("b-" + blocks.getAttribute("data-focus"));
+    if (!list || !row) { return; }
+    var top = row.getBoundingClientRect().top - list.getBoundingClientRect().top + list.scrollTop;
+    if (top < list.scrollTop || top + row.offsetHeight > list.scrollTop + list.clientHeight) {
+      list.scrollTop = Math.max(0, top - (list.clientHeight - row.offsetHeight) / 2);
+    }
+  }
+
   // Typing replaces a prompt's value, as on the control.
   document.addEventListener("focusin", function (event) {
     if (event.target.matches && event.target.matches("input[data-field]") && event.target.select) {

@@ -203,11 +203,11 @@ class Case:
 
 
 def block_cases() -> list[Case]:
-    from app.web.forms import KINDS
+    from app.web.forms import entry_forms
 
     found = []
     for key in BLOCK_KINDS:
-        for spec in KINDS[key].fields:
+        for spec in entry_forms()[key].fields:
             if spec.kind in ("flag", "choice"):
                 continue
             whole = spec.kind in ("count", "tool")

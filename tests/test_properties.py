@@ -12,6 +12,7 @@ Lengths are compared in integer nanometres, as in the Toolpath.
 from __future__ import annotations
 
 import copy
+import json
 import math
 from collections import Counter
 from collections.abc import Iterator
@@ -31,7 +32,7 @@ from app.cnc.blocks import (
     Program,
     Rep,
 )
-from app.cnc.document import dumps, loads
+from app.cnc.document import as_stored, dumps, loads, to_dict
 from app.cnc.emit import canon
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity, has_errors
@@ -481,6 +482,11 @@ def test_document_round_trip(program: Program) -> None:
     again = loads(text)
     assert again == program
     assert dumps(again) == text
+    # dumps assembles the text from each block's own (kept per block object): it is the
+    # plain JSON writer's text, and as_stored is the program its document reads back as.
+    assert text == json.dumps(to_dict(program), indent=2, ensure_ascii=False) + "\n"
+    stored = as_stored(program)
+    assert stored == again and repr(stored) == repr(again)
 
 
 # -- (f) determinism ---------------------------------------------------------------------------

@@ -4,19 +4,23 @@ Seed 001 §3.4.4-3.4.6 is the source. A program is a value: frozen dataclasses, 
 building new ones (`dataclasses.replace`). Dimensions are kept exactly as typed (`Decimal`, in
 the block's own units); conversion to the tool path's nanometres happens in the interpreter.
 
-Data blocks are numbered from 1 by their position in `Program.blocks`. Fields carry the
-control's prompt in their metadata (`label`), so messages, the JSON document and the editor
-all name a field the way the control's screen does.
+Data blocks are numbered from 1 by their position in `Program.blocks`. Each block kind is
+declared once, here: its fields with the control's prompt, value kind and limits
+(`prompt()`), and its `KIND` (document names, editor sub-kinds, qualifiers, planner). The
+document, the editor, validation, COPY and mirror all read these declarations through
+app.cnc.kinds.REGISTRY, whose docstring has the checklist for adding a kind.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import enum
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Any, ClassVar
 
+from app.cnc import limits
+from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
 from app.cnc.units import Units
 
 MAX_TOOLS = 24
@@ -84,22 +88,68 @@ class CopyAction(enum.Enum):
     CANCEL = "cancel"
 
 
-def _f(label: str, default: Any = dataclasses.MISSING) -> Any:
-    """A dataclass field that remembers the control's prompt for it."""
-    return field(default=default, metadata={"label": label})
+# -- where the editor offers a sub-kind (SubKind.offered) ----------------------------------
+
+
+def open_loops(blocks: tuple[Block, ...], before: int) -> int:
+    """How many LOOPs are open before position `before` (0-based insertion index)."""
+    depth = 0
+    for block in blocks[:before]:
+        if block.loop and REGISTRY.of(block).loopable:
+            depth += 1
+        elif isinstance(block, Rep) and depth:
+            depth -= 1
+    return depth
+
+
+def _after_hole(op: HoleOp) -> Callable[[tuple[Block, ...], int], str]:
+    """BOLT CIR is offered only right after a standard block of the same operation."""
+
+    def offered(blocks: tuple[Block, ...], at: int) -> str:
+        previous = blocks[at - 2] if at >= 2 else None
+        if isinstance(previous, Hole) and previous.op is op:
+            return ""
+        return f"follows a standard {op.value} block, which gives the centre"
+
+    return offered
+
+
+def _loop_open(blocks: tuple[Block, ...], at: int) -> str:
+    return "" if open_loops(blocks, at - 1) else "closes an open LOOP; no LOOP is open here"
+
+
+def _at_end(blocks: tuple[Block, ...], at: int) -> str:
+    return "" if at == len(blocks) + 1 else "only as a new block at the end (ERROR: COPY 4)"
+
+
+# -- the kinds ------------------------------------------------------------------------------
+
+LENGTH, FEED, ANGLE, COUNT = Value.LENGTH, Value.FEED, Value.ANGLE, Value.COUNT
+TOOL, FLAG, CHOICE, TEXT = Value.TOOL, Value.FLAG, Value.CHOICE, Value.TEXT
+TWO_AXIS = "empty in a 2-axis program"
+DRILL_ONLY = (("op", HoleOp.DRILL),)
 
 
 @dataclass(frozen=True, kw_only=True)
 class Block:
     """What every data block has: ABS/INC, inch/mm, the LOOP and STOP qualifiers, and an
-    optional operator message shown when the block runs (where the target can show one)."""
+    optional operator message shown when the block runs (where the target can show one).
+
+    Each subclass with a `KIND` is a block kind, registered in `REGISTRY` (app.cnc.kinds).
+    """
 
     kind: ClassVar[str] = "BLOCK"
-    mode: Mode = _f("ABS/INC", Mode.ABS)
-    units: Units = _f("INCH/MM", Units.INCH)
-    loop: bool = _f("LOOP", False)
-    stop: bool = _f("STOP", False)
-    message: str = _f("MESSAGE", "")
+    KIND: ClassVar[Kind]
+    mode: Mode = prompt("ABS/INC", CHOICE, Mode.ABS, prompted=False)
+    units: Units = prompt("INCH/MM", CHOICE, Units.INCH, prompted=False)
+    loop: bool = prompt("LOOP", FLAG, False, prompted=False)
+    stop: bool = prompt("STOP", FLAG, False, prompted=False)
+    message: str = prompt("MESSAGE", TEXT, "", prompted=False)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "KIND" in cls.__dict__:
+            REGISTRY.add(cls)
 
     @property
     def title(self) -> str:
@@ -124,10 +174,16 @@ class Pos(Block):
     """POS: position the table at rapid with the spindle retracted and turning."""
 
     kind: ClassVar[str] = "POS"
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    index: bool = _f("INDEX", False)
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("POS"),),
+        editor=(SubKind("POS", "POS", "POS", 1),),
+        positioned=True,
+        loopable=True,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    index: bool = prompt("INDEX", FLAG, False)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -138,15 +194,29 @@ class Hole(Block):
     """
 
     kind: ClassVar[str] = "HOLE"
-    op: HoleOp = _f("OPERATION")
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    z_up: Decimal | None = _f("Z UP", None)
-    z_dn: Decimal | None = _f("Z DN", None)
-    feed_z: Decimal | None = _f("FEEDR Z", None)
-    pecks: int = _f("# PECK", 1)
-    tool: int = _f("TOOL #")
-    comp: Comp = _f("CUTTER COMP", Comp.NONE)
+    KIND: ClassVar[Kind] = Kind(
+        documents=tuple(Document(op.value, (("op", op),)) for op in HoleOp),
+        editor=(
+            SubKind("DRILL", "DRILL", "DRILL", 1, (*DRILL_ONLY, ("comp", Comp.NONE))),
+            SubKind(
+                "DRILL_CUT_RT", "DRILL CUT RT", "DRILL", 3, (*DRILL_ONLY, ("comp", Comp.RIGHT))
+            ),
+            SubKind("DRILL_CUT_LT", "DRILL CUT LT", "DRILL", 4, (*DRILL_ONLY, ("comp", Comp.LEFT))),
+            SubKind("BORE", "BORE", "BORE", 1, (("op", HoleOp.BORE),)),
+            SubKind("TAP", "TAP", "TAP", 1, (("op", HoleOp.TAP),)),
+        ),
+        positioned=True,
+        loopable=True,
+    )
+    op: HoleOp = prompt("OPERATION", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    z_up: Decimal | None = prompt("Z UP", LENGTH, None, help=TWO_AXIS)
+    z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=TWO_AXIS)
+    feed_z: Decimal | None = prompt("FEEDR Z", FEED, None, feed=limits.FEED_Z)
+    pecks: int = prompt("# PECK", COUNT, 1, low=1, high=limits.MAX_PECKS, only_when=DRILL_ONLY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    comp: Comp = prompt("CUTTER COMP", CHOICE, Comp.NONE, only_when=DRILL_ONLY)
 
     @property
     def type_name(self) -> str:
@@ -172,14 +242,33 @@ class BoltCircle(Block):
     """
 
     kind: ClassVar[str] = "BOLT_CIR"
-    op: HoleOp = _f("OPERATION")
-    holes: int = _f("# HOLES")
-    angle: Decimal = _f("ANGLE", Decimal(0))
-    radius: Decimal = _f("RAD")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("BOLT_CIR"),),
+        editor=tuple(
+            SubKind(
+                f"BOLT_CIR_{op.value}",
+                f"BOLT CIR {op.value}",
+                op.value,
+                2,
+                (("op", op),),
+                offered=_after_hole(op),
+            )
+            for op in HoleOp
+        ),
+    )
+    op: HoleOp = prompt("OPERATION", CHOICE)
+    holes: int = prompt("# HOLES", COUNT, low=1, high=limits.MAX_BOLT_HOLES)
+    angle: Decimal = prompt(
+        "ANGLE", ANGLE, Decimal(0), role=Role.ANGLE, help="degrees clockwise from 6 o'clock"
+    )
+    radius: Decimal = prompt("RAD", LENGTH, positive=True)
 
     @property
     def type_name(self) -> str:
         return f"BOLT CIR {self.op.value}"
+
+
+MILL_Z_HELP = "empty keeps the depth"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -187,11 +276,17 @@ class MillLine(Block):
     """MILL STD: a straight cut from the current position to X, Y."""
 
     kind: ClassVar[str] = "MILL_STD"
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    z_dn: Decimal | None = _f("Z DN", None)
-    feed_xy: Decimal = _f("FEEDR XY")
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("MILL_STD"),),
+        editor=(SubKind("MILL_STD", "MILL STD", "MILL", 1),),
+        positioned=True,
+        mill=Mill.CONTOUR,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
     @property
     def type_name(self) -> str:
@@ -203,16 +298,45 @@ class MillQcir(Block):
     """MILL QCIR C/CC: a quarter circle from the current position to X, Y."""
 
     kind: ClassVar[str] = "MILL_QCIR"
-    direction: Direction = _f("DIRECTION")
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    z_dn: Decimal | None = _f("Z DN", None)
-    feed_xy: Decimal = _f("FEEDR XY")
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("MILL_QCIR"),),
+        editor=(
+            SubKind("QCIR_C", "QCIR C", "MILL", 2, (("direction", Direction.CW),)),
+            SubKind("QCIR_CC", "QCIR CC", "MILL", 3, (("direction", Direction.CCW),)),
+        ),
+        positioned=True,
+        mill=Mill.CONTOUR,
+    )
+    direction: Direction = prompt("DIRECTION", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
     @property
     def type_name(self) -> str:
         return "MILL QCIR " + ("C" if self.direction is Direction.CW else "CC")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ArcEnd(Block):
+    """MILL ARC XY-END: the arc's end point; in INC mode relative to the arc's start."""
+
+    kind: ClassVar[str] = "MILL_ARC_END"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("MILL_ARC_END"),),
+        editor=(SubKind("ARC_END", "MILL ARC XY-END", "MILL"),),
+        positioned=True,
+        part="XY-END",
+        mill=Mill.CONTOUR,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+
+    @property
+    def type_name(self) -> str:
+        return "MILL ARC XY-END"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -224,29 +348,31 @@ class MillArc(Block):
     """
 
     kind: ClassVar[str] = "MILL_ARC"
-    direction: Direction = _f("DIRECTION")
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    z_dn: Decimal | None = _f("Z DN", None)
-    feed_xy: Decimal = _f("FEEDR XY")
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("MILL_ARC"),),
+        editor=(
+            SubKind("ARC_C", "ARC C", "MILL", 4, (("direction", Direction.CW),), ArcEnd),
+            SubKind("ARC_CC", "ARC CC", "MILL", 5, (("direction", Direction.CCW),), ArcEnd),
+        ),
+        positioned=True,
+        stoppable=False,
+        xy_is_centre=True,
+        part="XY-CENT",
+        mill=Mill.CONTOUR,
+    )
+    direction: Direction = prompt("DIRECTION", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
     @property
     def type_name(self) -> str:
         return "MILL ARC " + ("C" if self.direction is Direction.CW else "CC") + " XY-CENT"
 
 
-@dataclass(frozen=True, kw_only=True)
-class ArcEnd(Block):
-    """MILL ARC XY-END: the arc's end point; in INC mode relative to the arc's start."""
-
-    kind: ClassVar[str] = "MILL_ARC_END"
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-
-    @property
-    def type_name(self) -> str:
-        return "MILL ARC XY-END"
+PLACEMENT_HELP = "INSIDE, OUTSIDE, IN/TAN, OUT/TAN or POCKET"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -254,11 +380,20 @@ class Circle(Block):
     """CIRCLE / CIR 2P: a circle routine about the previous DRILL's X/Y."""
 
     kind: ClassVar[str] = "CIRCLE"
-    placement: Placement = _f("PLACEMENT")
-    two_pass: bool = _f("2P", False)
-    radius: Decimal = _f("RAD")
-    feed_xy: Decimal = _f("FEEDR XY")
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("CIRCLE"),),
+        editor=(
+            SubKind("CIRCLE", "CIRCLE", "MILL", 6, (("two_pass", False),)),
+            SubKind("CIR_2P", "CIR 2P", "MILL", 7, (("two_pass", True),)),
+        ),
+        mill=Mill.ROUTINE,
+        planner="app.cnc.mill:plan_circle",
+    )
+    placement: Placement = prompt("PLACEMENT", CHOICE)
+    two_pass: bool = prompt("2P", FLAG, False)
+    radius: Decimal = prompt("RAD", LENGTH, positive=True)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
     @property
     def type_name(self) -> str:
@@ -271,13 +406,22 @@ class Frame(Block):
     """FRAME / FRM 2P: a rectangle whose lower-left corner is the previous DRILL's X/Y."""
 
     kind: ClassVar[str] = "FRAME"
-    placement: Placement = _f("PLACEMENT")
-    two_pass: bool = _f("2P", False)
-    xl: Decimal = _f("XL")
-    yw: Decimal = _f("YW")
-    corner_radius: Decimal = _f("CORNER RAD", Decimal(0))
-    feed_xy: Decimal = _f("FEEDR XY")
-    tool: int = _f("TOOL #")
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("FRAME"),),
+        editor=(
+            SubKind("FRAME", "FRAME", "MILL", 8, (("two_pass", False),)),
+            SubKind("FRM_2P", "FRM 2P", "MILL", 9, (("two_pass", True),)),
+        ),
+        mill=Mill.ROUTINE,
+        planner="app.cnc.mill:plan_frame",
+    )
+    placement: Placement = prompt("PLACEMENT", CHOICE)
+    two_pass: bool = prompt("2P", FLAG, False)
+    xl: Decimal = prompt("XL", LENGTH, positive=True, role=Role.SIZE_X)
+    yw: Decimal = prompt("YW", LENGTH, positive=True, role=Role.SIZE_Y)
+    corner_radius: Decimal = prompt("CORNER RAD", LENGTH, Decimal(0), low=Decimal(0))
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
     @property
     def type_name(self) -> str:
@@ -290,11 +434,16 @@ class Rep(Block):
     """REP: closes the innermost open LOOP; X/Y step between patterns, NX/NY extra copies."""
 
     kind: ClassVar[str] = "REP"
-    mode: Mode = _f("ABS/INC", Mode.INC)
-    x: Decimal = _f("X", Decimal(0))
-    y: Decimal = _f("Y", Decimal(0))
-    nx: int = _f("NX", 0)
-    ny: int = _f("NY", 0)
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("REP"),),
+        editor=(SubKind("REP", "REP", "REP", 1, offered=_loop_open),),
+        stoppable=False,
+    )
+    mode: Mode = prompt("ABS/INC", CHOICE, Mode.INC, prompted=False)
+    x: Decimal = prompt("X", LENGTH, Decimal(0), role=Role.STEP_X)
+    y: Decimal = prompt("Y", LENGTH, Decimal(0), role=Role.STEP_Y)
+    nx: int = prompt("NX", COUNT, 0, low=0, high=limits.MAX_REPEAT)
+    ny: int = prompt("NY", COUNT, 0, low=0, high=limits.MAX_REPEAT)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -306,44 +455,38 @@ class Copy(Block):
     """
 
     kind: ClassVar[str] = "COPY"
-    from_block: int = _f("FROM")
-    to_block: int = _f("TO")
-    op: HoleOp | None = _f("OPERATION", None)
-    pecks: int | None = _f("# PECK", None)
-    xof: Decimal | None = _f("XOF", None)
-    yof: Decimal | None = _f("YOF", None)
-    z_up: Decimal | None = _f("Z UP", None)
-    z_dn: Decimal | None = _f("Z DN", None)
-    feed_z: Decimal | None = _f("FEEDR Z", None)
-    feed_xy: Decimal | None = _f("FEEDR XY", None)
-    tool: int | None = _f("TOOL #", None)
-    action: CopyAction | None = _f("EXEC/CANCEL", None)
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("COPY"),),
+        editor=(SubKind("COPY", "COPY", "COPY", 1, offered=_at_end),),
+        stoppable=False,
+    )
+    from_block: int = prompt("FROM", COUNT)
+    to_block: int = prompt("TO", COUNT)
+    op: HoleOp | None = prompt("OPERATION", CHOICE, None, blank="unchanged", changes="op")
+    pecks: int | None = prompt("# PECK", COUNT, None, low=1, high=limits.MAX_PECKS, changes="pecks")
+    xof: Decimal | None = prompt("XOF", LENGTH, None, role=Role.STEP_X, changes="x")
+    yof: Decimal | None = prompt("YOF", LENGTH, None, role=Role.STEP_Y, changes="y")
+    z_up: Decimal | None = prompt("Z UP", LENGTH, None, changes="z_up")
+    z_dn: Decimal | None = prompt("Z DN", LENGTH, None, changes="z_dn")
+    feed_z: Decimal | None = prompt("FEEDR Z", FEED, None, feed=limits.FEED_Z, changes="feed_z")
+    feed_xy: Decimal | None = prompt("FEEDR XY", FEED, None, feed=limits.FEED_XY, changes="feed_xy")
+    tool: int | None = prompt("TOOL #", TOOL, None, low=1, high=MAX_TOOLS, changes="tool")
+    action: CopyAction | None = prompt("EXEC/CANCEL", CHOICE, None, prompted=False)
 
 
-BLOCK_CLASSES: tuple[type[Block], ...] = (
-    Pos,
-    Hole,
-    BoltCircle,
-    MillLine,
-    MillQcir,
-    MillArc,
-    ArcEnd,
-    Circle,
-    Frame,
-    Rep,
-    Copy,
+BLOCK_CLASSES: tuple[type[Block], ...] = REGISTRY.classes
+MILL_CONTOUR_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.CONTOUR)
+MILL_ROUTINE_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.ROUTINE)
+LOOP_CAPABLE_CLASSES: tuple[type[Block], ...] = tuple(
+    cls for cls in BLOCK_CLASSES if REGISTRY.kind(cls).loopable
 )
-MILL_CONTOUR_CLASSES: tuple[type[Block], ...] = (MillLine, MillQcir, MillArc, ArcEnd)
-MILL_ROUTINE_CLASSES: tuple[type[Block], ...] = (Circle, Frame)
-LOOP_CAPABLE_CLASSES: tuple[type[Block], ...] = (Pos, Hole)
 
 
 def field_label(block: Block | type[Block] | DataBlock0 | Tool | Stock, name: str) -> str:
-    """The control's prompt for field `name` of a block (e.g. `feed_z` → `FEEDR Z`)."""
-    for f in dataclasses.fields(block):
-        if f.name == name:
-            return str(f.metadata.get("label", name.upper()))
-    raise KeyError(name)
+    """The control's prompt for field `name` of a block (e.g. `feed_z` → `FEEDR Z`).
+
+    Read from a table made once per class. Raises KeyError for an unknown field."""
+    return REGISTRY.label(block if isinstance(block, type) else type(block), name)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -355,11 +498,11 @@ class Tool:
     tool's calibrated Z zero; None shows as "****" (uncalibrated).
     """
 
-    number: int = _f("TOOL #")
-    diameter: Decimal | None = _f("DIA", None)
-    rpm: int | None = _f("RPM", None)
-    tcal: Decimal | None = _f("TCAL", None)
-    coolant: Coolant = _f("COOLANT", Coolant.OFF)
+    number: int = prompt("TOOL #", TOOL)
+    diameter: Decimal | None = prompt("DIA", LENGTH, None)
+    rpm: int | None = prompt("RPM", COUNT, None)
+    tcal: Decimal | None = prompt("TCAL", LENGTH, None)
+    coolant: Coolant = prompt("COOLANT", CHOICE, Coolant.OFF)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -369,12 +512,12 @@ class DataBlock0:
     Lengths are in the program's units.
     """
 
-    x_offset: Decimal = _f("X", Decimal(0))
-    y_offset: Decimal = _f("Y", Decimal(0))
-    current_tool: int = _f("CUR-TOOL", 0)
-    milling: MillingMode = _f("0 CONV 1 CLIMB", MillingMode.CLIMB)
-    z_retract: Decimal = _f("Z RET", Decimal("0.1"))
-    tools: tuple[Tool, ...] = _f("TOOLS", ())
+    x_offset: Decimal = prompt("X", LENGTH, Decimal(0))
+    y_offset: Decimal = prompt("Y", LENGTH, Decimal(0))
+    current_tool: int = prompt("CUR-TOOL", COUNT, 0)
+    milling: MillingMode = prompt("0 CONV 1 CLIMB", CHOICE, MillingMode.CLIMB)
+    z_retract: Decimal = prompt("Z RET", LENGTH, Decimal("0.1"))
+    tools: tuple[Tool, ...] = prompt("TOOLS", TEXT, (), prompted=False)
 
     def tool(self, number: int) -> Tool | None:
         """The tool table entry for `number`, or None when the tool is not defined."""
@@ -392,12 +535,12 @@ class Stock:
     `zh` its size along X, Y and Z (down from the top). Lengths in the program's units.
     """
 
-    x: Decimal = _f("X")
-    y: Decimal = _f("Y")
-    z: Decimal = _f("Z TOP", Decimal(0))
-    xl: Decimal = _f("XL")
-    yw: Decimal = _f("YW")
-    zh: Decimal = _f("ZH")
+    x: Decimal = prompt("X", LENGTH)
+    y: Decimal = prompt("Y", LENGTH)
+    z: Decimal = prompt("Z TOP", LENGTH, Decimal(0))
+    xl: Decimal = prompt("XL", LENGTH)
+    yw: Decimal = prompt("YW", LENGTH)
+    zh: Decimal = prompt("ZH", LENGTH)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -11,18 +11,8 @@ import dataclasses
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import (
-    Block,
-    BoltCircle,
-    Comp,
-    Copy,
-    CopyAction,
-    Hole,
-    HoleOp,
-    Mode,
-    Pos,
-    Program,
-)
+from app.cnc.blocks import Block, Copy, CopyAction, Mode, Pos, Program
+from app.cnc.kinds import REGISTRY, Role
 from app.cnc.problems import Rule
 from app.cnc.validate import copy_errors
 
@@ -35,10 +25,6 @@ class CopyError(ValueError):
         self.block = block
         self.rule = rule
         self.message = message
-
-
-# Fields a COPY block may change in every block that has them.
-_PLAIN_CHANGES = ("z_up", "z_dn", "feed_z", "feed_xy", "tool")
 
 
 def execute_copy(program: Program, number: int) -> Program:
@@ -105,25 +91,26 @@ def _offset_pos(copy: Copy, span: tuple[Block, ...]) -> Pos:
 
 
 def _copied(block: Block, copy: Copy) -> Block:
-    """One block of the range with the COPY's changes applied."""
+    """One block of the range with the COPY's changes applied, as the declarations say:
+    each COPY field names the field it `changes`; a STEP (XOF, YOF) adds to the position of
+    an absolute block, the others replace the value in every block that has the field.
+    A field that no longer applies afterwards (BORE and TAP take no pecks and no cutter
+    compensation, seed 001 §3.4.5.2) goes back to its default."""
+    cls = type(block)
+    target = {f.name: f for f in REGISTRY.fields(cls)}
     changes: dict[str, Any] = {}
-    names = {f.name for f in dataclasses.fields(block)}
-    for name in _PLAIN_CHANGES:
-        value = getattr(copy, name)
-        if value is not None and name in names:
+    for change in REGISTRY.fields(Copy):
+        value = getattr(copy, change.name)
+        name = change.prompt.changes
+        if value is None or name not in target:
+            continue
+        if change.prompt.role in (Role.STEP_X, Role.STEP_Y):
+            if block.mode is Mode.ABS and target[name].prompt.role in (Role.X, Role.Y):
+                changes[name] = getattr(block, name) + value
+        else:
             changes[name] = value
-    if copy.op is not None and isinstance(block, Hole | BoltCircle):
-        changes["op"] = copy.op
-        if isinstance(block, Hole) and copy.op is not HoleOp.DRILL:
-            # BORE and TAP take no pecks and no cutter compensation (seed 001 §3.4.5.2).
-            changes["pecks"] = 1
-            changes["comp"] = Comp.NONE
-    final_op = changes.get("op", getattr(block, "op", None))
-    if copy.pecks is not None and isinstance(block, Hole) and final_op is HoleOp.DRILL:
-        changes["pecks"] = copy.pecks
-    if block.mode is Mode.ABS and "x" in names and not isinstance(block, BoltCircle):
-        if copy.xof is not None:
-            changes["x"] = block.x + copy.xof  # type: ignore[attr-defined]
-        if copy.yof is not None:
-            changes["y"] = block.y + copy.yof  # type: ignore[attr-defined]
+    values = {name: changes.get(name, getattr(block, name)) for name in target}
+    for name, f in target.items():
+        if f.prompt.only_when and not REGISTRY.applies(cls, f, values):
+            changes[name] = f.default
     return dataclasses.replace(block, **changes)

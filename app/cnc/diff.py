@@ -13,6 +13,7 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import Block, DataBlock0, Program, field_label
+from app.cnc.kinds import REGISTRY
 
 
 def _show(value: Any) -> str:
@@ -28,7 +29,7 @@ def _show(value: Any) -> str:
 
 
 def _key(block: Block) -> tuple[Any, ...]:
-    return (type(block).__name__, *(getattr(block, f.name) for f in dataclasses.fields(block)))
+    return (type(block).__name__, *(getattr(block, f.name) for f in REGISTRY.fields(type(block))))
 
 
 def field_changes(old: Any, new: Any) -> list[str]:

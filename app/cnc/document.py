@@ -13,53 +13,20 @@ from __future__ import annotations
 import dataclasses
 import enum
 import json
+import threading
 import typing
+from dataclasses import dataclass, replace
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import (
-    ArcEnd,
-    Block,
-    BoltCircle,
-    Circle,
-    Copy,
-    DataBlock0,
-    Frame,
-    Hole,
-    HoleOp,
-    MillArc,
-    MillLine,
-    MillQcir,
-    Pos,
-    Program,
-    Rep,
-    Stock,
-    Tool,
-    field_label,
-)
+from app.cnc.blocks import Block, DataBlock0, Program, Stock, Tool, field_label
+from app.cnc.kinds import REGISTRY
 from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
 from app.cnc.units import Units
 
 FORMAT_NAME = "millblocks-program"
 FORMAT_VERSION = 1
-
-# The JSON `type` of each block class; hole blocks use their operation (DRILL/BORE/TAP).
-_TYPE_OF: dict[type[Block], str] = {
-    Pos: "POS",
-    BoltCircle: "BOLT_CIR",
-    MillLine: "MILL_STD",
-    MillQcir: "MILL_QCIR",
-    MillArc: "MILL_ARC",
-    ArcEnd: "MILL_ARC_END",
-    Circle: "CIRCLE",
-    Frame: "FRAME",
-    Rep: "REP",
-    Copy: "COPY",
-}
-_CLASS_OF: dict[str, type[Block]] = {name: cls for cls, name in _TYPE_OF.items()}
-for _op in HoleOp:
-    _CLASS_OF[_op.value] = Hole
 
 
 class DocumentError(ValueError):
@@ -101,21 +68,115 @@ def to_dict(program: Program) -> dict[str, Any]:
 
 
 def dumps(program: Program) -> str:
-    """The document as deterministic JSON text."""
-    return json.dumps(to_dict(program), indent=2, ensure_ascii=False) + "\n"
+    """The document as deterministic JSON text: `json.dumps(to_dict(program), indent=2)`.
+
+    Made from each block's own text, kept per block object: a program is edited a block at
+    a time and the other blocks are the same objects from one save to the next."""
+    data = to_dict(_without_blocks(program))
+    del data["blocks"]
+    stock = data.pop("stock", None)
+    head = _json(data).removesuffix("\n}")
+    parts = [head, ',\n  "blocks": [']
+    if program.blocks:
+        parts += ["\n", ",\n".join("    " + _block_text(block) for block in program.blocks)]
+        parts.append("\n  ]")
+    else:
+        parts.append("]")
+    if stock is not None:
+        parts += [',\n  "stock": ', _json(stock).replace("\n", "\n  ")]
+    parts.append("\n}\n")
+    return "".join(parts)
+
+
+def _json(data: Any) -> str:
+    return json.dumps(data, indent=2, ensure_ascii=False)
+
+
+def _without_blocks(program: Program) -> Program:
+    return Program(
+        name=program.name,
+        part_number=program.part_number,
+        units=program.units,
+        notes=program.notes,
+        block0=program.block0,
+        stock=program.stock,
+    )
+
+
+# Each block's text as it stands in the document (indented for its place), by the block
+# object; the entry keeps the block alive, so its id is not reused while it is here.
+BLOCK_MEMO = 1 << 16
+_BLOCK_TEXT: dict[int, tuple[Block, str]] = {}
+_MEMO_LOCK = threading.Lock()
+
+
+def _block_text(block: Block) -> str:
+    found = _BLOCK_TEXT.get(id(block))
+    if found is not None and found[0] is block:
+        return found[1]
+    text = _json(_block_out(block)).replace("\n", "\n    ")
+    with _MEMO_LOCK:
+        if len(_BLOCK_TEXT) >= BLOCK_MEMO:
+            _BLOCK_TEXT.clear()
+        _BLOCK_TEXT[id(block)] = (block, text)
+    return text
+
+
+def as_stored(program: Program) -> Program:
+    """The program as its document reads back: `loads(dumps(program))`, which writes every
+    number as the document does (1.50 is stored as 1.5). What reads back exactly as it is
+    (blocks read from a document, and most typed ones) stays the same object, and so does
+    the program when all of it does: what was worked out for it still applies."""
+    blocks = tuple(_stored_block(block, n) for n, block in enumerate(program.blocks, 1))
+    stock = program.stock
+    if program.block0 is not _READ.get(id(program.block0)) or (
+        stock is not None and stock is not _READ.get(id(stock))
+    ):
+        rest = loads(dumps(_without_blocks(program)))
+        if repr(rest.block0) == repr(program.block0) and repr(rest.stock) == repr(stock):
+            _was_read(program.block0)
+            if stock is not None:
+                _was_read(stock)
+        else:
+            return replace(rest, blocks=blocks)
+    if all(a is b for a, b in zip(blocks, program.blocks, strict=True)):
+        return program
+    return replace(program, blocks=blocks)
+
+
+def _stored_block(block: Block, number: int) -> Block:
+    if _READ.get(id(block)) is block:
+        return block
+    data = json.loads(_json(_block_out(block)), parse_float=decimal_of, parse_int=_whole)
+    again = _block_in(data, number)
+    # The same values written the same way (repr shows each Decimal as typed): keep it.
+    return _was_read(block if repr(again) == repr(block) else again)
+
+
+# Blocks and Data Blocks 0 made by reading a document (by id; kept alive while here).
+_READ: dict[int, object] = {}
+
+
+def _was_read(value: _T) -> _T:
+    with _MEMO_LOCK:
+        if len(_READ) >= BLOCK_MEMO:
+            _READ.clear()
+        _READ[id(value)] = value
+    return value
 
 
 def _block_out(block: Block) -> dict[str, Any]:
-    kind = block.op.value if isinstance(block, Hole) else _TYPE_OF[type(block)]
-    data: dict[str, Any] = {"type": kind}
+    # The JSON `type` names the kind and stands for the field values it fixes (DRILL: op).
+    kind = REGISTRY.document_of(block)
+    data: dict[str, Any] = {"type": kind.name}
     data.update(_fields_out(block))
-    if isinstance(block, Hole):
-        del data["op"]
+    for name, _ in kind.fixed:
+        del data[name]
     return data
 
 
 def _fields_out(obj: Any) -> dict[str, Any]:
-    return {f.name: _out(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    return {f.name: _out(getattr(obj, f.name)) for f in REGISTRY.fields(type(obj))}
 
 
 def _out(value: Any) -> Any:
@@ -187,7 +248,7 @@ def from_dict(data: Any) -> Program:
         raise DocumentError("Data Block 0, tools", "expected a list of tools")
     tools = tuple(_tool_in(item, n) for n, item in enumerate(tools_data, start=1))
     db0_fields = {k: v for k, v in db0_data.items() if k != "tools"}
-    block0 = _build(DataBlock0, db0_fields, "Data Block 0", tools=tools)
+    block0 = _was_read(_build(DataBlock0, db0_fields, "Data Block 0", tools=tools))
     blocks_data = data.get("blocks", [])
     if not isinstance(blocks_data, list):
         raise DocumentError("blocks", "expected a list of data blocks")
@@ -197,7 +258,7 @@ def from_dict(data: Any) -> Program:
             f"{len(blocks_data)} data blocks; a program has at most {MAX_BLOCKS} (the limit of "
             "one program in MillBlocks)",
         )
-    blocks = tuple(_block_in(item, n) for n, item in enumerate(blocks_data, start=1))
+    blocks = tuple(_was_read(_block_in(item, n)) for n, item in enumerate(blocks_data, start=1))
     stock_data = data.get("stock")
     if stock_data is not None and not isinstance(stock_data, dict):
         raise DocumentError("stock", 'expected an object like {"x": 0, "y": 0, "xl": 4, ...}')
@@ -208,7 +269,7 @@ def from_dict(data: Any) -> Program:
         notes=_text(data.get("notes", ""), "program, notes"),
         block0=block0,
         blocks=blocks,
-        stock=None if stock_data is None else _build(Stock, stock_data, "stock"),
+        stock=None if stock_data is None else _was_read(_build(Stock, stock_data, "stock")),
     )
 
 
@@ -221,50 +282,89 @@ def _tool_in(item: Any, number: int) -> Tool:
     return _build(Tool, item, where)
 
 
+# Blocks already read, by their JSON fields exactly as written: the next version of a
+# program is the same document but for the edited block, and reads it from here.
+_BLOCKS_READ: dict[tuple[Any, ...], Block] = {}
+
+
 def _block_in(item: Any, number: int) -> Block:
     where = f"block {number}"
     if not isinstance(item, dict):
         raise DocumentError(where, "expected an object")
+    try:
+        key: tuple[Any, ...] | None = tuple((k, _written(v)) for k, v in item.items())
+        known = _BLOCKS_READ.get(key)  # type: ignore[arg-type]
+    except TypeError:  # a list or an object where a value belongs: read it for its error
+        key = known = None
+    if known is not None:
+        return known
+    block = _read_block(item, where)
+    if key is not None:
+        with _MEMO_LOCK:
+            if len(_BLOCKS_READ) >= BLOCK_MEMO:
+                _BLOCKS_READ.clear()
+            _BLOCKS_READ[key] = block
+    return block
+
+
+def _written(value: Any) -> Any:
+    """A JSON value as written: 1.5 and 1.50 read as equal Decimals but are kept apart."""
+    return (type(value), str(value)) if isinstance(value, Decimal) else (type(value), value)
+
+
+def _read_block(item: dict[str, Any], where: str) -> Block:
     kind = item.get("type")
-    cls = _CLASS_OF.get(kind) if isinstance(kind, str) else None
-    if cls is None:
-        allowed = ", ".join(sorted(_CLASS_OF))
+    types = REGISTRY.documents()
+    found = types.get(kind) if isinstance(kind, str) else None
+    if found is None:
+        allowed = ", ".join(sorted(types))
         raise DocumentError(f"{where}, type", f"unknown block type {kind!r}; allowed: {allowed}")
+    cls, fixed = found
     fields = {k: v for k, v in item.items() if k != "type"}
-    if cls is Hole:
-        return _build(Hole, fields, where, op=HoleOp(kind))
-    return _build(cls, fields, where)
+    return _build(cls, fields, where, **fixed)
 
 
 _T = typing.TypeVar("_T")
 
 
-_HINTS: dict[type, dict[str, Any]] = {}
+@dataclass(frozen=True)
+class _Shape:
+    """What reading a dataclass from JSON needs, worked out once per class: its resolved
+    type hints (slow to resolve), its field names and those that have no default."""
+
+    hints: dict[str, Any]
+    names: frozenset[str]
+    required: tuple[str, ...]
 
 
-def _hints(cls: type) -> dict[str, Any]:
-    """A dataclass's resolved type hints (resolving them is slow; each class once)."""
-    if cls not in _HINTS:
-        _HINTS[cls] = typing.get_type_hints(cls)
-    return _HINTS[cls]
+_SHAPES: dict[type, _Shape] = {}
+
+
+def _shape(cls: type) -> _Shape:
+    found = _SHAPES.get(cls)
+    if found is None:
+        fields = dataclasses.fields(cls)
+        found = _SHAPES[cls] = _Shape(
+            typing.get_type_hints(cls),
+            frozenset(f.name for f in fields),
+            tuple(
+                f.name
+                for f in fields
+                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+            ),
+        )
+    return found
 
 
 def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:
     """Construct dataclass `cls` from JSON fields, converting and checking each one."""
-    hints = _hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    _no_unknown(where, data, set(fields) - set(fixed))
+    shape = _shape(cls)
+    _no_unknown(where, data, set(shape.names - set(fixed)))
     values: dict[str, Any] = dict(fixed)
     for name, raw in data.items():
         label = field_label(cls, name)  # type: ignore[arg-type]
-        values[name] = _convert(raw, hints[name], f"{where}, {label}")
-    missing = [
-        field_label(cls, f.name)  # type: ignore[arg-type]
-        for f in fields.values()
-        if f.name not in values
-        and f.default is dataclasses.MISSING
-        and f.default_factory is dataclasses.MISSING
-    ]
+        values[name] = _convert(raw, shape.hints[name], f"{where}, {label}")
+    missing = [field_label(cls, name) for name in shape.required if name not in values]  # type: ignore[arg-type]
     if missing:
         raise DocumentError(f"{where}, {missing[0]}", "missing; this field has no default")
     return cls(**values)

@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
+from typing import Any
 
 from app.cnc.blocks import (
     ArcEnd,
@@ -52,6 +53,7 @@ from app.cnc.blocks import (
     Placement,
 )
 from app.cnc.geometry import arc_sweep, resolve_xy
+from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.problems import Rule, Severity
 from app.cnc.units import Units, message_length, to_nm
 
@@ -821,9 +823,12 @@ def plan_sequence(
     diameter = None if tool is None or tool.diameter is None else tool.diameter
     radius = 0 if diameter is None else to_nm(diameter, program_units) // 2
     first = blocks[mills[0]]
-    if isinstance(first, Circle | Frame):
+    if REGISTRY.of(first).mill is Mill.ROUTINE:
+        # A routine kind declares its planner (app.cnc.kinds): the signature of plan_circle.
         rpm = None if tool is None else tool.rpm
-        return _plan_routine(first, mills[0] + 1, block0, rpm, radius, start)
+        planner = REGISTRY.planner(type(first))
+        plan: SequencePlan = planner(first, RoutineStart(mills[0] + 1, block0, rpm, radius, start))
+        return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
     path, numbers, end = programmed_contour(blocks, mills, start, findings, depth)
@@ -850,46 +855,65 @@ def routine_clockwise(placement: Placement, milling: MillingMode, rpm: int | Non
     return not outside_cw if placement in INSIDE_PLACEMENTS else outside_cw
 
 
-def _plan_routine(
-    block: Circle | Frame,
-    number: int,
-    block0: DataBlock0,
-    rpm: int | None,
-    tool_radius: int,
-    start: tuple[int, int],
-) -> SequencePlan:
+@dataclass(frozen=True)
+class RoutineStart:
+    """What a mill routine's planner is given (the hook a routine kind declares, see
+    app.cnc.kinds): its block number, Data Block 0, the tool's RPM (its sign gives the
+    spindle direction), the tool's radius in nm (0: no DIA, which validation reports) and
+    the start point in nm (the previous DRILL's X/Y)."""
+
+    number: int
+    block0: DataBlock0
+    rpm: int | None
+    tool_radius: int
+    start: tuple[int, int]
+
+
+def plan_circle(block: Block, at: RoutineStart) -> SequencePlan:
+    """The passes of a CIRCLE about `at.start`. Problems are in the plan, not raised."""
+    assert isinstance(block, Circle)
+    routine = Routine(
+        **_routine_common(block, at),
+        centre=(float(at.start[0]), float(at.start[1])),
+        radius=to_nm(block.radius, block.units),
+    )
+    return _plan_routine(routine, block.two_pass, at.start)
+
+
+def plan_frame(block: Block, at: RoutineStart) -> SequencePlan:
+    """The passes of a FRAME whose lower-left corner is `at.start`; as `plan_circle`."""
+    assert isinstance(block, Frame)
     units = block.units
-    clockwise = routine_clockwise(block.placement, block0.milling, rpm)
-    common = {
-        "block": number,
+    routine = Routine(
+        **_routine_common(block, at),
+        corner=(float(at.start[0]), float(at.start[1])),
+        width=to_nm(block.xl, units),
+        height=to_nm(block.yw, units),
+        corner_radius=to_nm(block.corner_radius, units),
+        is_frame=True,
+    )
+    return _plan_routine(routine, block.two_pass, at.start)
+
+
+def _routine_common(block: Circle | Frame, at: RoutineStart) -> dict[str, Any]:
+    return {
+        "block": at.number,
         "placement": block.placement,
-        "clockwise": clockwise,
-        "tool_radius": tool_radius,
-        "units": units,
+        "clockwise": routine_clockwise(block.placement, at.block0.milling, at.rpm),
+        "tool_radius": at.tool_radius,
+        "units": block.units,
     }
-    if isinstance(block, Circle):
-        routine = Routine(
-            **common,  # type: ignore[arg-type]
-            centre=(float(start[0]), float(start[1])),
-            radius=to_nm(block.radius, units),
-        )
-    else:
-        routine = Routine(
-            **common,  # type: ignore[arg-type]
-            corner=(float(start[0]), float(start[1])),
-            width=to_nm(block.xl, units),
-            height=to_nm(block.yw, units),
-            corner_radius=to_nm(block.corner_radius, units),
-            is_frame=True,
-        )
+
+
+def _plan_routine(routine: Routine, two_pass: bool, start: tuple[int, int]) -> SequencePlan:
     findings = routine_problems(routine)
-    if any(f.severity is Severity.ERROR for f in findings) or tool_radius == 0:
+    if any(f.severity is Severity.ERROR for f in findings) or routine.tool_radius == 0:
         return SequencePlan([], 0, start, findings)
     passes = [routine_path(routine)]
     allowance = 0
-    if block.two_pass:
-        passes.insert(0, routine_path(routine, wall_allowance=rough_wall(units)))
-        allowance = rough_depth(units)
+    if two_pass:
+        passes.insert(0, routine_path(routine, wall_allowance=rough_wall(routine.units)))
+        allowance = rough_depth(routine.units)
     return SequencePlan(passes, allowance, start, findings)
 
 

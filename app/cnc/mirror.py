@@ -26,19 +26,16 @@ from app.cnc.blocks import (
     ArcEnd,
     Block,
     BoltCircle,
-    Circle,
-    Copy,
-    Frame,
     Hole,
     MillArc,
     MillLine,
     MillQcir,
     Mode,
-    Pos,
     Program,
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.kinds import REGISTRY, Mill, Role
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units, to_nm
 
@@ -78,8 +75,9 @@ def mirror(program: Program, axis: Axis) -> Mirrored:
     index = 0
     while index < len(blocks):
         block = blocks[index]
-        if starts_mill_sequence(program.blocks, index) and not isinstance(
-            blocks[index + 1], Circle | Frame
+        if (
+            starts_mill_sequence(program.blocks, index)
+            and REGISTRY.of(blocks[index + 1]).mill is not Mill.ROUTINE
         ):
             end = mill_sequence_end(program.blocks, index)
             plan += _contour(program, index, end, targets, m, reverse)
@@ -116,35 +114,60 @@ def _single(
     sy: int,
     blocks: list[Block],
 ) -> tuple[Block, XY | None]:
+    """One block outside a contour, mirrored as its declaration says: its point (X/Y) moved,
+    its steps (REP X/Y, COPY XOF/YOF) and directions (BOLT CIR ANGLE) reflected; a block
+    whose size (FRAME XL/YW) is measured from the point before keeps its values, and that
+    point moves by the size on a flipped axis (the mirrored frame's lower-left corner)."""
     target, _ = targets[index]
-    if isinstance(block, Frame):
-        return block, None
-    if isinstance(block, Hole) and index + 1 < len(blocks) and isinstance(blocks[index + 1], Frame):
-        frame = blocks[index + 1]
-        assert isinstance(frame, Frame) and target is not None
-        corner = m(target)
-        width, height = to_nm(frame.xl, frame.units), to_nm(frame.yw, frame.units)
-        # The mirrored frame's lower-left corner moves by its own size on a flipped axis.
-        return block, (corner[0] - (width if sx < 0 else 0), corner[1] - (height if sy < 0 else 0))
-    if isinstance(block, BoltCircle):
-        angle = block.angle
-        if sx < 0 and sy < 0:
-            angle = Decimal(180) + angle
-        elif sx < 0:
-            angle = -angle
-        elif sy < 0:
-            angle = Decimal(180) - angle
-        angle %= 360
-        return dataclasses.replace(block, angle=angle + 360 if angle < 0 else angle), None
-    if isinstance(block, Rep):
-        return dataclasses.replace(block, x=sx * block.x, y=sy * block.y), None
-    if isinstance(block, Copy):
-        xof = None if block.xof is None else sx * block.xof
-        yof = None if block.yof is None else sy * block.yof
-        return dataclasses.replace(block, xof=xof, yof=yof), None
+    following = blocks[index + 1] if index + 1 < len(blocks) else None
+    sizes = {} if following is None else _roles(following, Role.SIZE_X, Role.SIZE_Y)
+    changes: dict[str, Any] = {}
+    for name, role in _roles(block, Role.STEP_X, Role.STEP_Y, Role.ANGLE).items():
+        value = getattr(block, name)
+        if value is None:
+            continue
+        if role is Role.ANGLE:
+            changes[name] = _mirrored_angle(value, sx, sy)
+        else:
+            changes[name] = (sx if role is Role.STEP_X else sy) * value
+    if changes:
+        block = dataclasses.replace(block, **changes)
     if target is None:
         return block, None
-    return block, m(target)
+    point = m(target)
+    if sizes:
+        assert following is not None
+        width, height = (
+            to_nm(getattr(following, name), following.units) if name else 0
+            for name in (_name(sizes, Role.SIZE_X), _name(sizes, Role.SIZE_Y))
+        )
+        point = (point[0] - (width if sx < 0 else 0), point[1] - (height if sy < 0 else 0))
+    return block, point
+
+
+def _roles(block: Block, *roles: Role) -> dict[str, Role]:
+    """The block's fields that have one of `roles` (name → role), in declaration order."""
+    return {
+        f.name: f.prompt.role
+        for f in REGISTRY.fields(type(block))
+        if f.prompt.role is not None and f.prompt.role in roles
+    }
+
+
+def _name(found: dict[str, Role], role: Role) -> str:
+    return next((name for name, r in found.items() if r is role), "")
+
+
+def _mirrored_angle(angle: Decimal, sx: int, sy: int) -> Decimal:
+    """A direction in degrees clockwise from the lower vertical centre line, reflected."""
+    if sx < 0 and sy < 0:
+        angle = Decimal(180) + angle
+    elif sx < 0:
+        angle = -angle
+    elif sy < 0:
+        angle = Decimal(180) - angle
+    angle %= 360
+    return angle + 360 if angle < 0 else angle
 
 
 def _contour(
@@ -219,13 +242,16 @@ def _targets(blocks: tuple[Block, ...]) -> list[tuple[XY | None, XY | None]]:
     reference: XY = (0, 0)
     found: list[tuple[XY | None, XY | None]] = []
     for index, block in enumerate(blocks):
-        if isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd):
-            point = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+        kind = REGISTRY.of(block)
+        if kind.positioned:
+            roles = _roles(block, Role.X, Role.Y)
+            x, y = (getattr(block, _name(roles, role)) for role in (Role.X, Role.Y))
+            point = resolve_xy(x, y, block.mode, block.units, reference)
             centre = None
             if isinstance(block, MillQcir):
                 centre = qcir_centre(reference, point, block.direction)
             found.append((point, centre))
-            if not isinstance(block, MillArc):
+            if not kind.xy_is_centre:
                 reference = point
         elif isinstance(block, BoltCircle) and index > 0:
             radius = to_nm(block.radius, block.units)
@@ -248,20 +274,20 @@ def _encode(plan: list[tuple[Block, XY | None]], units: Units) -> list[Block]:
     reference: XY = (0, 0)
     open_loops = 0
     for block, point in plan:
-        if block.loop and isinstance(block, Pos | Hole):
+        if block.loop and REGISTRY.of(block).loopable:
             open_loops += 1
         if point is not None:
             inside = open_loops > 0
             block_units = block.units
             value = (point[0] - reference[0], point[1] - reference[1]) if inside else point
-            positioned: Any = block
-            block = dataclasses.replace(
-                positioned,
-                mode=Mode.INC if inside else Mode.ABS,
-                x=_decimal(value[0], block_units),
-                y=_decimal(value[1], block_units),
-            )
-            if not isinstance(block, MillArc):
+            roles = _roles(block, Role.X, Role.Y)
+            changes: dict[str, Any] = {
+                "mode": Mode.INC if inside else Mode.ABS,
+                _name(roles, Role.X): _decimal(value[0], block_units),
+                _name(roles, Role.Y): _decimal(value[1], block_units),
+            }
+            block = dataclasses.replace(block, **changes)
+            if not REGISTRY.of(block).xy_is_centre:
                 reference = point
         # A QCIR or ARC keeps its direction: a one-axis mirror turns it the other way and
         # running it backwards turns it back; a half turn changes neither.

@@ -8,14 +8,15 @@ RPM, the divot of an arc whose end is off its radius).
 
 from __future__ import annotations
 
-import dataclasses
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator
+from dataclasses import replace
 from decimal import Decimal
+from typing import Any
 
 from app.cnc import limits
 from app.cnc.blocks import (
-    LOOP_CAPABLE_CLASSES,
-    MAX_TOOLS,
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
     ArcEnd,
@@ -30,15 +31,13 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     MillArc,
-    MillLine,
-    MillQcir,
     Mode,
-    Pos,
     Program,
     Rep,
     field_label,
 )
 from app.cnc.compiler import compile_program
+from app.cnc.kinds import REGISTRY, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
@@ -58,23 +57,94 @@ MESSAGE_CHARACTERS = frozenset(
     "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 .,-:/#+=*"
 )
 
-# Fields holding signed lengths, and fields holding lengths that must be positive.
-SIGNED_LENGTHS = ("x", "y", "z_up", "z_dn", "xof", "yof")
-POSITIVE_LENGTHS = ("radius", "xl", "yw")
-COUNTS = {
-    "tool": (1, MAX_TOOLS),
-    "pecks": (1, limits.MAX_PECKS),
-    "holes": (1, limits.MAX_BOLT_HOLES),
-    "nx": (0, limits.MAX_REPEAT),
-    "ny": (0, limits.MAX_REPEAT),
-}
+WHOLE = (Value.COUNT, Value.TOOL)
+
+
+class _Shown:
+    """A value with its unit as a message shows it, formatted only if a message uses it."""
+
+    def __init__(self, value: Decimal, symbol: str) -> None:
+        self.value = value
+        self.symbol = symbol
+
+    def __format__(self, spec: str) -> str:
+        return f"{format_decimal(self.value)} {self.symbol}"
 
 
 def validate(program: Program) -> list[Problem]:
-    """Every problem of `program`, in block order (program and Data Block 0 first)."""
+    """Every problem of `program`, in block order (program and Data Block 0 first).
+
+    A program is a value: the same Program object validated again (the editor does, several
+    times per request) gets the answer it got, from a small memo of recent programs."""
+    key = _identity(program)
+    with _LOCK:
+        hit = _RECENT.get(key)
+        if hit is not None and _identity(hit[0]) == key:
+            _RECENT.move_to_end(key)
+            return list(hit[1])
     checker = _Checker(program)
     checker.run()
+    with _LOCK:
+        _RECENT[key] = (program, tuple(checker.problems))
+        while len(_RECENT) > RECENT_PROGRAMS:
+            _RECENT.popitem(last=False)
     return checker.problems
+
+
+def _identity(program: Program) -> tuple[Any, ...]:
+    """What validation reads of a program, by object for its parts: a copy with the same
+    blocks, Data Block 0 and stock (the preview makes one) is the same program to it."""
+    return (
+        id(program.blocks),
+        id(program.block0),
+        id(program.stock),
+        program.name,
+        program.part_number,
+        program.units,
+    )
+
+
+# The memo keeps each program it answers for alive, so no id in a key is reused while the
+# entry is in.
+RECENT_PROGRAMS = 8
+_NOTHING = Program(name="")
+_RECENT: OrderedDict[tuple[Any, ...], tuple[Program, tuple[Problem, ...]]] = OrderedDict()
+_LOCK = threading.Lock()
+_OWN: dict[tuple[Any, ...], tuple[Problem, ...]] = {}
+OWN_BLOCKS = 1 << 15
+# The same block objects come back (a program is edited one block at a time): by identity.
+_SEEN: dict[int, tuple[Block, tuple[Problem, ...]]] = {}
+
+
+def _own_problems(block: Block) -> tuple[Problem, ...]:
+    """What is wrong with a block by itself (its values, qualifiers and message), as
+    problems of block 0. A block says the same wherever it stands, so each distinct block is
+    checked once. The key keeps each value as typed: 1.0 and 1.00 are equal Decimals, but a
+    message shows the one typed."""
+    seen = _SEEN.get(id(block))
+    if seen is not None and seen[0] is block:
+        return seen[1]
+    key = (type(block), *(_as_typed(getattr(block, f.name)) for f in REGISTRY.fields(type(block))))
+    found = _OWN.get(key)
+    if found is None:
+        checker = _Checker(_NOTHING)
+        checker.check_fields(0, block)
+        checker.check_kind_rules(0, block)
+        checker.check_message(0, block)
+        found = tuple(checker.problems)
+        with _LOCK:
+            if len(_OWN) >= OWN_BLOCKS:
+                _OWN.clear()
+            _OWN[key] = found
+    with _LOCK:
+        if len(_SEEN) >= OWN_BLOCKS:
+            _SEEN.clear()
+        _SEEN[id(block)] = (block, found)
+    return found
+
+
+def _as_typed(value: Any) -> Any:
+    return (value.as_tuple(), str(value)) if isinstance(value, Decimal) else value
 
 
 class _Checker:
@@ -92,9 +162,7 @@ class _Checker:
         self.check_program()
         self.check_block0(self.program.block0, self.program.units)
         for number, block in enumerate(self.blocks, start=1):
-            self.check_fields(number, block)
-            self.check_kind_rules(number, block)
-            self.check_message(number, block)
+            self.problems += [replace(p, block=number) for p in _own_problems(block)]
         self.check_geometry()
         self.check_loops()
         self.check_order()
@@ -167,26 +235,25 @@ class _Checker:
     # -- fields -------------------------------------------------------------------------
 
     def check_fields(self, number: int, block: Block) -> None:
+        """Each value against its declaration (app.cnc.kinds: value kind and limits)."""
         units = block.units
-        for f in dataclasses.fields(block):
+        for f in REGISTRY.fields(type(block)):
             value = getattr(block, f.name)
             if value is None or isinstance(value, bool):
                 continue
-            label = str(f.metadata.get("label", f.name))
-            if f.name in SIGNED_LENGTHS:
-                self.check_length(number, label, value, units)
-            elif f.name in POSITIVE_LENGTHS:
-                self.check_length(number, label, value, units, positive=True)
-            elif f.name == "corner_radius":
-                self.check_length(number, label, value, units, minimum=Decimal(0))
-            elif f.name == "feed_z":
-                self.check_feed(number, label, value, limits.FEED_Z[units], units)
-            elif f.name == "feed_xy":
-                self.check_feed(number, label, value, limits.FEED_XY[units], units)
-            elif f.name == "angle":
+            declared = f.prompt
+            label = declared.label
+            if declared.value is Value.LENGTH:
+                minimum = None if declared.low is None else Decimal(declared.low)
+                self.check_length(
+                    number, label, value, units, positive=declared.positive, minimum=minimum
+                )
+            elif declared.value is Value.FEED and declared.feed is not None:
+                self.check_feed(number, label, value, declared.feed[units], units)
+            elif declared.value is Value.ANGLE:
                 self.check_angle(number, label, value)
-            elif f.name in COUNTS:
-                low, high = COUNTS[f.name]
+            elif declared.value in WHOLE and declared.low is not None and declared.high is not None:
+                low, high = declared.low, declared.high
                 if not low <= value <= high:
                     self.add(
                         number,
@@ -206,8 +273,8 @@ class _Checker:
         positive: bool = False,
         minimum: Decimal | None = None,
     ) -> None:
-        shown = f"{format_decimal(value)} {units.symbol}"
         high = limits.MAX_DIMENSION[units]
+        shown = _Shown(value, units.symbol)
         low = minimum if minimum is not None else -high
         if positive and value <= 0:
             self.add(
@@ -238,7 +305,7 @@ class _Checker:
     def check_feed(
         self, block: int, label: str, value: Decimal, feed: limits.FeedLimits, units: Units
     ) -> None:
-        shown = f"{format_decimal(value)} {units.feed_symbol}"
+        shown = _Shown(value, units.feed_symbol)
         if not feed.low <= value <= feed.high:
             self.add(
                 block,
@@ -297,7 +364,8 @@ class _Checker:
             )
 
     def check_kind_rules(self, number: int, block: Block) -> None:
-        if block.loop and not isinstance(block, LOOP_CAPABLE_CLASSES):
+        kind = REGISTRY.of(block)
+        if block.loop and not kind.loopable:
             self.add(
                 number,
                 "LOOP",
@@ -306,7 +374,7 @@ class _Checker:
                 f"a {block.type_name} block cannot carry LOOP; "
                 "a LOOP is a POS, DRILL, BORE or TAP block",
             )
-        if block.stop and isinstance(block, Rep | Copy | MillArc):
+        if block.stop and not kind.stoppable:
             self.add(
                 number,
                 "STOP",
@@ -375,7 +443,7 @@ class _Checker:
     def check_loops(self) -> None:
         open_loops: list[int] = []
         for number, block in enumerate(self.blocks, start=1):
-            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+            if block.loop and REGISTRY.of(block).loopable:
                 if len(open_loops) == limits.MAX_LOOP_DEPTH:
                     self.add(
                         number,
@@ -570,7 +638,7 @@ class _Checker:
         depth = 0
         start = 0
         for index, block in enumerate(blocks):
-            if block.loop and isinstance(block, LOOP_CAPABLE_CLASSES):
+            if block.loop and REGISTRY.of(block).loopable:
                 if depth == 0:
                     start = index
                 depth += 1
@@ -683,4 +751,4 @@ def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
 
 def _has_position(block: Block) -> bool:
     """True for blocks whose X/Y is a position (ABS/INC matters for them)."""
-    return isinstance(block, Pos | Hole | MillLine | MillQcir | MillArc | ArcEnd)
+    return REGISTRY.of(block).positioned

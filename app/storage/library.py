@@ -11,7 +11,9 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+import threading
 import zipfile
+from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -257,13 +259,12 @@ class Library:
                 raise NotFound(f"no program {program_id} in the library")
             if row.version != based_on:
                 raise self._stale(s, row, based_on, program)
-            old = document.loads(row.document)
+            old = _parse(row.document)
+            columns = _columns(program)
             result = s.execute(
                 update(ProgramRow)
                 .where(ProgramRow.id == program_id, ProgramRow.version == based_on)
-                .values(
-                    **_columns(program), version=based_on + 1, updated_at=now, updated_by=author
-                )
+                .values(**columns, version=based_on + 1, updated_at=now, updated_by=author)
             )
             if result.rowcount != 1:  # type: ignore[attr-defined]
                 s.rollback()
@@ -275,7 +276,7 @@ class Library:
                 RevisionRow(
                     program_id=program_id,
                     version=based_on + 1,
-                    document=document.dumps(program),
+                    document=columns["document"],
                     created_at=now,
                     author=author,
                     summary=summary(old, program),
@@ -283,6 +284,8 @@ class Library:
             )
             s.flush()
             s.refresh(row)
+            # The next read of this version (the editor's, right after) needs no parse.
+            _remember(columns["document"], document.as_stored(program))
             return _info(row)
 
     def _stale(self, s: Session, row: ProgramRow, based_on: int, mine: Program) -> StaleSave:
@@ -525,9 +528,37 @@ def _load(row: ProgramRow) -> Program:
     """A stored program's document. One the library can no longer open (stored before a
     limit existed) is a LibraryError naming the program, not a crash."""
     try:
-        return document.loads(row.document)
+        return _parse(row.document)
     except document.DocumentError as exc:
         raise LibraryError(f"program {row.id} ({row.name}) cannot be opened: {exc}") from None
+
+
+# Parsed documents by their text, most recent last. A program is an immutable value, so the
+# same text is the same Program: an edit reads the stored version (to edit it, and again for
+# the revision summary) and then the version it saved, and parses none of them twice.
+PARSED_DOCUMENTS = 16
+_PARSED: OrderedDict[str, Program] = OrderedDict()
+_PARSED_LOCK = threading.Lock()
+
+
+def _parse(text: str) -> Program:
+    """`document.loads(text)`, from the recent documents when it was read or written."""
+    with _PARSED_LOCK:
+        found = _PARSED.get(text)
+        if found is not None:
+            _PARSED.move_to_end(text)
+            return found
+    program = document.loads(text)
+    _remember(text, program)
+    return program
+
+
+def _remember(text: str, program: Program) -> None:
+    with _PARSED_LOCK:
+        _PARSED[text] = program
+        _PARSED.move_to_end(text)
+        while len(_PARSED) > PARSED_DOCUMENTS:
+            _PARSED.popitem(last=False)
 
 
 def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:

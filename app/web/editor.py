@@ -9,45 +9,46 @@ posts and redirects the same way.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
 
 from flask import Blueprint, abort, redirect, render_template, request, url_for
-from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import (
-    ArcEnd,
     Block,
     Coolant,
     DataBlock0,
-    MillArc,
     MillingMode,
     Program,
     Tool,
-    field_label,
 )
 from app.cnc.copy import CopyError, cancel_copy, execute_copy
-from app.cnc.estimate import format_seconds
+from app.cnc.kinds import REGISTRY
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
+from app.web.editor_page import (
+    Entry,
+    page_of,
+    render_entry,
+    render_list,
+    render_page,
+    render_reply,
+)
+from app.web.editor_page import is_htmx as is_htmx  # the other pages ask it from here
 from app.web.extensions import get_library
 from app.web.forms import (
-    GROUP_KINDS,
-    KINDS,
     defaults_for,
+    entry_forms,
     field_values,
     kind_of,
-    offered_groups,
     offered_kinds,
     parse_block,
     read_number,
     read_whole,
 )
-from app.web.preview import preview
 
 bp = Blueprint("editor", __name__)
 
@@ -68,128 +69,11 @@ def load(program_id: int) -> StoredProgram:
         abort(422, str(exc))
 
 
-def is_htmx() -> bool:
-    return request.headers.get("HX-Request") == "true"
-
-
-# -- the page model -------------------------------------------------------------------------
-
-
-@dataclass
-class Entry:
-    """What the entry panel shows: a choice of type, of sub-type, or a block's fields."""
-
-    at: int  # the block number being entered (new) or edited
-    editing: bool
-    group: str = ""
-    kind: str = ""
-    loop: bool = False
-    stop: bool = False
-    values: dict[str, str] = dataclasses.field(default_factory=dict)
-    errors: dict[str, str] = dataclasses.field(default_factory=dict)
-    message: str = ""
-    page: int = 0  # the block list's page asked for; 0: the page of block `at`
-
-
-PAGE_SIZE = 100
-"""Blocks per page of the block list: a page costs the same whatever the program's size."""
-
-
-def page_of(number: int) -> int:
-    """The page (from 1) of the block list that shows block `number`."""
-    return max(1, (number - 1) // PAGE_SIZE + 1)
-
-
-def block_summary(block: Block) -> str:
-    """The block's values in one line, the way the control's block list reads."""
-    parts = []
-    for f in dataclasses.fields(block):
-        if f.name in ("mode", "units", "loop", "stop", "kind", "message"):
-            continue
-        value = getattr(block, f.name)
-        if value is None or value is False or f.name in ("op", "direction", "two_pass"):
-            continue
-        label = field_label(block, f.name)
-        if value is True:
-            parts.append(label)
-        elif isinstance(value, Decimal):
-            parts.append(f"{label} {value:f}")
-        elif hasattr(value, "value"):
-            parts.append(f"{label} {str(value.value).upper()}")
-        else:
-            parts.append(f"{label} {value}")
-    if getattr(block, "x", None) is not None and block.mode.value == "inc":
-        parts.insert(0, "INC")
-    return "  ".join(parts)
-
-
-def context(stored: StoredProgram, entry: Entry) -> dict[str, Any]:
-    program = stored.program
-    problems = validate(program)
-    svg, per_block, total, shown = preview(program, problems)
-    by_block: dict[int, list[Problem]] = {}
-    for problem in problems:
-        if problem.block is not None:
-            by_block.setdefault(problem.block, []).append(problem)
-    count = len(program.blocks)
-    pages = page_of(max(count, 1))  # "new block…" ends the last page
-    page = min(entry.page or page_of(entry.at), pages)
-    first = (page - 1) * PAGE_SIZE + 1
-    rows = [
-        {
-            "number": n,
-            "title": block.title,
-            "summary": block_summary(block),
-            "units": block.units.symbol,
-            "seconds": format_seconds(per_block.get(n, 0.0)) if n in per_block else "",
-            "problems": by_block.get(n, []),
-            "has_error": any(p.severity is Severity.ERROR for p in by_block.get(n, [])),
-        }
-        for n, block in enumerate(program.blocks[first - 1 : first - 1 + PAGE_SIZE], start=first)
-    ]
-    kind = KINDS.get(entry.kind)
-    field_problems: dict[str, list[Problem]] = {}
-    if entry.editing and kind is not None:
-        block = program.blocks[entry.at - 1]
-        field_problems["message"] = [
-            p for p in problems if p.block == entry.at and p.field == "MESSAGE"
-        ]
-        for spec in kind.fields:
-            try:
-                label = field_label(block, spec.name)
-            except KeyError:
-                label = spec.label
-            field_problems[spec.name] = [
-                p for p in problems if p.block == entry.at and p.field == label
-            ]
-    return {
-        "stored": stored,
-        "program": program,
-        "rows": rows,
-        "block_count": count,
-        "page": page,
-        "pages": pages,
-        "first": first,
-        "problems": problems,
-        "errors": [p for p in problems if p.severity is Severity.ERROR],
-        "svg": svg,
-        "total": format_seconds(total),
-        "shown": shown,
-        "entry": entry,
-        "kind": kind,
-        "field_problems": field_problems,
-        "groups": offered_groups(program, entry.at) if not entry.editing else [],
-        "sub_kinds": offered_kinds(program, entry.at, entry.group) if entry.group else [],
-        "group_kinds": GROUP_KINDS,
-        "kinds": KINDS,
-    }
-
-
-def render_editor(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
-    ctx = context(stored, entry)
-    if is_htmx():
-        return render_block("editor/program.html", "editor", **ctx), status
-    return render_template("editor/program.html", **ctx), status
+def follower(blocks: tuple[Block, ...] | list[Block], number: int) -> int:
+    """1 when block `number` is entered together with the block after it (an ARC XY-CENT
+    and its XY-END), else 0."""
+    then = REGISTRY.sub_kind_of(blocks[number - 1]).then
+    return int(then is not None and number < len(blocks) and isinstance(blocks[number], then))
 
 
 def entry_from_args(program: Program, args: Any) -> Entry:
@@ -231,7 +115,7 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         kinds = offered_kinds(program, at, group)
         if len(kinds) == 1:
             kind = kinds[0]
-    if kind in KINDS:
+    if kind in entry_forms():
         entry.kind = kind
         entry.values = defaults_for(program, at, kind, loop)
     return entry
@@ -264,14 +148,25 @@ def _int(text: str | None, default: int) -> int:
 @bp.get("/programs/<int:program_id>")
 def edit(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
-    return render_editor(stored, entry_from_args(stored.program, request.args))
+    return render_page(stored, entry_from_args(stored.program, request.args))
 
 
 @bp.get("/programs/<int:program_id>/entry")
 def entry(program_id: int) -> tuple[str, int]:
     """The entry panel for the choice made (a fragment for htmx, the page otherwise)."""
     stored = load(program_id)
-    return render_editor(stored, entry_from_args(stored.program, request.args))
+    return render_entry(stored, entry_from_args(stored.program, request.args))
+
+
+@bp.get("/programs/<int:program_id>/list")
+def block_list(program_id: int) -> Response | tuple[str, int]:
+    """Another page of the block list (a fragment for htmx, the page otherwise)."""
+    stored = load(program_id)
+    page = max(1, _int(request.args.get("page"), 1))
+    if not is_htmx():
+        return redirect(url_for("editor.edit", program_id=program_id, page=page))
+    count = len(stored.program.blocks)
+    return render_list(stored, Entry(at=count + 1, editing=False, page=page))
 
 
 @bp.post("/programs/<int:program_id>/blocks")
@@ -297,13 +192,16 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
     )
     if parsed.errors:
         entry.message = "Not saved: " + "; ".join(parsed.errors.values())
-        return render_editor(stored, entry, 422)
+        return render_entry(stored, entry, 422)
     blocks = list(program.blocks)
+    in_place = False
     if editing:
-        span = 2 if isinstance(blocks[at - 1], MillArc) and len(parsed.blocks) == 2 else 1
-        if span == 2 and not (at < len(blocks) and isinstance(blocks[at], ArcEnd)):
-            span = 1
+        # An ARC is entered as its XY-CENT and XY-END blocks: both are replaced (the
+        # XY-END is added when it was missing).
+        span = 1 + (follower(blocks, at) if len(parsed.blocks) == 2 else 0)
+        if len(parsed.blocks) == 2 and span == 1:
             blocks.insert(at, parsed.blocks[1])
+        in_place = span == len(parsed.blocks)
         blocks[at - 1 : at - 1 + span] = parsed.blocks
     else:
         blocks[at - 1 : at - 1] = parsed.blocks
@@ -319,14 +217,14 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
         except CopyError as exc:
             entry.message = f"Not done: {exc.message}"
             entry.errors = {"from_block": exc.message}
-            return render_editor(stored, entry, 422)
+            return render_entry(stored, entry, 422)
     refused = value_problems(new_program, range(at, at + len(parsed.blocks)))
     if refused:
         # As the control refuses an out-of-range entry: nothing is saved, the values stay
         # in the form and each message stands beside its field.
         entry.errors = {name: f"{p.field}: {p.message}" for name, p in refused}
         entry.message = "Not saved: " + "; ".join(f"{p.location}: {p.message}" for _, p in refused)
-        return render_editor(stored, entry, 422)
+        return render_entry(stored, entry, 422)
     saved = _save(stored, new_program, entry)
     if isinstance(saved, tuple):
         return saved
@@ -334,8 +232,12 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
     if kind == "COPY":
         next_at = len(saved.program.blocks) + 1
     next_entry = Entry(at=min(next_at, len(saved.program.blocks) + 1), editing=False)
+    # The list stays where the machinist was: at the edited block, or where they insert.
+    focus = at if editing else next_entry.at
     if is_htmx():
-        return render_editor(saved, next_entry)
+        return render_reply(program, saved, next_entry, focus, in_place)
+    if editing:
+        return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
     return redirect(url_for("editor.edit", program_id=program_id, at=next_entry.at))
 
 
@@ -364,36 +266,29 @@ def value_problems(program: Program, numbers: range) -> list[tuple[str, Problem]
             if problem.severity is not Severity.ERROR:
                 continue
             block = program.blocks[number - 1]
-            name = next(
-                (
-                    f.name
-                    for f in dataclasses.fields(block)
-                    if f.metadata.get("label") == problem.field
-                ),
-                "x",
-            )
-            if isinstance(block, ArcEnd) and name in ("x", "y"):
-                name = f"end_{name}"
-            found.append((name, problem))
+            name = REGISTRY.name_of(type(block), problem.field or "") or "x"
+            # The second block of a two-block entry (an ARC's XY-END) has `end_` fields.
+            found.append(("end_" + name if number > numbers.start else name, problem))
     return found
 
 
 def _save(stored: StoredProgram, program: Program, entry: Entry) -> StoredProgram | tuple[str, int]:
-    """Save a new version based on the one the form showed; the editor with a message if
-    someone saved in between (nothing is overwritten)."""
+    """Save a new version based on the one the form showed; the entry panel with a message
+    if someone saved in between (nothing is overwritten)."""
     based_on = form_version()
     if based_on is None:
         entry.message = MISSING_VERSION
-        return render_editor(stored, entry, 422)
+        return render_entry(stored, entry, 422)
     library = get_library()
     try:
         library.save(stored.info.id, program, based_on=based_on, author=current_user())
     except StaleSave as exc:
         entry.message = str(exc)
-        return render_editor(library.get(stored.info.id), entry, 409)
+        return render_entry(library.get(stored.info.id), entry, 409)
     except LibraryError as exc:  # e.g. past the block limit
         entry.message = f"Not saved: {exc}"
-        return render_editor(stored, entry, 422)
+        return render_entry(stored, entry, 422)
+    # Reads no document: the library keeps what it just wrote.
     return library.get(stored.info.id)
 
 
@@ -403,40 +298,37 @@ def delete_block(program_id: int, number: int) -> Response | tuple[str, int]:
     blocks = list(stored.program.blocks)
     if not 1 <= number <= len(blocks):
         abort(404, f"There is no block {number}.")
-    span = (
-        2
-        if isinstance(blocks[number - 1], MillArc)
-        and number < len(blocks)
-        and isinstance(blocks[number], ArcEnd)
-        else 1
-    )
+    span = 1 + follower(blocks, number)
     del blocks[number - 1 : number - 1 + span]
     entry = Entry(at=len(blocks) + 1, editing=False)
     saved = _save(stored, dataclasses.replace(stored.program, blocks=tuple(blocks)), entry)
     if isinstance(saved, tuple):
         return saved
+    focus = min(number, len(blocks) + 1)
     if is_htmx():
-        return render_editor(saved, entry)
-    return redirect(url_for("editor.edit", program_id=program_id))
+        return render_reply(stored.program, saved, entry, focus, in_place=False)
+    return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
 
 
 @bp.post("/programs/<int:program_id>/blocks/<int:number>/move")
 def move_block(program_id: int, number: int) -> Response | tuple[str, int]:
     stored = load(program_id)
-    blocks = list(stored.program.blocks)
+    before = stored.program
+    blocks = list(before.blocks)
     if not 1 <= number <= len(blocks):
         abort(404, f"There is no block {number}.")
     target = number - 1 if request.form.get("direction") == "up" else number + 1
     entry = Entry(at=len(blocks) + 1, editing=False)
+    focus = number
     if 1 <= target <= len(blocks):
         blocks[number - 1], blocks[target - 1] = blocks[target - 1], blocks[number - 1]
-        saved = _save(stored, dataclasses.replace(stored.program, blocks=tuple(blocks)), entry)
+        saved = _save(stored, dataclasses.replace(before, blocks=tuple(blocks)), entry)
         if isinstance(saved, tuple):
             return saved
-        stored = saved
+        stored, focus = saved, target
     if is_htmx():
-        return render_editor(stored, entry)
-    return redirect(url_for("editor.edit", program_id=program_id))
+        return render_reply(before, stored, entry, focus, in_place=False)
+    return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
 
 
 @bp.post("/programs/<int:program_id>/header")

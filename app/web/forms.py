@@ -9,40 +9,25 @@ never raises: it returns the block, or the message for each field that could not
 
 from __future__ import annotations
 
-import dataclasses
+import enum
+import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import (
-    ArcEnd,
-    Block,
-    BoltCircle,
-    Circle,
-    Comp,
-    Copy,
-    CopyAction,
-    Direction,
-    Frame,
-    Hole,
-    HoleOp,
-    MillArc,
-    MillLine,
-    MillQcir,
-    Mode,
-    Placement,
-    Pos,
-    Program,
-    Rep,
-)
+from app.cnc.blocks import Block, Mode, Program, open_loops
+from app.cnc.kinds import REGISTRY, Field, Role, SubKind, Value
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.units import Units
+
+# The qualifiers and settings every block has; the form asks for them apart from the prompts.
+COMMON = frozenset({"mode", "units", "loop", "stop", "message"})
 
 
 @dataclass(frozen=True)
 class FieldSpec:
-    """One prompt: form name, the control's label, how it is read."""
+    """One prompt of an entry form: form name, the control's label, how it is read."""
 
     name: str
     label: str
@@ -52,33 +37,10 @@ class FieldSpec:
     help: str = ""
 
 
-X = FieldSpec("x", "X", "length")
-Y = FieldSpec("y", "Y", "length")
-Z_UP = FieldSpec("z_up", "Z UP", "length", False, help="empty in a 2-axis program")
-Z_DN = FieldSpec("z_dn", "Z DN", "length", False, help="empty in a 2-axis program")
-FEED_Z = FieldSpec("feed_z", "FEEDR Z", "feed", False)
-FEED_XY = FieldSpec("feed_xy", "FEEDR XY", "feed")
-PECKS = FieldSpec("pecks", "# PECK", "count")
-TOOL = FieldSpec("tool", "TOOL #", "tool")
-MILL_Z = FieldSpec("z_dn", "Z DN", "length", False, help="empty keeps the depth")
-PLACEMENT = FieldSpec(
-    "placement",
-    "PLACEMENT",
-    "choice",
-    choices=(
-        ("inside", "INSIDE"),
-        ("outside", "OUTSIDE"),
-        ("in_tan", "IN/TAN"),
-        ("out_tan", "OUT/TAN"),
-        ("pocket", "POCKET"),
-    ),
-)
-OPTIONAL_LENGTH = {"required": False}
-
-
 @dataclass(frozen=True)
-class Kind:
-    """A block type and sub-type as the editor offers it."""
+class EntryForm:
+    """A block type and sub-type as the editor offers it, read from its declaration
+    (app.cnc.kinds): the prompts in the control's order, and what the form builds."""
 
     key: str
     title: str
@@ -86,191 +48,97 @@ class Kind:
     fields: tuple[FieldSpec, ...]
     positioned: bool = False  # has X/Y, so the INC/ABS switch applies
     loopable: bool = False
+    stoppable: bool = True
+    menu: int = 0  # its number in the group's menu (0: not in a menu)
 
 
-KINDS: dict[str, Kind] = {
-    k.key: k
-    for k in (
-        Kind(
-            "POS",
-            "POS",
-            "POS",
-            (X, Y, FieldSpec("index", "INDEX", "flag", False), TOOL),
-            True,
-            True,
-        ),
-        Kind("DRILL", "DRILL", "DRILL", (X, Y, Z_UP, Z_DN, FEED_Z, PECKS, TOOL), True, True),
-        Kind(
-            "DRILL_CUT_RT",
-            "DRILL CUT RT",
-            "DRILL",
-            (X, Y, Z_UP, Z_DN, FEED_Z, PECKS, TOOL),
-            True,
-            True,
-        ),
-        Kind(
-            "DRILL_CUT_LT",
-            "DRILL CUT LT",
-            "DRILL",
-            (X, Y, Z_UP, Z_DN, FEED_Z, PECKS, TOOL),
-            True,
-            True,
-        ),
-        Kind("BORE", "BORE", "BORE", (X, Y, Z_UP, Z_DN, FEED_Z, TOOL), True, True),
-        Kind("TAP", "TAP", "TAP", (X, Y, Z_UP, Z_DN, FEED_Z, TOOL), True, True),
-        *(
-            Kind(
-                f"BOLT_CIR_{op}",
-                f"BOLT CIR {op}",
-                op,
-                (
-                    FieldSpec("holes", "# HOLES", "count"),
-                    FieldSpec("angle", "ANGLE", "angle", help="degrees clockwise from 6 o'clock"),
-                    FieldSpec("radius", "RAD", "length"),
-                ),
-            )
-            for op in ("DRILL", "BORE", "TAP")
-        ),
-        Kind("MILL_STD", "MILL STD", "MILL", (X, Y, MILL_Z, FEED_XY, TOOL), True),
-        Kind("QCIR_C", "QCIR C", "MILL", (X, Y, MILL_Z, FEED_XY, TOOL), True),
-        Kind("QCIR_CC", "QCIR CC", "MILL", (X, Y, MILL_Z, FEED_XY, TOOL), True),
-        *(
-            Kind(
-                key,
-                title,
-                "MILL",
-                (
-                    FieldSpec("x", "X (XY-CENT)", "length"),
-                    FieldSpec("y", "Y (XY-CENT)", "length"),
-                    MILL_Z,
-                    FEED_XY,
-                    TOOL,
-                    FieldSpec("end_x", "X (XY-END)", "length"),
-                    FieldSpec("end_y", "Y (XY-END)", "length"),
-                ),
-                True,
-            )
-            for key, title in (("ARC_C", "ARC C"), ("ARC_CC", "ARC CC"))
-        ),
-        *(
-            Kind(
-                key, title, "MILL", (PLACEMENT, FieldSpec("radius", "RAD", "length"), FEED_XY, TOOL)
-            )
-            for key, title in (("CIRCLE", "CIRCLE"), ("CIR_2P", "CIR 2P"))
-        ),
-        *(
-            Kind(
-                key,
-                title,
-                "MILL",
-                (
-                    PLACEMENT,
-                    FieldSpec("xl", "XL", "length"),
-                    FieldSpec("yw", "YW", "length"),
-                    FieldSpec("corner_radius", "CORNER RAD", "length"),
-                    FEED_XY,
-                    TOOL,
-                ),
-            )
-            for key, title in (("FRAME", "FRAME"), ("FRM_2P", "FRM 2P"))
-        ),
-        Kind(
-            "REP",
-            "REP",
-            "REP",
-            (X, Y, FieldSpec("nx", "NX", "count"), FieldSpec("ny", "NY", "count")),
-        ),
-        Kind(
-            "COPY",
-            "COPY",
-            "COPY",
-            (
-                FieldSpec("from_block", "FROM", "count"),
-                FieldSpec("to_block", "TO", "count"),
-                FieldSpec(
-                    "op",
-                    "OPERATION",
-                    "choice",
-                    False,
-                    (("", "unchanged"), ("DRILL", "DRILL"), ("BORE", "BORE"), ("TAP", "TAP")),
-                ),
-                FieldSpec("pecks", "# PECK", "count", False),
-                FieldSpec("xof", "XOF", "length", False),
-                FieldSpec("yof", "YOF", "length", False),
-                FieldSpec("z_up", "Z UP", "length", False),
-                FieldSpec("z_dn", "Z DN", "length", False),
-                FieldSpec("feed_z", "FEEDR Z", "feed", False),
-                FieldSpec("feed_xy", "FEEDR XY", "feed", False),
-                FieldSpec("tool", "TOOL #", "tool", False),
-            ),
-        ),
-        Kind("ARC_END", "MILL ARC XY-END", "MILL", (X, Y), True),
+def _enum_of(cls: type, name: str) -> type[enum.Enum] | None:
+    """The enum a CHOICE field holds (from the dataclass's resolved annotations)."""
+    hint = _hints(cls)[name]
+    options = typing.get_args(hint) or (hint,)
+    return next((o for o in options if isinstance(o, type) and issubclass(o, enum.Enum)), None)
+
+
+_HINTS: dict[type, dict[str, Any]] = {}
+
+
+def _hints(cls: type) -> dict[str, Any]:
+    if cls not in _HINTS:
+        _HINTS[cls] = typing.get_type_hints(cls)
+    return _HINTS[cls]
+
+
+def _spec(cls: type[Block], f: Field, name: str, label: str) -> FieldSpec:
+    choices: tuple[tuple[str, str], ...] = ()
+    if f.prompt.value is Value.CHOICE:
+        members = _enum_of(cls, f.name) or enum.Enum
+        choices = tuple((m.value, m.name.replace("_", "/")) for m in members)
+        if f.optional:
+            choices = (("", f.prompt.blank), *choices)
+    return FieldSpec(name, label, f.prompt.value.value, f.required, choices, f.prompt.help)
+
+
+def _form(cls: type[Block], sub: SubKind) -> EntryForm:
+    kind = REGISTRY.kind(cls)
+    parts = [(cls, "")] + ([(sub.then, "end_")] if sub.then is not None else [])
+    specs = []
+    for part, prefix in parts:
+        suffix = f" ({REGISTRY.kind(part).part})" if sub.then is not None else ""
+        follower = SubKind("", "", "") if prefix else sub
+        for f in REGISTRY.prompted(part, follower):
+            xy = f.prompt.role in (Role.X, Role.Y)
+            specs.append(_spec(part, f, prefix + f.name, f.label + (suffix if xy else "")))
+    return EntryForm(
+        sub.key,
+        sub.title,
+        sub.group,
+        tuple(specs),
+        kind.positioned,
+        kind.loopable,
+        kind.stoppable or sub.then is not None,
+        sub.menu,
     )
-}
+
 
 GROUPS = ("POS", "DRILL", "BORE", "TAP", "MILL", "LOOP", "STOP", "REP", "COPY")
-GROUP_KINDS = {
-    "POS": ("POS",),
-    "DRILL": ("DRILL", "BOLT_CIR_DRILL", "DRILL_CUT_RT", "DRILL_CUT_LT"),
-    "BORE": ("BORE", "BOLT_CIR_BORE"),
-    "TAP": ("TAP", "BOLT_CIR_TAP"),
-    "MILL": (
-        "MILL_STD",
-        "QCIR_C",
-        "QCIR_CC",
-        "ARC_C",
-        "ARC_CC",
-        "CIRCLE",
-        "CIR_2P",
-        "FRAME",
-        "FRM_2P",
-    ),
-    "REP": ("REP",),
-    "COPY": ("COPY",),
-}
+_FORMS: tuple[int, dict[str, EntryForm], dict[str, tuple[str, ...]]] = (-1, {}, {})
+
+
+def _tables() -> tuple[dict[str, EntryForm], dict[str, tuple[str, ...]]]:
+    """The entry forms and each group's menu, read once from the registry (again only if
+    a kind is declared later)."""
+    global _FORMS
+    if _FORMS[0] != REGISTRY.version:
+        forms = {key: _form(cls, sub) for key, (cls, sub) in REGISTRY.sub_kinds().items()}
+        menus = {
+            group: tuple(
+                form.key
+                for form in sorted(forms.values(), key=lambda form: form.menu)
+                if form.group == group and form.menu
+            )
+            for group in GROUPS
+            if group not in ("LOOP", "STOP")
+        }
+        _FORMS = (REGISTRY.version, forms, menus)
+    return _FORMS[1], _FORMS[2]
+
+
+def entry_forms() -> dict[str, EntryForm]:
+    """Editor key (e.g. `DRILL_CUT_RT`) → its entry form."""
+    return _tables()[0]
+
+
+def group_kinds() -> dict[str, tuple[str, ...]]:
+    """First choice (POS, DRILL, …) → the keys of its sub-types, by menu number."""
+    return _tables()[1]
 
 
 def kind_of(block: Block) -> str:
     """The editor kind of an existing block."""
-    if isinstance(block, Pos):
-        return "POS"
-    if isinstance(block, Hole):
-        if block.op is HoleOp.DRILL and block.comp is Comp.RIGHT:
-            return "DRILL_CUT_RT"
-        if block.op is HoleOp.DRILL and block.comp is Comp.LEFT:
-            return "DRILL_CUT_LT"
-        return block.op.value
-    if isinstance(block, BoltCircle):
-        return f"BOLT_CIR_{block.op.value}"
-    if isinstance(block, MillLine):
-        return "MILL_STD"
-    if isinstance(block, MillQcir):
-        return "QCIR_C" if block.direction is Direction.CW else "QCIR_CC"
-    if isinstance(block, MillArc):
-        return "ARC_C" if block.direction is Direction.CW else "ARC_CC"
-    if isinstance(block, ArcEnd):
-        return "ARC_END"
-    if isinstance(block, Circle):
-        return "CIR_2P" if block.two_pass else "CIRCLE"
-    if isinstance(block, Frame):
-        return "FRM_2P" if block.two_pass else "FRAME"
-    if isinstance(block, Rep):
-        return "REP"
-    return "COPY"
+    return REGISTRY.sub_kind_of(block).key
 
 
 # -- what may be offered where -------------------------------------------------------------
-
-
-def open_loops(blocks: tuple[Block, ...], before: int) -> int:
-    """How many LOOPs are open before position `before` (0-based insertion index)."""
-    depth = 0
-    for block in blocks[:before]:
-        if block.loop and isinstance(block, Pos | Hole):
-            depth += 1
-        elif isinstance(block, Rep) and depth:
-            depth -= 1
-    return depth
 
 
 def offered_kinds(program: Program, at: int, group: str) -> list[str]:
@@ -279,20 +147,13 @@ def offered_kinds(program: Program, at: int, group: str) -> list[str]:
     BOLT CIR only right after a standard block of the same operation; REP only with an
     unmatched LOOP open; COPY only as a new block at the end (not inserted).
     """
-    blocks = program.blocks
-    previous = blocks[at - 2] if at >= 2 else None
-    kinds = []
-    for key in GROUP_KINDS.get(group, ()):
-        if key.startswith("BOLT_CIR_"):
-            op = key.removeprefix("BOLT_CIR_")
-            if not (isinstance(previous, Hole) and previous.op.value == op):
-                continue
-        if key == "REP" and open_loops(blocks, at - 1) == 0:
-            continue
-        if key == "COPY" and at != len(blocks) + 1:
-            continue
-        kinds.append(key)
-    return kinds
+    return [key for key in group_kinds().get(group, ()) if not refusal(program, at, key)]
+
+
+def refusal(program: Program, at: int, key: str) -> str:
+    """Why sub-kind `key` cannot be entered as block `at` ("" when it can)."""
+    _, sub = REGISTRY.sub_kinds()[key]
+    return sub.offered(program.blocks, at) if sub.offered else ""
 
 
 def offered_groups(program: Program, at: int) -> list[str]:
@@ -309,15 +170,12 @@ def offered_groups(program: Program, at: int) -> list[str]:
 
 def field_values(block: Block, following: Block | None = None) -> dict[str, str]:
     """A block's values as form text (an ARC XY-CENT also shows its XY-END)."""
-    values: dict[str, str] = {}
-    for f in dataclasses.fields(block):
-        value = getattr(block, f.name)
-        values[f.name] = _text(value)
-    if isinstance(block, MillArc) and isinstance(following, ArcEnd):
-        values["end_x"] = _text(following.x)
-        values["end_y"] = _text(following.y)
-    if isinstance(block, Hole | BoltCircle):
-        values["op"] = block.op.value
+    values = {f.name: _text(getattr(block, f.name)) for f in REGISTRY.fields(type(block))}
+    then = REGISTRY.sub_kind_of(block).then
+    if then is not None and isinstance(following, then):
+        for f in REGISTRY.fields(then):
+            if f.prompt.prompted:
+                values["end_" + f.name] = _text(getattr(following, f.name))
     return values
 
 
@@ -379,32 +237,75 @@ class Parsed:
 
 def parse_block(kind_key: str, form: Mapping[str, str]) -> Parsed:
     """Read a submitted block form into blocks. Errors name the field and what is allowed."""
-    kind = KINDS.get(kind_key)
-    if kind is None:
+    entry = entry_forms().get(kind_key)
+    if entry is None:
         return Parsed([], {"kind": f"unknown block type {kind_key!r}"})
     errors: dict[str, str] = {}
     values: dict[str, Any] = {}
-    for spec in kind.fields:
+    for spec in entry.fields:
         raw = form.get(spec.name, "").strip()
         value, error = _read(spec, raw)
         if error:
             errors[spec.name] = f"{spec.label}: {error}"
         values[spec.name] = value
-    units = Units.MM if form.get("units") == "mm" else Units.INCH
-    mode = Mode.INC if form.get("mode") == "inc" else Mode.ABS
-    loop = form.get("loop") == "on" and kind.loopable
-    stop = form.get("stop") == "on" and kind_key not in ("REP", "COPY")
     if errors:
         return Parsed([], errors)
-    message = form.get("message", "").strip()
-    common: dict[str, Any] = {
-        "units": units,
-        "mode": mode,
-        "loop": loop,
-        "stop": stop,
-        "message": message,
-    }
-    return Parsed(_build(kind_key, values, common, form), {})
+    return Parsed(build(kind_key, values, form), {})
+
+
+def build(kind_key: str, values: Mapping[str, Any], form: Mapping[str, str]) -> list[Block]:
+    """The blocks of sub-kind `kind_key` from read values (`end_…` for the block the kind
+    enters with it) and the form's qualifiers, as the declarations say (app.cnc.kinds)."""
+    cls, sub = REGISTRY.sub_kinds()[kind_key]
+    kind = REGISTRY.kind(cls)
+    units = Units.MM if form.get("units") == "mm" else Units.INCH
+    mode = Mode.INC if form.get("mode") == "inc" else Mode.ABS
+    stop = form.get("stop") == "on"
+    common: dict[str, Any] = {"units": units, "message": form.get("message", "").strip()}
+    if kind.positioned:
+        common["mode"] = mode
+    if kind.loopable:
+        common["loop"] = form.get("loop") == "on"
+    if kind.stoppable:
+        common["stop"] = stop
+    blocks = [cls(**common, **dict(sub.fixed), **_own(cls, sub, values, form, ""))]
+    if sub.then is not None:
+        # The block the control adds itself (an ARC's XY-END) takes the kind's STOP.
+        then = REGISTRY.kind(sub.then)
+        extra: dict[str, Any] = {"units": units}
+        if then.positioned:
+            extra["mode"] = mode
+        if then.stoppable and not kind.stoppable:
+            extra["stop"] = stop
+        follower = SubKind("", "", "")
+        blocks.append(sub.then(**extra, **_own(sub.then, follower, values, form, "end_")))
+    return blocks
+
+
+def _own(
+    cls: type[Block], sub: SubKind, values: Mapping[str, Any], form: Mapping[str, str], prefix: str
+) -> dict[str, Any]:
+    """The block's own field values: the prompted ones read, choices made members of their
+    enum; a field the form does not prompt (COPY's EXEC/CANCEL) from its button."""
+    own: dict[str, Any] = {}
+    prompted = {f.name for f in REGISTRY.prompted(cls, sub)}
+    for f in REGISTRY.fields(cls):
+        if f.name in COMMON or f.name in dict(sub.fixed):
+            continue
+        if f.name in prompted:
+            value = values[prefix + f.name]
+        elif not f.prompt.prompted and f.prompt.value is Value.CHOICE:
+            value = form.get(prefix + f.name, "")
+        else:
+            continue
+        members = _enum_of(cls, f.name) if f.prompt.value is Value.CHOICE else None
+        if members is not None:
+            known = {m.value: m for m in members}
+            if f.name not in prompted and value not in known:
+                continue
+            value = known.get(value) if value not in (None, "") else None
+        own[f.name] = value
+    return own
 
 
 def _read(spec: FieldSpec, raw: str) -> tuple[Any, str]:
@@ -439,118 +340,3 @@ def read_whole(raw: str) -> tuple[int | None, str]:
         return parse_int(raw), ""
     except NumberError as exc:
         return None, str(exc)
-
-
-def _build(
-    kind: str, v: dict[str, Any], common: dict[str, Any], form: Mapping[str, str]
-) -> list[Block]:
-    if kind == "POS":
-        return [Pos(**common, x=v["x"], y=v["y"], index=v["index"], tool=v["tool"])]
-    if kind in ("DRILL", "DRILL_CUT_RT", "DRILL_CUT_LT", "BORE", "TAP"):
-        op = HoleOp(kind.split("_")[0])
-        comp = {"DRILL_CUT_RT": Comp.RIGHT, "DRILL_CUT_LT": Comp.LEFT}.get(kind, Comp.NONE)
-        return [
-            Hole(
-                **common,
-                op=op,
-                x=v["x"],
-                y=v["y"],
-                z_up=v["z_up"],
-                z_dn=v["z_dn"],
-                feed_z=v["feed_z"],
-                pecks=v.get("pecks") or 1,
-                tool=v["tool"],
-                comp=comp,
-            )
-        ]
-    if kind.startswith("BOLT_CIR_"):
-        common = {**common, "loop": False}
-        op = HoleOp(kind.removeprefix("BOLT_CIR_"))
-        return [BoltCircle(**common, op=op, holes=v["holes"], angle=v["angle"], radius=v["radius"])]
-    if kind == "MILL_STD":
-        return [
-            MillLine(
-                **common, x=v["x"], y=v["y"], z_dn=v["z_dn"], feed_xy=v["feed_xy"], tool=v["tool"]
-            )
-        ]
-    if kind in ("QCIR_C", "QCIR_CC"):
-        direction = Direction.CW if kind == "QCIR_C" else Direction.CCW
-        return [
-            MillQcir(
-                **common,
-                direction=direction,
-                x=v["x"],
-                y=v["y"],
-                z_dn=v["z_dn"],
-                feed_xy=v["feed_xy"],
-                tool=v["tool"],
-            )
-        ]
-    if kind in ("ARC_C", "ARC_CC"):
-        direction = Direction.CW if kind == "ARC_C" else Direction.CCW
-        centre = MillArc(
-            **common,
-            direction=direction,
-            x=v["x"],
-            y=v["y"],
-            z_dn=v["z_dn"],
-            feed_xy=v["feed_xy"],
-            tool=v["tool"],
-        )
-        end = ArcEnd(units=common["units"], mode=common["mode"], x=v["end_x"], y=v["end_y"])
-        return [centre, end]
-    if kind == "ARC_END":
-        return [ArcEnd(**common, x=v["x"], y=v["y"])]
-    if kind in ("CIRCLE", "CIR_2P"):
-        return [
-            Circle(
-                **common,
-                placement=Placement(v["placement"]),
-                two_pass=kind == "CIR_2P",
-                radius=v["radius"],
-                feed_xy=v["feed_xy"],
-                tool=v["tool"],
-            )
-        ]
-    if kind in ("FRAME", "FRM_2P"):
-        return [
-            Frame(
-                **common,
-                placement=Placement(v["placement"]),
-                two_pass=kind == "FRM_2P",
-                xl=v["xl"],
-                yw=v["yw"],
-                corner_radius=v["corner_radius"],
-                feed_xy=v["feed_xy"],
-                tool=v["tool"],
-            )
-        ]
-    if kind == "REP":
-        return [
-            Rep(
-                units=common["units"],
-                message=common["message"],
-                x=v["x"],
-                y=v["y"],
-                nx=v["nx"],
-                ny=v["ny"],
-            )
-        ]
-    action = {"exec": CopyAction.EXEC, "cancel": CopyAction.CANCEL}.get(form.get("action", ""))
-    return [
-        Copy(
-            units=common["units"],
-            from_block=v["from_block"],
-            to_block=v["to_block"],
-            op=HoleOp(v["op"]) if v.get("op") else None,
-            pecks=v["pecks"],
-            xof=v["xof"],
-            yof=v["yof"],
-            z_up=v["z_up"],
-            z_dn=v["z_dn"],
-            feed_z=v["feed_z"],
-            feed_xy=v["feed_xy"],
-            tool=v["tool"],
-            action=action,
-        )
-    ]

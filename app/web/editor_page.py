@@ -1,0 +1,288 @@
+"""What the editor page shows, and what an edit answers with (issue 18, the editor's reply).
+
+The page is three parts: the block list (one page of rows, the cycle time), the entry panel
+and the preview. htmx requests get only the part that changes: a choice in the entry panel
+answers with the panel; an edit answers with the panel and, out of band, the rows whose
+title, values, problems or time changed (the whole list page when blocks moved or came or
+went), the cycle time, the version the row buttons post, and the new drawing.
+
+What a version of a program shows (its problems, its preview and times) is worked out once
+and kept for the last few versions (`shown_of`): the GET after an edit, and the rows of the
+version an edit starts from, cost nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from decimal import Decimal
+from typing import Any
+
+from flask import render_template, request
+
+from app.cnc.blocks import Block, Mode, Program
+from app.cnc.estimate import format_seconds
+from app.cnc.kinds import REGISTRY
+from app.cnc.problems import Problem, Severity
+from app.cnc.validate import validate
+from app.storage.library import StoredProgram
+from app.web.forms import entry_forms, group_kinds, offered_groups, offered_kinds
+from app.web.preview import preview
+
+
+@dataclass
+class Entry:
+    """What the entry panel shows: a choice of type, of sub-type, or a block's fields."""
+
+    at: int  # the block number being entered (new) or edited
+    editing: bool
+    group: str = ""
+    kind: str = ""
+    loop: bool = False
+    stop: bool = False
+    values: dict[str, str] = dataclasses.field(default_factory=dict)
+    errors: dict[str, str] = dataclasses.field(default_factory=dict)
+    message: str = ""
+    page: int = 0  # the block list's page asked for; 0: the page of block `at`
+
+
+PAGE_SIZE = 100
+"""Blocks per page of the block list: a page costs the same whatever the program's size."""
+
+
+def page_of(number: int) -> int:
+    """The page (from 1) of the block list that shows block `number`."""
+    return max(1, (number - 1) // PAGE_SIZE + 1)
+
+
+def is_htmx() -> bool:
+    return request.headers.get("HX-Request") == "true"
+
+
+def block_summary(block: Block) -> str:
+    """The block's values in one line, the way the control's block list reads: what its
+    entry form asks for (its type and sub-type are in its title)."""
+    parts = []
+    for f in REGISTRY.prompted(type(block), REGISTRY.sub_kind_of(block)):
+        value = getattr(block, f.name)
+        if value is None or value is False:
+            continue
+        label = f.label
+        if value is True:
+            parts.append(label)
+        elif isinstance(value, Decimal):
+            parts.append(f"{label} {value:f}")
+        elif isinstance(value, enum.Enum):
+            parts.append(f"{label} {str(value.value).upper()}")
+        else:
+            parts.append(f"{label} {value}")
+    if REGISTRY.of(block).positioned and block.mode is Mode.INC:
+        parts.insert(0, "INC")
+    return "  ".join(parts)
+
+
+# -- one version of a program, as the editor shows it -----------------------------------------
+
+
+@dataclass(frozen=True)
+class Shown:
+    """A program's problems, drawing and times: what validation and the preview made of it."""
+
+    program: Program
+    problems: list[Problem]
+    by_block: dict[int, list[Problem]]
+    svg: str
+    per_block: dict[int, float]
+    total: float
+    shown: int  # blocks drawn: those before the first with an error
+
+
+SHOWN_VERSIONS = 4
+_SHOWN: OrderedDict[int, Shown] = OrderedDict()
+_LOCK = threading.Lock()
+
+
+def shown_of(program: Program) -> Shown:
+    """What the editor shows of `program`, worked out once per Program object (the library
+    hands out the same object for the same stored text)."""
+    with _LOCK:
+        found = _SHOWN.get(id(program))
+        if found is not None and found.program is program:
+            _SHOWN.move_to_end(id(program))
+            return found
+    problems = validate(program)
+    svg, per_block, total, shown = preview(program, problems)
+    by_block: dict[int, list[Problem]] = {}
+    for problem in problems:
+        if problem.block is not None:
+            by_block.setdefault(problem.block, []).append(problem)
+    found = Shown(program, problems, by_block, svg, per_block, total, shown)
+    with _LOCK:
+        _SHOWN[id(program)] = found
+        while len(_SHOWN) > SHOWN_VERSIONS:
+            _SHOWN.popitem(last=False)
+    return found
+
+
+def cached(program: Program) -> Shown | None:
+    """`shown_of(program)` if it was worked out already, else None (nothing is computed)."""
+    with _LOCK:
+        found = _SHOWN.get(id(program))
+    return found if found is not None and found.program is program else None
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of the block list."""
+
+    number: int
+    title: str
+    summary: str
+    seconds: str
+    problems: tuple[Problem, ...]
+    has_error: bool
+    current: bool = False
+
+
+def row(shown: Shown, number: int, current: bool = False) -> Row:
+    block = shown.program.blocks[number - 1]
+    problems = tuple(shown.by_block.get(number, ()))
+    seconds = shown.per_block.get(number)
+    return Row(
+        number,
+        block.title,
+        block_summary(block),
+        "" if seconds is None else format_seconds(seconds),
+        problems,
+        any(p.severity is Severity.ERROR for p in problems),
+        current,
+    )
+
+
+def changed_rows(old: Shown, new: Shown, first: int, last: int) -> list[Row]:
+    """The rows `first`…`last` of `new` that do not read as they did in `old` (same blocks
+    count: an edit in place)."""
+    return [
+        fresh
+        for number in range(first, last + 1)
+        if (fresh := row(new, number)) != row(old, number)
+    ]
+
+
+# -- contexts and rendering ---------------------------------------------------------------------
+
+
+def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) -> dict[str, Any]:
+    """The block list's page: the page of `focus` unless the entry asks for another."""
+    count = len(stored.program.blocks)
+    pages = page_of(max(count, 1))  # "new block…" ends the last page
+    page = min(entry.page or page_of(focus), pages)
+    first = (page - 1) * PAGE_SIZE + 1
+    last = min(count, first + PAGE_SIZE - 1)
+    current = entry.at if entry.editing else 0
+    return {
+        "rows": [row(shown, n, n == current) for n in range(first, last + 1)],
+        "block_count": count,
+        "page": page,
+        "pages": pages,
+        "first": first,
+        "focus": focus,
+        "total": format_seconds(shown.total),
+        "shown": shown.shown,
+    }
+
+
+def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) -> dict[str, Any]:
+    """The entry panel: the menus offered at `entry.at`, or the prompts with their problems."""
+    program = stored.program
+    kind = entry_forms().get(entry.kind)
+    field_problems: dict[str, list[Problem]] = {}
+    if entry.editing and kind is not None:
+        field_problems["message"] = [
+            p for p in problems if p.block == entry.at and p.field == "MESSAGE"
+        ]
+        for spec in kind.fields:
+            number, name = entry.at, spec.name
+            if name.startswith("end_"):
+                number, name = entry.at + 1, name.removeprefix("end_")
+            label = REGISTRY.label(type(program.blocks[number - 1]), name)
+            field_problems[spec.name] = [
+                p for p in problems if p.block == number and p.field == label
+            ]
+    return {
+        "problems": problems,
+        "errors": [p for p in problems if p.severity is Severity.ERROR],
+        "entry": entry,
+        "kind": kind,
+        "field_problems": field_problems,
+        "groups": offered_groups(program, entry.at) if not entry.editing else [],
+        "sub_kinds": offered_kinds(program, entry.at, entry.group) if entry.group else [],
+        "group_kinds": group_kinds(),
+        "kinds": entry_forms(),
+    }
+
+
+def _common(stored: StoredProgram) -> dict[str, Any]:
+    return {"stored": stored, "program": stored.program, "program_id": stored.info.id}
+
+
+def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
+    """The whole editor page."""
+    shown = shown_of(stored.program)
+    return render_template(
+        "editor/program.html",
+        **_common(stored),
+        **list_context(stored, shown, entry, entry.at),
+        **entry_context(stored, entry, shown.problems),
+        svg=shown.svg,
+    ), status
+
+
+def render_entry(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
+    """The entry panel alone (htmx), or the page."""
+    if not is_htmx():
+        return render_page(stored, entry, status)
+    problems = validate(stored.program)
+    return render_template(
+        "editor/_entry.html", **_common(stored), **entry_context(stored, entry, problems)
+    ), status
+
+
+def render_list(stored: StoredProgram, entry: Entry) -> tuple[str, int]:
+    """The block list alone (htmx: another page of it)."""
+    shown = shown_of(stored.program)
+    return render_template(
+        "editor/_blocks.html",
+        **_common(stored),
+        **list_context(stored, shown, entry, entry.at),
+        entry=entry,
+    ), 200
+
+
+def render_reply(
+    before: Program, saved: StoredProgram, entry: Entry, focus: int, in_place: bool
+) -> tuple[str, int]:
+    """The answer to an edit (htmx): the entry panel, and out of band what changed.
+
+    `focus` is the block the list stays at (the edited one). `in_place`: the edit kept
+    every block where it was, so the rows can be compared one for one with the version the
+    edit started from — when that version's rows are still known (else, and when blocks
+    moved, the whole list page is sent)."""
+    shown = shown_of(saved.program)
+    listing = list_context(saved, shown, entry, focus)
+    changed: list[Row] | None = None
+    old = cached(before) if in_place else None
+    if old is not None:
+        last = listing["first"] + len(listing["rows"]) - 1
+        changed = changed_rows(old, shown, listing["first"], last)
+    return render_template(
+        "editor/_reply.html",
+        **_common(saved),
+        **listing,
+        **entry_context(saved, entry, shown.problems),
+        changed=changed,
+        svg=shown.svg,
+    ), 200

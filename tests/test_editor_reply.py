@@ -1,0 +1,58 @@
+"""The editor's reply to an edit (issue 18): what changed, not the whole page.
+
+A 500-block program is edited through the Flask test client the way the editor's htmx form
+posts; the answer must carry the edited row, the cycle time and the drawing out of band,
+and leave the other rows alone.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from flask import Flask
+from flask.testing import FlaskClient
+
+from app import create_app
+from app.web import get_library
+from bench.editor import HTMX, edit_form
+from bench.programs import editor_program
+
+OOB_ROW = re.compile(r'<li class="block-row[^"]*" data-block="(\d+)" id="b-\1" hx-swap-oob="true"')
+
+
+@pytest.fixture
+def app(tmp_path: Path) -> Iterator[Flask]:
+    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'reply.db'}", "SECRET_KEY": "t"})
+    yield app
+    with app.app_context():
+        get_library().engine.dispose()
+
+
+def csrf_of(page: str) -> str:
+    found = re.search(r'name="csrf_token" value="([^"]+)"', page)
+    assert found
+    return found.group(1)
+
+
+def test_an_edit_answers_with_the_rows_it_changed(app: Flask) -> None:
+    with app.app_context():
+        program_id = get_library().create(editor_program(500)).id
+    client: FlaskClient = app.test_client()
+    page = client.get(f"/programs/{program_id}?edit=11").get_data(as_text=True)
+    answer = client.post(
+        f"/programs/{program_id}/blocks",
+        data=edit_form(csrf_of(page), 1, 1, 500),  # DRILL 11 to a new X
+        headers=HTMX,
+    )
+    assert answer.status_code == 200
+    text = answer.get_data(as_text=True)
+    rows = {int(n) for n in OOB_ROW.findall(text)}
+    assert 11 in rows and len(rows) <= 3, rows  # the DRILL, and what its move retimed
+    assert 'hx-swap-oob="innerHTML:#preview"' in text and "<svg" in text
+    assert 'id="total" hx-swap-oob="true"' in text
+    assert 'id="version" hx-swap-oob="true">v2<' in text
+    drawing = text[text.index('hx-swap-oob="innerHTML:#preview"') :]
+    assert len(text.encode()) - len(drawing.encode()) < 15_000  # the rest of the reply

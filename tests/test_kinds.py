@@ -1,0 +1,175 @@
+"""Block kinds declared once (issue 18): what the declarations give every reader.
+
+A kind declared here, in the test alone (SPOT: a spot drill at X/Y to a depth), is read,
+checked, entered, copied and mirrored without a line of the document, forms, validation,
+COPY or mirror code knowing its name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+from dataclasses import dataclass
+from decimal import Decimal
+from typing import ClassVar
+
+import pytest
+
+from app.cnc import document, limits
+from app.cnc.blocks import (
+    MAX_TOOLS,
+    Block,
+    Circle,
+    Copy,
+    CopyAction,
+    Frame,
+    Hole,
+    HoleOp,
+    Mode,
+    Pos,
+    Program,
+    field_label,
+)
+from app.cnc.copy import execute_copy
+from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
+from app.cnc.mirror import Axis, mirror
+from app.cnc.validate import validate
+from app.web.forms import entry_forms, parse_block
+
+
+@dataclass(frozen=True, kw_only=True)
+class Spot(Block):
+    """SPOT (a kind for this test only): spot a hole at X/Y to Z DN."""
+
+    kind: ClassVar[str] = "SPOT"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("SPOT"),),
+        editor=(SubKind("SPOT", "SPOT", "DRILL", 5),),
+        positioned=True,
+        loopable=True,
+    )
+    x: Decimal = prompt("X", Value.LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", Value.LENGTH, role=Role.Y)
+    z_dn: Decimal = prompt("Z DN", Value.LENGTH)
+    feed_z: Decimal = prompt("FEEDR Z", Value.FEED, feed=limits.FEED_Z)
+    tool: int = prompt("TOOL #", Value.TOOL, low=1, high=MAX_TOOLS)
+
+
+# Declaring SPOT registered it; it is there only while a test below asks for it.
+REGISTRY.remove(Spot)
+
+
+@pytest.fixture
+def spot() -> Iterator[type[Spot]]:
+    """SPOT registered for one test (declaring it registered it; others do not see it)."""
+    REGISTRY.add(Spot)
+    yield Spot
+    REGISTRY.remove(Spot)
+
+
+def spotted(*blocks: Block) -> Program:
+    return Program(name="spots", blocks=blocks)
+
+
+def test_a_kind_declared_once_reads_and_writes_in_the_document(spot: type[Spot]) -> None:
+    program = spotted(
+        spot(x=Decimal("1.5"), y=Decimal(2), z_dn=Decimal("-0.1"), feed_z=Decimal(5), tool=1)
+    )
+    text = document.dumps(program)
+    assert '"type": "SPOT"' in text
+    assert document.loads(text) == program
+    broken = text.replace('"feed_z": 5', '"feed_z": "fast"')
+    with pytest.raises(document.DocumentError, match="block 1, FEEDR Z: expected a number"):
+        document.loads(broken)
+
+
+def test_a_kind_declared_once_is_checked_by_its_limits(spot: type[Spot]) -> None:
+    program = spotted(
+        spot(x=Decimal(1), y=Decimal(1), z_dn=Decimal(-1), feed_z=Decimal(900), tool=30)
+    )
+    assert [str(p) for p in validate(program)] == [
+        "block 1, FEEDR Z: 900 ipm is outside the allowed range 0.1 to 250 ipm",
+        "block 1, TOOL #: 30 is outside the allowed range 1 to 24",
+    ]
+
+
+def test_a_kind_declared_once_is_offered_and_entered(spot: type[Spot]) -> None:
+    form = entry_forms()["SPOT"]
+    assert (form.title, form.group, form.positioned, form.loopable) == ("SPOT", "DRILL", True, True)
+    assert [(f.name, f.label, f.kind) for f in form.fields] == [
+        ("x", "X", "length"),
+        ("y", "Y", "length"),
+        ("z_dn", "Z DN", "length"),
+        ("feed_z", "FEEDR Z", "feed"),
+        ("tool", "TOOL #", "tool"),
+    ]
+    parsed = parse_block(
+        "SPOT", {"x": "1", "y": "2", "z_dn": "-.1", "feed_z": "5", "tool": "2", "mode": "inc"}
+    )
+    assert parsed.errors == {}
+    assert parsed.blocks == [
+        spot(
+            mode=Mode.INC,
+            x=Decimal(1),
+            y=Decimal(2),
+            z_dn=Decimal("-.1"),
+            feed_z=Decimal(5),
+            tool=2,
+        )
+    ]
+    assert parse_block("SPOT", {"x": "1", "y": "two"}).errors["y"].startswith("Y: 'two'")
+
+
+def test_a_kind_declared_once_is_copied_and_mirrored(spot: type[Spot]) -> None:
+    first = spot(x=Decimal(1), y=Decimal(2), z_dn=Decimal(-1), feed_z=Decimal(5), tool=1)
+    copy = Copy(from_block=1, to_block=1, xof=Decimal(3), tool=2, action=CopyAction.EXEC)
+    copied = execute_copy(spotted(first, copy), 2)
+    assert copied.blocks[1] == dataclasses.replace(first, x=Decimal(4), tool=2)
+    assert mirror(spotted(first), Axis.X).program.blocks == (
+        dataclasses.replace(first, x=Decimal("-1.000"), y=Decimal("2.000")),
+    )
+
+
+def test_field_label_answers_from_a_table_made_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The editor asked for labels 17 000 times per edit, each scanning the dataclass."""
+    assert field_label(Hole, "feed_z") == "FEEDR Z"
+
+    def no_scan(*_: object) -> None:
+        raise AssertionError("dataclasses.fields scanned again")
+
+    monkeypatch.setattr(dataclasses, "fields", no_scan)
+    block = Hole(op=HoleOp.DRILL, x=Decimal(0), y=Decimal(0), tool=1)
+    assert [field_label(block, name) for name in ("z_up", "pecks", "comp")] == [
+        "Z UP",
+        "# PECK",
+        "CUTTER COMP",
+    ]
+    with pytest.raises(KeyError):
+        field_label(block, "nonsense")
+
+
+def test_every_kind_declares_its_document_editor_and_labels() -> None:
+    names = {d.name for cls in REGISTRY.classes for d in REGISTRY.kind(cls).documents}
+    assert names == set(REGISTRY.documents())
+    for cls in REGISTRY.classes:
+        kind = REGISTRY.kind(cls)
+        assert kind.documents and kind.editor, cls.__name__
+        for f in REGISTRY.fields(cls):
+            assert f.label and f.label == field_label(cls, f.name)
+
+
+def test_routine_kinds_name_planners_that_resolve() -> None:
+    routines = REGISTRY.mill_classes(Mill.ROUTINE)
+    assert set(routines) == {Circle, Frame}
+    for cls in routines:
+        assert callable(REGISTRY.planner(cls))
+    with pytest.raises(LookupError):
+        REGISTRY.planner(Pos)
+
+
+def test_stop_on_an_arc_lands_on_its_xy_end() -> None:
+    """The head retracts after the arc's last block: STOP belongs to the XY-END (the
+    XY-CENT cannot carry it). Failed before: the form put STOP on the XY-CENT block."""
+    form = {"x": "1", "y": "0", "feed_xy": "10", "tool": "1", "end_x": "2", "end_y": "0"}
+    parsed = parse_block("ARC_C", {**form, "stop": "on"})
+    assert [block.stop for block in parsed.blocks] == [False, True]

@@ -34,6 +34,7 @@ from app.cnc.copy import CopyError, resolve_copies
 from app.cnc.emit.target import ExportError, OptionError, targets
 from app.cnc.emit.target import export as run_export
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
+from app.cnc.imports import importers
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -70,20 +71,28 @@ class ProgramFileError(click.ClickException):
     exit_code = 2
 
 
-FILE_FORMATS = ("json", "events", "gcode", "tape", "dxf")
 _FORMAT_KEY = "millblocks.file_format"
+
+
+def _format_choice() -> click.Choice[str]:
+    """The import formats of the registry, as a choice."""
+    return click.Choice(list(importers()))
+
+
+def _formats_help() -> str:
+    return ", ".join(importers())
 
 
 def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
     """`--format`: force what a program FILE is (default: detected from its content)."""
     return click.option(
         "--format",
-        type=click.Choice(FILE_FORMATS),
+        type=_format_choice(),
         default=None,
         expose_value=False,
         is_eager=True,
         callback=lambda ctx, _param, value: ctx.meta.__setitem__(_FORMAT_KEY, value),
-        help="What FILE is: json, events, gcode, tape or dxf (default: detected).",
+        help=f"What FILE is: {_formats_help()} (default: detected).",
     )(command)
 
 
@@ -354,7 +363,7 @@ def list_targets(show_options: bool) -> None:
 @click.option(
     "--format",
     "format",
-    type=click.Choice(FILE_FORMATS),
+    type=_format_choice(),
     default=None,
     help="What the file is (default: detected from its content).",
 )

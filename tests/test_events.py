@@ -37,12 +37,11 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.events import (
+from app.cnc.emit.target import Export, ExportError, Report, export
+from app.cnc.formats.events.model import (
     Mill,
     Position,
     Routine,
-    build_events,
-    check_events,
     format_angle,
     format_dimension,
     format_feed,
@@ -50,7 +49,7 @@ from app.cnc.emit.events import (
     plus_angle,
     plus_holes,
 )
-from app.cnc.emit.target import Export, ExportError, Report, export
+from app.cnc.formats.events.writer import build_events, check_events
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid

@@ -15,14 +15,13 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from app.cnc.emit.target import get_target
 from app.dnc.settings import DC1, DC2, DC3, DC4, DEL, NUL, Framing, Parity, PortSettings
 
 CR, LF, TAB = 0x0D, 0x0A, 0x09
 _DEVICE_CONTROL = frozenset({DC1, DC2, DC3, DC4})
 _SKIPPED_TEXT = frozenset({NUL, DEL}) | _DEVICE_CONTROL
 _SKIPPED_BINARY = frozenset({0x00, 0x7F, 0xFF})  # blank tape; EIA delete; ASCII delete
-# The rewind stop (`%` in a listing) of each punch image (app/cnc/emit/tapecode.py).
-_PUNCH_PERCENT = {"punch-eia": 0x0B, "punch-ascii": 0xA5}
 
 
 class DataError(ValueError):
@@ -132,7 +131,8 @@ class Capture:
         self._state = _State.LEADER
         self._opened_with_mark = False
         if settings.is_binary:
-            self._mark = bytes([_PUNCH_PERCENT.get(settings.target, ord("%"))])
+            # The target's own end mark: a punch image's rewind stop, not the ASCII `%`.
+            self._mark = get_target(settings.target).end_mark
         else:
             self._mark = b"%" if settings.end in ("%", "idle") else settings.end.encode("ascii")
 

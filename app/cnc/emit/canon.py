@@ -113,6 +113,7 @@ class CanonTarget(Target):
     """The canonical dump as an export target."""
 
     name = "canon"
+    label = "Canonical moves (the test dump)"
     description = "canonical move dump (one call per line, the golden-test format)"
     extension = "canon"
 

@@ -44,8 +44,6 @@ from fractions import Fraction
 from typing import Any, ClassVar
 
 from app.cnc.blocks import BoltCircle, Hole, HoleOp, Program
-from app.cnc.emit import tapecode
-from app.cnc.emit.tapecode import TapeCode
 from app.cnc.emit.target import (
     Option,
     OptionError,
@@ -54,6 +52,8 @@ from app.cnc.emit.target import (
     Target,
     register,
 )
+from app.cnc.formats.tape1704 import codes as tapecode
+from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.geometry import arc_sweep
 from app.cnc.needs import blocks_text
 from app.cnc.problems import Need
@@ -1692,6 +1692,12 @@ class _TapeTarget(Target):
 
     code: ClassVar[TapeCode] = TapeCode.EIA
     options: ClassVar[tuple[Option, ...]] = PROFILE_OPTIONS
+    reads_back: ClassVar[str | None] = "tape"
+    picture = "tape-svg"
+
+    def picture_options(self, options: Mapping[str, str]) -> dict[str, str]:
+        # The same tape, drawn in this target's code.
+        return dict(options) | {"code": self.code.value}
 
     def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
         # Without a spindle code table the tape has no S word: the speed is set by hand. Z
@@ -1727,6 +1733,7 @@ class _TapeTarget(Target):
 @register
 class TapeEiaTarget(_TapeTarget):
     name = "tape-eia"
+    label = "1704 tape, EIA (listing)"
     description = "Tektronix 1704 tape listing for an EIA RS-244 tape (word address text)"
     extension = "eia.txt"
     code = TapeCode.EIA
@@ -1735,6 +1742,7 @@ class TapeEiaTarget(_TapeTarget):
 @register
 class TapeAsciiTarget(_TapeTarget):
     name = "tape-ascii"
+    label = "1704 tape, ASCII (listing)"
     description = "Tektronix 1704 tape listing for an ASCII tape, with comments (text)"
     extension = "ascii.txt"
     code = TapeCode.ASCII
@@ -1742,6 +1750,7 @@ class TapeAsciiTarget(_TapeTarget):
 
 class _PunchTarget(_TapeTarget):
     media_type = "application/octet-stream"
+    binary = True
 
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
@@ -1753,22 +1762,31 @@ class _PunchTarget(_TapeTarget):
 @register
 class PunchEiaTarget(_PunchTarget):
     name = "punch-eia"
+    label = "1704 tape, EIA (punch image)"
     description = "Tektronix 1704 EIA punch image: a byte per row, channel n in bit n-1"
     extension = "eia.punch"
     code = TapeCode.EIA
+    end_mark = bytes([tapecode.EIA_REWIND_STOP])
+    # In EIA RS-244 the row 0x13 (DC3, XOFF) is the digit 3 and 0x11 (DC1, XON) is data too.
+    flow_codes_in_data = True
 
 
 @register
 class PunchAsciiTarget(_PunchTarget):
     name = "punch-ascii"
+    label = "1704 tape, ASCII (punch image)"
     description = "Tektronix 1704 ASCII punch image: a byte per row, channel n in bit n-1"
     extension = "ascii.punch"
     code = TapeCode.ASCII
+    end_mark = tapecode.encode(tapecode.REWIND_STOP_CHAR, TapeCode.ASCII)
 
 
 @register
 class TapeSvgTarget(_TapeTarget):
     name = "tape-svg"
+    label = "1704 tape picture (SVG)"
+    reads_back = None
+    picture = "tape-svg"
     description = "drawing of the Tektronix 1704 tape (channels, feed holes, title) as SVG"
     extension = "svg"
     media_type = "image/svg+xml"
@@ -1776,6 +1794,9 @@ class TapeSvgTarget(_TapeTarget):
         *PROFILE_OPTIONS,
         Option("code", _CHOICE, "eia", "the tape code drawn", choices=("eia", "ascii")),
     )
+
+    def picture_options(self, options: Mapping[str, str]) -> dict[str, str]:
+        return dict(options)
 
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report

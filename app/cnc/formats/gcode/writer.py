@@ -27,12 +27,11 @@ whole milliseconds (P800) and G04 X in seconds.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
-from decimal import Decimal
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.emit.target import Report, Target, register
+from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
 from app.cnc.limits import HOLE_DWELL_SECONDS
 from app.cnc.problems import Need
 from app.cnc.toolpath import (
@@ -55,120 +54,13 @@ from app.cnc.toolpath import (
 from app.cnc.units import Units, format_length
 
 
-@dataclass(frozen=True)
-class Dialect:
-    """What one G-code dialect does differently."""
-
-    two_digit_codes: bool  # G00 / M03 rather than G0 / M3
-    spaces: bool  # spaces between words
-    end_of_block: str  # appended to every block
-    g_on_every_line: bool  # repeat the motion G code on every motion line (seed 003 §2.1)
-    program_number: bool  # an O number after the first %
-    can_write_offsets: bool  # G10 L2 / G10 L1 exist (LinuxCNC), offered by write-offsets
-    messages: bool  # (MSG,…) comments are shown to the operator (LinuxCNC)
-    milliseconds: bool  # dwell as P in whole milliseconds (Fanuc), not seconds
-    dwell_word: str  # the word of a dwell in seconds: P (LinuxCNC) or X (BOSS)
-    keep_trailing_zeros: bool  # the default of the trailing_zeros option
-    line_numbers: bool  # the default of the sequence-numbers option
-    largest_line_number: int  # N numbers restart after this (seed 003 §2.2.4: 0-999)
-
-    def dwell(self, seconds: Decimal, cycle: bool) -> str:
-        """The dwell word of a G04 (`cycle` False) or a G82 canned cycle."""
-        if self.milliseconds:
-            return f"P{int((seconds * 1000).to_integral_value())}"
-        return f"{'P' if cycle else self.dwell_word}{seconds}"
-
-
-def _options(dialect: Dialect) -> tuple[Option, ...]:
-    return (
-        Option(
-            "sequence-numbers",
-            OptionKind.BOOL,
-            dialect.line_numbers,
-            "write N numbers",
-        ),
-        Option(
-            "sequence-start",
-            OptionKind.INT,
-            10 if dialect.line_numbers else 1,
-            "first N number",
-            minimum=Decimal(0),
-            maximum=Decimal(dialect.largest_line_number),
-        ),
-        Option(
-            "sequence-increment",
-            OptionKind.INT,
-            10 if dialect.line_numbers else 1,
-            "N number step",
-            minimum=Decimal(1),
-            maximum=Decimal(1000),
-        ),
-        Option(
-            "trailing-zeros",
-            OptionKind.CHOICE,
-            "keep" if dialect.keep_trailing_zeros else "drop",
-            "zero suppression: keep or drop trailing zeros (the decimal point always stays)",
-            ("keep", "drop"),
-        ),
-        Option("tabs", OptionKind.BOOL, False, "separate words with tabs"),
-        Option(
-            "block-delete",
-            OptionKind.BOOL,
-            False,
-            "write STOP blocks as /M00 so the block-delete switch can skip them",
-        ),
-        Option("end-code", OptionKind.CHOICE, "M30", "end of program code", ("M30", "M02")),
-        Option(
-            "canned-cycles",
-            OptionKind.BOOL,
-            True,
-            "write G82 where the cycle's motion is identical to the hole's",
-        ),
-        Option(
-            "peck-cycle",
-            OptionKind.CHOICE,
-            "explicit",
-            "pecks as explicit moves, or G83 (which backs off above each level; reported)",
-            ("explicit", "G83"),
-        ),
-        *(
-            (
-                Option(
-                    "write-offsets",
-                    OptionKind.BOOL,
-                    False,
-                    "write G54 (G10 L2) and the tool table's lengths and radii (G10 L1) from "
-                    "Data Block 0: they replace the machine's own settings",
-                ),
-            )
-            if dialect.can_write_offsets
-            else ()
-        ),
-        Option(
-            "spindle-speeds",
-            OptionKind.CHOICE,
-            "program",
-            "program: every tool needs its RPM (S words); by-hand: a tool without RPM starts "
-            "its spindle with no S word and the operator sets the speed (reported)",
-            ("program", "by-hand"),
-        ),
-        Option(
-            "index-code",
-            OptionKind.INT,
-            None,
-            "M code that indexes the rotary table (POS INDEX); none: reported as lost",
-            minimum=Decimal(0),
-            maximum=Decimal(999),
-        ),
-    )
-
-
 class GcodeTarget(Target):
     """Shared writer; subclasses set `dialect` and the target attributes."""
 
     dialect: ClassVar[Dialect]
     extension = "ngc"
     needs = frozenset({Need.SPINDLE_SPEEDS})
+    reads_back: ClassVar[str | None] = "gcode"
 
     def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
         # S words need speeds, unless the operator sets them by hand (reported).
@@ -184,74 +76,31 @@ class GcodeTarget(Target):
         return writer.write().encode("ascii")
 
 
-LINUXCNC = Dialect(
-    two_digit_codes=False,
-    spaces=True,
-    end_of_block="",
-    g_on_every_line=False,
-    program_number=False,
-    can_write_offsets=True,
-    messages=True,
-    milliseconds=False,
-    dwell_word="P",
-    keep_trailing_zeros=True,
-    line_numbers=False,
-    largest_line_number=99999,
-)
-FANUC = Dialect(
-    two_digit_codes=True,
-    spaces=False,
-    end_of_block="",
-    g_on_every_line=False,
-    program_number=True,
-    can_write_offsets=False,
-    messages=False,
-    milliseconds=True,
-    dwell_word="P",
-    keep_trailing_zeros=False,
-    line_numbers=True,
-    largest_line_number=9999,
-)
-# The ProtoTRAK's "modified Fanuc 6" (seed 003 §2.1): a Fanuc 6 post's output with a G code
-# on every line, spaces between words and `;` ending each block; line numbers 0-999 (§2.2.4).
-PROTOTRAK = Dialect(
-    two_digit_codes=True,
-    spaces=True,
-    end_of_block=";",
-    g_on_every_line=True,
-    program_number=False,
-    can_write_offsets=False,
-    messages=False,
-    milliseconds=True,
-    dwell_word="P",
-    keep_trailing_zeros=False,
-    line_numbers=True,
-    largest_line_number=999,
-)
-
-
 @register
 class LinuxcncTarget(GcodeTarget):
     name = "gcode-linuxcnc"
+    label = "LinuxCNC (RS274/NGC)"
     description = "RS274/NGC as LinuxCNC reads it"
     dialect = LINUXCNC
-    options = _options(LINUXCNC)
+    options = dialect_options(LINUXCNC)
 
 
 @register
 class FanucTarget(GcodeTarget):
     name = "gcode-fanuc"
+    label = "Fanuc 6M"
     description = "Fanuc 6M (% and O number, N numbers, no spaces)"
     dialect = FANUC
-    options = _options(FANUC)
+    options = dialect_options(FANUC)
 
 
 @register
 class PrototrakTarget(GcodeTarget):
     name = "gcode-prototrak"
+    label = "ProtoTRAK G-code (modified Fanuc 6)"
     description = "ProtoTRAK Plus modified Fanuc 6 (G on every line, spaces, ; end of block)"
     dialect = PROTOTRAK
-    options = _options(PROTOTRAK)
+    options = dialect_options(PROTOTRAK)
 
 
 class _Writer:

@@ -18,6 +18,7 @@ Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import sys
@@ -289,22 +290,42 @@ def export(
             raise click.BadParameter(f"{pair!r} is not NAME=VALUE", param_hint="-O")
         raw[name.strip()] = value
     program = resolve_program(file)
+    # Written as it is made: to a file beside OUT, renamed to OUT once the export is whole
+    # (a failed export leaves OUT as it was), or to a spool that is then copied to stdout.
+    partial = None
+    if output is not None:
+        partial = output.with_name(f".{output.name}.partial")
     try:
-        result = run_export(program, fmt, raw, machine)
+        with contextlib.ExitStack() as stack:
+            sink = None if partial is None else stack.enter_context(partial.open("wb"))
+            result = run_export(program, fmt, raw, machine, out=sink)
     except OptionError as exc:
+        _remove(partial)
         raise click.UsageError(str(exc)) from None
     except ExportError as exc:
+        _remove(partial)
         print_problems(file, [p for p in exc.problems if p.severity.value == "error"])
         if exc.report is not None:
             click.echo(exc.report.text(), err=True, nl=False)
         click.echo(f"{file}: {exc}", err=True)
         sys.exit(1)
+    except BaseException:
+        _remove(partial)
+        raise
     click.echo(result.report.text(), err=True, nl=False)
-    if output is None:
-        sys.stdout.buffer.write(result.data)
+    if partial is None:
+        for chunk in result.chunks():
+            sys.stdout.buffer.write(chunk)
         sys.stdout.flush()
+        result.close()
     else:
-        output.write_bytes(result.data)
+        assert output is not None
+        partial.replace(output)
+
+
+def _remove(path: Path | None) -> None:
+    if path is not None:
+        path.unlink(missing_ok=True)
 
 
 def _library_machine(name: str) -> Machine:

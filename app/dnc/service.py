@@ -118,7 +118,7 @@ def send_program(
 
     try:
         result = send(
-            made.data,
+            made.chunks,
             settings,
             path,
             progress=progress,

@@ -151,6 +151,9 @@ def download(program_id: int) -> Response | tuple[str, int]:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
     stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
     filename = f"{stem}.{result.extension}"
-    response = Response(result.data, mimetype=result.media_type.split(";")[0])
+    # The export was spooled as it was made; it goes out a piece at a time.
+    response = Response(result.chunks(), mimetype=result.media_type.split(";")[0])
+    response.headers["Content-Length"] = str(result.size)
     response.headers["Content-Disposition"] = attachment(filename)
+    response.call_on_close(result.close)
     return response

@@ -8,6 +8,7 @@ from werkzeug.wrappers import Response
 
 from app.cnc.blocks import DataBlock0, Program, Tool
 from app.cnc.imports import importers
+from app.cnc.sizes import check_import_size
 from app.cnc.units import Units
 from app.storage.library import SORTS, LibraryError
 from app.web.editor import current_user, is_htmx
@@ -77,6 +78,7 @@ def upload() -> Response | tuple[str, int]:
         )
     data = file.read()
     try:
+        check_import_size(data)  # before detection reads it
         reading = chosen or detect_format(data)
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)

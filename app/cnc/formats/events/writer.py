@@ -74,7 +74,7 @@ from app.cnc.blocks import (
     Program,
     Rep,
 )
-from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.formats.events.model import (
     FEED_RANGE_NM,
     MAX_DIMENSION_NM,
@@ -111,9 +111,10 @@ from app.cnc.mill import (
     rough_wall,
     routine_clockwise,
 )
+from app.cnc.motions import motions
+from app.cnc.path import CompiledPath, Op
 from app.cnc.problems import Rule
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, Toolpath
 from app.cnc.units import Units, to_nm
 
 TC = {Comp.NONE: TOOL_CENTRE, Comp.RIGHT: TOOL_RIGHT, Comp.LEFT: TOOL_LEFT}
@@ -148,21 +149,21 @@ def routine_comp(placement: Placement, clockwise: bool) -> int:
 # -- from blocks to events -------------------------------------------------------------------
 
 
-def build_events(program: Program, toolpath: Toolpath, report: Report) -> Events:
+def build_events(program: Program, path: CompiledPath, report: Report) -> Events:
     """The events of a validated program (COPY blocks carried out), reporting what is lost."""
-    builder = _Builder(program, toolpath, report)
+    builder = _Builder(program, path, report)
     builder.run_nodes(build_nodes(program.blocks))
     builder.report_program()
     return builder.result
 
 
 class _Builder:
-    def __init__(self, program: Program, toolpath: Toolpath, report: Report) -> None:
+    def __init__(self, program: Program, path: CompiledPath, report: Report) -> None:
         self.program = program
         self.blocks = program.blocks
         self.block0: DataBlock0 = program.block0
         self.units = program.units
-        self.toolpath = toolpath
+        self.path = path
         self.report = report
         self.result = Events(program.units, program.part_number)
         self.reference: XY = (0, 0)
@@ -180,7 +181,7 @@ class _Builder:
         return (float(written(p[0], self.units)), float(written(p[1], self.units)))
 
     def diameter(self, tool: int) -> int | None:
-        info = self.toolpath.tools.get(tool)
+        info = self.path.tools.get(tool)
         return None if info is None else info.diameter
 
     def resolve(self, block: Block) -> XY:
@@ -594,7 +595,7 @@ def _g_units(units: Units) -> str:
 # -- the self-check ----------------------------------------------------------------------------
 
 
-def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
+def check_events(events: Events, path: CompiledPath, report: Report) -> None:
     """Compare the events with the tool path; a difference is a report error.
 
     Every XY point the tool path moves to at a block must be one of the points the events
@@ -606,23 +607,38 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
     block that finds the tool already at its point has no move of its own. Blocks whose
     path the Plus computes itself (`events.unchecked`: compensated contours, routines) are
     skipped; circular pockets and frames must turn the way the tool path does.
+
+    The tool path is read a chunk at a time; what is kept is each distinct point once.
     """
     units = events.units
     tolerance = RESOLUTION_NM[units] + 1
     expected = _expected_points(events)
+    places: set[XY] = {(path.start[0], path.start[1])}
+    destinations: dict[int, dict[XY, None]] = defaultdict(dict)
+    turns: dict[int, set[tuple[int, int, bool]]] = defaultdict(set)
+    for m in motions(path):
+        rows = m.rows
+        places.update(zip(rows["x"].tolist(), rows["y"].tolist(), strict=True))
+        moved = (rows["x"] != m.x0) | (rows["y"] != m.y0)
+        for block, px, py in zip(
+            rows["block"][moved].tolist(),
+            rows["x"][moved].tolist(),
+            rows["y"][moved].tolist(),
+            strict=True,
+        ):
+            destinations[block][(px, py)] = None
+        arcs = rows[rows["op"] >= Op.ARC_CW]
+        for block, cx, cy, op in zip(
+            arcs["block"].tolist(),
+            arcs["cx"].tolist(),
+            arcs["cy"].tolist(),
+            arcs["op"].tolist(),
+            strict=True,
+        ):
+            turns[block].add((cx, cy, op == Op.ARC_CW))
     positions = _Grid(RESOLUTION_NM[units])
-    destinations: dict[int, list[Pt]] = defaultdict(list)
-    arcs: dict[int, list[ArcFeed]] = defaultdict(list)
-    x, y = toolpath.start[0], toolpath.start[1]
-    positions.add((x, y))
-    for move in toolpath.moves:
-        if isinstance(move, Rapid | Feed | ArcFeed):
-            if (move.x, move.y) != (x, y):
-                destinations[move.block].append((move.x, move.y))
-            x, y = move.x, move.y
-            if isinstance(move, ArcFeed):
-                arcs[move.block].append(move)
-            positions.add((x, y))
+    for place in places:
+        positions.add((float(place[0]), float(place[1])))
 
     def where(p: Pt) -> str:
         px, py = format_dimension(round(p[0]), units), format_dimension(round(p[1]), units)
@@ -636,7 +652,8 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
                 f"self-check: the events put the tool at {where(missing)}, where the tool "
                 "path never goes",
             )
-    for block, points in sorted(destinations.items()):
+    for block, reached in sorted(destinations.items()):
+        points = [(float(x), float(y)) for x, y in reached]
         if block in events.unchecked:
             continue
         if block not in expected:
@@ -653,8 +670,8 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
             )
     for event in events.events:
         if isinstance(event, Routine) and not event.rectangular:
-            turns = {a.clockwise for a in arcs[event.source] if (a.cx, a.cy) == event.point}
-            if turns and turns != {event.clockwise}:
+            turn = {cw for cx, cy, cw in turns[event.source] if (cx, cy) == event.point}
+            if turn and turn != {event.clockwise}:
                 report.error(event.source, "self-check: DR turns the other way from the tool path")
 
 
@@ -824,11 +841,16 @@ class EventsTarget(Target):
         ),
     )
 
-    def emit(
-        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
-    ) -> bytes:
-        events = build_events(program, toolpath, report)
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        events = build_events(program, path, report)
         check_ranges(events, report)
-        check_events(events, toolpath, report)
+        check_events(events, path, report)
         line_end = "\r\n" if options.get("line_end", "crlf") == "crlf" else "\n"
-        return render(events, line_end).encode("ascii")
+        out.write(render(events, line_end).encode("ascii"))

@@ -21,26 +21,19 @@ feed number).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import replace
+from collections.abc import Callable, Mapping
 from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Option, OptionKind, Report, register
+from app.cnc.emit.target import Option, OptionKind, Out, Report, register
+from app.cnc.emit.text import Lines
 from app.cnc.formats.gcode.dialects import BOSS, dialect_options
-from app.cnc.formats.gcode.writer import GcodeTarget, _Writer
+from app.cnc.formats.gcode.writer import GcodeTarget, Row, Writer
+from app.cnc.motions import motions
+from app.cnc.path import Chunk, CompiledPath, Op
 from app.cnc.problems import Need
 from app.cnc.rotary import MAX_STEP, Boss, feed_number, y_distance
-from app.cnc.toolpath import (
-    ArcFeed,
-    Feed,
-    IndexTable,
-    Move,
-    Rapid,
-    ToolChange,
-    Toolpath,
-)
 from app.cnc.units import Units, to_nm
 
 _BOSS_OPTIONS = (
@@ -93,47 +86,56 @@ _BOSS_OPTIONS = (
 )
 
 
-class _BossWriter(_Writer):
-    """The G-code writer with the BOSS header, and a note of where segments may break."""
+class _BossWriter(Writer):
+    """The G-code writer with the BOSS header, Z words with each tool's TCAL (no length
+    offsets), the rotary index, and the places where a segment may end."""
 
-    def __init__(self, *args: Any, rotary: dict[str, Any] | None = None) -> None:
-        super().__init__(*args)
+    def __init__(
+        self, *args: Any, tape: Segmenter, rotary: dict[str, Any] | None, **kwargs: Any
+    ) -> None:
+        super().__init__(*args, **kwargs)
+        self.tape = tape
         self.rotary = rotary
-        self.breaks: set[int] = set()
-        self.no_breaks = True
 
     def header(self) -> None:
         self.line(self.code("G", 70 if self.units is Units.INCH else 71), self.code("G", 90))
-        ox, oy = self.tp.origin
+        ox, oy = self.path.origin
         self.report.note(
             None,
             f"set part zero at table X{self.length(ox)} Y{self.length(oy)}; Z words are each "
             "tool's Z plus its TCAL (no tool length offsets on the tape)",
         )
-        self.line(self.code("G", 0), f"Z{self.length(self.z)}")
+        self.line(self.code("G", 0), f"Z{self.wz}")
         self.motion = "0"
         self.xy_known = False
 
-    def move(self, move: Move) -> None:
-        if isinstance(move, Rapid) and (move.x, move.y) != (self.x, self.y) and move.z == self.z:
-            # A rapid across at the travel height: the tool is clear, a segment may end here.
-            self.breaks.add(len(self.lines))
-        if isinstance(move, IndexTable) and self.rotary is not None:
-            self.index(move)
-            return
-        if isinstance(move, ToolChange):
-            # Z words already include each tool's TCAL: no length offset (G43) to apply.
-            self.line(f"T{move.tool}", self.code("M", 6))
-            self.z = move.z
-            return
-        super().move(move)
+    def finish(self) -> None:
+        pass  # the segments end the tape
 
-    def index(self, move: IndexTable) -> None:
+    def move(self, row: Row, wx: str, wy: str, wz: str, z: int, chunk: Chunk) -> None:
+        op = row[0]
+        if op == Op.RAPID and (row[3], row[4]) != (self.x, self.y) and z == self.z:
+            # A rapid across at the travel height: the tool is clear, a segment may end here.
+            self.tape.may_break()
+        if op == Op.INDEX and self.rotary is not None:
+            self.index_table(row[2])
+            return
+        super().move(row, wx, wy, wz, z, chunk)
+
+    def tool_change(self, block: int, tool: int, z: int) -> None:
+        # Z words already include each tool's TCAL: no length offset (G43) to apply.
+        self.line(f"T{tool}", self.code("M", 6))
+        self.tool = tool
+        self.lift = self.z_lift(tool)
+        self.z = z
+        self.wz = self.length(z)
+
+    def index_table(self, block: int) -> None:
         rotary = self.rotary
         assert rotary is not None
         distance = y_distance(rotary["degrees"], rotary["boss"], self.units)
         if distance > MAX_STEP[self.units]:
-            self.report.error(move.block, f"index Y{distance}: more than one step may turn")
+            self.report.error(block, f"index Y{distance}: more than one step may turn")
         # A length like every other on the tape: its decimal point always stays (Y9., not
         # Y9, which a control reading implied decimals takes for 0.0009 in).
         y = f"Y{self.length(to_nm(distance, self.units))}"
@@ -157,15 +159,21 @@ class BossTarget(GcodeTarget):
     extension = "bos"
     dialect = BOSS
     options = _BOSS_OPTIONS
+    common = ("segment", "system", "rotary", "line-end")
 
     def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
         # Z words include each tool's TCAL, as on a 1704 tape.
         return super().needs_for(options) | {Need.CALIBRATED_TOOLS}
 
-    def emit(
-        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
-    ) -> bytes:
-        units = toolpath.units
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        units = path.units
         rotary = None
         if options["rotary"]:
             boss = Boss(options["system"])
@@ -181,16 +189,14 @@ class BossTarget(GcodeTarget):
                     except ValueError as exc:
                         report.error(None, f"index feed: {exc}")
             rotary = {"boss": boss, "degrees": options["index-degrees"], "feed_number": number}
-            moving_y = _y_moves(toolpath)
-            for block in moving_y:
+            for block in _y_moves(path):
                 report.error(
                     block,
                     "moves in Y, but on this machine the Y output drives the rotary table",
                 )
-        elif any(isinstance(m, IndexTable) for m in toolpath.moves):
-            for move in toolpath.moves:
-                if isinstance(move, IndexTable):
-                    report.unsupported(move.block, "INDEX: no rotary table (set rotary=yes)")
+        else:
+            for block in _index_blocks(path):
+                report.unsupported(block, "INDEX: no rotary table (set rotary=yes)")
         writer_options = dict(options) | {
             "block-delete": False,
             "end-code": "M02",
@@ -198,83 +204,123 @@ class BossTarget(GcodeTarget):
             "peck-cycle": "explicit",
             "index-code": None,
         }
-        writer = _BossWriter(
-            BOSS, program, _machine_z(toolpath), writer_options, report, rotary=rotary
-        )
-        text = writer.write()
-        lines = [line for line in text.splitlines() if line != "%"]
-        if any(line.startswith("/") for line in lines):
-            report.error(None, "a block delete (/) cannot be used in real-time tape mode")
-        end = "\r" if options["line-end"] == "cr" else "\r\n"
-        tape = segments(lines, writer.breaks, int(options["segment"]), report)
-        return (end.join(tape) + end).encode("ascii")
+        lines = Lines(out, "\r" if options["line-end"] == "cr" else "\r\n")
+        tape = Segmenter(int(options["segment"]), report, lines.add)
+        tcal = {n: t.tcal or 0 for n, t in path.tools.items()}
+        _BossWriter(
+            BOSS,
+            program,
+            path,
+            writer_options,
+            report,
+            tape.add,
+            z_lift=lambda tool: tcal.get(tool, 0),
+            tape=tape,
+            rotary=rotary,
+        ).write()
+        tape.close()
+        lines.flush()
 
 
-def _y_moves(toolpath: Toolpath) -> list[int]:
-    y = toolpath.start[1]
+def _y_moves(path: CompiledPath) -> list[int]:
+    """The blocks that move in Y (an arc always does), in order."""
+    blocks: dict[int, None] = {}
+    for m in motions(path):
+        rows = m.rows
+        moving = (rows["y"] != m.y0) | (rows["op"] >= Op.ARC_CW)
+        blocks.update(dict.fromkeys(rows["block"][moving].tolist()))
+    return list(blocks)
+
+
+def _index_blocks(path: CompiledPath) -> list[int]:
     blocks: list[int] = []
-    for move in toolpath.moves:
-        if isinstance(move, Rapid | Feed | ArcFeed):
-            if (move.y != y or isinstance(move, ArcFeed)) and move.block not in blocks:
-                blocks.append(move.block)
-            y = move.y
+    for chunk in path.chunks():
+        blocks += chunk.rows["block"][chunk.rows["op"] == Op.INDEX].tolist()
     return blocks
 
 
-def _machine_z(toolpath: Toolpath) -> Toolpath:
-    """The tool path with every Z as the control sees it: the tool's Z plus its TCAL."""
-    tcal = {n: t.tcal or 0 for n, t in toolpath.tools.items()}
-    current = tcal.get(toolpath.initial_tool, 0)
-    moves: list[Move] = []
-    for move in toolpath.moves:
-        if isinstance(move, ToolChange):
-            current = tcal.get(move.tool, 0)
-            moves.append(replace(move, z=move.z + current))
-        elif isinstance(move, Rapid | Feed | ArcFeed):
-            moves.append(replace(move, z=move.z + current))
-        else:
-            moves.append(move)
-    start = toolpath.start
-    first = tcal.get(toolpath.initial_tool, 0)
-    return replace(toolpath, start=(start[0], start[1], start[2] + first), moves=moves)
+class Segmenter:
+    """The BOSS tape made line by line: `%#0`, segments of at most `size` characters each
+    ending `$`, and the `M02`, `$`, `$` ending (seed 004 §8.1.1 b, c, g). A segment may end
+    only where `may_break` was called before a line (the tool is up). One segment when
+    `size` is 0.
+
+    A segment ends at the last safe place before it would overflow: whether the stretch from
+    a safe place to the next still fits is known at the next one, so the lines of one
+    stretch wait here. Where a stretch between two safe places is itself longer than a
+    segment, that segment is over the limit — an error naming the segment and its size (the
+    control has no room for it) — and the later safe places are used as usual, so every
+    such segment is named.
+    """
+
+    def __init__(self, size: int, report: Report, emit: Callable[[str], None]) -> None:
+        self.size = size
+        self.report = report
+        self.emit = emit
+        self.stretch: list[str] = []  # the lines since the last safe place
+        self.stretch_cost = 0
+        self.at_break = False  # the stretch began at a safe place
+        self.next_breaks = False
+        self.used = 0  # characters in the segment being written
+        self.sizes: list[int] = []
+        self.deleted = False
+        emit("%#0")
+
+    def may_break(self) -> None:
+        """The next line starts where the tool is up: a segment may end before it."""
+        self.next_breaks = True
+
+    def add(self, line: str) -> None:
+        if line == "M02":
+            return  # the tape's own ending has it
+        if line.startswith("/"):
+            self.deleted = True
+        if self.next_breaks:
+            self.next_breaks = False
+            self.settle()
+            self.at_break = True
+        self.stretch.append(line)
+        self.stretch_cost += len(line) + 1  # each line and its carriage return
+
+    def settle(self) -> None:
+        """The stretch is whole: end the segment before it if it no longer fits."""
+        fits = self.used + self.stretch_cost <= self.size
+        if self.size and self.at_break and self.used > 0 and not fits:
+            self.sizes.append(self.used)
+            self.emit("$")
+            self.emit("#0")
+            self.used = 0
+        for line in self.stretch:
+            self.emit(line)
+        self.used += self.stretch_cost
+        self.stretch = []
+        self.stretch_cost = 0
+
+    def close(self) -> None:
+        self.settle()
+        self.sizes.append(self.used)
+        if self.deleted:
+            self.report.error(None, "a block delete (/) cannot be used in real-time tape mode")
+        for k, length in enumerate(self.sizes, start=1):
+            if self.size and length > self.size:
+                self.report.error(
+                    None,
+                    f"segment {k} is {length} characters, over the {self.size}-character "
+                    "segment: it has no place with the tool up to end it sooner (give the "
+                    "control's real storage in segment, or split the cut)",
+                )
+        for line in ("M02", "$", "$"):
+            self.emit(line)
 
 
 def segments(lines: list[str], breaks: set[int], size: int, report: Report) -> list[str]:
-    """The tape: `%#0`, segments of at most `size` characters each ending `$`, and the
-    `M02`, `$`, `$` ending (seed 004 §8.1.1 b, c, g). `breaks` are the line indexes where
-    a segment may end (the tool is up). One segment when `size` is 0.
-
-    A segment ends at the last safe place before it would overflow. Where a stretch of
-    cutting between two safe places is itself longer than a segment, that segment is over
-    the limit — an error naming the segment and its size (the control has no room for it)
-    — and the later safe places are used as usual, so every such segment is named.
-    """
-    body = [line for line in lines if line not in ("M02",)]
-    cost = [len(line) + 1 for line in body]  # each line and its carriage return
-    safe = sorted(b for b in breaks if 0 < b < len(body))
-    out = ["%#0"]
-    used = 0
-    number = 1
-    sizes: list[int] = []
-    for index, line in enumerate(body):
-        if size and index in breaks and used > 0:
-            # Will the stretch up to the next safe place still fit? If not, end here.
-            following = next((b for b in safe if b > index), len(body))
-            if used + sum(cost[index:following]) > size:
-                sizes.append(used)
-                out += ["$", "#0"]
-                used = 0
-                number += 1
-        out.append(line)
-        used += cost[index]
-    sizes.append(used)
-    for k, length in enumerate(sizes, start=1):
-        if size and length > size:
-            report.error(
-                None,
-                f"segment {k} is {length} characters, over the {size}-character segment: it "
-                "has no place with the tool up to end it sooner (give the control's real "
-                "storage in segment, or split the cut)",
-            )
-    out += ["M02", "$", "$"]
+    """The tape for `lines`, where the line indexes `breaks` are the safe places (see
+    `Segmenter`)."""
+    out: list[str] = []
+    tape = Segmenter(size, report, out.append)
+    for index, line in enumerate(lines):
+        if index in breaks and index > 0:
+            tape.may_break()
+        tape.add(line)
+    tape.close()
     return out

@@ -1,10 +1,12 @@
 """Tektronix 1704 punched tape (seed 000): listings, punch images, a picture, and reading
 them back.
 
-codes.py holds the EIA RS-244 and ASCII character codes; targets.py the machine profile,
-the plan of blocks, the words, the tape image and its picture, and the five targets;
-reader.py reads a listing or a punch image into motion, which app.cnc.imports recognises
-as data blocks.
+codes.py holds the EIA RS-244 and ASCII character codes; profile.py the machine profile (the
+targets' options); plan.py turns the compiled path into the blocks to be; words.py rounds
+them, chooses their G codes and writes their words; image.py lays the blocks out on tape
+(listing, punch rows); picture.py draws the tape (svgwrite); targets.py makes a tape through
+those stages and offers the five targets; reader.py reads a listing or a punch image into
+motion, which app.cnc.imports recognises as data blocks.
 """
 
 from __future__ import annotations

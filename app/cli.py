@@ -18,6 +18,7 @@ Exit codes: 0 success, 1 the program has errors, 2 the file cannot be read.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import sys
@@ -34,6 +35,7 @@ from app.cnc.copy import CopyError, resolve_copies
 from app.cnc.emit.target import ExportError, OptionError, targets
 from app.cnc.emit.target import export as run_export
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
+from app.cnc.imports import importers
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -70,20 +72,28 @@ class ProgramFileError(click.ClickException):
     exit_code = 2
 
 
-FILE_FORMATS = ("json", "events", "gcode", "tape", "dxf")
 _FORMAT_KEY = "millblocks.file_format"
+
+
+def _format_choice() -> click.Choice[str]:
+    """The import formats of the registry, as a choice."""
+    return click.Choice(list(importers()))
+
+
+def _formats_help() -> str:
+    return ", ".join(importers())
 
 
 def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
     """`--format`: force what a program FILE is (default: detected from its content)."""
     return click.option(
         "--format",
-        type=click.Choice(FILE_FORMATS),
+        type=_format_choice(),
         default=None,
         expose_value=False,
         is_eager=True,
         callback=lambda ctx, _param, value: ctx.meta.__setitem__(_FORMAT_KEY, value),
-        help="What FILE is: json, events, gcode, tape or dxf (default: detected).",
+        help=f"What FILE is: {_formats_help()} (default: detected).",
     )(command)
 
 
@@ -280,22 +290,42 @@ def export(
             raise click.BadParameter(f"{pair!r} is not NAME=VALUE", param_hint="-O")
         raw[name.strip()] = value
     program = resolve_program(file)
+    # Written as it is made: to a file beside OUT, renamed to OUT once the export is whole
+    # (a failed export leaves OUT as it was), or to a spool that is then copied to stdout.
+    partial = None
+    if output is not None:
+        partial = output.with_name(f".{output.name}.partial")
     try:
-        result = run_export(program, fmt, raw, machine)
+        with contextlib.ExitStack() as stack:
+            sink = None if partial is None else stack.enter_context(partial.open("wb"))
+            result = run_export(program, fmt, raw, machine, out=sink)
     except OptionError as exc:
+        _remove(partial)
         raise click.UsageError(str(exc)) from None
     except ExportError as exc:
+        _remove(partial)
         print_problems(file, [p for p in exc.problems if p.severity.value == "error"])
         if exc.report is not None:
             click.echo(exc.report.text(), err=True, nl=False)
         click.echo(f"{file}: {exc}", err=True)
         sys.exit(1)
+    except BaseException:
+        _remove(partial)
+        raise
     click.echo(result.report.text(), err=True, nl=False)
-    if output is None:
-        sys.stdout.buffer.write(result.data)
+    if partial is None:
+        for chunk in result.chunks():
+            sys.stdout.buffer.write(chunk)
         sys.stdout.flush()
+        result.close()
     else:
-        output.write_bytes(result.data)
+        assert output is not None
+        partial.replace(output)
+
+
+def _remove(path: Path | None) -> None:
+    if path is not None:
+        path.unlink(missing_ok=True)
 
 
 def _library_machine(name: str) -> Machine:
@@ -354,7 +384,7 @@ def list_targets(show_options: bool) -> None:
 @click.option(
     "--format",
     "format",
-    type=click.Choice(FILE_FORMATS),
+    type=_format_choice(),
     default=None,
     help="What the file is (default: detected from its content).",
 )

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from app.cnc.emit import tapecode
+from app.cnc.formats.tape1704 import codes as tapecode
 from app.dnc.framing import Capture, DataError, add_parity, check_parity, outgoing
 from app.dnc.record import Direction, TransferRecord
 from app.dnc.settings import (

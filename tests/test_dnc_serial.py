@@ -395,6 +395,27 @@ def test_events_capture_imports_through_the_import_package(events: bytes) -> Non
         assert len(program.blocks) > 0
 
 
+def test_a_boss_machine_capture_is_not_read_as_a_1704_tape(sample: Program) -> None:
+    """What reads a target's output back is the target's `reads_back`, not a guess from
+    its name: nothing reads a BOSS tape (`tape-boss` is no 1704 tape), so the receive says
+    so instead of a 1704 reader's error about the first line."""
+    data = export(sample, "tape-boss").data
+    now = datetime(2025, 3, 1)
+    result = ReceiveResult(
+        port="/dev/ttyS0",
+        settings=SEVEN_E_ONE,
+        raw=data,
+        data=data,
+        started=now,
+        finished=now,
+        seconds=0.0,
+        outcome=Outcome.OK,
+        text=data.decode("ascii"),
+    )
+    with pytest.raises(CaptureImportError, match="nothing reads tape-boss output back"):
+        program_from_capture(result, "tape-boss")
+
+
 def test_a_background_job_reports_progress_and_can_be_cancelled(
     pair: SocatPair, sample: Program
 ) -> None:

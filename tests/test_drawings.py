@@ -29,8 +29,8 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app.cnc.blocks import BoltCircle, Comp, Hole, HoleOp, Mode, Pos, Program
-from app.cnc.imports.dxf import Drawing, parse_options, read_drawing
-from app.cnc.imports.dxf_choice import (
+from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
+from app.cnc.formats.dxf.choice import (
     ChoiceError,
     ContourChoice,
     HoleChoice,

@@ -36,13 +36,13 @@ from app.cnc.blocks import (
     Rep,
     Tool,
 )
+from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.events import (
+from app.cnc.emit.target import Export, ExportError, Report, export
+from app.cnc.formats.events.model import (
     Mill,
     Position,
     Routine,
-    build_events,
-    check_events,
     format_angle,
     format_dimension,
     format_feed,
@@ -50,7 +50,7 @@ from app.cnc.emit.events import (
     plus_angle,
     plus_holes,
 )
-from app.cnc.emit.target import Export, ExportError, Report, export
+from app.cnc.formats.events.writer import build_events, check_events
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid
@@ -653,7 +653,7 @@ def test_self_check_reports_a_moved_event() -> None:
     block, and the G105 moves every repeat with it (the first pattern's hole is where the
     POS left the tool, so the first move of block 2 in the tool path is to X1.75)."""
     program = golden("loop-rep-grid")
-    toolpath = interpret(program)
+    toolpath = compile_program(program).path
     events = build_events(program, toolpath, Report("events"))
     report = Report("events")
     check_events(events, toolpath, report)
@@ -673,7 +673,7 @@ def test_self_check_reports_a_moved_event() -> None:
 
 def test_self_check_reports_a_missing_event_and_a_wrong_direction() -> None:
     program = golden("circle-pocket")
-    toolpath = interpret(program)
+    toolpath = compile_program(program).path
     events = build_events(program, toolpath, Report("events"))
     routine = events.events[0]
     assert isinstance(routine, Routine)
@@ -684,7 +684,7 @@ def test_self_check_reports_a_missing_event_and_a_wrong_direction() -> None:
         "error: block 2: self-check: DR turns the other way from the tool path"
     ]
     program = make(drill(0, 0), line(1, 0), line(1, 1))
-    toolpath = interpret(program)
+    toolpath = compile_program(program).path
     events = build_events(program, toolpath, Report("events"))
     assert isinstance(events.events[-1], Mill)
     del events.events[-1], events.checks[-1]

@@ -31,10 +31,10 @@ from app.cnc.blocks import (
     Hole,
     Program,
 )
+from app.cnc.formats.dxf.blocks import as_path, contour_blocks
+from app.cnc.formats.dxf.reader import parse_options, read_drawing
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports import ImportFailure, detect_format, read_program
-from app.cnc.imports.dxf import parse_options, read_drawing
-from app.cnc.imports.dxf_blocks import as_path, contour_blocks
 from app.cnc.mill import Element, programmed_contour
 from app.cnc.mill import Path as MillPath
 from app.cnc.problems import Rule, Severity

@@ -10,12 +10,18 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import DataBlock0, Hole, HoleOp, Pos, Program, Tool
+from app.cnc.compiler import compile_program
 from app.cnc.emit.target import ExportError, export
 from app.cnc.estimate import estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.machine import PRESETS, MachineError, check_travel, read_machine
+from app.cnc.path import CompiledPath
 
 GOLDEN = Path(__file__).parent / "golden"
+
+
+def compiled(program: Program) -> CompiledPath:
+    return compile_program(program).path
 
 
 def part(x_offset: str, y: str, z_dn: str = "-0.5", tcal: str = "0") -> Program:
@@ -60,7 +66,7 @@ def test_a_move_past_the_travel_is_refused_with_its_block() -> None:
     but at X 19.5 + 1 = 20.5 with part zero at X 19.5: block 2 crosses X 20. (TCAL 5 keeps
     the drill's Z, 5.2 down to 4.5, inside the Z travel.)"""
     machine = read_machine({"preset": "kt-180", "zone": ""})
-    assert check_travel(interpret(part("18.5", "1", tcal="5")), machine) == []
+    assert check_travel(compiled(part("18.5", "1", tcal="5")), machine) == []
     with pytest.raises(ExportError) as refused:
         export(part("19.5", "1", tcal="5"), "gcode-linuxcnc", machine=machine)
     report = refused.value.report
@@ -76,8 +82,8 @@ def test_the_collision_zone_is_refused_with_its_block() -> None:
     Y 0.5 is at machine Y 2.5; with TCAL 7 the drill is at Z 7.1 … 6.5, out of the zone,
     but with TCAL 6 it feeds down to Z 5.5 there: block 2 enters the zone."""
     machine = PRESETS["kt-180"]
-    assert check_travel(interpret(part("5", "0.5", tcal="7")), machine) == []
-    crossings = check_travel(interpret(part("5", "0.5", tcal="6")), machine)
+    assert check_travel(compiled(part("5", "0.5", tcal="7")), machine) == []
+    crossings = check_travel(compiled(part("5", "0.5", tcal="6")), machine)
     assert [(c.block, c.message) for c in crossings] == [
         (
             2,
@@ -92,13 +98,14 @@ def test_arcs_are_checked_at_their_bulge() -> None:
     and end points do not."""
     program = document.loads((GOLDEN / "circle-outside" / "program.json").read_text())
     toolpath = interpret(program)
+    path = compiled(program)
     furthest = max(
         getattr(m, "cx", 0) + abs(getattr(m, "x", 0) - getattr(m, "cx", 0)) for m in toolpath.moves
     )
     assert furthest > 0
     limit = (D(furthest) + D(toolpath.origin[0])) / 25_400_000 - D("0.01")
     machine = read_machine({"x": [0, float(limit)], "units": "inch"})
-    assert any("X reaches" in c.message for c in check_travel(toolpath, machine))
+    assert any("X reaches" in c.message for c in check_travel(path, machine))
 
 
 def test_bad_machine_descriptions_are_named() -> None:

@@ -33,9 +33,9 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.copy import resolve_copies
-from app.cnc.emit import tapecode
-from app.cnc.emit.tapecode import TapeCode
 from app.cnc.emit.target import Export, ExportError, OptionError, export
+from app.cnc.formats.tape1704 import codes as tapecode
+from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.units import Units
 
 GOLDEN = Path(__file__).parent / "golden"

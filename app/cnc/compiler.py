@@ -627,6 +627,11 @@ class _Compiler:
         # to), then across, down and in.
         if self.retract > self.z:
             self.rapid_z(number, self.retract)
+        elif self.z > self.retract:
+            # Above it (a tool change raised the head): across and down to it first, also
+            # outside the span, so the hole is a canned cycle from where it returns to.
+            self.rapid_xy(number, target)
+            self.rapid_z(number, self.retract)
         z0 = self.z
         first_row = len(self.buffer.rows)
         self.rapid_xy(number, target)

@@ -15,14 +15,18 @@ a move is in the zone where Y < a and Z < b at the same time.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Any
 
+import numpy as np
+
 from app.cnc.geometry import arc_sweep
+from app.cnc.motions import motions
 from app.cnc.numbers import NumberError, parse_decimal
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange, Toolpath
+from app.cnc.path import CompiledPath, Op, as_move
+from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units, format_length, to_nm
 
 AXES = ("x", "y", "z")
@@ -167,57 +171,97 @@ class Crossing:
     message: str
 
 
-def check_travel(toolpath: Toolpath, machine: MachineModel) -> list[Crossing]:
+def check_travel(path: CompiledPath, machine: MachineModel) -> list[Crossing]:
     """Every block whose moves cross the machine's travel limits or collision zone (one
-    message per block and limit, at the first such move)."""
-    ox, oy = toolpath.origin
-    tcal = {n: t.tcal or 0 for n, t in toolpath.tools.items()}
-    tool = toolpath.initial_tool
-    x, y, z = toolpath.start
+    message per block and limit, at the first such move).
+
+    Each chunk's motions are screened with numpy (end points and each arc's whole circle,
+    which bounds its bulge); only the moves that may cross are checked exactly."""
+    ox, oy = path.origin
+    tcal = {n: t.tcal or 0 for n, t in path.tools.items()}
     found: dict[tuple[int, str], Crossing] = {}
     limits = {axis: (machine.nm(lo), machine.nm(hi)) for axis, (lo, hi) in machine.travel.items()}
     zone = (
         None if machine.zone is None else (machine.nm(machine.zone[0]), machine.nm(machine.zone[1]))
     )
-    u = toolpath.units
+    u = path.units
 
     def show(nm: float) -> str:
         return f"{format_length(round(nm), u)} {u.symbol}"
 
-    for move in toolpath.moves:
-        if isinstance(move, ToolChange):
-            tool = move.tool
-            z = move.z
+    for m in motions(path):
+        rows = m.rows
+        if not len(rows):
             continue
-        if not isinstance(move, Rapid | Feed | ArcFeed):
+        tools, where = np.unique(m.tool, return_inverse=True)
+        lift = np.array([tcal.get(int(t), 0) for t in tools], dtype=np.int64)[where]
+        ex, ey = rows["x"] + ox, rows["y"] + oy
+        sx, sy = m.x0 + ox, m.y0 + oy
+        sz, ez = m.z0 + lift, rows["z"] + lift
+        arc = rows["op"] >= Op.ARC_CW
+        # Every point of an arc is within its radius of its centre.
+        radius = np.where(arc, np.hypot(sx - (rows["cx"] + ox), sy - (rows["cy"] + oy)), 0.0)
+        cx, cy = rows["cx"] + ox, rows["cy"] + oy
+        low = {
+            "x": np.where(arc, cx - radius, np.minimum(sx, ex)),
+            "y": np.where(arc, cy - radius, np.minimum(sy, ey)),
+            "z": np.minimum(sz, ez),
+        }
+        high = {
+            "x": np.where(arc, cx + radius, np.maximum(sx, ex)),
+            "y": np.where(arc, cy + radius, np.maximum(sy, ey)),
+            "z": np.maximum(sz, ez),
+        }
+        maybe = np.zeros(len(rows), dtype=bool)
+        for axis, (lo, hi) in limits.items():
+            maybe |= (low[axis] < lo - 0.5) | (high[axis] > hi + 0.5)
+        if zone is not None:
+            maybe |= (low["y"] < zone[0]) & (low["z"] < zone[1])
+        strings = m.chunk.strings
+        for k in np.flatnonzero(maybe).tolist():
+            move = as_move(rows[k].tolist(), strings)
+            assert isinstance(move, Rapid | Feed | ArcFeed)
+            start = (int(sx[k]), int(sy[k]), int(sz[k]))
+            end = (int(ex[k]), int(ey[k]), int(ez[k]))
+            _check_move(move, start, end, (ox, oy), limits, zone, machine, show, found)
+    return sorted(found.values(), key=lambda c: c.block)
+
+
+def _check_move(
+    move: Rapid | Feed | ArcFeed,
+    start: tuple[int, int, int],
+    end: tuple[int, int, int],
+    origin: tuple[int, int],
+    limits: dict[str, tuple[int, int]],
+    zone: tuple[int, int] | None,
+    machine: MachineModel,
+    show: Callable[[float], str],
+    found: dict[tuple[int, str], Crossing],
+) -> None:
+    """Add to `found` the limits one move (in machine coordinates) crosses."""
+    ox, oy = origin
+    low, high = _extent(move, start, end, ox, oy)
+    for i, axis in enumerate(AXES):
+        if axis not in limits:
             continue
-        offset_z = tcal.get(tool, 0)
-        start = (x + ox, y + oy, z + offset_z)
-        end = (move.x + ox, move.y + oy, move.z + offset_z)
-        low, high = _extent(move, start, end, ox, oy)
-        for i, axis in enumerate(AXES):
-            if axis not in limits:
-                continue
-            lo, hi = limits[axis]
-            if low[i] < lo - 0.5 or high[i] > hi + 0.5:
-                key = (move.block, axis)
-                if key not in found:
-                    beyond = low[i] if low[i] < lo - 0.5 else high[i]
-                    found[key] = Crossing(
-                        move.block,
-                        f"{axis.upper()} reaches {show(beyond)} in machine coordinates; the "
-                        f"{machine.name or 'machine'} travels {show(lo)} to {show(hi)}",
-                    )
-        if zone is not None and _enters_zone(start, end, move, zone, ox, oy):
-            key = (move.block, "zone")
+        lo, hi = limits[axis]
+        if low[i] < lo - 0.5 or high[i] > hi + 0.5:
+            key = (move.block, axis)
             if key not in found:
+                beyond = low[i] if low[i] < lo - 0.5 else high[i]
                 found[key] = Crossing(
                     move.block,
-                    f"the move enters the collision zone (Y below {show(zone[0])} while Z is "
-                    f"below {show(zone[1])}): the spindle head can hit the table",
+                    f"{axis.upper()} reaches {show(beyond)} in machine coordinates; the "
+                    f"{machine.name or 'machine'} travels {show(lo)} to {show(hi)}",
                 )
-        x, y, z = move.x, move.y, move.z
-    return sorted(found.values(), key=lambda c: c.block)
+    if zone is not None and _enters_zone(start, end, move, zone, ox, oy):
+        key = (move.block, "zone")
+        if key not in found:
+            found[key] = Crossing(
+                move.block,
+                f"the move enters the collision zone (Y below {show(zone[0])} while Z is "
+                f"below {show(zone[1])}): the spindle head can hit the table",
+            )
 
 
 def _extent(

@@ -19,9 +19,12 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+import numpy as np
+
 from app.cnc.blocks import Program
+from app.cnc.motions import motions
+from app.cnc.path import CompiledPath
 from app.cnc.problems import Need, Problem, Rule, Severity
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange, Toolpath
 
 
 def blocks_text(numbers: list[int]) -> str:
@@ -40,16 +43,16 @@ def blocks_text(numbers: list[int]) -> str:
 
 
 def unmet(
-    program: Program, needs: frozenset[Need], toolpath: Toolpath | None = None
+    program: Program, needs: frozenset[Need], path: CompiledPath | None = None
 ) -> list[Problem]:
     """The problems of `program` for a consumer with `needs` (errors, each with its need).
-    CALIBRATED_TOOLS is judged on the tool path (`toolpath`, required for that need)."""
+    CALIBRATED_TOOLS is judged on the compiled path (`path`, required for that need)."""
     problems: list[Problem] = []
     if Need.SPINDLE_SPEEDS in needs:
         problems += _spindle_speeds(program)
     if Need.CALIBRATED_TOOLS in needs:
-        assert toolpath is not None, "calibrated tools are judged on the tool path"
-        problems += _calibrated_tools(toolpath)
+        assert path is not None, "calibrated tools are judged on the compiled path"
+        problems += _calibrated_tools(path)
     return problems
 
 
@@ -84,21 +87,18 @@ def _spindle_speeds(program: Program) -> list[Problem]:
     return problems
 
 
-def _calibrated_tools(toolpath: Toolpath) -> list[Problem]:
+def _calibrated_tools(path: CompiledPath) -> list[Problem]:
     """Tools without TCAL that move down in Z (a 2-axis program never does)."""
     users: dict[int, list[int]] = defaultdict(list)
-    tool = toolpath.initial_tool
-    z = toolpath.start[2]
-    for move in toolpath.moves:
-        if isinstance(move, ToolChange):
-            tool, z = move.tool, move.z
-            continue
-        if not isinstance(move, Rapid | Feed | ArcFeed):
-            continue
-        info = toolpath.tools.get(tool)
-        if move.z < z and tool and (info is None or info.tcal is None):
-            users[tool].append(move.block)
-        z = move.z
+    calibrated = np.array([n for n, t in path.tools.items() if t.tcal is not None], dtype=np.int64)
+    for m in motions(path):
+        down = m.rows["z"] < m.z0
+        uncalibrated = (m.tool != 0) & ~np.isin(m.tool, calibrated)
+        found = down & uncalibrated
+        for tool, block in zip(
+            m.tool[found].tolist(), m.rows["block"][found].tolist(), strict=True
+        ):
+            users[tool].append(block)
     return [
         Problem(
             0,

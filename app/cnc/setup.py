@@ -12,13 +12,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from app.cnc.blocks import Program
+from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Report
 from app.cnc.estimate import Estimate, estimate, format_seconds
 from app.cnc.interpret import interpret
 from app.cnc.limits import GEAR_CHANGE_RPM
 from app.cnc.machine import MachineModel
-from app.cnc.toolpath import ArcFeed, Feed, ToolChange, Toolpath
+from app.cnc.motions import motions
+from app.cnc.path import CompiledPath, Op
 from app.cnc.units import format_decimal
 
 
@@ -64,15 +68,16 @@ def gear(rpm: int | None) -> str:
     return f"{'low' if speed <= GEAR_CHANGE_RPM else 'high'} gear, {direction}"
 
 
-def first_cuts(toolpath: Toolpath) -> dict[int, int]:
+def first_cuts(path: CompiledPath) -> dict[int, int]:
     """The first block each tool feeds in (cuts), by tool number."""
-    tool = toolpath.initial_tool
     found: dict[int, int] = {}
-    for move in toolpath.moves:
-        if isinstance(move, ToolChange):
-            tool = move.tool
-        elif isinstance(move, Feed | ArcFeed) and tool not in found:
-            found[tool] = move.block
+    for m in motions(path):
+        cutting = np.flatnonzero(m.rows["op"] != Op.RAPID)
+        tools = m.tool[cutting]
+        distinct, first = np.unique(tools, return_index=True)
+        blocks = m.rows["block"][cutting][first]
+        for tool, block in zip(distinct.tolist(), blocks.tolist(), strict=True):
+            found.setdefault(tool, block)
     return found
 
 
@@ -83,11 +88,11 @@ def setup_sheet(
     result: Estimate | None = None,
 ) -> SetupSheet:
     """The sheet for a valid program (and, with `report`, for one export of it)."""
-    toolpath = interpret(program)
-    result = result or estimate(toolpath, machine=machine)
+    if result is None:
+        result = estimate(interpret(program), machine=machine)
     db0 = program.block0
     u = program.units.symbol
-    cuts = first_cuts(toolpath)
+    cuts = first_cuts(compile_program(program).path)
     used = set(result.per_tool) | set(cuts)
     sheet = SetupSheet(
         name=program.name,

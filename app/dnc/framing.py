@@ -13,16 +13,17 @@ handed to `outgoing`).
 from __future__ import annotations
 
 import enum
+import re
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
+from app.cnc.emit.target import get_target
 from app.dnc.settings import DC1, DC2, DC3, DC4, DEL, NUL, Framing, Parity, PortSettings
 
 CR, LF, TAB = 0x0D, 0x0A, 0x09
 _DEVICE_CONTROL = frozenset({DC1, DC2, DC3, DC4})
 _SKIPPED_TEXT = frozenset({NUL, DEL}) | _DEVICE_CONTROL
 _SKIPPED_BINARY = frozenset({0x00, 0x7F, 0xFF})  # blank tape; EIA delete; ASCII delete
-# The rewind stop (`%` in a listing) of each punch image (app/cnc/emit/tapecode.py).
-_PUNCH_PERCENT = {"punch-eia": 0x0B, "punch-ascii": 0xA5}
 
 
 class DataError(ValueError):
@@ -46,46 +47,79 @@ def check_parity(byte: int, parity: Parity) -> bool:
     return (byte >> 7) == parity_bit(byte, parity)
 
 
-def _place(data: bytes, offset: int) -> str:
-    line = data.count(b"\n", 0, offset) + 1
-    column = offset - (data.rfind(b"\n", 0, offset) + 1) + 1
-    return f"offset {offset} (line {line}, column {column})"
+_NOT_TEXT = re.compile(rb"[^\x09\x0a\x0d\x20-\x7f]")
+_EIGHT_BIT = re.compile(rb"[\x80-\xff]")
 
 
 def outgoing(data: bytes, settings: PortSettings) -> bytes:
-    """The bytes `send` writes for an export's `data`: line endings made the machine's
-    (text targets; punch images go as they are), NUL leader and trailer around them, and
-    with software framing the parity in bit 8.
+    """The bytes `send` writes for an export's `data` (see `outgoing_pieces`)."""
+    return b"".join(outgoing_pieces([data], settings))
 
-    Raises DataError when a byte cannot go: a text target's byte that is not 7-bit ASCII
-    program text, or any byte above 0x7F on a 7-bit line.
+
+def outgoing_pieces(pieces: Iterable[bytes], settings: PortSettings) -> Iterator[bytes]:
+    """The bytes `send` writes for an export that comes in `pieces`, piece by piece: line
+    endings made the machine's (text targets; punch images go as they are), NUL leader and
+    trailer around them, and with software framing the parity in bit 8.
+
+    Raises DataError (when the piece holding it is reached) for a byte that cannot go: a
+    text target's byte that is not 7-bit ASCII program text, or any byte above 0x7F on a
+    7-bit line; its offset counts from the export's first byte.
     """
-    if settings.is_binary:
-        body = data
-        if settings.data_bits == 7:
-            bad = next((i for i, b in enumerate(body) if b > 0x7F), None)
-            if bad is not None:
+    software = settings.framing is Framing.SOFTWARE
+
+    def framed(data: bytes) -> bytes:
+        return add_parity(data, settings.parity) if software else data
+
+    yield framed(bytes(settings.leader))
+    offset = 0  # of the piece's first byte in the whole export
+    newlines = 0  # LFs before it, and where the last one was (for line and column)
+    last_newline = -1
+    carry = b""  # a CR at the end of a piece: a CR LF may be split between two
+    for data in pieces:
+        if settings.is_binary:
+            if settings.data_bits == 7 and (bad := _EIGHT_BIT.search(data)) is not None:
+                at = offset + bad.start()
                 raise DataError(
-                    f"byte 0x{body[bad]:02X} at offset {bad} does not fit in 7 data bits"
+                    f"byte 0x{data[bad.start()]:02X} at offset {at} does not fit in 7 data bits"
                 )
-    else:
-        for offset, byte in enumerate(data):
-            if byte > 0x7F:
-                raise DataError(
-                    f"byte 0x{byte:02X} at {_place(data, offset)} is not ASCII: controls read "
-                    f"7-bit ASCII program text ({settings.target} export)"
+            body = data
+        else:
+            found = _NOT_TEXT.search(data)
+            if found is not None:
+                k = found.start()
+                before = data[:k]
+                line = newlines + before.count(b"\n") + 1
+                previous = before.rfind(b"\n")
+                start = offset + previous if previous >= 0 else last_newline
+                place = f"offset {offset + k} (line {line}, column {offset + k - start})"
+                byte = data[k]
+                what = (
+                    f"byte 0x{byte:02X} at {place} is not ASCII: controls read 7-bit ASCII "
+                    f"program text ({settings.target} export)"
+                    if byte > 0x7F
+                    else f"control character 0x{byte:02X} at {place} is not program text "
+                    f"({settings.target} export)"
                 )
-            if byte < 0x20 and byte not in (CR, LF, TAB):
-                raise DataError(
-                    f"control character 0x{byte:02X} at {_place(data, offset)} is not program "
-                    f"text ({settings.target} export)"
-                )
-        lines = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
-        body = lines.replace(b"\n", settings.eol.bytes)
-    wire = bytes(settings.leader) + body + bytes(settings.trailer)
-    if settings.framing is Framing.SOFTWARE:
-        wire = add_parity(wire, settings.parity)
-    return wire
+                raise DataError(what)
+            newlines += data.count(b"\n")
+            last = data.rfind(b"\n")
+            if last >= 0:
+                last_newline = offset + last
+            text = carry + data
+            carry = b"\r" if text.endswith(b"\r") else b""
+            if carry:
+                text = text[:-1]
+            body = _line_ends(text, settings)
+        offset += len(data)
+        yield framed(body)
+    if carry:
+        yield framed(_line_ends(carry, settings))
+    yield framed(bytes(settings.trailer))
+
+
+def _line_ends(text: bytes, settings: PortSettings) -> bytes:
+    lines = text.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    return lines.replace(b"\n", settings.eol.bytes)
 
 
 class EndReason(enum.Enum):
@@ -132,7 +166,8 @@ class Capture:
         self._state = _State.LEADER
         self._opened_with_mark = False
         if settings.is_binary:
-            self._mark = bytes([_PUNCH_PERCENT.get(settings.target, ord("%"))])
+            # The target's own end mark: a punch image's rewind stop, not the ASCII `%`.
+            self._mark = get_target(settings.target).end_mark
         else:
             self._mark = b"%" if settings.end in ("%", "idle") else settings.end.encode("ascii")
 

@@ -17,8 +17,9 @@ from typing import Any, Protocol
 import serial.tools.list_ports
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Export, export
+from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
+from app.cnc.imports.registry import importers
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -117,7 +118,7 @@ def send_program(
 
     try:
         result = send(
-            made.data,
+            made.chunks,
             settings,
             path,
             progress=progress,
@@ -202,14 +203,19 @@ def receive_program(
     return Received(result, entry, program, stored, report)
 
 
-def import_format(target: str) -> str:
-    """The import format of what a machine whose export target is `target` sends back:
-    `gcode-*` → gcode, `tape-*` and `punch-*` → tape, else the target's own name."""
-    if target.startswith("gcode"):
-        return "gcode"
-    if target.startswith(("tape", "punch")):
-        return "tape"
-    return target
+def import_format(name: str) -> str:
+    """The import format that reads what a machine sends: `name` itself when it is an import
+    format, else the one that reads back the output of the export target `name` (its
+    `reads_back`). Raises CaptureImportError when nothing reads it."""
+    if name in importers():
+        return name
+    target = targets().get(name)
+    if target is not None and target.reads_back:
+        return target.reads_back
+    formats = ", ".join(importers())
+    raise CaptureImportError(
+        f"nothing reads {name} output back into a program; receive it as one of {formats}"
+    )
 
 
 def program_from_capture(result: ReceiveResult, format: str, name: str = "") -> Program:
@@ -226,6 +232,6 @@ def import_capture(result: ReceiveResult, format: str, name: str = "") -> tuple[
     try:
         found = read_program(result.data, name or "received", chosen)
     except ValueError as exc:
-        what = "a MillBlocks program" if chosen == "json" else f"a {chosen} program"
+        what = importers()[chosen].label
         raise CaptureImportError(f"what came is not {what}: {exc}; nothing was saved") from None
     return found.program, ("" if found.format == "json" else found.text())

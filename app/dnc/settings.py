@@ -116,10 +116,6 @@ _EOL_WORDS = {
 }
 
 
-def _is_punch(target: str) -> bool:
-    return target.startswith("punch-")
-
-
 @dataclass(frozen=True)
 class PortSettings:
     """One machine's line and what goes on it. Build with `from_serial`, or directly and
@@ -207,8 +203,9 @@ class PortSettings:
 
     @property
     def is_binary(self) -> bool:
-        """Punch images are 8-bit rows (channel 8 in bit 8), sent as they are."""
-        return _is_punch(self.target)
+        """A binary target (a punch image: 8-bit rows, channel 8 in bit 8) is sent as it is."""
+        target = targets().get(self.target)
+        return target is not None and target.binary
 
     @property
     def frame(self) -> str:
@@ -267,11 +264,13 @@ class PortSettings:
                 f"{self.target} is an 8-bit image (a byte per tape row, channel 8 in bit 8): "
                 f"use 8 data bits (8N1), not {self.frame}"
             )
-        if self.flow is Flow.XONXOFF and self.target == "punch-eia":
+        target = targets().get(self.target)
+        if self.flow is Flow.XONXOFF and target is not None and target.flow_codes_in_data:
             raise SettingsError(
-                "XON/XOFF cannot be used with punch-eia: in EIA RS-244 the row 0x13 (DC3, "
-                "XOFF) is the digit 3 and 0x11 (DC1, XON) can be data too, so flow control "
-                "and data collide; use RTS/CTS, or none with a drip-feed rate"
+                f"XON/XOFF cannot be used with {self.target}: its bytes can be the XON and "
+                "XOFF codes (in EIA RS-244 the row 0x13, DC3 or XOFF, is the digit 3 and 0x11, "
+                "DC1 or XON, can be data too), so flow control and data collide; use "
+                "RTS/CTS, or none with a drip-feed rate"
             )
         end = self.end
         if not end or len(end) > 16 or not all(32 < ord(c) < 127 for c in end):

@@ -26,13 +26,13 @@ import select
 import termios
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 
 import serial
 
-from app.dnc.framing import Capture, EndReason, outgoing
+from app.dnc.framing import Capture, EndReason, outgoing_pieces
 from app.dnc.settings import DC1, DC3, Flow, Framing, Parity, PortSettings
 
 Progress = Callable[[int, int | None], object]
@@ -244,7 +244,7 @@ def _out_waiting(port: serial.Serial) -> int:
 
 
 def send(
-    data: bytes,
+    data: bytes | Callable[[], Iterable[bytes]],
     settings: PortSettings,
     port_path: str,
     *,
@@ -254,9 +254,11 @@ def send(
     write_timeout: float = 10.0,
     chunk: int | None = None,
 ) -> SendResult:
-    """Send an export's `data` to the control on `port_path`.
+    """Send an export's `data` to the control on `port_path`: its bytes, or a function
+    giving them in pieces each time it is called (`Export.chunks`: the export is read
+    twice, to check and count it, then to send it, and never held whole in memory).
 
-    The wire bytes are `framing.outgoing(data, settings)`. They go `chunk` characters at a
+    The wire bytes are `framing.outgoing_pieces(data, settings)`. They go `chunk` characters at a
     time (default: 1/60 s of line time, 8 at 4800 baud, at most 16), never faster than
     `settings.send_cps`. With XON/XOFF a DC3 from the control holds us until DC1;
     `xoff_timeout` seconds without XON fail the send. With RTS/CTS the driver holds the
@@ -273,7 +275,9 @@ def send(
     settings.check()
     if chunk is not None and chunk < 1:
         raise ValueError(f"chunk {chunk}: send at least 1 character at a time")
-    total = len(outgoing(data, settings))  # DataError before the port is touched
+    pieces = (lambda: [data]) if isinstance(data, bytes) else data
+    # DataError before the port is touched.
+    total = sum(len(piece) for piece in outgoing_pieces(pieces(), settings))
     rate = settings.send_cps
     size = chunk or max(1, min(16, int(rate // 60)))
     started, clock = _now(), time.monotonic()
@@ -301,7 +305,7 @@ def send(
         raise SendError(str(exc), result(Outcome.FAILED, str(exc))) from None
     outcome = Outcome.FAILED
     try:
-        wire = outgoing(data, used)
+        wire = _Wire(outgoing_pieces(pieces(), used), total)
         outcome = _send_loop(
             port, wire, used, size, state, progress, cancel, xoff_timeout, write_timeout
         )
@@ -330,9 +334,34 @@ class _Failure(Exception):
         self.message = message
 
 
+class _Wire:
+    """The bytes to send (`total` of them), taken a few at a time from their pieces."""
+
+    def __init__(self, pieces: Iterator[bytes], total: int) -> None:
+        self.pieces = pieces
+        self.total = total
+        self.buffer = b""
+        self.at = 0  # in `buffer`
+
+    def take(self, size: int) -> bytes:
+        """The next `size` bytes (fewer at the end). Raises _Failure when the pieces end
+        before `total`."""
+        while len(self.buffer) - self.at < size:
+            piece = next(self.pieces, None)
+            if piece is None:
+                break
+            self.buffer = self.buffer[self.at :] + piece
+            self.at = 0
+        taken = self.buffer[self.at : self.at + size]
+        self.at += len(taken)
+        if not taken:
+            raise _Failure("the export ended before all its bytes were sent")
+        return taken
+
+
 def _send_loop(
     port: serial.Serial,
-    wire: bytes,
+    wire: _Wire,
     settings: PortSettings,
     size: int,
     state: _SendState,
@@ -342,7 +371,7 @@ def _send_loop(
     write_timeout: float,
 ) -> Outcome:
     rate = settings.send_cps
-    total = len(wire)
+    total = wire.total
     software_flow = settings.flow is Flow.XONXOFF
     held_since: float | None = None
     stalled_since: float | None = None
@@ -384,7 +413,7 @@ def _send_loop(
             _wait_input(port, min(size / rate, POLL))
             continue
         stalled_since = None
-        piece = wire[sent : sent + size]
+        piece = wire.take(size)
         try:
             port.write(piece)
         except serial.SerialTimeoutException:

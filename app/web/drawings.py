@@ -22,8 +22,8 @@ from werkzeug.wrappers import Response
 from app.cnc.compiler import compile_program
 from app.cnc.emit.svg import draw
 from app.cnc.imports.common import ImportFailure
-from app.cnc.imports.dxf import Drawing, is_dxf, parse_options, read_drawing
-from app.cnc.imports.dxf_choice import (
+from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
+from app.cnc.formats.dxf.choice import (
     DIRECTIONS,
     Choice,
     ChoiceError,

@@ -9,7 +9,7 @@ from urllib.parse import urlencode
 from flask import Blueprint, Response, render_template, request
 from jinja2_fragments.flask import render_block
 
-from app.cnc.emit.target import Export, ExportError, OptionError, export, targets
+from app.cnc.emit.target import Export, ExportError, OptionError, export, get_target, targets
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.storage.library import LibraryError
 from app.web.downloads import attachment
@@ -47,6 +47,22 @@ def _machine_options(name: str) -> tuple[str | None, dict[str, str], MachineMode
     return machine.target, dict(machine.options), model
 
 
+def preview_text(result: Export) -> str:
+    """The first PREVIEW_LINES lines of a text export, and how many more the file has."""
+    if result.media_type.split(";")[0] != "text/plain" or get_target(result.target).binary:
+        return ""
+    data = result.head(PREVIEW_LINES * 200)
+    lines = data.decode("ascii", "replace").splitlines()
+    if len(data) < result.size and not data.endswith((b"\n", b"\r")):
+        lines = lines[:-1]  # cut off inside a line: that line is not shown
+    total = sum(chunk.count(b"\n") for chunk in result.chunks())
+    total = total or sum(chunk.count(b"\r") for chunk in result.chunks())  # CR-only lines
+    text = "\n".join(lines[:PREVIEW_LINES])
+    if total > PREVIEW_LINES:
+        text += f"\n… {total - PREVIEW_LINES} more lines in the download"
+    return text
+
+
 @bp.get("/programs/<int:program_id>/export")
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
@@ -71,25 +87,17 @@ def page(program_id: int) -> tuple[str, int]:
         problems = [str(p) for p in exc.problems if p.severity.value == "error"]
         if exc.report is not None:
             problems += [str(e) for e in exc.report.entries if e.severity.value == "error"]
-    text_preview = ""
+    target = all_targets[target_name]
+    text_preview = preview_text(result) if result is not None else ""
     picture = ""
-    if result is not None and result.media_type.startswith("text/"):
-        lines = result.data.decode("ascii", "replace").splitlines()
-        text_preview = "\n".join(lines[:PREVIEW_LINES])
-        if len(lines) > PREVIEW_LINES:
-            text_preview += f"\n… {len(lines) - PREVIEW_LINES} more lines in the download"
-    if (
-        result is not None
-        and target_name.startswith(("tape-", "punch-"))
-        and "tape-svg" in all_targets
-    ):
-        code = "ascii" if target_name.endswith("ascii") else "eia"
+    drawn_by = target.picture_target()
+    if result is not None and drawn_by == target_name:
+        picture = result.data.decode()
+    elif result is not None and drawn_by in all_targets:
         try:
-            picture = export(stored.program, "tape-svg", {"code": code}).data.decode()
+            picture = export(stored.program, drawn_by, target.picture_options(raw)).data.decode()
         except (OptionError, ExportError):
             picture = ""
-    if result is not None and target_name == "svg":
-        picture = result.data.decode()
     effective = all_targets[target_name].parse_options(raw) if not error else {}
     all_defaults = all_targets[target_name].parse_options({})
     values = {
@@ -143,6 +151,9 @@ def download(program_id: int) -> Response | tuple[str, int]:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
     stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
     filename = f"{stem}.{result.extension}"
-    response = Response(result.data, mimetype=result.media_type.split(";")[0])
+    # The export was spooled as it was made; it goes out a piece at a time.
+    response = Response(result.chunks(), mimetype=result.media_type.split(";")[0])
+    response.headers["Content-Length"] = str(result.size)
     response.headers["Content-Disposition"] = attachment(filename)
+    response.call_on_close(result.close)
     return response

@@ -7,6 +7,8 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import DataBlock0, Program, Tool
+from app.cnc.imports import importers
+from app.cnc.sizes import check_import_size
 from app.cnc.units import Units
 from app.storage.library import SORTS, LibraryError
 from app.web.editor import current_user, is_htmx
@@ -29,6 +31,7 @@ def index() -> str:
         "sorts": SORTS,
         "message": "",
         "form": None,
+        "import_formats": importers(),
     }
     if is_htmx() and request.args.get("fragment") == "list":
         return render_block("library/index.html", "program_list", **context)
@@ -57,31 +60,36 @@ def create() -> Response | tuple[str, int]:
     return redirect(url_for("editor.data_block_0", program_id=info.id))
 
 
-IMPORT_FORMATS = ("json", "events", "gcode", "tape")
-
-
 @bp.post("/programs/import")
 def upload() -> Response | tuple[str, int]:
-    """Import a MillBlocks document, ProtoTRAK Plus events, G-code or a 1704 tape; show the
-    import report. A file that cannot be read is refused whole, naming the line and column."""
-    from app.cnc.imports import read_program
+    """Import a file in any import format (detected, or the one chosen) and show the import
+    report. A file that cannot be read is refused whole, naming the line and column. The
+    format's own options come as `opt_<format>_<name>` fields."""
+    from app.cnc.imports import detect_format, read_program
 
     file = request.files.get("file")
     if file is None or not file.filename:
         return _index_with("Not imported: choose a file to import.", 422)
     chosen = request.form.get("format", "")
-    if chosen and chosen not in IMPORT_FORMATS:
+    formats = importers()
+    if chosen and chosen not in formats:
         return _index_with(
-            f"Not imported: format {chosen!r} is not one of {', '.join(IMPORT_FORMATS)}", 422
+            f"Not imported: format {chosen!r} is not one of {', '.join(formats)}", 422
         )
+    data = file.read()
+    try:
+        check_import_size(data)  # before detection reads it
+        reading = chosen or detect_format(data)
+    except ValueError as exc:
+        return _index_with(f"Not imported: {file.filename}: {exc}", 422)
     options = {
-        key: request.form[key]
-        for key in ("units", "resolution")
-        if request.form.get(key) and chosen in ("", "tape")
+        option.name: request.form[key]
+        for option in formats[reading].options
+        if request.form.get(key := f"opt_{reading}_{option.name}")
     }
     stem = file.filename.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     try:
-        result = read_program(file.read(), stem, chosen or None, options)
+        result = read_program(data, stem, reading, options)
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)
     info = get_library().create(
@@ -158,5 +166,6 @@ def _index_with(message: str, status: int) -> tuple[str, int]:
         "sorts": SORTS,
         "message": message,
         "form": request.form,
+        "import_formats": importers(),
     }
     return render_template("library/index.html", **context), status

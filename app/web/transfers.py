@@ -14,6 +14,7 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
+from app.cnc.imports import importers
 from app.dnc import Direction, TransferRecord, jobs, service
 from app.dnc.jobs import JobState, TransferJob
 from app.dnc.service import Log
@@ -26,9 +27,6 @@ from app.web.downloads import attachment
 from app.web.extensions import get_library
 
 bp = Blueprint("transfers", __name__)
-
-RECEIVE_FORMATS = ("json", "events", "gcode", "tape")
-"""What a capture may be read as (the default is the machine's own target)."""
 
 
 def _machines() -> list[Machine]:
@@ -45,7 +43,7 @@ def _page(message: str = "", status: int = 200) -> tuple[str, int]:
             programs=library.programs(),
             transfers=transfers,
             running=any(t.outcome == "running" for t in transfers),
-            formats=RECEIVE_FORMATS,
+            formats={n: f for n, f in importers().items() if f.from_machines},
             message=message,
             chosen_program=request.values.get("program_id", ""),
         ),
@@ -159,9 +157,10 @@ def receive() -> Response | tuple[str, int]:
     form_format = request.form.get("format", "")
     try:
         machine = _machine(request.form.get("machine", ""))
-        if form_format and form_format not in RECEIVE_FORMATS:
+        formats = [n for n, f in importers().items() if f.from_machines]
+        if form_format and form_format not in formats:
             raise _Refused(
-                f"format {form_format!r} is not one of {', '.join(RECEIVE_FORMATS)} "
+                f"format {form_format!r} is not one of {', '.join(formats)} "
                 "(or empty for the machine's own)"
             )
     except _Refused as exc:

@@ -3,16 +3,19 @@
 Every line starts with the block number the call came from (0 for set-up). Lengths are in
 the program's units with fixed decimals (0.0001 in, 0.001 mm), feeds in units per minute
 with the same decimals, dwells in seconds to 0.01 s. A tag, when a move has one, follows
-after `;`. The dump is a pure function of the Toolpath: same program, same bytes.
+after `;`. The dump is a pure function of the tool path: same program, same bytes; the
+target writes it as the compiled path's moves come, a chunk at a time.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Report, Target, register
+from app.cnc.emit.target import Out, Report, Target, register
+from app.cnc.emit.text import Lengths
+from app.cnc.path import CompiledPath
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -30,7 +33,6 @@ from app.cnc.toolpath import (
     ToolChange,
     Toolpath,
 )
-from app.cnc.units import format_length
 
 HEADER = "# MillBlocks canonical dump v1"
 
@@ -42,10 +44,14 @@ def dump(toolpath: Toolpath) -> str:
 
 def iter_lines(toolpath: Toolpath) -> Iterator[str]:
     """The dump line by line, so large tool paths can be streamed."""
-    u = toolpath.units
+    return _lines(toolpath, toolpath.moves)
 
-    def length(nm: int) -> str:
-        return format_length(nm, u)
+
+def _lines(toolpath: Toolpath | CompiledPath, moves: Iterable[Move]) -> Iterator[str]:
+    """The dump of `moves`, which start as `toolpath` says (its units, origin, start and
+    tools)."""
+    u = toolpath.units
+    length = Lengths(u).one
 
     yield f"{HEADER}, units {u.value}\n"
     x, y, z = toolpath.start
@@ -54,7 +60,7 @@ def iter_lines(toolpath: Toolpath) -> Iterator[str]:
     yield f"{0:>5} CURRENT_TOOL({toolpath.initial_tool})\n"
     if toolpath.initial_tool:
         yield f"{0:>5} {_tool_data(toolpath, toolpath.initial_tool, length)}\n"
-    for move in toolpath.moves:
+    for move in moves:
         yield f"{move.block:>5} {_call(move, length)}\n"
         if isinstance(move, ToolChange):
             # As LinuxCNC's USE_TOOL_LENGTH_OFFSET: Z after this line is measured from this
@@ -62,7 +68,7 @@ def iter_lines(toolpath: Toolpath) -> Iterator[str]:
             yield f"{move.block:>5} {_tool_data(toolpath, move.tool, length)}\n"
 
 
-def _tool_data(toolpath: Toolpath, tool: int, length: Callable[[int], str]) -> str:
+def _tool_data(toolpath: Toolpath | CompiledPath, tool: int, length: Callable[[int], str]) -> str:
     info = toolpath.tools.get(tool)
     dia = "none" if info is None or info.diameter is None else length(info.diameter)
     tcal = "uncalibrated" if info is None or info.tcal is None else length(info.tcal)
@@ -113,10 +119,22 @@ class CanonTarget(Target):
     """The canonical dump as an export target."""
 
     name = "canon"
+    label = "Canonical moves (the test dump)"
     description = "canonical move dump (one call per line, the golden-test format)"
     extension = "canon"
 
-    def emit(
-        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
-    ) -> bytes:
-        return dump(toolpath).encode("utf-8")
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        pending: list[str] = []
+        for line in _lines(path, path.moves()):
+            pending.append(line)
+            if len(pending) == 4096:
+                out.write("".join(pending).encode("utf-8"))
+                pending = []
+        out.write("".join(pending).encode("utf-8"))

@@ -1,11 +1,17 @@
-"""Export targets: one registry, typed options, and the compatibility report.
+"""Export targets: one registry, typed options, abilities, and the compatibility report.
 
-In the manner of sqlglot's dialects: every target turns the same Toolpath (and, for the
-structural ProtoTRAK Plus events, the Program) into its own bytes, declares its options,
-and reports through one `Report` what it could not express — nothing is dropped silently.
+In the manner of sqlglot's dialects: every target turns the same compiled program (its
+moves in chunks, with the hole and mill spans kept; for the structural ProtoTRAK Plus
+events, the Program too) into its own bytes, declares its options and what it can do, and
+reports through one `Report` what it could not express — nothing is dropped silently.
 
-A target module registers itself with `@register` when imported; `targets()` imports every
-module of this package once, so a new target is a new file.
+A target writes as it goes (`Target.write` to a binary stream), so an export's memory does
+not grow with the program: `export()` spools the bytes to a temporary file past 1 MB and
+hands back an `Export` to read them from, whole (`data`) or in pieces (`chunks`).
+
+A target registers itself with `@register` when its module is imported; `targets()` imports
+the modules of this package and every format package (app.cnc.formats) once, so a new
+target is a new module — app/cnc/formats/__init__.py has the checklist.
 """
 
 from __future__ import annotations
@@ -13,81 +19,48 @@ from __future__ import annotations
 import enum
 import importlib
 import pkgutil
-from abc import ABC, abstractmethod
-from collections.abc import Mapping
+import tempfile
+import weakref
+from abc import ABC
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
-from decimal import Decimal
-from typing import Any, ClassVar
+from typing import Any, BinaryIO, ClassVar, Protocol
 
 from app.cnc.blocks import Program
+from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.interpret import interpret
 from app.cnc.machine import MachineModel, check_travel
 from app.cnc.needs import unmet
-from app.cnc.numbers import NumberError, parse_decimal
+from app.cnc.options import Option, OptionError, OptionKind
+from app.cnc.path import CompiledPath
 from app.cnc.problems import Need, Problem, blocking
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
 
+__all__ = [
+    "Entry",
+    "Export",
+    "ExportError",
+    "Option",
+    "OptionError",
+    "OptionKind",
+    "Report",
+    "Severity",
+    "Target",
+    "export",
+    "get_target",
+    "register",
+    "targets",
+]
 
-class OptionKind(enum.Enum):
-    """How an option's text value is read."""
-
-    BOOL = "bool"
-    INT = "int"
-    DECIMAL = "decimal"
-    CHOICE = "choice"
-    TEXT = "text"
+# An export's bytes stay in memory up to this size, then go to a temporary file.
+SPOOL_BYTES = 1 << 20
 
 
-class OptionError(ValueError):
-    """An option that does not exist for the target or whose value cannot be read."""
+class Out(Protocol):
+    """Where a target writes its bytes (a binary file, a spool, a socket's writer)."""
 
-
-_TRUE = {"1", "true", "yes", "on"}
-_FALSE = {"0", "false", "no", "off"}
-
-
-@dataclass(frozen=True)
-class Option:
-    """One export option: its name (as on the command line), kind, default and meaning."""
-
-    name: str
-    kind: OptionKind
-    default: Any
-    help: str
-    choices: tuple[str, ...] = ()
-    minimum: Decimal | None = None
-    maximum: Decimal | None = None
-
-    def parse(self, raw: str) -> Any:
-        """The value of `raw` for this option. Raises OptionError saying what is allowed."""
-        text = raw.strip()
-        if self.kind is OptionKind.BOOL:
-            if text.lower() in _TRUE:
-                return True
-            if text.lower() in _FALSE:
-                return False
-            raise OptionError(f"option {self.name}: {raw!r} is not yes/no (true/false, 1/0)")
-        if self.kind is OptionKind.CHOICE:
-            if text not in self.choices:
-                allowed = ", ".join(self.choices)
-                raise OptionError(f"option {self.name}: {raw!r} is not one of {allowed}")
-            return text
-        if self.kind is OptionKind.TEXT:
-            return raw
-        try:
-            number = parse_decimal(text)
-        except NumberError as exc:
-            raise OptionError(f"option {self.name}: {exc}") from None
-        if self.kind is OptionKind.INT and number != number.to_integral_value():
-            raise OptionError(f"option {self.name}: {raw!r} is not a whole number")
-        low, high = self.minimum, self.maximum
-        if (low is not None and number < low) or (high is not None and number > high):
-            raise OptionError(
-                f"option {self.name}: {raw} is outside the allowed range {low} to {high}"
-            )
-        return int(number) if self.kind is OptionKind.INT else number
+    def write(self, data: bytes, /) -> int: ...
 
 
 class Severity(enum.Enum):
@@ -115,14 +88,17 @@ class Entry:
 
 @dataclass
 class Report:
-    """What a target did with a program: errors, losses, rewrites, warnings, notes."""
+    """What a target did with a program: errors, losses, rewrites, warnings, notes (each
+    entry once, in the order first reported)."""
 
     target: str
     entries: list[Entry] = field(default_factory=list)
+    _seen: set[Entry] = field(default_factory=set, repr=False)
 
     def add(self, severity: Severity, block: int | None, message: str) -> None:
         entry = Entry(severity, block, message)
-        if entry not in self.entries:
+        if entry not in self._seen:
+            self._seen.add(entry)
             self.entries.append(entry)
 
     def unsupported(self, block: int | None, message: str) -> None:
@@ -157,15 +133,50 @@ class Report:
         return "\n".join(lines) + "\n"
 
 
-@dataclass(frozen=True)
+@dataclass
 class Export:
-    """An export's bytes, how to name and serve them, and its report."""
+    """An export: its bytes (`size` of them, in `file` from its start), how to name and
+    serve them, and its report. Read them with `data` (all at once) or `chunks`. A spool
+    `export()` made itself is closed with the Export (or by `close`)."""
 
     target: str
-    data: bytes
+    file: BinaryIO
+    size: int
     extension: str
     media_type: str
     report: Report
+    owned: bool = False
+
+    def __post_init__(self) -> None:
+        if self.owned:
+            weakref.finalize(self, self.file.close)
+
+    def close(self) -> None:
+        """Let go of the spooled bytes (an export made to a caller's stream keeps it open)."""
+        if self.owned:
+            self.file.close()
+
+    @property
+    def data(self) -> bytes:
+        """Every byte of the output (for small programs; large ones read `chunks`)."""
+        self.file.seek(0)
+        return self.file.read(self.size)
+
+    def chunks(self, size: int = 1 << 16) -> Iterator[bytes]:
+        """The output in pieces of at most `size` bytes, in order."""
+        self.file.seek(0)
+        left = self.size
+        while left > 0:
+            piece = self.file.read(min(size, left))
+            if not piece:
+                return
+            left -= len(piece)
+            yield piece
+
+    def head(self, size: int) -> bytes:
+        """The first `size` bytes (a preview)."""
+        self.file.seek(0)
+        return self.file.read(min(size, self.size))
 
 
 class ExportError(ValueError):
@@ -178,16 +189,32 @@ class ExportError(ValueError):
 
 
 class Target(ABC):
-    """An output format. Subclasses set the class attributes and implement `emit`."""
+    """An output format. Subclasses set the class attributes and implement `write` (or,
+    for a target that makes its bytes in one piece from the whole Toolpath, `emit`)."""
 
     name: ClassVar[str]
+    # The shop's name for it, as a menu shows it ("LinuxCNC (RS274/NGC)"); "" for none.
+    label: ClassVar[str] = ""
     description: ClassVar[str]
     extension: ClassVar[str]
     media_type: ClassVar[str] = "text/plain; charset=us-ascii"
     options: ClassVar[tuple[Option, ...]] = ()
+    # The options a shop sets most often: a form shows them first and folds the rest.
+    common: ClassVar[tuple[str, ...]] = ()
     # What the target needs from a program beyond what every consumer needs (a program
     # that lacks it is refused by this target alone, naming the blocks).
     needs: ClassVar[frozenset[Need]] = frozenset()
+    # Bytes that are not lines of text (a punch image: a byte per tape row): sent on a
+    # serial line as they are, never shown as text.
+    binary: ClassVar[bool] = False
+    # The target that draws this output ("" for none; a drawing names itself).
+    picture: ClassVar[str] = ""
+    # The import format that reads the output back (None: nothing reads it).
+    reads_back: ClassVar[str | None] = None
+    # The bytes that end the program (a receive stops after them): the rewind stop.
+    end_mark: ClassVar[bytes] = b"%"
+    # Whether data bytes can be the XON/XOFF codes (then software flow control cannot run).
+    flow_codes_in_data: ClassVar[bool] = False
 
     def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
         """The needs with these (parsed) options; a target whose options change what it
@@ -198,12 +225,41 @@ class Target(ABC):
         """What else the user may do when a program lacks `need` (an option), or ""."""
         return ""
 
-    @abstractmethod
+    @property
+    def shown_name(self) -> str:
+        """How a menu names the target: its label, else its description."""
+        return self.label or self.description
+
+    def picture_target(self) -> str:
+        """The target that draws this output: `picture`, or the target itself when its
+        output is an image; "" for none."""
+        return self.picture or (self.name if self.media_type.startswith("image/") else "")
+
+    def picture_options(self, options: Mapping[str, str]) -> dict[str, str]:
+        """The options (text) of the picture target that draw this output as made with
+        `options` (text)."""
+        return dict(options)
+
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        """Write the output for a validated program to `out` as it is made. Report what
+        cannot be expressed; errors (report.error) make the export fail (the caller then
+        discards what was written). Must be a pure function of its arguments.
+
+        By default the whole Toolpath is made and handed to `emit`."""
+        out.write(self.emit(program, path.toolpath(), options, report))
+
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
     ) -> bytes:
-        """The output for a validated program. Report what cannot be expressed; errors
-        (report.error) make the export fail. Must be a pure function of its arguments."""
+        """The output in one piece, from the whole Toolpath (targets that do not stream)."""
+        raise NotImplementedError(f"{self.name} implements neither write nor emit")
 
     def parse_options(self, raw: Mapping[str, str]) -> dict[str, Any]:
         """Defaults overridden by `raw` (name → text). Raises OptionError for unknown names."""
@@ -233,12 +289,16 @@ def register(cls: type[Target]) -> type[Target]:
 
 
 def targets() -> dict[str, Target]:
-    """Every target, by name (each module of this package is imported once)."""
+    """Every target, by name (the modules of this package and the format packages are
+    imported once)."""
     global _LOADED
     if not _LOADED:
         package = importlib.import_module("app.cnc.emit")
         for module in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):
             importlib.import_module(f"app.cnc.emit.{module.name}")
+        from app.cnc.formats import load_formats
+
+        load_formats()
         _LOADED = True
     return dict(sorted(_REGISTRY.items()))
 
@@ -251,18 +311,33 @@ def get_target(name: str) -> Target:
     return found
 
 
+class _Counted:
+    """A binary stream that counts what is written through it."""
+
+    def __init__(self, out: Out) -> None:
+        self.out = out
+        self.size = 0
+
+    def write(self, data: bytes) -> int:
+        self.size += len(data)
+        return self.out.write(data)
+
+
 def export(
     program: Program,
     name: str,
     raw_options: Mapping[str, str] | None = None,
     machine: MachineModel | None = None,
+    out: BinaryIO | None = None,
 ) -> Export:
     """Export `program` (COPY blocks carried out) to target `name`.
 
-    With a `machine`, every move is checked against its travel limits and collision zone,
-    and a crossing is an error naming the block. Raises OptionError for bad options and
-    ExportError when the program has validation errors or the target (or the machine)
-    reports errors.
+    The output is written to `out` (a binary stream at its start) as it is made, or by
+    default to a temporary file that stays in memory up to SPOOL_BYTES; the returned
+    `Export` reads it. With a `machine`, every move is checked against its travel limits
+    and collision zone, and a crossing is an error naming the block. Raises OptionError for
+    bad options and ExportError when the program has validation errors or the target (or
+    the machine) reports errors; what was written to `out` by then is not an export.
     """
     target = get_target(name)
     options = target.parse_options(raw_options or {})
@@ -271,8 +346,8 @@ def export(
     # The control's needs are checked by validation; a target has its own (and may lack
     # some of the control's: events and JSON never need spindle speeds).
     problems = [p for p in validate(program) if p.need is None]
-    toolpath = None if blocking(problems) else interpret(program)
-    problems += unmet(program, needs, toolpath) if toolpath is not None else []
+    path = None if blocking(problems) else compile_program(program).path
+    problems += unmet(program, needs, path) if path is not None else []
     stopping = blocking(problems, needs)
     if stopping:
         missing = sorted({p.need for p in stopping if p.need is not None}, key=lambda n: n.value)
@@ -285,13 +360,34 @@ def export(
             message = "the program has errors; fix them before exporting"
         raise ExportError(message, stopping, None)
     report = Report(target.name)
-    assert toolpath is not None
+    assert path is not None
     for need in sorted(needs, key=lambda n: n.value):
         report.note(None, f"this target needs {need.value}: the program has them")
     if machine is not None:
-        for crossing in check_travel(toolpath, machine):
+        for crossing in check_travel(path, machine):
             report.error(crossing.block, crossing.message)
-    data = target.emit(program, toolpath, options, report)
+    sink: BinaryIO = out if out is not None else _spool()
+    counted = _Counted(sink)
+    try:
+        target.write(program, path, options, report, counted)
+    except BaseException:
+        if out is None:
+            sink.close()
+        raise
     if report.has_errors:
+        if out is None:
+            sink.close()
         raise ExportError(f"{target.name} cannot take this program", problems, report)
-    return Export(target.name, data, target.extension, target.media_type, report)
+    return Export(
+        target.name,
+        sink,
+        counted.size,
+        target.extension,
+        target.media_type,
+        report,
+        owned=out is None,
+    )
+
+
+def _spool() -> BinaryIO:
+    return tempfile.SpooledTemporaryFile(max_size=SPOOL_BYTES)  # type: ignore[return-value]

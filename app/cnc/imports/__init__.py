@@ -2,14 +2,18 @@
 
     read_program(data, name="", format=None) -> ImportResult
 
-`format` is "json" (a MillBlocks program document), "events" (ProtoTRAK Plus G100-G109,
-seed 003 §2.2), "gcode" (RS274/NGC or Fanuc, seed 003's tables), "tape" (a Tektronix
-1704 listing or punch image, EIA or ASCII, seed 000) or "dxf" (a drawing, `dxf.py`); None
-detects it from the content.
+`format` names an import format of the registry (`importers()`: a MillBlocks program
+document, ProtoTRAK Plus events, G-code, a Tektronix 1704 tape, a DXF drawing — each a
+package of app.cnc.formats); None detects it from the content (`detect_format`).
 The result holds the program, the report (what became what, what was not understood or not
 carried, what was assumed, what was rounded, what the user must still supply — each with
 its line) and the format read. Every failure is an `ImportFailure` (a ValueError) naming
 the line and column, or the tape block and row; nothing half-imported is returned.
+
+What the readers share lives here: the report and the failure (common.py), the motion
+vocabulary of word-address files (steps.py), turning motion into operations and blocks
+(segment.py, recognise.py, build.py, motion.py) and the evidence that tells a tape from
+G-code (wordaddress.py).
 
 Pure core: no web, database or serial code. See docs/imports.md.
 """
@@ -21,16 +25,17 @@ from dataclasses import dataclass, field
 
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
-from app.cnc.imports.detect import FORMATS, detect_format, read
+from app.cnc.imports.registry import Importer, detect, get_importer, importers
 from app.cnc.sizes import TooLarge, check_block_count, check_import_size
 
 __all__ = [
-    "FORMATS",
     "ImportFailure",
     "ImportNote",
     "ImportResult",
+    "Importer",
     "NoteKind",
     "detect_format",
+    "importers",
     "read_program",
 ]
 
@@ -51,6 +56,12 @@ class ImportResult:
         return "\n".join(lines) + "\n"
 
 
+def detect_format(data: bytes) -> str:
+    """The name of the import format `data` is in, from its content. Raises ImportFailure
+    when it is empty or could be several formats alike (it then asks for the format)."""
+    return detect(data).name
+
+
 def read_program(
     data: bytes,
     name: str = "",
@@ -58,18 +69,35 @@ def read_program(
     options: Mapping[str, str] | None = None,
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
-    gives no name. `options` are reader options (docs/imports.md): for a tape `units`
-    (inch/metric) and `resolution` (standard/option1/option2), as the tape target has them;
-    for a DXF `layer`, `hole-diameter`, `tolerance`, `units`, `drawing-units`, `feed`.
+    gives no name. `options` are the format's reader options (docs/imports.md): for a tape
+    `units` (inch/metric) and `resolution` (standard/option1/option2), as the tape target
+    has them; for a DXF `layer`, `hole-diameter`, `tolerance`, `units`, `drawing-units`,
+    `feed`.
 
-    Raises ImportFailure for anything it cannot read (and for an unknown `format`, or
-    content that could be either a 1704 tape or G-code when `format` is None, or a file
-    past the limits of app.cnc.sizes, refused before it is parsed).
+    Raises ImportFailure for anything it cannot read (and for an unknown `format` or
+    option, content that could be either a 1704 tape or G-code when `format` is None, or a
+    file past the limits of app.cnc.sizes, refused before it is parsed).
     """
     try:
         check_import_size(data)
-        program, notes, chosen = read(data, name, format, options or {})
+        importer = detect(data) if format is None else get_importer(format)
+        program, notes = read_as(importer, data, name, options or {})
         check_block_count(len(program.blocks))
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
-    return ImportResult(program, notes, chosen)
+    return ImportResult(program, notes, importer.name)
+
+
+def read_as(
+    importer: Importer, data: bytes, name: str, options: Mapping[str, str]
+) -> tuple[Program, list[ImportNote]]:
+    """`importer.read`, after refusing options it does not have (no size limits: for
+    callers that set their own, such as the benchmarks)."""
+    known = {option.name for option in importer.options}
+    unknown = sorted(set(options) - known)
+    if unknown:
+        allowed = ", ".join(sorted(known)) or "none"
+        raise ImportFailure(
+            "", f"{importer.name} import has no option {unknown[0]!r}; its options: {allowed}"
+        )
+    return importer.read(data, name, options)

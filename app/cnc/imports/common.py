@@ -214,3 +214,19 @@ def is_text(data: bytes) -> bool:
 def check_digits(digits: str) -> bool:
     """True when a number's digits are few enough to be a real value (MAX_DIGITS)."""
     return len(digits.lstrip("0")) <= MAX_DIGITS
+
+
+def decode_text(data: bytes) -> str:
+    """The file as text. Raises ImportFailure naming line and column of a byte that is not
+    UTF-8."""
+    try:
+        return data.decode("utf-8").lstrip("\ufeff")
+    except UnicodeDecodeError as exc:
+        before = data[: exc.start]
+        line = before.count(b"\n") + 1
+        column = exc.start - (before.rfind(b"\n") + 1) + 1
+        raise ImportFailure(
+            f"line {line}, column {column}",
+            f"byte 0x{data[exc.start]:02X} is not text (UTF-8)",
+            line,
+        ) from None

@@ -55,8 +55,7 @@ import math
 from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from decimal import ROUND_HALF_EVEN, Decimal
-from fractions import Fraction
+from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import (
@@ -75,7 +74,32 @@ from app.cnc.blocks import (
     Program,
     Rep,
 )
-from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
+from app.cnc.formats.events.model import (
+    FEED_RANGE_NM,
+    MAX_DIMENSION_NM,
+    MAX_EVENT_REFERENCE,
+    MAX_LINE_NUMBER,
+    RESOLUTION_NM,
+    TOOL_CENTRE,
+    TOOL_LEFT,
+    TOOL_RIGHT,
+    WORDS,
+    XY,
+    Bolthole,
+    Event,
+    Mill,
+    Position,
+    Pt,
+    Repeat,
+    Routine,
+    format_angle,
+    format_dimension,
+    format_feed,
+    plus_angle,
+    plus_holes,
+    written,
+)
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.mill import (
     INSIDE_PLACEMENTS,
@@ -87,117 +111,13 @@ from app.cnc.mill import (
     rough_wall,
     routine_clockwise,
 )
+from app.cnc.motions import motions
+from app.cnc.path import CompiledPath, Op
 from app.cnc.problems import Rule
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, Toolpath
 from app.cnc.units import Units, to_nm
 
-XY = tuple[int, int]
-Pt = tuple[float, float]
-
-# §2.2.4: inch dimensions to 0.0001 in, metric to 0.01 mm; both exact in nanometres.
-RESOLUTION_NM = {Units.INCH: 2_540, Units.MM: 10_000}
-PLACES = {Units.INCH: 4, Units.MM: 2}
-# §2.2.4 ranges: dimensions and conrad ±99.9999 in / ±9999.99 mm; feeds 0.1-99.9 ipm and
-# 5-2535 mm/min; From/To event 1-255; line numbers 0-999.
-MAX_DIMENSION_NM = {Units.INCH: 99_9999 * 2_540, Units.MM: 9999_99 * 10_000}
-FEED_RANGE_NM = {
-    Units.INCH: (2_540_000, 999 * 2_540_000),
-    Units.MM: (5 * 1_000_000, 2535 * 1_000_000),
-}
-MAX_EVENT_REFERENCE = 255
-MAX_LINE_NUMBER = 999
-
-TOOL_RIGHT, TOOL_LEFT, TOOL_CENTRE = 1, 2, 0
 TC = {Comp.NONE: TOOL_CENTRE, Comp.RIGHT: TOOL_RIGHT, Comp.LEFT: TOOL_LEFT}
-
-
-# -- events ----------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class Position:
-    """G100 Position event (§2.2.5 N001): go to X Y with tool T."""
-
-    block: int
-    at: XY
-    tool: int
-
-
-@dataclass(frozen=True, slots=True)
-class Mill:
-    """G101 Mill (a line), G102 Arc CW or G103 Arc CCW event (§2.2.5 N002-N004).
-
-    Lengths in nm, `feed` in nm/min. `centre` is None for a line. `comp` is TC (0 centre,
-    1 right, 2 left); `conrad` the corner radius into the next event, None for `CR-` (not
-    connected).
-    """
-
-    block: int
-    begin: XY
-    end: XY
-    centre: XY | None
-    clockwise: bool
-    comp: int
-    feed: int
-    diameter: int | None
-    conrad: int | None
-    tool: int
-
-
-@dataclass(frozen=True, slots=True)
-class Bolthole:
-    """G104 Bolthole event (§2.2.5 N005): HL holes on radius R about XC YC.
-
-    `angle` is the Plus's A: degrees counter-clockwise from +X to the first hole; the
-    others follow counter-clockwise.
-    """
-
-    block: int
-    centre: XY
-    holes: int
-    radius: int
-    angle: Decimal
-    tool: int
-
-
-@dataclass(frozen=True, slots=True)
-class Repeat:
-    """G105 Repeat event (§2.2.5 N006): events FE…LE again RE times, the k-th shifted k·(XO, YO)."""
-
-    block: int
-    first: int
-    last: int
-    offset: XY
-    repeats: int
-    tool: int
-    diameter: int | None
-
-
-@dataclass(frozen=True, slots=True)
-class Routine:
-    """G106/G107 rectangular and G108/G109 circular pocket/frame (§2.2.5 N007-N010).
-
-    A rectangle has its lower-left corner at `point` (XB YB), the diagonal corner at
-    `diagonal` (XD YD) and corner radius `radius` (CR); a circle its centre at `point`
-    (XC YC) and radius `radius` (R). `finish` is FC, the finishing allowance, in nm.
-    """
-
-    block: int
-    rectangular: bool
-    pocket: bool
-    point: XY
-    diagonal: XY | None
-    radius: int
-    clockwise: bool
-    comp: int
-    finish: int
-    feed: int
-    diameter: int | None
-    tool: int
-
-
-Event = Position | Mill | Bolthole | Repeat | Routine
 Check = tuple[int, Pt]  # a block number and an XY point (nm) the tool is at for it
 
 
@@ -217,76 +137,6 @@ class Events:
     unchecked: set[int] = field(default_factory=set)
 
 
-# -- numbers (§2.2.4) ------------------------------------------------------------------------
-
-
-def steps(nm: int, units: Units) -> int:
-    """A length in the Plus's steps (0.0001 in, 0.01 mm), rounded half-even."""
-    return round(Fraction(nm, RESOLUTION_NM[units]))
-
-
-def written(nm: int, units: Units) -> int:
-    """A length (nm) as the file carries it: rounded to the Plus's resolution, back in nm."""
-    return steps(nm, units) * RESOLUTION_NM[units]
-
-
-def _text(value: Decimal) -> str:
-    """Trailing zeros dropped, one decimal kept (`1.0`, `-2.45`); zero is `0` (§2.2.5)."""
-    if value == 0:
-        return "0"
-    text = f"{value.normalize():f}"
-    return text if "." in text else text + ".0"
-
-
-def format_dimension(nm: int, units: Units) -> str:
-    """A length as the Plus reads it: `12.3456` in, `1234.56` mm, always with a point."""
-    return _text(Decimal(steps(nm, units)).scaleb(-PLACES[units]))
-
-
-def format_feed(nm_per_minute: int, units: Units) -> str:
-    """A feed: inch per minute with one decimal (`F8.0`), mm per minute whole (`F250`).
-
-    §2.2.4: an inch feed without a point is read in tenths (`F1` = 0.1 ipm), so it always
-    has one; a metric feed is a whole number of mm/min.
-    """
-    if units is Units.INCH:
-        tenths = round(Fraction(nm_per_minute, 2_540_000))
-        return f"{Decimal(tenths).scaleb(-1):.1f}"
-    return str(round(Fraction(nm_per_minute, 1_000_000)))
-
-
-def format_angle(degrees: Decimal) -> str:
-    """An angle in degrees to 0.001° (§2.2.4 `A-300.000`), e.g. `45.0`."""
-    return _text(degrees.quantize(Decimal("0.001"), rounding=ROUND_HALF_EVEN))
-
-
-# -- bolt circles (DESIGN.md §3) -------------------------------------------------------------
-
-
-def plus_angle(theta0: Decimal) -> Decimal:
-    """The G104 angle A for a BOLT CIR whose first hole is at `theta0`.
-
-    MillBlocks measures θ clockwise from straight below the centre; the Plus measures A
-    counter-clockwise from +X. The same first hole: A = 270° − θ0, in [0°, 360°).
-    """
-    angle = (Decimal(270) - theta0) % 360
-    return angle + 360 if angle < 0 else angle
-
-
-def millblocks_angle(a_plus: Decimal) -> Decimal:
-    """The BOLT CIR angle θ0 for a G104 angle A (the inverse, θ0 = 270° − A)."""
-    return plus_angle(a_plus)
-
-
-def plus_holes(centre: Pt, radius: float, holes: int, angle: Decimal) -> list[Pt]:
-    """Hole centres of a G104 in the Plus's order: from `angle` counter-clockwise from +X."""
-    points = []
-    for k in range(holes):
-        a = math.radians(float(angle) + k * 360.0 / holes)
-        points.append((centre[0] + radius * math.cos(a), centre[1] + radius * math.sin(a)))
-    return points
-
-
 # -- circle and frame routines ---------------------------------------------------------------
 
 
@@ -299,21 +149,21 @@ def routine_comp(placement: Placement, clockwise: bool) -> int:
 # -- from blocks to events -------------------------------------------------------------------
 
 
-def build_events(program: Program, toolpath: Toolpath, report: Report) -> Events:
+def build_events(program: Program, path: CompiledPath, report: Report) -> Events:
     """The events of a validated program (COPY blocks carried out), reporting what is lost."""
-    builder = _Builder(program, toolpath, report)
+    builder = _Builder(program, path, report)
     builder.run_nodes(build_nodes(program.blocks))
     builder.report_program()
     return builder.result
 
 
 class _Builder:
-    def __init__(self, program: Program, toolpath: Toolpath, report: Report) -> None:
+    def __init__(self, program: Program, path: CompiledPath, report: Report) -> None:
         self.program = program
         self.blocks = program.blocks
         self.block0: DataBlock0 = program.block0
         self.units = program.units
-        self.toolpath = toolpath
+        self.path = path
         self.report = report
         self.result = Events(program.units, program.part_number)
         self.reference: XY = (0, 0)
@@ -331,7 +181,7 @@ class _Builder:
         return (float(written(p[0], self.units)), float(written(p[1], self.units)))
 
     def diameter(self, tool: int) -> int | None:
-        info = self.toolpath.tools.get(tool)
+        info = self.path.tools.get(tool)
         return None if info is None else info.diameter
 
     def resolve(self, block: Block) -> XY:
@@ -525,7 +375,7 @@ class _Builder:
                 )
             for half_end, is_end in halves:
                 event = Mill(
-                    block=element.block,
+                    source=element.block,
                     begin=current,
                     end=half_end,
                     centre=centre,
@@ -584,7 +434,7 @@ class _Builder:
         pocket = block.placement is Placement.POCKET
         finish = rough_wall(block.units) if block.two_pass else 0
         common: dict[str, Any] = {
-            "block": number,
+            "source": number,
             "pocket": pocket,
             "point": start,
             "clockwise": clockwise,
@@ -745,7 +595,7 @@ def _g_units(units: Units) -> str:
 # -- the self-check ----------------------------------------------------------------------------
 
 
-def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
+def check_events(events: Events, path: CompiledPath, report: Report) -> None:
     """Compare the events with the tool path; a difference is a report error.
 
     Every XY point the tool path moves to at a block must be one of the points the events
@@ -757,23 +607,38 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
     block that finds the tool already at its point has no move of its own. Blocks whose
     path the Plus computes itself (`events.unchecked`: compensated contours, routines) are
     skipped; circular pockets and frames must turn the way the tool path does.
+
+    The tool path is read a chunk at a time; what is kept is each distinct point once.
     """
     units = events.units
     tolerance = RESOLUTION_NM[units] + 1
     expected = _expected_points(events)
+    places: set[XY] = {(path.start[0], path.start[1])}
+    destinations: dict[int, dict[XY, None]] = defaultdict(dict)
+    turns: dict[int, set[tuple[int, int, bool]]] = defaultdict(set)
+    for m in motions(path):
+        rows = m.rows
+        places.update(zip(rows["x"].tolist(), rows["y"].tolist(), strict=True))
+        moved = (rows["x"] != m.x0) | (rows["y"] != m.y0)
+        for block, px, py in zip(
+            rows["block"][moved].tolist(),
+            rows["x"][moved].tolist(),
+            rows["y"][moved].tolist(),
+            strict=True,
+        ):
+            destinations[block][(px, py)] = None
+        arcs = rows[rows["op"] >= Op.ARC_CW]
+        for block, cx, cy, op in zip(
+            arcs["block"].tolist(),
+            arcs["cx"].tolist(),
+            arcs["cy"].tolist(),
+            arcs["op"].tolist(),
+            strict=True,
+        ):
+            turns[block].add((cx, cy, op == Op.ARC_CW))
     positions = _Grid(RESOLUTION_NM[units])
-    destinations: dict[int, list[Pt]] = defaultdict(list)
-    arcs: dict[int, list[ArcFeed]] = defaultdict(list)
-    x, y = toolpath.start[0], toolpath.start[1]
-    positions.add((x, y))
-    for move in toolpath.moves:
-        if isinstance(move, Rapid | Feed | ArcFeed):
-            if (move.x, move.y) != (x, y):
-                destinations[move.block].append((move.x, move.y))
-            x, y = move.x, move.y
-            if isinstance(move, ArcFeed):
-                arcs[move.block].append(move)
-            positions.add((x, y))
+    for place in places:
+        positions.add((float(place[0]), float(place[1])))
 
     def where(p: Pt) -> str:
         px, py = format_dimension(round(p[0]), units), format_dimension(round(p[1]), units)
@@ -787,7 +652,8 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
                 f"self-check: the events put the tool at {where(missing)}, where the tool "
                 "path never goes",
             )
-    for block, points in sorted(destinations.items()):
+    for block, reached in sorted(destinations.items()):
+        points = [(float(x), float(y)) for x, y in reached]
         if block in events.unchecked:
             continue
         if block not in expected:
@@ -804,9 +670,9 @@ def check_events(events: Events, toolpath: Toolpath, report: Report) -> None:
             )
     for event in events.events:
         if isinstance(event, Routine) and not event.rectangular:
-            turns = {a.clockwise for a in arcs[event.block] if (a.cx, a.cy) == event.point}
-            if turns and turns != {event.clockwise}:
-                report.error(event.block, "self-check: DR turns the other way from the tool path")
+            turn = {cw for cx, cy, cw in turns[event.source] if (cx, cy) == event.point}
+            if turn and turn != {event.clockwise}:
+                report.error(event.source, "self-check: DR turns the other way from the tool path")
 
 
 def _expected_points(events: Events) -> dict[int, list[Pt]]:
@@ -863,78 +729,72 @@ def render(events: Events, line_end: str = "\r\n") -> str:
 
 
 def _words(event: Event, units: Units) -> list[str]:
-    """An event's words in the order of the §2.2.5 listing."""
+    """An event's words, in the order the model lists them (§2.2.5)."""
 
     def length(nm: int) -> str:
         return format_dimension(nm, units)
 
-    def axis(name: str, nm: int) -> str:
-        return f"{name}{length(nm)}A"
+    def axis(nm: int) -> str:
+        return f"{length(nm)}A"
 
-    def tool(number: int) -> str:
-        return f"T{number:02d}"
-
-    def diameter(nm: int | None) -> list[str]:
-        return [] if nm is None else [f"D{length(nm)}"]
-
+    values: dict[str, str] = {"T": f"{event.tool:02d}"}
     if isinstance(event, Position):
-        return ["G100", axis("X", event.at[0]), axis("Y", event.at[1]), tool(event.tool)]
-    if isinstance(event, Mill):
-        ends = [
-            axis("XB", event.begin[0]),
-            axis("YB", event.begin[1]),
-            axis("XE", event.end[0]),
-            axis("YE", event.end[1]),
-        ]
-        conrad = "CR-" if event.conrad is None else f"CR{length(event.conrad)}"
-        feed = f"F{format_feed(event.feed, units)}"
-        tail = [*diameter(event.diameter), conrad, tool(event.tool)]
-        if event.centre is None:
-            return ["G101", *ends, f"TC{event.comp}", feed, *tail]
-        code = "G102" if event.clockwise else "G103"
-        centre = [axis("XC", event.centre[0]), axis("YC", event.centre[1])]
-        return [code, *ends, *centre, feed, f"TC{event.comp}", *tail]
-    if isinstance(event, Bolthole):
-        return [
-            "G104",
-            axis("XC", event.centre[0]),
-            axis("YC", event.centre[1]),
-            f"HL{event.holes:02d}",
-            f"R{length(event.radius)}",
-            f"A{format_angle(event.angle)}",
-            tool(event.tool),
-        ]
-    if isinstance(event, Repeat):
-        return [
-            "G105",
-            f"FE{event.first:03d}",
-            f"LE{event.last:03d}",
-            f"XO{length(event.offset[0])}",
-            f"YO{length(event.offset[1])}",
-            f"RE{event.repeats:02d}",
-            *diameter(event.diameter),
-            tool(event.tool),
-        ]
-    cut = [
-        f"DR{1 if event.clockwise else 2}",
-        f"TC{event.comp}",
-        f"FC{length(event.finish)}",
-        f"F{format_feed(event.feed, units)}",
-        *diameter(event.diameter),
+        values |= {"X": axis(event.at[0]), "Y": axis(event.at[1])}
+    elif isinstance(event, Mill):
+        values |= {
+            "XB": axis(event.begin[0]),
+            "YB": axis(event.begin[1]),
+            "XE": axis(event.end[0]),
+            "YE": axis(event.end[1]),
+            "TC": str(event.comp),
+            "F": format_feed(event.feed, units),
+            "CR": "-" if event.conrad is None else length(event.conrad),
+        }
+        if event.centre is not None:
+            values |= {"XC": axis(event.centre[0]), "YC": axis(event.centre[1])}
+    elif isinstance(event, Bolthole):
+        values |= {
+            "XC": axis(event.centre[0]),
+            "YC": axis(event.centre[1]),
+            "HL": f"{event.holes:02d}",
+            "R": length(event.radius),
+            "A": format_angle(event.angle),
+        }
+    elif isinstance(event, Repeat):
+        values |= {
+            "FE": f"{event.first:03d}",
+            "LE": f"{event.last:03d}",
+            "XO": length(event.offset[0]),
+            "YO": length(event.offset[1]),
+            "RE": f"{event.repeats:02d}",
+        }
+    else:
+        values |= {
+            "DR": "1" if event.clockwise else "2",
+            "TC": str(event.comp),
+            "FC": length(event.finish),
+            "F": format_feed(event.feed, units),
+        }
+        if event.rectangular:
+            assert event.diagonal is not None
+            values |= {
+                "XB": axis(event.point[0]),
+                "YB": axis(event.point[1]),
+                "XD": axis(event.diagonal[0]),
+                "YD": axis(event.diagonal[1]),
+                "CR": length(event.radius),
+            }
+        else:
+            values |= {
+                "XC": axis(event.point[0]),
+                "YC": axis(event.point[1]),
+                "R": length(event.radius),
+            }
+    if not isinstance(event, Position | Bolthole) and event.diameter is not None:
+        values["D"] = length(event.diameter)
+    return [f"G{event.code}"] + [
+        f"{code}{values[code]}" for code in WORDS[event.code] if code in values
     ]
-    if event.rectangular:
-        assert event.diagonal is not None
-        corners = [
-            axis("XB", event.point[0]),
-            axis("YB", event.point[1]),
-            axis("XD", event.diagonal[0]),
-            axis("YD", event.diagonal[1]),
-        ]
-        code = "G106" if event.pocket else "G107"
-        return [code, *corners, *cut, f"CR{length(event.radius)}", tool(event.tool)]
-    code = "G108" if event.pocket else "G109"
-    centre = [axis("XC", event.point[0]), axis("YC", event.point[1]), f"R{length(event.radius)}"]
-    return [code, *centre, *cut, tool(event.tool)]
 
 
 def check_ranges(events: Events, report: Report) -> None:
@@ -956,7 +816,7 @@ def check_ranges(events: Events, report: Report) -> None:
         worst = max((abs(v) for v in values), default=0)
         if written(worst, units) > limit:
             report.error(
-                event.block,
+                event.source,
                 f"{format_dimension(worst, units)} {units.symbol} is beyond the Plus's "
                 f"±{format_dimension(limit, units)} {units.symbol} (seed 003 §2.2.4)",
             )
@@ -967,6 +827,8 @@ class EventsTarget(Target):
     """ProtoTRAK Plus events G100-G109 over RS-232 (seed 003 §2.2)."""
 
     name = "events"
+    label = "ProtoTRAK Plus (events over RS-232)"
+    reads_back = "events"
     description = "ProtoTRAK Plus events G100-G109 (RS-232, seed 003 §2.2)"
     extension = "cnc"
     options = (
@@ -979,11 +841,16 @@ class EventsTarget(Target):
         ),
     )
 
-    def emit(
-        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
-    ) -> bytes:
-        events = build_events(program, toolpath, report)
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        events = build_events(program, path, report)
         check_ranges(events, report)
-        check_events(events, toolpath, report)
+        check_events(events, path, report)
         line_end = "\r\n" if options.get("line_end", "crlf") == "crlf" else "\n"
-        return render(events, line_end).encode("ascii")
+        out.write(render(events, line_end).encode("ascii"))

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 
 from app.cnc.blocks import Block, Circle, Comp, DataBlock0, Frame, HoleOp, Placement, Program
+from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Hole, Segment
 from app.cnc.imports.build import Builder, SetUp, block0, make_program, used_tools
 from app.cnc.imports.common import (
     XY,
@@ -35,7 +36,6 @@ from app.cnc.imports.common import (
     quantize_nm,
     resolution_nm,
 )
-from app.cnc.imports.dxf import Contour, Drawing, DxfNotes, Hole, Segment
 from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, RoutineOp
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.imports.steps import ToolData

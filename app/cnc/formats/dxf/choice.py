@@ -8,7 +8,7 @@ A choice is a contour (which one, where the cut starts, which way round, which s
 tool is on, INSIDE or OUTSIDE when a routine cuts it exactly, the tool) or a group of holes
 (in the order they are to be drilled, made into a BOLT CIR where three or more of one
 diameter are equally spaced). The choices become blocks in the order given, exactly as
-`dxf_blocks` makes them for a whole drawing. The report says what became what, what was
+`blocks.py` makes them for a whole drawing. The report says what became what, what was
 rounded, and what of the drawing was not chosen or could not be read — nothing is left out
 silently.
 
@@ -26,8 +26,8 @@ import svgwrite
 from app.cnc.blocks import Block, BoltCircle, Comp, DataBlock0, Mode, Program
 from app.cnc.imports.build import Builder
 from app.cnc.imports.common import ImportNote
-from app.cnc.imports.dxf import Contour, Drawing, DxfNotes, Segment
-from app.cnc.imports.dxf_blocks import contour_ops, drawing_block0, hole_spec, resolution_half
+from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Segment
+from app.cnc.formats.dxf.blocks import contour_ops, drawing_block0, hole_spec, resolution_half
 from app.cnc.imports.ops import HoleOpR, Op
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence

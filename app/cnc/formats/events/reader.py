@@ -56,7 +56,18 @@ from app.cnc.blocks import (
     Placement,
     Program,
 )
-from app.cnc.emit.events import millblocks_angle
+from app.cnc.formats.events.model import (
+    ARC_CENTRE_WORDS,
+    WORDS,
+    Bolthole,
+    Event,
+    Mill,
+    Position,
+    Repeat,
+    Routine,
+    implied,
+    millblocks_angle,
+)
 from app.cnc.imports.build import Builder, SetUp, block0, make_program
 from app.cnc.imports.common import (
     MAX_ABS_NM,
@@ -84,7 +95,7 @@ from app.cnc.imports.ops import (
 from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import rough_wall, routine_clockwise
-from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_decimal
+from app.cnc.numbers import NUMBER_TEXT, NumberError
 from app.cnc.units import Units
 
 # Two-letter codes first, so `XB` is not read as X followed by B.
@@ -140,69 +151,6 @@ class EBlock:
     column: int
 
 
-# -- the events ---------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class EvPos:
-    line: int
-    at: XY
-    tool: int
-
-
-@dataclass(frozen=True)
-class EvMill:
-    line: int
-    begin: XY
-    end: XY
-    centre: XY | None
-    clockwise: bool
-    tc: int
-    feed: int
-    diameter: int | None
-    conrad: int | None  # None: not connected (CR-)
-    tool: int
-
-
-@dataclass(frozen=True)
-class EvBolt:
-    line: int
-    centre: XY
-    holes: int
-    radius: int
-    angle: Decimal
-    tool: int
-
-
-@dataclass(frozen=True)
-class EvRepeat:
-    line: int
-    first: int
-    last: int
-    offset: XY
-    repeats: int
-    tool: int
-    diameter: int | None
-
-
-@dataclass(frozen=True)
-class EvRoutine:
-    line: int
-    code: int
-    point: XY
-    diagonal: XY | None
-    radius: int
-    clockwise: bool
-    tc: int
-    finish: int
-    feed: int
-    diameter: int | None
-    tool: int
-
-
-Event = EvPos | EvMill | EvBolt | EvRepeat | EvRoutine
-
-
 def read_events(text: str, name: str = "") -> tuple[Program, Notes]:
     """Read an events file. Raises ImportFailure naming line and column."""
     return _Reader(text, name).run()
@@ -210,7 +158,7 @@ def read_events(text: str, name: str = "") -> tuple[Program, Notes]:
 
 @dataclass
 class _Chain:
-    events: list[EvMill] = field(default_factory=list)
+    events: list[Mill] = field(default_factory=list)
 
 
 class _Reader:
@@ -233,7 +181,7 @@ class _Reader:
         self.diameters: dict[int, tuple[int, int]] = {}
         self.ops: list[Op] = []
         self.op_events: list[tuple[int, int]] = []  # (first, last) event of each op; 0: a copy
-        self.chain: list[tuple[int, EvMill]] = []
+        self.chain: list[tuple[int, Mill]] = []
 
     # -- text -----------------------------------------------------------------------------
 
@@ -394,7 +342,7 @@ class _Reader:
         """A dimension, radius, conrad or offset in nm (§2.2.4 implied decimals)."""
         units = self.units_or_fail(block)
         try:
-            value = _implied(word.text, 4 if units is Units.INCH else 2)
+            value = implied(word.text, 4 if units is Units.INCH else 2)
         except NumberError as exc:
             raise failure(block.line, word.column, f"{word.code}{word.text}: {exc}") from None
         nm = int((value * units.nm).to_integral_value(rounding=ROUND_HALF_EVEN))
@@ -436,7 +384,7 @@ class _Reader:
                 block.line, f"no F: {default} {units.feed_symbol}, the manual's default"
             )
             return int(default * units.nm)
-        value = _implied(word.text, 1 if units is Units.INCH else 0)
+        value = implied(word.text, 1 if units is Units.INCH else 0)
         if value <= 0:
             raise failure(block.line, word.column, f"F{word.text}: a feed must be more than 0")
         return int((value * units.nm).to_integral_value())
@@ -522,7 +470,7 @@ class _Reader:
         event: Event
         if g == 100:
             at = self.point(block, "X", "Y", here, here)
-            return EvPos(line, at, self.tool(block)), at
+            return Position(line, at, self.tool(block)), at
         if g in (101, 102, 103):
             begin = self.point(block, "XB", "YB", here, here)
             end = self.point(block, "XE", "YE", begin, begin)
@@ -545,7 +493,7 @@ class _Reader:
                 conrad = None if cr.text == "-" else self.dim(block, cr)
                 if conrad is not None and conrad < 0:
                     conrad = None
-            event = EvMill(
+            event = Mill(
                 line,
                 begin,
                 end,
@@ -568,8 +516,8 @@ class _Reader:
             if radius == 0:
                 raise failure(line, r_word.column, "a bolt circle of radius 0")
             a_word = block.words.get("A")
-            angle = Decimal(0) if a_word is None else _implied(a_word.text, 3)
-            event = EvBolt(line, centre, holes, radius, angle, self.tool(block))
+            angle = Decimal(0) if a_word is None else implied(a_word.text, 3)
+            event = Bolthole(line, centre, holes, radius, angle, self.tool(block))
             last = math.radians(float(angle) + (holes - 1) * 360.0 / holes)
             after = (
                 centre[0] + round(radius * math.cos(last)),
@@ -590,14 +538,14 @@ class _Reader:
             ox = self.dim(block, block.words["XO"]) if "XO" in block.words else 0
             oy = self.dim(block, block.words["YO"]) if "YO" in block.words else 0
             for k in range(first, last + 1):
-                if isinstance(self.events[k - 1], EvRepeat):
+                if isinstance(self.events[k - 1], Repeat):
                     raise failure(
                         line,
                         block.column,
                         f"FE{first} LE{last} takes in the repeat of event {k}: a repeat of a "
                         "repeat is not in the manual",
                     )
-            event = EvRepeat(
+            event = Repeat(
                 line, first, last, (ox, oy), repeats, self.tool(block), self.diameter(block)
             )
             base = self.after[last - 1]
@@ -624,9 +572,10 @@ class _Reader:
         tc = self.integer(block, "TC", 0, 2, default=self.tc)
         self.tc = tc
         finish = self.positive(block, block.words["FC"]) if "FC" in block.words else 0
-        event = EvRoutine(
+        event = Routine(
             line,
-            g,
+            g in (106, 107),
+            g in (106, 108),
             point,
             diagonal,
             radius,
@@ -658,7 +607,7 @@ class _Reader:
         assert self.units is not None
         units = self.units
         for number, event in enumerate(self.events, start=1):
-            if isinstance(event, EvRepeat):
+            if isinstance(event, Repeat):
                 self.close_chain()
                 self.repeat(number, event)
             else:
@@ -690,9 +639,9 @@ class _Reader:
     def take(self, number: int, event: Event, shift: XY) -> None:
         """Event `number` (0 for a copy made by a G105), shifted by `shift`."""
         if shift != (0, 0):
-            event = _shifted(event, shift)
+            event = event.moved(shift)
         self.note_diameter(event)
-        if isinstance(event, EvMill):
+        if isinstance(event, Mill):
             if self.chain and not self.continues(self.chain[-1][1], event):
                 self.close_chain()
             self.chain.append((number, event))
@@ -702,12 +651,12 @@ class _Reader:
         self.close_chain()
         units = self.units
         assert units is not None
-        line = event.line
-        if isinstance(event, EvPos):
+        line = event.source
+        if isinstance(event, Position):
             self.add(PosOp([line], event.at, event.tool, units), number, number)
-        elif isinstance(event, EvBolt):
+        elif isinstance(event, Bolthole):
             self.bolt(number, event)
-        elif isinstance(event, EvRoutine):
+        elif isinstance(event, Routine):
             self.routine(number, event)
 
     def add(self, op: Op, first: int, last: int) -> None:
@@ -715,39 +664,39 @@ class _Reader:
         self.op_events.append((first, last))
 
     def note_diameter(self, event: Event) -> None:
-        if isinstance(event, EvPos | EvBolt):
+        if isinstance(event, Position | Bolthole):
             return
         if event.diameter is None:
             return
         tool = event.tool
         known = self.diameters.get(tool)
         if known is None:
-            self.diameters[tool] = (event.diameter, event.line)
+            self.diameters[tool] = (event.diameter, event.source)
         elif known[0] != event.diameter:
             assert self.units is not None
             self.notes.assumed(
-                event.line,
+                event.source,
                 f"D{show(event.diameter, self.units)} for tool {tool}: Data Block 0 keeps one "
                 f"diameter per tool (D{show(known[0], self.units)} from line {known[1]})",
             )
 
-    def continues(self, previous: EvMill, event: EvMill) -> bool:
+    def continues(self, previous: Mill, event: Mill) -> bool:
         if previous.conrad is None:
             return False
         if event.begin != previous.end:
             self.notes.assumed(
-                event.line,
+                event.source,
                 "the event before is connected (CR not negative) but this one begins "
                 "elsewhere: a new mill sequence",
             )
             return False
         if event.tool != previous.tool:
-            self.notes.assumed(event.line, "another tool: a new mill sequence")
+            self.notes.assumed(event.source, "another tool: a new mill sequence")
             return False
-        if event.tc != previous.tc:
+        if event.comp != previous.comp:
             self.notes.assumed(
-                event.line,
-                f"TC{event.tc} after TC{previous.tc}: MillBlocks sets cutter compensation "
+                event.source,
+                f"TC{event.comp} after TC{previous.comp}: MillBlocks sets cutter compensation "
                 "once per mill sequence, so a new one starts here",
             )
             return False
@@ -760,22 +709,22 @@ class _Reader:
         units = self.units
         assert units is not None
         first = chain[0][1]
-        comp = {0: Comp.NONE, 1: Comp.RIGHT, 2: Comp.LEFT}[first.tc]
-        elements = [Element(e.line, e.end, e.centre, e.clockwise, None, e.feed) for _, e in chain]
+        comp = {0: Comp.NONE, 1: Comp.RIGHT, 2: Comp.LEFT}[first.comp]
+        elements = [Element(e.source, e.end, e.centre, e.clockwise, None, e.feed) for _, e in chain]
         elements = self.fillets(chain, elements)
         last = chain[-1][1]
         if last.conrad:
             self.notes.ignored(
-                last.line,
+                last.source,
                 f"CR{show(last.conrad, units)} after the last event of a contour: no corner "
                 "to round",
             )
         spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, first.tool, units)
-        lines = [e.line for _, e in chain]
+        lines = [e.source for _, e in chain]
         op = MillOp(lines, first.begin, spec, comp, elements, quill_stops=2)
         self.add(op, chain[0][0], chain[-1][0])
 
-    def fillets(self, chain: list[tuple[int, EvMill]], elements: list[Element]) -> list[Element]:
+    def fillets(self, chain: list[tuple[int, Mill]], elements: list[Element]) -> list[Element]:
         """CR > 0 between two connected lines: an arc of that radius between them."""
         units = self.units
         assert units is not None
@@ -790,7 +739,7 @@ class _Reader:
             nxt = elements[k + 1]
             if element.centre is not None or nxt.centre is not None:
                 self.notes.ignored(
-                    event.line,
+                    event.source,
                     f"CR{show(radius, units)} next to an arc: the fillet is not imported, the "
                     "corner stays sharp (MillBlocks rounds a corner only with an ARC block "
                     "between two lines here)",
@@ -800,16 +749,16 @@ class _Reader:
             fillet = _fillet(begin, element.end, nxt.end, radius)
             if fillet is None:
                 self.notes.ignored(
-                    event.line,
+                    event.source,
                     f"CR{show(radius, units)}: the lines are too short for that fillet (or in "
                     "line): the corner stays sharp",
                 )
                 continue
             t1, centre, t2, clockwise = fillet
             out[-1] = replace(element, end=t1)
-            out.append(Element(event.line, t2, centre, clockwise, None, element.feed))
+            out.append(Element(event.source, t2, centre, clockwise, None, element.feed))
             self.notes.became(
-                event.line,
+                event.source,
                 f"CR{show(radius, units)}: the corner X{show(element.end[0], units)} "
                 f"Y{show(element.end[1], units)} rounded by an ARC block of that radius from "
                 f"X{show(t1[0], units)} Y{show(t1[1], units)} to X{show(t2[0], units)} "
@@ -817,7 +766,7 @@ class _Reader:
             )
         return out
 
-    def bolt(self, number: int, event: EvBolt) -> None:
+    def bolt(self, number: int, event: Bolthole) -> None:
         units = self.units
         assert units is not None
         theta = millblocks_angle(event.angle)
@@ -825,39 +774,39 @@ class _Reader:
         if angle >= 360:
             angle -= 360
         if angle != theta:
-            self.builder.log(event.line, f"angle {theta}° → {angle}°")
+            self.builder.log(event.source, f"angle {theta}° → {angle}°")
         spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, event.tool, units)
-        bolt = BoltOp([event.line], event.centre, spec, event.holes, angle, event.radius)
+        bolt = BoltOp([event.source], event.centre, spec, event.holes, angle, event.radius)
         self.add(bolt, number, number)
         if event.holes >= 3:
             self.notes.assumed(
-                event.line,
+                event.source,
                 f"A{event.angle} (counter-clockwise from +X) is a BOLT CIR angle of {angle}° "
                 "(clockwise from below, 270° − A): the same first hole; MillBlocks drills the "
                 f"other {event.holes - 1} clockwise, the Plus counter-clockwise",
             )
 
-    def routine(self, number: int, event: EvRoutine) -> None:
+    def routine(self, number: int, event: Routine) -> None:
         units = self.units
         assert units is not None
-        line = event.line
+        line = event.source
         pocket = event.code in (106, 108)
         rect = event.code in (106, 107)
         b = self.builder
-        if not pocket and event.tc == 0:
+        if not pocket and event.comp == 0:
             self.contour_of(number, event)
             return
         if pocket:
             placement = Placement.POCKET
             expected = 1 if event.clockwise else 2
-            if event.tc not in (0, expected):
+            if event.comp not in (0, expected):
                 self.notes.ignored(
                     line,
-                    f"TC{event.tc} on a pocket cut {_turn(event.clockwise)}: the inside is on "
+                    f"TC{event.comp} on a pocket cut {_turn(event.clockwise)}: the inside is on "
                     "the other side; a pocket is inside by itself (TC not used)",
                 )
         else:
-            inside = (event.tc == 1) == event.clockwise
+            inside = (event.comp == 1) == event.clockwise
             placement = Placement.INSIDE if inside else Placement.OUTSIDE
         two_pass = event.finish > 0
         if two_pass and event.finish != rough_wall(units):
@@ -933,11 +882,11 @@ class _Reader:
             + (" (IN/TAN or OUT/TAN are other choices)" if not pocket else ""),
         )
 
-    def contour_of(self, number: int, event: EvRoutine) -> None:
+    def contour_of(self, number: int, event: Routine) -> None:
         """TC0 on a frame: the tool centre goes round the line itself, a contour."""
         units = self.units
         assert units is not None
-        line = event.line
+        line = event.source
         cw = event.clockwise
         elements: list[Element]
         if event.code == 109:
@@ -979,10 +928,10 @@ class _Reader:
             "side, where MillBlocks starts its routines",
         )
 
-    def repeat(self, number: int, event: EvRepeat) -> None:
+    def repeat(self, number: int, event: Repeat) -> None:
         units = self.units
         assert units is not None
-        line = event.line
+        line = event.source
         # A G105's D is the diameter of its tool (T), as on every other event with D.
         self.note_diameter(event)
         first, last = event.first, event.last
@@ -1015,16 +964,16 @@ class _Reader:
                 shift = (k * event.offset[0], k * event.offset[1])
                 for n in range(first, last + 1):
                     # A copy is reported as made by the G105's line.
-                    self.take(0, replace(self.events[n - 1], line=line), shift)
+                    self.take(0, replace(self.events[n - 1], source=line), shift)
                 self.close_chain()
-        tools = {e.tool for e in self.events[first - 1 : last] if not isinstance(e, EvRepeat)}
+        tools = {e.tool for e in self.events[first - 1 : last] if not isinstance(e, Repeat)}
         if tools != {event.tool}:
             self.notes.ignored(
                 line,
                 f"T{event.tool:02d} on the G105: the repeated events keep their own tools",
             )
 
-    def loop_refusal(self, number: int, event: EvRepeat) -> str | None:
+    def loop_refusal(self, number: int, event: Repeat) -> str | None:
         """Why G105 event `number` cannot be a LOOP/REP (None when it can)."""
         units = self.units
         assert units is not None
@@ -1054,18 +1003,11 @@ class _Reader:
         return None
 
 
+# The words an event may have: N and G, the words the model lists, and I J on an arc.
 _ALLOWED: dict[int, set[str]] = {
-    100: {"N", "G", "X", "Y", "T"},
-    101: {"N", "G", "XB", "YB", "XE", "YE", "TC", "F", "D", "CR", "T"},
-    102: {"N", "G", "XB", "YB", "XE", "YE", "XC", "YC", "I", "J", "TC", "F", "D", "CR", "T"},
-    104: {"N", "G", "XC", "YC", "HL", "R", "A", "T"},
-    105: {"N", "G", "FE", "LE", "XO", "YO", "RE", "D", "T"},
-    106: {"N", "G", "XB", "YB", "XD", "YD", "DR", "TC", "FC", "F", "D", "CR", "T"},
-    108: {"N", "G", "XC", "YC", "R", "DR", "TC", "FC", "F", "D", "T"},
+    g: {"N", "G", *words, *(ARC_CENTRE_WORDS if g in (102, 103) else ())}
+    for g, words in WORDS.items()
 }
-_ALLOWED[103] = _ALLOWED[102]
-_ALLOWED[107] = _ALLOWED[106]
-_ALLOWED[109] = _ALLOWED[108]
 
 
 def _g(block: EBlock) -> int | None:
@@ -1085,35 +1027,10 @@ def _has_event(text: str) -> bool:
     return re.search(r"G\s*10[0-9](?![0-9])", text.upper()) is not None
 
 
-def _implied(text: str, places: int) -> Decimal:
-    """§2.2.4: with a point the number is as written, without one it has `places` decimals."""
-    value = parse_decimal(text, exponent=False)
-    if "." in text:
-        return value
-    return value.scaleb(-places)
-
-
 def _tools(op: Op) -> set[int]:
     if isinstance(op, LoopOp):
         return {t for body in op.body for t in _tools(body)}
     return {tool_of(op)}
-
-
-def _shifted(event: Event, shift: XY) -> Event:
-    def mv(p: XY) -> XY:
-        return (p[0] + shift[0], p[1] + shift[1])
-
-    if isinstance(event, EvPos):
-        return replace(event, at=mv(event.at))
-    if isinstance(event, EvMill):
-        centre = None if event.centre is None else mv(event.centre)
-        return replace(event, begin=mv(event.begin), end=mv(event.end), centre=centre)
-    if isinstance(event, EvBolt):
-        return replace(event, centre=mv(event.centre))
-    if isinstance(event, EvRoutine):
-        diagonal = None if event.diagonal is None else mv(event.diagonal)
-        return replace(event, point=mv(event.point), diagonal=diagonal)
-    return event
 
 
 def _fillet(a: XY, corner: XY, c: XY, radius: int) -> tuple[XY, XY, XY, bool] | None:

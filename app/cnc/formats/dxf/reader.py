@@ -37,6 +37,7 @@ from ezdxf.lldxf.const import DXFError
 from ezdxf.lldxf.tagger import binary_tags_loader
 
 from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
+from app.cnc.options import Option, OptionKind
 from app.cnc.units import Units
 
 BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
@@ -50,7 +51,32 @@ INSUNITS: dict[int, tuple[int, Units, str]] = {
     6: (1_000_000_000, Units.MM, "metres"),
 }
 DEFAULT_TOLERANCE = {Units.INCH: 2_540, Units.MM: 2_000}  # nm: 0.0001 in, 0.002 mm
-OPTIONS = ("layer", "hole-diameter", "tolerance", "units", "drawing-units", "feed")
+OPTIONS: tuple[Option, ...] = (
+    Option("layer", OptionKind.TEXT, "", "only these layers (comma-separated); empty: all"),
+    Option(
+        "hole-diameter",
+        OptionKind.DECIMAL,
+        None,
+        "circles this size or smaller are holes (program units); empty: none",
+    ),
+    Option("tolerance", OptionKind.DECIMAL, None, "ends this close are chained"),
+    Option(
+        "units",
+        OptionKind.CHOICE,
+        "",
+        "the program's units; empty: the drawing's",
+        ("", "inch", "mm"),
+    ),
+    Option(
+        "drawing-units",
+        OptionKind.CHOICE,
+        "",
+        "what a drawing without units is in; empty: refuse it",
+        ("", "inch", "mm"),
+    ),
+    Option("feed", OptionKind.DECIMAL, None, "FEEDR XY of the mill blocks"),
+)
+NAMES = tuple(option.name for option in OPTIONS)
 
 
 @dataclass(frozen=True)
@@ -166,10 +192,10 @@ def parse_options(options: Mapping[str, str]) -> DxfOptions:
     """Reader options from text (`layer=A,B`, `hole-diameter=0.5`, `tolerance=0.0002`,
     `units=inch|mm`, `drawing-units=inch|mm`, `feed=10`). Raises ImportFailure for an
     unknown option or a bad value."""
-    unknown = sorted(set(options) - set(OPTIONS))
+    unknown = sorted(set(options) - set(NAMES))
     if unknown:
         raise ImportFailure(
-            "", f"dxf import has no option {unknown[0]!r}; its options: {', '.join(OPTIONS)}"
+            "", f"dxf import has no option {unknown[0]!r}; its options: {', '.join(NAMES)}"
         )
     return DxfOptions(
         layers=tuple(x.strip() for x in options.get("layer", "").split(",") if x.strip()),

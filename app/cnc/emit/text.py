@@ -1,0 +1,82 @@
+"""What every text target shares: lengths written from integers, and lines written out as
+they are made.
+
+`Lengths` writes nanometres with fixed decimals in a unit, rounding half-even exactly as
+`units.format_length` does, but from integers: a column of a chunk (numpy) is rounded at
+once and each distinct value is formatted once. `Lines` batches text lines into a binary
+stream, so a writer's memory holds a few thousand lines, never the file.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import numpy.typing as npt
+
+from app.cnc.emit.target import Out
+from app.cnc.units import Units
+
+
+class Lengths:
+    """Lengths (nm) in `units` with `places` decimals (default: the unit's dump places,
+    0.0001 in and 0.001 mm), rounded half-even: `1.2500`, `-0.0010`, `0.0000` (no sign on
+    a zero)."""
+
+    def __init__(self, units: Units, places: int | None = None) -> None:
+        self.places = units.dump_places if places is None else places
+        self.step = units.nm // 10**self.places  # nm in one unit of the last decimal
+        assert self.step * 10**self.places == units.nm, "a decimal the unit cannot hold"
+        self.one = lru_cache(maxsize=1 << 14)(self._one)
+
+    def digits(self, nm: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+        """`nm` in units of the last decimal, rounded half-even."""
+        step = self.step
+        q = nm // step
+        twice = 2 * (nm - q * step)
+        up = (twice > step) | ((twice == step) & (q % 2 == 1))
+        rounded: npt.NDArray[np.int64] = q + up
+        return rounded
+
+    def _one(self, nm: int) -> str:
+        q, r = divmod(nm, self.step)
+        if 2 * r > self.step or (2 * r == self.step and q % 2):
+            q += 1
+        return self.text(q)
+
+    def text(self, digits: int) -> str:
+        """A value in units of the last decimal as text."""
+        scale = 10**self.places
+        whole, part = divmod(abs(digits), scale)
+        sign = "-" if digits < 0 else ""
+        return f"{sign}{whole}.{part:0{self.places}d}"
+
+    def many(self, nm: npt.NDArray[np.int64]) -> list[str]:
+        """A column of lengths as text, each distinct value formatted once."""
+        if not len(nm):
+            return []
+        values, where = np.unique(self.digits(nm), return_inverse=True)
+        texts = np.array([self.text(v) for v in values.tolist()], dtype=object)
+        result: list[str] = texts[where].tolist()
+        return result
+
+
+class Lines:
+    """Text lines written to `out` in batches, each ended by `end`, encoded as `encoding`."""
+
+    def __init__(self, out: Out, end: str = "\n", encoding: str = "ascii") -> None:
+        self.out = out
+        self.end = end
+        self.encoding = encoding
+        self.pending: list[str] = []
+
+    def add(self, text: str) -> None:
+        self.pending.append(text)
+        if len(self.pending) >= 4096:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.pending:
+            text = self.end.join(self.pending) + self.end
+            self.out.write(text.encode(self.encoding))
+            self.pending = []

@@ -1,0 +1,69 @@
+"""The MillBlocks program document (JSON, docs/program-format.md) as a format.
+
+Its model, reader and writer are app/cnc/document.py (the library stores programs in it
+and the editor owns it); this package offers it to the two registries: the `json` target
+writes the program itself (not its tool path), the `json` importer reads a document back
+with its executed or cancelled COPY blocks carried out.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from app.cnc import document
+from app.cnc.blocks import Program
+from app.cnc.copy import CopyError, resolve_copies
+from app.cnc.emit.target import Out, Report, Target, register
+from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind, decode_text
+from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.path import CompiledPath
+
+
+@register
+class JsonTarget(Target):
+    name = "json"
+    label = "MillBlocks program (JSON)"
+    description = "MillBlocks program document (docs/program-format.md)"
+    extension = "json"
+    media_type = "application/json"
+    reads_back = "json"
+
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        out.write(document.dumps(program).encode("utf-8"))
+
+
+@register_importer
+class JsonImporter(Importer):
+    name = "json"
+    label = "a MillBlocks program"
+    description = "a MillBlocks program (JSON)"
+    rank = 10
+
+    def sniff(self, content: Content) -> Sniff | None:
+        text = content.text
+        if text is not None and text.lstrip().startswith("{"):
+            return Sniff(Strength.SIGNATURE, "a JSON document")
+        return None
+
+    def read(
+        self, data: bytes, name: str, options: Mapping[str, str]
+    ) -> tuple[Program, list[ImportNote]]:
+        text = decode_text(data)
+        try:
+            program = document.loads(text)
+        except document.DocumentError as exc:
+            raise ImportFailure(exc.where, exc.message) from None
+        try:
+            program = resolve_copies(program)
+        except CopyError as exc:
+            raise ImportFailure(f"block {exc.block}", exc.message) from None
+        note = ImportNote(NoteKind.BECAME, None, "a MillBlocks program document, as written")
+        return program, [note]

@@ -1,0 +1,40 @@
+"""ProtoTRAK Plus events G100-G109 (seed 003 §2.2): the Plus's RS-232 program format.
+
+model.py declares the events once (their fields, words and numbers); reader.py reads a
+file into events and then into a 2-axis program; writer.py makes events from a program's
+blocks, checks them against its tool path and writes the file.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+
+from app.cnc.blocks import Program
+from app.cnc.formats.events import writer
+from app.cnc.formats.events.reader import read_events
+from app.cnc.imports.common import ImportNote, decode_text
+from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+
+__all__ = ["EventsImporter", "writer"]
+
+# A G100-G109 word (seed 003 §2.2.1): no G-code or tape has those.
+_EVENT = re.compile(r"(?<![A-Z0-9.])G10[0-9](?![0-9.])", re.IGNORECASE)
+
+
+@register_importer
+class EventsImporter(Importer):
+    name = "events"
+    label = "ProtoTRAK Plus events"
+    description = "ProtoTRAK Plus events (G100-G109)"
+    rank = 20
+
+    def sniff(self, content: Content) -> Sniff | None:
+        found = _EVENT.search(content.plain)
+        return None if found is None else Sniff(Strength.CONTENT, f"the event {found.group()}")
+
+    def read(
+        self, data: bytes, name: str, options: Mapping[str, str]
+    ) -> tuple[Program, list[ImportNote]]:
+        program, notes = read_events(decode_text(data), name)
+        return program, notes.report()

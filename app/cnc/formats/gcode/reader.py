@@ -1,0 +1,1008 @@
+"""RS274/NGC and Fanuc G-code, read into motion (then recognised as data blocks).
+
+The codes are those of seed 003's RS274/NGC (LinuxCNC) and Fanuc tables, executed in
+LinuxCNC's order within a block (feed, speed, tool, spindle, dwell, plane, units,
+compensation, tool length, coordinates, distance mode, return mode, G10/G28/G92, motion,
+stop). Readings where the dialects differ or the seed is vague (docs/imports.md):
+
+- **No G20/G21** in the file: inches (seed 003's Fanuc samples have none and are inch),
+  reported.
+- **`;`** ends a block (the ProtoTRAK "modified Fanuc 6", §2.1 rule 3); text after it on the
+  same line is a comment (LinuxCNC), reported when there is any.
+- **G45 Hn Z…** (Fanuc "tool offset increase"; §2.2.6.1-2 use it to bring each tool down):
+  tool n's length offset taken up, then a move to the given axes in the current motion
+  mode, as `G43 Hn` and a move would. G46-G48 need offset values the file lacks: refused.
+- **Which tool**: M6 changes to the selected T; a G43/G45 H after it names the tool (a
+  length offset belongs to its tool) — §2.2.6.1 writes T1 on every line, H1, H2, H3.
+- **G92** before any motion says where part zero is (the tool's start); a later one shifts
+  the coordinates, and the shift is carried into the imported (part) coordinates.
+- **G28/G30** with axis words: the tool goes to the intermediate point (imported as a
+  move); the return on to the machine's home, which the file does not give, is not.
+- **G04 P**: seconds (LinuxCNC); in a Fanuc-style `G04 P800` (two-digit code, no point)
+  milliseconds. G04 X: seconds.
+- A **canned cycle left on by a G00/G01** that only moves in X/Y is refused: RS274 ends the
+  cycle there (no hole), while a ProtoTRAK post writing its modal code on every line
+  (§2.1 rule 1, §2.2.6.2 N6-N9) means a hole — the file cannot say which.
+- Unknown G and M codes are listed with their line and not imported; codes that change the
+  motion in ways MillBlocks cannot hold (G33, G38, G53, G93, G95, rotary axes,
+  subroutines, parameters) are refused, naming line and column.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from decimal import Decimal
+
+from app.cnc.imports.common import (
+    MAX_ABS_NM,
+    Notes,
+    arc_end_off,
+    check_digits,
+    failure,
+    show,
+)
+from app.cnc.imports.steps import (
+    Arc,
+    Coolant,
+    Cycle,
+    Dwell,
+    End,
+    Feed,
+    Message,
+    Parsed,
+    Rapid,
+    SpindleOff,
+    SpindleOn,
+    Step,
+    Stop,
+    ToolChange,
+    ToolData,
+)
+from app.cnc.numbers import NUMBER_TEXT
+from app.cnc.units import Units
+
+NUMBER = re.compile(NUMBER_TEXT)
+SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
+PAIR = re.compile(rf"([A-Za-z])({NUMBER_TEXT})")
+MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
+HEADER = re.compile(r"^(.*) PART ([0-9]{1,8}|-) MILLBLOCKS$")
+# MillBlocks' set-up comments (emit/gcode.py): part zero and each tool's diameter and length.
+SETUP_ZERO = re.compile(
+    r"^SET-UP: G0?54 = PART ZERO AT TABLE X(-?\d+\.\d+) Y(-?\d+\.\d+)$", re.ASCII
+)
+SETUP_TOOL = re.compile(
+    r"^SET-UP: T(\d{1,2})(?: DIA (\d+\.\d+))? LENGTH H\d+"
+    r"(?: = (-?\d+\.\d+), ITS TCAL|: UNCALIBRATED, MEASURE IT)$",
+    re.ASCII,
+)
+
+# LinuxCNC's modal groups (one code of each per block), seed 003 Table 5 plus Fanuc's.
+MODAL_GROUPS: dict[str, set[str]] = {
+    "motion": {"0", "1", "2", "3", "33", "38.2", "73", "74", "76", "80", "81", "82", "83"}
+    | {"84", "85", "86", "87", "88", "89"},
+    "plane": {"17", "18", "19"},
+    "distance": {"90", "91"},
+    "arc distance": {"90.1", "91.1"},
+    "feed mode": {"93", "94", "95"},
+    "units": {"20", "21"},
+    "cutter compensation": {"40", "41", "42", "41.1", "42.1"},
+    "tool length": {"43", "43.1", "44", "49"},
+    "return mode": {"98", "99"},
+    "coordinate system": {"54", "55", "56", "57", "58", "59", "59.1", "59.2", "59.3"},
+    "path control": {"61", "61.1", "64"},
+    "non-modal": {"4", "10", "28", "30", "45", "46", "47", "48", "53", "92", "92.1", "92.2"}
+    | {"92.3"},
+}
+GROUP_OF = {code: group for group, codes in MODAL_GROUPS.items() for code in codes}
+CYCLES = {"73", "74", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89"}
+# Codes of seed 003's tables that change the motion in ways a data-block program cannot hold.
+REFUSED_G = {
+    "33": "thread cutting",
+    "38.2": "probing",
+    "41.1": "dynamic cutter compensation",
+    "42.1": "dynamic cutter compensation",
+    "43.1": "dynamic tool length",
+    "44": "negative tool length offset",
+    "46": "tool offset decrease (the offset value is not in the file)",
+    "47": "tool offset double increase (the offset value is not in the file)",
+    "48": "tool offset double decrease (the offset value is not in the file)",
+    "53": "a move in machine coordinates (not related to part zero in the file)",
+    "93": "inverse time feed",
+    "95": "feed per revolution",
+    "7": "imaginary axis designation",
+    "22": "",
+    "29": "return from the reference point (its position is not in the file)",
+    "31": "skip cutting",
+    "50": "",
+    "51": "scaling",
+    "52": "a local coordinate system",
+    "65": "macro call",
+    "66": "macro call",
+    "68": "coordinate rotation",
+}
+NOTED_G = {
+    "17": "",
+    "22": "stored stroke limit on: not carried",
+    "23": "stored stroke limit off: not carried",
+    "27": "reference point return check: not carried",
+    "40": "",
+    "49": "tool length offset cancelled: Z is then the spindle's, MillBlocks' Z is the tool's",
+    "50": "scaling off: nothing to import",
+    "54": "",
+    "60": "single direction positioning: not carried",
+    "61": "exact path mode: not carried (MillBlocks has no path control)",
+    "61.1": "exact stop mode: not carried",
+    "64": "continuous mode: not carried",
+    "67": "macro modal call cancel: nothing to import",
+    "69": "coordinate rotation off: nothing to import",
+    "80": "",
+    "94": "",
+    "96": "constant surface speed: not carried",
+    "97": "constant surface speed cancel: not carried",
+}
+NOTED_M = {
+    "48": "feed and speed overrides on: not carried",
+    "49": "feed and speed overrides off: not carried",
+    "60": "pallet shuttle and stop: not carried",
+}
+REFUSED_M = {"98": "a subprogram call", "99": "a subprogram return"}
+AXES = ("X", "Y", "Z")
+ALLOWED = set("XYZIJKRFSTMGNPQLHDO")
+LETTER_HINT = {
+    "A": "a rotary axis",
+    "B": "a rotary axis",
+    "C": "a rotary axis",
+    "U": "a secondary axis",
+    "V": "a secondary axis",
+    "W": "a secondary axis",
+}
+
+
+@dataclass
+class Word:
+    """A letter and its number as written, and the column the letter is in."""
+
+    letter: str
+    text: str
+    column: int
+    value: Decimal = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.value = Decimal(self.text)
+
+    @property
+    def code(self) -> str:
+        """A G or M code's number as written in the tables (`0`, `92.1`)."""
+        value = self.value
+        if value == value.to_integral_value():
+            return str(int(value))
+        return format(value.normalize(), "f")
+
+
+@dataclass
+class Block:
+    line: int
+    words: list[Word]
+    comment: str = ""
+    gs: list[Word] = field(default_factory=list)
+    ms: list[Word] = field(default_factory=list)
+    other: dict[str, Word] = field(default_factory=dict)
+
+    def has(self, letter: str) -> bool:
+        return letter in self.other
+
+    def get(self, letter: str) -> Word | None:
+        return self.other.get(letter)
+
+
+def parse_gcode(text: str, name: str = "") -> Parsed:
+    """Read G-code text. Raises ImportFailure naming line and column of the first problem."""
+    return _Reader(text, name).run()
+
+
+class _Reader:
+    def __init__(self, text: str, name: str) -> None:
+        self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        self.notes = Notes()
+        self.steps: list[Step] = []
+        self.name = ""
+        self.part_number = ""
+        self.fallback_name = name
+        # modal state
+        self.units: Units | None = None
+        self.program_units: Units | None = None
+        self.units_assumed = False
+        self.motion: str | None = None
+        self.cycle_drilled = False  # the last motion block drilled with a canned cycle
+        self.incremental = False
+        self.arc_absolute = False
+        self.plane = "17"
+        self.comp = ""
+        self.return_initial = True
+        self.feed: int | None = None
+        self.speed: int | None = None
+        self.spindle: bool | None = None  # True clockwise, False counter-clockwise
+        self.selected_tool: int | None = None
+        self.tool = 0
+        self.initial_tool = 0
+        # (line, T, index of its ToolChange step) of an M6 that no cut has confirmed yet
+        self.change_pending: tuple[int, int, int] | None = None
+        self.moved = False
+        self.x: int | None = None
+        self.y: int | None = None
+        self.z: int | None = None
+        self.shift = [0, 0, 0]
+        self.cycle_r: int | None = None
+        self.cycle_z: int | None = None
+        self.cycle_q: int | None = None
+        self.cycle_p: Decimal | None = None
+        self.decimals = 0
+        self.offsets: tuple[int, int] | None = None
+        self.tools: dict[int, ToolData] = {}
+        self.active_length = 0  # nm: the tool length offset in effect (G43 H: the TCAL)
+        self.start_z: int | None = None
+        self.percent = 0
+        self.ended_at: int | None = None
+
+    # -- the file -------------------------------------------------------------------------
+
+    def run(self) -> Parsed:
+        for number, raw in enumerate(self.lines, start=1):
+            if self.percent >= 2 or self.ended_at is not None:
+                if raw.strip() and raw.strip() != "%":
+                    where = "the closing %" if self.percent >= 2 else "the program end"
+                    self.notes.ignored(number, f"after {where}: not imported")
+                continue
+            block = self.read_line(number, raw)
+            if block is not None:
+                self.execute(block)
+        units = self.program_units or Units.INCH
+        if self.units_assumed:
+            self.notes.assumed(None, "no G20/G21 before the first dimension: read in inches")
+        if self.tool == 0 and self.steps:
+            self.notes.assumed(None, "the file names no tool: tool 1")
+            self.initial_tool = 1
+        places = max(self.decimals, 4 if units is Units.INCH else 3)
+        tolerance = max(1, round(Decimal(units.nm) / (2 * 10**places)))
+        return Parsed(
+            format="gcode",
+            units=units,
+            steps=self.steps,
+            notes=self.notes,
+            tolerance=tolerance,
+            name=self.name or self.fallback_name,
+            part_number=self.part_number,
+            offsets=self.offsets,
+            tools=self.tools,
+            initial_tool=self.initial_tool,
+            start_z=self.start_z,
+        )
+
+    def read_line(self, number: int, raw: str) -> Block | None:
+        """Split one line into words and comments. Returns None for a line with no words."""
+        line = raw.rstrip()
+        stripped = line.lstrip()
+        if not stripped:
+            return None
+        pos = len(line) - len(stripped)
+        if stripped.startswith("%"):
+            self.percent += 1
+            label = stripped[1:].strip().lstrip(":").rstrip(";").strip()
+            if label and self.percent == 1:
+                self.name = label
+                self.notes.became(number, f"program label {label!r}: the program name")
+            return None
+        if stripped.startswith("/"):
+            self.notes.assumed(
+                number, "block delete (/): imported as run (the block-delete switch off)"
+            )
+            pos += 1
+        words: list[Word] = []
+        comments: list[str] = []
+        n = len(line)
+        if SIMPLE.fullmatch(line, pos):
+            # Only words (the usual line): read them in one go.
+            for match in PAIR.finditer(line, pos):
+                letter = match.group(1).upper()
+                if letter in LETTER_HINT or letter == "O" or letter not in ALLOWED:
+                    break  # the careful reader below says what is wrong
+                digits = match.group(2).lstrip("+-").replace(".", "")
+                if not check_digits(digits):
+                    break
+                words.append(Word(letter, match.group(2), match.start() + 1))
+            else:
+                pos = n
+            if pos != n:
+                words = []
+        while pos < n:
+            ch = line[pos]
+            if ch in " \t":
+                pos += 1
+            elif ch == "(":
+                close = line.find(")", pos)
+                if close < 0:
+                    raise failure(number, pos + 1, "comment not closed: '(' without ')'")
+                comments.append(line[pos + 1 : close].strip())
+                pos = close + 1
+            elif ch == ";":
+                rest = line[pos + 1 :].strip()
+                if rest:
+                    comments.append(rest)
+                    self.notes.assumed(number, f"text after ';' read as a comment: {rest!r}")
+                break
+            elif ch.isascii() and ch.isalpha():
+                pos = self.word(number, line, pos, words)
+            elif ch in "#[":
+                raise failure(number, pos + 1, "parameters and expressions are not supported")
+            else:
+                raise failure(number, pos + 1, f"unexpected character {ch!r}")
+        for comment in comments:
+            if comment.upper().startswith("MSG,"):
+                self.steps.append(Message(number, comment[4:].strip()))
+            elif comment.startswith("SET-UP: "):
+                self.setup_comment(number, comment)
+        if not words:
+            if comments and not self.name and not self.moved and not self.steps:
+                self.title(number, comments[0])
+            return None
+        block = Block(number, words, " ".join(comments))
+        for word in words:
+            if word.letter == "G":
+                block.gs.append(word)
+            elif word.letter == "M":
+                block.ms.append(word)
+            elif word.letter in block.other:
+                first = block.other[word.letter]
+                raise failure(
+                    number,
+                    word.column,
+                    f"{word.letter} given twice in one block ({first.letter}{first.text} and "
+                    f"{word.letter}{word.text})",
+                )
+            else:
+                block.other[word.letter] = word
+        return block
+
+    def word(self, number: int, line: str, pos: int, words: list[Word]) -> int:
+        """Read the word at `pos` into `words`; returns where the next one may start."""
+        ch = line[pos]
+        letter = ch.upper()
+        if letter in LETTER_HINT:
+            raise failure(
+                number, pos + 1, f"{letter}: {LETTER_HINT[letter]}; MillBlocks has X, Y, Z"
+            )
+        match = NUMBER.match(line, pos + 1)
+        if letter == "O":
+            rest = line[match.end() :].strip() if match else ""
+            if words or match is None or re.match(r"[A-Za-z]{2,}", rest):
+                raise failure(number, pos + 1, "O-word subroutines are not supported")
+            self.notes.ignored(number, f"program number O{match.group()}: not carried")
+            return match.end()
+        if letter not in ALLOWED:
+            raise failure(number, pos + 1, f"'{ch}' is not a G-code word letter")
+        if match is None:
+            after = line[pos + 1 : pos + 4]
+            if after[:1] in ("#", "["):
+                raise failure(number, pos + 2, "parameters and expressions are not supported")
+            hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
+            raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
+        digits = match.group().lstrip("+-").replace(".", "")
+        if not check_digits(digits):
+            raise failure(number, pos + 2, f"{letter}{match.group()}: too many digits")
+        words.append(Word(letter, match.group(), pos + 1))
+        return match.end()
+
+    def title(self, number: int, comment: str) -> None:
+        match = HEADER.match(comment)
+        if match:
+            self.name = match.group(1).strip()
+            if match.group(2) != "-":
+                self.part_number = match.group(2)
+            self.notes.became(number, "the MillBlocks header comment: program name and part number")
+        else:
+            self.name = comment
+            self.notes.became(number, f"comment {comment!r}: the program name")
+
+    # -- numbers --------------------------------------------------------------------------
+
+    def length(self, word: Word, block: Block) -> int:
+        """A dimension word in nm (in the current units)."""
+        units = self.current_units()
+        if "." in word.text:
+            self.decimals = max(self.decimals, len(word.text.split(".")[1]))
+        nm = int((word.value * units.nm).to_integral_value())
+        if abs(nm) > MAX_ABS_NM:
+            raise failure(block.line, word.column, f"{word.letter}{word.text} is out of range")
+        return nm
+
+    def current_units(self) -> Units:
+        if self.units is None:
+            self.units = Units.INCH
+            self.program_units = self.program_units or Units.INCH
+            self.units_assumed = True
+        return self.units
+
+    def integer(self, word: Word, block: Block, low: int, high: int) -> int:
+        value = word.value
+        if value != value.to_integral_value() or not low <= value <= high:
+            raise failure(
+                block.line,
+                word.column,
+                f"{word.letter}{word.text}: a whole number from {low} to {high} is needed",
+            )
+        return int(value)
+
+    # -- a block ----------------------------------------------------------------------------
+
+    def execute(self, block: Block) -> None:
+        codes = self.g_codes(block)
+        m_codes = [(m, m.code) for m in block.ms]
+        line = block.line
+        for word, code in m_codes:
+            if code in REFUSED_M:
+                raise failure(line, word.column, f"M{code}: {REFUSED_M[code]} is not supported")
+        f = block.get("F")
+        if f is not None and "4" not in codes:
+            if f.value <= 0:
+                raise failure(line, f.column, f"F{f.text}: a feed must be more than 0")
+            self.feed = self.rate(f)
+        s = block.get("S")
+        if s is not None:
+            self.speed = self.integer(s, block, 0, 100_000)
+            if self.spindle is not None and not any(c in ("3", "4", "5") for _, c in m_codes):
+                self.steps.append(SpindleOn(line, self.speed, self.spindle))
+        t = block.get("T")
+        if t is not None:
+            self.selected_tool = self.integer(t, block, 0, 999)
+        if any(c == "6" for _, c in m_codes):
+            if self.selected_tool is None:
+                self.notes.assumed(line, "M6 with no T selected: the same tool stays")
+            else:
+                self.steps.append(ToolChange(line, self.selected_tool))
+                self.change_pending = (line, self.selected_tool, len(self.steps) - 1)
+                self.tool = self.selected_tool
+        for _, code in m_codes:
+            if code in ("3", "4"):
+                self.spindle = code == "3"
+                self.steps.append(SpindleOn(line, self.speed, self.spindle))
+            elif code == "5":
+                self.spindle = None
+                self.steps.append(SpindleOff(line))
+            elif code in ("7", "8", "9"):
+                mode = {"7": "mist", "8": "flood", "9": "off"}[code]
+                self.steps.append(Coolant(line, mode))
+            elif code in NOTED_M:
+                self.notes.ignored(line, f"M{code}: {NOTED_M[code]}")
+            elif code not in ("0", "1", "2", "30", "6"):
+                self.notes.ignored(line, f"M{code}: not a code MillBlocks knows; not imported")
+        uses_axes = False  # a code on the line takes the axis words: no move
+        if "4" in codes:
+            self.dwell(block, codes["4"])
+            uses_axes = block.has("X") and not block.has("P")  # Fanuc G04 X is the time
+        self.modes(block, codes)
+        if "10" in codes:
+            self.g10(block)
+            uses_axes = True
+        for code in ("28", "30"):
+            if code in codes:
+                self.home(block, code)
+                uses_axes = True
+        if "92" in codes:
+            self.g92(block)
+            uses_axes = True
+        for code in ("92.1", "92.2"):
+            if code in codes:
+                self.shift = [0, 0, 0]
+                self.notes.assumed(line, f"G{code}: the G92 shift is cancelled")
+        if "92.3" in codes:
+            self.notes.ignored(line, "G92.3: restoring a stored G92 shift is not supported")
+        motion_word = next((codes[c] for c in codes if GROUP_OF.get(c) == "motion"), None)
+        if motion_word is not None:
+            self.set_motion(block, motion_word, uses_axes)
+        if any(block.has(a) for a in AXES) and not uses_axes:
+            self.move(block)
+        self.unused(block, codes)
+        for _, code in m_codes:
+            if code in ("0", "1"):
+                self.steps.append(Stop(line, code == "1", block.comment))
+            elif code in ("2", "30"):
+                self.steps.append(End(line))
+                self.ended_at = line
+                self.notes.became(line, f"M{code}: the end of the program")
+
+    def modes(self, block: Block, codes: dict[str, Word]) -> None:
+        """Plane, units, compensation, tool length, coordinate system, distance, return."""
+        line = block.line
+        for code in ("17", "18", "19"):
+            if code in codes:
+                self.plane = code
+                if code != "17":
+                    self.notes.ignored(
+                        line,
+                        f"G{code} selects the {'XZ' if code == '18' else 'YZ'} plane; "
+                        "MillBlocks cuts arcs in XY only (an arc while it is on is refused)",
+                    )
+        for code in ("20", "21"):
+            if code in codes:
+                self.units = Units.INCH if code == "20" else Units.MM
+                if self.program_units is None:
+                    self.program_units = self.units
+                    u = self.units
+                    self.notes.became(
+                        line,
+                        f"G{code}: the program and every block are {u.value} (numbers finer "
+                        f"than {u.resolution} {u.symbol} are rounded, each reported)",
+                    )
+                elif self.units is not self.program_units:
+                    self.notes.assumed(
+                        line,
+                        f"units change to {self.units.value}: the blocks from here are "
+                        f"{self.units.value} blocks",
+                    )
+        if "40" in codes:
+            self.comp = ""
+        for code, side in (("41", "left"), ("42", "right")):
+            if code in codes:
+                self.comp = side
+        for code in ("43", "45"):
+            if code in codes:
+                self.length_offset(block, code)
+                self.apply_length(block.get("H"), block)
+        if "49" in codes:
+            self.apply_length(None, block)
+        for code in ("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"):
+            if code in codes:
+                self.notes.assumed(
+                    line,
+                    f"G{code}: coordinates read as part coordinates (its offsets are not in "
+                    "the file)",
+                )
+        if "90" in codes:
+            self.incremental = False
+        if "91" in codes:
+            self.incremental = True
+        if "90.1" in codes:
+            self.arc_absolute = True
+        if "91.1" in codes:
+            self.arc_absolute = False
+        if "98" in codes:
+            self.return_initial = True
+        if "99" in codes:
+            self.return_initial = False
+        for code in codes:
+            if NOTED_G.get(code):
+                self.notes.ignored(line, f"G{code}: {NOTED_G[code]}")
+
+    def set_motion(self, block: Block, word: Word, uses_axes: bool) -> None:
+        new = word.code
+        if (
+            self.cycle_drilled
+            and new in ("0", "1")
+            and not uses_axes
+            and not block.has("Z")
+            and (block.has("X") or block.has("Y"))
+        ):
+            raise failure(
+                block.line,
+                word.column,
+                f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it ends "
+                "the cycle, so no hole is drilled here; a ProtoTRAK post that writes its G "
+                "code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is meant "
+                "cannot be told: remove the G code to drill here, or put G80 before the line "
+                "to only move",
+            )
+        self.motion = new
+        if new not in CYCLES:
+            self.cycle_drilled = False
+
+    def g_codes(self, block: Block) -> dict[str, Word]:
+        codes: dict[str, Word] = {}
+        groups: dict[str, Word] = {}
+        for word in block.gs:
+            code = word.code
+            if REFUSED_G.get(code):
+                raise failure(
+                    block.line, word.column, f"G{code}: {REFUSED_G[code]} is not supported"
+                )
+            group = GROUP_OF.get(code)
+            if group is None and code not in NOTED_G:
+                self.notes.ignored(
+                    block.line, f"G{code}: not a code MillBlocks knows; not imported"
+                )
+                continue
+            if group is not None and group != "non-modal":
+                if group in groups:
+                    other = groups[group]
+                    raise failure(
+                        block.line,
+                        word.column,
+                        f"G{other.code} and G{code} in one block are both {group} codes",
+                    )
+                groups[group] = word
+            codes[code] = word
+        return codes
+
+    def unused(self, block: Block, codes: dict[str, Word]) -> None:
+        used = {"N", "F", "S", "T", "X", "Y", "Z"}
+        if self.motion in ("2", "3") or self.motion in CYCLES:
+            used |= {"I", "J", "R", "Q", "P", "L"}
+        if "4" in codes:
+            used |= {"P", "X"}
+        if "10" in codes:
+            used |= {"L", "P", "R"}
+        if "43" in codes or "45" in codes:
+            used.add("H")
+        if "41" in codes or "42" in codes:
+            used.add("D")
+        for letter, word in block.other.items():
+            if letter not in used:
+                self.notes.ignored(block.line, f"{letter}{word.text}: no code on the line uses it")
+
+    # -- tools and set-up -------------------------------------------------------------------
+
+    def length_offset(self, block: Block, code: str) -> None:
+        h = block.get("H")
+        line = block.line
+        if h is None:
+            self.notes.assumed(line, f"G{code} without H: the tool in the spindle")
+            return
+        number = self.integer(h, block, 0, 999)
+        if code == "45":
+            self.notes.assumed(
+                line,
+                f"G45 H{number} (Fanuc: tool offset increase) read as in seed 003 §2.2.6.1: "
+                f"tool {number}'s length offset, then the move to the axes given",
+            )
+        if self.change_pending is not None:
+            change_line, selected, index = self.change_pending
+            self.change_pending = None
+            if selected != number:
+                self.notes.assumed(
+                    line,
+                    f"M6 (line {change_line}) with T{selected} selected, then H{number}: "
+                    f"read as tool {number} (a length offset belongs to its tool)",
+                )
+                self.steps[index] = ToolChange(change_line, number)
+                self.tool = number
+        elif self.tool == 0:
+            self.initial_tool = number
+            self.tool = number
+            self.notes.became(
+                line, f"H{number} before any tool change: tool {number} is in the spindle"
+            )
+        elif number != self.tool:
+            self.notes.assumed(
+                line,
+                f"H{number} with tool {self.tool} in the spindle and no tool change: read "
+                f"as tool {number}",
+            )
+            self.tool = number
+            self.steps.append(ToolChange(line, number))
+
+    def apply_length(self, h: Word | None, block: Block) -> None:
+        """G43 H / G49: the head stays where it is, so Z reads differently by the change in
+        length offset (a known TCAL from G10 L1 or the set-up comments; 0 otherwise)."""
+        number = 0 if h is None else self.integer(h, block, 0, 999)
+        data = self.tools.get(number)
+        length = 0 if data is None or data.tcal is None else data.tcal
+        if self.z is not None:
+            self.z += self.active_length - length
+        self.active_length = length
+
+    def g10(self, block: Block) -> None:
+        line = block.line
+        lword, pword = block.get("L"), block.get("P")
+        kind = None if lword is None else self.integer(lword, block, 0, 99)
+        p = None if pword is None else self.integer(pword, block, 0, 999)
+        if kind == 2 and p in (0, 1):
+            x, y = block.get("X"), block.get("Y")
+            ox = 0 if x is None else self.length(x, block)
+            oy = 0 if y is None else self.length(y, block)
+            self.offsets = (ox, oy)
+            self.notes.became(line, "G10 L2 P1: part zero on the table (Data Block 0 X, Y)")
+        elif kind == 1 and p is not None:
+            z, r = block.get("Z"), block.get("R")
+            tcal = None if z is None else self.length(z, block)
+            diameter = None if r is None else 2 * abs(self.length(r, block))
+            self.tools[p] = ToolData(diameter=diameter or None, tcal=tcal)
+            self.notes.became(
+                line, f"G10 L1 P{p}: tool {p}'s diameter and length (Data Block 0 DIA, TCAL)"
+            )
+        else:
+            self.notes.ignored(line, "G10 with this L/P: not imported")
+
+    def setup_comment(self, line: int, comment: str) -> None:
+        """A MillBlocks set-up comment: part zero, or a tool's diameter and length (TCAL)."""
+        zero = SETUP_ZERO.match(comment)
+        tool = SETUP_TOOL.match(comment)
+        units = self.current_units()
+        if zero is not None:
+            self.offsets = (decimal_nm(zero.group(1), units), decimal_nm(zero.group(2), units))
+            self.notes.became(line, "the set-up comment: part zero (Data Block 0 X, Y)")
+        elif tool is not None:
+            number = int(tool.group(1))
+            dia, tcal = tool.group(2), tool.group(3)
+            self.tools[number] = ToolData(
+                diameter=None if dia is None else decimal_nm(dia, units),
+                tcal=None if tcal is None else decimal_nm(tcal, units),
+            )
+            self.notes.became(
+                line, f"the set-up comment of tool {number}: its DIA and TCAL (Data Block 0)"
+            )
+
+    def g92(self, block: Block) -> None:
+        line = block.line
+        if not self.moved and all(v is None for v in (self.x, self.y, self.z)):
+            for axis in AXES:
+                word = block.get(axis)
+                if word is not None:
+                    setattr(self, axis.lower(), self.length(word, block))
+            self.notes.assumed(
+                line,
+                "G92 before any move: the tool starts at the point it names (part zero is "
+                "where the file says the tool is)",
+            )
+            return
+        for k, axis in enumerate(AXES):
+            word = block.get(axis)
+            if word is None:
+                continue
+            current = getattr(self, axis.lower())
+            if current is None:
+                raise failure(line, word.column, f"G92 {axis}: the tool's position is not known")
+            # The point now called `value` is `current` in part coordinates.
+            self.shift[k] = current - self.length(word, block)
+        self.notes.assumed(line, "G92 shifts the coordinates: later points are converted back")
+
+    def home(self, block: Block, code: str) -> None:
+        line = block.line
+        if not any(block.has(a) for a in AXES):
+            self.notes.ignored(
+                line, f"G{code}: a return to the machine's home, which the file does not give"
+            )
+            self.x = self.y = self.z = None
+            return
+        x, y, z = self.target(block)
+        self.steps.append(Rapid(line, x, y, z, self.current_units()))
+        self.x, self.y, self.z = x, y, z
+        self.moved = True
+        self.cycle_drilled = False
+        self.notes.assumed(
+            line,
+            f"G{code}: the move to the intermediate point is imported; the return on to the "
+            "machine's home (not in the file) is not",
+        )
+
+    # -- motion -------------------------------------------------------------------------------
+
+    def rate(self, word: Word) -> int:
+        units = self.current_units()
+        return int((word.value * units.nm).to_integral_value())
+
+    def target(self, block: Block) -> tuple[int, int, int | None]:
+        """Where the axis words go, in part coordinates (G90/G91, G92 shift)."""
+        out: list[int | None] = []
+        for k, axis in enumerate(AXES):
+            word = block.get(axis)
+            current = getattr(self, axis.lower())
+            if word is None:
+                if current is None and axis != "Z":
+                    current = 0
+                    if block.has("X") or block.has("Y") or self.motion != "0":
+                        self.note_zero(block.line, axis)
+                out.append(current)
+                continue
+            value = self.length(word, block)
+            if self.incremental:
+                if current is None:
+                    if axis == "Z":
+                        raise failure(
+                            block.line, word.column, "Z incremental from an unknown height"
+                        )
+                    current = 0
+                    self.note_zero(block.line, axis)
+                out.append(current + value)
+            else:
+                out.append(value + self.shift[k])
+        x, y, z = out
+        assert x is not None and y is not None
+        return x, y, z
+
+    def note_zero(self, line: int, axis: str) -> None:
+        self.notes.assumed(line, f"{axis} not known yet: the tool starts over part zero ({axis}0)")
+
+    def move(self, block: Block) -> None:
+        line = block.line
+        units = self.current_units()
+        motion = self.motion
+        if motion is None:
+            raise failure(line, block.words[0].column, "axis words with no motion mode (G0/G1/…)")
+        if motion == "80":
+            raise failure(line, block.words[0].column, "axis words after G80 with no motion code")
+        if motion in CYCLES:
+            self.cycle(block)
+            return
+        x, y, z = self.target(block)
+        if motion != "0":
+            self.change_pending = None
+        if motion == "0":
+            if not any(isinstance(s, Rapid | Feed | Arc) for s in self.steps) and not (
+                block.has("X") or block.has("Y")
+            ):
+                self.start_z = z  # the first move, up or down to where the program starts
+            self.steps.append(Rapid(line, x, y, z, units))
+        elif motion == "1":
+            feed = self.need_feed(block)
+            self.steps.append(Feed(line, x, y, z, feed, units, self.comp))
+        else:
+            self.arc(block, x, y, z, motion == "2")
+        self.x, self.y, self.z = x, y, z
+        self.moved = True
+        self.cycle_drilled = False
+
+    def need_feed(self, block: Block) -> int:
+        if self.feed is None:
+            raise failure(block.line, block.words[0].column, "a feed move with no F given yet")
+        return self.feed
+
+    def arc(self, block: Block, x: int, y: int, z: int | None, clockwise: bool) -> None:
+        line = block.line
+        units = self.current_units()
+        first = block.words[0].column
+        if self.plane != "17":
+            raise failure(
+                line, first, f"an arc in the G{self.plane} plane: MillBlocks cuts arcs in XY"
+            )
+        if z is not None and self.z is not None and z != self.z:
+            raise failure(
+                line, first, "a helix (an arc with a Z move): MillBlocks cuts arcs at one depth"
+            )
+        k = block.get("K")
+        if k is not None:
+            raise failure(line, k.column, "K in an XY arc")
+        sx = self.x if self.x is not None else 0
+        sy = self.y if self.y is not None else 0
+        i_word, j_word, r_word = block.get("I"), block.get("J"), block.get("R")
+        feed = self.need_feed(block)
+        if r_word is not None:
+            if i_word is not None or j_word is not None:
+                raise failure(line, r_word.column, "an arc with both R and I/J")
+            radius = self.length(r_word, block)
+            cx, cy = self.centre_from_radius(line, r_word, (sx, sy), (x, y), radius, clockwise)
+        else:
+            if i_word is None and j_word is None:
+                raise failure(line, first, "an arc with no centre (I, J or R)")
+            i = 0 if i_word is None else self.length(i_word, block)
+            j = 0 if j_word is None else self.length(j_word, block)
+            if self.arc_absolute:
+                cx, cy = i + self.shift[0], j + self.shift[1]
+            else:
+                cx, cy = sx + i, sy + j
+            where = i_word or j_word
+            assert where is not None
+            check_arc(line, where.column, (sx, sy), (x, y), (cx, cy), units)
+        self.steps.append(Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp))
+
+    def centre_from_radius(
+        self,
+        line: int,
+        word: Word,
+        start: tuple[int, int],
+        end: tuple[int, int],
+        radius: int,
+        clockwise: bool,
+    ) -> tuple[int, int]:
+        """The centre of an R-form arc: R > 0 the arc of 180° or less, R < 0 the longer."""
+        d = math.dist(start, end)
+        if d == 0:
+            raise failure(line, word.column, "an R-form arc cannot be a full circle")
+        half = d / 2
+        r: float = abs(radius)
+        if r < half:
+            if half - r > 12_700:
+                raise failure(line, word.column, "R is smaller than half the distance to the end")
+            r = half
+        h = math.sqrt(max(r * r - half * half, 0.0))
+        mx, my = (start[0] + end[0]) / 2, (start[1] + end[1]) / 2
+        ux, uy = (end[0] - start[0]) / d, (end[1] - start[1]) / d
+        # The short way round: a clockwise arc's centre is right of the chord, else left.
+        side = -1 if clockwise else 1
+        if radius < 0:
+            side = -side
+        return round(mx - side * h * uy), round(my + side * h * ux)
+
+    def dwell(self, block: Block, word: Word) -> None:
+        p, x = block.get("P"), block.get("X")
+        line = block.line
+        chosen = p if p is not None else x
+        if chosen is None:
+            raise failure(line, word.column, "G4 with no dwell time (P or X)")
+        seconds = chosen.value
+        if p is not None and "." not in p.text and word.text.startswith("0"):
+            seconds = p.value / 1000
+            self.notes.assumed(line, f"G04 P{p.text}: Fanuc milliseconds ({seconds} s)")
+        if not 0 <= seconds <= 100_000:
+            raise failure(line, chosen.column, "a dwell time out of range")
+        self.steps.append(Dwell(line, seconds))
+
+    def cycle(self, block: Block) -> None:
+        line = block.line
+        code = self.motion
+        assert code is not None
+        units = self.current_units()
+        first = block.words[0].column
+        self.change_pending = None
+        x0, y0 = self.x or 0, self.y or 0
+        x, y, _ = self.target(block)
+        r_word, z_word, q_word = block.get("R"), block.get("Z"), block.get("Q")
+        start_z = self.z
+        if start_z is None:
+            raise failure(line, first, "a canned cycle from an unknown height (no Z yet)")
+        if r_word is not None:
+            value = self.length(r_word, block)
+            self.cycle_r = start_z + value if self.incremental else value + self.shift[2]
+        if self.cycle_r is None:
+            raise failure(line, first, f"G{code} with no R plane")
+        if z_word is not None:
+            value = self.length(z_word, block)
+            self.cycle_z = self.cycle_r + value if self.incremental else value + self.shift[2]
+        if self.cycle_z is None:
+            raise failure(line, first, f"G{code} with no Z depth")
+        if q_word is not None:
+            self.cycle_q = abs(self.length(q_word, block))
+        p_word = block.get("P")
+        if p_word is not None:
+            self.cycle_p = p_word.value
+        r, bottom = self.cycle_r, self.cycle_z
+        if bottom >= r:
+            where = z_word or r_word or block.words[0]
+            raise failure(line, where.column, f"G{code}: Z is not below R")
+        feed = self.need_feed(block)
+        peck = 0
+        if code in ("73", "83"):
+            if not self.cycle_q:
+                raise failure(line, first, f"G{code} with no peck depth Q")
+            peck = self.cycle_q
+        l_word = block.get("L")
+        repeats = 1 if l_word is None else self.integer(l_word, block, 1, 1000)
+        clear = max(start_z, r) if self.return_initial else r
+        dx, dy = (x - x0, y - y0) if self.incremental else (0, 0)
+        if len(self.steps) + repeats > MAX_STEPS:
+            raise failure(line, first, f"more than {MAX_STEPS} moves: not a program to import")
+        for k in range(repeats):
+            hx, hy = x + k * dx, y + k * dy
+            self.steps.append(
+                Cycle(line, int(code), hx, hy, r, bottom, clear, feed, peck, self.cycle_p, units)
+            )
+        self.x, self.y, self.z = x + (repeats - 1) * dx, y + (repeats - 1) * dy, clear
+        self.moved = True
+        self.cycle_drilled = True
+
+
+def decimal_nm(text: str, units: Units) -> int:
+    """A number written in a comment, in `units`, as nm."""
+    return int((Decimal(text) * units.nm).to_integral_value())
+
+
+def check_arc(
+    line: int,
+    column: int,
+    start: tuple[int, int],
+    end: tuple[int, int],
+    centre: tuple[int, int],
+    units: Units,
+) -> None:
+    """LinuxCNC's test (`arc_end_off`): beyond it, an error naming the line."""
+    r1 = math.dist(start, centre)
+    r2 = math.dist(end, centre)
+    if r1 == 0:
+        raise failure(line, column, "the arc's centre is its start point")
+    if arc_end_off(r1, r2, units):
+        raise failure(
+            line,
+            column,
+            f"the arc's end is {show(abs(r1 - r2), units)} off its radius: the start is "
+            f"{show(r1, units)} from the centre, the end {show(r2, units)}",
+        )

@@ -1,0 +1,524 @@
+"""G-code targets: LinuxCNC RS274/NGC, Fanuc 6M, and the ProtoTRAK "modified Fanuc 6".
+
+One writer walks the compiled path chunk by chunk with the control's modal state (only
+words that change are written) and writes lines as it goes; a `Dialect` (dialects.py) says
+what differs (seed 003 §2.1 for the ProtoTRAK: a G code on every line, spaces between
+words, `;` at the end of each block). The G/M codes are those of seed 003's RS274/NGC and
+Fanuc tables. Lengths are written from integers (`emit.text.Lengths`): a chunk's X, Y, Z, I
+and J columns are rounded at once and each distinct value is formatted once.
+
+Canned cycles are written only where the cycle's motion is identical to the block's
+(DESIGN.md §4): the compiler marks such holes (`HoleSpan.canned`: an optional rapid across
+at the height the hole starts from, a rapid down to Z UP, the feeds and pecks, the dwell, a
+rapid back up there), and a DRILL hole without pecks is written `G98 G82 R<Z UP> Z<Z DN>
+P…` (the 0.8 s dwell in the dialect's unit); a hole whose moves differ (a retract height
+that changed on the way) is written as explicit moves. Pecks (ours return to the level just
+cut; G83 backs off above it) and TAP's feed-out to Z UP + 0.3 in are explicit moves unless
+the user accepts G83 (`peck-cycle=G83`, for evenly spaced pecks), which the compatibility
+report then states.
+
+Part zero and tool lengths are the machine's own settings (DESIGN.md §1: an output never
+changes them unless asked): every dialect states them as set-up comments (G54 = part zero
+from table zero, each tool's length = its TCAL) and in the report, which the set-up sheet
+prints, and applies them with `G43 H` at each tool change. LinuxCNC's `write-offsets=yes`
+writes them as `G10 L2 P1` (G54) and `G10 L1` (the tool table), reported as a warning since
+they persist on the machine.
+
+Dwell belongs to the dialect: LinuxCNC reads G4 P and G82 P in seconds; a Fanuc reads P in
+whole milliseconds (P800) and G04 X in seconds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from decimal import Decimal
+from typing import Any, ClassVar
+
+import numpy as np
+
+from app.cnc.blocks import HoleOp, Program
+from app.cnc.compiler import peck_levels
+from app.cnc.emit.target import Out, Report, Target, register
+from app.cnc.emit.text import Lengths, Lines
+from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
+from app.cnc.limits import HOLE_DWELL_SECONDS
+from app.cnc.motions import is_motion
+from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op
+from app.cnc.problems import Need
+from app.cnc.units import Units
+
+# A row of a chunk as a tuple (path.MOVE's fields, in order).
+Row = tuple[int, int, int, int, int, int, int, int, int, int]
+
+
+class GcodeTarget(Target):
+    """Shared writer; subclasses set `dialect` and the target attributes."""
+
+    dialect: ClassVar[Dialect]
+    extension = "ngc"
+    needs = frozenset({Need.SPINDLE_SPEEDS})
+    reads_back: ClassVar[str | None] = "gcode"
+    common = ("sequence-numbers", "canned-cycles", "spindle-speeds", "end-code")
+
+    def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
+        # S words need speeds, unless the operator sets them by hand (reported).
+        return frozenset() if options.get("spindle-speeds") == "by-hand" else self.needs
+
+    def need_hint(self, need: Need) -> str:
+        return "or export with spindle-speeds=by-hand to set them at the control"
+
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        lines = Lines(out)
+        Writer(self.dialect, program, path, options, report, lines.add).write()
+        lines.flush()
+
+
+@register
+class LinuxcncTarget(GcodeTarget):
+    name = "gcode-linuxcnc"
+    label = "LinuxCNC (RS274/NGC)"
+    description = "RS274/NGC as LinuxCNC reads it"
+    dialect = LINUXCNC
+    options = dialect_options(LINUXCNC)
+
+
+@register
+class FanucTarget(GcodeTarget):
+    name = "gcode-fanuc"
+    label = "Fanuc 6M"
+    description = "Fanuc 6M (% and O number, N numbers, no spaces)"
+    dialect = FANUC
+    options = dialect_options(FANUC)
+
+
+@register
+class PrototrakTarget(GcodeTarget):
+    name = "gcode-prototrak"
+    label = "ProtoTRAK G-code (modified Fanuc 6)"
+    description = "ProtoTRAK Plus modified Fanuc 6 (G on every line, spaces, ; end of block)"
+    dialect = PROTOTRAK
+    options = dialect_options(PROTOTRAK)
+
+
+class Writer:
+    """Walks the compiled path once, keeping the modal state of the control, and hands each
+    line to `emit` as it is made.
+
+    `z_lift(tool)` is what the Z words add to the tool path's Z for a tool (0 for every
+    dialect with length offsets; a tape without them adds the TCAL)."""
+
+    def __init__(
+        self,
+        dialect: Dialect,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        emit: Callable[[str], None],
+        z_lift: Callable[[int], int] | None = None,
+    ) -> None:
+        self.d = dialect
+        self.program = program
+        self.path = path
+        self.o = options
+        self.report = report
+        self.emit = emit
+        self.z_lift = z_lift or (lambda tool: 0)
+        self.units: Units = path.units
+        self.lengths = Lengths(path.units)
+        self.drop_zeros = options["trailing-zeros"] == "drop"
+        self.number = int(options["sequence-start"])
+        self.separator = "\t" if options["tabs"] else (" " if dialect.spaces else "")
+        self.motion: str | None = None
+        self.feed: int | None = None
+        self.cycle: tuple[str, ...] | None = None  # words of the active canned cycle
+        self.xy_known = True
+        self.tool = path.initial_tool
+        self.lift = self.z_lift(self.tool)
+        x, y, z = path.start
+        # Where the control is: nm, and as written.
+        self.x, self.y, self.z = x, y, z + self.lift
+        self.wx, self.wy, self.wz = self.length(x), self.length(y), self.length(self.z)
+        self.lines = 0  # lines emitted
+
+    # -- words and lines ------------------------------------------------------------------
+
+    def code(self, letter: str, value: int) -> str:
+        return f"{letter}{value:02d}" if self.d.two_digit_codes else f"{letter}{value}"
+
+    def length(self, nm: int) -> str:
+        return self.shown(self.lengths.one(nm))
+
+    def shown(self, text: str) -> str:
+        """A length's text as the trailing-zeros option wants it."""
+        if self.drop_zeros:
+            text = text.rstrip("0")
+            return "0" if text in ("0.", "-0.") else text
+        return text
+
+    def feed_value(self, nm_per_min: int) -> str:
+        text = self.lengths.one(nm_per_min).rstrip("0")
+        return text + "0" if text.endswith(".") else text
+
+    def out(self, text: str) -> None:
+        self.emit(text)
+        self.lines += 1
+
+    def line(self, *words: str, comment: str = "") -> None:
+        """One block: N number, words, comment, end of block."""
+        parts = [w for w in words if w]
+        if self.o["sequence-numbers"]:
+            if self.number > self.d.largest_line_number:
+                start = int(self.o["sequence-start"])
+                self.report.note(
+                    None,
+                    f"N numbers restart at N{start} after N{self.d.largest_line_number}: the "
+                    f"control's line numbers run 0-{self.d.largest_line_number}",
+                )
+                self.number = start
+            parts.insert(0, f"N{self.number}")
+            self.number += int(self.o["sequence-increment"])
+        if comment:
+            parts.append(f"({comment_text(comment)})")
+        self.out(self.separator.join(parts) + self.d.end_of_block)
+
+    def comment(self, text: str) -> None:
+        self.out(f"({comment_text(text)}){self.d.end_of_block}")
+
+    # -- the program --------------------------------------------------------------------
+
+    def write(self) -> None:
+        self.header()
+        cycles = bool(self.o["canned-cycles"])
+        for chunk in self.path.chunks():
+            self.write_chunk(chunk, cycles)
+        self.end_cycle()
+        self.finish()
+
+    def finish(self) -> None:
+        self.out("%")
+
+    def write_chunk(self, chunk: Chunk, cycles: bool) -> None:
+        rows = chunk.rows
+        lift = self.lifts(rows)
+        z = rows["z"] + lift if lift is not None else rows["z"]
+        xs = self.lengths.many(rows["x"])
+        ys = self.lengths.many(rows["y"])
+        zs = self.lengths.many(z)
+        if self.drop_zeros:
+            xs, ys, zs = ([self.shown(t) for t in column] for column in (xs, ys, zs))
+        holes = {span.start: span for span in chunk.hole_spans()} if cycles else {}
+        table = rows.tolist()
+        zvalues = z.tolist()
+        i = 0
+        n = len(table)
+        while i < n:
+            span = holes.get(i)
+            if span is not None:
+                used = self.canned_cycle(span, table[i][2], zvalues[span.end - 1])
+                if used:
+                    i = span.end
+                    continue
+            self.end_cycle()
+            row = table[i]
+            self.move(row, xs[i], ys[i], zs[i], zvalues[i], chunk)
+            i += 1
+
+    def lifts(self, rows: Any) -> Any:
+        """What each row's Z words add (the z_lift of the tool in the spindle), or None
+        when nothing is added."""
+        ops = rows["op"]
+        changes = np.flatnonzero(ops == Op.TOOL)
+        if not len(changes) and self.lift == 0:
+            return None
+        tools = np.full(len(rows), self.tool, dtype=np.int64)
+        for k in changes.tolist():
+            tools[k:] = rows["value"][k]
+        distinct = np.unique(tools)
+        lifts = {int(t): self.z_lift(int(t)) for t in distinct.tolist()}
+        if not any(lifts.values()):
+            return None
+        return np.array([lifts[int(t)] for t in distinct.tolist()], dtype=np.int64)[
+            np.searchsorted(distinct, tools)
+        ]
+
+    def header(self) -> None:
+        p = self.program
+        label = p.name.upper() if p.name else "MILLBLOCKS"
+        # The ProtoTRAK sample (seed 003 §2.2.6.2) opens with `%:LABEL;`; LinuxCNC's reader,
+        # our referee, takes `%` only alone on its line, so the label follows as a comment.
+        self.out("%")
+        if self.d.program_number:
+            number = int(p.part_number[-4:]) if p.part_number else 1
+            self.out(f"O{number:04d}")
+        self.comment(f"{label} PART {p.part_number or '-'} MILLBLOCKS")
+        units = self.code("G", 20 if self.units is Units.INCH else 21)
+        g = self.code
+        self.line(g("G", 17), units, g("G", 40), g("G", 80), g("G", 90), g("G", 94))
+        used, cuts_in_z = self.survey()
+        self.setup(used)
+        for number in sorted(used):
+            info = self.path.tools.get(number)
+            if info is not None and info.tcal is None and cuts_in_z:
+                self.report.warning(
+                    None,
+                    f"tool {number} is uncalibrated: its Z words are measured from wherever "
+                    "the operator sets its length",
+                )
+        self.first_tool()
+        # Only Z is known at the start: the first move across writes both X and Y.
+        self.line(self.code("G", 0), f"Z{self.wz}")
+        self.motion = "0"
+        self.xy_known = False
+
+    def first_tool(self) -> None:
+        if self.path.initial_tool:
+            self.line(self.code("G", 43), self.code("H", self.path.initial_tool))
+
+    def survey(self) -> tuple[set[int], bool]:
+        """The tools the program uses, and whether any rapid or feed leaves the start Z."""
+        used = {self.path.initial_tool} if self.path.initial_tool else set()
+        start_z = self.path.start[2]
+        cuts = False
+        for chunk in self.path.chunks():
+            ops = chunk.rows["op"]
+            used.update(chunk.rows["value"][ops == Op.TOOL].tolist())
+            straight = ops <= Op.FEED
+            cuts = cuts or bool(np.any(chunk.rows["z"][straight] != start_z))
+        return used, cuts
+
+    def setup(self, used_tools: set[int]) -> None:
+        """Part zero and tool lengths: set-up comments and report notes, or (write-offsets)
+        G10 lines that set them on the machine."""
+        ox, oy = self.path.origin
+        lengths = self.lengths.one
+        offset = f"X{lengths(ox)} Y{lengths(oy)}"
+        write = bool(self.o.get("write-offsets"))
+        g54 = self.code("G", 54)
+        self.comment(f"SET-UP: {g54} = PART ZERO AT TABLE {offset}")
+        self.report.note(None, f"set-up: {g54} must hold part zero, table {offset}")
+        used = sorted(n for n in self.path.tools if n in used_tools)
+        for number in used:
+            tool = self.path.tools[number]
+            # The diameter too: cutter compensation and routines were planned with it, and an
+            # importer needs it to read the tool-centre path back as the blocks it came from.
+            dia = "" if tool.diameter is None else f" DIA {lengths(tool.diameter)}"
+            if tool.tcal is None:
+                length = "measured (uncalibrated)"
+                self.comment(
+                    f"SET-UP: T{number}{dia} LENGTH H{number:02d}: UNCALIBRATED, MEASURE IT"
+                )
+            else:
+                length = lengths(tool.tcal)
+                self.comment(f"SET-UP: T{number}{dia} LENGTH H{number:02d} = {length}, ITS TCAL")
+            self.report.note(
+                None,
+                f"set-up: the length of T{number} (H{number:02d}) must be "
+                + (length if tool.tcal is None else f"{length}, its TCAL"),
+            )
+        if not write:
+            return
+        self.line("G10", "L2", "P1", f"X{self.length(ox)}", f"Y{self.length(oy)}", "Z0")
+        self.line("G54")
+        for number in used:
+            tool = self.path.tools[number]
+            words = ["G10", "L1", f"P{number}"]
+            if tool.tcal is not None:
+                words.append(f"Z{self.length(tool.tcal)}")
+            if tool.diameter is not None:
+                words.append(f"R{self.length(tool.diameter // 2)}")
+            self.line(*words)
+        self.report.warning(
+            None,
+            "write-offsets: the program sets G54 and the tool table's lengths (G10 L2, "
+            "G10 L1); they replace the operator's own settings and stay on the machine",
+        )
+
+    # -- moves ----------------------------------------------------------------------------
+
+    def axis_words(self, wx: str, wy: str, wz: str | None) -> list[str]:
+        """The axis words of a move to the written (wx, wy, wz): those whose written value
+        changes. Until the first move across, the control's XY is unknown: that move names
+        both."""
+        words = []
+        moves_xy = wx != self.wx or wy != self.wy
+        if wx != self.wx or (moves_xy and not self.xy_known):
+            words.append(f"X{wx}")
+        if wy != self.wy or (moves_xy and not self.xy_known):
+            words.append(f"Y{wy}")
+        if wz is not None and wz != self.wz:
+            words.append(f"Z{wz}")
+        self.xy_known = self.xy_known or moves_xy
+        return words
+
+    def motion_word(self, motion: str) -> str:
+        if motion != self.motion or self.d.g_on_every_line:
+            self.motion = motion
+            return self.code("G", int(motion))
+        return ""
+
+    def feed_word(self, feed: int) -> str:
+        if feed != self.feed:
+            self.feed = feed
+            return f"F{self.feed_value(feed)}"
+        return ""
+
+    def at(self, row: Row, wx: str, wy: str, wz: str, z: int) -> None:
+        self.x, self.y, self.z = row[3], row[4], z
+        self.wx, self.wy, self.wz = wx, wy, wz
+
+    def move(self, row: Row, wx: str, wy: str, wz: str, z: int, chunk: Chunk) -> None:
+        op, _tag, block, _x, _y, _z, cx, cy, feed, value = row
+        if op == Op.RAPID or op == Op.FEED:
+            words = self.axis_words(wx, wy, wz)
+            if words:
+                if op == Op.RAPID:
+                    self.line(self.motion_word("0"), *words)
+                else:
+                    self.line(self.motion_word("1"), *words, self.feed_word(feed))
+            self.at(row, wx, wy, wz, z)
+        elif op == Op.ARC_CW or op == Op.ARC_CCW:
+            words = [f"X{wx}", f"Y{wy}"]
+            if z != self.z:
+                words.append(f"Z{wz}")
+            i, j = cx - self.x, cy - self.y
+            self.line(
+                self.motion_word("2" if op == Op.ARC_CW else "3"),
+                *words,
+                f"I{self.length(i)}",
+                f"J{self.length(j)}",
+                self.feed_word(feed),
+            )
+            self.at(row, wx, wy, wz, z)
+        elif op == Op.DWELL:
+            self.line(self.code("G", 4), self.d.dwell(Decimal(value) / 1000, cycle=False))
+        elif op == Op.SPINDLE:
+            rpm = None if value < 0 else value
+            if rpm is None:
+                self.report.warning(
+                    block,
+                    "no RPM: the spindle starts without an S word; set its speed by hand "
+                    "(spindle-speeds=by-hand)",
+                )
+            self.line("" if rpm is None else f"S{rpm}", self.code("M", 3 if feed else 4))
+        elif op == Op.SPINDLE_OFF:
+            self.line(self.code("M", 5))
+        elif op == Op.TOOL:
+            self.tool_change(block, value, z)
+        elif op == Op.STOP:
+            reason = chunk.strings[value]
+            stop = self.code("M", 0)
+            if reason == "STOP" and self.o["block-delete"]:
+                stop = "/" + stop
+            self.line(stop, comment=reason)
+        elif op == Op.INDEX:
+            self.index(block)
+        elif op == Op.COOLANT:
+            self.line(self.code("M", 8 if value == 1 else 7))
+        elif op == Op.COOLANT_OFF:
+            self.line(self.code("M", 9))
+        elif op == Op.MESSAGE:
+            text = chunk.strings[value]
+            if self.d.messages:
+                # LinuxCNC shows (MSG,…) comments to the operator.
+                self.out(f"(MSG,{comment_text(text)})")
+            else:
+                self.comment(text)
+        else:
+            assert op == Op.END
+            self.line(str(self.o["end-code"]))
+
+    def tool_change(self, block: int, tool: int, z: int) -> None:
+        self.line(f"T{tool}", self.code("M", 6))
+        self.tool = tool
+        self.z = z
+        self.wz = self.length(z)
+        self.line(self.code("G", 43), self.code("H", tool))
+
+    def index(self, block: int) -> None:
+        code = self.o["index-code"]
+        if code is None:
+            self.report.unsupported(block, "INDEX: no M code for the rotary table (set index-code)")
+        else:
+            self.line(self.code("M", int(code)), comment="INDEX")
+
+    # -- canned cycles --------------------------------------------------------------------
+
+    def canned_cycle(self, span: HoleSpan, block: int, z_end: int) -> bool:
+        """Write a G82 (or accepted G83) for a hole the compiler marked canned. False when
+        the hole is not such a cycle (then its moves are written one by one)."""
+        if not span.canned or span.op is not HoleOp.DRILL or z_end != self.z:
+            return False
+        x, y, r, bottom, feed = span.x, span.y, span.r, span.bottom, span.feed
+        z0 = self.z
+        lift = self.lift
+        pecked = span.pecks > 1
+        if pecked and (self.o["peck-cycle"] != "G83" or not _even_pecks(span)):
+            return False
+        wx, wy = self.length(x), self.length(y)
+        words = self.axis_words(wx, wy, None)
+        if not words:
+            # A hole where the last one was (written to the same numbers): a cycle line
+            # without axis words drills nothing, so it names the position again.
+            words = [f"X{wx}", f"Y{wy}"]
+        wr, wb = self.length(r + lift), self.length(bottom + lift)
+        key: tuple[str, ...]
+        if pecked:
+            q = self.length(span.step)
+            key = ("G83", wr, wb, q, str(feed), str(z0))
+            cycle_words = ["G98", "G83", f"R{wr}", f"Z{wb}", f"Q{q}"]
+            self.report.rewritten(
+                block,
+                "pecks written as G83, which backs off a little above each level instead of "
+                "returning to the level just cut (accepted with peck-cycle=G83)",
+            )
+        else:
+            key = ("G82", wr, wb, str(feed), str(z0))
+            cycle_words = ["G98", "G82", f"R{wr}", f"Z{wb}"]
+            cycle_words.append(self.d.dwell(HOLE_DWELL_SECONDS, cycle=True))
+        if self.cycle == key:
+            # Seed 003 §2.1 rule 1 (ProtoTRAK): a G code on every line, the cycle's too.
+            again = self.code("G", int(key[0][1:])) if self.d.g_on_every_line else ""
+            self.line(again, *words)
+        else:
+            self.end_cycle()
+            self.feed = feed
+            g98, g8x, *rest = cycle_words
+            self.line(g98, g8x, *words, *rest, f"F{self.feed_value(feed)}")
+            self.cycle = key
+            self.motion = None
+        self.x, self.y = x, y
+        self.wx, self.wy = wx, wy
+        return True
+
+    def end_cycle(self) -> None:
+        if self.cycle is not None:
+            self.line(self.code("G", 80))
+            self.cycle = None
+            self.motion = None
+
+
+def _even_pecks(span: HoleSpan) -> bool:
+    """Whether a pecked hole's levels are evenly spaced from Z UP by its first step, as
+    G83's Q spaces them (the last level is the bottom)."""
+    levels = peck_levels(span.r, span.bottom, span.pecks)
+    return all(levels[j] == span.r - span.step * (j + 1) for j in range(len(levels) - 1))
+
+
+def comment_text(text: str) -> str:
+    """Comment text the controls accept: no parentheses, upper case ASCII, one line.
+    Line breaks and other control characters become spaces: in a name or message they
+    would otherwise end the comment's block and put the rest on the tape as code."""
+    cleaned = text.replace("(", "[").replace(")", "]").replace(";", ",")
+    cleaned = "".join(" " if ord(ch) < 32 or ord(ch) == 127 else ch for ch in cleaned)
+    return cleaned.encode("ascii", "replace").decode("ascii").upper()
+
+
+__all__ = ["TAGS", "GcodeTarget", "Writer", "comment_text", "is_motion"]

@@ -29,7 +29,6 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app.cnc.blocks import BoltCircle, Comp, Hole, HoleOp, Mode, Pos, Program
-from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
 from app.cnc.formats.dxf.choice import (
     ChoiceError,
     ContourChoice,
@@ -38,6 +37,7 @@ from app.cnc.formats.dxf.choice import (
     chosen_blocks,
     insert_blocks,
 )
+from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
 from app.cnc.validate import validate
 from app.web.extensions import get_library
 from tests.hostile_corpus import HOSTILE_NUMBERS, UPLOADS

@@ -21,8 +21,6 @@ from werkzeug.wrappers import Response
 
 from app.cnc.compiler import compile_program
 from app.cnc.emit.svg import draw
-from app.cnc.imports.common import ImportFailure
-from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
 from app.cnc.formats.dxf.choice import (
     DIRECTIONS,
     Choice,
@@ -36,13 +34,16 @@ from app.cnc.formats.dxf.choice import (
     drawing_svg,
     insert_blocks,
 )
+from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
+from app.cnc.imports.common import ImportFailure
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Severity
 from app.cnc.sizes import TooLarge, check_import_size
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import LibraryError, NotFound, StaleSave
-from app.web.editor import block_summary, current_user, is_htmx
+from app.web.editor import current_user
+from app.web.editor_page import block_summary, is_htmx
 from app.web.extensions import get_library
 
 bp = Blueprint("drawings", __name__)

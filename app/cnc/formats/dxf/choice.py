@@ -24,10 +24,10 @@ from dataclasses import dataclass, replace
 import svgwrite
 
 from app.cnc.blocks import Block, BoltCircle, Comp, DataBlock0, Mode, Program
+from app.cnc.formats.dxf.blocks import contour_ops, drawing_block0, hole_spec, resolution_half
+from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Segment
 from app.cnc.imports.build import Builder
 from app.cnc.imports.common import ImportNote
-from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Segment
-from app.cnc.formats.dxf.blocks import contour_ops, drawing_block0, hole_spec, resolution_half
 from app.cnc.imports.ops import HoleOpR, Op
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence

@@ -34,8 +34,9 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.web import get_library
+from app.web.forms import entry_forms, field_values, kind_of
 from bench.programs import editor_program
-from tests.test_browser import browser, page, settle, until
+from tests.test_browser import SHOTS, browser, page, settle, until
 
 # The browser and the page (which fails the test on any console error) are test_browser's.
 __all__ = ["browser", "page"]
@@ -281,3 +282,183 @@ def test_the_library_links_each_program_to_its_history(page: Page, served: Serve
     row.get_by_role("link", name="History").click()
     expect(page.locator("h1")).to_contain_text("History")
     assert page.url.endswith(f"/programs/{program_id}/history")
+
+
+# -- the trial part from the keyboard, counted (issue 20 "Must show") ----------------------
+
+
+@dataclass
+class Keys:
+    """The keyboard, counting every key pressed (a typed character is one key)."""
+
+    page: Page
+    count: int = 0
+
+    def press(self, key: str) -> None:
+        self.count += 1
+        self.page.keyboard.press(key)
+
+    def type(self, text: str) -> None:
+        self.count += len(text)
+        self.page.keyboard.type(text)
+
+    def enter(self, *values: str) -> None:
+        """Type each value and press Enter ("" takes the value offered)."""
+        for value in values:
+            self.type(value)
+            self.press("Enter")
+
+    def choose(self, *keys: str) -> None:
+        """Menu keys: each opens the next step (its heading changes)."""
+        for key in keys:
+            before = self.page.locator("#entry h2").inner_text()
+            self.press(key)
+            expect(self.page.locator("#entry h2")).not_to_have_text(before)
+            settle(self.page)
+
+    def block(self, number: int) -> None:
+        """Wait until block `number` is entered and the menu for the next is up."""
+        expect(self.page.locator(f'.block-row[data-block="{number}"]')).to_be_visible()
+        expect(self.page.locator("#entry h2")).to_contain_text(f"Block {number + 1}: type")
+        settle(self.page)
+
+
+def control_keystrokes(blocks: tuple[Block, ...], menu_keys: int) -> int:
+    """What the control asks for the same blocks (seed 001 §3): the same menu keys, then at
+    every prompt the value keyed in full and ENTER ADV (an ARC's XY-END is its second
+    screen); the INC key once per block in INC outside a LOOP sequence is not counted, to
+    keep the comparison on the safe side."""
+    forms = entry_forms()
+    total = menu_keys
+    for at, block in enumerate(blocks):
+        key = kind_of(block)
+        if key == "ARC_END":
+            continue
+        values = field_values(block, blocks[at + 1] if at + 1 < len(blocks) else None)
+        total += sum(len(values.get(spec.name, "")) + 1 for spec in forms[key].fields)
+    return total
+
+
+def test_the_trial_part_from_the_keyboard_in_fewer_keys_than_the_control(
+    page: Page, served: Served
+) -> None:
+    """The trial's part (bolt circle, compensated contour with an arc, frame pocket,
+    LOOP/REP) entered with the keyboard only; ours must not take more keys than the
+    control's prompts for the same blocks."""
+    program_id = open_editor(page, served, program_of())
+    keys = Keys(page)
+    menu = 0
+
+    def choose(*menu_keys: str) -> None:
+        nonlocal menu
+        menu += len(menu_keys)
+        keys.choose(*menu_keys)
+
+    choose("2", "1")  # DRILL at the bolt circle's centre
+    keys.enter("3", "3", ".1", "-.3", "5", "", "")
+    keys.block(1)
+    choose("2", "2")  # BOLT CIR DRILL: 6 holes, angle 0, radius 1
+    keys.enter("6", "", "1")
+    keys.block(2)
+    choose("2", "3")  # DRILL CUT RT: the contour's start, tool 2
+    keys.enter("0", "-2", "", "-.2", "", "", "2")
+    keys.block(3)
+    choose("5", "1")  # MILL STD
+    keys.enter("3", "-2", "", "10", "")
+    keys.block(4)
+    choose("5", "5")  # ARC CC: centre, then XY-END
+    keys.enter("3", "-1", "", "", "", "3", "0")
+    keys.block(6)
+    choose("5", "1")  # MILL STD back to 0,0
+    keys.enter("0", "0", "", "", "")
+    keys.block(7)
+    choose("2", "1")  # DRILL at the frame's corner
+    keys.enter("5", "-2", "", "-.25", "", "", "")
+    keys.block(8)
+    choose("5", "8")  # FRAME POCKET 1 x .75
+    keys.press("5")
+    keys.enter("1", ".75", "", "8", "")
+    keys.block(9)
+    choose("6", "2", "1")  # LOOP DRILL, a row of holes .5 apart
+    keys.enter(".5", "0", "", "-.3", "5", "", "1")
+    keys.block(10)
+    choose("8")  # REP: 3 more
+    keys.enter(".5", "0", "3", "")
+    keys.block(11)
+
+    blocks = saved_blocks(served, program_id)
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    assert [kind_of(b) for b in blocks] == [
+        "DRILL", "BOLT_CIR_DRILL", "DRILL_CUT_RT", "MILL_STD", "ARC_CC", "ARC_END",
+        "MILL_STD", "DRILL", "FRAME", "DRILL", "REP",
+    ]  # fmt: skip
+    control = control_keystrokes(blocks, menu)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    (SHOTS / "trial-keystrokes.txt").write_text(f"ours {keys.count}, the control's {control}\n")
+    assert keys.count <= control, (keys.count, control)
+
+
+# -- any screen (issue 20 item 5) ------------------------------------------------------------
+
+
+def no_horizontal_overflow(page: Page) -> None:
+    widths = page.evaluate("[document.scrollingElement.scrollWidth, window.innerWidth]")
+    assert widths[0] <= widths[1], f"the page scrolls sideways: {widths}"
+
+
+def boxes(page: Page, *selectors: str) -> list[dict[str, float]]:
+    found: list[dict[str, float]] = page.evaluate(
+        """(selectors) => selectors.map(s => {
+             const r = document.querySelector(s).getBoundingClientRect();
+             return {left: r.left, right: r.right, top: r.top, bottom: r.bottom};
+           })""",
+        list(selectors),
+    )
+    return found
+
+
+def overlap(a: dict[str, float], b: dict[str, float]) -> bool:
+    return (
+        a["left"] < b["right"] - 1
+        and b["left"] < a["right"] - 1
+        and a["top"] < b["bottom"] - 1
+        and b["top"] < a["bottom"] - 1
+    )
+
+
+@pytest.mark.parametrize("width", [1280, 1024, 800])
+def test_the_editor_fits_the_screen(page: Page, served: Served, width: int) -> None:
+    """Item 5: at 800 px the preview was cut off and the columns overlapped. At 1280, 1024
+    and 800 px the block list, the entry panel and the preview are all on the page, apart."""
+    program_id = served.create(editor_program(60, name=f"fits {width}"))
+    page.set_viewport_size({"width": width, "height": 800})
+    page.goto(f"{served.url}/programs/{program_id}")
+    expect(page.locator("#entry h2")).to_contain_text("Block 61: type")
+    panels = boxes(page, ".blocks", "#entry", ".preview")
+    for i, a in enumerate(panels):
+        assert a["left"] >= 0 and a["right"] <= width, (width, panels)
+        for b in panels[i + 1 :]:
+            assert not overlap(a, b), (width, panels)
+    no_horizontal_overflow(page)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / f"editor-{width}.png"), full_page=True)
+
+
+def test_the_library_and_a_program_read_on_a_phone(page: Page, served: Served) -> None:
+    """Item 5: at 390 px it was the same fixed layout. The library and a program's blocks
+    read without scrolling sideways."""
+    program_id = served.create(editor_program(30, name="on a phone"))
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.goto(served.url + "/")
+    expect(page.locator("#program-list")).to_contain_text("on a phone")
+    no_horizontal_overflow(page)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "library-390.png"), full_page=True)
+    row = page.locator(f'#program-list tr:has(a[href="/programs/{program_id}"])')
+    expect(row.get_by_role("link", name="History")).to_be_visible()
+    row.get_by_role("link", name="on a phone").click()
+    expect(page.locator('.block-row[data-block="1"] .summary')).to_be_visible()
+    no_horizontal_overflow(page)
+    (row_box,) = boxes(page, '.block-row[data-block="1"]')
+    assert row_box["right"] <= 390
+    page.screenshot(path=str(SHOTS / "program-390.png"), full_page=True)

@@ -4,11 +4,52 @@
 (function () {
   "use strict";
 
+  // The prompts Enter steps through: every value of the block (ABS/INC is not one: it is
+  // the INC key at the X or Y prompt, as on the control).
   function fields(form) {
-    return Array.from(form.querySelectorAll("[data-field], input[name=mode]")).filter(function (el) {
+    return Array.from(form.querySelectorAll("[data-field]")).filter(function (el) {
       return !el.disabled && el.type !== "hidden";
     });
   }
+
+  // A new block's form shows the values offered; until one is typed, Enter on the last
+  // prompt does not enter it (a stray Enter saved unwanted blocks). Ctrl+Enter does.
+  function untouched(form) {
+    if (form.getAttribute("data-offered") !== "1") { return false; }
+    var mode = form.querySelector("[data-mode]");
+    if (mode && mode.value !== mode.defaultValue) { return false; }
+    return fields(form).every(function (el) {
+      if (el.type === "checkbox") { return el.checked === el.defaultChecked; }
+      if (el.tagName === "SELECT") {
+        return Array.from(el.options).every(function (o) { return o.selected === o.defaultSelected; });
+      }
+      return el.value === el.defaultValue;
+    });
+  }
+
+  function enterBlock(form) {
+    var submit = form.querySelector("[data-submit]");
+    if (submit) { submit.click(); } else { form.requestSubmit(); }
+  }
+
+  // The INC key: ABS/INC of the block, shown in its heading; new blocks take it on.
+  function toggleMode(form) {
+    var mode = form.querySelector("[data-mode]");
+    var key = form.querySelector("[data-mode-key]");
+    if (!mode || !key) { return; }
+    if (key.getAttribute("data-inc-only") === "1") {
+      key.classList.add("refused");
+      key.title = "blocks in a LOOP sequence are always INC";
+      return;
+    }
+    mode.value = mode.value === "inc" ? "abs" : "inc";
+    key.textContent = mode.value.toUpperCase();
+  }
+
+  document.addEventListener("click", function (event) {
+    var key = event.target.closest ? event.target.closest("[data-mode-key]") : null;
+    if (key && key.form) { toggleMode(key.form); }
+  });
 
   // Alt+letter reaches the element with that access key on every browser (browsers disagree
   // on the modifier, and some headless ones have none): a field gets the focus, anything
@@ -23,15 +64,19 @@
   }, true);
 
   // Enter moves to the next prompt, as ENTER ADV does on the control; on the last one it
-  // enters the block. Escape goes back one step.
+  // enters the block. Escape goes back one step (leaving a block unsaved).
   document.addEventListener("keydown", function (event) {
     var target = event.target;
     var form = target.closest ? target.closest("form.block-form, form.db0-form") : null;
     if (event.key === "Enter" && (event.ctrlKey || event.metaKey) && target.form) {
       // Ctrl+Enter enters the whole form from any prompt.
       event.preventDefault();
-      var button = target.form.querySelector("[data-submit]");
-      if (button) { button.click(); } else { target.form.requestSubmit(); }
+      enterBlock(target.form);
+      return;
+    }
+    if (event.key === "Enter" && target.matches && target.matches("#entry .choices")) {
+      // On a menu a number chooses; Enter does nothing (it opened POS by accident).
+      event.preventDefault();
       return;
     }
     if (event.key === "Enter" && form && target.tagName !== "TEXTAREA" && target.tagName !== "BUTTON") {
@@ -43,8 +88,29 @@
         if (list[index + 1].select) { list[index + 1].select(); }
       } else if (index === list.length - 1) {
         event.preventDefault();
-        var submit = form.querySelector("[data-submit]");
-        if (submit) { submit.click(); } else { form.requestSubmit(); }
+        var note = form.querySelector(".untouched");
+        if (untouched(form)) { if (note) { note.hidden = false; } return; }
+        enterBlock(form);
+      }
+      return;
+    }
+    if (form && target.matches("[data-xy]") && (event.key === "i" || event.key === "I") &&
+        !event.ctrlKey && !event.metaKey && !event.altKey) {
+      event.preventDefault();
+      toggleMode(form);
+      return;
+    }
+    if (form && target.matches("select[data-numbered]") && /^[0-9]$/.test(event.key)) {
+      // A choice prompt takes its number and moves on, as the control's menus do.
+      var option = Array.from(target.options).find(function (o) {
+        return o.textContent.trim().split(" ")[0] === event.key;
+      });
+      if (option) {
+        event.preventDefault();
+        target.value = option.value;
+        var all = fields(form);
+        var next = all[all.indexOf(target) + 1];
+        if (next) { next.focus(); if (next.select) { next.select(); } }
       }
       return;
     }
@@ -64,8 +130,9 @@
   // first choice), and keep the block list in step with the entry panel.
   var shownList = null;
   function focusEntry() {
+    // On a menu the menu itself has the focus, so a stray Enter chooses nothing.
     var first = document.querySelector("#entry form.block-form .field [data-field]") ||
-      document.querySelector("#entry .choice");
+      document.querySelector("#entry .choices");
     if (first) { first.focus(); if (first.select) { first.select(); } }
     syncList();
     var blocks = document.getElementById("blocks");

@@ -128,7 +128,7 @@ def choose(page: Page, *keys: str) -> None:
 
 
 def choose_named(page: Page, title: str) -> None:
-    """Press the number shown beside a choice (the numbering follows what is offered)."""
+    """Press the number shown beside a choice."""
     choice = page.locator("#entry .choice", has_text=title).first
     key = choice.get_attribute("data-key")
     assert key, f"no choice {title}"
@@ -160,20 +160,20 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
         "&& e.selectionStart === 0 && e.selectionEnd === e.value.length; })()",
     )
     answer(page, "5", "3", "1", "", "0.1")
-    answer(page, "0.5", "1000", "0", "0.25", "2000")
+    answer(page, "0.5", "1000", "0", "")  # tool 1: DIA, RPM, TCAL, coolant as it is
+    shot(page, "02-data-block-0")
+    answer(page, "0.25", "2000")
     page.keyboard.type("-1")
     page.keyboard.press("Control+Enter")
-    expect(page.locator(".message.ok")).to_have_text("Saved.")
-    shot(page, "02-data-block-0")
-
-    page.keyboard.press("Alt+b")
+    # Saving Data Block 0 goes on to the data blocks, as on the control.
+    expect(page.locator(".message.ok")).to_have_text("Data Block 0 saved.")
     expect(page.locator("#entry h2")).to_contain_text("Block 1: type")
     assert drawn(page) == 0
 
     # POS, with a mistyped Y first: the error is named beside the field, nothing is saved.
     choose(page, "1")
     expect(page.locator("#entry h2")).to_contain_text("Block 1: POS")
-    answer(page, "1", "", "abc", "", "1")
+    answer(page, "1", "abc", "", "1")
     expect(page.locator(".field.invalid .field-error")).to_contain_text("Y: 'abc' is not a number")
     shot(page, "03-field-error")
     page.locator("#f-y").focus()
@@ -183,7 +183,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
 
     # DRILL at (3, 3), then a 6-hole bolt circle about it.
     choose(page, "2", "1")
-    answer(page, "3", "", "3", "0.1", "-0.3", "5", "1", "1")
+    answer(page, "3", "3", "0.1", "-0.3", "5", "1", "1")
     wait_for_block(page, 2)
     choose(page, "2")
     expect(page.locator("#entry .choice")).to_contain_text(["DRILL", "BOLT CIR DRILL"])
@@ -196,7 +196,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     choose(page, "6")
     expect(page.locator("#entry h2")).to_contain_text("LOOP")
     choose(page, "2", "1")
-    answer(page, "0.5", "", "0", "0.1", "-0.3", "5", "1", "1")
+    answer(page, "0.5", "0", "0.1", "-0.3", "5", "1", "1")
     wait_for_block(page, 4)
     choose_named(page, "REP")
     expect(page.locator("#entry h2")).to_contain_text("REP")
@@ -206,32 +206,32 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
 
     # A compensated contour: DRILL CUT RT, a line, an ARC CC (and its XY-END), a line.
     before = drawn(page)
-    choose(page, "2", "2")
+    choose(page, "2", "3")
     expect(page.locator("#entry h2")).to_contain_text("DRILL CUT RT")
-    page.locator("#f-mode").uncheck() if page.locator("#f-mode").count() else None
-    answer(page, "0", "", "-2", "0.1", "-0.2", "5", "1", "1")
+    expect(page.locator("#entry .mode")).to_have_text("ABS")
+    answer(page, "0", "-2", "0.1", "-0.2", "5", "1", "1")
     wait_for_block(page, 6)
     choose(page, "5", "1")
-    answer(page, "3", "", "-2", "-0.2", "10", "1")
+    answer(page, "3", "-2", "-0.2", "10", "1")
     wait_for_block(page, 7)
     choose(page, "5", "5")
     expect(page.locator("#entry h2")).to_contain_text("ARC CC")
-    answer(page, "3", "", "-1", "-0.2", "10", "1", "3", "0")
+    answer(page, "3", "-1", "-0.2", "10", "1", "3", "0")
     wait_for_block(page, 9)
     expect(page.locator('.block-row[data-block="9"] .title')).to_have_text("MILL ARC XY-END")
     choose(page, "5", "1")
-    answer(page, "0", "", "0", "-0.2", "10", "1")
+    answer(page, "0", "0", "-0.2", "10", "1")
     wait_for_block(page, 10)
     assert drawn(page) > before
     shot(page, "04-contour")
 
     # A pocket: DRILL with tool 2 at (6, 3), then CIRCLE POCKET R 0.75.
     choose(page, "2", "1")
-    answer(page, "6", "", "3", "0.1", "-0.25", "5", "1", "2")
+    answer(page, "6", "3", "0.1", "-0.25", "5", "1", "2")
     wait_for_block(page, 11)
     choose(page, "5", "6")
-    page.keyboard.type("POCKET")
-    answer(page, "", "0.75", "8", "2")
+    page.keyboard.press("5")  # PLACEMENT 5 POCKET: a number chooses and moves on
+    answer(page, "0.75", "8", "2")
     wait_for_block(page, 12)
     expect(page.locator('.block-row[data-block="12"] .title')).to_contain_text("CIRCLE POCKET")
 

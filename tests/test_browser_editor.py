@@ -6,9 +6,11 @@ to show; each failed before its fix (the commit that fixed it says how).
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
+from decimal import Decimal
 
 import pytest
 from flask import Flask
@@ -16,10 +18,25 @@ from playwright.sync_api import Page, expect
 from werkzeug.serving import make_server
 
 from app import create_app
-from app.cnc.blocks import Program
+from app.cnc.blocks import (
+    ArcEnd,
+    Block,
+    Comp,
+    DataBlock0,
+    Direction,
+    Hole,
+    HoleOp,
+    MillArc,
+    MillLine,
+    Mode,
+    Pos,
+    Program,
+    Tool,
+)
 from app.web import get_library
+from app.web.forms import entry_forms, field_values, kind_of
 from bench.programs import editor_program
-from tests.test_browser import browser, page, settle, until
+from tests.test_browser import SHOTS, browser, page, settle, until
 
 # The browser and the page (which fails the test on any console error) are test_browser's.
 __all__ = ["browser", "page"]
@@ -77,3 +94,371 @@ def test_after_editing_block_301_of_552_the_list_stays_at_it(page: Page, served:
     expect(page.locator(".pager").first).to_contain_text("blocks 301–400 of 552")
     until(page, "document.querySelector('.block-row[data-block=\"301\"]') !== null")
     assert in_list_view(page, 301)
+
+
+# -- the control's keystrokes (issue 20 items 1-3, 6) --------------------------------------
+
+D = Decimal
+TOOLS = (
+    Tool(number=1, diameter=D("0.25"), rpm=1200, tcal=D(0)),
+    Tool(number=2, diameter=D("0.5"), rpm=800, tcal=D(0)),
+)
+
+
+def program_of(*blocks: Block) -> Program:
+    return Program(name="keys", block0=DataBlock0(current_tool=1, tools=TOOLS), blocks=blocks)
+
+
+def drill(x: str, y: str, **more: object) -> Hole:
+    values: dict[str, object] = {
+        "op": HoleOp.DRILL,
+        "x": D(x),
+        "y": D(y),
+        "z_up": D("0.1"),
+        "z_dn": D("-0.3"),
+        "feed_z": D(5),
+        "tool": 1,
+    }
+    return Hole(**{**values, **more})  # type: ignore[arg-type]
+
+
+def open_editor(page: Page, served: Served, program: Program) -> int:
+    program_id = served.create(program)
+    page.goto(f"{served.url}/programs/{program_id}")
+    expect(page.locator("#entry h2")).to_contain_text(f"Block {len(program.blocks) + 1}: type")
+    settle(page)
+    return program_id
+
+
+def saved_blocks(served: Served, program_id: int) -> tuple[Block, ...]:
+    with served.app.app_context():
+        return get_library().get(program_id).program.blocks
+
+
+def stored_count(served: Served, program_id: int) -> int:
+    return len(saved_blocks(served, program_id))
+
+
+def enter(page: Page, *values: str) -> None:
+    """Type each value and press Enter, as at the control's prompts ("" keeps the value)."""
+    for value in values:
+        if value:
+            page.keyboard.type(value)
+        page.keyboard.press("Enter")
+
+
+def choose(page: Page, key: str, heading: str) -> None:
+    """Press `key` on a menu and wait for the next step (its heading has `heading`)."""
+    before = page.locator("#entry h2").inner_text()
+    page.keyboard.press(key)
+    expect(page.locator("#entry h2")).not_to_have_text(before)
+    expect(page.locator("#entry h2")).to_contain_text(heading)
+    settle(page)
+
+
+def test_inc_is_a_key_at_x_or_y_not_a_prompt(page: Page, served: Served) -> None:
+    """Item 1: `2⏎2⏎.1⏎-.5⏎5⏎` put the second 2 on the INC checkbox and shifted every later
+    value. INC is a key pressed at the X or Y prompt (I), the mode is shown, and it carries
+    to the block and to new blocks."""
+    program_id = open_editor(page, served, program_of())
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 1: DRILL")
+    enter(page, "2", "2", ".1", "-.5", "5", "1", "1")
+    expect(page.locator('.block-row[data-block="1"] .summary')).to_contain_text(
+        "X 2  Y 2  Z UP 0.1  Z DN -0.5  FEEDR Z 5"
+    )
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 2: DRILL")
+    expect(page.locator("#entry .mode")).to_have_text("ABS")
+    page.keyboard.press("i")  # at the X prompt
+    expect(page.locator("#entry .mode")).to_have_text("INC")
+    assert page.evaluate("document.activeElement.name") == "x"
+    enter(page, "1", "0", "", "", "", "", "")
+    expect(page.locator('.block-row[data-block="2"] .summary')).to_contain_text("INC  X 1  Y 0")
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 3: DRILL")
+    expect(page.locator("#entry .mode")).to_have_text("INC")
+    blocks = saved_blocks(served, program_id)
+    assert [b.mode for b in blocks] == [Mode.ABS, Mode.INC]
+    assert blocks[0] == drill("2", "2", z_up=D(".1"), z_dn=D("-.5"))
+
+
+def menu_numbers(page: Page) -> dict[str, str]:
+    """Each choice of the menu shown: its title → its number."""
+    found: dict[str, str] = page.evaluate(
+        """() => Object.fromEntries(Array.from(document.querySelectorAll('#entry .choice'))
+              .map(c => [(c.querySelector('.what') || c).textContent.replace(/^\\s*\\d+\\s*/, '')
+                         .trim(), c.dataset.key]))"""
+    )
+    return found
+
+
+def test_menu_numbers_never_change(page: Page, served: Served) -> None:
+    """Item 2: DRILL CUT LT was 3, or 4 when BOLT CIR was offered; COPY 8, or 9 with REP.
+    A number always means the same type; what does not fit is shown with the reason, and
+    its number is refused with that reason."""
+    open_editor(page, served, program_of(Pos(x=D(0), y=D(0), tool=1)))
+    first = menu_numbers(page)
+    assert (first.get("REP"), first.get("COPY")) == ("8", "9"), first
+    page.keyboard.press("8")
+    expect(page.locator("#entry .refused")).to_contain_text("REP closes an open LOOP")
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: type")
+    choose(page, "2", "DRILL")
+    after_pos = menu_numbers(page)
+    assert (after_pos.get("DRILL CUT LT"), after_pos.get("BOLT CIR DRILL")) == ("4", "2")
+    expect(page.locator('#entry .choice[data-key="2"]')).to_have_class(re.compile("unavailable"))
+
+    open_editor(page, served, program_of(drill("1", "1", loop=True, mode=Mode.INC)))
+    in_loop = menu_numbers(page)
+    assert (in_loop.get("REP"), in_loop.get("COPY")) == ("8", "9"), in_loop
+    choose(page, "2", "DRILL")
+    assert menu_numbers(page).get("DRILL CUT LT") == "4"
+
+
+def test_prefill_comes_from_the_sequence_being_cut(page: Page, served: Served) -> None:
+    """Item 3: a MILL STD after an ARC XY-END came with TOOL 1 (the contour uses tool 2) and
+    empty Z DN and FEEDR XY; a LOOP DRILL ticked INC but offered the absolute position."""
+    contour = program_of(
+        drill("0", "-2", comp=Comp.RIGHT, z_dn=D("-0.2"), tool=2),
+        MillLine(x=D(3), y=D(-2), z_dn=D("-0.2"), feed_xy=D(10), tool=2),
+        MillArc(direction=Direction.CCW, x=D(3), y=D(-1), feed_xy=D(10), tool=2),
+        ArcEnd(x=D(3), y=D(0)),
+    )
+    open_editor(page, served, contour)
+    choose(page, "5", "MILL")
+    choose(page, "1", "MILL STD")
+    values = page.evaluate(
+        "Object.fromEntries(Array.from(document.querySelectorAll('#entry [data-field]'))"
+        ".map(f => [f.name, f.value]))"
+    )
+    assert (values["tool"], values["z_dn"], values["feed_xy"]) == ("2", "-0.2", "10")
+
+    open_editor(page, served, program_of(Pos(x=D("1.5"), y=D(5), tool=1)))
+    choose(page, "6", "LOOP")
+    choose(page, "2", "LOOP")
+    choose(page, "1", "LOOP DRILL")
+    expect(page.locator("#entry .mode")).to_have_text("INC")
+    assert page.locator("#f-x").input_value() == "0" and page.locator("#f-y").input_value() == "0"
+
+
+def test_a_stray_enter_saves_nothing_and_escape_leaves(page: Page, served: Served) -> None:
+    """Item 3: one extra Enter on the menu opened POS, and Enter through it saved an unwanted
+    block. Esc leaves a block without saving it."""
+    program_id = open_editor(page, served, program_of(Pos(x=D(1), y=D(1), tool=1)))
+    page.keyboard.press("Enter")
+    page.keyboard.press("Enter")
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: type")
+    choose(page, "1", "Block 2: POS")
+    enter(page, "", "", "", "")  # X, Y, INDEX, TOOL # as offered
+    expect(page.locator("#entry .untouched")).to_be_visible()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POS")
+    assert stored_count(served, program_id) == 1
+    page.locator("#f-x").focus()
+    page.keyboard.type("4")
+    page.keyboard.press("Escape")
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: type")
+    assert stored_count(served, program_id) == 1
+
+
+def test_data_block_0_enter_reaches_coolant_and_saving_returns(page: Page, served: Served) -> None:
+    """Item 6: in Data Block 0 Enter skipped Coolant, and saving stayed on the page."""
+    program_id = served.create(program_of())
+    page.goto(f"{served.url}/programs/{program_id}/db0")
+    until(page, "document.activeElement && document.activeElement.name === 'x_offset'")
+    enter(page, "", "", "", "", "")  # X, Y, CUR-TOOL, 0 CONV 1 CLIMB, Z RET
+    enter(page, "", "", "")  # tool 1: DIA, RPM, TCAL
+    assert page.evaluate("document.activeElement.name") == "coolant_1"
+    page.keyboard.press("Control+Enter")
+    expect(page.locator("#entry h2")).to_contain_text("Block 1: type")
+    expect(page.locator(".message.ok")).to_contain_text("Data Block 0 saved")
+    assert f"/programs/{program_id}?" in page.url
+
+
+def test_the_library_links_each_program_to_its_history(page: Page, served: Served) -> None:
+    """Item 6: the library had no History link."""
+    program_id = served.create(program_of())
+    page.goto(served.url + "/")
+    row = page.locator(f'#program-list tr:has(a[href="/programs/{program_id}"])')
+    row.get_by_role("link", name="History").click()
+    expect(page.locator("h1")).to_contain_text("History")
+    assert page.url.endswith(f"/programs/{program_id}/history")
+
+
+# -- the trial part from the keyboard, counted (issue 20 "Must show") ----------------------
+
+
+@dataclass
+class Keys:
+    """The keyboard, counting every key pressed (a typed character is one key)."""
+
+    page: Page
+    count: int = 0
+
+    def press(self, key: str) -> None:
+        self.count += 1
+        self.page.keyboard.press(key)
+
+    def type(self, text: str) -> None:
+        self.count += len(text)
+        self.page.keyboard.type(text)
+
+    def enter(self, *values: str) -> None:
+        """Type each value and press Enter ("" takes the value offered)."""
+        for value in values:
+            self.type(value)
+            self.press("Enter")
+
+    def choose(self, *keys: str) -> None:
+        """Menu keys: each opens the next step (its heading changes)."""
+        for key in keys:
+            before = self.page.locator("#entry h2").inner_text()
+            self.press(key)
+            expect(self.page.locator("#entry h2")).not_to_have_text(before)
+            settle(self.page)
+
+    def block(self, number: int) -> None:
+        """Wait until block `number` is entered and the menu for the next is up."""
+        expect(self.page.locator(f'.block-row[data-block="{number}"]')).to_be_visible()
+        expect(self.page.locator("#entry h2")).to_contain_text(f"Block {number + 1}: type")
+        settle(self.page)
+
+
+def control_keystrokes(blocks: tuple[Block, ...], menu_keys: int) -> int:
+    """What the control asks for the same blocks (seed 001 §3): the same menu keys, then at
+    every prompt the value keyed in full and ENTER ADV (an ARC's XY-END is its second
+    screen); the INC key once per block in INC outside a LOOP sequence is not counted, to
+    keep the comparison on the safe side."""
+    forms = entry_forms()
+    total = menu_keys
+    for at, block in enumerate(blocks):
+        key = kind_of(block)
+        if key == "ARC_END":
+            continue
+        values = field_values(block, blocks[at + 1] if at + 1 < len(blocks) else None)
+        total += sum(len(values.get(spec.name, "")) + 1 for spec in forms[key].fields)
+    return total
+
+
+def test_the_trial_part_from_the_keyboard_in_fewer_keys_than_the_control(
+    page: Page, served: Served
+) -> None:
+    """The trial's part (bolt circle, compensated contour with an arc, frame pocket,
+    LOOP/REP) entered with the keyboard only; ours must not take more keys than the
+    control's prompts for the same blocks."""
+    program_id = open_editor(page, served, program_of())
+    keys = Keys(page)
+    menu = 0
+
+    def choose(*menu_keys: str) -> None:
+        nonlocal menu
+        menu += len(menu_keys)
+        keys.choose(*menu_keys)
+
+    choose("2", "1")  # DRILL at the bolt circle's centre
+    keys.enter("3", "3", ".1", "-.3", "5", "", "")
+    keys.block(1)
+    choose("2", "2")  # BOLT CIR DRILL: 6 holes, angle 0, radius 1
+    keys.enter("6", "", "1")
+    keys.block(2)
+    choose("2", "3")  # DRILL CUT RT: the contour's start, tool 2
+    keys.enter("0", "-2", "", "-.2", "", "", "2")
+    keys.block(3)
+    choose("5", "1")  # MILL STD
+    keys.enter("3", "-2", "", "10", "")
+    keys.block(4)
+    choose("5", "5")  # ARC CC: centre, then XY-END
+    keys.enter("3", "-1", "", "", "", "3", "0")
+    keys.block(6)
+    choose("5", "1")  # MILL STD back to 0,0
+    keys.enter("0", "0", "", "", "")
+    keys.block(7)
+    choose("2", "1")  # DRILL at the frame's corner
+    keys.enter("5", "-2", "", "-.25", "", "", "")
+    keys.block(8)
+    choose("5", "8")  # FRAME POCKET 1 x .75
+    keys.press("5")
+    keys.enter("1", ".75", "", "8", "")
+    keys.block(9)
+    choose("6", "2", "1")  # LOOP DRILL, a row of holes .5 apart
+    keys.enter(".5", "0", "", "-.3", "5", "", "1")
+    keys.block(10)
+    choose("8")  # REP: 3 more
+    keys.enter(".5", "0", "3", "")
+    keys.block(11)
+
+    blocks = saved_blocks(served, program_id)
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    assert [kind_of(b) for b in blocks] == [
+        "DRILL", "BOLT_CIR_DRILL", "DRILL_CUT_RT", "MILL_STD", "ARC_CC", "ARC_END",
+        "MILL_STD", "DRILL", "FRAME", "DRILL", "REP",
+    ]  # fmt: skip
+    control = control_keystrokes(blocks, menu)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    (SHOTS / "trial-keystrokes.txt").write_text(f"ours {keys.count}, the control's {control}\n")
+    assert keys.count <= control, (keys.count, control)
+
+
+# -- any screen (issue 20 item 5) ------------------------------------------------------------
+
+
+def no_horizontal_overflow(page: Page) -> None:
+    widths = page.evaluate("[document.scrollingElement.scrollWidth, window.innerWidth]")
+    assert widths[0] <= widths[1], f"the page scrolls sideways: {widths}"
+
+
+def boxes(page: Page, *selectors: str) -> list[dict[str, float]]:
+    found: list[dict[str, float]] = page.evaluate(
+        """(selectors) => selectors.map(s => {
+             const r = document.querySelector(s).getBoundingClientRect();
+             return {left: r.left, right: r.right, top: r.top, bottom: r.bottom};
+           })""",
+        list(selectors),
+    )
+    return found
+
+
+def overlap(a: dict[str, float], b: dict[str, float]) -> bool:
+    return (
+        a["left"] < b["right"] - 1
+        and b["left"] < a["right"] - 1
+        and a["top"] < b["bottom"] - 1
+        and b["top"] < a["bottom"] - 1
+    )
+
+
+@pytest.mark.parametrize("width", [1280, 1024, 800])
+def test_the_editor_fits_the_screen(page: Page, served: Served, width: int) -> None:
+    """Item 5: at 800 px the preview was cut off and the columns overlapped. At 1280, 1024
+    and 800 px the block list, the entry panel and the preview are all on the page, apart."""
+    program_id = served.create(editor_program(60, name=f"fits {width}"))
+    page.set_viewport_size({"width": width, "height": 800})
+    page.goto(f"{served.url}/programs/{program_id}")
+    expect(page.locator("#entry h2")).to_contain_text("Block 61: type")
+    panels = boxes(page, ".blocks", "#entry", ".preview")
+    for i, a in enumerate(panels):
+        assert a["left"] >= 0 and a["right"] <= width, (width, panels)
+        for b in panels[i + 1 :]:
+            assert not overlap(a, b), (width, panels)
+    no_horizontal_overflow(page)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / f"editor-{width}.png"), full_page=True)
+
+
+def test_the_library_and_a_program_read_on_a_phone(page: Page, served: Served) -> None:
+    """Item 5: at 390 px it was the same fixed layout. The library and a program's blocks
+    read without scrolling sideways."""
+    program_id = served.create(editor_program(30, name="on a phone"))
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.goto(served.url + "/")
+    expect(page.locator("#program-list")).to_contain_text("on a phone")
+    no_horizontal_overflow(page)
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "library-390.png"), full_page=True)
+    row = page.locator(f'#program-list tr:has(a[href="/programs/{program_id}"])')
+    expect(row.get_by_role("link", name="History")).to_be_visible()
+    row.get_by_role("link", name="on a phone").click()
+    expect(page.locator('.block-row[data-block="1"] .summary')).to_be_visible()
+    no_horizontal_overflow(page)
+    (row_box,) = boxes(page, '.block-row[data-block="1"]')
+    assert row_box["right"] <= 390
+    page.screenshot(path=str(SHOTS / "program-390.png"), full_page=True)

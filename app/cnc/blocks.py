@@ -119,7 +119,9 @@ def _loop_open(blocks: tuple[Block, ...], at: int) -> str:
 
 
 def _at_end(blocks: tuple[Block, ...], at: int) -> str:
-    return "" if at == len(blocks) + 1 else "only as a new block at the end (ERROR: COPY 4)"
+    if at == len(blocks) + 1:
+        return ""
+    return "is entered only as a new block at the end, not inserted (ERROR: COPY 4)"
 
 
 # -- the kinds ------------------------------------------------------------------------------

@@ -237,6 +237,16 @@ def _contour(
 def _targets(blocks: tuple[Block, ...]) -> list[tuple[XY | None, XY | None]]:
     """For each block, the absolute point it reaches in the first pattern (an ARC XY-CENT:
     its centre), and a QCIR's centre; (None, None) for blocks without a position."""
+    return _walk(blocks)[0]
+
+
+def table_position(blocks: tuple[Block, ...]) -> XY:
+    """Where the table is after `blocks` (nm, part coordinates; the first pattern of a
+    LOOP, moved on by its REP as the next block sees it): the reference of an INC block."""
+    return _walk(blocks)[1]
+
+
+def _walk(blocks: tuple[Block, ...]) -> tuple[list[tuple[XY | None, XY | None]], XY]:
     from app.cnc.mill import qcir_centre
 
     reference: XY = (0, 0)
@@ -264,7 +274,7 @@ def _targets(blocks: tuple[Block, ...]) -> list[tuple[XY | None, XY | None]]:
             found.append((None, None))
         else:
             found.append((None, None))
-    return found
+    return found, reference
 
 
 def _encode(plan: list[tuple[Block, XY | None]], units: Units) -> list[Block]:
@@ -309,6 +319,11 @@ def _bolt_last(out: list[Block], centre: XY) -> XY:
     assert isinstance(bolt, BoltCircle)
     holes = bolt_circle_points(centre, to_nm(bolt.radius, bolt.units), bolt.holes, bolt.angle)
     return holes[-1]
+
+
+def length_of(nm: int, units: Units) -> Decimal:
+    """nm as a value of `units`, at the programming resolution (0.001 in / 0.01 mm)."""
+    return _decimal(nm, units)
 
 
 def _decimal(nm: int, units: Units) -> Decimal:

@@ -43,11 +43,13 @@ from app.web.forms import (
     defaults_for,
     entry_forms,
     field_values,
+    group_kinds,
+    group_menu,
     kind_of,
-    offered_kinds,
     parse_block,
     read_number,
     read_whole,
+    refusal,
 )
 
 bp = Blueprint("editor", __name__)
@@ -99,25 +101,35 @@ def entry_from_args(program: Program, args: Any) -> Entry:
     kind = args.get("kind", "")
     loop = args.get("loop") == "1"
     stop = args.get("stop") == "1"
-    if group in ("LOOP", "STOP"):
-        loop = loop or group == "LOOP"
-        stop = stop or group == "STOP"
-        group = ""
     entry = Entry(
-        at=at,
-        editing=False,
-        group=group,
-        loop=loop,
-        stop=stop,
-        page=max(0, _int(args.get("page"), 0)),
+        at=at, editing=False, loop=loop, stop=stop, page=max(0, _int(args.get("page"), 0))
     )
-    if group and not kind:
-        kinds = offered_kinds(program, at, group)
-        if len(kinds) == 1:
-            kind = kinds[0]
-    if kind in entry_forms():
-        entry.kind = kind
-        entry.values = defaults_for(program, at, kind, loop)
+    if group:
+        # A number always means the same choice; one that does not fit here is refused
+        # with the reason, and the menu stays.
+        choice = next((c for c in group_menu(program, at, loop, stop) if c.key == group), None)
+        if choice is None or choice.reason:
+            entry.refused = f"{group} {choice.reason}" if choice else f"no such type {group!r}"
+        elif group in ("LOOP", "STOP"):
+            entry.loop, entry.stop = loop or group == "LOOP", stop or group == "STOP"
+        else:
+            entry.group = group
+            only = group_kinds().get(group, ())
+            if len(only) == 1 and not kind:
+                kind = only[0]
+    forms = entry_forms()
+    if kind in forms:
+        form = forms[kind]
+        reason = refusal(program, at, kind)
+        if not reason and loop and not form.loopable:
+            reason = "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+        if reason:
+            entry.refused = f"{form.title} {reason}"
+            entry.group = form.group if len(group_kinds().get(form.group, ())) > 1 else ""
+        else:
+            entry.group = form.group
+            entry.kind = kind
+            entry.values = defaults_for(program, at, kind, loop)
     return entry
 
 
@@ -148,7 +160,10 @@ def _int(text: str | None, default: int) -> int:
 @bp.get("/programs/<int:program_id>")
 def edit(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
-    return render_page(stored, entry_from_args(stored.program, request.args))
+    entry = entry_from_args(stored.program, request.args)
+    if request.args.get("saved") == "db0":
+        entry.notice = "Data Block 0 saved."
+    return render_page(stored, entry)
 
 
 @bp.get("/programs/<int:program_id>/entry")
@@ -383,7 +398,8 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
                     based_on=based_on or 0,
                     author=current_user(),
                 )
-                return redirect(url_for("editor.data_block_0", program_id=program_id, saved=1))
+                # Like leaving Data Block 0 on the control: back to the data blocks.
+                return redirect(url_for("editor.edit", program_id=program_id, saved="db0"))
             except StaleSave as exc:
                 message = str(exc)
                 stored = get_library().get(program_id)
@@ -400,7 +416,6 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
             errors=errors,
             message=message,
             problems=problems,
-            saved=request.args.get("saved") == "1",
         ),
         status,
     )

@@ -23,13 +23,13 @@ from typing import Any
 
 from flask import render_template, request
 
-from app.cnc.blocks import Block, Mode, Program
+from app.cnc.blocks import Block, Mode, Program, open_loops
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
-from app.web.forms import entry_forms, group_kinds, offered_groups, offered_kinds
+from app.web.forms import entry_forms, group_menu, sub_menu
 from app.web.preview import preview
 
 
@@ -45,7 +45,9 @@ class Entry:
     stop: bool = False
     values: dict[str, str] = dataclasses.field(default_factory=dict)
     errors: dict[str, str] = dataclasses.field(default_factory=dict)
-    message: str = ""
+    message: str = ""  # why what was entered was not saved
+    refused: str = ""  # why the choice made cannot be made here
+    notice: str = ""  # what was just done elsewhere (Data Block 0 saved)
     page: int = 0  # the block list's page asked for; 0: the page of block `at`
 
 
@@ -218,10 +220,11 @@ def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) 
         "entry": entry,
         "kind": kind,
         "field_problems": field_problems,
-        "groups": offered_groups(program, entry.at) if not entry.editing else [],
-        "sub_kinds": offered_kinds(program, entry.at, entry.group) if entry.group else [],
-        "group_kinds": group_kinds(),
+        "groups": group_menu(program, entry.at, entry.loop, entry.stop),
+        "sub_kinds": sub_menu(program, entry.at, entry.group) if entry.group else [],
         "kinds": entry_forms(),
+        "offered": not entry.editing and not entry.errors and not entry.message,
+        "in_loop": open_loops(program.blocks, entry.at - 1) > 0,
     }
 
 

@@ -16,9 +16,12 @@ from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import Block, Mode, Program, open_loops
+from app.cnc import limits
+from app.cnc.blocks import Block, Mode, Program, Rep, open_loops
 from app.cnc.kinds import REGISTRY, Field, Role, SubKind, Value
+from app.cnc.mirror import length_of, table_position
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
+from app.cnc.structure import starts_mill_sequence
 from app.cnc.units import Units
 
 # The qualifiers and settings every block has; the form asks for them apart from the prompts.
@@ -141,28 +144,59 @@ def kind_of(block: Block) -> str:
 # -- what may be offered where -------------------------------------------------------------
 
 
-def offered_kinds(program: Program, at: int, group: str) -> list[str]:
-    """The sub-types of `group` the control offers for a new block at position `at` (1-based).
-
-    BOLT CIR only right after a standard block of the same operation; REP only with an
-    unmatched LOOP open; COPY only as a new block at the end (not inserted).
-    """
-    return [key for key in group_kinds().get(group, ()) if not refusal(program, at, key)]
-
-
 def refusal(program: Program, at: int, key: str) -> str:
     """Why sub-kind `key` cannot be entered as block `at` ("" when it can)."""
     _, sub = REGISTRY.sub_kinds()[key]
     return sub.offered(program.blocks, at) if sub.offered else ""
 
 
-def offered_groups(program: Program, at: int) -> list[str]:
-    """The first choices offered for a new block at position `at`."""
-    groups = []
-    for group in GROUPS:
-        if group in ("LOOP", "STOP") or offered_kinds(program, at, group):
-            groups.append(group)
-    return groups
+@dataclass(frozen=True)
+class Choice:
+    """One line of a menu: its number (always the same for the same choice), what it
+    chooses, its title, and why it cannot be chosen here ("" when it can)."""
+
+    number: int
+    key: str
+    title: str
+    reason: str = ""
+
+
+LOOP_KINDS = ("POS", "DRILL", "BORE", "TAP")
+
+
+def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False) -> list[Choice]:
+    """The first menu for block `at`: every choice, numbered as always (the control's order),
+    those that do not fit here (given the LOOP and STOP already chosen) with the reason."""
+    choices = []
+    for number, group in enumerate(GROUPS, start=1):
+        reason = ""
+        if group == "LOOP":
+            if loop:
+                reason = "is chosen already"
+            elif open_loops(program.blocks, at - 1) >= limits.MAX_LOOP_DEPTH:
+                reason = "sequences nest at most 4 deep; close one with REP first"
+        elif group == "STOP":
+            reason = "is chosen already" if stop else ""
+        elif (loop or stop) and group in ("REP", "COPY"):
+            reason = "takes no LOOP or STOP qualifier"
+        elif loop and group not in LOOP_KINDS:
+            reason = "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+        else:
+            reasons = [refusal(program, at, key) for key in group_kinds().get(group, ())]
+            if reasons and all(reasons):
+                reason = reasons[0]
+        choices.append(Choice(number, group, group, reason))
+    return choices
+
+
+def sub_menu(program: Program, at: int, group: str) -> list[Choice]:
+    """The sub-types of `group` for block `at`, each with its own number (its declaration's)
+    and, where it does not fit here, the reason."""
+    forms = entry_forms()
+    return [
+        Choice(forms[key].menu, key, forms[key].title, refusal(program, at, key))
+        for key in group_kinds().get(group, ())
+    ]
 
 
 # -- values --------------------------------------------------------------------------------
@@ -191,40 +225,98 @@ def _text(value: Any) -> str:
     return str(value)
 
 
-def defaults_for(program: Program, at: int, kind: str, loop: bool = False) -> dict[str, str]:
-    """Values offered for a new block: the previous block's where it has the same field.
+def entry_mode(blocks: tuple[Block, ...], at: int, loop: bool = False) -> Mode:
+    """ABS or INC for a new block at `at` (seed 001 §3.4.5.1): the mode the machinist last
+    chose with the INC key (that of the last positioned block outside LOOP sequences),
+    carried to new blocks; INC for a LOOP block and inside a LOOP sequence, where the
+    control programs every block in INC by itself."""
+    if loop or open_loops(blocks, at - 1):
+        return Mode.INC
+    mode, depth = Mode.ABS, 0
+    for block in blocks[: at - 1]:
+        kind = REGISTRY.of(block)
+        if block.loop and kind.loopable:
+            depth += 1
+        elif isinstance(block, Rep):
+            depth = max(0, depth - 1)
+        elif depth == 0 and kind.positioned:
+            mode = block.mode
+    return mode
 
-    Blocks of a LOOP sequence (the LOOP block included) are offered in INC.
+
+def defaults_for(program: Program, at: int, kind: str, loop: bool = False) -> dict[str, str]:
+    """Values offered for a new block `at` of sub-kind `kind`, from the sequence being cut.
+
+    Each value comes from the nearest block before that has the field: first from the mill
+    sequence the block continues (a MILL STD after an ARC's XY-END takes the contour's tool,
+    Z DN and FEEDR XY), then from blocks of the same kind, then from any block; else the
+    declared default. X and Y offer where the table is: in INC the step of the block before
+    when it was an INC step too, else 0 (a LOOP DRILL after an ABS POS starts where it is);
+    in ABS the position reached.
     """
-    values: dict[str, str] = {
-        "units": program.units.value,
-        "mode": "abs",
-        "tool": str(
-            program.block0.current_tool
-            or (program.block0.tools[0].number if program.block0.tools else 1)
-        ),
-        "pecks": "1",
-        "angle": "0",
-        "corner_radius": "0",
-        "nx": "0",
-        "ny": "0",
-        "placement": "inside",
-    }
-    previous = program.blocks[at - 2] if at >= 2 else None
-    if previous is not None:
-        values.update({k: v for k, v in field_values(previous).items() if v != ""})
-        values.pop("index", None)
-        values.pop("stop", None)
-        values.pop("loop", None)
-    if loop or open_loops(program.blocks, at - 1) or kind == "REP":
-        values["mode"] = "inc"
-    elif (
-        previous is not None and previous.loop is False and open_loops(program.blocks, at - 1) == 0
-    ):
-        values["mode"] = "abs"
+    blocks = program.blocks[: at - 1]
+    units = blocks[-1].units if blocks else program.units
     if kind == "COPY":
-        values = {"units": values["units"], "from_block": "1", "to_block": str(at - 1)}
+        return {"units": units.value, "from_block": "1", "to_block": str(at - 1)}
+    cls, sub = REGISTRY.sub_kinds()[kind]
+    mode = entry_mode(program.blocks, at, loop)
+    values = {"units": units.value, "mode": mode.value}
+    order = _search_order(blocks, cls)
+    for f in REGISTRY.prompted(cls, sub):
+        if f.prompt.role in (Role.X, Role.Y):
+            continue
+        found = next(
+            (getattr(b, f.name) for b in order if getattr(b, f.name, None) is not None), None
+        )
+        values[f.name] = _text(f.default if found is None else found)
+    if "tool" in values and values["tool"] == "":
+        block0 = program.block0
+        values["tool"] = str(block0.current_tool or (block0.tools[0].number if block0.tools else 1))
+    if "placement" in values and values["placement"] == "":
+        values["placement"] = "inside"
+    if REGISTRY.kind(cls).positioned:
+        values.update(_position(blocks, mode, units))
     return values
+
+
+def _search_order(blocks: tuple[Block, ...], cls: type[Block]) -> list[Block]:
+    """The blocks a new block of kind `cls` takes its values from, in the order asked."""
+    nearest = blocks[::-1]
+    start = len(blocks)
+    if REGISTRY.kind(cls).mill is not None:
+        while start and REGISTRY.of(blocks[start - 1]).mill is not None:
+            start -= 1
+        if start < len(blocks) and start and starts_mill_sequence(blocks, start - 1):
+            start -= 1
+    sequence = blocks[start:][::-1]
+    same = [b for b in nearest if isinstance(b, cls)]
+    return [*sequence, *same, *nearest]
+
+
+def _position(blocks: tuple[Block, ...], mode: Mode, units: Units) -> dict[str, str]:
+    """X and Y offered for a new positioned block (see `defaults_for`)."""
+    kinds = [(b, REGISTRY.of(b)) for b in blocks]
+    points = [b for b, kind in kinds if kind.positioned and not kind.xy_is_centre]
+    last = points[-1] if points else None
+    if mode is Mode.INC:
+        if last is not None and last.mode is Mode.INC and not REGISTRY.of(last).part:
+            return _xy(last)
+        return {"x": "0", "y": "0"}
+    if last is None:
+        return {}
+    if last is blocks[-1] and last.mode is Mode.ABS:
+        return _xy(last)
+    x, y = table_position(blocks)
+    return {axis: _text(length_of(nm, units).normalize()) for axis, nm in (("x", x), ("y", y))}
+
+
+def _xy(block: Block) -> dict[str, str]:
+    """A positioned block's X and Y as form text (the fields declared as its point)."""
+    found = {}
+    for f in REGISTRY.fields(type(block)):
+        if f.prompt.role in (Role.X, Role.Y):
+            found["x" if f.prompt.role is Role.X else "y"] = _text(getattr(block, f.name))
+    return found
 
 
 @dataclass

@@ -1,4 +1,4 @@
-"""G-code import: lines per second of our reader (+ interpreter) against LinuxCNC's
+"""G-code import: lines per second of our reader (+ compiler) against LinuxCNC's
 `rs274 -g` and pygcode, on the same 100 000-line file.
 
 The file is written here, deterministically, in the style of our gcode-linuxcnc target
@@ -8,9 +8,9 @@ G3 arcs and a short G1/G2 contour. It is padded with single-axis G1 moves to exa
 line count. rs274 must accept it (its exit status is checked), so all three readers see a
 valid program.
 
-- ours: `app.cnc.imports.read_program(data, name, "gcode")` (parse, motion, recognition of
-  data blocks), then `interpret()` of the program it returns. While `app.cnc.imports` has no
-  `read_program`, the row says "not available" and the others still run.
+- ours: `app.cnc.imports.read_as` with the G-code importer (parse, motion, recognition of
+  data blocks; without the web's and CLI's size limits), then `compile_program()` of the
+  program it returns.
 - rs274: LinuxCNC's interpreter in batch mode (`-g`), canonical calls to /dev/null; wall
   time of the process (its start-up, ~20 ms, is included and reported).
 - pygcode 0.2.1: `Line(text)` per line and `Machine.process_block` (its own interpreter);
@@ -124,32 +124,27 @@ def write_file(directory: Path, lines: int = LINES) -> Path:
 
 
 def ours_case(path: str) -> Result:
-    """(child) Our reader, then our interpreter, on the file."""
-    try:
-        from app.cnc import imports
-    except ImportError as exc:
-        return {"unavailable": f"app.cnc.imports cannot be imported ({exc})"}
-    read_program = getattr(imports, "read_program", None)
-    if read_program is None:
-        return {"unavailable": "app.cnc.imports has no read_program yet"}
-    from app.cnc.blocks import Program
-    from app.cnc.interpret import interpret
+    """(child) Our reader (`imports.read_as` with the G-code importer: the web's and the
+    CLI's size limits are theirs, not the reader's), then the compiler on the program it
+    returns."""
+    from app.cnc.compiler import compile_program
+    from app.cnc.imports import read_as
+    from app.cnc.imports.registry import get_importer
 
     data = Path(path).read_bytes()
-    result, seconds, peak = measure(lambda: read_program(data, Path(path).name, "gcode"))
-    program = result if isinstance(result, Program) else getattr(result, "program", None)
-    if not isinstance(program, Program):
-        return {"unavailable": f"read_program returned {type(result).__name__}, not a Program"}
+    importer = get_importer("gcode")
+    (program, _notes), seconds, peak = measure(lambda: read_as(importer, data, Path(path).name, {}))
     started = time.perf_counter()
-    toolpath = interpret(program)
-    interpret_seconds = time.perf_counter() - started
+    compiled = compile_program(program)
+    moves = len(compiled.path)
+    compile_seconds = time.perf_counter() - started
     return {
         "lines": data.count(b"\n"),
         "seconds": seconds,
-        "interpret_seconds": interpret_seconds,
+        "compile_seconds": compile_seconds,
         "peak": peak,
         "blocks": len(program.blocks),
-        "moves": len(toolpath.moves),
+        "moves": moves,
     }
 
 
@@ -222,65 +217,84 @@ def pygcode_case(path: str, limit: float = PYGCODE_LIMIT) -> Result:
     }
 
 
-def run(lines: int = LINES, timeout: float = 300.0) -> Section:
-    section = Section(f"G-code import: {fmt_count(lines)}-line file")
-    with tempfile.TemporaryDirectory() as tmp:
-        path = write_file(Path(tmp), lines)
-        size = path.stat().st_size
-        args = {"path": str(path)}
-        results = {
-            "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
-            "ours": run_child("bench.gcode_import:ours_case", args, timeout),
-            "pygcode": run_child(
-                "bench.gcode_import:pygcode_case", {**args, "limit": PYGCODE_LIMIT}, timeout
-            ),
-        }
-    referee = results["rs274"]
-    base = referee["lines"] / referee["seconds"] if "seconds" in referee else float("nan")
+SIZES = (10_000, 100_000, 1_000_000)
+
+
+def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
+    """rs274 and ours on files of each size (linear: the same µs per line at every size),
+    pygcode on the 100 000-line file only (its time limit would cut the others short)."""
+    section = Section("G-code import: " + ", ".join(fmt_count(n) for n in sizes) + " lines")
     rows: list[list[str]] = []
-    for name, r in results.items():
-        label = {
-            "rs274": "LinuxCNC `rs274 -g` (baseline)",
-            "ours": "ours: `read_program` + `interpret`",
-            "pygcode": "pygcode `Line` + `Machine.process_block`",
-        }[name]
-        if "unavailable" in r or "error" in r:
-            reason = r.get("unavailable") or r.get("error")
-            shown = "**not available**" if "unavailable" in r else "**failed**"
-            rows.append([label, f"{shown}: {reason}", "", "", ""])
-            continue
-        seconds = r["seconds"] + r.get("interpret_seconds", 0.0)
-        rate = r["lines"] / seconds
-        detail = ""
-        if name == "rs274":
-            detail = f"process start-up {fmt_seconds(r['startup'])} included"
-        elif name == "ours":
-            detail = (
-                f"read {fmt_seconds(r['seconds'])} → {r['blocks']} blocks, interpret "
-                f"{fmt_seconds(r['interpret_seconds'])} → {fmt_count(r['moves'])} moves; "
-                f"peak {fmt_bytes(r['peak'])}"
+    headline: tuple[int, float, float] | None = None
+    for lines in sizes:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = write_file(Path(tmp), lines)
+            size = path.stat().st_size
+            args = {"path": str(path)}
+            results = {
+                "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
+                "ours": run_child("bench.gcode_import:ours_case", args, timeout),
+            }
+            if lines == LINES:
+                results["pygcode"] = run_child(
+                    "bench.gcode_import:pygcode_case", {**args, "limit": PYGCODE_LIMIT}, timeout
+                )
+        referee = results["rs274"]
+        base = referee["lines"] / referee["seconds"] if "seconds" in referee else float("nan")
+        for name, r in results.items():
+            label = {
+                "rs274": "LinuxCNC `rs274 -g` (baseline)",
+                "ours": "ours: `read_as` + `compile_program`",
+                "pygcode": "pygcode `Line` + `Machine.process_block`",
+            }[name]
+            if "unavailable" in r or "error" in r:
+                reason = r.get("unavailable") or r.get("error")
+                shown = "**not available**" if "unavailable" in r else "**failed**"
+                rows.append([fmt_count(lines), label, f"{shown}: {reason}", "", "", "", ""])
+                continue
+            seconds = r["seconds"] + r.get("compile_seconds", 0.0)
+            rate = r["lines"] / seconds
+            detail = ""
+            if name == "rs274":
+                detail = f"{fmt_bytes(size)}; process start-up {fmt_seconds(r['startup'])} included"
+            elif name == "ours":
+                detail = (
+                    f"read {fmt_seconds(r['seconds'])} → {r['blocks']} blocks, compile "
+                    f"{fmt_seconds(r['compile_seconds'])} → {fmt_count(r['moves'])} moves; "
+                    f"peak {fmt_bytes(r['peak'])}"
+                )
+                if lines == LINES:
+                    headline = (lines, rate, rate / base)
+            elif name == "pygcode":
+                detail = (
+                    f"pygcode {r['version']}; {fmt_count(r['lines'])} of {fmt_count(r['of'])} lines"
+                )
+                if r["lines"] < r["of"]:
+                    detail += f" in the {PYGCODE_LIMIT:.0f} s limit"
+                if r["failures"]:
+                    detail += f"; {fmt_count(r['failures'])} lines raised ({r['first_failure']})"
+            per_line = f"{seconds / r['lines'] * 1e6:.1f} µs"
+            rows.append(
+                [
+                    fmt_count(lines),
+                    label,
+                    fmt_seconds(seconds),
+                    fmt_rate(rate),
+                    per_line,
+                    fmt_ratio(rate / base),
+                    detail,
+                ]
             )
-        elif name == "pygcode":
-            detail = (
-                f"pygcode {r['version']}; {fmt_count(r['lines'])} of {fmt_count(r['of'])} lines"
-            )
-            if r["lines"] < r["of"]:
-                detail += f" in the {PYGCODE_LIMIT:.0f} s limit"
-            if r["failures"]:
-                detail += f"; {fmt_count(r['failures'])} lines raised ({r['first_failure']})"
-        rows.append([label, fmt_seconds(seconds), fmt_rate(rate), fmt_ratio(rate / base), detail])
     section.lines += [
-        f"The file: {fmt_count(lines)} lines, {fmt_bytes(size)}, written by",
-        "`bench/gcode_import.py` (bolt circles in G82, pecked holes, G3 pockets, G1/G2",
-        "contours); *× rs274* is lines per second over rs274's, same file, same run.",
+        "Files written by `bench/gcode_import.py` (bolt circles in G82, pecked holes, G3",
+        "pockets, G1/G2 contours, padded with single-axis moves); *× rs274* is lines per",
+        "second over rs274's on the same file in the same run; *per line* shows linearity.",
         "",
-        *table(["reader", "time", "lines/s", "× rs274", "notes"], rows),
+        *table(["lines", "reader", "time", "lines/s", "per line", "× rs274", "notes"], rows),
     ]
-    ours = results["ours"]
-    if "seconds" in ours and "seconds" in referee:
-        rate = ours["lines"] / (ours["seconds"] + ours["interpret_seconds"])
+    if headline is not None:
         section.target(
-            "G-code import, 100 000 lines", "≥ rs274", fmt_rate(rate), fmt_ratio(rate / base)
+            "G-code import, 100 000 lines", "≥ rs274", fmt_rate(headline[1]), fmt_ratio(headline[2])
         )
     else:
         section.target("G-code import, 100 000 lines", "≥ rs274", "not available", "–")

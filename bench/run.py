@@ -44,7 +44,7 @@ def sections(quick: bool) -> dict[str, Callable[[], Section]]:
     sizes = (10_000, 100_000) if quick else interpreter.SIZES
     return {
         "interpreter": lambda: interpreter.run(sizes),
-        "gcode": lambda: gcode_import.run(10_000 if quick else gcode_import.LINES),
+        "gcode": lambda: gcode_import.run((10_000,) if quick else gcode_import.SIZES),
         "preview": lambda: preview.run(sizes),
         "editor": lambda: editor.run(),
         "export": lambda: exports.run((10_000, 100_000) if quick else exports.SIZES),

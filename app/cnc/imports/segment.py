@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from decimal import Decimal
+from itertools import islice
 
 from app.cnc import limits
 from app.cnc.blocks import Comp, HoleOp
@@ -118,7 +119,10 @@ def is_two_axis(steps: list[Step]) -> bool:
 def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
     """True when steps[j:] go on cutting in XY from `at` (after more feeds in Z there): a
     feed in Z before it is a depth change, not the end of the sequence."""
-    for step in steps[j:]:
+    # Indexing, not `steps[j:]`: a slice copies the rest of the file's steps on every
+    # call, which made reading a long file quadratic.
+    for k in range(j, len(steps)):
+        step = steps[k]
         if isinstance(step, Feed) and (step.x, step.y) == at:
             continue
         return isinstance(step, Feed | Arc)
@@ -723,7 +727,9 @@ class _Segmenter:
         self.spindle_off_line = None
         if self.two_axis and self.pending is not None and not after_spindle_stop:
             # The quill: a hole by hand here, or the quill lowered for the cuts that follow.
-            nxt = next((s for s in self.steps[i + 1 :] if not isinstance(s, Dwell)), None)
+            nxt = next(
+                (s for s in islice(self.steps, i + 1, None) if not isinstance(s, Dwell)), None
+            )
             if isinstance(nxt, Feed | Arc) and (nxt.x, nxt.y) != self.pending.at:
                 self.quill_stop = step.line
                 return i + 1

@@ -234,6 +234,23 @@ def test_export_page_and_downloads(client: FlaskClient) -> None:
     assert gcode.status_code == 200 and gcode.data.startswith(b"%\n")
 
 
+def test_each_target_downloads_under_its_own_file_name(client: FlaskClient) -> None:
+    """A shop exporting one part for LinuxCNC and for the Fanuc keeps both files: the
+    downloads have different names (part.ngc, part.fanuc.nc), for every target."""
+    from app.cnc.emit.target import targets
+
+    names = {}
+    for name in targets():
+        response = client.get(f"/programs/3/export/download?target={name}")
+        disposition = response.headers.get("Content-Disposition", "")
+        found = re.search(r'filename="([^"]+)"', disposition)
+        if response.status_code == 200 and found:
+            names[name] = found.group(1)
+    assert names["gcode-linuxcnc"].endswith(".ngc")
+    assert names["gcode-fanuc"].endswith(".fanuc.nc")
+    assert len(set(names.values())) == len(names), names
+
+
 def test_oversized_upload_gets_413(client: FlaskClient) -> None:
     csrf = token(client)
     boundary = "mbtest"

@@ -96,6 +96,8 @@ class FanucTarget(GcodeTarget):
     label = "Fanuc 6M"
     description = "Fanuc 6M (% and O number, N numbers, no spaces)"
     dialect = FANUC
+    # Its own name beside the LinuxCNC file of the same part (part.ngc, part.fanuc.nc).
+    extension = "fanuc.nc"
     options = dialect_options(FANUC)
 
 
@@ -105,6 +107,7 @@ class PrototrakTarget(GcodeTarget):
     label = "ProtoTRAK G-code (modified Fanuc 6)"
     description = "ProtoTRAK Plus modified Fanuc 6 (G on every line, spaces, ; end of block)"
     dialect = PROTOTRAK
+    extension = "prototrak.nc"
     options = dialect_options(PROTOTRAK)
 
 

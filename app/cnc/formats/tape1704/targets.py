@@ -304,7 +304,7 @@ class TapeSvgTarget(TapeTarget):
     name = "tape-svg"
     label = "1704 tape picture (SVG)"
     description = "drawing of the Tektronix 1704 tape (channels, feed holes, title) as SVG"
-    extension = "svg"
+    extension = "tape.svg"  # beside the tool-path picture (svg) of the same part
     media_type = "image/svg+xml"
     reads_back = None
     picture = "tape-svg"

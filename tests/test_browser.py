@@ -257,7 +257,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     page.keyboard.press("Alt+e")
     expect(page.locator("h1")).to_contain_text("Export")
     page.keyboard.press("Alt+t")
-    page.keyboard.type("tape-eia")
+    page.keyboard.type("Tektronix 1704 tape (EIA)")  # the menu's names are the shop's
     expect(page.locator(".report")).to_contain_text("Compatibility report for tape-eia")
     expect(page.locator(".picture svg")).to_be_visible()
     shot(page, "06-export-tape")
@@ -267,7 +267,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     assert tape.value.suggested_filename.startswith("Keyboard-bracket")
     assert Path(tape_path).read_bytes().startswith(b"%")
     page.keyboard.press("Alt+t")
-    page.keyboard.type("gcode-linuxcnc")
+    page.keyboard.type("LinuxCNC G-code")
     expect(page.locator(".report")).to_contain_text("Compatibility report for gcode-linuxcnc")
     with page.expect_download() as gcode:
         page.keyboard.press("Alt+d")

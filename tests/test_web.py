@@ -251,6 +251,25 @@ def test_each_target_downloads_under_its_own_file_name(client: FlaskClient) -> N
     assert len(set(names.values())) == len(names), names
 
 
+def test_export_page_names_targets_and_options_in_the_shops_words(client: FlaskClient) -> None:
+    """The target menu reads "LinuxCNC G-code", "Tektronix 1704 tape (EIA)", not the
+    registry's names; options are labelled by what they do, the common ones first and the
+    rest folded away."""
+    page = client.get("/programs/3/export").get_data(as_text=True)
+    menu = re.search(r'<select name="target".*?</select>', page, re.S)
+    assert menu is not None
+    shown = re.findall(r"<option value=\"([^\"]+)\"[^>]*>([^<]+)</option>", menu.group(0))
+    labels = {value: text.strip() for value, text in shown}
+    assert labels["gcode-linuxcnc"] == "LinuxCNC G-code"
+    assert labels["tape-eia"] == "Tektronix 1704 tape (EIA)"
+    assert all(text != value and not text.startswith(value) for value, text in labels.items())
+    assert "Options of LinuxCNC G-code" in page
+    assert ">write N numbers" in page  # the option's meaning, not "sequence-numbers"
+    folded = page.index("<details")
+    assert page.index('name="opt_sequence-numbers"') < folded  # common: shown first
+    assert page.index('name="opt_tabs"') > folded  # the rest: folded
+
+
 def test_oversized_upload_gets_413(client: FlaskClient) -> None:
     csrf = token(client)
     boundary = "mbtest"

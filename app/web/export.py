@@ -9,8 +9,17 @@ from urllib.parse import urlencode
 from flask import Blueprint, Response, render_template, request
 from jinja2_fragments.flask import render_block
 
-from app.cnc.emit.target import Export, ExportError, OptionError, export, get_target, targets
+from app.cnc.emit.target import (
+    Export,
+    ExportError,
+    OptionError,
+    Target,
+    export,
+    get_target,
+    targets,
+)
 from app.cnc.machine import MachineError, MachineModel, read_machine
+from app.cnc.options import Option
 from app.storage.library import LibraryError
 from app.web.downloads import attachment
 from app.web.editor import is_htmx, load
@@ -45,6 +54,15 @@ def _machine_options(name: str) -> tuple[str | None, dict[str, str], MachineMode
     except (LibraryError, MachineError):
         return None, {}, None
     return machine.target, dict(machine.options), model
+
+
+def option_groups(target: Target) -> tuple[list[Option], list[Option]]:
+    """A target's options as its form shows them: the common ones (in the order the
+    target lists them), then the rest, folded. A target that names none shows all."""
+    if not target.common:
+        return list(target.options), []
+    common = [option for option in target.options if option.name in target.common]
+    return common, [option for option in target.options if option.name not in target.common]
 
 
 def preview_text(result: Export) -> str:
@@ -115,8 +133,11 @@ def page(program_id: int) -> tuple[str, int]:
                 query[f"opt_{option.name}"] = "on"
         elif value is not None:
             query[f"opt_{option.name}"] = str(value)
+    common, more = option_groups(target)
     context = {
         "stored": stored,
+        "common_options": common,
+        "more_options": more,
         "targets": all_targets,
         "target": all_targets[target_name],
         "target_name": target_name,

@@ -84,7 +84,7 @@ class GcodeTarget(Target):
 @register
 class LinuxcncTarget(GcodeTarget):
     name = "gcode-linuxcnc"
-    label = "LinuxCNC (RS274/NGC)"
+    label = "LinuxCNC G-code"
     description = "RS274/NGC as LinuxCNC reads it"
     dialect = LINUXCNC
     options = dialect_options(LINUXCNC)
@@ -93,7 +93,7 @@ class LinuxcncTarget(GcodeTarget):
 @register
 class FanucTarget(GcodeTarget):
     name = "gcode-fanuc"
-    label = "Fanuc 6M"
+    label = "Fanuc 6M G-code"
     description = "Fanuc 6M (% and O number, N numbers, no spaces)"
     dialect = FANUC
     # Its own name beside the LinuxCNC file of the same part (part.ngc, part.fanuc.nc).

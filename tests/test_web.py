@@ -270,6 +270,26 @@ def test_export_page_names_targets_and_options_in_the_shops_words(client: FlaskC
     assert page.index('name="opt_tabs"') > folded  # the rest: folded
 
 
+def test_machines_page_starts_on_a_real_target_and_lists_the_ports(client: FlaskClient) -> None:
+    """A new machine starts on LinuxCNC G-code (not the test dump "canon"), targets are
+    named as the export page names them, and the serial port can be picked from the ports
+    this computer has (pyserial's list)."""
+    from app.dnc.service import available_ports
+
+    page = client.get("/machines").get_data(as_text=True)
+    menu = re.search(r'<select name="target".*?</select>', page, re.S)
+    assert menu is not None
+    selected = re.search(r'<option value="([^"]+)" selected>([^<]+)</option>', menu.group(0))
+    assert selected is not None
+    assert selected.groups() == ("gcode-linuxcnc", "LinuxCNC G-code")
+    assert ">canon<" not in menu.group(0)
+    picker = re.search(r'<datalist id="ports">.*?</datalist>', page, re.S)
+    assert picker is not None
+    for device, _ in available_ports():
+        assert f'value="{device}"' in picker.group(0)
+    assert 'name="port" list="ports"' in page
+
+
 def test_oversized_upload_gets_413(client: FlaskClient) -> None:
     csrf = token(client)
     boundary = "mbtest"

@@ -27,6 +27,13 @@ from app.web.extensions import get_library
 
 bp = Blueprint("export", __name__)
 PREVIEW_LINES = 400
+DEFAULT_TARGET = "gcode-linuxcnc"  # what a new export or machine starts on
+
+
+def shown_targets() -> dict[str, Target]:
+    """The targets a shop picks from, by name: all but the canonical-move dump, which is
+    for tests and the CLI."""
+    return {name: target for name, target in targets().items() if name != "canon"}
 
 
 def options_from(args: Any, target_name: str) -> dict[str, str]:
@@ -86,10 +93,10 @@ def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     machine_name = request.args.get("machine", "")
     machine_target, machine_options, model = _machine_options(machine_name)
-    target_name = request.args.get("target") or machine_target or "gcode-linuxcnc"
+    target_name = request.args.get("target") or machine_target or DEFAULT_TARGET
     all_targets = targets()
     if target_name not in all_targets:
-        target_name = "gcode-linuxcnc"
+        target_name = DEFAULT_TARGET
     raw = machine_options | (
         options_from(request.args, target_name) if "go" in request.args else {}
     )
@@ -138,7 +145,7 @@ def page(program_id: int) -> tuple[str, int]:
         "stored": stored,
         "common_options": common,
         "more_options": more,
-        "targets": all_targets,
+        "targets": shown_targets() | {target_name: all_targets[target_name]},
         "target": all_targets[target_name],
         "target_name": target_name,
         "values": values,
@@ -163,7 +170,7 @@ def page(program_id: int) -> tuple[str, int]:
 @bp.get("/programs/<int:program_id>/export/download")
 def download(program_id: int) -> Response | tuple[str, int]:
     stored = load(program_id)
-    target_name = request.args.get("target", "gcode-linuxcnc")
+    target_name = request.args.get("target", DEFAULT_TARGET)
     _, machine_options, model = _machine_options(request.args.get("machine", ""))
     raw = machine_options | options_from(request.args, target_name)
     try:

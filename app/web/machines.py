@@ -7,11 +7,12 @@ import contextlib
 from flask import Blueprint, redirect, render_template, request, url_for
 from werkzeug.wrappers import Response
 
-from app.cnc.emit.target import OptionError, get_target
+from app.cnc.emit.target import OptionError, get_target, targets
 from app.cnc.machine import PRESETS, MachineError, read_machine
-from app.dnc.service import settings_of
+from app.dnc.service import available_ports, settings_of
 from app.dnc.settings import SettingsError
 from app.storage.library import LibraryError, Machine
+from app.web.export import DEFAULT_TARGET, shown_targets
 from app.web.extensions import get_library
 
 bp = Blueprint("machines", __name__)
@@ -33,10 +34,28 @@ SERIAL_DEFAULTS = {
 ProtoTRAK's 4800 7E1; app.dnc.settings says what each means)."""
 
 
+def _page(machine: Machine | None, message: str = "") -> str:
+    """The machines page: the list, and the form for `machine` (None: a new one, on
+    LinuxCNC G-code), its serial port picked from the ports this computer has."""
+    chosen = machine.target if machine else DEFAULT_TARGET
+    everything = targets()
+    # A machine kept on a target the menu leaves out (the canonical dump) still shows it.
+    own = {chosen: everything[chosen]} if chosen in everything else {}
+    return render_template(
+        "machines/index.html",
+        machines=get_library().machines(),
+        targets=shown_targets() | own,
+        chosen=chosen,
+        machine=machine,
+        serial_defaults=SERIAL_DEFAULTS,
+        ports=available_ports(),
+        presets=PRESETS,
+        message=message,
+    )
+
+
 @bp.get("/machines")
 def index() -> str:
-    from app.cnc.emit.target import targets
-
     edit = request.args.get("edit", "")
     machine = None
     if edit:
@@ -44,21 +63,11 @@ def index() -> str:
             machine = get_library().machine(edit)
         except LibraryError:
             machine = None
-    return render_template(
-        "machines/index.html",
-        machines=get_library().machines(),
-        targets=targets(),
-        machine=machine,
-        serial_defaults=SERIAL_DEFAULTS,
-        presets=PRESETS,
-        message="",
-    )
+    return _page(machine)
 
 
 @bp.post("/machines")
 def save() -> Response | tuple[str, int]:
-    from app.cnc.emit.target import targets
-
     form = request.form
     name = form.get("name", "").strip()
     target = form.get("target", "")
@@ -105,18 +114,9 @@ def save() -> Response | tuple[str, int]:
         except LibraryError as exc:
             message = f"Not saved: {exc}"
     if message:
-        return (
-            render_template(
-                "machines/index.html",
-                machines=get_library().machines(),
-                targets=targets(),
-                machine=Machine(name, target, options, serial, form.get("notes", ""), limits),
-                serial_defaults=SERIAL_DEFAULTS,
-                presets=PRESETS,
-                message=message,
-            ),
-            422,
-        )
+        return _page(
+            Machine(name, target, options, serial, form.get("notes", ""), limits), message
+        ), 422
     return redirect(url_for("machines.index"))
 
 

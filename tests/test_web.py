@@ -290,6 +290,32 @@ def test_machines_page_starts_on_a_real_target_and_lists_the_ports(client: Flask
     assert 'name="port" list="ports"' in page
 
 
+def test_a_machines_options_are_the_fields_of_its_target(client: FlaskClient) -> None:
+    """Options are chosen in fields labelled by what they do (as on the export page), not
+    typed as NAME=VALUE lines; only what differs from the target's defaults is kept."""
+    page = client.get("/machines?target=gcode-fanuc").get_data(as_text=True)
+    assert 'name="options"' not in page
+    assert ">write N numbers" in page and 'name="opt_sequence-increment"' in page
+    fields = client.get("/machines/options?target=tape-eia").get_data(as_text=True)
+    assert 'name="options_for" value="tape-eia"' in fields
+    form = {
+        "csrf_token": token(client, "/machines"),
+        "name": "Fanuc mill",
+        "target": "gcode-fanuc",
+        "options_for": "gcode-fanuc",
+        "opt_sequence-numbers": "on",  # ticked, as the page shows these two
+        "opt_canned-cycles": "on",
+        "opt_sequence-increment": "5",
+        "opt_trailing-zeros": "drop",  # the Fanuc default: not kept
+    }
+    assert client.post("/machines", data=form).status_code == 302
+    with client.application.app_context():
+        saved = get_library().machine("Fanuc mill")
+    assert saved.options == {"sequence-increment": "5"}
+    page = client.get("/machines?edit=Fanuc+mill").get_data(as_text=True)
+    assert 'name="opt_sequence-increment" value="5"' in page
+
+
 def test_oversized_upload_gets_413(client: FlaskClient) -> None:
     csrf = token(client)
     boundary = "mbtest"

@@ -3,6 +3,7 @@ and downloads. Every export is made by the same registry the CLI uses."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 from urllib.parse import urlencode
 
@@ -72,6 +73,14 @@ def option_groups(target: Target) -> tuple[list[Option], list[Option]]:
     return common, [option for option in target.options if option.name not in target.common]
 
 
+def form_values(target: Target, effective: Mapping[str, Any]) -> dict[str, str]:
+    """Each option's value as its form field shows it (`effective`: parsed options; an
+    option missing there shows its default)."""
+    return {
+        option.name: str(effective.get(option.name, option.default)) for option in target.options
+    }
+
+
 def preview_text(result: Export) -> str:
     """The first PREVIEW_LINES lines of a text export, and how many more the file has."""
     if result.media_type.split(";")[0] != "text/plain" or get_target(result.target).binary:
@@ -125,10 +134,7 @@ def page(program_id: int) -> tuple[str, int]:
             picture = ""
     effective = all_targets[target_name].parse_options(raw) if not error else {}
     all_defaults = all_targets[target_name].parse_options({})
-    values = {
-        option.name: str(effective.get(option.name, option.default))
-        for option in all_targets[target_name].options
-    }
+    values = form_values(all_targets[target_name], effective)
     # The download carries every option as the page shows it, so the file is the preview.
     query: dict[str, str] = {"target": target_name, "go": "1"}
     if machine_name:

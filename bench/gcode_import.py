@@ -22,6 +22,7 @@ Target (issue 10): our import at least as fast as rs274.
 from __future__ import annotations
 
 import math
+import resource
 import shutil
 import subprocess
 import tempfile
@@ -148,8 +149,15 @@ def ours_case(path: str) -> Result:
     }
 
 
+def children_cpu() -> float:
+    """CPU seconds (user + system) used so far by this process's finished children."""
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
 def rs274_case(path: str) -> Result:
-    """(child) LinuxCNC's rs274 in batch mode; the file must be accepted."""
+    """(child) LinuxCNC's rs274 in batch mode; the file must be accepted. Wall and CPU
+    seconds of the faster of two runs."""
     rs274 = shutil.which("rs274")
     if rs274 is None:
         return {"unavailable": "rs274 is not installed (Debian linuxcnc-uspace)"}
@@ -159,7 +167,8 @@ def rs274_case(path: str) -> Result:
         empty = Path(tmp) / "empty.ngc"
         empty.write_text("%\nM2\n%\n")
 
-        def run(file: Path) -> tuple[float, subprocess.CompletedProcess[bytes]]:
+        def run(file: Path) -> tuple[float, float, subprocess.CompletedProcess[bytes]]:
+            cpu = children_cpu()
             started = time.perf_counter()
             done = subprocess.run(
                 [rs274, "-t", str(table_file), "-g", str(file)],
@@ -168,16 +177,17 @@ def rs274_case(path: str) -> Result:
                 timeout=300,
                 check=False,
             )
-            return time.perf_counter() - started, done
+            return time.perf_counter() - started, children_cpu() - cpu, done
 
-        startup, _ = min(run(empty) for _ in range(3))
-        seconds, done = min((run(Path(path)) for _ in range(2)), key=lambda r: r[0])
+        startup = min(run(empty)[0] for _ in range(3))
+        seconds, cpu, done = min((run(Path(path)) for _ in range(2)), key=lambda r: r[0])
     errors = done.stderr.decode(errors="replace").strip()
     if done.returncode != 0 or "error" in errors.lower():
         return {"error": f"rs274 refused the file: {errors.splitlines()[-1] if errors else ''}"}
     return {
         "lines": Path(path).read_text().count("\n"),
         "seconds": seconds,
+        "cpu": cpu,
         "startup": startup,
     }
 

@@ -257,7 +257,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     page.keyboard.press("Alt+e")
     expect(page.locator("h1")).to_contain_text("Export")
     page.keyboard.press("Alt+t")
-    page.keyboard.type("tape-eia")
+    page.keyboard.type("Tektronix 1704 tape (EIA)")  # the menu's names are the shop's
     expect(page.locator(".report")).to_contain_text("Compatibility report for tape-eia")
     expect(page.locator(".picture svg")).to_be_visible()
     shot(page, "06-export-tape")
@@ -267,7 +267,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     assert tape.value.suggested_filename.startswith("Keyboard-bracket")
     assert Path(tape_path).read_bytes().startswith(b"%")
     page.keyboard.press("Alt+t")
-    page.keyboard.type("gcode-linuxcnc")
+    page.keyboard.type("LinuxCNC G-code")
     expect(page.locator(".report")).to_contain_text("Compatibility report for gcode-linuxcnc")
     with page.expect_download() as gcode:
         page.keyboard.press("Alt+d")
@@ -310,3 +310,19 @@ def test_script_in_a_name_stays_text(page: Page, server: str) -> None:
     expect(page.locator("#program-list")).to_contain_text("<script>alert(2)</script>")
     assert dialogs == []
     assert page.locator("#program-list img").count() == 0
+
+
+def test_a_machine_takes_the_options_of_the_target_it_is_set_to(page: Page, server: str) -> None:
+    """Choosing another target on the machines page brings that target's own option fields
+    (the form keeps the rest of what was typed)."""
+    page.goto(server + "/machines")
+    page.locator('input[name="name"]').fill("Tape mill")
+    expect(page.locator("#machine-options legend")).to_have_text("Options of LinuxCNC G-code")
+    page.locator('select[name="target"]').select_option(label="Tektronix 1704 tape (EIA)")
+    expect(page.locator("#machine-options legend")).to_have_text(
+        "Options of Tektronix 1704 tape (EIA)"
+    )
+    expect(page.locator('input[name="options_for"]')).to_have_value("tape-eia")
+    expect(page.locator('input[name="name"]')).to_have_value("Tape mill")
+    page.locator("button", has_text="Save machine").click()
+    expect(page.locator("table.programs")).to_contain_text("Tektronix 1704 tape (EIA)")

@@ -10,11 +10,18 @@ import re
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
 
 from app.cnc import document
 from app.cnc.blocks import Program
+from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Severity, export
+from app.cnc.emit.target import Report, Severity, export, get_target
+from app.cnc.formats.gcode.writer import Writer
+from app.cnc.problems import has_errors
+from app.cnc.validate import validate
+from tests.strategies import programs
 
 GOLDEN = Path(__file__).parent / "golden"
 
@@ -118,3 +125,52 @@ def test_a_line_break_in_the_name_cannot_put_code_on_the_tape(target: str) -> No
     assert "(BRACKET G0 Z-5  M3 " in text
     assert len(text.splitlines()) == len(plain.splitlines())
     assert not any(line.strip().startswith("G0 Z-5") for line in text.splitlines())
+
+
+GCODE_OPTIONS = st.fixed_dictionaries(
+    {
+        "sequence-numbers": st.sampled_from(["yes", "no"]),
+        "sequence-increment": st.sampled_from(["1", "10"]),
+        "trailing-zeros": st.sampled_from(["keep", "drop"]),
+        "tabs": st.sampled_from(["yes", "no"]),
+        "peck-cycle": st.sampled_from(["explicit", "G83"]),
+        "spindle-speeds": st.just("by-hand"),
+    }
+)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    programs(),
+    st.sampled_from(["gcode-linuxcnc", "gcode-fanuc", "gcode-prototrak"]),
+    GCODE_OPTIONS,
+    st.integers(min_value=0, max_value=40),
+)
+def test_runs_written_in_one_go_are_the_lines_written_one_by_one(
+    program: Program, target: str, options: dict[str, str], numbers_left: int
+) -> None:
+    """The writer writes runs of rapids, feeds and dwells a run at a time (numpy finds the
+    words that change); the same program written one line at a time gives the same bytes,
+    also when the N numbers pass the control's largest inside a run and start again."""
+    assume(not has_errors(validate(program)))
+    made = get_target(target)
+    largest = made.dialect.largest_line_number  # type: ignore[attr-defined]
+    step = int(options["sequence-increment"])
+    options = {**options, "sequence-start": str(max(0, largest - numbers_left * step))}
+    parsed = made.parse_options(options)
+    path = compile_program(resolve_copies(program)).path
+    texts = []
+    for bulk in (True, False):
+        lines: list[str] = []
+        writer = Writer(
+            made.dialect,  # type: ignore[attr-defined]
+            program,
+            path,
+            parsed,
+            Report(target),
+            lines.append,
+            bulk=lines.extend if bulk else None,
+        )
+        writer.write()
+        texts.append(lines)
+    assert texts[0] == texts[1]

@@ -234,6 +234,88 @@ def test_export_page_and_downloads(client: FlaskClient) -> None:
     assert gcode.status_code == 200 and gcode.data.startswith(b"%\n")
 
 
+def test_each_target_downloads_under_its_own_file_name(client: FlaskClient) -> None:
+    """A shop exporting one part for LinuxCNC and for the Fanuc keeps both files: the
+    downloads have different names (part.ngc, part.fanuc.nc), for every target."""
+    from app.cnc.emit.target import targets
+
+    names = {}
+    for name in targets():
+        response = client.get(f"/programs/3/export/download?target={name}")
+        disposition = response.headers.get("Content-Disposition", "")
+        found = re.search(r'filename="([^"]+)"', disposition)
+        if response.status_code == 200 and found:
+            names[name] = found.group(1)
+    assert names["gcode-linuxcnc"].endswith(".ngc")
+    assert names["gcode-fanuc"].endswith(".fanuc.nc")
+    assert len(set(names.values())) == len(names), names
+
+
+def test_export_page_names_targets_and_options_in_the_shops_words(client: FlaskClient) -> None:
+    """The target menu reads "LinuxCNC G-code", "Tektronix 1704 tape (EIA)", not the
+    registry's names; options are labelled by what they do, the common ones first and the
+    rest folded away."""
+    page = client.get("/programs/3/export").get_data(as_text=True)
+    menu = re.search(r'<select name="target".*?</select>', page, re.S)
+    assert menu is not None
+    shown = re.findall(r"<option value=\"([^\"]+)\"[^>]*>([^<]+)</option>", menu.group(0))
+    labels = {value: text.strip() for value, text in shown}
+    assert labels["gcode-linuxcnc"] == "LinuxCNC G-code"
+    assert labels["tape-eia"] == "Tektronix 1704 tape (EIA)"
+    assert all(text != value and not text.startswith(value) for value, text in labels.items())
+    assert "Options of LinuxCNC G-code" in page
+    assert ">write N numbers" in page  # the option's meaning, not "sequence-numbers"
+    folded = page.index("<details")
+    assert page.index('name="opt_sequence-numbers"') < folded  # common: shown first
+    assert page.index('name="opt_tabs"') > folded  # the rest: folded
+
+
+def test_machines_page_starts_on_a_real_target_and_lists_the_ports(client: FlaskClient) -> None:
+    """A new machine starts on LinuxCNC G-code (not the test dump "canon"), targets are
+    named as the export page names them, and the serial port can be picked from the ports
+    this computer has (pyserial's list)."""
+    from app.dnc.service import available_ports
+
+    page = client.get("/machines").get_data(as_text=True)
+    menu = re.search(r'<select name="target".*?</select>', page, re.S)
+    assert menu is not None
+    selected = re.search(r'<option value="([^"]+)" selected>([^<]+)</option>', menu.group(0))
+    assert selected is not None
+    assert selected.groups() == ("gcode-linuxcnc", "LinuxCNC G-code")
+    assert ">canon<" not in menu.group(0)
+    picker = re.search(r'<datalist id="ports">.*?</datalist>', page, re.S)
+    assert picker is not None
+    for device, _ in available_ports():
+        assert f'value="{device}"' in picker.group(0)
+    assert 'name="port" list="ports"' in page
+
+
+def test_a_machines_options_are_the_fields_of_its_target(client: FlaskClient) -> None:
+    """Options are chosen in fields labelled by what they do (as on the export page), not
+    typed as NAME=VALUE lines; only what differs from the target's defaults is kept."""
+    page = client.get("/machines?target=gcode-fanuc").get_data(as_text=True)
+    assert 'name="options"' not in page
+    assert ">write N numbers" in page and 'name="opt_sequence-increment"' in page
+    fields = client.get("/machines/options?target=tape-eia").get_data(as_text=True)
+    assert 'name="options_for" value="tape-eia"' in fields
+    form = {
+        "csrf_token": token(client, "/machines"),
+        "name": "Fanuc mill",
+        "target": "gcode-fanuc",
+        "options_for": "gcode-fanuc",
+        "opt_sequence-numbers": "on",  # ticked, as the page shows these two
+        "opt_canned-cycles": "on",
+        "opt_sequence-increment": "5",
+        "opt_trailing-zeros": "drop",  # the Fanuc default: not kept
+    }
+    assert client.post("/machines", data=form).status_code == 302
+    with client.application.app_context():
+        saved = get_library().machine("Fanuc mill")
+    assert saved.options == {"sequence-increment": "5"}
+    page = client.get("/machines?edit=Fanuc+mill").get_data(as_text=True)
+    assert 'name="opt_sequence-increment" value="5"' in page
+
+
 def test_oversized_upload_gets_413(client: FlaskClient) -> None:
     csrf = token(client)
     boundary = "mbtest"

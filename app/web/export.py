@@ -3,14 +3,24 @@ and downloads. Every export is made by the same registry the CLI uses."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 from urllib.parse import urlencode
 
 from flask import Blueprint, Response, render_template, request
 from jinja2_fragments.flask import render_block
 
-from app.cnc.emit.target import Export, ExportError, OptionError, export, get_target, targets
+from app.cnc.emit.target import (
+    Export,
+    ExportError,
+    OptionError,
+    Target,
+    export,
+    get_target,
+    targets,
+)
 from app.cnc.machine import MachineError, MachineModel, read_machine
+from app.cnc.options import Option
 from app.storage.library import LibraryError
 from app.web.downloads import attachment
 from app.web.editor import is_htmx, load
@@ -18,6 +28,13 @@ from app.web.extensions import get_library
 
 bp = Blueprint("export", __name__)
 PREVIEW_LINES = 400
+DEFAULT_TARGET = "gcode-linuxcnc"  # what a new export or machine starts on
+
+
+def shown_targets() -> dict[str, Target]:
+    """The targets a shop picks from, by name: all but the canonical-move dump, which is
+    for tests and the CLI."""
+    return {name: target for name, target in targets().items() if name != "canon"}
 
 
 def options_from(args: Any, target_name: str) -> dict[str, str]:
@@ -47,6 +64,23 @@ def _machine_options(name: str) -> tuple[str | None, dict[str, str], MachineMode
     return machine.target, dict(machine.options), model
 
 
+def option_groups(target: Target) -> tuple[list[Option], list[Option]]:
+    """A target's options as its form shows them: the common ones (in the order the
+    target lists them), then the rest, folded. A target that names none shows all."""
+    if not target.common:
+        return list(target.options), []
+    common = [option for option in target.options if option.name in target.common]
+    return common, [option for option in target.options if option.name not in target.common]
+
+
+def form_values(target: Target, effective: Mapping[str, Any]) -> dict[str, str]:
+    """Each option's value as its form field shows it (`effective`: parsed options; an
+    option missing there shows its default)."""
+    return {
+        option.name: str(effective.get(option.name, option.default)) for option in target.options
+    }
+
+
 def preview_text(result: Export) -> str:
     """The first PREVIEW_LINES lines of a text export, and how many more the file has."""
     if result.media_type.split(";")[0] != "text/plain" or get_target(result.target).binary:
@@ -68,10 +102,10 @@ def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     machine_name = request.args.get("machine", "")
     machine_target, machine_options, model = _machine_options(machine_name)
-    target_name = request.args.get("target") or machine_target or "gcode-linuxcnc"
+    target_name = request.args.get("target") or machine_target or DEFAULT_TARGET
     all_targets = targets()
     if target_name not in all_targets:
-        target_name = "gcode-linuxcnc"
+        target_name = DEFAULT_TARGET
     raw = machine_options | (
         options_from(request.args, target_name) if "go" in request.args else {}
     )
@@ -100,10 +134,7 @@ def page(program_id: int) -> tuple[str, int]:
             picture = ""
     effective = all_targets[target_name].parse_options(raw) if not error else {}
     all_defaults = all_targets[target_name].parse_options({})
-    values = {
-        option.name: str(effective.get(option.name, option.default))
-        for option in all_targets[target_name].options
-    }
+    values = form_values(all_targets[target_name], effective)
     # The download carries every option as the page shows it, so the file is the preview.
     query: dict[str, str] = {"target": target_name, "go": "1"}
     if machine_name:
@@ -115,9 +146,12 @@ def page(program_id: int) -> tuple[str, int]:
                 query[f"opt_{option.name}"] = "on"
         elif value is not None:
             query[f"opt_{option.name}"] = str(value)
+    common, more = option_groups(target)
     context = {
         "stored": stored,
-        "targets": all_targets,
+        "common_options": common,
+        "more_options": more,
+        "targets": shown_targets() | {target_name: all_targets[target_name]},
         "target": all_targets[target_name],
         "target_name": target_name,
         "values": values,
@@ -142,7 +176,7 @@ def page(program_id: int) -> tuple[str, int]:
 @bp.get("/programs/<int:program_id>/export/download")
 def download(program_id: int) -> Response | tuple[str, int]:
     stored = load(program_id)
-    target_name = request.args.get("target", "gcode-linuxcnc")
+    target_name = request.args.get("target", DEFAULT_TARGET)
     _, machine_options, model = _machine_options(request.args.get("machine", ""))
     raw = machine_options | options_from(request.args, target_name)
     try:

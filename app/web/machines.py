@@ -1,17 +1,28 @@
-"""Machine profiles: export target with its options, and serial port settings."""
+"""Machine profiles: export target with its options (the target's fields, as on the export
+page), and serial port settings."""
 
 from __future__ import annotations
 
 import contextlib
+from collections.abc import Mapping
+from typing import Any
 
 from flask import Blueprint, redirect, render_template, request, url_for
+from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
-from app.cnc.emit.target import OptionError, get_target
+from app.cnc.emit.target import OptionError, get_target, targets
 from app.cnc.machine import PRESETS, MachineError, read_machine
-from app.dnc.service import settings_of
+from app.dnc.service import available_ports, settings_of
 from app.dnc.settings import SettingsError
 from app.storage.library import LibraryError, Machine
+from app.web.export import (
+    DEFAULT_TARGET,
+    form_values,
+    option_groups,
+    options_from,
+    shown_targets,
+)
 from app.web.extensions import get_library
 
 bp = Blueprint("machines", __name__)
@@ -33,10 +44,49 @@ SERIAL_DEFAULTS = {
 ProtoTRAK's 4800 7E1; app.dnc.settings says what each means)."""
 
 
+def _options(target_name: str, options: Mapping[str, str]) -> dict[str, Any]:
+    """What the options fieldset shows: the fields of target `target_name` (the default
+    target when there is none by that name) holding `options` (its defaults where they do
+    not parse)."""
+    everything = targets()
+    target = everything.get(target_name) or everything[DEFAULT_TARGET]
+    try:
+        effective = target.parse_options(options)
+    except OptionError:
+        effective = target.parse_options({})
+    common, more = option_groups(target)
+    return {
+        "target": target,
+        "chosen": target.name,
+        "values": form_values(target, effective),
+        "common_options": common,
+        "more_options": more,
+    }
+
+
+def _page(machine: Machine | None, message: str = "", target_name: str = "") -> str:
+    """The machines page: the list, and the form for `machine` (None: a new one, on
+    `target_name` or LinuxCNC G-code), its serial port picked from the ports this computer
+    has."""
+    chosen = machine.target if machine else target_name or DEFAULT_TARGET
+    everything = targets()
+    # A machine kept on a target the menu leaves out (the canonical dump) still shows it.
+    own = {chosen: everything[chosen]} if chosen in everything else {}
+    return render_template(
+        "machines/index.html",
+        machines=get_library().machines(),
+        targets=shown_targets() | own,
+        **_options(chosen, machine.options if machine else {}),
+        machine=machine,
+        serial_defaults=SERIAL_DEFAULTS,
+        ports=available_ports(),
+        presets=PRESETS,
+        message=message,
+    )
+
+
 @bp.get("/machines")
 def index() -> str:
-    from app.cnc.emit.target import targets
-
     edit = request.args.get("edit", "")
     machine = None
     if edit:
@@ -44,39 +94,42 @@ def index() -> str:
             machine = get_library().machine(edit)
         except LibraryError:
             machine = None
-    return render_template(
-        "machines/index.html",
-        machines=get_library().machines(),
-        targets=targets(),
-        machine=machine,
-        serial_defaults=SERIAL_DEFAULTS,
-        presets=PRESETS,
-        message="",
-    )
+    return _page(machine, target_name=request.args.get("target", ""))
+
+
+@bp.get("/machines/options")
+def options() -> str:
+    """The options fieldset for another target (the form swaps it in when the target
+    changes)."""
+    context = _options(request.args.get("target", ""), {})
+    return render_block("machines/index.html", "options", **context)
+
+
+def _chosen_options(form: Mapping[str, str], target_name: str) -> dict[str, str]:
+    """The options set in the form's fields for `target_name` that differ from its
+    defaults, as text (none when the fields shown were another target's). Raises
+    OptionError for a value the option does not take."""
+    if form.get("options_for") != target_name or target_name not in targets():
+        return {}
+    target = get_target(target_name)
+    raw = options_from(form, target_name)
+    chosen = target.parse_options(raw)
+    defaults = target.parse_options({})
+    return {name: text for name, text in raw.items() if chosen[name] != defaults[name]}
 
 
 @bp.post("/machines")
 def save() -> Response | tuple[str, int]:
-    from app.cnc.emit.target import targets
-
     form = request.form
     name = form.get("name", "").strip()
     target = form.get("target", "")
     options: dict[str, str] = {}
     message = ""
-    for line in form.get("options", "").splitlines():
-        if not line.strip():
-            continue
-        key, sep, value = line.partition("=")
-        if not sep:
-            message = f"Not saved: options line {line!r} is not NAME=VALUE"
-            break
-        options[key.strip()] = value.strip()
-    if not message:
-        try:
-            get_target(target).parse_options(options)
-        except OptionError as exc:
-            message = f"Not saved: {exc}"
+    try:
+        options = _chosen_options(form, target)
+        get_target(target).parse_options(options)
+    except OptionError as exc:
+        message = f"Not saved: {exc}"
     serial = {key: form.get(key, default).strip() for key, default in SERIAL_DEFAULTS.items()}
     limits: dict[str, object] = {}
     for line in form.get("limits", "").splitlines():
@@ -105,18 +158,9 @@ def save() -> Response | tuple[str, int]:
         except LibraryError as exc:
             message = f"Not saved: {exc}"
     if message:
-        return (
-            render_template(
-                "machines/index.html",
-                machines=get_library().machines(),
-                targets=targets(),
-                machine=Machine(name, target, options, serial, form.get("notes", ""), limits),
-                serial_defaults=SERIAL_DEFAULTS,
-                presets=PRESETS,
-                message=message,
-            ),
-            422,
-        )
+        return _page(
+            Machine(name, target, options, serial, form.get("notes", ""), limits), message
+        ), 422
     return redirect(url_for("machines.index"))
 
 

@@ -43,6 +43,7 @@ g.grid line {{ stroke: #e5e7eb; stroke-width: {thin}; }}
 @register
 class SvgTarget(Target):
     name = "svg"
+    label = "Tool path picture (SVG)"
     description = "tool path drawing (SVG), as the web preview shows it"
     extension = "svg"
     media_type = "image/svg+xml"

@@ -193,7 +193,7 @@ class Target(ABC):
     for a target that makes its bytes in one piece from the whole Toolpath, `emit`)."""
 
     name: ClassVar[str]
-    # The shop's name for it, as a menu shows it ("LinuxCNC (RS274/NGC)"); "" for none.
+    # The shop's name for it, as a menu shows it ("LinuxCNC G-code"); "" for none.
     label: ClassVar[str] = ""
     description: ClassVar[str]
     extension: ClassVar[str]

@@ -9,6 +9,7 @@ stream, so a writer's memory holds a few thousand lines, never the file.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import lru_cache
 
 import numpy as np
@@ -53,12 +54,22 @@ class Lengths:
 
     def many(self, nm: npt.NDArray[np.int64]) -> list[str]:
         """A column of lengths as text, each distinct value formatted once."""
-        if not len(nm):
-            return []
-        values, where = np.unique(self.digits(nm), return_inverse=True)
-        texts = np.array([self.text(v) for v in values.tolist()], dtype=object)
-        result: list[str] = texts[where].tolist()
+        result: list[str] = self.column(nm).tolist()
         return result
+
+    def column(
+        self, nm: npt.NDArray[np.int64], shown: Callable[[str], str] | None = None
+    ) -> npt.NDArray[np.str_]:
+        """A column of lengths as a numpy string array, each distinct value formatted once
+        (and passed through `shown`, when given)."""
+        if not len(nm):
+            return np.array([], dtype=str)
+        values, where = np.unique(self.digits(nm), return_inverse=True)
+        texts = [self.text(v) for v in values.tolist()]
+        if shown is not None:
+            texts = [shown(t) for t in texts]
+        column: npt.NDArray[np.str_] = np.array(texts, dtype=str)[where]
+        return column
 
 
 class Lines:
@@ -72,6 +83,11 @@ class Lines:
 
     def add(self, text: str) -> None:
         self.pending.append(text)
+        if len(self.pending) >= 4096:
+            self.flush()
+
+    def add_many(self, texts: list[str]) -> None:
+        self.pending.extend(texts)
         if len(self.pending) >= 4096:
             self.flush()
 

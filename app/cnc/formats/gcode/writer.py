@@ -35,6 +35,7 @@ from decimal import Decimal
 from typing import Any, ClassVar
 
 import numpy as np
+import numpy.typing as npt
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import peck_levels
@@ -76,14 +77,14 @@ class GcodeTarget(Target):
         out: Out,
     ) -> None:
         lines = Lines(out)
-        Writer(self.dialect, program, path, options, report, lines.add).write()
+        Writer(self.dialect, program, path, options, report, lines.add, bulk=lines.add_many).write()
         lines.flush()
 
 
 @register
 class LinuxcncTarget(GcodeTarget):
     name = "gcode-linuxcnc"
-    label = "LinuxCNC (RS274/NGC)"
+    label = "LinuxCNC G-code"
     description = "RS274/NGC as LinuxCNC reads it"
     dialect = LINUXCNC
     options = dialect_options(LINUXCNC)
@@ -92,9 +93,11 @@ class LinuxcncTarget(GcodeTarget):
 @register
 class FanucTarget(GcodeTarget):
     name = "gcode-fanuc"
-    label = "Fanuc 6M"
+    label = "Fanuc 6M G-code"
     description = "Fanuc 6M (% and O number, N numbers, no spaces)"
     dialect = FANUC
+    # Its own name beside the LinuxCNC file of the same part (part.ngc, part.fanuc.nc).
+    extension = "fanuc.nc"
     options = dialect_options(FANUC)
 
 
@@ -104,6 +107,7 @@ class PrototrakTarget(GcodeTarget):
     label = "ProtoTRAK G-code (modified Fanuc 6)"
     description = "ProtoTRAK Plus modified Fanuc 6 (G on every line, spaces, ; end of block)"
     dialect = PROTOTRAK
+    extension = "prototrak.nc"
     options = dialect_options(PROTOTRAK)
 
 
@@ -123,6 +127,7 @@ class Writer:
         report: Report,
         emit: Callable[[str], None],
         z_lift: Callable[[int], int] | None = None,
+        bulk: Callable[[list[str]], None] | None = None,
     ) -> None:
         self.d = dialect
         self.program = program
@@ -130,6 +135,9 @@ class Writer:
         self.o = options
         self.report = report
         self.emit = emit
+        # Where many lines go at once (straight moves written a run at a time); None: one
+        # line at a time through `emit`, for writers that watch every line.
+        self.bulk = bulk
         self.z_lift = z_lift or (lambda tool: 0)
         self.units: Units = path.units
         self.lengths = Lengths(path.units)
@@ -207,29 +215,146 @@ class Writer:
 
     def write_chunk(self, chunk: Chunk, cycles: bool) -> None:
         rows = chunk.rows
+        ops = rows["op"]
         lift = self.lifts(rows)
         z = rows["z"] + lift if lift is not None else rows["z"]
-        xs = self.lengths.many(rows["x"])
-        ys = self.lengths.many(rows["y"])
-        zs = self.lengths.many(z)
-        if self.drop_zeros:
-            xs, ys, zs = ([self.shown(t) for t in column] for column in (xs, ys, zs))
-        holes = {span.start: span for span in chunk.hole_spans()} if cycles else {}
-        table = rows.tolist()
-        zvalues = z.tolist()
+        shown = self.shown if self.drop_zeros else None
+        xs = self.lengths.column(rows["x"], shown)
+        ys = self.lengths.column(rows["y"], shown)
+        zs = self.lengths.column(z, shown)
+        spans = chunk.hole_spans() if cycles else []
+        holes = {span.start: span for span in spans}
+        # Rapids, feeds and dwells outside the holes that may be cycles go in runs, a run
+        # at a time.
+        straight = (ops <= Op.FEED) | (ops == Op.DWELL)
+        for hole in spans:
+            if self.may_cycle(hole):
+                straight[hole.start : hole.end] = False
+        bulk = self.bulk is not None
+        # Rows as tuples for `move`: all of them at once when every row goes that way, else
+        # one at a time for the few that are not in a run.
+        table = None if bulk else rows.tolist()
+        run_end = _run_ends(straight) if bulk else None
         i = 0
-        n = len(table)
+        n = len(rows)
         while i < n:
+            if bulk and straight[i] and self.xy_known:
+                assert run_end is not None
+                self.end_cycle()
+                end = int(run_end[i])
+                i += self.straight_run(rows[i:end], xs[i:end], ys[i:end], zs[i:end], z[i:end])
+                if i == end:
+                    continue
+                # The row at i is the line whose number passes the dialect's largest: `move`
+                # writes it and restarts the numbers.
+            row: Row = table[i] if table is not None else rows[i].tolist()
             span = holes.get(i)
             if span is not None:
-                used = self.canned_cycle(span, table[i][2], zvalues[span.end - 1])
+                used = self.canned_cycle(span, row[2], int(z[span.end - 1]))
                 if used:
                     i = span.end
                     continue
             self.end_cycle()
-            row = table[i]
-            self.move(row, xs[i], ys[i], zs[i], zvalues[i], chunk)
+            self.move(row, str(xs[i]), str(ys[i]), str(zs[i]), int(z[i]), chunk)
             i += 1
+
+    def straight_run(self, rows: Any, xs: Any, ys: Any, zs: Any, z: npt.NDArray[np.int64]) -> int:
+        """Write a run of rapids, feeds and dwells (`rows`, with the written X Y Z of each)
+        in one go, as `move` writes them one by one: numpy finds the words that change and
+        makes the lines. Returns how many rows it wrote: all, or those before the line whose
+        number would pass the dialect's largest (`move` writes that one, restarting them)."""
+        ops = rows["op"]
+        moving = np.flatnonzero(ops <= Op.FEED)
+        mx, my, mz = xs[moving], ys[moving], zs[moving]
+        changed = [
+            column != np.concatenate(([current], column[:-1]))
+            for column, current in ((mx, self.wx), (my, self.wy), (mz, self.wz))
+        ]
+        said = changed[0] | changed[1] | changed[2]
+        # The rows that make a line: moves that change a written axis, and every dwell.
+        lines = np.sort(np.concatenate((moving[said], np.flatnonzero(ops == Op.DWELL))))
+        count = len(lines)
+        if self.o["sequence-numbers"]:
+            step = int(self.o["sequence-increment"])
+            room = max(0, (self.d.largest_line_number - self.number) // step + 1)
+            if count > room:
+                # Write the rows before the first line without a number left (none of them
+                # makes a line past the room), and stop there.
+                end = int(lines[room])
+                return self.straight_run(rows[:end], xs[:end], ys[:end], zs[:end], z[:end])
+        if count:
+            self.bulk_lines(rows, lines, said, changed, (mx, my, mz))
+        if len(moving):
+            last = moving[-1]
+            self.x, self.y, self.z = int(rows["x"][last]), int(rows["y"][last]), int(z[last])
+            self.wx, self.wy, self.wz = str(mx[-1]), str(my[-1]), str(mz[-1])
+        return len(rows)
+
+    def bulk_lines(
+        self,
+        rows: Any,
+        lines: npt.NDArray[np.intp],
+        said: npt.NDArray[np.bool_],
+        changed: list[npt.NDArray[np.bool_]],
+        written: tuple[Any, Any, Any],
+    ) -> None:
+        """The lines of a run (`lines`: its rows that make one), as `straight_run` found
+        them."""
+        count = len(lines)
+        ops = rows["op"][lines]
+        codes = ops.astype(np.int64)
+        # Which lines are moves (the others are dwells), and where they are among the lines.
+        is_move = ops != Op.DWELL
+        move_lines = np.flatnonzero(is_move)
+        empty = np.full(count, "", dtype=object)
+        g = empty.copy()
+        motion = codes[is_move]
+        before = np.concatenate(([_MOTION.get(self.motion or "", -1)], motion[:-1]))
+        new = np.ones(len(motion), dtype=bool) if self.d.g_on_every_line else motion != before
+        mode = np.where(motion == Op.RAPID, self.code("G", 0), self.code("G", 1))
+        g[move_lines[new]] = mode[new]
+        dwelling = ops == Op.DWELL
+        g[dwelling] = self.code("G", 4)
+        p = empty.copy()
+        values = rows["value"][lines][dwelling]
+        texts = {
+            v: self.d.dwell(Decimal(v) / 1000, cycle=False) for v in np.unique(values).tolist()
+        }
+        p[dwelling] = [texts[v] for v in values.tolist()]
+        f = empty.copy()
+        feeding = np.flatnonzero(ops == Op.FEED)
+        if len(feeding):
+            feeds = rows["feed"][lines][feeding]
+            previous = np.concatenate(([-1 if self.feed is None else self.feed], feeds[:-1]))
+            fresh = feeds != previous
+            words = {v: f"F{self.feed_value(v)}" for v in np.unique(feeds[fresh]).tolist()}
+            f[feeding[fresh]] = [words[v] for v in feeds[fresh].tolist()]
+            self.feed = int(feeds[-1])
+        axes = []
+        for letter, column, change in zip("XYZ", written, changed, strict=True):
+            word = empty.copy()
+            picked = change[said]
+            word[move_lines[picked]] = np.strings.add(letter, column[said][picked]).astype(object)
+            axes.append(word)
+        columns = [g, *axes, f, p]
+        if self.o["sequence-numbers"]:
+            step = int(self.o["sequence-increment"])
+            numbers = self.number + step * np.arange(count)
+            columns.insert(0, np.strings.add("N", numbers.astype(str)).astype(object))
+            self.number += step * count
+        sep = self.separator
+        text = empty.copy()
+        for column in columns:
+            text = np.where(column != "", text + column + sep, text)
+        if sep:
+            text = np.strings.rstrip(text.astype(str), sep).astype(object)
+        if self.d.end_of_block:
+            text = text + self.d.end_of_block
+        assert self.bulk is not None
+        self.bulk(text.tolist())
+        self.lines += count
+        if len(motion):
+            self.motion = "0" if motion[-1] == Op.RAPID else "1"
 
     def lifts(self, rows: Any) -> Any:
         """What each row's Z words add (the z_lift of the tool in the spindle), or None
@@ -451,17 +576,24 @@ class Writer:
 
     # -- canned cycles --------------------------------------------------------------------
 
+    def may_cycle(self, span: HoleSpan) -> bool:
+        """Whether a hole can be written as a canned cycle: the compiler marked it canned,
+        a DRILL without pecks, or with evenly spaced pecks when G83 is accepted."""
+        if not span.canned or span.op is not HoleOp.DRILL:
+            return False
+        if span.pecks > 1:
+            return self.o["peck-cycle"] == "G83" and _even_pecks(span)
+        return True
+
     def canned_cycle(self, span: HoleSpan, block: int, z_end: int) -> bool:
         """Write a G82 (or accepted G83) for a hole the compiler marked canned. False when
         the hole is not such a cycle (then its moves are written one by one)."""
-        if not span.canned or span.op is not HoleOp.DRILL or z_end != self.z:
+        if not self.may_cycle(span) or z_end != self.z:
             return False
         x, y, r, bottom, feed = span.x, span.y, span.r, span.bottom, span.feed
         z0 = self.z
         lift = self.lift
         pecked = span.pecks > 1
-        if pecked and (self.o["peck-cycle"] != "G83" or not _even_pecks(span)):
-            return False
         wx, wy = self.length(x), self.length(y)
         words = self.axis_words(wx, wy, None)
         if not words:
@@ -503,6 +635,19 @@ class Writer:
             self.line(self.code("G", 80))
             self.cycle = None
             self.motion = None
+
+
+# The motion modes as the writer keeps them, as row ops.
+_MOTION = {"0": Op.RAPID, "1": Op.FEED, "2": Op.ARC_CW, "3": Op.ARC_CCW}
+
+
+def _run_ends(straight: npt.NDArray[np.bool_]) -> npt.NDArray[np.int64]:
+    """For each row, where the run of straight rows it is in ends (one past its last)."""
+    n = len(straight)
+    ends = np.where(~straight, np.arange(n), n)
+    # The first non-straight row at or after each row.
+    ends = np.minimum.accumulate(ends[::-1])[::-1]
+    return ends.astype(np.int64)
 
 
 def _even_pecks(span: HoleSpan) -> bool:

@@ -244,7 +244,7 @@ class TapeTarget(Target):
 @register
 class TapeEiaTarget(TapeTarget):
     name = "tape-eia"
-    label = "1704 tape, EIA (listing)"
+    label = "Tektronix 1704 tape (EIA)"
     description = "Tektronix 1704 tape listing for an EIA RS-244 tape (word address text)"
     extension = "eia.txt"
     code = TapeCode.EIA
@@ -253,7 +253,7 @@ class TapeEiaTarget(TapeTarget):
 @register
 class TapeAsciiTarget(TapeTarget):
     name = "tape-ascii"
-    label = "1704 tape, ASCII (listing)"
+    label = "Tektronix 1704 tape (ASCII)"
     description = "Tektronix 1704 tape listing for an ASCII tape, with comments (text)"
     extension = "ascii.txt"
     code = TapeCode.ASCII
@@ -280,7 +280,7 @@ class _PunchTarget(TapeTarget):
 @register
 class PunchEiaTarget(_PunchTarget):
     name = "punch-eia"
-    label = "1704 tape, EIA (punch image)"
+    label = "Tektronix 1704 tape, EIA punch image"
     description = "Tektronix 1704 EIA punch image: a byte per row, channel n in bit n-1"
     extension = "eia.punch"
     code = TapeCode.EIA
@@ -292,7 +292,7 @@ class PunchEiaTarget(_PunchTarget):
 @register
 class PunchAsciiTarget(_PunchTarget):
     name = "punch-ascii"
-    label = "1704 tape, ASCII (punch image)"
+    label = "Tektronix 1704 tape, ASCII punch image"
     description = "Tektronix 1704 ASCII punch image: a byte per row, channel n in bit n-1"
     extension = "ascii.punch"
     code = TapeCode.ASCII
@@ -302,9 +302,9 @@ class PunchAsciiTarget(_PunchTarget):
 @register
 class TapeSvgTarget(TapeTarget):
     name = "tape-svg"
-    label = "1704 tape picture (SVG)"
+    label = "Tektronix 1704 tape picture (SVG)"
     description = "drawing of the Tektronix 1704 tape (channels, feed holes, title) as SVG"
-    extension = "svg"
+    extension = "tape.svg"  # beside the tool-path picture (svg) of the same part
     media_type = "image/svg+xml"
     reads_back = None
     picture = "tape-svg"

@@ -29,6 +29,7 @@ from bench.common import (
     Result,
     Section,
     best_time,
+    drag,
     fmt_bytes,
     fmt_count,
     fmt_rate,
@@ -159,19 +160,9 @@ def browser_case(family: str, moves: int) -> Result:
                     assert kind == "SVG" or state == "drawn", (kind, state)
                     paints.append((first_byte - request, frame - end, frame - request, kind))
                 server, paint, total, kind = min(paints, key=lambda p: p[2])
-                box = page.locator("#preview").bounding_box()
-                assert box is not None
-                cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
                 page.evaluate(FRAMES)
-                page.mouse.move(cx, cy)
-                page.mouse.down()
-                began = time.perf_counter()
-                step = 0
-                while time.perf_counter() - began < DRAG_SECONDS:
-                    step += 1
-                    page.mouse.move(cx + 150 * ((step % 40) / 40 - 0.5), cy + 15 * (step % 7))
-                page.mouse.up()
-                elapsed = time.perf_counter() - began
+                box = page.locator("#preview").bounding_box()
+                elapsed, step = drag(page, box, DRAG_SECONDS, 150)
                 frames = int(page.evaluate("window.__frames"))
                 browser.close()
         finally:

@@ -27,6 +27,7 @@ from bench.common import (
     Result,
     Section,
     best_time,
+    drag,
     fmt_bytes,
     fmt_count,
     fmt_ratio,
@@ -157,18 +158,8 @@ def browser_case(family: str, moves: int, seconds: float = 3.0) -> Result:
                 ready = time.perf_counter() - started
                 cells = int(page.evaluate(f"{state}.cells"))
                 box = page.locator("#part-canvas").bounding_box()
-                assert box is not None
-                cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
                 frames0 = int(page.evaluate(f"{state}.frames"))
-                page.mouse.move(cx, cy)
-                page.mouse.down()
-                began = time.perf_counter()
-                step = 0
-                while time.perf_counter() - began < seconds:
-                    step += 1
-                    page.mouse.move(cx + 200 * ((step % 40) / 40 - 0.5), cy + 20 * (step % 7))
-                page.mouse.up()
-                elapsed = time.perf_counter() - began
+                elapsed, step = drag(page, box, seconds, 200)
                 frames = int(page.evaluate(f"{state}.frames")) - frames0
                 browser.close()
         finally:

@@ -25,7 +25,10 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from playwright.sync_api import FloatRect, Page
 
 ROOT = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
@@ -84,6 +87,23 @@ def best_time(call: Callable[[], Any], budget: float = 2.0, most: int = 5) -> fl
         call()
         times.append(time.perf_counter() - start)
     return min(times)
+
+
+def drag(page: Page, box: FloatRect | None, seconds: float, reach: float) -> tuple[float, int]:
+    """Drag with the mouse across the middle of `box` (a Playwright bounding box) for about
+    `seconds`, back and forth over `reach` px; (seconds it took, mouse moves sent). The
+    frames shown meanwhile are the page's own count, read by the caller."""
+    assert box is not None
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    began = time.perf_counter()
+    step = 0
+    while time.perf_counter() - began < seconds:
+        step += 1
+        page.mouse.move(cx + reach * ((step % 40) / 40 - 0.5), cy + reach / 10 * (step % 7))
+    page.mouse.up()
+    return time.perf_counter() - began, step
 
 
 def percentile(values: Sequence[float], p: float) -> float:

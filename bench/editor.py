@@ -156,8 +156,8 @@ def parts_case(blocks: int) -> Result:
         "validate an edited version (once per edit)": lambda: validate(edited()),
         "interpret": lambda: interpret(program),
         "estimate": lambda: estimate(toolpath),
-        "draw (SVG)": lambda: draw(toolpath, embedded_style=False),
-        "editor preview() = interpret + estimate + draw": lambda: preview(program),
+        "draw (SVG)": lambda: draw(program, embedded_style=False),
+        "editor preview() = validate + compile + estimate + draw": lambda: preview(program),
     }
     result: Result = {"moves": len(toolpath.moves)}
     for name, call in parts.items():

@@ -21,7 +21,18 @@ from decimal import Decimal
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from app.cnc.blocks import Block, Mode, Program
+from app.cnc.blocks import (
+    Block,
+    DataBlock0,
+    Direction,
+    Hole,
+    HoleOp,
+    MillLine,
+    MillQcir,
+    Mode,
+    Program,
+    Tool,
+)
 from app.cnc.compiler import Cache, compile_program
 from app.cnc.emit import canon
 from app.cnc.emit.target import ExportError, export, targets
@@ -150,3 +161,36 @@ def _nodes(node: object) -> list[object]:
     if child is not None:
         found += _nodes(child)
     return found
+
+
+def test_a_mill_sequence_with_an_error_is_not_cut_but_located() -> None:
+    """A contour whose quarter circle is not one is not cut (the compile's finding says
+    why), yet its span is kept, without rows, with the programmed contour up to the bad
+    block: the preview draws it in red where it would be instead of leaving it out."""
+    tool = Tool(number=1, diameter=Decimal("0.5"), rpm=800, tcal=Decimal(0))
+    depth = {"z_dn": Decimal("-0.3"), "feed_xy": Decimal(10), "tool": 1}
+    program = Program(
+        name="bad arc",
+        block0=DataBlock0(current_tool=1, tools=(tool,)),
+        blocks=(
+            Hole(
+                op=HoleOp.DRILL,
+                x=Decimal(1),
+                y=Decimal(3),
+                z_up=Decimal("0.1"),
+                z_dn=Decimal("-0.3"),
+                feed_z=Decimal(5),
+                tool=1,
+            ),
+            MillLine(x=Decimal(2), y=Decimal(3), **depth),  # type: ignore[arg-type]
+            MillQcir(direction=Direction.CCW, x=Decimal(3), y=Decimal("3.5"), **depth),  # type: ignore[arg-type]
+        ),
+    )
+    compiled = compile_program(program, Cache())
+    assert any(f.severity is Severity.ERROR and f.block == 3 for f in compiled.findings)
+    spans = [m for chunk in compiled.path.chunks() for m in chunk.mills]
+    assert len(spans) == 1
+    (span,) = spans
+    assert span.start == span.end and span.drill == 1
+    assert (span.x, span.y) == (25_400_000, 76_200_000)
+    assert span.contour() is not None

@@ -187,7 +187,7 @@ def test_what_check_accepts_every_consumer_processes(program: Program) -> None:
     program = valid(program)
     toolpath = interpret(program)
     estimate(toolpath)
-    draw(toolpath)
+    draw(program)
     setup_sheet(program)
     for name in targets():
         try:

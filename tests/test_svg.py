@@ -1,83 +1,203 @@
-"""The SVG drawing: what it shows must be the tool path, and repeated patterns stay small."""
+"""The SVG drawing: what it shows must be the tool path, and repeated patterns stay small.
+
+The drawing is made from the compiled tree (a LOOP's patterns drawn once, placed with
+`<use>`), trusting the compiler that every placement is the pattern moved. These tests
+check that trust the slow way: every `<use>` expanded, the drawing's segments and holes
+are exactly the moves' and the holes' of the compiled path, walked move by move.
+"""
 
 from __future__ import annotations
 
+import itertools
+import math
+import re
 import xml.etree.ElementTree as ET
+from collections import Counter
 from decimal import Decimal as D
 from pathlib import Path
 
 import pytest
 
 from app.cnc import document
-from app.cnc.blocks import DataBlock0, Hole, HoleOp, Mode, Pos, Program, Rep, Tool
+from app.cnc.blocks import DataBlock0, Hole, HoleOp, Mode, Pos, Program, Rep, Stock, Tool
+from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.svg import draw
+from app.cnc.emit.svg import HOLE_LABELS, draw, render
 from app.cnc.emit.target import export
-from app.cnc.interpret import interpret
-from app.cnc.toolpath import Dwell, Feed, Rapid, Toolpath
+from app.cnc.path import Op
+from bench.programs import sized
 
 GOLDEN = Path(__file__).parent / "golden"
+CASES = sorted(p.name for p in GOLDEN.iterdir() if (p / "program.json").exists())
 SVG = "{http://www.w3.org/2000/svg}"
 XLINK = "{http://www.w3.org/1999/xlink}href"
+PLACES = 4
+
+Segment = tuple[str, tuple[float, float], tuple[float, float]]
 
 
 def load(name: str) -> Program:
     return resolve_copies(document.loads((GOLDEN / name / "program.json").read_text()))
 
 
-def flatten_holes(svg: str) -> list[tuple[float, float]]:
-    """Every hole circle of the drawing, with each <use> expanded at its offset."""
-    root = ET.fromstring(svg)
-    symbols = {s.get("id"): s for s in root.iter(f"{SVG}symbol")}
+def r(value: float) -> float:
+    return round(value + 0.0, PLACES) + 0.0
 
-    def walk(element: ET.Element, dx: float, dy: float) -> list[tuple[float, float]]:
-        found = []
-        for child in element:
-            if child.tag == f"{SVG}circle" and child.get("class") == "hole":
-                found.append(
-                    (
-                        round(float(child.get("cx", 0)) + dx, 4),
-                        round(float(child.get("cy", 0)) + dy, 4),
+
+def same(drawn: Counter[Segment], moves: Counter[Segment], places: int) -> bool:
+    """True when the drawn segments are the moves, each coordinate within two steps of the
+    last printed place (a placed pattern's point is its rounded offset plus its rounded
+    position in the pattern, which may differ from the rounded sum in the last place)."""
+    step = 10.0**-places
+    tolerance = 2.5 * step
+
+    def cell(segment: Segment) -> tuple[object, ...]:
+        kind, a, b = segment
+        return (kind, *(math.floor(v / (10 * step)) for v in (*a, *b)))
+
+    pool: dict[tuple[object, ...], list[Segment]] = {}
+    for segment, count in drawn.items():
+        pool.setdefault(cell(segment), []).extend([segment] * count)
+    for segment, count in moves.items():
+        kind, a, b = segment
+        for _ in range(count):
+            base = cell(segment)
+            for shift in itertools.product((-1, 0, 1), repeat=4):
+                key = (kind, *(c + d for c, d in zip(base[1:], shift, strict=True)))  # type: ignore[operator]
+                near = [
+                    s
+                    for s in pool.get(key, [])
+                    if all(
+                        abs(u - v) <= tolerance
+                        for u, v in zip((*s[1], *s[2]), (*a, *b), strict=True)
                     )
+                ]
+                if near:
+                    pool[key].remove(near[0])
+                    break
+            else:
+                return False
+    return not any(pool.values())
+
+
+class Flat:
+    """A drawing with every `<use>` expanded: its tool path segments and hole circles."""
+
+    def __init__(self, svg: str) -> None:
+        self.root = ET.fromstring(svg)
+        self.shapes = {g.get("id"): g for g in self.root.iter(f"{SVG}g") if g.get("id")}
+        self.segments: Counter[Segment] = Counter()
+        self.holes: list[tuple[float, float]] = []
+        self.blocks: set[int] = set()
+        page = next(g for g in self.root if g.get("class") == "page")
+        self.walk(page, 0.0, 0.0, None)
+
+    def walk(self, element: ET.Element, dx: float, dy: float, block: int | None) -> None:
+        for child in element:
+            tag = child.tag.removeprefix(SVG)
+            kind = child.get("class", "")
+            if tag == "g":
+                number = child.get("data-block")
+                if number is not None:
+                    self.blocks.add(int(number))
+                shift = re.fullmatch(
+                    r"translate\(([-\d.]+) ([-\d.]+)\)", child.get("transform", "")
                 )
-            elif child.tag == f"{SVG}use":
-                target = symbols[child.get(XLINK, "").lstrip("#")]
-                found += walk(target, dx + float(child.get("x", 0)), dy + float(child.get("y", 0)))
-            elif child.tag in (f"{SVG}g",):
-                found += walk(child, dx, dy)
-        return found
-
-    page = next(g for g in root if g.tag == f"{SVG}g")
-    return walk(page, 0.0, 0.0)
-
-
-def toolpath_holes(toolpath: Toolpath) -> list[tuple[float, float]]:
-    unit = toolpath.units.nm
-    x, y = toolpath.start[:2]
-    holes = []
-    for move in toolpath.moves:
-        if isinstance(move, Rapid | Feed):
-            x, y = move.x, move.y
-        elif isinstance(move, Dwell):
-            holes.append((round(x / unit, 4), round(y / unit, 4)))
-    return holes
+                ox, oy = (float(shift[1]), float(shift[2])) if shift else (0.0, 0.0)
+                self.walk(child, dx + ox, dy + oy, int(number) if number else block)
+            elif tag == "use":
+                shape = self.shapes[child.get(XLINK, "").lstrip("#")]
+                self.walk(
+                    shape, dx + float(child.get("x", 0)), dy + float(child.get("y", 0)), block
+                )
+            elif tag == "circle" and kind == "hole":
+                self.holes.append(
+                    (r(float(child.get("cx", 0)) + dx), r(float(child.get("cy", 0)) + dy))
+                )
+            elif tag == "path" and kind == "hole":
+                # A large drawing's holes: one path of circles, each two half circles.
+                for start, end in _segments(child.get("d", ""))[::2]:
+                    self.holes.append((r((start[0] + end[0]) / 2 + dx), r(start[1] + dy)))
+            elif tag == "path" and kind in ("rapid", "feed"):
+                for start, end in _segments(child.get("d", "")):
+                    moved = ((r(start[0] + dx), r(start[1] + dy)), (r(end[0] + dx), r(end[1] + dy)))
+                    self.segments[(kind, *moved)] += 1
 
 
-@pytest.mark.parametrize(
-    "name", ["loop-nested-3-deep", "loop-rep-grid", "loop-bolt-circle", "bolt-circle-250"]
-)
-def test_drawing_shows_every_hole_where_the_tool_path_makes_it(name: str) -> None:
-    toolpath = interpret(load(name))
-    assert sorted(flatten_holes(draw(toolpath))) == sorted(toolpath_holes(toolpath))
+def hole_marks(holes: list[tuple[float, float]]) -> Counter[Segment]:
+    """Holes as zero-length segments (to compare them the same way)."""
+    return Counter(("hole", h, h) for h in holes)
+
+
+def _segments(d: str) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """The (start, end) of each line and arc of a path's `d`."""
+    found = []
+    at = (0.0, 0.0)
+    for command, numbers in re.findall(r"([MLA])([^MLA]*)", d):
+        values = [float(v) for v in numbers.split()]
+        end = (values[-2], values[-1])
+        if command != "M":
+            found.append((at, end))
+        at = end
+    return found
+
+
+def expected(program: Program) -> tuple[Counter[Segment], list[tuple[float, float]]]:
+    """Every XY motion of the compiled path, move by move (a full circle as two halves,
+    as SVG draws it), and every hole."""
+    path = compile_program(program).path
+    unit = path.units.nm
+    x, y = path.start[0], path.start[1]
+    segments: Counter[Segment] = Counter()
+    holes: list[tuple[float, float]] = []
+
+    def p(a: float, b: float) -> tuple[float, float]:
+        return (r(a / unit), r(b / unit))
+
+    for chunk in path.chunks():
+        holes += [p(h.x, h.y) for h in chunk.hole_spans()]
+        for op, _tag, _block, nx, ny, _z, cx, cy, _feed, _value in chunk.rows.tolist():
+            if op > Op.ARC_CCW:
+                continue
+            kind = "rapid" if op == Op.RAPID else "feed"
+            if op >= Op.ARC_CW and (nx, ny) == (x, y):
+                segments[(kind, p(x, y), p(2 * cx - x, 2 * cy - y))] += 1
+                segments[(kind, p(2 * cx - x, 2 * cy - y), p(nx, ny))] += 1
+            elif (nx, ny) != (x, y):
+                segments[(kind, p(x, y), p(nx, ny))] += 1
+            x, y = nx, ny
+    return segments, holes
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_drawing_is_exactly_the_compiled_moves(name: str) -> None:
+    program = load(name)
+    flat = Flat(draw(program))
+    segments, holes = expected(program)
+    assert same(flat.segments, segments, program.units.dump_places)
+    assert same(hole_marks(flat.holes), hole_marks(holes), program.units.dump_places)
+
+
+@pytest.mark.parametrize("family", ["grid", "bolts", "pockets"])
+def test_looped_families_draw_every_pattern_in_place(family: str) -> None:
+    program = sized(family, 30_000)
+    svg = draw(program)
+    flat = Flat(svg)
+    segments, holes = expected(program)
+    assert same(flat.segments, segments, program.units.dump_places)
+    assert same(hole_marks(flat.holes), hole_marks(holes), program.units.dump_places)
+    # Drawn once, placed many times: the drawing is a small fraction of the moves.
+    assert svg.count("<use") > 10 and len(svg) < 30_000 * 10
 
 
 def test_every_block_that_moves_is_linkable() -> None:
     program = load("contour-cut-right")
-    svg = draw(interpret(program))
-    blocks = {int(g.get("data-block", 0)) for g in ET.fromstring(svg).iter(f"{SVG}g")}
-    blocks.discard(0)
-    moving = {m.block for m in interpret(program).moves if isinstance(m, Rapid | Feed)}
-    assert moving - {0} <= blocks
+    drawing = render(program)
+    moving = set()
+    for chunk in compile_program(program).path.chunks():
+        rows = chunk.rows[chunk.rows["op"] <= Op.ARC_CCW]
+        moving |= set(rows["block"].tolist())
+    assert moving - {0} <= Flat(drawing.svg).blocks == set(drawing.blocks)
 
 
 def test_arcs_stay_arcs_with_the_right_sweep() -> None:
@@ -85,8 +205,53 @@ def test_arcs_stay_arcs_with_the_right_sweep() -> None:
 
     The page is flipped (scale(1,-1)), so a counter-clockwise arc has SVG sweep flag 1.
     """
-    svg = draw(interpret(load("contour-cut-right")))
+    svg = draw(load("contour-cut-right"))
     assert "A0.75 0.75 0 0 1 3.75 0.5" in svg
+
+
+def test_the_programmed_contour_is_drawn_with_the_tool_centre() -> None:
+    """contour-cut-right: the tool (0.5 in, CUT RT) runs 0.25 in off the contour; the
+    contour itself is block 3's quarter circle of radius 0.5 to (3.5, 0.5)."""
+    svg = draw(load("contour-cut-right"))
+    block3 = re.search(r'<g class="block" data-block="3">(.*?)</g>', svg)
+    assert block3 is not None
+    assert '<path class="contour" d="M3 0 A0.5 0.5 0 0 1 3.5 0.5"/>' in block3[1]
+    pocket = draw(load("circle-pocket"))
+    assert re.search(r'<circle class="contour" cx="[-\d.]+" cy="[-\d.]+" r="[\d.]+"/>', pocket)
+
+
+def test_part_zero_and_the_stock_outline() -> None:
+    """Without a stock the outline is the reach of the cuts (tool radius included) plus
+    the simulation's 0.1 in margin, rounded out to 0.05 in; with one, it is the stock."""
+    program = load("contour-cut-right")
+    svg = draw(program)
+    assert '<g class="zero">' in svg
+    # The 0.5 in tool's centre reaches x -0.25…3.75 and y -0.25…3.5: ± 0.25, + 0.1.
+    assert '<rect x="-0.65" y="-0.6" width="4.75" height="4.7"/>' in svg
+    stock = Stock(x=D(-1), y=D(-1), z=D(0), xl=D(6), yw=D(5), zh=D(1))
+    given = draw(Program(**{**program.__dict__, "stock": stock}))
+    assert '<rect x="-1" y="-1" width="6" height="5"/>' in given
+
+
+def test_holes_are_numbered_in_the_order_they_are_cut() -> None:
+    svg = draw(load("loop-rep-grid"))
+    labels = re.findall(r'<text x="([-\d.]+)" y="([-\d.]+)">(\d+)</text>', svg)
+    holes = expected(load("loop-rep-grid"))[1]
+    assert [int(k) for _, _, k in labels] == list(range(1, len(holes) + 1))
+    # Each number sits up and right of its hole (the text is outside the flipped page).
+    for (x, y, _), (hx, hy) in zip(labels, holes, strict=True):
+        assert float(x) > hx and -float(y) > hy
+    many = draw(sized("grid", 20_000))
+    assert "<text" not in many
+    assert HOLE_LABELS < 1_000
+
+
+def test_a_problem_block_is_red_with_its_messages() -> None:
+    svg = draw(load("drill-single"), problems={1: ["FEEDR Z: 900 ipm is above the limit"]})
+    assert (
+        '<g class="block problem" data-block="1"><title>block 1: FEEDR Z: 900 ipm is above '
+        "the limit</title>" in svg
+    )
 
 
 def test_swept_width_and_grid_are_options() -> None:
@@ -133,13 +298,14 @@ def ten_thousand() -> Program:
 
 
 def test_ten_thousand_patterns_preview_under_200_kb() -> None:
-    toolpath = interpret(ten_thousand())
-    svg = draw(toolpath)
+    program = ten_thousand()
+    svg = draw(program)
     assert len(svg.encode()) < 200_000, f"{len(svg.encode())} bytes"
-    assert svg.count("<symbol") == 4
-    assert sorted(flatten_holes(svg)) == sorted(toolpath_holes(toolpath))
+    holes = Flat(svg).holes
+    assert len(holes) == 10_000
+    assert same(hole_marks(holes), hole_marks(expected(program)[1]), 4)
 
 
 def test_same_program_same_bytes() -> None:
     program = load("circle-pocket")
-    assert draw(interpret(program)) == draw(interpret(program))
+    assert draw(program) == draw(program)

@@ -505,7 +505,8 @@ class _Compiler:
         the retract height, back to the plunge point, down to the level just finished, and
         feeds to the next (seed 001 §3.4.5.2 PECK). A 2P routine takes its levels down to
         the roughing depth, then feeds to Z DN for the finishing pass. A sequence whose plan
-        has errors is not cut (its findings say why); the reference still moves on.
+        has errors is not cut (its findings say why; its MillSpan has no rows); the
+        reference still moves on.
         """
         drill = self.blocks[node.drill]
         assert isinstance(drill, Hole)
@@ -517,6 +518,9 @@ class _Compiler:
         )
         self.findings += plan.findings
         if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
+            # Not cut: a span without rows says where it would be (with the programmed
+            # contour), so a drawing can show what is left out.
+            self.record_mill(node, drill, start, len(self.buffer.rows), plan.finished)
             self.reference = plan.end
             return
         self.use_tool(number, drill.tool)

@@ -193,7 +193,8 @@ class HoleSpan:
 
 @dataclass(frozen=True, slots=True)
 class MillSpan:
-    """One mill sequence in a piece: rows [start, end) cut it.
+    """One mill sequence in a piece: rows [start, end) cut it (none when its plan has
+    errors: it is not cut, the span only says where it would be).
 
     `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME block (0 for a
     contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point (nm);

@@ -19,7 +19,6 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
-from app.cnc.compiler import compile_program
 from app.cnc.emit.svg import draw
 from app.cnc.formats.dxf.choice import (
     DIRECTIONS,
@@ -252,7 +251,7 @@ def _page(
     if chosen is not None and chosen.blocks:
         program = chosen.program(drawing.name, drawing.units)
         problems = [p for p in validate(program) if p.severity is Severity.ERROR]
-        preview_svg = draw(compile_program(program).path.toolpath(), embedded_style=False)
+        preview_svg = draw(program, embedded_style=False)
     context = {
         "key": key,
         "drawing": drawing,

@@ -30,6 +30,7 @@ from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
 from app.web.forms import entry_forms, group_menu, sub_menu
+from app.web.preview import Shown as PreviewShown
 from app.web.preview import preview
 
 
@@ -99,7 +100,7 @@ class Shown:
     svg: str
     per_block: dict[int, float]
     total: float
-    shown: int  # blocks drawn: those before the first with an error
+    shown: PreviewShown  # what the drawing and the cycle time hold (blocks with errors)
 
 
 SHOWN_VERSIONS = 4

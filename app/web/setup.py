@@ -6,7 +6,6 @@ from flask import Blueprint, render_template, request
 
 from app.cnc.emit.svg import draw
 from app.cnc.emit.target import ExportError, OptionError, export, targets
-from app.cnc.interpret import interpret
 from app.cnc.problems import has_errors
 from app.cnc.setup import setup_sheet
 from app.cnc.validate import validate
@@ -39,7 +38,7 @@ def sheet(program_id: int) -> tuple[str, int]:
             else []
         )
         error = "; ".join([str(exc), *reasons])
-    picture = draw(interpret(program), embedded_style=False)
+    picture = draw(program, embedded_style=False)
     return (
         render_template(
             "setup/sheet.html",

@@ -1,42 +1,73 @@
-"""The tool path as an SVG drawing (svgwrite): the web preview and the `svg` export.
+"""The tool path as an SVG drawing: the web preview and the `svg` export.
 
-Seen from above in part coordinates (part zero marked), Y up. Rapids, feeds, plunges and
-holes have their own classes (`rapid`, `feed`, `plunge`, `hole`) so a stylesheet can
-restyle them; arcs stay arcs. Every drawn element sits in a `<g class="block"
-data-block="N">` so the editor can link drawing and block. A LOOP/REP pattern is drawn
-once as a `<symbol>` and placed with `<use>` for each repetition that is really the first
-moved by its offset (checked move by move); nested LOOPs nest symbols, so the drawing grows
-with NX + NY, not NX × NY.
+Seen from above in part coordinates, Y up (the page is flipped with `scale(1,-1)`), in the
+program's unit. What it shows, each with its own class so a stylesheet can restyle it:
 
-Options: `swept` draws the width the tool sweeps along feed moves; `grid` draws a grid of
-1 in (10 mm) squares. Output is deterministic: fixed decimals, no ids but the pattern
-symbols' `p<block>-<n>`.
+- the tool centre: `rapid` and `feed` paths (arcs stay arcs), `plunge` marks where a feed
+  goes down in place, `hole` circles the tool's size for every DRILL, BORE and TAP, and
+  with `swept` the width the tool sweeps along feeds (`swept`);
+- the programmed contour of every mill sequence (`contour`: the lines and arcs as
+  programmed, before cutter compensation; a CIRCLE or FRAME routine's circle or frame);
+- part zero (`g.zero`), the stock outline (`g.stock`: the program's stock, or the reach
+  of its cuts with the margin the simulation uses), with `grid` a 1 in / 10 mm grid;
+- the order holes are cut in (`g.order`, numbers beside the holes, up to HOLE_LABELS).
+
+Every drawn element sits in a `<g class="block" data-block="N">`, so the editor can link
+drawing and block; a block given in `problems` gets the class `problem` and a `<title>`
+with its messages. A mill sequence the compiler could not cut is still drawn: its
+programmed contour, in its (problem) block's group.
+
+Drawn from the compiled tree (path.py), not from the moves one by one: a `Run` (the
+patterns of a LOOP) draws its node once into `<defs>` and places it with `<use>` at each
+offset — the compiler guarantees each placement is the node moved by its offset. The move
+that brings the tool into each pattern is drawn apart (one path for the whole run), so the
+first pattern and the others share one drawing; identical drawings are kept once.
+
+Deterministic: fixed decimals, ids `p1`, `p2`… in the order drawings are first made.
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from html import escape
 from typing import Any
 
-import svgwrite
+import numpy as np
 
-from app.cnc.blocks import Program
+from app.cnc.blocks import Circle, Frame, Program
+from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Report, Target, register
-from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid, Repetition, ToolChange, Toolpath
-from app.cnc.units import Units
+from app.cnc.mill import Path
+from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
+from app.cnc.simulate.stock import MARGIN, ROUND_TO
+from app.cnc.toolpath import Toolpath
+from app.cnc.units import Units, to_nm
+
+# Holes are numbered in the order they are cut when a program has at most this many.
+HOLE_LABELS = 500
+# Level of detail. Beyond this many holes, holes and plunge marks are one path per block
+# (a browser lays out every element of every <use>); beyond this many moves the drawing
+# is large: marks as paths too, and the editor paints it on a canvas (static/preview.js).
+MARKS_AS_ELEMENTS = 2_000
+LARGE_MOVES = 50_000
 
 STYLE = """
-path:not(.swept), circle, line {{ fill: none; stroke-width: {w}; }}
+path:not(.swept), circle, line, rect {{ fill: none; stroke-width: {w}; }}
 path.swept {{ fill: none; }}
 path.rapid {{ stroke: #8a8a8a; stroke-dasharray: {dash} {gap}; }}
 path.feed {{ stroke: #0b5fbf; stroke-width: {wide}; }}
 path.swept {{ stroke: #9cc3f0; stroke-linecap: round; stroke-linejoin: round; opacity: .45; }}
+.contour {{ stroke: #111827; }}
 circle.plunge {{ stroke: #c2410c; }}
 circle.hole {{ stroke: #15803d; fill: #bbf7d0; fill-opacity: .5; }}
+g.problem path, g.problem circle, g.problem rect {{ stroke: #dc2626; }}
 g.zero line {{ stroke: #b91c1c; }}
+g.stock rect {{ stroke: #a16207; stroke-dasharray: {gap} {gap}; }}
 g.grid line {{ stroke: #e5e7eb; stroke-width: {thin}; }}
+g.order text {{ fill: #166534; }}
 """
 
 
@@ -55,337 +86,665 @@ class SvgTarget(Target):
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
     ) -> bytes:
-        return draw(toolpath, swept=bool(options["swept"]), grid=bool(options["grid"])).encode(
-            "utf-8"
-        )
-
-
-def draw(
-    toolpath: Toolpath, swept: bool = False, grid: bool = False, embedded_style: bool = True
-) -> str:
-    """The SVG text of a tool path (see the module docstring).
-
-    `embedded_style` False leaves the `<style>` out, for a page whose own stylesheet
-    styles the classes (a Content-Security-Policy without inline styles forbids it there).
-    """
-    return _Drawing(toolpath, swept, grid, embedded_style).render()
+        # The compiled path of the program (cached: export compiled it a moment ago) keeps
+        # the structure the drawing is made from.
+        text = draw(program, swept=bool(options["swept"]), grid=bool(options["grid"]))
+        return text.encode("utf-8")
 
 
 @dataclass(frozen=True, slots=True)
-class _Prim:
-    """One drawn thing: a rapid/feed segment (line or arc), a hole, or a plunge mark.
+class Drawing:
+    """A drawing and what is in it: the blocks that have something drawn, the holes, and
+    whether it is large (more than LARGE_MOVES moves)."""
 
-    `move` is the index of the move it comes from; points are XY in nm.
+    svg: str
+    blocks: frozenset[int]
+    holes: int
+    large: bool = False
+
+
+def draw(
+    program: Program,
+    swept: bool = False,
+    grid: bool = False,
+    embedded_style: bool = True,
+    problems: Mapping[int, Sequence[str]] | None = None,
+) -> str:
+    """The SVG text of a program's tool path (see the module docstring).
+
+    `embedded_style` False leaves the `<style>` out, for a page whose own stylesheet
+    styles the classes (a Content-Security-Policy without inline styles forbids it there).
+    `problems` are messages by block number: those blocks are drawn as problems.
     """
+    return render(
+        program, swept=swept, grid=grid, embedded_style=embedded_style, problems=problems
+    ).svg
 
-    move: int
+
+def render(
+    program: Program,
+    path: CompiledPath | None = None,
+    *,
+    swept: bool = False,
+    grid: bool = False,
+    embedded_style: bool = True,
+    problems: Mapping[int, Sequence[str]] | None = None,
+) -> Drawing:
+    """The drawing of `program` (its compiled `path`, compiled here when not given)."""
+    if path is None:
+        path = compile_program(program).path
+    return _Painter(program, path, swept, problems or {}).document(grid, embedded_style)
+
+
+# -- boxes and state -------------------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class _Box:
+    """An axis-aligned box (nm), empty until something is added."""
+
+    x0: float = math.inf
+    y0: float = math.inf
+    x1: float = -math.inf
+    y1: float = -math.inf
+
+    def add(self, x0: float, y0: float, x1: float, y1: float) -> None:
+        self.x0, self.y0 = min(self.x0, x0), min(self.y0, y0)
+        self.x1, self.y1 = max(self.x1, x1), max(self.y1, y1)
+
+    def point(self, x: float, y: float, r: float = 0.0) -> None:
+        self.add(x - r, y - r, x + r, y + r)
+
+    def join(self, other: _Box, lo: tuple[int, int] = (0, 0), hi: tuple[int, int] = (0, 0)) -> None:
+        """Add `other` moved by every offset between `lo` and `hi`."""
+        if other.empty:
+            return
+        self.add(other.x0 + lo[0], other.y0 + lo[1], other.x1 + hi[0], other.y1 + hi[1])
+
+    @property
+    def empty(self) -> bool:
+        return self.x0 > self.x1
+
+
+@dataclass(frozen=True, slots=True)
+class _State:
+    """Where the tool is (nm, in the frame being drawn) and which tool is in."""
+
+    x: int
+    y: int
+    z: int
+    tool: int
+
+    def moved(self, dx: int, dy: int) -> _State:
+        return _State(self.x + dx, self.y + dy, self.z, self.tool)
+
+
+@dataclass(slots=True)
+class _Entry:
+    """The move that brings the tool into a piece: from where it was to (x, y)."""
+
     block: int
-    kind: str  # rapid, feed, hole, plunge
-    start: tuple[int, int]
-    end: tuple[int, int]
-    arc: tuple[int, int, bool] | None = None  # centre x, centre y, clockwise
-    size: int = 0  # hole diameter, or the tool diameter for a swept feed
-
-    def moved(self, dx: int, dy: int) -> _Prim:
-        arc = None if self.arc is None else (self.arc[0] + dx, self.arc[1] + dy, self.arc[2])
-        return _Prim(
-            self.move,
-            self.block,
-            self.kind,
-            (self.start[0] + dx, self.start[1] + dy),
-            (self.end[0] + dx, self.end[1] + dy),
-            arc,
-            self.size,
-        )
-
-    def same_shape(self, other: _Prim, dx: int, dy: int) -> bool:
-        """True when `other` is this primitive moved by (dx, dy)."""
-        moved = self.moved(dx, dy)
-        return (moved.block, moved.kind, moved.start, moved.end, moved.arc, moved.size) == (
-            other.block,
-            other.kind,
-            other.start,
-            other.end,
-            other.arc,
-            other.size,
-        )
+    kind: str
+    x: int
+    y: int
 
 
-class _Drawing:
-    def __init__(self, toolpath: Toolpath, swept: bool, grid: bool, embedded_style: bool) -> None:
-        self.tp = toolpath
-        self.embedded_style = embedded_style
-        self.unit = toolpath.units.nm
-        self.places = toolpath.units.dump_places
+@dataclass(slots=True)
+class _Body:
+    """The drawing of one node entered in one state, in the node's own frame."""
+
+    text: str
+    exit: _State
+    box: _Box  # everything drawn, tool radius included
+    cut: _Box  # the reach of the cuts below Z0 (tool radius included): the stock's extent
+    blocks: set[int]
+    holes: list[tuple[int, int, int]]  # (x, y, radius) in cutting order (when labelled)
+    entry: _Entry | None = None  # drawn apart, when the node is a piece placed by a run
+
+
+@dataclass(slots=True)
+class _Group:
+    """What one block draws in one body: paths by (class, tool size), circles, contours."""
+
+    paths: dict[tuple[str, int], list[str]] = field(default_factory=dict)
+    ends: dict[tuple[str, int], tuple[float, float]] = field(default_factory=dict)
+    marks: list[str] = field(default_factory=list)
+    contour: list[str] = field(default_factory=list)  # path commands of the contour
+    outlines: list[str] = field(default_factory=list)  # routines' circles and frames
+    plunges: set[tuple[int, int]] = field(default_factory=set)
+    holes: list[str] = field(default_factory=list)  # hole circles as path commands (LOD)
+    plunge_rings: list[str] = field(default_factory=list)
+
+
+# -- the painter -----------------------------------------------------------------------------
+
+
+class _Painter:
+    def __init__(
+        self,
+        program: Program,
+        path: CompiledPath,
+        swept: bool,
+        problems: Mapping[int, Sequence[str]],
+    ) -> None:
+        self.program = program
+        self.path = path
+        self.units = path.units
+        self.unit = path.units.nm
+        self.places = path.units.dump_places
         self.swept = swept
-        self.grid = grid
-        self.prims = self.primitives()
-        self.runs = _runs(toolpath.repetitions)
-
-    def primitives(self) -> list[_Prim]:
-        prims: list[_Prim] = []
-        x, y, z = self.tp.start
-        tool = self.tp.initial_tool
-        for i, move in enumerate(self.tp.moves):
-            if isinstance(move, ToolChange):
-                tool, z = move.tool, move.z
-                continue
-            info = self.tp.tools.get(tool)
-            diameter = info.diameter if info is not None and info.diameter else 0
-            if isinstance(move, Dwell):
-                prims.append(_Prim(i, move.block, "hole", (x, y), (x, y), size=diameter))
-                continue
-            if not isinstance(move, Rapid | Feed | ArcFeed):
-                continue
-            if (move.x, move.y) == (x, y) and not isinstance(move, ArcFeed):
-                if isinstance(move, Feed) and move.z < z:
-                    prims.append(_Prim(i, move.block, "plunge", (x, y), (x, y)))
-            else:
-                kind = "rapid" if isinstance(move, Rapid) else "feed"
-                arc = (move.cx, move.cy, move.clockwise) if isinstance(move, ArcFeed) else None
-                size = diameter if kind == "feed" else 0
-                prims.append(_Prim(i, move.block, kind, (x, y), (move.x, move.y), arc, size))
-            x, y, z = move.x, move.y, move.z
-        return prims
+        self.problems = problems
+        self.defs: list[str] = []
+        self.shapes: dict[str, str] = {}  # a drawing's text → its id in <defs>
+        self.bodies: dict[tuple[object, ...], _Body] = {}
+        self.digests: dict[int, bytes] = {}
+        self.numbers: dict[float, str] = {}
+        holes = _hole_count(path.root)
+        self.labelled = holes <= HOLE_LABELS
+        # Level of detail: a large drawing draws each block's holes and plunge marks as one
+        # path, not an element each (a browser lays out every element of every <use>).
+        self.large = len(path) > LARGE_MOVES
+        self.merged = self.large or holes > MARKS_AS_ELEMENTS
 
     # -- numbers ----------------------------------------------------------------------------
 
     def n(self, nm: float) -> str:
-        text = f"{nm / self.unit:.{self.places}f}".rstrip("0").rstrip(".")
-        return "0" if text in ("-0", "") else text
+        """A length in the drawing's unit, at its printing resolution, no trailing zeros."""
+        found = self.numbers.get(nm)
+        if found is None:
+            text = f"{nm / self.unit:.{self.places}f}".rstrip("0").rstrip(".")
+            found = self.numbers[nm] = "0" if text in ("-0", "") else text
+        return found
 
-    # -- the document ------------------------------------------------------------------------
+    def xy(self, x: float, y: float) -> str:
+        return f"{self.n(x)} {self.n(y)}"
 
-    def render(self) -> str:
-        x0, y0, x1, y1 = self.extent()
-        pad = max((x1 - x0), (y1 - y0), self.unit // 4) * 0.05
-        x0, y0, x1, y1 = x0 - pad, y0 - pad, x1 + pad, y1 + pad
-        width, height = x1 - x0, y1 - y0
-        drawing = svgwrite.Drawing(
-            size=("100%", "100%"),
-            viewBox=f"{self.n(x0)} {self.n(-y1)} {self.n(width)} {self.n(height)}",
-            debug=False,
-            profile="full",
+    def radius(self, tool: int) -> int:
+        info = self.path.tools.get(tool)
+        return info.diameter // 2 if info is not None and info.diameter else 0
+
+    # -- the tree ---------------------------------------------------------------------------
+
+    def paint(self, node: Node, state: _State, base: int, split: bool = False) -> _Body:
+        """`node` entered in `state` (its frame), block numbers + `base`. `split` draws a
+        piece's entry move apart (for a run to draw once for all its placements)."""
+        if isinstance(node, Piece):
+            # Pieces alike in content (the compiler makes one per LOOP run, and the runs of
+            # a long LOOP are alike) are drawn once for each way they are entered; a piece
+            # whose drawing does not depend on where it is entered from, once.
+            digest = self.digest(node)
+            shift = node.base + base
+            key: tuple[object, ...] = (digest, shift, split, state)
+            found = self.bodies.get(key)
+            if found is None:
+                loose = self.loose(node, digest, shift, state) if split else None
+                found = self.bodies.get(loose) if loose is not None else None
+                if found is None:
+                    found = self.piece(node, state, base, split)
+                    if loose is not None:
+                        self.bodies[loose] = found
+                self.bodies[key] = found
+            return found
+        if isinstance(node, Seq):
+            return self.sequence(node.nodes, state, base)
+        return self.run(node, state, base)
+
+    def digest(self, piece: Piece) -> bytes:
+        """What a piece's drawing is made of (its moves, holes and mill sequences)."""
+        found = self.digests.get(id(piece))
+        if found is None:
+            made = hashlib.blake2b(piece.rows.tobytes(), digest_size=16)
+            made.update(piece.holes.tobytes())
+            made.update(repr(piece.mills).encode())
+            found = self.digests[id(piece)] = made.digest()
+        return found
+
+    def loose(
+        self, piece: Piece, digest: bytes, shift: int, state: _State
+    ) -> tuple[object, ...] | None:
+        """The key of a piece's drawing that holds from any place it is entered from, or
+        None: when its first move across is a rapid (its entry, drawn by the run) and
+        nothing before it cuts, the drawing depends only on that move and the tool."""
+        rows = piece.rows
+        op = rows["op"]
+        motion = op <= Op.ARC_CCW
+        across = np.flatnonzero(
+            motion & ((rows["x"] != state.x) | (rows["y"] != state.y) | (op >= Op.ARC_CW))
         )
-        drawing.attribs["class"] = "mb-path"
-        drawing.attribs["data-units"] = self.tp.units.value
-        # Line widths in drawing units, a fixed fraction of its size, so the drawing reads
-        # the same in any viewer and at any part size.
-        w = max(width, height) / 700
-        if self.embedded_style:
-            drawing.defs.add(
-                drawing.style(
-                    STYLE.format(
-                        w=self.n(w),
-                        wide=self.n(1.8 * w),
-                        thin=self.n(0.5 * w),
-                        dash=self.n(4 * w),
-                        gap=self.n(3 * w),
-                    )
-                )
+        if not len(across) or op[across[0]] != Op.RAPID:
+            return None
+        first = int(across[0])
+        if np.any((op[:first] == Op.FEED) | (op[:first] == Op.TOOL)):
+            return None
+        return (digest, shift, "entered at", first, state.tool)
+
+    def sequence(self, nodes: Iterable[Node], state: _State, base: int) -> _Body:
+        texts: list[str] = []
+        body = _Body("", state, _Box(), _Box(), set(), [])
+        for child in nodes:
+            part = self.paint(child, state, base)
+            texts.append(part.text)
+            body.box.join(part.box)
+            body.cut.join(part.cut)
+            body.blocks |= part.blocks
+            body.holes += part.holes
+            state = part.exit
+        body.text = "".join(texts)
+        body.exit = state
+        return body
+
+    def run(self, run: Run, state: _State, base: int) -> _Body:
+        """A node placed at each of the run's offsets: drawn once, then `<use>`d."""
+        offsets = [(int(x), int(y)) for x, y in run.offsets.tolist()]
+        first = offsets[0]
+        # A LOOP's patterns draw their way in apart, so patterns entered from different
+        # places still share one drawing.
+        split = run.rep > 0 or len(offsets) > 1
+        inner = self.paint(run.node, state.moved(-first[0], -first[1]), base + run.base, split)
+        lo = (min(x for x, _ in offsets), min(y for _, y in offsets))
+        hi = (max(x for x, _ in offsets), max(y for _, y in offsets))
+        body = _Body("", inner.exit.moved(*offsets[-1]), _Box(), _Box(), set(inner.blocks), [])
+        body.box.join(inner.box, lo, hi)
+        body.cut.join(inner.cut, lo, hi)
+        for dx, dy in offsets:
+            body.holes += [(x + dx, y + dy, r) for x, y, r in inner.holes]
+        texts = []
+        entry = inner.entry
+        if entry is not None:
+            # Each placement's way in, from where the tool is (the same place relative to
+            # every placement of a run) to the entry's end: one path for the run.
+            start = state.moved(-first[0], -first[1])
+            parts = []
+            at = None
+            for dx, dy in offsets:
+                if at != (start.x + dx, start.y + dy):
+                    parts.append(f"M{self.xy(start.x + dx, start.y + dy)}")
+                at = (entry.x + dx, entry.y + dy)
+                parts.append(f"L{self.xy(*at)}")
+            texts.append(
+                self.group(entry.block) + f'<path class="{entry.kind}" d="{" ".join(parts)}"/></g>'
             )
-        page = drawing.g(transform="scale(1,-1)")
-        if self.grid:
-            page.add(self.grid_lines(drawing, x0, y0, x1, y1))
-        mark = self.unit * (0.1 if self.tp.units is Units.INCH else 2.5)
-        zero = drawing.g(class_="zero")
-        zero.add(drawing.line((self.n(-mark), 0), (self.n(mark), 0)))
-        zero.add(drawing.line((0, self.n(-mark)), (0, self.n(mark))))
-        page.add(zero)
-        self.draw_range(drawing, page, 0, len(self.prims), 0)
-        drawing.add(page)
-        return str(drawing.tostring()) + "\n"
+            body.box.add(
+                min(start.x, entry.x) + lo[0],
+                min(start.y, entry.y) + lo[1],
+                max(start.x, entry.x) + hi[0],
+                max(start.y, entry.y) + hi[1],
+            )
+            body.blocks.add(entry.block)
+        if not split:
+            dx, dy = first
+            texts.append(
+                inner.text
+                if (dx, dy) == (0, 0)
+                else f'<g transform="translate({self.xy(dx, dy)})">{inner.text}</g>'
+            )
+        elif inner.text:
+            shape = self.shapes.get(inner.text)
+            if shape is None:
+                shape = self.shapes[inner.text] = f"p{len(self.shapes) + 1}"
+                # Its extent (drawing units, tool radius included): what a canvas needs to
+                # paint it once and place the picture (static/preview.js).
+                b = inner.box
+                extent = f"{self.n(b.x0)} {self.n(b.y0)} {self.n(b.x1)} {self.n(b.y1)}"
+                self.defs.append(
+                    f'<g id="{shape}" class="pattern" data-box="{extent}">{inner.text}</g>'
+                )
+            texts += [
+                f'<use xlink:href="#{shape}" x="{self.n(dx)}" y="{self.n(dy)}"/>'
+                if (dx, dy) != (0, 0)
+                else f'<use xlink:href="#{shape}"/>'
+                for dx, dy in offsets
+            ]
+        body.text = "".join(texts)
+        return body
 
-    def extent(self) -> tuple[float, float, float, float]:
-        xs = [float(self.tp.start[0]), 0.0]
-        ys = [float(self.tp.start[1]), 0.0]
-        for p in self.prims:
-            xs += [p.start[0], p.end[0]]
-            ys += [p.start[1], p.end[1]]
-            if p.arc is not None:
-                radius = math.hypot(p.start[0] - p.arc[0], p.start[1] - p.arc[1])
-                xs += [p.arc[0] - radius, p.arc[0] + radius]
-                ys += [p.arc[1] - radius, p.arc[1] + radius]
-        return min(xs), min(ys), max(xs), max(ys)
+    # -- a piece ----------------------------------------------------------------------------
 
-    def grid_lines(
-        self, drawing: svgwrite.Drawing, x0: float, y0: float, x1: float, y1: float
-    ) -> Any:
-        step = self.unit * (1 if self.tp.units is Units.INCH else 10)
-        group = drawing.g(class_="grid")
-        for k in range(math.floor(x0 / step), math.ceil(x1 / step) + 1):
-            group.add(drawing.line((self.n(k * step), self.n(y0)), (self.n(k * step), self.n(y1))))
-        for k in range(math.floor(y0 / step), math.ceil(y1 / step) + 1):
-            group.add(drawing.line((self.n(x0), self.n(k * step)), (self.n(x1), self.n(k * step))))
-        return group
+    def piece(self, piece: Piece, state: _State, base: int, split: bool) -> _Body:
+        """The moves of one piece from `state`: segments, holes, plunges, contours.
 
-    # -- patterns ---------------------------------------------------------------------------
-
-    def run_at(self, move: int, depth: int) -> list[Repetition] | None:
-        """The LOOP run at `depth` whose moves include move index `move`."""
-        for (first, run_depth), run in self.runs.items():
-            if run_depth == depth and first <= move < run[-1].end:
-                return run
-        return None
-
-    def draw_range(
-        self, drawing: svgwrite.Drawing, parent: Any, lo: int, hi: int, depth: int
-    ) -> None:
-        """Draw prims[lo:hi], drawing each LOOP run at `depth + 1` once as a symbol."""
-        i = lo
-        pending: list[_Prim] = []
-        while i < hi:
-            run = self.run_at(self.prims[i].move, depth + 1)
-            if run is None:
-                pending.append(self.prims[i])
-                i += 1
-                continue
-            self.flush(drawing, parent, pending)
-            pending = []
-            end = i
-            while end < hi and self.prims[end].move < run[-1].end:
-                end += 1
-            self.draw_run(drawing, parent, run, i, end, depth + 1)
-            i = end
-        self.flush(drawing, parent, pending)
-
-    def draw_run(
-        self,
-        drawing: svgwrite.Drawing,
-        parent: Any,
-        run: list[Repetition],
-        lo: int,
-        hi: int,
-        depth: int,
-    ) -> None:
-        """One LOOP run: the first pattern as a symbol, the others as `<use>` where equal.
-
-        Each pattern begins with the moves that bring the tool from where the last one
-        ended; those are drawn as they are. The first pattern's entry is its first
-        segment (if it starts with one); a later pattern's entry ends where its drawing
-        starts to match the first pattern's body moved by the pattern's offset.
+        With `split`, the first move, when it is a rapid across with nothing drawn before
+        it, is the piece's entry: left out of the drawing and its box (the run draws it).
         """
-        groups: list[tuple[Repetition, int, int]] = []
-        k = lo
-        for rep in run:
-            start = k
-            while k < hi and self.prims[k].move < rep.end:
-                k += 1
-            groups.append((rep, start, k))
-        first, f_lo, f_hi = groups[0]
-        entry = f_lo + 1 if f_lo < f_hi and self.prims[f_lo].kind in ("rapid", "feed") else f_lo
-        self.flush(drawing, parent, self.prims[f_lo:entry])
-        symbol_id = f"p{first.rep_block}-{first.start}"
-        symbol = drawing.symbol(id=symbol_id)
-        symbol.attribs["overflow"] = "visible"
-        self.draw_range(drawing, symbol, entry, f_hi, depth)
-        drawing.defs.add(symbol)
-        parent.add(drawing.use(f"#{symbol_id}"))
-        body = self.prims[entry:f_hi]
-        for rep, r_lo, r_hi in groups[1:]:
-            dx = rep.offset[0] - first.offset[0]
-            dy = rep.offset[1] - first.offset[1]
-            # This pattern's entry ends where the first pattern's body begins, moved.
-            r_entry = r_lo
-            while body and r_entry < r_hi and not body[0].same_shape(self.prims[r_entry], dx, dy):
-                r_entry += 1
-            other = self.prims[r_entry:r_hi]
-            if len(other) == len(body) and all(
-                a.same_shape(b, dx, dy) for a, b in zip(body, other, strict=True)
-            ):
-                self.flush(drawing, parent, self.prims[r_lo:r_entry])
-                parent.add(drawing.use(f"#{symbol_id}", insert=(self.n(dx), self.n(dy))))
+        shift = piece.base + base
+        groups: dict[int, _Group] = {}
+        x0 = y0 = cx0 = cy0 = math.inf
+        x1 = y1 = cx1 = cy1 = -math.inf
+        x, y, z, tool = state.x, state.y, state.z, state.tool
+        r = self.radius(tool)
+        entry: _Entry | None = None
+        rows = piece.rows.tolist()
+        # Rows inside a hole's span: its feeds down are the hole's, not plunge marks.
+        depth = np.zeros(len(rows) + 1, dtype=np.int64)
+        np.add.at(depth, piece.holes["start"], 1)
+        np.add.at(depth, piece.holes["end"], -1)
+        in_hole = (np.cumsum(depth) > 0).tolist()
+        hole_tools: dict[int, int] = {}
+        starts = set(piece.holes["start"].tolist())
+        for k, (op, _tag, block, nx, ny, nz, cx, cy, _feed, value) in enumerate(rows):
+            if k in starts:
+                hole_tools[k] = tool
+            if op > Op.ARC_CCW:
+                if op == Op.TOOL:
+                    tool, z = value, nz
+                    r = self.radius(tool)
+                continue
+            number = block + shift
+            if op < Op.ARC_CW and nx == x and ny == y:
+                if op == Op.FEED:
+                    if nz < z and not in_hole[k]:
+                        self.plunge(groups, number, x, y)
+                    x0, y0 = min(x0, x - r), min(y0, y - r)
+                    x1, y1 = max(x1, x + r), max(y1, y + r)
+                    if z < 0 or nz < 0:
+                        cx0, cy0 = min(cx0, x - r), min(cy0, y - r)
+                        cx1, cy1 = max(cx1, x + r), max(cy1, y + r)
+                z = nz
+                continue
+            if op == Op.RAPID:
+                if split and entry is None and not groups:
+                    entry = _Entry(number, "rapid", nx, ny)
+                else:
+                    self.segment(groups, number, "rapid", 0, (x, y), (nx, ny), None)
+                    x0, y0 = min(x0, x, nx), min(y0, y, ny)
+                    x1, y1 = max(x1, x, nx), max(y1, y, ny)
+            elif op == Op.FEED:
+                self.segment(groups, number, "feed", 2 * r, (x, y), (nx, ny), None)
+                lo_x, lo_y = min(x, nx) - r, min(y, ny) - r
+                hi_x, hi_y = max(x, nx) + r, max(y, ny) + r
+                x0, y0, x1, y1 = min(x0, lo_x), min(y0, lo_y), max(x1, hi_x), max(y1, hi_y)
+                if z < 0 or nz < 0:
+                    cx0, cy0 = min(cx0, lo_x), min(cy0, lo_y)
+                    cx1, cy1 = max(cx1, hi_x), max(cy1, hi_y)
             else:
-                self.draw_range(drawing, parent, r_lo, r_hi, depth)
+                self.segment(groups, number, "feed", 2 * r, (x, y), (nx, ny), (cx, cy, op))
+                # The whole circle: an arc's bulge is never more than that.
+                reach = math.hypot(x - cx, y - cy) + r
+                x0, y0 = min(x0, cx - reach), min(y0, cy - reach)
+                x1, y1 = max(x1, cx + reach), max(y1, cy + reach)
+                if nz < 0:
+                    cx0, cy0 = min(cx0, cx - reach), min(cy0, cy - reach)
+                    cx1, cy1 = max(cx1, cx + reach), max(cy1, cy + reach)
+            x, y, z = nx, ny, nz
+        box, cut = _Box(x0, y0, x1, y1), _Box(cx0, cy0, cx1, cy1)
+        holes: list[tuple[int, int, int]] = []
+        for hole in piece.holes.tolist():
+            start, hx, hy = hole[0], hole[4], hole[5]
+            hr = self.radius(hole_tools.get(start, tool))
+            self.hole(groups, rows[start][2] + shift, hx, hy, max(hr, self.unit // 100))
+            box.point(hx, hy, hr)
+            if self.labelled:
+                holes.append((hx, hy, hr))
+        for mill in piece.mills:
+            self.mill(groups, box, mill.moved(0, 0, 0, shift))
+        text = "".join(self.close(number, group) for number, group in groups.items())
+        blocks = set(groups)
+        return _Body(text, _State(x, y, z, tool), box, cut, blocks, holes, entry)
 
-    # -- primitives -------------------------------------------------------------------------
+    def hole(self, groups: dict[int, _Group], number: int, x: int, y: int, r: int) -> None:
+        group = groups.setdefault(number, _Group())
+        if self.merged:
+            group.holes.append(self.ring(x, y, r))
+        else:
+            group.marks.append(
+                f'<circle class="hole" cx="{self.n(x)}" cy="{self.n(y)}" r="{self.n(r)}"/>'
+            )
 
-    def flush(self, drawing: svgwrite.Drawing, parent: Any, prims: list[_Prim]) -> None:
-        """Draw primitives, grouped by block, joining neighbours of one kind in one path."""
-        group: Any = None
-        block: int | None = None
-        path: list[str] = []
-        kind = ""
-        size = 0
-        at: tuple[int, int] | None = None
+    def plunge(self, groups: dict[int, _Group], number: int, x: int, y: int) -> None:
+        group = groups.setdefault(number, _Group())
+        if (x, y) in group.plunges:
+            return
+        group.plunges.add((x, y))
+        r = self.unit // 50 if self.units is Units.INCH else self.unit // 2
+        if self.merged:
+            group.plunge_rings.append(self.ring(x, y, r))
+        else:
+            group.marks.append(
+                f'<circle class="plunge" cx="{self.n(x)}" cy="{self.n(y)}" r="{self.n(r)}"/>'
+            )
 
-        def close() -> None:
-            nonlocal path, kind
-            if path:
-                group.add(drawing.path(d=" ".join(path), class_=kind))
-                if kind == "feed" and self.swept and size:
-                    sweep = drawing.path(d=" ".join(path), class_="swept")
-                    # A presentation attribute, not a style: a page's Content-Security-
-                    # Policy may forbid inline styles.
-                    sweep.attribs["stroke-width"] = self.n(size)
-                    group.add(sweep)
-            path, kind = [], ""
+    def ring(self, x: int, y: int, r: int) -> str:
+        """A circle as path commands (two half circles), for marks drawn as one path."""
+        radius = self.n(r)
+        return (
+            f"M{self.xy(x - r, y)} A{radius} {radius} 0 0 0 {self.xy(x + r, y)} "
+            f"A{radius} {radius} 0 0 0 {self.xy(x - r, y)}"
+        )
 
-        for p in prims:
-            if p.block != block:
-                close()
-                block = p.block
-                group = drawing.g(class_="block")
-                group.attribs["data-block"] = str(block)
-                parent.add(group)
-            if p.kind == "hole":
-                close()
-                r = self.n(max(p.size / 2, self.unit * 0.01))
-                group.add(
-                    drawing.circle(
-                        center=(self.n(p.start[0]), self.n(p.start[1])), r=r, class_="hole"
-                    )
-                )
-                continue
-            if p.kind == "plunge":
-                close()
-                r = self.n(self.unit * (0.02 if self.tp.units is Units.INCH else 0.5))
-                group.add(
-                    drawing.circle(
-                        center=(self.n(p.start[0]), self.n(p.start[1])), r=r, class_="plunge"
-                    )
-                )
-                continue
-            if p.kind != kind or p.start != at or p.size != size:
-                close()
-                kind, size = p.kind, p.size
-                path = [f"M{self.n(p.start[0])} {self.n(p.start[1])}"]
-            path.append(self.segment(p))
-            at = p.end
-        close()
+    def segment(
+        self,
+        groups: dict[int, _Group],
+        number: int,
+        kind: str,
+        size: int,
+        start: tuple[int, int],
+        end: tuple[int, int],
+        arc: tuple[int, int, int] | None,
+    ) -> None:
+        """A line or arc of `kind`, joined to the block's last one of that kind if it
+        ends where this starts."""
+        group = groups.setdefault(number, _Group())
+        key = (kind, size)
+        parts = group.paths.setdefault(key, [])
+        if group.ends.get(key) != start:
+            parts.append(f"M{self.xy(*start)}")
+        if arc is None:
+            parts.append(f"L{self.xy(*end)}")
+        else:
+            cx, cy, op = arc
+            parts.append(self.arc(start, end, (cx, cy), op == Op.ARC_CW))
+        group.ends[key] = end
 
-    def segment(self, p: _Prim) -> str:
-        if p.arc is None:
-            return f"L{self.n(p.end[0])} {self.n(p.end[1])}"
-        cx, cy, clockwise = p.arc
-        radius = math.hypot(p.start[0] - cx, p.start[1] - cy)
-        r = self.n(radius)
+    def arc(
+        self,
+        start: tuple[float, float],
+        end: tuple[float, float],
+        centre: tuple[float, float],
+        clockwise: bool,
+    ) -> str:
+        """The SVG arc command from `start` to `end` about `centre`."""
+        cx, cy = centre
+        r = self.n(math.hypot(start[0] - cx, start[1] - cy))
         # Y is flipped by the page transform, so SVG's sweep flag 1 (positive angle) is
         # counter-clockwise as seen from above.
         sweep = "0" if clockwise else "1"
-        if p.end == p.start:
+        if abs(end[0] - start[0]) < 0.5 and abs(end[1] - start[1]) < 0.5:
             # A full circle: two half circles through the opposite point.
-            ox, oy = 2 * cx - p.start[0], 2 * cy - p.start[1]
-            return (
-                f"A{r} {r} 0 0 {sweep} {self.n(ox)} {self.n(oy)} "
-                f"A{r} {r} 0 0 {sweep} {self.n(p.end[0])} {self.n(p.end[1])}"
-            )
-        a0 = math.atan2(p.start[1] - cy, p.start[0] - cx)
-        a1 = math.atan2(p.end[1] - cy, p.end[0] - cx)
+            ox, oy = 2 * cx - start[0], 2 * cy - start[1]
+            return f"A{r} {r} 0 0 {sweep} {self.xy(ox, oy)} A{r} {r} 0 0 {sweep} {self.xy(*end)}"
+        a0 = math.atan2(start[1] - cy, start[0] - cx)
+        a1 = math.atan2(end[1] - cy, end[0] - cx)
         turn = ((a0 - a1) if clockwise else (a1 - a0)) % (2 * math.pi)
         large = "1" if turn > math.pi else "0"
-        return f"A{r} {r} 0 {large} {sweep} {self.n(p.end[0])} {self.n(p.end[1])}"
+        return f"A{r} {r} 0 {large} {sweep} {self.xy(*end)}"
+
+    def mill(self, groups: dict[int, _Group], box: _Box, mill: MillSpan) -> None:
+        """The programmed contour of a mill sequence, or its routine's circle or frame; for
+        a sequence not cut (its plan has errors), also where its DRILL would go down."""
+        if mill.start == mill.end:
+            self.plunge(groups, mill.drill, mill.x, mill.y)
+        contour = mill.contour()
+        if contour is not None:
+            self.contour(groups, box, contour)
+            return
+        if not mill.routine or mill.routine > len(self.program.blocks):
+            return
+        block = self.program.blocks[mill.routine - 1]
+        group = groups.setdefault(mill.routine, _Group())
+        if isinstance(block, Circle):
+            r = to_nm(block.radius, block.units)
+            if r > 0:
+                group.outlines.append(
+                    f'<circle class="contour" cx="{self.n(mill.x)}" cy="{self.n(mill.y)}" '
+                    f'r="{self.n(r)}"/>'
+                )
+                box.point(mill.x, mill.y, r)
+        elif isinstance(block, Frame):
+            w, h = to_nm(block.xl, block.units), to_nm(block.yw, block.units)
+            corner = max(0, min(to_nm(block.corner_radius, block.units), w // 2, h // 2))
+            if w > 0 and h > 0:
+                rounded = f' rx="{self.n(corner)}"' if corner else ""
+                group.outlines.append(
+                    f'<rect class="contour" x="{self.n(mill.x)}" y="{self.n(mill.y)}" '
+                    f'width="{self.n(w)}" height="{self.n(h)}"{rounded}/>'
+                )
+                box.add(mill.x, mill.y, mill.x + w, mill.y + h)
+
+    def contour(self, groups: dict[int, _Group], box: _Box, contour: Path) -> None:
+        at = contour.start
+        for element in contour.elements:
+            group = groups.setdefault(element.block, _Group())
+            if group.ends.get(("contour", 0)) != at:
+                group.contour.append(f"M{self.xy(*at)}")
+            if element.centre is None:
+                group.contour.append(f"L{self.xy(*element.end)}")
+                box.add(
+                    min(at[0], element.end[0]),
+                    min(at[1], element.end[1]),
+                    max(at[0], element.end[0]),
+                    max(at[1], element.end[1]),
+                )
+            else:
+                cx, cy = element.centre
+                group.contour.append(self.arc(at, element.end, element.centre, element.clockwise))
+                radius = math.hypot(at[0] - cx, at[1] - cy)
+                box.point(cx, cy, radius)
+            at = element.end
+            group.ends[("contour", 0)] = at
+
+    def group(self, number: int) -> str:
+        """The opening tag of a block's group (a problem block's with its messages)."""
+        messages = self.problems.get(number)
+        if not messages:
+            return f'<g class="block" data-block="{number}">'
+        title = escape(f"block {number}: " + "; ".join(messages))
+        return f'<g class="block problem" data-block="{number}"><title>{title}</title>'
+
+    def close(self, number: int, group: _Group) -> str:
+        """One block's drawing: contour, then tool path, then marks."""
+        out = [self.group(number)]
+        if group.contour:
+            out.append(f'<path class="contour" d="{" ".join(group.contour)}"/>')
+        out += group.outlines
+        for (kind, size), parts in group.paths.items():
+            d = " ".join(parts)
+            out.append(f'<path class="{kind}" d="{d}"/>')
+            if kind == "feed" and self.swept and size:
+                # A presentation attribute, not a style: a page's Content-Security-Policy
+                # may forbid inline styles.
+                out.append(f'<path class="swept" stroke-width="{self.n(size)}" d="{d}"/>')
+        if group.plunge_rings:
+            out.append(f'<path class="plunge" d="{" ".join(group.plunge_rings)}"/>')
+        if group.holes:
+            out.append(f'<path class="hole" d="{" ".join(group.holes)}"/>')
+        out += group.marks
+        out.append("</g>")
+        return "".join(out)
+
+    # -- the document -----------------------------------------------------------------------
+
+    def document(self, grid: bool, embedded_style: bool) -> Drawing:
+        start = self.path.start
+        state = _State(start[0], start[1], start[2], self.path.initial_tool)
+        body = self.paint(self.path.root, state, 0)
+        stock = self.stock(body.cut)
+        box = _Box()
+        box.join(body.box)
+        box.point(start[0], start[1])
+        mark = self.unit * (0.1 if self.units is Units.INCH else 2.5)
+        box.point(0, 0, mark)
+        if stock is not None:
+            box.add(*stock)
+        pad = max(box.x1 - box.x0, box.y1 - box.y0, self.unit / 4) * 0.05
+        x0, y0, x1, y1 = box.x0 - pad, box.y0 - pad, box.x1 + pad, box.y1 + pad
+        width, height = x1 - x0, y1 - y0
+        w = max(width, height) / 700
+        out = [
+            '<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" '
+            f'class="mb-path{" large" if self.large else ""}" data-units="{self.units.value}" '
+            'width="100%" height="100%" '
+            f'viewBox="{self.n(x0)} {self.n(-y1)} {self.n(width)} {self.n(height)}">'
+        ]
+        defs = list(self.defs)
+        if embedded_style:
+            style = STYLE.format(
+                w=self.n(w),
+                wide=self.n(1.8 * w),
+                thin=self.n(0.5 * w),
+                dash=self.n(4 * w),
+                gap=self.n(3 * w),
+            )
+            defs.insert(0, f"<style>{style}</style>")
+        if defs:
+            out.append("<defs>" + "".join(defs) + "</defs>")
+        out.append('<g class="page" transform="scale(1,-1)">')
+        if grid:
+            out.append(self.grid(x0, y0, x1, y1))
+        if stock is not None:
+            sx0, sy0, sx1, sy1 = stock
+            how = "the program's stock" if self.program.stock is not None else "stock"
+            out.append(
+                f'<g class="stock"><title>{how}</title><rect x="{self.n(sx0)}" '
+                f'y="{self.n(sy0)}" width="{self.n(sx1 - sx0)}" height="{self.n(sy1 - sy0)}"/></g>'
+            )
+        out.append(
+            f'<g class="zero"><title>part zero</title><line x1="{self.n(-mark)}" y1="0" '
+            f'x2="{self.n(mark)}" y2="0"/><line x1="0" y1="{self.n(-mark)}" x2="0" '
+            f'y2="{self.n(mark)}"/></g>'
+        )
+        out.append(body.text)
+        out.append("</g>")
+        if self.labelled and body.holes:
+            out.append(self.order(body.holes, max(width, height)))
+        out.append("</svg>\n")
+        holes = _hole_count(self.path.root)
+        return Drawing("".join(out), frozenset(body.blocks), holes, self.large)
+
+    def stock(self, cut: _Box) -> tuple[float, float, float, float] | None:
+        """The program's stock, or the reach of its cuts with the simulation's margin
+        (rounded outward), or None when nothing cuts below Z0."""
+        given = self.program.stock
+        if given is not None:
+            units = self.program.units
+            x, y = to_nm(given.x, units), to_nm(given.y, units)
+            return (x, y, x + to_nm(given.xl, units), y + to_nm(given.yw, units))
+        if cut.empty:
+            return None
+        margin = to_nm(MARGIN[self.units], self.units)
+        step = to_nm(ROUND_TO[self.units], self.units)
+        return (
+            math.floor((cut.x0 - margin) / step) * step,
+            math.floor((cut.y0 - margin) / step) * step,
+            math.ceil((cut.x1 + margin) / step) * step,
+            math.ceil((cut.y1 + margin) / step) * step,
+        )
+
+    def order(self, holes: list[tuple[int, int, int]], size: float) -> str:
+        """Each hole's number in cutting order, beside it (outside the flipped page, so
+        the text reads upright)."""
+        font = size / 60
+        texts = []
+        for k, (x, y, r) in enumerate(holes, start=1):
+            gap = r * 0.75 + font * 0.15
+            texts.append(f'<text x="{self.n(x + gap)}" y="{self.n(-(y + gap))}">{k}</text>')
+        return f'<g class="order" font-size="{self.n(font)}">{"".join(texts)}</g>'
+
+    def grid(self, x0: float, y0: float, x1: float, y1: float) -> str:
+        step = self.unit * (1 if self.units is Units.INCH else 10)
+        lines = []
+        for k in range(math.floor(x0 / step), math.ceil(x1 / step) + 1):
+            v = self.n(k * step)
+            lines.append(f'<line x1="{v}" y1="{self.n(y0)}" x2="{v}" y2="{self.n(y1)}"/>')
+        for k in range(math.floor(y0 / step), math.ceil(y1 / step) + 1):
+            v = self.n(k * step)
+            lines.append(f'<line x1="{self.n(x0)}" y1="{v}" x2="{self.n(x1)}" y2="{v}"/>')
+        return f'<g class="grid">{"".join(lines)}</g>'
 
 
-def _runs(repetitions: list[Repetition]) -> dict[tuple[int, int], list[Repetition]]:
-    """LOOP runs keyed by (first move index, depth): the repetitions of one LOOP, in order."""
-    runs: dict[tuple[int, int], list[Repetition]] = {}
-    current: list[Repetition] = []
-    for rep in sorted(repetitions, key=lambda r: (r.depth, r.start)):
-        if current and rep.number == 0:
-            runs[(current[0].start, current[0].depth)] = current
-            current = []
-        current.append(rep)
-    if current:
-        runs[(current[0].start, current[0].depth)] = current
-    return runs
+def _hole_count(node: Node) -> int:
+    """How many holes `node` cuts (without expanding its runs)."""
+    if isinstance(node, Piece):
+        return len(node.holes)
+    if isinstance(node, Run):
+        return _hole_count(node.node) * len(node.offsets)
+    return sum(_hole_count(n) for n in node.nodes)

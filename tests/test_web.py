@@ -527,3 +527,29 @@ def test_a_machine_preset_fills_the_form_and_saves(app: Flask, client: FlaskClie
     exported = client.get("/programs/6/export?machine=Mill+kt-180-1704&go=1")
     assert exported.status_code == 422
     assert "the spindle head can hit the table" in exported.get_data(as_text=True)
+
+
+def test_the_set_up_sheet_of_uncalibrated_tools_offers_the_touch_off_choice(
+    app: Flask, client: FlaskClient
+) -> None:
+    """The set-up sheet for a 1704 tape of tools without TCAL says what the tape needs and
+    offers the touch-off choice (which shows the sheet for it), not a line of errors; its
+    target menu names targets as the export page does."""
+    from dataclasses import replace
+
+    from app.storage.demo import demo_programs
+
+    sample = demo_programs()[0]
+    tools = tuple(replace(t, tcal=None) for t in sample.block0.tools)
+    program = replace(sample, block0=replace(sample.block0, tools=tools))
+    with app.app_context():
+        program_id = get_library().create(program).id
+    page = client.get(f"/programs/{program_id}/setup").get_data(as_text=True)
+    assert '<option value="tape-eia" selected>Tektronix 1704 tape (EIA)</option>' in page
+    offer = re.search(r'<div class="offer.*?</div>', page, re.S)
+    assert offer is not None, page
+    link = re.search(r'href="([^"]*opt_z-zero=g94[^"]*)"', offer.group(0))
+    assert link is not None
+    taken = client.get(link.group(1).replace("&amp;", "&")).get_data(as_text=True)
+    assert 'class="offer' not in taken and 'role="alert"' not in taken
+    assert "Tape length" in taken

@@ -277,3 +277,14 @@ def test_a_transfer_whose_process_died_is_shown_as_interrupted(
     assert "interrupted" in page and 'hx-trigger="every 1s"' in page
     log.cancel(alive)
     assert log.heartbeat(alive) is True
+
+
+def test_the_transfers_page_names_a_machines_target_in_the_shops_words(
+    app: Flask, client: FlaskClient
+) -> None:
+    """The machine menu says what the machine takes ("ProtoTRAK Plus (events over RS-232)"),
+    as the export and machines pages do, not the registry's name ("events")."""
+    library_of(app).save_machine(Machine("Plus", "events", {}, {"port": "/dev/ttyS0"}))
+    page = client.get("/transfers").get_data(as_text=True)
+    assert "Plus — ProtoTRAK Plus (events over RS-232) on /dev/ttyS0" in page
+    assert "— events on" not in page

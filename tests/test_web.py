@@ -452,3 +452,104 @@ def test_a_file_that_cannot_be_imported_saves_nothing(client: FlaskClient, app: 
     assert "Not imported: bad.ngc: line 1, column " in page
     with app.app_context():
         assert get_library().programs() == before
+
+
+def test_a_tape_of_uncalibrated_tools_offers_the_touch_off_choice(
+    app: Flask, client: FlaskClient
+) -> None:
+    """A 1704 tape of a program whose tools have no TCAL opens on the choice the shop has
+    (touch off each tool at its change, or fill in the tool table), the per-tool problems
+    folded under it; taking the choice exports the tape."""
+    from dataclasses import replace
+
+    from app.storage.demo import demo_programs
+
+    sample = demo_programs()[0]
+    tools = tuple(replace(t, tcal=None) for t in sample.block0.tools)
+    program = replace(sample, block0=replace(sample.block0, tools=tools))
+    with app.app_context():
+        program_id = get_library().create(program).id
+    response = client.get(f"/programs/{program_id}/export?target=tape-eia&go=1")
+    page = response.get_data(as_text=True)
+    assert response.status_code == 422
+    offer = re.search(r'<div class="offer".*?</div>', page, re.S)
+    assert offer is not None, page
+    assert "needs calibrated tools (TCAL in Data Block 0)" in offer.group(0)
+    assert offer.group(0).index("<details>") > offer.group(0).index("Choose:")
+    link = re.search(r'href="([^"]*opt_z-zero=g94[^"]*)"', offer.group(0))
+    assert link is not None
+    assert "touch off each tool at its change" in offer.group(0)
+    assert f'href="/programs/{program_id}/db0"' in offer.group(0)
+    taken = client.get(link.group(1).replace("&amp;", "&"))
+    assert taken.status_code == 200
+    assert 'id="download"' in taken.get_data(as_text=True)
+    assert "G94" in taken.get_data(as_text=True)
+
+
+def test_a_machine_preset_fills_the_form_and_saves(app: Flask, client: FlaskClient) -> None:
+    """Starting a new machine from a preset fills in its target, options and travel limits;
+    every preset saves as it is filled in, and the export page then uses it."""
+    from app.web.machines import SHOP_PRESETS
+
+    page = client.get("/machines").get_data(as_text=True)
+    assert "Kearney &amp; Trecker Milwaukee-Matic 180, Tektronix 1704 (EIA tape)" in page
+    for key, preset in SHOP_PRESETS.items():
+        filled = client.get(f"/machines?preset={key}").get_data(as_text=True)
+        menu = re.search(r'<select name="target".*?</select>', filled, re.S)
+        assert menu is not None
+        assert f'<option value="{preset.target}" selected>' in menu.group(0), key
+        form = dict(
+            re.findall(
+                r'<input name="([^"]+)"[^>]*value="([^"]*)"', filled.split('class="card"')[-1]
+            )
+        )
+        limits = re.search(r'<textarea name="limits"[^>]*>(.*?)</textarea>', filled, re.S)
+        assert limits is not None
+        for name, value in preset.limits.items():
+            assert f"{name}={value}" in limits.group(1)
+        csrf = token(client, "/machines")
+        saved = client.post(
+            "/machines",
+            data={
+                **form,
+                "csrf_token": csrf,
+                "name": f"Mill {key}",
+                "target": preset.target,
+                "limits": limits.group(1),
+            },
+        )
+        assert saved.status_code == 302, saved.get_data(as_text=True)
+        with app.app_context():
+            machine = get_library().machine(f"Mill {key}")
+        assert (machine.target, machine.limits) == (preset.target, dict(preset.limits))
+    # The machine's limits now judge the export: the sample part, with its part zero at
+    # machine zero, runs into the K&T 180's collision zone.
+    exported = client.get("/programs/6/export?machine=Mill+kt-180-1704&go=1")
+    assert exported.status_code == 422
+    assert "the spindle head can hit the table" in exported.get_data(as_text=True)
+
+
+def test_the_set_up_sheet_of_uncalibrated_tools_offers_the_touch_off_choice(
+    app: Flask, client: FlaskClient
+) -> None:
+    """The set-up sheet for a 1704 tape of tools without TCAL says what the tape needs and
+    offers the touch-off choice (which shows the sheet for it), not a line of errors; its
+    target menu names targets as the export page does."""
+    from dataclasses import replace
+
+    from app.storage.demo import demo_programs
+
+    sample = demo_programs()[0]
+    tools = tuple(replace(t, tcal=None) for t in sample.block0.tools)
+    program = replace(sample, block0=replace(sample.block0, tools=tools))
+    with app.app_context():
+        program_id = get_library().create(program).id
+    page = client.get(f"/programs/{program_id}/setup").get_data(as_text=True)
+    assert '<option value="tape-eia" selected>Tektronix 1704 tape (EIA)</option>' in page
+    offer = re.search(r'<div class="offer.*?</div>', page, re.S)
+    assert offer is not None, page
+    link = re.search(r'href="([^"]*opt_z-zero=g94[^"]*)"', offer.group(0))
+    assert link is not None
+    taken = client.get(link.group(1).replace("&amp;", "&")).get_data(as_text=True)
+    assert 'class="offer' not in taken and 'role="alert"' not in taken
+    assert "Tape length" in taken

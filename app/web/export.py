@@ -14,6 +14,7 @@ from app.cnc.emit.target import (
     Export,
     ExportError,
     OptionError,
+    Remedy,
     Target,
     export,
     get_target,
@@ -97,6 +98,26 @@ def preview_text(result: Export) -> str:
     return text
 
 
+def page_query(
+    target: Target, effective: Mapping[str, Any], machine_name: str, remedy: Remedy | None = None
+) -> dict[str, str]:
+    """The page's (and the download's) query for these options: every option as the page
+    shows it, so the file is the preview; with `remedy`, its option set to its value."""
+    query: dict[str, str] = {"target": target.name, "go": "1"}
+    if machine_name:
+        query["machine"] = machine_name
+    for option in target.options:
+        value = effective.get(option.name, option.default)
+        if option.kind.value == "bool":
+            if value:
+                query[f"opt_{option.name}"] = "on"
+        elif value is not None:
+            query[f"opt_{option.name}"] = str(value)
+    if remedy is not None:
+        query[f"opt_{remedy.option}"] = remedy.value
+    return query
+
+
 @bp.get("/programs/<int:program_id>/export")
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
@@ -111,16 +132,22 @@ def page(program_id: int) -> tuple[str, int]:
     )
     result: Export | None = None
     error = ""
+    options_wrong = False
     problems: list[str] = []
+    remedies: tuple[Remedy, ...] = ()
+    missing: list[str] = []
     try:
         result = export(stored.program, target_name, raw, model)
     except OptionError as exc:
         error = str(exc)
+        options_wrong = True
     except ExportError as exc:
         error = str(exc)
         problems = [str(p) for p in exc.problems if p.severity.value == "error"]
         if exc.report is not None:
             problems += [str(e) for e in exc.report.entries if e.severity.value == "error"]
+        remedies = exc.remedies
+        missing = sorted({p.need.value for p in exc.problems if p.need is not None})
     target = all_targets[target_name]
     text_preview = preview_text(result) if result is not None else ""
     picture = ""
@@ -132,21 +159,16 @@ def page(program_id: int) -> tuple[str, int]:
             picture = export(stored.program, drawn_by, target.picture_options(raw)).data.decode()
         except (OptionError, ExportError):
             picture = ""
-    effective = all_targets[target_name].parse_options(raw) if not error else {}
-    all_defaults = all_targets[target_name].parse_options({})
-    values = form_values(all_targets[target_name], effective)
-    # The download carries every option as the page shows it, so the file is the preview.
-    query: dict[str, str] = {"target": target_name, "go": "1"}
-    if machine_name:
-        query["machine"] = machine_name
-    for option in all_targets[target_name].options:
-        value = effective.get(option.name, option.default)
-        if option.kind.value == "bool":
-            if value:
-                query[f"opt_{option.name}"] = "on"
-        elif value is not None:
-            query[f"opt_{option.name}"] = str(value)
+    effective = target.parse_options(raw) if not options_wrong else {}
+    all_defaults = target.parse_options({})
+    values = form_values(target, effective)
     common, more = option_groups(target)
+    # A need the program lacks that an option takes away is offered as that choice, with
+    # the problems folded under it, rather than a wall of the same error per tool.
+    offers = [
+        (remedy, urlencode(page_query(target, effective, machine_name, remedy)))
+        for remedy in remedies
+    ]
     context = {
         "stored": stored,
         "common_options": common,
@@ -162,7 +184,9 @@ def page(program_id: int) -> tuple[str, int]:
         "picture": picture,
         "machines": get_library().machines(),
         "machine_name": machine_name,
-        "download_query": urlencode(query),
+        "download_query": urlencode(page_query(target, effective, machine_name)),
+        "offers": offers,
+        "missing": missing,
         "needs": sorted(
             n.value for n in all_targets[target_name].needs_for(effective or all_defaults)
         ),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 from flask import Blueprint, redirect, render_template, request, url_for
@@ -44,6 +45,34 @@ SERIAL_DEFAULTS = {
 ProtoTRAK's 4800 7E1; app.dnc.settings says what each means)."""
 
 
+@dataclass(frozen=True)
+class ShopPreset:
+    """A machine a shop has, as the form starts it: the target it takes, that target's
+    options, the serial settings over SERIAL_DEFAULTS and the travel limits (app.cnc.machine
+    presets). Only what the seeds say is filled in; the rest stays at its default."""
+
+    label: str
+    target: str
+    options: Mapping[str, str] = field(default_factory=dict)
+    serial: Mapping[str, str] = field(default_factory=dict)
+    limits: Mapping[str, str] = field(default_factory=dict)
+
+
+SHOP_PRESETS: dict[str, ShopPreset] = {
+    "prototrak-plus": ShopPreset("ProtoTRAK Plus over RS-232 (4800 7E1)", "events"),
+    "linuxcnc": ShopPreset("LinuxCNC mill (G-code file)", "gcode-linuxcnc"),
+    "fanuc-6m": ShopPreset("Fanuc 6M mill", "gcode-fanuc"),
+    "prototrak-gcode": ShopPreset("ProtoTRAK (modified Fanuc G-code)", "gcode-prototrak"),
+    # The Kearney & Trecker machines with the Tektronix 1704 control read EIA tape.
+    **{
+        f"{key}-1704": ShopPreset(
+            f"{model.name}, Tektronix 1704 (EIA tape)", "tape-eia", limits={"preset": key}
+        )
+        for key, model in PRESETS.items()
+    },
+}
+
+
 def _options(target_name: str, options: Mapping[str, str]) -> dict[str, Any]:
     """What the options fieldset shows: the fields of target `target_name` (the default
     target when there is none by that name) holding `options` (its defaults where they do
@@ -64,7 +93,9 @@ def _options(target_name: str, options: Mapping[str, str]) -> dict[str, Any]:
     }
 
 
-def _page(machine: Machine | None, message: str = "", target_name: str = "") -> str:
+def _page(
+    machine: Machine | None, message: str = "", target_name: str = "", new: bool = False
+) -> str:
     """The machines page: the list, and the form for `machine` (None: a new one, on
     `target_name` or LinuxCNC G-code), its serial port picked from the ports this computer
     has."""
@@ -81,6 +112,8 @@ def _page(machine: Machine | None, message: str = "", target_name: str = "") -> 
         serial_defaults=SERIAL_DEFAULTS,
         ports=available_ports(),
         presets=PRESETS,
+        shop_presets=SHOP_PRESETS,
+        new=new,
         message=message,
     )
 
@@ -94,6 +127,19 @@ def index() -> str:
             machine = get_library().machine(edit)
         except LibraryError:
             machine = None
+    preset = SHOP_PRESETS.get(request.args.get("preset", ""))
+    if machine is None and preset is not None:
+        # A new machine started from a preset: the form filled in, nothing saved yet.
+        return _page(
+            Machine(
+                "",
+                preset.target,
+                dict(preset.options),
+                SERIAL_DEFAULTS | dict(preset.serial),
+                limits=dict(preset.limits),
+            ),
+            new=True,
+        )
     return _page(machine, target_name=request.args.get("target", ""))
 
 

@@ -2,15 +2,17 @@
 
 from __future__ import annotations
 
+from urllib.parse import urlencode
+
 from flask import Blueprint, render_template, request
 
 from app.cnc.emit.svg import draw
-from app.cnc.emit.target import ExportError, OptionError, export, targets
+from app.cnc.emit.target import ExportError, OptionError, Remedy, export, get_target, targets
 from app.cnc.problems import has_errors
 from app.cnc.setup import setup_sheet
 from app.cnc.validate import validate
 from app.web.editor import load
-from app.web.export import _machine_options
+from app.web.export import _machine_options, options_from, page_query, shown_targets
 
 bp = Blueprint("setup", __name__)
 
@@ -25,8 +27,12 @@ def sheet(program_id: int) -> tuple[str, int]:
     machine_name = request.args.get("machine", "")
     machine_target, options, model = _machine_options(machine_name)
     target = request.args.get("target") or machine_target or "tape-eia"
+    if target not in targets():
+        target = "tape-eia"
+    options = options | options_from(request.args, target)
     report = None
     error = ""
+    offers: list[tuple[Remedy, str]] = []
     try:
         report = export(program, target, options, model).report
     except OptionError as exc:
@@ -38,6 +44,12 @@ def sheet(program_id: int) -> tuple[str, int]:
             else []
         )
         error = "; ".join([str(exc), *reasons])
+        # The need an option takes away is offered as that choice (as on the export page).
+        effective = get_target(target).parse_options(options)
+        offers = [
+            (remedy, urlencode(page_query(get_target(target), effective, machine_name, remedy)))
+            for remedy in exc.remedies
+        ]
     picture = draw(program, embedded_style=False)
     return (
         render_template(
@@ -46,7 +58,8 @@ def sheet(program_id: int) -> tuple[str, int]:
             sheet=setup_sheet(program, report, model),
             picture=picture,
             error=error,
-            targets=targets(),
+            targets=shown_targets() | {target: get_target(target)},
+            offers=offers,
             target=target,
             machine_name=machine_name,
         ),

@@ -14,6 +14,7 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
+from app.cnc.emit.target import targets
 from app.cnc.imports import importers
 from app.dnc import Direction, TransferRecord, jobs, service
 from app.dnc.jobs import JobState, TransferJob
@@ -44,6 +45,7 @@ def _page(message: str = "", status: int = 200) -> tuple[str, int]:
             transfers=transfers,
             running=any(t.outcome == "running" for t in transfers),
             formats={n: f for n, f in importers().items() if f.from_machines},
+            targets=targets(),
             message=message,
             chosen_program=request.values.get("program_id", ""),
         ),

@@ -179,13 +179,37 @@ class Export:
         return self.file.read(min(size, self.size))
 
 
-class ExportError(ValueError):
-    """The program cannot be exported: validation errors, or the target's own errors."""
+@dataclass(frozen=True)
+class Remedy:
+    """An option value that takes a need away, offered when a program lacks the need:
+    export with `option`=`value` to `does` (the shop's words: "touch off each tool at its
+    change")."""
 
-    def __init__(self, message: str, problems: list[Problem], report: Report | None) -> None:
+    option: str
+    value: str
+    does: str
+
+    @property
+    def hint(self) -> str:
+        return f"or export with {self.option}={self.value} to {self.does}"
+
+
+class ExportError(ValueError):
+    """The program cannot be exported: validation errors, or the target's own errors.
+    `remedies`: option values that would take away every need the program lacks (empty
+    when other errors stop it too)."""
+
+    def __init__(
+        self,
+        message: str,
+        problems: list[Problem],
+        report: Report | None,
+        remedies: tuple[Remedy, ...] = (),
+    ) -> None:
         super().__init__(message)
         self.problems = problems
         self.report = report
+        self.remedies = remedies
 
 
 class Target(ABC):
@@ -221,9 +245,9 @@ class Target(ABC):
         needs (a tape with spindle codes needs speeds) overrides this."""
         return self.needs
 
-    def need_hint(self, need: Need) -> str:
-        """What else the user may do when a program lacks `need` (an option), or ""."""
-        return ""
+    def need_remedy(self, need: Need) -> Remedy | None:
+        """The option value that takes `need` away, if this target has one."""
+        return None
 
     @property
     def shown_name(self) -> str:
@@ -351,14 +375,16 @@ def export(
     stopping = blocking(problems, needs)
     if stopping:
         missing = sorted({p.need for p in stopping if p.need is not None}, key=lambda n: n.value)
+        remedies: tuple[Remedy, ...] = ()
         if missing and all(p.need is not None for p in stopping):
-            hints = [h for h in (target.need_hint(n) for n in missing) if h]
+            found = [target.need_remedy(n) for n in missing]
+            remedies = tuple(r for r in found if r is not None)
             message = f"{target.name} needs {', '.join(n.value for n in missing)}" + "".join(
-                f"; {h}" for h in hints
+                f"; {r.hint}" for r in remedies
             )
         else:
             message = "the program has errors; fix them before exporting"
-        raise ExportError(message, stopping, None)
+        raise ExportError(message, stopping, None, remedies)
     report = Report(target.name)
     assert path is not None
     for need in sorted(needs, key=lambda n: n.value):

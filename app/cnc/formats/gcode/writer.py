@@ -39,7 +39,7 @@ import numpy.typing as npt
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import peck_levels
-from app.cnc.emit.target import Out, Report, Target, register
+from app.cnc.emit.target import Out, Remedy, Report, Target, register
 from app.cnc.emit.text import Lengths, Lines
 from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
 from app.cnc.limits import HOLE_DWELL_SECONDS
@@ -65,8 +65,10 @@ class GcodeTarget(Target):
         # S words need speeds, unless the operator sets them by hand (reported).
         return frozenset() if options.get("spindle-speeds") == "by-hand" else self.needs
 
-    def need_hint(self, need: Need) -> str:
-        return "or export with spindle-speeds=by-hand to set them at the control"
+    def need_remedy(self, need: Need) -> Remedy | None:
+        if need is Need.SPINDLE_SPEEDS:
+            return Remedy("spindle-speeds", "by-hand", "set them at the control")
+        return None
 
     def write(
         self,

@@ -19,7 +19,7 @@ from collections.abc import Iterator, Mapping
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Option, Out, Report, Target, register
+from app.cnc.emit.target import Option, Out, Remedy, Report, Target, register
 from app.cnc.emit.text import Lines
 from app.cnc.formats.tape1704 import codes, picture
 from app.cnc.formats.tape1704.codes import TapeCode
@@ -220,10 +220,10 @@ class TapeTarget(Target):
             needs.add(Need.CALIBRATED_TOOLS)
         return frozenset(needs)
 
-    def need_hint(self, need: Need) -> str:
+    def need_remedy(self, need: Need) -> Remedy | None:
         if need is Need.CALIBRATED_TOOLS:
-            return "or export with z-zero=g94 to touch off each tool at its change"
-        return ""
+            return Remedy("z-zero", "g94", "touch off each tool at its change")
+        return None
 
     def write(
         self,

@@ -351,24 +351,27 @@ class _Painter:
         texts = []
         entry = inner.entry
         if entry is not None:
-            # Each placement's way in, from where the tool is (the same place relative to
-            # every placement of a run) to the entry's end: one path for the run.
-            start = state.moved(-first[0], -first[1])
+            # Each placement's way in: from where the tool is (before the run, then where
+            # the placement before left it) to the entry's end: one path for the run. Where
+            # the tool was left is not the same place relative to every placement: a bolt
+            # circle's holes are placed by translation, but each is entered from the last.
             parts = []
             at = None
+            came = (state.x, state.y)
             for dx, dy in offsets:
-                if at != (start.x + dx, start.y + dy):
-                    parts.append(f"M{self.xy(start.x + dx, start.y + dy)}")
+                if at != came:
+                    parts.append(f"M{self.xy(*came)}")
                 at = (entry.x + dx, entry.y + dy)
                 parts.append(f"L{self.xy(*at)}")
+                body.box.add(
+                    min(came[0], at[0]),
+                    min(came[1], at[1]),
+                    max(came[0], at[0]),
+                    max(came[1], at[1]),
+                )
+                came = (inner.exit.x + dx, inner.exit.y + dy)
             texts.append(
                 self.group(entry.block) + f'<path class="{entry.kind}" d="{" ".join(parts)}"/></g>'
-            )
-            body.box.add(
-                min(start.x, entry.x) + lo[0],
-                min(start.y, entry.y) + lo[1],
-                max(start.x, entry.x) + hi[0],
-                max(start.y, entry.y) + hi[1],
             )
             body.blocks.add(entry.block)
         if not split:

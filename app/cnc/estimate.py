@@ -31,7 +31,7 @@ import numpy.typing as npt
 from app.cnc.geometry import arc_sweep
 from app.cnc.limits import RAPID_IPM
 from app.cnc.machine import MachineModel
-from app.cnc.path import HOLE, MOVE, Chunk, CompiledPath, Op
+from app.cnc.path import HOLE, MOVE, Chunk, CompiledPath, Op, Rows, row_batches
 from app.cnc.toolpath import (
     ArcFeed,
     Dwell,
@@ -118,8 +118,8 @@ def estimate(
     result = Estimate(assumptions=assumptions(tool_change_seconds, machine))
     clock = _Clock(path.start, path.initial_tool, rapid_rate, max_feed, tool_change_seconds)
     chunks = path.chunks() if isinstance(path, CompiledPath) else [chunk_of(path)]
-    for chunk in chunks:
-        clock.add(chunk, result)
+    for rows, strings in row_batches(chunks):
+        clock.add(rows, strings, result)
     result.per_block = clock.per_block.totals()
     result.per_tool = clock.per_tool.totals()
     result.operator = operator
@@ -199,9 +199,9 @@ class _Clock:
         self.per_tool = _Sums()
         self.arcs: dict[tuple[int, int, int, int, bool], float] = {}
 
-    def add(self, chunk: Chunk, result: Estimate) -> None:
-        """Time one chunk's moves (vectorised) and add them to `result` and the sums."""
-        rows = chunk.rows
+    def add(self, rows: Rows, strings: tuple[str, ...], result: Estimate) -> None:
+        """Time a batch of moves (vectorised) and add them to `result` and the sums;
+        `strings` are the texts of its STOP rows."""
         n = len(rows)
         if not n:
             return
@@ -251,7 +251,7 @@ class _Clock:
         waits = np.flatnonzero((op == Op.STOP) | (op == Op.INDEX))
         for k in waits.tolist():
             row = rows[k]
-            reason = chunk.strings[row["value"]] if row["op"] == Op.STOP else INDEX_REASON
+            reason = strings[row["value"]] if row["op"] == Op.STOP else INDEX_REASON
             result.operator_waits.append((int(row["block"]), reason))
         # The tool each row runs with: a tool change's own time is the new tool's.
         if tool_rows.any():

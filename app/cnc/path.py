@@ -38,7 +38,7 @@ Row fields (lengths integer nm, part coordinates; feeds nm/min):
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from decimal import Decimal
 
@@ -322,15 +322,7 @@ def flattened(node: Node) -> Piece:
     strings: list[str] = []
     offset = 0
     for chunk in chunks:
-        remap = {}
-        for k, text in enumerate(chunk.strings):
-            if text not in strings:
-                strings.append(text)
-            remap[k] = strings.index(text)
-        if any(k != v for k, v in remap.items()):
-            sub = rows[offset : offset + len(chunk.rows)]
-            texts = (sub["op"] == Op.STOP) | (sub["op"] == Op.MESSAGE)
-            sub["value"][texts] = [remap[v] for v in sub["value"][texts].tolist()]
+        _join_strings(rows[offset : offset + len(chunk.rows)], chunk.strings, strings)
         moved = chunk.holes.copy()
         moved["start"] += offset
         moved["end"] += offset
@@ -340,6 +332,53 @@ def flattened(node: Node) -> Piece:
     all_holes = np.concatenate(holes) if holes else np.zeros(0, dtype=HOLE)
     node.flat = Piece(rows, all_holes, tuple(mills), 0, tuple(strings))
     return node.flat
+
+
+def _join_strings(rows: Rows, own: tuple[str, ...], joined: list[str]) -> None:
+    """Point the STOP and MESSAGE `rows` (a view into the joined rows) at `joined`, the
+    texts of every chunk joined so far, instead of their chunk's `own` (texts added)."""
+    remap = {}
+    for k, text in enumerate(own):
+        if text not in joined:
+            joined.append(text)
+        remap[k] = joined.index(text)
+    if any(k != v for k, v in remap.items()):
+        texts = (rows["op"] == Op.STOP) | (rows["op"] == Op.MESSAGE)
+        rows["value"][texts] = [remap[v] for v in rows["value"][texts].tolist()]
+
+
+def row_batches(
+    chunks: Iterable[Chunk], rows: int = FLAT_ROWS
+) -> Iterator[tuple[Rows, tuple[str, ...]]]:
+    """The moves of `chunks` in arrays of at least `rows` rows (the last may be shorter), with
+    the texts their STOP and MESSAGE rows refer to. For consumers that read moves only (the
+    cycle time): a program of many small blocks comes in many small chunks, and numpy's
+    cost per call, not per row, would dominate."""
+    pending: list[Chunk] = []
+    count = 0
+    for chunk in chunks:
+        if len(chunk.rows) >= rows and not pending:
+            yield chunk.rows, chunk.strings
+            continue
+        pending.append(chunk)
+        count += len(chunk.rows)
+        if count >= rows:
+            yield _joined_rows(pending)
+            pending, count = [], 0
+    if pending:
+        yield _joined_rows(pending)
+
+
+def _joined_rows(chunks: list[Chunk]) -> tuple[Rows, tuple[str, ...]]:
+    if len(chunks) == 1:
+        return chunks[0].rows, chunks[0].strings
+    rows = np.concatenate([c.rows for c in chunks])
+    strings: list[str] = []
+    offset = 0
+    for chunk in chunks:
+        _join_strings(rows[offset : offset + len(chunk.rows)], chunk.strings, strings)
+        offset += len(chunk.rows)
+    return rows, tuple(strings)
 
 
 class Chunk:

@@ -190,7 +190,8 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     choose(page, "2")
     answer(page, "6", "0", "1")
     wait_for_block(page, 3)
-    expect(page.locator("#preview circle.hole")).to_have_count(6)
+    # Six holes, numbered in cutting order (one hole drawn, placed six times).
+    expect(page.locator("#preview g.order text")).to_have_count(6)
 
     # LOOP DRILL, then REP: three holes 0.5 apart.
     choose(page, "6")
@@ -241,9 +242,8 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
     answer(page, "2", "3", "", "", "0", "4", "", "", "", "", "")
     wait_for_block(page, 14)
     expect(page.locator('.block-row[data-block="14"] .title')).to_have_text("BOLT CIR DRILL")
-    # 6 + 6 bolt-circle holes, and the 3 LOOP holes drawn once in a <symbol> used 3 times.
-    expect(page.locator("#preview circle.hole")).to_have_count(13)
-    expect(page.locator("#preview use")).to_have_count(3)
+    # 6 + 6 bolt-circle holes and the 3 LOOP holes, each numbered in cutting order.
+    expect(page.locator("#preview g.order text")).to_have_count(15)
     assert page.locator(".problems li.error").count() == 0
     shot(page, "05-editor")
 

@@ -352,3 +352,19 @@ def test_holes_of_a_pattern_look_like_a_hole_drawn_alone(page: Page, library: Li
     one = dark_green_pixels(page)
     assert one > 0
     assert 4 * one <= placed <= 8 * one, (placed, one)
+
+
+def test_an_edit_redraws_the_preview_after_its_reply(page: Page, library: Library) -> None:
+    """An edit's reply carries the rows and times, and asks for the new drawing, which
+    replaces the old one when it comes (the old one stays until then)."""
+    url = library.add(program("One hole", drill("3", "2"), drill("1", "1")))
+    page.goto(url)
+    expect(page.locator('#preview circle.hole[cx="3"]')).to_have_count(1)
+    page.locator('.block-row[data-block="1"] .block-link').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 1")
+    page.locator("#entry [data-field]").first.fill("4.5")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator('.block-row[data-block="1"] .summary')).to_contain_text("X 4.5")
+    expect(page.locator('#preview circle.hole[cx="4.5"]')).to_have_count(1)
+    expect(page.locator('#preview circle.hole[cx="3"]')).to_have_count(0)
+    expect(page.locator("#total")).to_contain_text("Cycle time")

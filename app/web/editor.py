@@ -32,6 +32,7 @@ from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
 from app.web.editor_page import (
     Entry,
     page_of,
+    render_drawing,
     render_entry,
     render_list,
     render_page,
@@ -171,6 +172,16 @@ def entry(program_id: int) -> tuple[str, int]:
     """The entry panel for the choice made (a fragment for htmx, the page otherwise)."""
     stored = load(program_id)
     return render_entry(stored, entry_from_args(stored.program, request.args))
+
+
+@bp.get("/programs/<int:program_id>/drawing")
+def drawing(program_id: int) -> Response | tuple[str, int]:
+    """The preview's drawing of the program as stored (an edit's reply asks for it after it
+    answers; `v` only keeps browsers from reusing an older drawing)."""
+    stored = load(program_id)
+    if not is_htmx():
+        return redirect(url_for("editor.edit", program_id=program_id))
+    return render_drawing(stored)
 
 
 @bp.get("/programs/<int:program_id>/list")

@@ -30,8 +30,8 @@ from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
 from app.web.forms import entry_forms, group_menu, sub_menu
+from app.web.preview import Preview, preview, times
 from app.web.preview import Shown as PreviewShown
-from app.web.preview import preview
 
 
 @dataclass
@@ -90,17 +90,30 @@ def block_summary(block: Block) -> str:
 # -- one version of a program, as the editor shows it -----------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass
 class Shown:
-    """A program's problems, drawing and times: what validation and the preview made of it."""
+    """A program's problems and times (what validation and the cycle time made of it), and
+    its drawing, made when first asked for: an edit's reply sends rows and times, and the
+    page fetches the drawing after it (`drawing()`, cached here)."""
 
     program: Program
     problems: list[Problem]
     by_block: dict[int, list[Problem]]
-    svg: str
     per_block: dict[int, float]
     total: float
-    shown: PreviewShown  # what the drawing and the cycle time hold (blocks with errors)
+    _drawing: Preview | None = None
+
+    def drawing(self) -> Preview:
+        """The preview: the SVG and what it holds (blocks with errors, not drawn)."""
+        if self._drawing is None:
+            self._drawing = preview(self.program, self.problems)
+        return self._drawing
+
+    @property
+    def drawn(self) -> PreviewShown | None:
+        """What the drawing holds, if it was made already (the cycle-time line says which
+        blocks it leaves out only then)."""
+        return self._drawing.shown if self._drawing is not None else None
 
 
 SHOWN_VERSIONS = 4
@@ -117,12 +130,12 @@ def shown_of(program: Program) -> Shown:
             _SHOWN.move_to_end(id(program))
             return found
     problems = validate(program)
-    svg, per_block, total, shown = preview(program, problems)
+    per_block, total = times(program, problems)
     by_block: dict[int, list[Problem]] = {}
     for problem in problems:
         if problem.block is not None:
             by_block.setdefault(problem.block, []).append(problem)
-    found = Shown(program, problems, by_block, svg, per_block, total, shown)
+    found = Shown(program, problems, by_block, per_block, total)
     with _LOCK:
         _SHOWN[id(program)] = found
         while len(_SHOWN) > SHOWN_VERSIONS:
@@ -194,7 +207,7 @@ def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) 
         "first": first,
         "focus": focus,
         "total": format_seconds(shown.total),
-        "shown": shown.shown,
+        "shown": shown.drawn,
     }
 
 
@@ -236,13 +249,28 @@ def _common(stored: StoredProgram) -> dict[str, Any]:
 def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
     """The whole editor page."""
     shown = shown_of(stored.program)
+    drawing = shown.drawing()
     return render_template(
         "editor/program.html",
         **_common(stored),
         **list_context(stored, shown, entry, entry.at),
         **entry_context(stored, entry, shown.problems),
-        svg=shown.svg,
+        svg=drawing.svg,
     ), status
+
+
+def render_drawing(stored: StoredProgram) -> tuple[str, int]:
+    """The drawing of the stored program, and the cycle-time line out of band (what an
+    edit's reply asks for after it)."""
+    shown = shown_of(stored.program)
+    drawing = shown.drawing()
+    return render_template(
+        "editor/_drawing_reply.html",
+        **_common(stored),
+        svg=drawing.svg,
+        shown=drawing.shown,
+        total=format_seconds(shown.total),
+    ), 200
 
 
 def render_entry(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
@@ -288,5 +316,4 @@ def render_reply(
         **listing,
         **entry_context(saved, entry, shown.problems),
         changed=changed,
-        svg=shown.svg,
     ), 200

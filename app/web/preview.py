@@ -91,6 +91,60 @@ def preview(program: Program, problems: list[Problem] | None = None) -> Preview:
     """
     if problems is None:
         problems = validate(program)
+    part = _drawable(program, problems)
+    errors = part.errors
+    if part.program is None:
+        # Data Block 0 (tools, retract, offsets) is in every move: nothing to draw yet.
+        return Preview(
+            "", {}, 0.0, Shown(part.listed(), tuple(sorted(errors)), part.general, False)
+        )
+    compiled = compile_program(part.program)
+    # Validation does not compile a program with values out of range, so the geometry's
+    # own errors (found by the compile of what can be drawn) may be news here.
+    for finding in compiled.findings:
+        if finding.severity is Severity.ERROR:
+            message = _said(finding.field, finding.message)
+            if message not in errors.get(finding.block, []):
+                errors.setdefault(finding.block, []).append(message)
+    path = compiled.path
+    drawing = render(
+        part.program, path, swept=True, grid=True, embedded_style=False, problems=errors
+    )
+    result = estimate(path)
+    shown = Shown(
+        problems=part.listed(),
+        not_drawn=tuple(b for b in sorted(errors) if b not in drawing.blocks),
+        program_errors=part.general,
+        large=drawing.large,
+    )
+    return Preview(drawing.svg, result.per_block, result.total, shown)
+
+
+def times(program: Program, problems: list[Problem]) -> tuple[dict[int, float], float]:
+    """The cycle time of `program` as the preview times it (seconds per block, total),
+    without drawing it: what an edit's reply needs (the drawing follows on its own)."""
+    part = _drawable(program, problems)
+    if part.program is None:
+        return {}, 0.0
+    result = estimate(compile_program(part.program).path)
+    return result.per_block, result.total
+
+
+@dataclass
+class _Drawable:
+    """What of a program can be compiled and drawn: `program` (None: nothing, Data Block 0
+    or the program as a whole has errors), the error messages per block, and the errors of
+    the program as a whole."""
+
+    program: Program | None
+    errors: dict[int, list[str]]
+    general: tuple[str, ...]
+
+    def listed(self) -> tuple[tuple[int, tuple[str, ...]], ...]:
+        return tuple((b, tuple(m)) for b, m in sorted(self.errors.items()))
+
+
+def _drawable(program: Program, problems: list[Problem]) -> _Drawable:
     errors: dict[int, list[str]] = {}
     general: list[str] = []
     unsafe: set[int] = set()
@@ -105,35 +159,15 @@ def preview(program: Program, problems: list[Problem] | None = None) -> Preview:
         else:
             general.append(str(p))
             whole = whole or p.rule not in HARMLESS_RULES
-    listed = tuple((b, tuple(m)) for b, m in sorted(errors.items()))
     if whole:
-        # Data Block 0 (tools, retract, offsets) is in every move: nothing to draw yet.
-        return Preview("", {}, 0.0, Shown(listed, tuple(sorted(errors)), tuple(general), False))
+        return _Drawable(None, errors, tuple(general))
     drawable = program
     if unsafe:
         blocks = tuple(
             LEFT_OUT if n in unsafe else block for n, block in enumerate(program.blocks, start=1)
         )
         drawable = replace(program, blocks=blocks)
-    compiled = compile_program(drawable)
-    # Validation does not compile a program with values out of range, so the geometry's
-    # own errors (found by the compile of what can be drawn) may be news here.
-    for finding in compiled.findings:
-        if finding.severity is Severity.ERROR:
-            message = _said(finding.field, finding.message)
-            if message not in errors.get(finding.block, []):
-                errors.setdefault(finding.block, []).append(message)
-    listed = tuple((b, tuple(m)) for b, m in sorted(errors.items()))
-    path = compiled.path
-    drawing = render(drawable, path, swept=True, grid=True, embedded_style=False, problems=errors)
-    result = estimate(path)
-    shown = Shown(
-        problems=listed,
-        not_drawn=tuple(b for b in sorted(errors) if b not in drawing.blocks),
-        program_errors=tuple(general),
-        large=drawing.large,
-    )
-    return Preview(drawing.svg, result.per_block, result.total, shown)
+    return _Drawable(drawable, errors, tuple(general))
 
 
 def _said(field: str | None, message: str) -> str:

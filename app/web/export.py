@@ -3,7 +3,7 @@ and downloads. Every export is made by the same registry the CLI uses."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 from urllib.parse import urlencode
 
@@ -118,6 +118,17 @@ def page_query(
     return query
 
 
+def remedy_offers(
+    target: Target, effective: Mapping[str, Any], machine_name: str, remedies: Iterable[Remedy]
+) -> list[tuple[Remedy, str]]:
+    """Each remedy with the query that takes it (the page's options, its option set): what
+    the export page and the set-up sheet offer instead of the needs a program lacks."""
+    return [
+        (remedy, urlencode(page_query(target, effective, machine_name, remedy)))
+        for remedy in remedies
+    ]
+
+
 @bp.get("/programs/<int:program_id>/export")
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
@@ -165,10 +176,7 @@ def page(program_id: int) -> tuple[str, int]:
     common, more = option_groups(target)
     # A need the program lacks that an option takes away is offered as that choice, with
     # the problems folded under it, rather than a wall of the same error per tool.
-    offers = [
-        (remedy, urlencode(page_query(target, effective, machine_name, remedy)))
-        for remedy in remedies
-    ]
+    offers = remedy_offers(target, effective, machine_name, remedies)
     context = {
         "stored": stored,
         "common_options": common,

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from urllib.parse import urlencode
-
 from flask import Blueprint, render_template, request
 
 from app.cnc.emit.svg import draw
@@ -12,7 +10,7 @@ from app.cnc.problems import has_errors
 from app.cnc.setup import setup_sheet
 from app.cnc.validate import validate
 from app.web.editor import load
-from app.web.export import _machine_options, options_from, page_query, shown_targets
+from app.web.export import _machine_options, options_from, remedy_offers, shown_targets
 
 bp = Blueprint("setup", __name__)
 
@@ -46,10 +44,7 @@ def sheet(program_id: int) -> tuple[str, int]:
         error = "; ".join([str(exc), *reasons])
         # The need an option takes away is offered as that choice (as on the export page).
         effective = get_target(target).parse_options(options)
-        offers = [
-            (remedy, urlencode(page_query(get_target(target), effective, machine_name, remedy)))
-            for remedy in exc.remedies
-        ]
+        offers = remedy_offers(get_target(target), effective, machine_name, exc.remedies)
     picture = draw(program, embedded_style=False)
     return (
         render_template(

@@ -498,6 +498,8 @@ def test_a_machine_preset_fills_the_form_and_saves(app: Flask, client: FlaskClie
         menu = re.search(r'<select name="target".*?</select>', filled, re.S)
         assert menu is not None
         assert f'<option value="{preset.target}" selected>' in menu.group(0), key
+        # The preset menu says which preset filled the form.
+        assert f'<option value="{key}" selected>' in filled, key
         form = dict(
             re.findall(
                 r'<input name="([^"]+)"[^>]*value="([^"]*)"', filled.split('class="card"')[-1]

@@ -94,7 +94,11 @@ def _options(target_name: str, options: Mapping[str, str]) -> dict[str, Any]:
 
 
 def _page(
-    machine: Machine | None, message: str = "", target_name: str = "", new: bool = False
+    machine: Machine | None,
+    message: str = "",
+    target_name: str = "",
+    new: bool = False,
+    preset: str = "",
 ) -> str:
     """The machines page: the list, and the form for `machine` (None: a new one, on
     `target_name` or LinuxCNC G-code), its serial port picked from the ports this computer
@@ -113,6 +117,7 @@ def _page(
         ports=available_ports(),
         presets=PRESETS,
         shop_presets=SHOP_PRESETS,
+        chosen_preset=preset,
         new=new,
         message=message,
     )
@@ -139,6 +144,7 @@ def index() -> str:
                 limits=dict(preset.limits),
             ),
             new=True,
+            preset=request.args.get("preset", ""),
         )
     return _page(machine, target_name=request.args.get("target", ""))
 

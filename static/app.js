@@ -120,7 +120,8 @@
       if (back) { event.preventDefault(); back.click(); }
       return;
     }
-    if (!typing && /^[1-9]$/.test(event.key)) {
+    if (!typing && /^[0-9]$/.test(event.key)) {
+      // 0 is the tenth choice (POCKET), as on a phone's keypad.
       var choice = document.querySelector('#entry .choice[data-key="' + event.key + '"]');
       if (choice) { event.preventDefault(); choice.click(); }
     }

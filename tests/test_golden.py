@@ -89,13 +89,22 @@ _GCODE_CASES = (
     "two-axis",
     "coolant-and-messages",
 )
+# POCKET (issue 22) goes to every target as explicit moves: a golden file for each.
+_POCKET_CASES = ("pocket-islands", "pocket-mm", "pocket-loop")
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
-    "gcode-linuxcnc": _GCODE_CASES,
-    "gcode-fanuc": _GCODE_CASES,
-    "gcode-prototrak": _GCODE_CASES,
-    "svg": ("loop-nested-3-deep", "contour-cut-right", "frame-pocket", "bolt-circle-drill"),
-    "tape-eia": _TAPE_CASES,
-    "tape-ascii": _TAPE_CASES,
+    "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES,
+    "gcode-fanuc": _GCODE_CASES + _POCKET_CASES,
+    "gcode-prototrak": _GCODE_CASES + _POCKET_CASES,
+    "svg": (
+        "loop-nested-3-deep",
+        "contour-cut-right",
+        "frame-pocket",
+        "bolt-circle-drill",
+        *_POCKET_CASES,
+    ),
+    "tape-eia": _TAPE_CASES + _POCKET_CASES,
+    "tape-ascii": _TAPE_CASES + _POCKET_CASES,
+    "events": _POCKET_CASES,
     "punch-eia": ("drill-single", "circle-inside-mm", "frame-in-tan", "stop-and-tool-changes"),
     "punch-ascii": ("drill-single", "tap-metric", "contour-cut-right"),
     "tape-svg": ("drill-single", "pos-basic", "tap-metric"),
@@ -118,4 +127,5 @@ def test_corpus_covers_every_block_type() -> None:
         kinds.update(b.kind for b in raw.blocks if b.kind == "COPY")
     expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
     expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
+    expected |= {"POCKET", "PKT_LINE", "PKT_ARC", "PKT_ARC_END", "ISLAND"}
     assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

@@ -26,6 +26,7 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     Mode,
+    Pocket,
     Pos,
     Program,
     field_label,
@@ -160,7 +161,7 @@ def test_every_kind_declares_its_document_editor_and_labels() -> None:
 
 def test_routine_kinds_name_planners_that_resolve() -> None:
     routines = REGISTRY.mill_classes(Mill.ROUTINE)
-    assert set(routines) == {Circle, Frame}
+    assert set(routines) == {Circle, Frame, Pocket}
     for cls in routines:
         assert callable(REGISTRY.planner(cls))
     with pytest.raises(LookupError):

@@ -431,6 +431,158 @@ class Frame(Block):
         return f"{name} {self.placement.name.replace('_', '/')}"
 
 
+# -- irregular pockets (issue 22) -----------------------------------------------------------
+
+
+def _in_pocket(blocks: tuple[Block, ...], at: int) -> str:
+    """A pocket's contour block follows its POCKET or another of its contour blocks."""
+    previous = blocks[at - 2] if at >= 2 else None
+    if previous is not None and (
+        isinstance(previous, Pocket) or REGISTRY.of(previous).mill is Mill.GEOMETRY
+    ):
+        return ""
+    return "follows a POCKET block or another of its contour blocks"
+
+
+def _after_drill(blocks: tuple[Block, ...], at: int) -> str:
+    previous = blocks[at - 2] if at >= 2 else None
+    if isinstance(previous, Hole) and previous.op is HoleOp.DRILL:
+        return ""
+    return "follows the DRILL block that gives its depths and the boundary's start point"
+
+
+POCKET_GROUP = "POCKET"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Pocket(Block):
+    """POCKET: clear the inside of a closed contour around up to `MAX_ISLANDS` islands.
+
+    The DRILL before it gives the boundary's start point (X/Y), the depths, the pecks and
+    the tool; the PKT LINE / PKT ARC blocks after it draw the boundary back to that point,
+    and each ISLAND block starts an island drawn the same way (app.cnc.pocketing).
+    `step_over` (None: the tool's DIA less the 0.050 in overlap of the POCKET routines) is
+    the distance between neighbouring passes; `finish` (None: 0.010 in, as 2P) the stock the
+    roughing passes leave on the walls and islands for the finishing pass.
+    """
+
+    kind: ClassVar[str] = "POCKET"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("POCKET"),),
+        editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1, offered=_after_drill),),
+        stoppable=False,
+        mill=Mill.ROUTINE,
+        planner="app.cnc.pocketing.routine:plan_pocket_routine",
+        geometry=True,
+    )
+    step_over: Decimal | None = prompt(
+        "STEP", LENGTH, None, positive=True, help="empty: the tool's DIA less 0.050 in"
+    )
+    finish: Decimal | None = prompt(
+        "FIN CUT", LENGTH, None, low=Decimal(0), help="empty: 0.010 in left for the finish pass"
+    )
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PocketLine(Block):
+    """PKT LINE: a line of a POCKET's boundary or island, from the point before to X, Y."""
+
+    kind: ClassVar[str] = "PKT_LINE"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("PKT_LINE"),),
+        editor=(SubKind("PKT_LINE", "PKT LINE", POCKET_GROUP, 2, offered=_in_pocket),),
+        positioned=True,
+        mill=Mill.GEOMETRY,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+
+    @property
+    def type_name(self) -> str:
+        return "PKT LINE"
+
+
+@dataclass(frozen=True, kw_only=True)
+class PocketArcEnd(Block):
+    """PKT ARC XY-END: the arc's end point; in INC mode relative to the arc's start."""
+
+    kind: ClassVar[str] = "PKT_ARC_END"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("PKT_ARC_END"),),
+        editor=(SubKind("PKT_ARC_END", "PKT ARC XY-END", POCKET_GROUP),),
+        positioned=True,
+        part="XY-END",
+        mill=Mill.GEOMETRY,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+
+    @property
+    def type_name(self) -> str:
+        return "PKT ARC XY-END"
+
+
+@dataclass(frozen=True, kw_only=True)
+class PocketArc(Block):
+    """PKT ARC C/CC, the XY-CENT block of an arc of a POCKET's boundary or island: its
+    centre (INC: from the arc's start) and direction; the next block is its XY-END."""
+
+    kind: ClassVar[str] = "PKT_ARC"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("PKT_ARC"),),
+        editor=(
+            SubKind(
+                "PKT_ARC_C",
+                "PKT ARC C",
+                POCKET_GROUP,
+                3,
+                (("direction", Direction.CW),),
+                PocketArcEnd,
+                _in_pocket,
+            ),
+            SubKind(
+                "PKT_ARC_CC",
+                "PKT ARC CC",
+                POCKET_GROUP,
+                4,
+                (("direction", Direction.CCW),),
+                PocketArcEnd,
+                _in_pocket,
+            ),
+        ),
+        positioned=True,
+        stoppable=False,
+        xy_is_centre=True,
+        part="XY-CENT",
+        mill=Mill.GEOMETRY,
+    )
+    direction: Direction = prompt("DIRECTION", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+
+    @property
+    def type_name(self) -> str:
+        return "PKT ARC " + ("C" if self.direction is Direction.CW else "CC") + " XY-CENT"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Island(Block):
+    """ISLAND: the start point of an island of the POCKET above; the PKT LINE / PKT ARC
+    blocks after it draw the island back to this point."""
+
+    kind: ClassVar[str] = "ISLAND"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("ISLAND"),),
+        editor=(SubKind("ISLAND", "ISLAND", POCKET_GROUP, 5, offered=_in_pocket),),
+        positioned=True,
+        mill=Mill.GEOMETRY,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Rep(Block):
     """REP: closes the innermost open LOOP; X/Y step between patterns, NX/NY extra copies."""
@@ -479,6 +631,7 @@ class Copy(Block):
 BLOCK_CLASSES: tuple[type[Block], ...] = REGISTRY.classes
 MILL_CONTOUR_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.CONTOUR)
 MILL_ROUTINE_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.ROUTINE)
+POCKET_GEOMETRY_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.GEOMETRY)
 LOOP_CAPABLE_CLASSES: tuple[type[Block], ...] = tuple(
     cls for cls in BLOCK_CLASSES if REGISTRY.kind(cls).loopable
 )

@@ -43,7 +43,6 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
-from fractions import Fraction
 
 import numpy as np
 
@@ -59,7 +58,8 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.mill import Finding, Path, plan_sequence
+from app.cnc.mill import Finding, Path, length, plan_sequence
+from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
     MOVE,
@@ -74,6 +74,7 @@ from app.cnc.path import (
     Seq,
     size,
 )
+from app.cnc.pocketing.model import LinkKind, PocketPlan
 from app.cnc.problems import Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.toolpath import ToolInfo
@@ -91,15 +92,6 @@ class CompileError(ValueError):
         super().__init__(f"block {block}: {message}")
         self.block = block
         self.message = message
-
-
-def peck_levels(z_up: int, z_dn: int, pecks: int) -> list[int]:
-    """The depths (nm) a drill feeds to: `pecks` levels evenly spaced, the last at Z DN.
-
-    Level k (1…N) is Z UP − k·(Z UP − Z DN)/N, rounded once to the nanometre.
-    """
-    span = z_up - z_dn
-    return [z_up - round(Fraction(k * span, pecks)) for k in range(1, pecks + 1)]
 
 
 def retract_height(z_up: int, z_retract: int) -> int:
@@ -525,6 +517,14 @@ class _Compiler:
             return
         self.use_tool(number, drill.tool)
         first_row = len(self.buffer.rows)
+        if plan.pocket is not None:
+            if drill.has_depth:
+                self.cut_pocket(number, last, drill, plan.pocket)
+            else:
+                self.cut_pocket_by_hand(number, last, plan.pocket)
+            self.record_mill(node, drill, start, first_row, None)
+            self.reference = plan.end
+            return
         plunge = _round(plan.passes[0].start)
         if not drill.has_depth:
             self.position(number, plunge, self.z)
@@ -560,6 +560,80 @@ class _Compiler:
         self.retract_up(last)
         self.record_mill(node, drill, start, first_row, plan.finished)
         self.reference = plan.end
+
+    def cut_pocket(self, number: int, last: int, drill: Hole, pocket: PocketPlan) -> None:
+        """A POCKET: every pass at each peck level (app.cnc.pocketing).
+
+        The tool goes down only where the plan says it fits: at the first pass's plunge
+        point, and after a retract at a RETRACT link's start. At the first level it feeds
+        down from Z UP; at the levels after, it rapids to the level just cut (that point was
+        cleared there) and feeds on down, as the DRILL's pecks do. Between levels it
+        retracts and returns to the first plunge point.
+        """
+        z_up, z_dn, feed_z = _depths(drill)
+        self.retract = retract_height(z_up, self.z_retract)
+        first = _round(pocket.passes[0].entry.path.start)
+        self.position(number, first, self.retract)
+        self.rapid_z(number, z_up)
+        above = z_up
+        levels = peck_levels(z_up, z_dn, drill.pecks)
+        for k, level in enumerate(levels):
+            for cut in pocket.passes:
+                link = cut.entry
+                if link.kind is LinkKind.RETRACT:
+                    self.retract_up(number)
+                    self.rapid_xy(number, _round(link.path.start))
+                    self.rapid_z(number, above, tag="" if k == 0 else "peck-reentry")
+                if link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
+                    self.feed_to(number, (self.x, self.y, level), feed_z)
+                self.cut_pocket_path(link.path, "step-over")
+                self.cut_pocket_path(cut.path, "")
+            if k < len(levels) - 1:
+                self.retract_up(number)
+                self.rapid_xy(number, first)
+                self.rapid_z(number, level, tag="peck-reentry")
+            above = level
+        self.retract_up(last)
+
+    def cut_pocket_by_hand(self, number: int, last: int, pocket: PocketPlan) -> None:
+        """A 2-axis POCKET: the passes at the one depth the operator sets, stopping for the
+        quill to go down at each place the plan plunges and to come up before the table
+        moves on (as a 2-axis mill sequence does)."""
+        down = False
+        for cut in pocket.passes:
+            link = cut.entry
+            if link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
+                if down:
+                    self.stop_for(number, "quill: raise the quill by hand")
+                self.position(number, _round(link.path.start), self.z)
+                self.stop_for(number, "quill: lower the quill to depth by hand")
+                down = True
+            self.cut_pocket_path(link.path, "step-over")
+            self.cut_pocket_path(cut.path, "")
+        self.stop_for(last, "quill: raise the quill by hand")
+
+    def cut_pocket_path(self, path: Path, tag: str) -> None:
+        """A pocket path's elements at the current depth; links and cleanup moves
+        (`Element.tag` "link") are step-overs. An element shorter than a nanometre once
+        rounded is left out: an arc whose end rounds onto its start would be a full circle."""
+        feed = -1
+        at = path.start  # the true start: an arc's sweep is judged from it, not the rounding
+        for element in path.elements:
+            end = _round(element.end)
+            if end == (self.x, self.y) and length(at, element) < 10:
+                at = element.end
+                continue
+            at = element.end
+            if feed < 0:
+                feed = self.feed_of(element.block)
+            move_tag = "step-over" if element.tag == "link" else tag
+            if element.centre is None:
+                self.feed_to(element.block, (end[0], end[1], self.z), feed, move_tag)
+            else:
+                self.arc_to(
+                    element.block, end, _round(element.centre), element.clockwise, feed, move_tag
+                )
+                self.x, self.y = end
 
     def record_mill(
         self,

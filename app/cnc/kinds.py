@@ -15,7 +15,9 @@ Adding a block kind:
    and each field declared with `prompt(...)`; `type_name` if its title says more than
    its editor title. Declaring it registers it.
 2. What it cuts. A mill routine names its planner: `Kind(mill=Mill.ROUTINE,
-   planner="module:function")`, a function `(block, mill.RoutineStart) -> SequencePlan`.
+   planner="module:function")`, a function `(block, mill.RoutineStart) -> SequencePlan`;
+   with `geometry=True` the `Mill.GEOMETRY` blocks after it are its contours
+   (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND.
    Other motion is a node in structure.py and compiler.py.
 3. Its own rules, if any, in validate.py, each with a case in tests/bad/.
 4. A golden case (tests/golden/<name>/program.json, `make regen-golden`); its JSON `type`
@@ -68,7 +70,8 @@ class Mill(enum.Enum):
     """The two families of mill blocks (seed 001 §3.4.5.2)."""
 
     CONTOUR = "contour"  # line and arc blocks: a path the tool follows
-    ROUTINE = "routine"  # CIRCLE / FRAME: a whole cut from one block
+    ROUTINE = "routine"  # CIRCLE / FRAME / POCKET: a whole cut from one block
+    GEOMETRY = "geometry"  # a POCKET's contour blocks: shapes its routine clears, not cut
 
 
 @dataclass(frozen=True)
@@ -143,6 +146,7 @@ class Kind:
     part: str = ""  # entered with another block: the suffix of its X/Y prompts
     mill: Mill | None = None
     planner: str = ""  # "module:function" planning a mill routine
+    geometry: bool = False  # a routine whose contour blocks (Mill.GEOMETRY) follow it
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
-from typing import Any
+from fractions import Fraction
+from typing import TYPE_CHECKING, Any
 
 from app.cnc.blocks import (
     ArcEnd,
@@ -56,6 +57,9 @@ from app.cnc.geometry import arc_sweep, resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.problems import Rule, Severity
 from app.cnc.units import Units, message_length, to_nm
+
+if TYPE_CHECKING:
+    from app.cnc.pocketing.model import PocketPlan
 
 Pt = tuple[float, float]
 EPS = 1e-6  # nm: points closer than this are the same point
@@ -84,6 +88,15 @@ def pocket_overlap(units: Units) -> int:
 def rough_wall(units: Units) -> int:
     """Stock left on the wall by the roughing pass of a 2P routine (0.010 in)."""
     return constant("0.010", "0.25", units)
+
+
+def peck_levels(z_up: int, z_dn: int, pecks: int) -> list[int]:
+    """The depths (nm) a drill feeds to: `pecks` levels evenly spaced, the last at Z DN.
+
+    Level k (1…N) is Z UP − k·(Z UP − Z DN)/N, rounded once to the nanometre.
+    """
+    span = z_up - z_dn
+    return [z_up - round(Fraction(k * span, pecks)) for k in range(1, pecks + 1)]
 
 
 def rough_depth(units: Units) -> int:
@@ -802,6 +815,7 @@ class SequencePlan:
     end: tuple[int, int]
     findings: list[Finding]
     finished: Path | None = None  # a contour's programmed path (None for a routine)
+    pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
 
 
 def plan_sequence(
@@ -827,7 +841,9 @@ def plan_sequence(
         # A routine kind declares its planner (app.cnc.kinds): the signature of plan_circle.
         rpm = None if tool is None else tool.rpm
         planner = REGISTRY.planner(type(first))
-        plan: SequencePlan = planner(first, RoutineStart(mills[0] + 1, block0, rpm, radius, start))
+        contours = tuple((i + 1, blocks[i]) for i in mills[1:])
+        at = RoutineStart(mills[0] + 1, block0, rpm, radius, start, contours)
+        plan: SequencePlan = planner(first, at)
         return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
@@ -860,13 +876,15 @@ class RoutineStart:
     """What a mill routine's planner is given (the hook a routine kind declares, see
     app.cnc.kinds): its block number, Data Block 0, the tool's RPM (its sign gives the
     spindle direction), the tool's radius in nm (0: no DIA, which validation reports) and
-    the start point in nm (the previous DRILL's X/Y)."""
+    the start point in nm (the previous DRILL's X/Y); for a routine that takes contour
+    blocks (POCKET), those blocks with their numbers."""
 
     number: int
     block0: DataBlock0
     rpm: int | None
     tool_radius: int
     start: tuple[int, int]
+    geometry: tuple[tuple[int, Block], ...] = ()
 
 
 def plan_circle(block: Block, at: RoutineStart) -> SequencePlan:

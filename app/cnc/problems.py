@@ -82,6 +82,12 @@ class Rule(enum.Enum):
     FRAME_CORNER = "frame-corner"
     CORNER_UNREACHABLE = "corner-unreachable"
     POCKET_TOOL = "pocket-tool"
+    POCKET_ORDER = "pocket-order"
+    POCKET_CONTOUR = "pocket-contour"
+    POCKET_ISLAND = "pocket-island"
+    POCKET_NARROW = "pocket-narrow"
+    POCKET_STEP = "pocket-step"
+    POCKET_TWO_AXIS = "pocket-two-axis"
     COMP_ON_ROUTINE = "comp-on-routine"
     MESSAGE = "message"
 

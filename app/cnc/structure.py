@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from app.cnc.blocks import (
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
+    POCKET_GEOMETRY_CLASSES,
     ArcEnd,
     Block,
     BoltCircle,
@@ -21,9 +22,12 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     MillArc,
+    PocketArc,
+    PocketArcEnd,
     Pos,
     Rep,
 )
+from app.cnc.kinds import REGISTRY
 
 
 @dataclass(frozen=True, slots=True)
@@ -79,12 +83,16 @@ def starts_mill_sequence(blocks: tuple[Block, ...], index: int) -> bool:
 def mill_sequence_end(blocks: tuple[Block, ...], drill: int) -> int:
     """The index after the last mill block of the sequence started at `drill`.
 
-    A sequence is either one CIRCLE/FRAME routine or a run of line, quarter-circle and arc
-    blocks; the head retracts at its end.
+    A sequence is either one CIRCLE/FRAME routine, a POCKET and its contour blocks, or a
+    run of line, quarter-circle and arc blocks; the head retracts at its end.
     """
     first = drill + 1
     if isinstance(blocks[first], MILL_ROUTINE_CLASSES):
-        return first + 1
+        end = first + 1
+        if REGISTRY.of(blocks[first]).geometry:
+            while end < len(blocks) and isinstance(blocks[end], POCKET_GEOMETRY_CLASSES):
+                end += 1
+        return end
     end = first
     while end < len(blocks) and isinstance(blocks[end], MILL_CONTOUR_CLASSES):
         end += 1
@@ -153,11 +161,16 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
             # An arc without its XY-END (or an XY-END without its arc): the blocks before
             # it run.
             for k, i in enumerate(mills):
-                dangling_arc = isinstance(blocks[i], MillArc) and (
-                    i + 1 >= end or not isinstance(blocks[i + 1], ArcEnd)
+                centre, end_kind = (
+                    (PocketArc, PocketArcEnd)
+                    if isinstance(blocks[i], PocketArc | PocketArcEnd)
+                    else (MillArc, ArcEnd)
                 )
-                dangling_end = isinstance(blocks[i], ArcEnd) and not isinstance(
-                    blocks[i - 1], MillArc
+                dangling_arc = isinstance(blocks[i], centre) and (
+                    i + 1 >= end or not isinstance(blocks[i + 1], end_kind)
+                )
+                dangling_end = isinstance(blocks[i], end_kind) and not isinstance(
+                    blocks[i - 1], centre
                 )
                 if dangling_arc or dangling_end:
                     mills = mills[:k]
@@ -169,6 +182,11 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
         if tolerant:
             return None, index + 1
         raise ValueError(f"block {index + 1}: XY-END without its XY-CENT (validate first)")
+    if isinstance(block, POCKET_GEOMETRY_CLASSES):
+        if tolerant:
+            return None, index + 1
+        what = block.type_name
+        raise ValueError(f"block {index + 1}: {what} without its POCKET (validate first)")
     if tolerant and not isinstance(block, Pos | Hole):
         return None, index + 1  # a mill block or a BOLT CIR that does not follow its block
     return Single(index=index), index + 1

@@ -19,6 +19,7 @@ from app.cnc import limits
 from app.cnc.blocks import (
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
+    POCKET_GEOMETRY_CLASSES,
     ArcEnd,
     Block,
     BoltCircle,
@@ -30,8 +31,12 @@ from app.cnc.blocks import (
     Frame,
     Hole,
     HoleOp,
+    Island,
     MillArc,
     Mode,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
     Program,
     Rep,
     field_label,
@@ -529,6 +534,8 @@ class _Checker:
                     )
             if is_mill(block) and not isinstance(block, ArcEnd):
                 self.check_mill_order(index, block, previous)
+            if isinstance(block, (Pocket, *POCKET_GEOMETRY_CLASSES)):
+                self.check_pocket_order(index, block, previous)
             if (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
@@ -546,7 +553,7 @@ class _Checker:
                 block.stop
                 and not isinstance(block, MillArc)
                 and self.inside_mill_sequence(index)
-                and is_mill(blocks[index + 1])
+                and _in_sequence(blocks[index + 1])
             ):
                 self.add(
                     number,
@@ -567,7 +574,13 @@ class _Checker:
                     ERROR,
                     Rule.MILL_ORDER,
                     f"{block.type_name} must follow the DRILL block that gives its "
-                    + ("centre" if isinstance(block, Circle) else "lower left corner"),
+                    + (
+                        "centre"
+                        if isinstance(block, Circle)
+                        else "lower left corner"
+                        if isinstance(block, Frame)
+                        else "depths and the boundary's start point"
+                    ),
                 )
             return
         ok = (isinstance(previous, Hole) and previous.op is HoleOp.DRILL) or isinstance(
@@ -584,10 +597,75 @@ class _Checker:
                 f"another mill block; {before}",
             )
 
+    def check_pocket_order(self, index: int, block: Block, previous: Block | None) -> None:
+        """A POCKET's contour blocks follow it (or each other); an arc's XY-CENT and XY-END
+        go together; a POCKET needs depths (it retracts between passes)."""
+        number = index + 1
+        nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
+        if isinstance(block, Pocket):
+            drill = previous
+            if isinstance(drill, Hole) and drill.op is HoleOp.DRILL and not drill.has_depth:
+                self.add(
+                    index,
+                    "Z DN",
+                    WARNING,
+                    Rule.POCKET_TWO_AXIS,
+                    "a 2-axis POCKET: the program stops for the quill to be lowered by hand "
+                    "at each place the tool goes down and raised before the table moves on; "
+                    "# PECK is the operator's",
+                )
+            if not isinstance(nxt, POCKET_GEOMETRY_CLASSES):
+                self.add(
+                    number,
+                    None,
+                    ERROR,
+                    Rule.POCKET_ORDER,
+                    "POCKET without its boundary: PKT LINE and PKT ARC blocks follow it and "
+                    "draw the boundary from the DRILL's X/Y back to that point",
+                )
+            return
+        if isinstance(block, PocketArcEnd):
+            if not isinstance(previous, PocketArc):
+                self.add(
+                    number,
+                    None,
+                    ERROR,
+                    Rule.ARC_END_ORDER,
+                    "PKT ARC XY-END without its XY-CENT block just before it",
+                )
+            return
+        if isinstance(block, PocketArc) and not isinstance(nxt, PocketArcEnd):
+            self.add(
+                number,
+                None,
+                ERROR,
+                Rule.ARC_END_ORDER,
+                "PKT ARC XY-CENT without its XY-END block just after it",
+            )
+        if not isinstance(previous, (Pocket, *POCKET_GEOMETRY_CLASSES)):
+            before = f"block {index} is {previous.title}" if previous else "it is first"
+            self.add(
+                number,
+                None,
+                ERROR,
+                Rule.POCKET_ORDER,
+                f"{block.type_name} must follow a POCKET block or another of its contour "
+                f"blocks; {before}",
+            )
+        elif isinstance(block, Island) and isinstance(previous, Pocket):
+            self.add(
+                number,
+                None,
+                ERROR,
+                Rule.POCKET_ORDER,
+                "ISLAND right after its POCKET: the boundary's PKT LINE and PKT ARC blocks "
+                "come first, then each island",
+            )
+
     def inside_mill_sequence(self, index: int) -> bool:
         """True when block `index` is a DRILL starting a sequence or one of its mill blocks."""
         return index + 1 < len(self.blocks) and (
-            starts_mill_sequence(self.blocks, index) or is_mill(self.blocks[index])
+            starts_mill_sequence(self.blocks, index) or _in_sequence(self.blocks[index])
         )
 
     # -- tools ----------------------------------------------------------------------------
@@ -601,7 +679,7 @@ class _Checker:
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            needs_diameter = isinstance(block, Circle | Frame) or (
+            needs_diameter = isinstance(block, Circle | Frame | Pocket) or (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(self.blocks, number - 1)
@@ -747,6 +825,11 @@ def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
     if span[0].mode is Mode.INC and any(b.mode is Mode.ABS for b in span if _has_position(b)):
         errors.append((Rule.COPY_3, COPY_MESSAGES[Rule.COPY_3]))
     return errors
+
+
+def _in_sequence(block: Block) -> bool:
+    """True for the blocks of a mill sequence after its DRILL (a POCKET's contour too)."""
+    return is_mill(block) or isinstance(block, POCKET_GEOMETRY_CLASSES)
 
 
 def _has_position(block: Block) -> bool:

@@ -103,7 +103,8 @@ def _form(cls: type[Block], sub: SubKind) -> EntryForm:
     )
 
 
-GROUPS = ("POS", "DRILL", "BORE", "TAP", "MILL", "LOOP", "STOP", "REP", "COPY")
+# The first menu, numbered in this order; the tenth (POCKET) is key 0.
+GROUPS = ("POS", "DRILL", "BORE", "TAP", "MILL", "LOOP", "STOP", "REP", "COPY", "POCKET")
 _FORMS: tuple[int, dict[str, EntryForm], dict[str, tuple[str, ...]]] = (-1, {}, {})
 
 

@@ -37,11 +37,12 @@ from typing import Any
 
 import numpy as np
 
-from app.cnc.blocks import Circle, Frame, Program
+from app.cnc.blocks import Circle, Frame, Pocket, Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Report, Target, register
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
+from app.cnc.pocketing.routine import contours_at
 from app.cnc.simulate.stock import MARGIN, ROUND_TO
 from app.cnc.toolpath import Toolpath
 from app.cnc.units import Units, to_nm
@@ -582,6 +583,9 @@ class _Painter:
                     f'r="{self.n(r)}"/>'
                 )
                 box.point(mill.x, mill.y, r)
+        elif isinstance(block, Pocket):
+            for drawn in contours_at(self.program.blocks, mill.routine, (mill.x, mill.y)):
+                self.contour(groups, box, drawn.path)
         elif isinstance(block, Frame):
             w, h = to_nm(block.xl, block.units), to_nm(block.yw, block.units)
             corner = max(0, min(to_nm(block.corner_radius, block.units), w // 2, h // 2))

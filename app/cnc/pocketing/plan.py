@@ -31,13 +31,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 from app.cnc.blocks import MillingMode, Placement
-from app.cnc.compiler import peck_levels
 from app.cnc.mill import (
     Element,
     Path,
     Pt,
     distance_to_element,
     length,
+    peck_levels,
     reverse,
     routine_clockwise,
     sample,

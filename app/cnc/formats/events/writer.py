@@ -70,6 +70,7 @@ from app.cnc.blocks import (
     MillLine,
     MillQcir,
     Placement,
+    Pocket,
     Pos,
     Program,
     Rep,
@@ -103,6 +104,7 @@ from app.cnc.formats.events.model import (
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.mill import (
     INSIDE_PLACEMENTS,
+    Element,
     clearance,
     plan_sequence,
     pocket_overlap,
@@ -110,9 +112,11 @@ from app.cnc.mill import (
     rough_depth,
     rough_wall,
     routine_clockwise,
+    sweep,
 )
 from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, Op
+from app.cnc.pocketing.model import LinkKind
 from app.cnc.problems import Rule
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import Units, to_nm
@@ -252,6 +256,9 @@ class _Builder:
         first = self.blocks[node.mills[0]]
         if isinstance(first, Circle | Frame):
             self.routine(node, drill, first, start)
+            self.reference = start
+        elif isinstance(first, Pocket):
+            self.pocket(node, drill, first, start)
             self.reference = start
         else:
             self.contour(node, drill, start)
@@ -404,6 +411,96 @@ class _Builder:
         if not checked:
             self.result.unchecked.update([drill_number, *(i + 1 for i in node.mills)])
         self.reference = end
+
+    def pocket(self, node: MillSequence, drill: Hole, block: Pocket, start: XY) -> None:
+        """POCKET → its passes as explicit G101/G102/G103 events on the tool centre (TC0):
+        the Plus has no irregular pocket. A G100 position comes first and wherever the tool
+        retracts between passes (the operator raises and lowers the quill there)."""
+        number = node.mills[0] + 1
+        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
+        pocket = plan.pocket
+        blocks = [node.drill + 1, *(i + 1 for i in node.mills)]
+        self.result.unchecked.update(blocks)
+        if pocket is None:
+            return  # not cut: validation says why
+        tool = drill.tool
+        diameter = self.diameter(tool)
+        feed = self.feed(number, block)
+        events: list[Event] = []
+        current: XY | None = None
+        plunges = 0
+        for cut in pocket.passes:
+            link = cut.entry
+            if current is None or link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
+                if events and isinstance(events[-1], Mill):
+                    events[-1] = replace(events[-1], conrad=None)
+                current = _on_grid(link.path.start, to_nm(self.units.resolution, self.units))
+                events.append(Position(number, current, tool))
+                plunges += 1
+            at = link.path.start
+            for element in (*link.path.elements, *cut.path.elements):
+                current = self.pocket_element(
+                    events, number, current, at, element, feed, diameter, tool
+                )
+                at = element.end
+        if events and isinstance(events[-1], Mill):
+            events[-1] = replace(events[-1], conrad=None)
+        for event in events:
+            self.add(event)
+        self.report.rewritten(
+            number,
+            f"POCKET: the Plus has no irregular pocket; its {len(pocket.passes)} passes are "
+            f"written as {sum(isinstance(e, Mill) for e in events)} mill events on the tool "
+            f"centre (TC0) at one depth, with a G100 where the quill goes down "
+            f"({plunges} {'place' if plunges == 1 else 'places'})",
+        )
+
+    def pocket_element(
+        self,
+        events: list[Event],
+        number: int,
+        current: XY,
+        at: Pt,
+        element: Element,
+        feed: int,
+        diameter: int | None,
+        tool: int,
+    ) -> XY:
+        """One element of a pocket pass as mill events (a full circle as two halves, an
+        element that goes nowhere as none); the point it ends at.
+
+        Points are written at the programming resolution (0.001 in, 0.01 mm), which is what
+        the Plus's blocks hold and what reads back: an arc's end is the point of that grid
+        next to the true end whose radius matches the start's within half a step, so the
+        arc is cut as written, without a divot (`mill.true_arc`).
+        """
+        step = to_nm(self.units.resolution, self.units)
+        target = _on_grid(element.end, step)
+        centre = None if element.centre is None else _on_grid(element.centre, step)
+        if target == current and (centre is None or abs(sweep(at, element)) < math.pi):
+            return current  # shorter than the grid's step: nothing to write
+        if centre is not None and target != current:
+            target = _on_radius(current, target, centre, step)
+        halves = [target]
+        if centre is not None and target == current:
+            halves = [(2 * centre[0] - current[0], 2 * centre[1] - current[1]), target]
+        for end in halves:
+            events.append(
+                Mill(
+                    number,
+                    current,
+                    end,
+                    centre,
+                    element.clockwise,
+                    TOOL_CENTRE,
+                    feed,
+                    diameter,
+                    0,
+                    tool,
+                )
+            )
+            current = end
+        return current
 
     def report_compensation(
         self, node: MillSequence, drill: Hole, start: XY, diameter: int | None
@@ -854,3 +951,21 @@ class EventsTarget(Target):
         check_events(events, path, report)
         line_end = "\r\n" if options.get("line_end", "crlf") == "crlf" else "\n"
         out.write(render(events, line_end).encode("ascii"))
+
+
+def _on_grid(p: Pt, step: int) -> XY:
+    """A point (nm) on the grid of `step` nm."""
+    return (round(p[0] / step) * step, round(p[1] / step) * step)
+
+
+def _on_radius(start: XY, end: XY, centre: XY, step: int) -> XY:
+    """`end`, or the nearest grid point around it whose distance from `centre` is within
+    half a step of the start's (an arc the reader takes as typed); `end` when none is."""
+    radius = math.dist(start, centre)
+    if abs(math.dist(end, centre) - radius) <= step / 2:
+        return end
+    around = [
+        (end[0] + i * step, end[1] + j * step) for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j
+    ]
+    fits = [p for p in around if abs(math.dist(p, centre) - radius) <= step / 2]
+    return min(fits, key=lambda p: (math.dist(p, end), p)) if fits else end

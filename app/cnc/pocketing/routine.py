@@ -1,0 +1,203 @@
+"""The POCKET block kind's planner: its contour blocks become paths, the engine plans them.
+
+A POCKET follows the DRILL that gives the boundary's start point, the depths, the pecks
+and the tool. Its contour blocks follow it: PKT LINE and PKT ARC (XY-CENT + XY-END) draw
+the boundary from the DRILL's point back to it; each ISLAND block starts an island at its
+own point, drawn the same way. INC values are from the point before, as for every
+positioned block: a PKT LINE's end from the contour's last point, an arc's centre and end
+from the arc's start, an ISLAND's start from the point the contour before it closed at.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from app.cnc import limits
+from app.cnc.blocks import Block, Direction, Island, Pocket, PocketArc, PocketArcEnd, PocketLine
+from app.cnc.geometry import resolve_xy
+from app.cnc.kinds import REGISTRY, Mill
+from app.cnc.mill import (
+    Element,
+    Finding,
+    Path,
+    RoutineStart,
+    SequencePlan,
+    pocket_overlap,
+    rough_wall,
+)
+from app.cnc.pocketing.model import PocketFinding, PocketIssue
+from app.cnc.pocketing.plan import plan_pocket
+from app.cnc.problems import Rule, Severity
+from app.cnc.units import message_length, to_nm
+
+RULES = {
+    PocketIssue.OPEN_CONTOUR: Rule.POCKET_CONTOUR,
+    PocketIssue.DEGENERATE: Rule.POCKET_CONTOUR,
+    PocketIssue.SELF_INTERSECTING: Rule.POCKET_CONTOUR,
+    PocketIssue.ISLAND_OUTSIDE: Rule.POCKET_ISLAND,
+    PocketIssue.ISLAND_TOUCHES_WALL: Rule.POCKET_ISLAND,
+    PocketIssue.ISLANDS_OVERLAP: Rule.POCKET_ISLAND,
+    PocketIssue.TOOL_TOO_LARGE: Rule.POCKET_TOOL,
+    PocketIssue.NARROW: Rule.POCKET_NARROW,
+    PocketIssue.STEP_OVER: Rule.POCKET_STEP,
+}
+
+
+@dataclass(frozen=True)
+class Contour:
+    """One contour drawn by a POCKET's blocks: its name ("boundary", "island 2"), the
+    block that starts it (the DRILL or the ISLAND), its path (nm) and its last block."""
+
+    name: str
+    first: int
+    path: Path
+    last: int
+
+
+def pocket_contours(
+    geometry: tuple[tuple[int, Block], ...], start: tuple[int, int], pocket: int
+) -> list[Contour]:
+    """The boundary (from `start`, the DRILL's point) and the islands drawn by a POCKET's
+    contour blocks (`geometry`: block number and block, in order). `pocket` is the POCKET's
+    block number, the first block of the boundary when it has no contour blocks."""
+    contours: list[Contour] = []
+    name, first, origin = "boundary", pocket, start
+    elements: list[Element] = []
+    reference = start
+    last = pocket
+    pending: tuple[int, PocketArc, tuple[int, int]] | None = None
+
+    def close() -> None:
+        contours.append(Contour(name, first, Path(_f(origin), tuple(elements)), last))
+
+    for number, block in geometry:
+        if isinstance(block, Island):
+            close()
+            reference = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+            name, first, origin = f"island {len(contours)}", number, reference
+            elements, last = [], number
+        elif isinstance(block, PocketLine):
+            reference = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+            elements.append(Element(number, _f(reference)))
+            last = number
+        elif isinstance(block, PocketArc):
+            centre = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+            pending = (number, block, centre)
+        elif isinstance(block, PocketArcEnd) and pending is not None:
+            arc_number, arc, centre = pending
+            reference = resolve_xy(block.x, block.y, block.mode, block.units, reference)
+            elements.append(
+                Element(
+                    arc_number,
+                    _f(reference),
+                    centre=_f(centre),
+                    clockwise=arc.direction is Direction.CW,
+                )
+            )
+            pending, last = None, number
+    close()
+    return contours
+
+
+def contours_at(blocks: tuple[Block, ...], pocket: int, start: tuple[int, int]) -> list[Contour]:
+    """The contours of POCKET block `pocket` (1-based) of a program, its boundary starting
+    at `start` (its DRILL's point where the pocket is cut: a LOOP's pattern moves it)."""
+    geometry = []
+    for index in range(pocket, len(blocks)):
+        if REGISTRY.of(blocks[index]).mill is not Mill.GEOMETRY:
+            break
+        geometry.append((index + 1, blocks[index]))
+    return pocket_contours(tuple(geometry), start, pocket)
+
+
+def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
+    """The passes of a POCKET (one path per pass; `SequencePlan.pocket` holds the plan with
+    its links). Problems are in the plan, not raised; the reference after it is the
+    DRILL's point."""
+    assert isinstance(block, Pocket)
+    units = block.units
+    contours = pocket_contours(at.geometry, at.start, at.number)
+    findings: list[Finding] = []
+    if len(contours) - 1 > limits.MAX_ISLANDS:
+        findings.append(
+            Finding(
+                contours[limits.MAX_ISLANDS + 1].first,
+                Rule.POCKET_ISLAND,
+                Severity.ERROR,
+                f"a POCKET takes at most {limits.MAX_ISLANDS} islands; this one has "
+                f"{len(contours) - 1}",
+            )
+        )
+    if any(not c.path.elements for c in contours):
+        # A POCKET without its boundary, or an ISLAND without its contour: the order of
+        # the blocks is at fault, which validation reports (Rule.POCKET_ORDER).
+        return SequencePlan([], 0, at.start, findings)
+    if at.tool_radius == 0 or findings:
+        # No DIA: validation reports it on the TOOL # (check_tools).
+        return SequencePlan([], 0, at.start, findings)
+    diameter = 2 * at.tool_radius
+    if block.step_over is None:
+        step = diameter - pocket_overlap(units)
+    else:
+        step = to_nm(block.step_over, units)
+    if step <= 0 or step >= diameter:
+        findings.append(
+            Finding(
+                at.number,
+                Rule.POCKET_STEP,
+                Severity.ERROR,
+                f"the step-over {message_length(step, units)} must be more than 0 and less "
+                f"than the tool's DIA {message_length(diameter, units)}"
+                + (", less the 0.050 in overlap" if block.step_over is None else ""),
+                "STEP" if block.step_over is not None else "TOOL #",
+            )
+        )
+        return SequencePlan([], 0, at.start, findings)
+    finish = rough_wall(units) if block.finish is None else to_nm(block.finish, units)
+    plan = plan_pocket(
+        contours[0].path,
+        [c.path for c in contours[1:]],
+        tool_radius=at.tool_radius,
+        step_over=step,
+        finish_allowance=finish,
+        milling=at.block0.milling,
+        rpm=at.rpm,
+        block=at.number,
+        units=units,
+    )
+    findings += [_finding(f, contours, at.number) for f in plan.findings]
+    if plan.has_errors:
+        return SequencePlan([], 0, at.start, findings)
+    return SequencePlan([p.path for p in plan.passes], 0, at.start, findings, pocket=plan)
+
+
+def _finding(found: PocketFinding, contours: list[Contour], pocket: int) -> Finding:
+    """The engine's finding on the block it names (else the block that starts its contour:
+    the POCKET for the boundary, the ISLAND for an island; the POCKET for the tool and the
+    step-over), in block numbers rather than the engine's element numbers, with the rule
+    the bad-input corpus refers to."""
+    contour = next((c for c in contours if c.name == found.contour), None)
+    field: str | None = None
+    block = found.block or (pocket if contour is None else contour.first)
+    if found.issue in (PocketIssue.STEP_OVER, PocketIssue.TOOL_TOO_LARGE):
+        block, field = pocket, "STEP" if found.issue is PocketIssue.STEP_OVER else "TOOL #"
+    message = found.message
+    head, colon, rest = message.partition(": ")
+    if colon and found.contour and head.startswith(found.contour):
+        message = rest  # "boundary, element 3 (block 5): ..." — the block says where
+    message = re.sub(r"element \d+ \(block (\d+)\)", r"block \1", message)
+    if contour is not None:
+        elements = contour.path.elements
+        message = re.sub(
+            r"element (\d+)",
+            lambda m: (
+                f"block {elements[int(m[1]) - 1].block}" if 0 < int(m[1]) <= len(elements) else m[0]
+            ),
+            message,
+        )
+    return Finding(block, RULES[found.issue], found.severity, message, field)
+
+
+def _f(p: tuple[int, int]) -> tuple[float, float]:
+    return (float(p[0]), float(p[1]))

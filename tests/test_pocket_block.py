@@ -1,0 +1,372 @@
+"""The POCKET block kind (issue 22): a program's irregular pocket, cut as the tool path says.
+
+The pocket engine's own passes are measured in test_pocketing.py. Here the whole program
+is: the DRILL + POCKET + PKT LINE / PKT ARC / ISLAND blocks compile to moves, and those
+moves (what every target writes) are measured with shapely against the contours drawn by
+the blocks, walked here independently of the app's own reading of them.
+"""
+
+from __future__ import annotations
+
+from decimal import Decimal
+from pathlib import Path
+
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from shapely.geometry import LineString, Point, Polygon
+
+from app.cnc import document
+from app.cnc.blocks import (
+    Block,
+    DataBlock0,
+    Direction,
+    Hole,
+    HoleOp,
+    Island,
+    MillingMode,
+    Mode,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
+    PocketLine,
+    Program,
+    Rep,
+    Tool,
+)
+from app.cnc.emit.target import export
+from app.cnc.interpret import interpret
+from app.cnc.mill import Element
+from app.cnc.mill import Path as MillPath
+from app.cnc.problems import Severity
+from app.cnc.toolpath import ArcFeed, Feed, Rapid
+from app.cnc.units import Units, to_nm
+from app.cnc.validate import validate
+from app.web.forms import group_menu, parse_block, sub_menu
+from tests.test_pocketing import points_of
+
+GOLDEN = Path(__file__).parent / "golden"
+REACH_TOL = 25_400  # 0.001 in: uncut material a round tool could reach
+GOUGE_TOL = 2_540  # 0.0001 in: material cut from an island or beyond the wall
+D = Decimal
+
+
+# -- the contours as the blocks draw them (walked here, not by the app) --------------------
+
+
+def pockets_of(program: Program) -> list[tuple[Polygon, list[Polygon], int, int]]:
+    """For each POCKET (each LOOP pattern of one too): the boundary, the islands (shapely,
+    nm), the tool radius and Z DN (nm). ABS/INC: from the point before, as the manual's
+    blocks are; a REP repeats the patterns of its LOOP (one level, as in the goldens)."""
+    blocks = program.blocks
+    found: list[tuple[Polygon, list[Polygon], int, int]] = []
+    for index, block in enumerate(blocks):
+        if not isinstance(block, Pocket):
+            continue
+        drill = blocks[index - 1]
+        assert isinstance(drill, Hole) and drill.z_dn is not None
+        tool = program.block0.tool(drill.tool)
+        assert tool is not None and tool.diameter is not None
+        radius = to_nm(tool.diameter, program.units) // 2
+        offsets = [(0, 0)]
+        rep = next((b for b in blocks[index:] if isinstance(b, Rep)), None)
+        if drill.loop and rep is not None:
+            step = (to_nm(rep.x, rep.units), to_nm(rep.y, rep.units))
+            offsets = [
+                (i * step[0], j * step[1]) for j in range(rep.ny + 1) for i in range(rep.nx + 1)
+            ]
+        before = _point_before(blocks, index - 1)
+        for dx, dy in offsets:
+            start = _resolve(drill, (before[0] + dx, before[1] + dy))
+            contours = _contours(blocks, index + 1, start)
+            outline = [Polygon(points_of(c)) for c in contours]
+            found.append((outline[0], outline[1:], radius, to_nm(drill.z_dn, drill.units)))
+    return found
+
+
+def _resolve(block: Block, reference: tuple[int, int]) -> tuple[int, int]:
+    x = to_nm(getattr(block, "x"), block.units)  # noqa: B009
+    y = to_nm(getattr(block, "y"), block.units)  # noqa: B009
+    if block.mode is Mode.INC:
+        return (reference[0] + x, reference[1] + y)
+    return (x, y)
+
+
+def _point_before(blocks: tuple[Block, ...], index: int) -> tuple[int, int]:
+    """The table's point before block `index` (the goldens have a POS or nothing there)."""
+    point = (0, 0)
+    for block in blocks[:index]:
+        if hasattr(block, "x") and not isinstance(block, Rep | PocketArc):
+            point = _resolve(block, point)
+    return point
+
+
+def _contours(blocks: tuple[Block, ...], first: int, start: tuple[int, int]) -> list[MillPath]:
+    contours: list[MillPath] = []
+    origin, at = start, start
+    elements: list[Element] = []
+    k = first
+    while k < len(blocks):
+        block = blocks[k]
+        if isinstance(block, Island):
+            contours.append(MillPath(origin, tuple(elements)))
+            origin = at = _resolve(block, at)
+            elements = []
+        elif isinstance(block, PocketLine):
+            at = _resolve(block, at)
+            elements.append(Element(k + 1, at))
+        elif isinstance(block, PocketArc):
+            centre = _resolve(block, at)
+            end_block = blocks[k + 1]
+            assert isinstance(end_block, PocketArcEnd)
+            at = _resolve(end_block, at)
+            elements.append(
+                Element(k + 1, at, centre=centre, clockwise=block.direction is Direction.CW)
+            )
+            k += 1
+        else:
+            break
+        k += 1
+    contours.append(MillPath(origin, tuple(elements)))
+    return contours
+
+
+# -- what the moves cut ---------------------------------------------------------------------
+
+
+def cut_below(program: Program, z_limit: int, radius: int) -> shapely.Geometry:
+    """The tool swept along every feed and arc that ends at or below `z_limit` (nm), one
+    move at a time; the rapids are checked apart (test_rapids_only_where_cleared)."""
+    pieces = []
+    at = (0.0, 0.0, 0.0)
+    for move in interpret(program).moves:
+        if isinstance(move, Feed | ArcFeed | Rapid):
+            end = (float(move.x), float(move.y), float(move.z))
+            if isinstance(move, Feed) and end[2] <= z_limit and at[2] <= z_limit + 1:
+                pieces.append(LineString([at[:2], end[:2]]).buffer(radius, quad_segs=128))
+                pieces.append(Point(end[:2]).buffer(radius, quad_segs=128))
+            elif isinstance(move, ArcFeed) and end[2] <= z_limit:
+                arc = MillPath(
+                    at[:2],
+                    (Element(0, end[:2], centre=(move.cx, move.cy), clockwise=move.clockwise),),
+                )
+                pieces.append(LineString(points_of(arc)).buffer(radius, quad_segs=128))
+            at = end
+    return shapely.union_all(pieces)
+
+
+def measure(program: Program) -> list[tuple[float, float]]:
+    """Per pocket: (reachable area left uncut beyond 0.001 in, area cut beyond 0.0001 in
+    outside the pocket), nm², by the moves at Z DN and by every cutting move."""
+    results = []
+    for boundary, islands, radius, z_dn in pockets_of(program):
+        region = boundary
+        for island in islands:
+            region = region.difference(island)
+        reachable = region.buffer(-radius, quad_segs=128).buffer(radius, quad_segs=128)
+        at_depth = cut_below(program, z_dn, radius)
+        uncut = reachable.difference(at_depth.buffer(REACH_TOL, quad_segs=64))
+        # Any move below the top of the part (Z UP is above it in the goldens): the walls
+        # and islands must not be cut at any peck level either.
+        anywhere = cut_below(program, 0, radius)
+        near = anywhere.intersection(boundary.buffer(radius * 4))
+        gouge = near.difference(region.buffer(GOUGE_TOL, quad_segs=128))
+        results.append((uncut.area, gouge.area))
+    return results
+
+
+def load(name: str) -> Program:
+    return document.loads((GOLDEN / name / "program.json").read_text(encoding="utf-8"))
+
+
+POCKET_GOLDENS = ("pocket-islands", "pocket-mm", "pocket-loop")
+
+
+@pytest.mark.parametrize("name", POCKET_GOLDENS)
+def test_the_moves_clear_the_pocket_and_cut_nothing_else(name: str) -> None:
+    """The union of the swept tool at Z DN leaves nothing a round tool could reach, and no
+    cutting move touches an island or goes past the wall. pocket-islands' round island
+    failed before: its finish pass, one full circle, was left out (its rounded end is its
+    start, and the compiler took it for an arc of no length)."""
+    program = load(name)
+    assert not [p for p in validate(program) if p.severity is Severity.ERROR]
+    for uncut, gouge in measure(program):
+        assert uncut < 1e4, f"uncut material: {uncut / 25.4e6**2:.3g} in²"
+        assert gouge < 1e4, f"cut outside the pocket: {gouge / 25.4e6**2:.3g} in²"
+
+
+@pytest.mark.parametrize("name", POCKET_GOLDENS)
+def test_rapids_only_where_cleared(name: str) -> None:
+    """The tool rapids across only above Z UP, and rapids down only straight (XY still) to
+    a level already cut at that point or above the part."""
+    program = load(name)
+    z_up = min(b.z_up for b in program.blocks if isinstance(b, Hole) and b.z_up is not None)
+    z_up_nm = to_nm(z_up, program.units)
+    at = (0, 0, 10**12)
+    deepest: dict[tuple[int, int], int] = {}
+    for move in interpret(program).moves:
+        if not isinstance(move, Rapid | Feed | ArcFeed):
+            continue
+        end = (move.x, move.y, move.z)
+        if isinstance(move, Rapid) and end[2] < z_up_nm:
+            assert end[:2] == at[:2], f"rapid across at Z {end[2]} nm, below Z UP: {move}"
+            assert end[2] >= deepest.get(end[:2], z_up_nm), f"rapid into uncut material: {move}"
+        if not isinstance(move, Rapid):
+            deepest[end[:2]] = min(deepest.get(end[:2], end[2]), end[2])
+        at = end
+
+
+def test_same_program_same_bytes_on_every_target() -> None:
+    program = load("pocket-islands")
+    for target in ("gcode-linuxcnc", "tape-eia", "events", "svg"):
+        assert export(program, target).data == export(program, target).data
+
+
+# -- generated programs ---------------------------------------------------------------------
+
+
+@st.composite
+def pocket_programs(draw: st.DrawFn) -> Program:
+    """A DRILL + POCKET: a rectangle (inch or mm) with a round end or not, 0-2 square or
+    round islands, a tool and a step-over that fit, pecks, climb or conventional, either
+    spindle direction, and ABS or INC contour blocks."""
+    units = draw(st.sampled_from([Units.INCH, Units.MM]))
+    scale = D(1) if units is Units.INCH else D("25.4")
+    places = D("0.001") if units is Units.INCH else D("0.01")
+
+    def q(inches: float) -> Decimal:
+        return (D(str(inches)) * scale).quantize(places)
+
+    width = draw(st.floats(2.0, 4.0))
+    height = draw(st.floats(1.5, 2.5))
+    x0, y0 = q(draw(st.floats(-2.0, 2.0))), q(draw(st.floats(-2.0, 2.0)))
+    w, h = q(width), 2 * q(height / 2)  # the round end's centre on the resolution
+    inc = draw(st.booleans())
+    mode = Mode.INC if inc else Mode.ABS
+
+    def line(x: Decimal, y: Decimal, px: Decimal, py: Decimal) -> PocketLine:
+        return PocketLine(units=units, mode=mode, x=x - px if inc else x, y=y - py if inc else y)
+
+    corners = [(x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h), (x0, y0)]
+    contour: list[Block] = []
+    previous = (x0, y0)
+    round_end = draw(st.booleans())
+    for k, (x, y) in enumerate(corners):
+        if round_end and k == 1:
+            cy = y0 + h / 2
+            cx = x0 + w
+            centre = (cx - previous[0], cy - previous[1]) if inc else (cx, cy)
+            contour.append(
+                PocketArc(units=units, mode=mode, direction=Direction.CCW, x=centre[0], y=centre[1])
+            )
+            end = (x - previous[0], y - previous[1]) if inc else (x, y)
+            contour.append(PocketArcEnd(units=units, mode=mode, x=end[0], y=end[1]))
+        else:
+            contour.append(line(x, y, *previous))
+        previous = (x, y)
+    islands = draw(st.integers(0, 2))
+    for j in range(islands):
+        size = q(0.4)
+        ix = x0 + q(0.5) + j * (w - q(1.4)) / max(islands, 1)
+        ix = ix.quantize(places)
+        iy = (y0 + h / 2 - size / 2).quantize(places)
+        start = (ix, iy)
+        contour.append(
+            Island(
+                units=units,
+                mode=mode,
+                x=ix - previous[0] if inc else ix,
+                y=iy - previous[1] if inc else iy,
+            )
+        )
+        previous = start
+        if draw(st.booleans()):
+            centre = (ix, iy + size / 2)
+            rel = (centre[0] - ix, centre[1] - iy) if inc else centre
+            contour.append(
+                PocketArc(units=units, mode=mode, direction=Direction.CW, x=rel[0], y=rel[1])
+            )
+            contour.append(
+                PocketArcEnd(units=units, mode=mode, x=D(0) if inc else ix, y=D(0) if inc else iy)
+            )
+        else:
+            for x, y in [(ix + size, iy), (ix + size, iy + size), (ix, iy + size), (ix, iy)]:
+                contour.append(line(x, y, *previous))
+                previous = (x, y)
+        previous = start
+    diameter = q(draw(st.sampled_from([0.125, 0.25, 0.375])))
+    step = draw(st.sampled_from([None, 0.5, 0.8]))  # of the DIA; None: DIA less 0.050 in
+    tool = Tool(
+        number=3,
+        diameter=diameter,
+        rpm=draw(st.sampled_from([1200, -900])),
+        tcal=D(0),
+    )
+    pecks = draw(st.integers(1, 3))
+    drill = Hole(
+        op=HoleOp.DRILL,
+        units=units,
+        x=x0,
+        y=y0,
+        z_up=q(0.1),
+        z_dn=-q(draw(st.sampled_from([0.1, 0.25]))),
+        feed_z=q(4) if units is Units.INCH else D(100),
+        pecks=pecks,
+        tool=3,
+    )
+    pocket = Pocket(
+        units=units,
+        step_over=None if step is None else (diameter * D(str(step))).quantize(places),
+        finish=draw(st.sampled_from([None, D(0), q(0.005)])),
+        feed_xy=q(10) if units is Units.INCH else D(250),
+        tool=3,
+    )
+    block0 = DataBlock0(
+        current_tool=3,
+        milling=draw(st.sampled_from(list(MillingMode))),
+        tools=(tool,),
+    )
+    return Program(name="generated", units=units, block0=block0, blocks=(drill, pocket, *contour))
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(pocket_programs())
+def test_generated_pocket_programs_clear_and_do_not_gouge(program: Program) -> None:
+    """Programs nobody wrote by hand: every one validates, compiles to moves that clear the
+    pocket and cut nothing else, and exports alike twice."""
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert errors == []
+    for uncut, gouge in measure(program):
+        assert uncut < 1e4, f"uncut material: {uncut:.3g} nm²"
+        assert gouge < 1e4, f"cut outside the pocket: {gouge:.3g} nm²"
+    assert export(program, "gcode-linuxcnc").data == export(program, "gcode-linuxcnc").data
+
+
+# -- the editor's forms ----------------------------------------------------------------------
+
+
+def test_the_pocket_menu_is_key_0_and_its_blocks_are_offered_in_order() -> None:
+    drill = Hole(op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.2"), tool=1)
+    program = Program(name="p", blocks=(drill,))
+    first = group_menu(program, 2)
+    assert [(c.number % 10, c.key, c.reason) for c in first if c.key == "POCKET"] == [
+        (0, "POCKET", "")
+    ]
+    offered = {c.key: c.reason for c in sub_menu(program, 2, "POCKET")}
+    assert offered["POCKET"] == ""
+    assert offered["PKT_LINE"] == "follows a POCKET block or another of its contour blocks"
+    after_pocket = Program(name="p", blocks=(drill, Pocket(feed_xy=D(10), tool=1)))
+    offered = {c.key: c.reason for c in sub_menu(after_pocket, 3, "POCKET")}
+    assert offered["PKT_LINE"] == offered["PKT_ARC_CC"] == offered["ISLAND"] == ""
+    assert offered["POCKET"].startswith("follows the DRILL")
+
+
+def test_a_pkt_arc_form_makes_its_xy_cent_and_xy_end_blocks() -> None:
+    parsed = parse_block(
+        "PKT_ARC_CC", {"x": "4", "y": "1", "end_x": "4", "end_y": "2", "stop": "on"}
+    )
+    assert tuple(parsed.blocks) == (
+        PocketArc(direction=Direction.CCW, x=D(4), y=D(1)),
+        PocketArcEnd(x=D(4), y=D(2), stop=True),
+    )

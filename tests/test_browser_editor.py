@@ -29,6 +29,7 @@ from app.cnc.blocks import (
     MillArc,
     MillLine,
     Mode,
+    PocketArcEnd,
     Pos,
     Program,
     Tool,
@@ -396,6 +397,62 @@ def test_the_trial_part_from_the_keyboard_in_fewer_keys_than_the_control(
     SHOTS.mkdir(parents=True, exist_ok=True)
     (SHOTS / "trial-keystrokes.txt").write_text(f"ours {keys.count}, the control's {control}\n")
     assert keys.count <= control, (keys.count, control)
+
+
+# -- the irregular pocket (issue 22) -----------------------------------------------------------
+
+
+def test_a_pocket_with_an_island_entered_from_the_keyboard(page: Page, served: Served) -> None:
+    """POCKET is key 0 on the first menu. A DRILL gives the boundary's start and the depths;
+    the POCKET, its PKT LINE / PKT ARC boundary back to that point and an ISLAND with its
+    lines are entered at the prompts; the drawing shows the wall, the island and the passes,
+    and the time counts the pocket."""
+    program_id = open_editor(page, served, program_of())
+    def entered(number: int) -> None:
+        expect(page.locator("#entry h2")).to_contain_text(f"Block {number + 1}: type")
+        settle(page)
+
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 1: DRILL")
+    enter(page, "0", "0", ".1", "-.25", "5", "2", "1")
+    entered(1)
+    choose(page, "0", "POCKET")
+    expect(page.locator('#entry .choice[data-key="2"]')).to_have_class(re.compile("unavailable"))
+    choose(page, "1", "Block 2: POCKET")
+    enter(page, "", "", "12", "1")  # STEP and FIN CUT as the routines do; FEEDR XY, TOOL #
+    entered(2)
+    count = 2
+
+    def pocket_block(key: str, heading: str, *values: str) -> None:
+        nonlocal count
+        choose(page, "0", "POCKET")
+        choose(page, key, heading)
+        enter(page, *values)
+        count += 2 if key == "4" else 1  # an arc is its XY-CENT and XY-END blocks
+        entered(count)
+
+    pocket_block("2", "PKT LINE", "3", "0")
+    pocket_block("4", "PKT ARC CC", "3", "1", "3", "2")  # centre, then its XY-END
+    pocket_block("2", "PKT LINE", "0", "2")
+    pocket_block("2", "PKT LINE", "0", "0")
+    pocket_block("5", "ISLAND", "1", ".75")
+    for x, y in (("1.5", ".75"), ("1.5", "1.25"), ("1", "1.25"), ("1", ".75")):
+        pocket_block("2", "PKT LINE", x, y)
+    expect(page.locator('.block-row[data-block="12"]')).to_be_visible()
+    blocks = saved_blocks(served, program_id)
+    assert [kind_of(b) for b in blocks] == [
+        "DRILL", "POCKET", "PKT_LINE", "PKT_ARC_CC", "PKT_ARC_END", "PKT_LINE", "PKT_LINE",
+        "ISLAND", "PKT_LINE", "PKT_LINE", "PKT_LINE", "PKT_LINE",
+    ]  # fmt: skip
+    assert blocks[4] == PocketArcEnd(x=D(3), y=D(2))
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    drawing = page.locator("#preview")
+    for number in (3, 4, 9, 12):  # the wall's and the island's blocks are drawn
+        expect(drawing.locator(f'g.block[data-block="{number}"] path.contour')).to_be_attached()
+    expect(drawing.locator('g.block[data-block="2"] path.feed').first).to_be_attached()
+    expect(page.locator('.block-row[data-block="2"] .time')).not_to_have_text("")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "pocket-entered.png"))
 
 
 # -- any screen (issue 20 item 5) ------------------------------------------------------------

@@ -8,6 +8,7 @@ the blocks, walked here independently of the app's own reading of them.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
 
@@ -40,6 +41,7 @@ from app.cnc.interpret import interpret
 from app.cnc.mill import Element
 from app.cnc.mill import Path as MillPath
 from app.cnc.problems import Severity
+from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
@@ -370,3 +372,24 @@ def test_a_pkt_arc_form_makes_its_xy_cent_and_xy_end_blocks() -> None:
         PocketArc(direction=Direction.CCW, x=D(4), y=D(1)),
         PocketArcEnd(x=D(4), y=D(2), stop=True),
     )
+
+
+# -- verify ----------------------------------------------------------------------------------
+
+
+def test_verify_checks_the_walls_and_islands_and_names_a_cut_into_an_island() -> None:
+    """The simulated part of each golden pocket has no gouge; a DRILL later put into island
+    1 is named as cutting into the island's finished surface (its block in the island)."""
+    program = load("pocket-islands")
+    clean = verify(program)
+    assert clean.checked["contours"] == 3  # the wall and both islands
+    assert [f.kind for f in clean.findings] == []
+    drill = Hole(
+        op=HoleOp.DRILL, x=D("1.3"), y=D(1), z_up=D("0.1"), z_dn=D("-0.2"), feed_z=D(5), tool=2
+    )
+    spoiled = verify(replace(program, blocks=(*program.blocks, drill)))
+    gouges = [(f.block, f.kind) for f in spoiled.findings]
+    assert gouges == [(len(program.blocks) + 1, "gouge")]
+    island_blocks = range(8, 14)  # ISLAND at block 8, its four PKT LINEs after it
+    message = spoiled.findings[0].message
+    assert any(f"finished contour of block {n} " in message for n in island_blocks), message

@@ -1,7 +1,8 @@
 """What the program asks for, for verify to measure the simulated part against.
 
 `programmed_geometry` is the one place that reads the blocks for verify: the finished
-contours of compensated MILL sequences and the CIRCLE/FRAME routines, and every hole with
+contours of compensated MILL sequences and of POCKETs (walls and islands), the CIRCLE/FRAME
+routines, and every hole with
 its programmed depth. All of it is the compiled path's: its hole and mill spans carry where
 each was cut and the contour it was planned from (LOOP patterns, bolt circles and
 incremental positions are the compiler's, not re-derived here). Lengths in nm, part
@@ -12,9 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Program
+from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Pocket, Program
 from app.cnc.compiler import compile_program
-from app.cnc.mill import INSIDE_PLACEMENTS, Element
+from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
+from app.cnc.pocketing.routine import contours_at
 from app.cnc.units import to_nm
 
 
@@ -111,6 +113,23 @@ def programmed_geometry(program: Program) -> Programmed:
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
+            if mill.routine and isinstance(program.blocks[mill.routine - 1], Pocket):
+                # A POCKET's walls and islands are finished surfaces, as a compensated
+                # contour's: the part outside the boundary and inside each island.
+                for drawn in contours_at(program.blocks, mill.routine, (mill.x, mill.y)):
+                    inside_left = signed_area(drawn.path) > 0  # counter-clockwise
+                    island = drawn.name != "boundary"
+                    found.contours.append(
+                        Contour(
+                            drill=mill.drill,
+                            start=drawn.path.start,
+                            elements=drawn.path.elements,
+                            part_left=inside_left if island else not inside_left,
+                            tool_radius=radius,
+                            depth=mill.depth,
+                        )
+                    )
+                continue
             if mill.routine:
                 routine = program.blocks[mill.routine - 1]
                 assert isinstance(routine, Circle | Frame)

@@ -408,6 +408,7 @@ def test_a_pocket_with_an_island_entered_from_the_keyboard(page: Page, served: S
     lines are entered at the prompts; the drawing shows the wall, the island and the passes,
     and the time counts the pocket."""
     program_id = open_editor(page, served, program_of())
+
     def entered(number: int) -> None:
         expect(page.locator("#entry h2")).to_contain_text(f"Block {number + 1}: type")
         settle(page)

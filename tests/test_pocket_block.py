@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 import shapely
+import shapely.affinity
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
@@ -40,6 +41,7 @@ from app.cnc.emit.target import export
 from app.cnc.interpret import interpret
 from app.cnc.mill import Element
 from app.cnc.mill import Path as MillPath
+from app.cnc.mirror import Axis, mirror
 from app.cnc.problems import Severity
 from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
@@ -393,3 +395,29 @@ def test_verify_checks_the_walls_and_islands_and_names_a_cut_into_an_island() ->
     island_blocks = range(8, 14)  # ISLAND at block 8, its four PKT LINEs after it
     message = spoiled.findings[0].message
     assert any(f"finished contour of block {n} " in message for n in island_blocks), message
+
+
+# -- mirror -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("axis", [Axis.X, Axis.Y, Axis.XY])
+def test_a_mirrored_pocket_is_the_mirror_image(axis: Axis) -> None:
+    """The mirrored program's pocket is the original's reflected (an arc's direction turns
+    under a one-axis mirror), and its moves clear it without touching wall or island.
+    Failed before for X and Y: the arcs kept their direction, so the round end bulged
+    the other way."""
+    program = load("pocket-islands")
+    mirrored = mirror(program, axis).program
+    assert not [p for p in validate(mirrored) if p.severity is Severity.ERROR]
+    sx = -1 if axis in (Axis.X, Axis.XY) else 1
+    sy = -1 if axis in (Axis.Y, Axis.XY) else 1
+    for (wall, islands, _, _), (m_wall, m_islands, _, _) in zip(
+        pockets_of(program), pockets_of(mirrored), strict=True
+    ):
+        reflected = shapely.affinity.scale(wall, sx, sy, origin=(0, 0))
+        assert reflected.symmetric_difference(m_wall).area < 1e6
+        for island, m_island in zip(islands, m_islands, strict=True):
+            island = shapely.affinity.scale(island, sx, sy, origin=(0, 0))
+            assert island.symmetric_difference(m_island).area < 1e6
+    for uncut, gouge in measure(mirrored):
+        assert uncut < 1e4 and gouge < 1e4

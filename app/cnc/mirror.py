@@ -4,8 +4,9 @@ Reflection about part zero in X (x → −x), in Y (y → −y), or both (a half
 does this with switches (seed 000 Fig. 3-9), which reverses every cut: climb milling
 becomes conventional. Here each cut keeps its milling direction instead: under a
 one-axis mirror every contour is run backwards (which also keeps the cutter compensation
-side), arcs keep their direction, and CIRCLE/FRAME routines keep climb or conventional
-because the control derives their direction from Data Block 0. Under a two-axis mirror
+side), arcs keep their direction, and CIRCLE/FRAME routines and POCKETs keep climb or
+conventional because the control derives their direction from Data Block 0 (a POCKET's
+contour is a shape: reflected as it stands, its arcs turn the other way). Under a two-axis mirror
 (a rotation) nothing needs reversing.
 
 Positions are rewritten in absolute form outside LOOPs and as increments inside them, so
@@ -26,11 +27,13 @@ from app.cnc.blocks import (
     ArcEnd,
     Block,
     BoltCircle,
+    Direction,
     Hole,
     MillArc,
     MillLine,
     MillQcir,
     Mode,
+    PocketArc,
     Program,
     Rep,
 )
@@ -88,6 +91,11 @@ def mirror(program: Program, axis: Axis) -> Mirrored:
                 )
             index = end
             continue
+        if isinstance(block, PocketArc) and reverse:
+            # A POCKET's contour is a shape, not a cut: it is reflected as it stands, so its
+            # arcs turn the other way (the passes keep climb or conventional by themselves).
+            turned = Direction.CCW if block.direction is Direction.CW else Direction.CW
+            block = dataclasses.replace(block, direction=turned)
         plan.append(_single(block, index, targets, m, sx, sy, blocks))
         index += 1
     new_blocks = _encode(plan, program.units)

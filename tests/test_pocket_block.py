@@ -421,3 +421,27 @@ def test_a_mirrored_pocket_is_the_mirror_image(axis: Axis) -> None:
             assert island.symmetric_difference(m_island).area < 1e6
     for uncut, gouge in measure(mirrored):
         assert uncut < 1e4 and gouge < 1e4
+
+
+def test_an_arc_end_typed_to_the_resolution_is_on_the_arc() -> None:
+    """A 45° arc of radius 2 ends at (1.41421…, 1.41421…); typed to 0.001 in it is
+    (1.414, 1.414), 0.0003 in inside the radius. That is typing, not a mistake: the pocket
+    is cut (round the arc through both typed ends), as a MILL ARC would be. Failed before:
+    "the arc's radius is 2.0000 in at its start and 1.9997 in at its end; they may differ by
+    0.0001 in at most"."""
+    drill = Hole(
+        op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.1"), feed_z=D(5), tool=1
+    )
+    blocks = (
+        drill,
+        Pocket(feed_xy=D(10), tool=1),
+        PocketLine(x=D(2), y=D(0)),
+        PocketArc(direction=Direction.CCW, x=D(0), y=D(0)),
+        PocketArcEnd(x=D("1.414"), y=D("1.414")),
+        PocketLine(x=D(0), y=D(0)),
+    )
+    tools = (Tool(number=1, diameter=D("0.25"), rpm=1500, tcal=D(0)),)
+    program = Program(name="sector", block0=DataBlock0(current_tool=1, tools=tools), blocks=blocks)
+    assert [str(p) for p in validate(program) if p.severity is Severity.ERROR] == []
+    for uncut, gouge in measure(program):
+        assert uncut < 1e4 and gouge < 1e4

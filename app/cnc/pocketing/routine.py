@@ -10,6 +10,7 @@ from the arc's start, an ISLAND's start from the point the contour before it clo
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -23,13 +24,14 @@ from app.cnc.mill import (
     Path,
     RoutineStart,
     SequencePlan,
+    half_step,
     pocket_overlap,
     rough_wall,
 )
 from app.cnc.pocketing.model import PocketFinding, PocketIssue
 from app.cnc.pocketing.plan import plan_pocket
 from app.cnc.problems import Rule, Severity
-from app.cnc.units import message_length, to_nm
+from app.cnc.units import Units, message_length, to_nm
 
 RULES = {
     PocketIssue.OPEN_CONTOUR: Rule.POCKET_CONTOUR,
@@ -86,18 +88,63 @@ def pocket_contours(
             pending = (number, block, centre)
         elif isinstance(block, PocketArcEnd) and pending is not None:
             arc_number, arc, centre = pending
+            begin = reference
             reference = resolve_xy(block.x, block.y, block.mode, block.units, reference)
             elements.append(
                 Element(
                     arc_number,
                     _f(reference),
-                    centre=_f(centre),
+                    centre=_typed_centre(begin, reference, centre, half_step(block.units)),
                     clockwise=arc.direction is Direction.CW,
                 )
             )
             pending, last = None, number
     close()
     return contours
+
+
+def _typed_centre(
+    start: tuple[int, int], end: tuple[int, int], centre: tuple[int, int], tolerance: float
+) -> tuple[float, float]:
+    """The centre of the arc the machinist meant: an end typed within half the programming
+    resolution of the start's radius (0.001 in cannot place it better) is on the arc, and
+    the centre moves onto the line of points as far from both ends (by at most that much);
+    farther off, the centre as typed, and the arc is refused (`arc_findings`)."""
+    r_start, r_end = math.dist(start, centre), math.dist(end, centre)
+    if r_start == r_end or abs(r_start - r_end) > tolerance or start == end:
+        return _f(centre)
+    # The foot of the perpendicular from the typed centre to the bisector of start-end.
+    mx, my = (start[0] + end[0]) / 2, (start[1] + end[1]) / 2
+    dx, dy = end[0] - start[0], end[1] - start[1]
+    along = ((centre[0] - mx) * dx + (centre[1] - my) * dy) / (dx * dx + dy * dy)
+    return (centre[0] - along * dx, centre[1] - along * dy)
+
+
+def arc_findings(contours: list[Contour], units: Units) -> list[Finding]:
+    """An arc whose XY-END is off the radius of its start by more than half the programming
+    resolution: the control would cut a divot (MILL ARC); a pocket's wall cannot have one."""
+    found: list[Finding] = []
+    for contour in contours:
+        at = contour.path.start
+        for element in contour.path.elements:
+            if element.centre is not None:
+                r_start = math.dist(at, element.centre)
+                r_end = math.dist(element.end, element.centre)
+                if abs(r_start - r_end) > half_step(units):
+                    found.append(
+                        Finding(
+                            element.block + 1,
+                            Rule.POCKET_CONTOUR,
+                            Severity.ERROR,
+                            f"the arc's end is {message_length(round(abs(r_start - r_end)), units)}"
+                            f" off its radius: start to centre "
+                            f"{message_length(round(r_start), units)}, centre to end "
+                            f"{message_length(round(r_end), units)}; the end must lie on the "
+                            "circle through the start (within half the programming resolution)",
+                        )
+                    )
+            at = element.end
+    return found
 
 
 def contours_at(blocks: tuple[Block, ...], pocket: int, start: tuple[int, int]) -> list[Contour]:
@@ -133,6 +180,7 @@ def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
         # A POCKET without its boundary, or an ISLAND without its contour: the order of
         # the blocks is at fault, which validation reports (Rule.POCKET_ORDER).
         return SequencePlan([], 0, at.start, findings)
+    findings += arc_findings(contours, units)
     if at.tool_radius == 0 or findings:
         # No DIA: validation reports it on the TOOL # (check_tools).
         return SequencePlan([], 0, at.start, findings)

@@ -65,3 +65,48 @@ def test_choose_a_profile_and_holes_from_a_drawing(page: Page, server: str, tmp_
     expect(page.locator('.block-row[data-block="1"]')).to_contain_text("DRILL CUT RT")
     expect(page.locator('.block-row[data-block="11"]')).to_contain_text("DRILL")
     shot(page, "drawings-3-in-the-editor")
+
+
+def test_choose_a_pocket_with_islands_from_a_drawing(
+    page: Page,  # noqa: F811 - the fixture
+    server: str,  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    """Click the profile, make it a POCKET and the bore and the slot its islands; the blocks
+    and their contours are shown; added to a new program, the editor draws the pocket."""
+    drawing = tmp_path / "bracket.dxf"
+    drawing.write_bytes(bracket())
+    page.goto(server + "/")
+    card = page.locator("form.card", has_text="From a drawing (DXF)")
+    card.locator('input[type="file"]').set_input_files(str(drawing))
+    card.locator('input[name="hole-diameter"]').fill("0.25")
+    card.get_by_role("button", name="Open and choose contours").click()
+    expect(page.locator("#dxf-view svg")).to_be_visible()
+    profile = page.locator("#dxf-view g.contour").filter(
+        has=page.locator('.segment[data-segment="7"]')
+    )
+    profile.locator('.segment[data-segment="0"]').click(force=True)
+    number = profile.get_attribute("data-contour")
+    expect(page.locator("#result h2")).to_have_text("9 blocks")
+    page.locator(f'select[name="c{number}_pocket"]').select_option("pocket")
+    expect(page.locator("#result ol.blocks li").nth(1)).to_contain_text("POCKET")
+    others = [
+        row.get_attribute("data-contour")
+        for row in page.locator("tr.contour-row").all()
+        if row.get_attribute("data-contour") != number
+    ]
+    for other in others:
+        page.locator(f'select[name="c{other}_pocket"]').select_option("island")
+    expect(page.locator("#result h2")).to_have_text("25 blocks")
+    expect(page.locator("#result ol.blocks li", has_text="ISLAND")).to_have_count(2)
+    # The drawing has no tool diameter: the pocket's contours are drawn, and the tool's
+    # DIA is asked for before it can be cut.
+    expect(page.locator("#result .chosen-preview svg path.contour").first).to_be_attached()
+    expect(page.locator("#result ul.problems")).to_contain_text("has no DIA")
+    shot(page, "drawings-4-pocket-chosen")
+    page.locator('input[name="name"]').fill("Bracket pocket")
+    page.get_by_role("button", name="Add the blocks").click()
+    expect(page).to_have_url(re.compile(r"/programs/\d+\?edit=1$"))
+    expect(page.locator('.block-row[data-block="2"]')).to_contain_text("POCKET")
+    expect(page.locator('.block-row[data-block="14"]')).to_contain_text("ISLAND")
+    shot(page, "drawings-5-pocket-in-the-editor")

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
 
@@ -28,20 +29,23 @@ import pytest
 from flask import Flask
 from flask.testing import FlaskClient
 
-from app.cnc.blocks import BoltCircle, Comp, Hole, HoleOp, Mode, Pos, Program
+from app.cnc.blocks import BoltCircle, Comp, Hole, HoleOp, Mode, Pos, Program, Tool
 from app.cnc.formats.dxf.choice import (
     ChoiceError,
     ContourChoice,
     HoleChoice,
     PlacementError,
+    PocketChoice,
     chosen_blocks,
     insert_blocks,
 )
 from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
+from app.cnc.problems import Severity
 from app.cnc.validate import validate
 from app.web.extensions import get_library
 from tests.hostile_corpus import HOSTILE_NUMBERS, UPLOADS
 from tests.test_import_dxf import bracket, bulge_part
+from tests.test_pocket_block import measure
 from tests.web_support import csrf, dispose, local_app
 
 
@@ -103,6 +107,57 @@ def test_choices_that_name_nothing_are_refused_naming_why() -> None:
     for choices, message in cases:
         with pytest.raises(ChoiceError) as refused:
             chosen_blocks(drawing, choices)
+        assert message in str(refused.value)
+
+
+def _bore_and_slot(drawing: Drawing) -> tuple[int, int]:
+    """The bracket's bore (a circle: one segment) and slot (two lines, two arcs)."""
+    bore = next(k for k, c in enumerate(drawing.contours) if len(c.segments) == 1)
+    slot = next(k for k, c in enumerate(drawing.contours) if len(c.segments) == 4)
+    return bore, slot
+
+
+def test_a_pocket_chosen_from_a_drawing_clears_round_its_islands() -> None:
+    """The profile chosen as a POCKET with the bore and the slot as islands: DRILL at the
+    start, POCKET, the profile's PKT blocks, then each ISLAND with its own; the pocket,
+    given depths and a tool, cuts nothing of the bore or the slot (measured with shapely)."""
+    drawing = _bracket()
+    profile = _profile(drawing)
+    bore, slot = _bore_and_slot(drawing)
+    chosen = chosen_blocks(drawing, [PocketChoice(profile, (bore, slot), start=0, tool=2)])
+    titles = [b.title for b in chosen.blocks]
+    assert titles[:2] == ["DRILL", "POCKET"]
+    assert titles.count("ISLAND") == 2
+    assert titles.count("PKT LINE") == 5 + 2  # the profile's lines and the slot's
+    assert titles.count("PKT ARC XY-END") == 3 + 2 + 2  # corners, the bore's halves, the slot
+    text = "\n".join(f"{n.where}: {n.kind.value}: {n.message}" for n in chosen.report)
+    assert "POCKET" in text and "a contour not chosen" not in text
+    program = chosen.program("bracket", drawing.units)
+    tools = (Tool(number=2, diameter=Decimal("0.25"), rpm=1500, tcal=Decimal(0)),)
+    drill = replace(program.blocks[0], z_up=Decimal("0.1"), z_dn=Decimal("-0.2"), feed_z=Decimal(5))
+    ready = replace(
+        program,
+        block0=replace(program.block0, tools=tools, current_tool=2),
+        blocks=(drill, *program.blocks[1:]),
+    )
+    assert [str(p) for p in validate(ready) if p.severity is Severity.ERROR] == []
+    for uncut, gouge in measure(ready):
+        assert uncut < 1e4 and gouge < 1e4
+
+
+def test_pocket_choices_that_cannot_be_are_refused_naming_why() -> None:
+    drawing = _bracket()
+    profile = _profile(drawing)
+    bore, slot = _bore_and_slot(drawing)
+    cases = [
+        (PocketChoice(slot, (profile,)), f"contour {profile + 1} is not inside contour {slot + 1}"),
+        (PocketChoice(profile, (profile,)), f"contour {profile + 1} is chosen twice"),
+        (PocketChoice(profile, (bore, bore)), f"contour {bore + 1} is chosen twice"),
+        (PocketChoice(profile, (), tool=0), "tool 0: allowed 1 to 24"),
+    ]
+    for choice, message in cases:
+        with pytest.raises(ChoiceError) as refused:
+            chosen_blocks(drawing, [choice])
         assert message in str(refused.value)
 
 
@@ -220,6 +275,42 @@ def test_upload_choose_preview_and_add_to_a_new_program(app: Flask) -> None:
     # nothing else: the geometry chosen is sound.
     rules = {p.rule.name for p in validate(stored.program)}
     assert rules == {"TOOL_NO_RPM", "TOOL_NO_DIAMETER"}
+
+
+def test_the_page_makes_a_pocket_of_a_contour_and_islands_of_those_inside_it(app: Flask) -> None:
+    """Pocket "POCKET" on the profile (with its order) and "island" on the bore and the
+    slot: the blocks shown are DRILL, POCKET, ..., two ISLANDs; an island given an order, or
+    one no pocket holds, is refused naming the contour and what to do."""
+    client = app.test_client()
+    location = _upload(client, bracket(), **{"hole-diameter": "0.25"})
+    token = csrf(client, location)
+    key = _key(location)
+    drawing = _bracket()
+    profile = _profile(drawing)
+    bore, slot = _bore_and_slot(drawing)
+    form = {
+        "csrf_token": token,
+        "hole-diameter": "0.25",
+        f"c{profile}_order": "1",
+        f"c{profile}_pocket": "pocket",
+        f"c{bore}_pocket": "island",
+        f"c{slot}_pocket": "island",
+    }
+    shown = client.post(f"/drawings/{key}/preview", data=form)
+    text = shown.get_data(as_text=True)
+    assert shown.status_code == 200, text
+    assert "25 blocks" in text and text.count("<strong>ISLAND</strong>") == 2
+    ordered = client.post(f"/drawings/{key}/preview", data={**form, f"c{bore}_order": "2"})
+    assert ordered.status_code == 422
+    assert f"contour {bore + 1} is an island: it has no order of its own" in ordered.get_data(
+        as_text=True
+    )
+    alone = {**form, f"c{profile}_pocket": ""}
+    orphan = client.post(f"/drawings/{key}/preview", data=alone)
+    assert orphan.status_code == 422
+    assert "is an island, but no contour chosen as a POCKET holds it" in orphan.get_data(
+        as_text=True
+    )
 
 
 def test_add_into_a_program_refused_where_it_would_split_it_leaves_it_as_it_was(

@@ -48,6 +48,7 @@ from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
 from app.web.forms import group_menu, parse_block, sub_menu
+from app.web.preview import preview
 from tests.test_pocketing import points_of
 
 GOLDEN = Path(__file__).parent / "golden"
@@ -445,3 +446,19 @@ def test_an_arc_end_typed_to_the_resolution_is_on_the_arc() -> None:
     assert [str(p) for p in validate(program) if p.severity is Severity.ERROR] == []
     for uncut, gouge in measure(program):
         assert uncut < 1e4 and gouge < 1e4
+
+
+def test_a_pocket_with_a_contour_error_is_drawn_with_the_error_on_its_block() -> None:
+    """An open boundary is drawn where it is, its last block red with the message, and the
+    blocks after the pocket still drawn. Failed before: the block with the error was left out
+    of the drawing, which changed the pocket into another one."""
+    program = document.loads(
+        (Path(__file__).parent / "bad" / "pocket-open-boundary" / "program.json").read_text(
+            encoding="utf-8"
+        )
+    )
+    shown = preview(program)
+    assert 'class="block problem" data-block="5"' in shown.svg
+    assert "the contour is not closed" in shown.svg
+    for number in (3, 4, 5):
+        assert f'data-block="{number}"' in shown.svg

@@ -20,6 +20,7 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.emit.svg import draw
+from app.cnc.formats.dxf.blocks import holds
 from app.cnc.formats.dxf.choice import (
     DIRECTIONS,
     Choice,
@@ -28,6 +29,7 @@ from app.cnc.formats.dxf.choice import (
     ContourChoice,
     HoleChoice,
     PlacementError,
+    PocketChoice,
     chosen_blocks,
     contour_comp,
     drawing_svg,
@@ -150,10 +152,24 @@ def read_choices(form: Any, drawing: Drawing) -> list[Choice]:
     Raises ChoiceError naming the field for an order that is not a whole number from 1,
     an order given twice, a segment that is not in its contour, or a tool outside 1-24."""
     items: list[_Item] = []
+    islands = [k for k in range(len(drawing.contours)) if form.get(f"c{k}_pocket") == "island"]
+    pockets = [k for k in range(len(drawing.contours)) if form.get(f"c{k}_pocket") == "pocket"]
     for what, count in (("contour", len(drawing.contours)), ("hole", len(drawing.holes))):
         for index in range(count):
             text = form.get(f"{what[0]}{index}_order", "").strip()
+            if what == "contour" and index in islands:
+                if text:
+                    raise ChoiceError(
+                        f"contour {index + 1} is an island: it has no order of its own (its "
+                        "pocket's order places it); clear its order or its Pocket choice"
+                    )
+                continue
             if not text:
+                if what == "contour" and index in pockets:
+                    raise ChoiceError(
+                        f"contour {index + 1} is a POCKET: give it an order number (or click "
+                        "it on the drawing)"
+                    )
                 continue
             order = _whole(text, f"{what} {index + 1} order")
             if order < 1:
@@ -182,6 +198,21 @@ def read_choices(form: Any, drawing: Drawing) -> list[Choice]:
             group = []
         k = item.index
         start = _whole(form.get(f"c{k}_start", "1") or "1", f"contour {k + 1} start") - 1
+        if k in pockets:
+            held = tuple(
+                j
+                for j in islands
+                if holds(drawing.contours[k], drawing.contours[j])
+                and not any(
+                    holds(drawing.contours[k], drawing.contours[p])
+                    and holds(drawing.contours[p], drawing.contours[j])
+                    for p in pockets
+                    if p != k
+                )
+            )
+            tool = _tool(form.get(f"c{k}_tool", "1"), f"contour {k + 1} tool")
+            choices.append(PocketChoice(k, held, start, tool))
+            continue
         direction = form.get(f"c{k}_dir", "drawn") or "drawn"
         if direction not in DIRECTIONS:
             raise ChoiceError(
@@ -199,6 +230,12 @@ def read_choices(form: Any, drawing: Drawing) -> list[Choice]:
         )
     if group:
         choices.append(HoleChoice(tuple(group), hole_tool, bolt))
+    placed = {j for c in choices if isinstance(c, PocketChoice) for j in c.islands}
+    for j in islands:
+        if j not in placed:
+            raise ChoiceError(
+                f"contour {j + 1} is an island, but no contour chosen as a POCKET holds it"
+            )
     return choices
 
 

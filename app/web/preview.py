@@ -40,6 +40,9 @@ GEOMETRY_RULES = frozenset(
         Rule.FRAME_CORNER,
         Rule.CORNER_UNREACHABLE,
         Rule.POCKET_TOOL,
+        Rule.POCKET_CONTOUR,
+        Rule.POCKET_ISLAND,
+        Rule.POCKET_STEP,
     }
 )
 # Errors of the program as a whole that leave its compile as it is (a name is not motion).

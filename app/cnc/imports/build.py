@@ -24,11 +24,16 @@ from app.cnc.blocks import (
     DataBlock0,
     Direction,
     Hole,
+    Island,
     MillArc,
     MillingMode,
     MillLine,
     MillQcir,
     Mode,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
+    PocketLine,
     Pos,
     Program,
     Rep,
@@ -48,11 +53,13 @@ from app.cnc.imports.common import (
 )
 from app.cnc.imports.ops import (
     BoltOp,
+    Element,
     HoleOpR,
     HoleSpec,
     LoopOp,
     MillOp,
     Op,
+    PocketOp,
     PosOp,
     RoutineOp,
     all_lines,
@@ -158,6 +165,8 @@ class Builder:
             self.mill(op, inc, loop)
         elif isinstance(op, BoltOp):
             self.bolt(op, inc, loop)
+        elif isinstance(op, PocketOp):
+            self.pocket(op, inc, loop)
         else:
             self.routine(op, inc, loop)
         if op.message:
@@ -258,6 +267,38 @@ class Builder:
         if op.stop:
             self.blocks[-1] = replace(self.blocks[-1], stop=True)
         self.ref = here
+
+    def pocket(self, op: PocketOp, inc: bool, loop: bool) -> None:
+        """DRILL + POCKET + the boundary's PKT blocks, then each ISLAND and its blocks
+        (absolute: a pocket's contour is a shape). The reference after it is the DRILL's
+        point, as after a routine."""
+        u = op.spec.units
+        self.hole(op.spec, op.at, op.lines[0], inc, loop, stop=False)
+        start = self.ref
+        feed = self.feed(op.feed, u, op.lines[0], "FEEDR XY")
+        self.blocks.append(Pocket(feed_xy=feed, tool=op.spec.tool, units=u))
+        self.pocket_contour(op.boundary, start, u)
+        for at, elements in op.islands:
+            x, y, here = self.place(at, u, False, elements[0].line if elements else op.lines[0])
+            self.blocks.append(Island(x=x, y=y, units=u))
+            self.pocket_contour(elements, here, u)
+        if op.stop:
+            self.blocks[-1] = replace(self.blocks[-1], stop=True)
+        self.ref = start
+
+    def pocket_contour(self, elements: list[Element], here: XY, u: Units) -> None:
+        """PKT LINE and PKT ARC blocks of one closed contour from `here` (nm, on the grid)."""
+        for e in elements:
+            x, y, end = self.place(e.end, u, False, e.line)
+            if e.centre is None:
+                self.blocks.append(PocketLine(x=x, y=y, units=u))
+            else:
+                centre = self.arc_centre(here, end, e.centre, u, e.line)
+                cx, cy, _ = self.place(centre, u, False, e.line)
+                direction = Direction.CW if e.clockwise else Direction.CCW
+                self.blocks.append(PocketArc(direction=direction, x=cx, y=cy, units=u))
+                self.blocks.append(PocketArcEnd(x=x, y=y, units=u))
+            here = end
 
     def arc_centre(
         self, start: XY, end: XY, centre: XY, units: Units, line: int, grid: XY = (0, 0)

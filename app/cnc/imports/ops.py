@@ -126,7 +126,23 @@ class LoopOp:
     head_added: bool = False  # a LOOP POS was put first to carry the LOOP qualifier
 
 
-Op = PosOp | HoleOpR | MillOp | BoltOp | RoutineOp | LoopOp
+@dataclass
+class PocketOp:
+    """A DRILL at `at` (the boundary's start point) and a POCKET clearing the inside of the
+    closed `boundary` (elements from `at`) round each island (its start point and elements),
+    at `feed` (nm/min)."""
+
+    lines: list[int]
+    at: XY
+    spec: HoleSpec
+    feed: int
+    boundary: list[Element]
+    islands: list[tuple[XY, list[Element]]]
+    stop: bool = False
+    message: str = ""
+
+
+Op = PosOp | HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp | LoopOp
 
 
 def anchor(op: Op) -> XY:
@@ -192,6 +208,9 @@ def _sign(op: Op, origin: XY, sig: Signature) -> None:
         sig.labels.append(("bolt", op.spec, op.holes, op.angle, op.radius, op.stop, op.message))
     elif isinstance(op, RoutineOp):
         sig.labels.append(("routine", op.spec, op.block, op.stop, op.message))
+    elif isinstance(op, PocketOp):
+        # A pocket is not repeated as a LOOP pattern: its own identity is its signature.
+        sig.labels.append(("pocket", id(op)))
     else:
         sig.labels.append(("loop", op.step, op.nx, op.ny, len(op.body), op.head_added))
         for body in op.body:

@@ -59,6 +59,7 @@ from app.cnc.imports.ops import (
     LoopOp,
     MillOp,
     Op,
+    PocketOp,
     RoutineOp,
     Signature,
     anchor,
@@ -698,6 +699,6 @@ class _LoopFinder:
 def _units(op: Op) -> Units:
     if isinstance(op, LoopOp):
         return _units(op.body[0])
-    if isinstance(op, HoleOpR | MillOp | BoltOp | RoutineOp):
+    if isinstance(op, HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp):
         return op.spec.units
     return op.units

@@ -36,7 +36,7 @@ from app.cnc.imports.common import (
     quantize_nm,
     resolution_nm,
 )
-from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, RoutineOp
+from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, PocketOp, RoutineOp
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import Element as MillElement
@@ -105,6 +105,38 @@ def contour_ops(
         Element(s.source, s.end, s.centre, s.clockwise, None, drawing.feed) for s in segments
     ]
     return MillOp(lines, segments[0].start, spec, side, elements)
+
+
+def pocket_ops(
+    drawing: Drawing, boundary: Contour, islands: list[Contour], start: int = 0, tool: int = 1
+) -> PocketOp:
+    """The DRILL + POCKET that clears the inside of the closed `boundary` (drawn from the
+    start of its segment `start`) round the closed `islands` (each from its first segment).
+    A pocket's contour is a shape: each is taken as drawn, whichever way round."""
+
+    def elements(segments: list[Segment]) -> list[Element]:
+        if len(segments) == 1:
+            segments = _halves(segments[0])  # a circle: two half circles, as PKT ARCs
+        return [Element(s.source, s.end, s.centre, s.clockwise, None, 0) for s in segments]
+
+    segments = list(boundary.segments)
+    segments = segments[start:] + segments[:start]
+    return PocketOp(
+        [*boundary.sources, *(s for i in islands for s in i.sources)],
+        segments[0].start,
+        hole_spec(drawing, tool),
+        drawing.feed,
+        elements(segments),
+        [(i.segments[0].start, elements(list(i.segments))) for i in islands],
+    )
+
+
+def holds(outer: Contour, inner: Contour) -> bool:
+    """True when the closed contour `outer` holds `inner` (its first point inside)."""
+    if not outer.closed:
+        return False
+    ring = regions.polygon(as_path(outer), CHORD_NM)
+    return bool(regions.inside([ring], inner.segments[0].start))
 
 
 def contour_blocks(

@@ -5,7 +5,9 @@
     drawing_svg(drawing, chosen=()) -> str
 
 A choice is a contour (which one, where the cut starts, which way round, which side the
-tool is on, INSIDE or OUTSIDE when a routine cuts it exactly, the tool) or a group of holes
+tool is on, INSIDE or OUTSIDE when a routine cuts it exactly, the tool), a pocket (a closed
+contour whose inside is cleared round the closed contours inside it chosen as its
+islands: DRILL + POCKET + PKT blocks), or a group of holes
 (in the order they are to be drilled, made into a BOLT CIR where three or more of one
 diameter are equally spaced). The choices become blocks in the order given, exactly as
 `blocks.py` makes them for a whole drawing. The report says what became what, what was
@@ -19,16 +21,24 @@ the drawing's origin), Y up.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import svgwrite
 
 from app.cnc.blocks import Block, BoltCircle, Comp, DataBlock0, Mode, Program
-from app.cnc.formats.dxf.blocks import contour_ops, drawing_block0, hole_spec, resolution_half
+from app.cnc.formats.dxf.blocks import (
+    contour_ops,
+    drawing_block0,
+    holds,
+    hole_spec,
+    pocket_ops,
+    resolution_half,
+)
 from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Segment
 from app.cnc.imports.build import Builder
 from app.cnc.imports.common import ImportNote
-from app.cnc.imports.ops import HoleOpR, Op
+from app.cnc.imports.ops import HoleOpR, Op, PocketOp
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units
@@ -63,7 +73,19 @@ class HoleChoice:
     bolt_circles: bool = True
 
 
-Choice = ContourChoice | HoleChoice
+@dataclass(frozen=True)
+class PocketChoice:
+    """Clear the inside of closed contour `contour` (its cut starting at its segment
+    `start`) round the closed contours `islands`, with tool `tool`: DRILL + POCKET +
+    PKT LINE / PKT ARC blocks, each island an ISLAND and its blocks."""
+
+    contour: int
+    islands: tuple[int, ...] = ()
+    start: int = 0
+    tool: int = 1
+
+
+Choice = ContourChoice | HoleChoice | PocketChoice
 
 
 class ChoiceError(ValueError):
@@ -94,7 +116,7 @@ class Chosen:
         )
 
 
-def chosen_blocks(drawing: Drawing, choices: list[Choice]) -> Chosen:
+def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
     """The blocks that cut `choices` in order, and the report (see the module's note).
 
     Raises ChoiceError for a contour or hole index not in the drawing, a hole chosen twice,
@@ -110,7 +132,11 @@ def chosen_blocks(drawing: Drawing, choices: list[Choice]) -> Chosen:
     for choice in choices:
         if not 1 <= choice.tool <= 24:
             raise ChoiceError(f"tool {choice.tool}: allowed 1 to 24")
-        if isinstance(choice, ContourChoice):
+        if isinstance(choice, PocketChoice):
+            ops.append(_pocket(drawing, choice))
+            for k in (choice.contour, *choice.islands):
+                used.update(drawing.contours[k].sources)
+        elif isinstance(choice, ContourChoice):
             contour = _contour(drawing, choice.contour)
             if choice.direction not in DIRECTIONS:
                 raise ChoiceError(
@@ -153,6 +179,28 @@ def chosen_blocks(drawing: Drawing, choices: list[Choice]) -> Chosen:
     if not ops:
         notes.assumed(None, "nothing was chosen: no blocks")
     return Chosen(tuple(builder.blocks), block0, tuple(notes.report()))
+
+
+def _pocket(drawing: Drawing, choice: PocketChoice) -> PocketOp:
+    """The pocket's operation; ChoiceError for a contour that is open, an island outside
+    the boundary, or a contour chosen twice."""
+    boundary = _contour(drawing, choice.contour)
+    if not boundary.closed:
+        raise ChoiceError(f"contour {choice.contour + 1} is open: a pocket's boundary is closed")
+    islands = []
+    for k in choice.islands:
+        island = _contour(drawing, k)
+        if k == choice.contour or choice.islands.count(k) > 1:
+            raise ChoiceError(f"contour {k + 1} is chosen twice in one pocket")
+        if not island.closed:
+            raise ChoiceError(f"contour {k + 1} is open: an island is closed")
+        if not holds(boundary, island):
+            raise ChoiceError(
+                f"contour {k + 1} is not inside contour {choice.contour + 1}: an island "
+                "lies inside its pocket's boundary"
+            )
+        islands.append(island)
+    return pocket_ops(drawing, boundary, islands, _start(boundary, choice.start), choice.tool)
 
 
 def _contour(drawing: Drawing, index: int) -> Contour:

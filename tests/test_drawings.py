@@ -134,7 +134,9 @@ def test_a_pocket_chosen_from_a_drawing_clears_round_its_islands() -> None:
     assert "POCKET" in text and "a contour not chosen" not in text
     program = chosen.program("bracket", drawing.units)
     tools = (Tool(number=2, diameter=Decimal("0.25"), rpm=1500, tcal=Decimal(0)),)
-    drill = replace(program.blocks[0], z_up=Decimal("0.1"), z_dn=Decimal("-0.2"), feed_z=Decimal(5))
+    first = program.blocks[0]
+    assert isinstance(first, Hole)
+    drill = replace(first, z_up=Decimal("0.1"), z_dn=Decimal("-0.2"), feed_z=Decimal(5))
     ready = replace(
         program,
         block0=replace(program.block0, tools=tools, current_tool=2),

@@ -43,7 +43,9 @@ from app.cnc.mill import Element
 from app.cnc.mill import Path as MillPath
 from app.cnc.mirror import Axis, mirror
 from app.cnc.problems import Severity
-from app.cnc.simulate.verify import verify
+from app.cnc.simulate.programmed import programmed_geometry
+from app.cnc.simulate.sweep import simulate
+from app.cnc.simulate.verify import Verification, check_part, prepare, verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
@@ -462,3 +464,24 @@ def test_a_pocket_with_a_contour_error_is_drawn_with_the_error_on_its_block() ->
     assert "the contour is not closed" in shown.svg
     for number in (3, 4, 5):
         assert f'data-block="{number}"' in shown.svg
+
+
+def test_verify_finds_material_left_in_the_pocket() -> None:
+    """The part cut by a program whose POCKET went round one island more than the program
+    verified asks for: the material of that island is named as left in the pocket, at its
+    place. (Each golden pocket leaves none: test_verify_checks_the_walls_and_islands...)."""
+    program = load("pocket-islands")
+    extra = (
+        Island(x=D("3.4"), y=D("0.4")),
+        PocketLine(x=D("3.6"), y=D("0.4")),
+        PocketLine(x=D("3.6"), y=D("0.6")),
+        PocketLine(x=D("3.4"), y=D("0.6")),
+        PocketLine(x=D("3.4"), y=D("0.4")),
+    )
+    cut_round_it = replace(program, blocks=(*program.blocks, *extra))
+    grid, placed = prepare(cut_round_it)
+    result = Verification(program, simulate(grid, placed, None, 25_400), tolerance=25_400)
+    check_part(result, programmed_geometry(program), 25_400)
+    left = [f for f in result.findings if f.kind == "rest material"]
+    assert [f.block for f in left] == [2]
+    assert 3.35 < left[0].x / 25.4e6 < 3.65 and 0.35 < left[0].y / 25.4e6 < 0.65

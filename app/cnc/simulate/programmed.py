@@ -65,6 +65,17 @@ class HoleSpec:
     depth: int
 
 
+@dataclass(frozen=True)
+class PocketArea:
+    """A POCKET (`block`) as cut: its wall (`contours[0]`) and islands as finished contours
+    (where this placement of it is), the tool that clears it and its depth."""
+
+    block: int
+    contours: tuple[Contour, ...]
+    tool_radius: int
+    depth: int | None
+
+
 @dataclass
 class Programmed:
     """Everything verify compares against."""
@@ -72,6 +83,7 @@ class Programmed:
     contours: list[Contour] = field(default_factory=list)
     routines: list[Routine] = field(default_factory=list)
     holes: list[HoleSpec] = field(default_factory=list)
+    pockets: list[PocketArea] = field(default_factory=list)
 
 
 def _routine(
@@ -116,10 +128,11 @@ def programmed_geometry(program: Program) -> Programmed:
             if mill.routine and isinstance(program.blocks[mill.routine - 1], Pocket):
                 # A POCKET's walls and islands are finished surfaces, as a compensated
                 # contour's: the part outside the boundary and inside each island.
+                walls = []
                 for drawn in contours_at(program.blocks, mill.routine, (mill.x, mill.y)):
                     inside_left = signed_area(drawn.path) > 0  # counter-clockwise
                     island = drawn.name != "boundary"
-                    found.contours.append(
+                    walls.append(
                         Contour(
                             drill=mill.drill,
                             start=drawn.path.start,
@@ -129,6 +142,8 @@ def programmed_geometry(program: Program) -> Programmed:
                             depth=mill.depth,
                         )
                     )
+                found.contours += walls
+                found.pockets.append(PocketArea(mill.routine, tuple(walls), radius, mill.depth))
                 continue
             if mill.routine:
                 routine = program.blocks[mill.routine - 1]

@@ -30,9 +30,16 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.mill import Element
+from app.cnc.mill import Element, Path
+from app.cnc.pocketing.regions import path_points
 from app.cnc.simulate.placements import Placed, place
-from app.cnc.simulate.programmed import Contour, Programmed, Routine, programmed_geometry
+from app.cnc.simulate.programmed import (
+    Contour,
+    PocketArea,
+    Programmed,
+    Routine,
+    programmed_geometry,
+)
 from app.cnc.simulate.segments import BOOL, F64
 from app.cnc.simulate.stock import (
     Grid,
@@ -156,17 +163,21 @@ def verify(
         "routines": len(geometry.routines),
         "holes": len(geometry.holes),
     }
+    if geometry.pockets:
+        result.checked["pockets"] = len(geometry.pockets)
     top = grid.stock.top
     if not any((np.minimum(g.segments.z0, g.segments.z1) < top).any() for g in placed.groups):
         result.notes.append(
             "no move goes below the stock's top, so nothing is cut (a 2-axis program "
             "moves the quill by hand)"
         )
-    _check(result, geometry, tol)
+    check_part(result, geometry, tol)
     return result
 
 
-def _check(result: Verification, geometry: Programmed, tol: int) -> None:
+def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
+    """Measure the simulated part against what the program asks for (`tol` nm): every
+    finding goes into `result.findings`, sorted by block."""
     sim = result.simulation
     heights = sim.heights()
     owners = sim.owner_blocks()
@@ -176,6 +187,8 @@ def _check(result: Verification, geometry: Programmed, tol: int) -> None:
         found += _contour_gouges(sim.grid, heights, owners, contour, tol, u)
     for routine in geometry.routines:
         found += _routine_findings(sim.grid, heights, owners, routine, tol, u)
+    for pocket in geometry.pockets:
+        found += _pocket_findings(sim.grid, heights, pocket, tol, u)
     found += _hole_findings(sim.grid, heights, owners, geometry, tol, u)
     found += _crash_findings(sim, u)
     result.findings = sorted(found, key=lambda f: (f.block, f.kind, f.message))
@@ -379,6 +392,64 @@ def _routine_findings(
                 "rest material",
                 f"{_len(thick, u)} of material left above Z DN {where} at {_at(x, y, u)} "
                 f"({area / u.nm**2:.4f} {u.symbol}² of it)",
+                x,
+                y,
+            )
+        )
+    return findings
+
+
+# -- irregular pockets ---------------------------------------------------------------------
+
+
+def _inside(points: list[tuple[float, float]], qx: F64, qy: F64) -> BOOL:
+    """Which points (qx, qy) a closed polygon holds (even-odd crossings)."""
+    inside = np.zeros(qx.shape, dtype=bool)
+    for (ax, ay), (bx, by) in zip(points, points[1:] + points[:1], strict=True):
+        if ay == by:
+            continue
+        crosses = (ay > qy) != (by > qy)
+        x_at = ax + (qy - ay) * (bx - ax) / (by - ay)
+        inside ^= crosses & (qx < x_at)
+    return inside
+
+
+def _pocket_findings(
+    grid: Grid, heights: F64, pocket: PocketArea, tol: int, u: Units
+) -> list[Finding]:
+    """Material left above Z DN where the tool's centre fits: inside the wall, outside every
+    island, at least a tool radius from all of them (nearer a wall, material left is a
+    corner's fillet, which every round tool leaves, or a gouge's opposite, found by the
+    walls' own check)."""
+    if pocket.depth is None or pocket.tool_radius <= 0:
+        return []
+    r = float(pocket.tool_radius)
+    chord = grid.resolution / 4  # the outlines as polygons, well within a cell
+    outlines = [path_points(Path(c.start, c.elements), chord) for c in pocket.contours]
+    xs = [p[0] for p in outlines[0]]
+    ys = [p[1] for p in outlines[0]]
+    rows, cols, qx, qy = _window(grid, min(xs), min(ys), max(xs), max(ys))
+    if qx.size == 0:
+        return []
+    inside = _inside(outlines[0], qx, qy)
+    for island in outlines[1:]:
+        inside &= ~_inside(island, qx, qy)
+    nearest = np.full(qx.shape, np.inf)
+    for contour in pocket.contours:
+        starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+        for start, element in zip(starts, contour.elements, strict=True):
+            nearest = np.minimum(nearest, _element_measures(qx, qy, start, element)[0])
+    left = heights[rows, cols] - max(pocket.depth, grid.stock.bottom)
+    rest = inside & (nearest >= r + tol) & (left > tol)
+    findings = []
+    for _, thick, x, y, cells in _worst(rest, left, qx, qy, None):
+        area = cells * grid.resolution**2
+        findings.append(
+            Finding(
+                pocket.block,
+                "rest material",
+                f"{_len(thick, u)} of material left above Z DN in the pocket at "
+                f"{_at(x, y, u)} ({area / u.nm**2:.4f} {u.symbol}² of it)",
                 x,
                 y,
             )

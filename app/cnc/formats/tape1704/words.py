@@ -99,6 +99,7 @@ class Rounder:
         self.profile = profile
         self.start = start
         self.report = Report("rounding")
+        self.limit = fmt.max_units
 
     def first(self) -> Point:
         """The start in tape units."""
@@ -161,7 +162,9 @@ class Rounder:
             pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
 
     def check_capacity(self, block: int, point: Sequence[int | None], axes: str = "XYZ") -> None:
-        limit = self.fmt.max_units
+        limit = self.limit
+        if all(value is None or -limit <= value <= limit for value in point):
+            return
         for axis, value in zip(axes, point, strict=True):
             if value is not None and abs(value) > limit:
                 self.report.error(
@@ -175,6 +178,8 @@ class Rounder:
         programmed feed, one it rounds is reported (never silently)."""
         fmt = self.fmt
         value = fmt.feed_value(feed_nm)
+        if fmt.feed_min <= value <= fmt.feed_max and value * fmt.feed_unit_nm == feed_nm:
+            return value  # carried exactly: nothing to say (and no words made to say it)
         programmed = fmt.show_programmed_feed(feed_nm)
         if value < fmt.feed_min:
             self.report.error(

@@ -289,9 +289,18 @@ class _Painter:
                         self.bodies[loose] = found
                 self.bodies[key] = found
             return found
-        if isinstance(node, Seq):
-            return self.sequence(node.nodes, state, base)
-        return self.run(node, state, base)
+        # A LOOP's runs share their pattern node (the compiler splits one LOOP into a run
+        # per row, each placing the same Seq): drawn once for each way it is entered, as a
+        # piece is, instead of once per run.
+        shared = (id(node), base, split, state)
+        found = self.bodies.get(shared)
+        if found is None:
+            if isinstance(node, Seq):
+                found = self.sequence(node.nodes, state, base)
+            else:
+                found = self.run(node, state, base)
+            self.bodies[shared] = found
+        return found
 
     def digest(self, piece: Piece) -> bytes:
         """What a piece's drawing is made of (its moves, holes and mill sequences)."""

@@ -8,7 +8,6 @@ with the differences listed in `test_sample_part_differs_from_the_manual_only_as
 from __future__ import annotations
 
 import math
-import tracemalloc
 from dataclasses import replace
 from decimal import Decimal as D
 from pathlib import Path
@@ -39,7 +38,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, ExportError, Report, export, targets
+from app.cnc.emit.target import Export, ExportError, Report, export
 from app.cnc.formats.events.model import (
     Mill,
     Position,
@@ -58,6 +57,7 @@ from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid
 from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units
 from app.cnc.validate import validate
 from bench.programs import sized
+from tests.export_support import traced_export
 
 GOLDEN = Path(__file__).parent / "golden"
 CASES = sorted(p for p in GOLDEN.iterdir() if (p / "program.json").exists())
@@ -731,16 +731,7 @@ def test_the_self_check_of_a_large_program_keeps_no_set_of_its_moves() -> None:
     # circles are a few dozen lines, but the self-check kept every distinct point of the
     # tool path as Python objects (270 MB at 10^6 moves; 24 MB traced at 10^5). It now
     # reads the path a chunk at a time against the events' own points, held as arrays.
-    program = sized("bolts", 100_000)
-    # Neither the compile's cache nor importing the targets' modules is the export's.
-    compile_program(resolve_copies(program))
-    targets()
-    tracemalloc.start()
-    try:
-        made = export(program, "events")
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
+    made, peak = traced_export(sized("bolts", 100_000), "events")
     assert not made.report.has_errors
     assert made.data.count(b"G104") > 1
     assert peak < 10_000_000, f"the events export allocated {peak / 1e6:.1f} MB at its peak"

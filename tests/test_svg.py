@@ -11,7 +11,6 @@ from __future__ import annotations
 import itertools
 import math
 import re
-import tracemalloc
 import xml.etree.ElementTree as ET
 from collections import Counter
 from decimal import Decimal as D
@@ -24,9 +23,10 @@ from app.cnc.blocks import DataBlock0, Hole, HoleOp, Mode, Pos, Program, Rep, St
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.emit.svg import HOLE_LABELS, draw, render
-from app.cnc.emit.target import export, targets
+from app.cnc.emit.target import export
 from app.cnc.path import Op
 from bench.programs import sized
+from tests.export_support import traced_export
 
 GOLDEN = Path(__file__).parent / "golden"
 CASES = sorted(p.name for p in GOLDEN.iterdir() if (p / "program.json").exists())
@@ -317,15 +317,6 @@ def test_the_svg_export_of_a_large_program_keeps_no_list_of_its_moves() -> None:
     # the compiled tree but was handed every move as an object first (218 MB at 10^6 moves).
     # 100 000 moves as objects are more than 20 MB; the drawing and the tree's arrays are
     # well under 5 MB.
-    program = sized("grid", 100_000)
-    # Neither the compile's cache nor importing the targets' modules is the export's.
-    compile_program(resolve_copies(program))
-    targets()
-    tracemalloc.start()
-    try:
-        made = export(program, "svg")
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
+    made, peak = traced_export(sized("grid", 100_000), "svg")
     assert b"<svg" in made.head(200)
     assert peak < 5_000_000, f"the svg export allocated {peak / 1e6:.1f} MB at its peak"

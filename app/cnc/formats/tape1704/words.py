@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from app.cnc.emit.target import Report
 from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion
-from app.cnc.formats.tape1704.profile import Profile, TapeFormat
+from app.cnc.formats.tape1704.profile import Profile, TapeFormat, half_even
 from app.cnc.geometry import arc_sweep
 
 Point = tuple[int, int, int | None]
@@ -111,6 +111,8 @@ class Rounder:
         fmt, report = self.fmt, self.report
         pos = self.first()
         carry_restart = False
+        # fmt.units inlined for the end points (three a move): the same half-even rounding.
+        step, ratio, limit = fmt.step_nm, fmt.step_nm // fmt.digit_nm, self.limit
         for item in items:
             if isinstance(item, Aux):
                 if item.preset_z:
@@ -118,8 +120,17 @@ class Rounder:
                 yield item
                 continue
             ex, ey, ez = item.end
-            end = (fmt.units(ex), fmt.units(ey), None if ez is None else fmt.units(ez))
-            self.check_capacity(item.block, end)
+            end = (
+                half_even(ex, step) * ratio,
+                half_even(ey, step) * ratio,
+                None if ez is None else half_even(ez, step) * ratio,
+            )
+            if not (
+                -limit <= end[0] <= limit
+                and -limit <= end[1] <= limit
+                and (end[2] is None or -limit <= end[2] <= limit)
+            ):
+                self.check_capacity(item.block, end)
             item.restart = item.restart or carry_restart
             carry_restart = False
             if item.kind in (Kind.LINE, Kind.ARC, Kind.CYCLE):
@@ -336,7 +347,7 @@ class Words:
             words = [("N", str(self.number % 1000)), *words]
             self.number += profile.sequence_increment
         joiner = "\t" if profile.tabs else ""
-        text = joiner.join(letter + value for letter, value in words)
+        text = joiner.join([letter + value for letter, value in words])
         if comment:
             text += f" ({comment})"
         line = Line(text, block, leader_after=leader_after)

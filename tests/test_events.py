@@ -56,6 +56,8 @@ from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid
 from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units
 from app.cnc.validate import validate
+from bench.programs import sized
+from tests.export_support import traced_export
 
 GOLDEN = Path(__file__).parent / "golden"
 CASES = sorted(p for p in GOLDEN.iterdir() if (p / "program.json").exists())
@@ -722,3 +724,14 @@ def test_compensated_contour_is_written_as_the_finished_contour() -> None:
 def test_mm_dimensions_use_hundredths() -> None:
     assert format_dimension(12_345 * NM_PER_MM // 1000, Units.MM) == "12.34"  # half-even
     assert format_dimension(12_355 * NM_PER_MM // 1000, Units.MM) == "12.36"
+
+
+def test_the_self_check_of_a_large_program_keeps_no_set_of_its_moves() -> None:
+    # Issue 18: an export's memory stays flat in program size. The events of a LOOP of bolt
+    # circles are a few dozen lines, but the self-check kept every distinct point of the
+    # tool path as Python objects (270 MB at 10^6 moves; 24 MB traced at 10^5). It now
+    # reads the path a chunk at a time against the events' own points, held as arrays.
+    made, peak = traced_export(sized("bolts", 100_000), "events")
+    assert not made.report.has_errors
+    assert made.data.count(b"G104") > 1
+    assert peak < 10_000_000, f"the events export allocated {peak / 1e6:.1f} MB at its peak"

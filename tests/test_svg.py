@@ -26,6 +26,7 @@ from app.cnc.emit.svg import HOLE_LABELS, draw, render
 from app.cnc.emit.target import export
 from app.cnc.path import Op
 from bench.programs import sized
+from tests.export_support import traced_export
 
 GOLDEN = Path(__file__).parent / "golden"
 CASES = sorted(p.name for p in GOLDEN.iterdir() if (p / "program.json").exists())
@@ -309,3 +310,13 @@ def test_ten_thousand_patterns_preview_under_200_kb() -> None:
 def test_same_program_same_bytes() -> None:
     program = load("circle-pocket")
     assert draw(program) == draw(program)
+
+
+def test_the_svg_export_of_a_large_program_keeps_no_list_of_its_moves() -> None:
+    # Issue 18: every export's memory stays flat in program size. The svg target drew from
+    # the compiled tree but was handed every move as an object first (218 MB at 10^6 moves).
+    # 100 000 moves as objects are more than 20 MB; the drawing and the tree's arrays are
+    # well under 5 MB.
+    made, peak = traced_export(sized("grid", 100_000), "svg")
+    assert b"<svg" in made.head(200)
+    assert peak < 5_000_000, f"the svg export allocated {peak / 1e6:.1f} MB at its peak"

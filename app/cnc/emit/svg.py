@@ -39,12 +39,11 @@ import numpy as np
 
 from app.cnc.blocks import Circle, Frame, Pocket, Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import Option, OptionKind, Report, Target, register
+from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
 from app.cnc.pocketing.routine import contours_at
 from app.cnc.simulate.stock import MARGIN, ROUND_TO
-from app.cnc.toolpath import Toolpath
 from app.cnc.units import Units, to_nm
 
 # Holes are numbered in the order they are cut when a program has at most this many.
@@ -84,13 +83,18 @@ class SvgTarget(Target):
         Option("grid", OptionKind.BOOL, False, "draw a 1 in / 10 mm grid"),
     )
 
-    def emit(
-        self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
-    ) -> bytes:
-        # The compiled path of the program (cached: export compiled it a moment ago) keeps
-        # the structure the drawing is made from.
-        text = draw(program, swept=bool(options["swept"]), grid=bool(options["grid"]))
-        return text.encode("utf-8")
+    def write(
+        self,
+        program: Program,
+        path: CompiledPath,
+        options: Mapping[str, Any],
+        report: Report,
+        out: Out,
+    ) -> None:
+        # Drawn from the compiled tree the export hands over: never the Toolpath of every
+        # move (the default `write`), so memory stays flat in the program's size.
+        drawing = render(program, path, swept=bool(options["swept"]), grid=bool(options["grid"]))
+        out.write(drawing.svg.encode("utf-8"))
 
 
 @dataclass(frozen=True, slots=True)
@@ -286,9 +290,18 @@ class _Painter:
                         self.bodies[loose] = found
                 self.bodies[key] = found
             return found
-        if isinstance(node, Seq):
-            return self.sequence(node.nodes, state, base)
-        return self.run(node, state, base)
+        # A LOOP's runs share their pattern node (the compiler splits one LOOP into a run
+        # per row, each placing the same Seq): drawn once for each way it is entered, as a
+        # piece is, instead of once per run.
+        shared = (id(node), base, split, state)
+        found = self.bodies.get(shared)
+        if found is None:
+            if isinstance(node, Seq):
+                found = self.sequence(node.nodes, state, base)
+            else:
+                found = self.run(node, state, base)
+            self.bodies[shared] = found
+        return found
 
     def digest(self, piece: Piece) -> bytes:
         """What a piece's drawing is made of (its moves, holes and mill sequences)."""

@@ -51,12 +51,14 @@ chose where the manual is vague (docs/readings.md):
 
 from __future__ import annotations
 
-import math
 from collections import defaultdict
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from typing import Any
+
+import numpy as np
+import numpy.typing as npt
 
 from app.cnc.blocks import (
     Block,
@@ -705,110 +707,215 @@ def check_events(events: Events, path: CompiledPath, report: Report) -> None:
     path the Plus computes itself (`events.unchecked`: compensated contours, routines) are
     skipped; circular pockets and frames must turn the way the tool path does.
 
-    The tool path is read a chunk at a time; what is kept is each distinct point once.
+    The tool path is read a chunk at a time and checked as it comes against the events'
+    points (arrays): nothing of the path is kept, so memory does not grow with the moves.
     """
     units = events.units
-    tolerance = RESOLUTION_NM[units] + 1
+    cell = RESOLUTION_NM[units]
+    tolerance = cell + 1
     expected = _expected_points(events)
-    places: set[XY] = {(path.start[0], path.start[1])}
-    destinations: dict[int, dict[XY, None]] = defaultdict(dict)
-    turns: dict[int, set[tuple[int, int, bool]]] = defaultdict(set)
+    anywhere = _Near(expected.points, cell)  # the events' points, whatever their block
+    mine = _Near(expected.points, cell, expected.blocks)  # each block's own points
+    reached = np.zeros(len(expected.points), dtype=bool)
+    moved_blocks: set[int] = set()
+    extra: dict[int, Pt] = {}
+    # Circular routines: the turns of arcs about their centre, by block.
+    centres = {
+        (event.source, event.point)
+        for event in events.events
+        if isinstance(event, Routine) and not event.rectangular
+    }
+    turns: dict[tuple[int, XY], set[bool]] = defaultdict(set)
+    start = np.array([[path.start[0], path.start[1]]], dtype=np.float64)
+    anywhere.mark(start, tolerance, reached)
     for m in motions(path):
         rows = m.rows
-        places.update(zip(rows["x"].tolist(), rows["y"].tolist(), strict=True))
+        xy = np.column_stack((rows["x"], rows["y"])).astype(np.float64)
+        anywhere.mark(np.unique(xy, axis=0), tolerance, reached)
         moved = (rows["x"] != m.x0) | (rows["y"] != m.y0)
-        for block, px, py in zip(
-            rows["block"][moved].tolist(),
-            rows["x"][moved].tolist(),
-            rows["y"][moved].tolist(),
-            strict=True,
-        ):
-            destinations[block][(px, py)] = None
-        arcs = rows[rows["op"] >= Op.ARC_CW]
-        for block, cx, cy, op in zip(
-            arcs["block"].tolist(),
-            arcs["cx"].tolist(),
-            arcs["cy"].tolist(),
-            arcs["op"].tolist(),
-            strict=True,
-        ):
-            turns[block].add((cx, cy, op == Op.ARC_CW))
-    positions = _Grid(RESOLUTION_NM[units])
-    for place in places:
-        positions.add((float(place[0]), float(place[1])))
+        blocks = rows["block"][moved]
+        if not len(blocks):
+            continue
+        moved_blocks.update(np.unique(blocks).tolist())
+        points = xy[moved]
+        checked = ~np.isin(blocks, list(events.unchecked) + list(extra)) & np.isin(
+            blocks, expected.known
+        )
+        if checked.any():
+            near = mine.near(points[checked], tolerance, blocks[checked])
+            for block, px, py in zip(
+                blocks[checked][~near].tolist(),
+                points[checked][~near, 0].tolist(),
+                points[checked][~near, 1].tolist(),
+                strict=True,
+            ):
+                extra.setdefault(block, (px, py))
+        if centres:
+            arcs = rows[rows["op"] >= Op.ARC_CW]
+            for block, cx, cy, op in zip(
+                arcs["block"].tolist(),
+                arcs["cx"].tolist(),
+                arcs["cy"].tolist(),
+                arcs["op"].tolist(),
+                strict=True,
+            ):
+                if (block, (cx, cy)) in centres:
+                    turns[block, (cx, cy)].add(op == Op.ARC_CW)
 
     def where(p: Pt) -> str:
         px, py = format_dimension(round(p[0]), units), format_dimension(round(p[1]), units)
         return f"X{px} Y{py}"
 
-    for block, points in sorted(expected.items()):
-        missing = next((p for p in points if not positions.near(p, tolerance)), None)
-        if missing is not None:
+    missing = ~reached
+    for block in np.unique(expected.blocks).tolist():
+        first = np.flatnonzero(missing & (expected.blocks == block))
+        if len(first):
+            x, y = expected.points[first[0]].tolist()
             report.error(
                 block,
-                f"self-check: the events put the tool at {where(missing)}, where the tool "
+                f"self-check: the events put the tool at {where((x, y))}, where the tool "
                 "path never goes",
             )
-    for block, reached in sorted(destinations.items()):
-        points = [(float(x), float(y)) for x, y in reached]
+    known = set(expected.known.tolist())
+    for block in sorted(moved_blocks):
         if block in events.unchecked:
             continue
-        if block not in expected:
+        if block not in known:
             report.error(block, "self-check: the tool path moves here but no event does")
             continue
-        grid = _Grid(RESOLUTION_NM[units])
-        for p in expected[block]:
-            grid.add(p)
-        extra = next((p for p in points if not grid.near(p, tolerance)), None)
-        if extra is not None:
+        if block in extra:
             report.error(
                 block,
-                f"self-check: the tool path goes to {where(extra)}, which no event reaches",
+                f"self-check: the tool path goes to {where(extra[block])}, which no event reaches",
             )
     for event in events.events:
         if isinstance(event, Routine) and not event.rectangular:
-            turn = {cw for cx, cy, cw in turns[event.source] if (cx, cy) == event.point}
+            turn = turns.get((event.source, event.point), set())
             if turn and turn != {event.clockwise}:
                 report.error(event.source, "self-check: DR turns the other way from the tool path")
 
 
-def _expected_points(events: Events) -> dict[int, list[Pt]]:
-    """Every block's XY points by the events, G105 repeats carried out."""
+@dataclass
+class _Expected:
+    """Every point the events put the tool at (`points`, k × 2, nm as floats, in the order
+    the events make them) with its block (`blocks`); `known` the blocks that have any."""
+
+    points: npt.NDArray[np.float64]
+    blocks: npt.NDArray[np.int64]
+
+    @property
+    def known(self) -> npt.NDArray[np.int64]:
+        return np.unique(self.blocks)
+
+
+def _expected_points(events: Events) -> _Expected:
+    """Every block's XY points by the events, G105 repeats carried out (as arrays: a repeat
+    of a bolt circle is thousands of points)."""
     units = events.units
-    expected: dict[int, list[Pt]] = defaultdict(list)
+    xs: list[npt.NDArray[np.float64]] = []
+    ys: list[npt.NDArray[np.float64]] = []
+    blocks: list[npt.NDArray[np.int64]] = []
+
+    def add(checks: Sequence[Check], dx: npt.NDArray[np.int64], dy: npt.NDArray[np.int64]) -> None:
+        # Each shift (dx[k], dy[k]) in turn, every check of `checks` in order within it.
+        if not checks or not len(dx):
+            return
+        cx = np.array([p[0] for _, p in checks], dtype=np.float64)
+        cy = np.array([p[1] for _, p in checks], dtype=np.float64)
+        xs.append((cx[None, :] + dx[:, None]).ravel())
+        ys.append((cy[None, :] + dy[:, None]).ravel())
+        blocks.append(np.tile(np.array([b for b, _ in checks], dtype=np.int64), len(dx)))
+
+    none = np.zeros(1, dtype=np.int64)
     for event, checks in zip(events.events, events.checks, strict=True):
-        for block, p in checks:
-            expected[block].append(p)
+        add(checks, none, none)
         if isinstance(event, Repeat):
             ox, oy = written(event.offset[0], units), written(event.offset[1], units)
-            for k in range(1, event.repeats + 1):
-                for n in range(event.first, event.last + 1):
-                    for block, (px, py) in events.checks[n - 1]:
-                        expected[block].append((px + k * ox, py + k * oy))
-    return expected
+            k = np.arange(1, event.repeats + 1, dtype=np.int64)
+            repeated = [c for n in range(event.first, event.last + 1) for c in events.checks[n - 1]]
+            add(repeated, k * ox, k * oy)
+    if not xs:
+        return _Expected(np.zeros((0, 2)), np.zeros(0, dtype=np.int64))
+    points = np.column_stack((np.concatenate(xs), np.concatenate(ys)))
+    return _Expected(points, np.concatenate(blocks))
 
 
-class _Grid:
-    """Points bucketed by cell, to find one within a tolerance below the cell size fast."""
+class _Near:
+    """Points bucketed by cell (sorted cell keys, optionally with a block), to find for many
+    query points at once whether one lies within a tolerance below the cell size: the
+    neighbouring cells of each query are looked up with `searchsorted`."""
 
-    def __init__(self, cell: int) -> None:
+    SPAN = 1 << 20  # cells either side of zero a key can hold (±2.6 m at 2.54 µm)
+
+    def __init__(
+        self,
+        points: npt.NDArray[np.float64],
+        cell: int,
+        blocks: npt.NDArray[np.int64] | None = None,
+    ) -> None:
         self.cell = cell
-        self.cells: dict[tuple[int, int], list[Pt]] = defaultdict(list)
+        self.points = points
+        keys = self.keys(points, blocks)
+        self.order = np.argsort(keys, kind="stable")
+        self.sorted_keys = keys[self.order]
+        # The most points in one key: how many candidates a query takes from each cell.
+        edges = np.flatnonzero(np.diff(self.sorted_keys)) if len(keys) else keys
+        bounds = np.concatenate(([0], edges + 1, [len(keys)]))
+        self.most = int(np.diff(bounds).max()) if len(keys) else 0
 
-    def key(self, p: Pt) -> tuple[int, int]:
-        return math.floor(p[0] / self.cell), math.floor(p[1] / self.cell)
+    def cells(self, points: npt.NDArray[np.float64]) -> npt.NDArray[np.int64]:
+        return np.floor(points / self.cell).astype(np.int64) + self.SPAN
 
-    def add(self, p: Pt) -> None:
-        self.cells[self.key(p)].append(p)
+    def keys(
+        self, points: npt.NDArray[np.float64], blocks: npt.NDArray[np.int64] | None
+    ) -> npt.NDArray[np.int64]:
+        c = self.cells(points)
+        keys = c[:, 0] * (2 * self.SPAN) + c[:, 1]
+        if blocks is not None:
+            keys = keys + blocks.astype(np.int64) * (2 * self.SPAN) ** 2
+        return keys
 
-    def near(self, p: Pt, tolerance: float) -> bool:
-        kx, ky = self.key(p)
-        return any(
-            abs(q[0] - p[0]) <= tolerance and abs(q[1] - p[1]) <= tolerance
-            for dx in (-1, 0, 1)
-            for dy in (-1, 0, 1)
-            for q in self.cells.get((kx + dx, ky + dy), ())
-        )
+    def _pairs(
+        self,
+        query: npt.NDArray[np.float64],
+        tolerance: float,
+        blocks: npt.NDArray[np.int64] | None,
+    ) -> Iterator[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]]:
+        """(query index, point index) of every pair within `tolerance`, in batches."""
+        if not len(query) or not len(self.points):
+            return
+        base = self.keys(query, blocks)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                key = base + dx * (2 * self.SPAN) + dy
+                lo = np.searchsorted(self.sorted_keys, key, side="left")
+                hi = np.searchsorted(self.sorted_keys, key, side="right")
+                for j in range(self.most):
+                    which = np.flatnonzero(lo + j < hi)
+                    if not len(which):
+                        break
+                    found = self.order[lo[which] + j]
+                    close = np.all(np.abs(self.points[found] - query[which]) <= tolerance, axis=1)
+                    yield which[close], found[close]
+
+    def near(
+        self,
+        query: npt.NDArray[np.float64],
+        tolerance: float,
+        blocks: npt.NDArray[np.int64] | None = None,
+    ) -> npt.NDArray[np.bool_]:
+        """For each query point (of its block), whether a point lies within `tolerance`."""
+        hit = np.zeros(len(query), dtype=bool)
+        for which, _ in self._pairs(query, tolerance, blocks):
+            hit[which] = True
+        return hit
+
+    def mark(
+        self, query: npt.NDArray[np.float64], tolerance: float, reached: npt.NDArray[np.bool_]
+    ) -> None:
+        """Set `reached` for every point within `tolerance` of a query point."""
+        for _, found in self._pairs(query, tolerance, None):
+            reached[found] = True
 
 
 # -- text (§2.2.5) -----------------------------------------------------------------------------

@@ -168,6 +168,7 @@ ASCII_CODES: dict[str, int] = {
 }
 
 _TABLES = {TapeCode.EIA: EIA_CODES, TapeCode.ASCII: ASCII_CODES}
+_CHARACTERS = {code: frozenset(table) for code, table in _TABLES.items()}
 _DELETE = {TapeCode.EIA: EIA_DELETE, TapeCode.ASCII: ASCII_DELETE}
 
 
@@ -211,8 +212,7 @@ def parity_ok(row: int, code: TapeCode) -> bool:
 
 def can_encode(text: str, code: TapeCode) -> bool:
     """True when every character of `text` has a row in `code`."""
-    codes = _TABLES[code]
-    return all(ch in codes for ch in text)
+    return _CHARACTERS[code].issuperset(text)
 
 
 def encode(text: str, code: TapeCode) -> bytes:

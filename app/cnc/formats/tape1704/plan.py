@@ -36,19 +36,17 @@ from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.profile import Profile
 from app.cnc.geometry import arc_sweep
 from app.cnc.needs import blocks_text
-from app.cnc.path import Chunk, CompiledPath, HoleSpan, Op, as_move
+from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
     CoolantOn,
     Dwell,
-    Feed,
     IndexTable,
     Message,
     Move,
     ProgramEnd,
     ProgramStop,
-    Rapid,
     SpindleOff,
     SpindleOn,
     ToolChange,
@@ -190,14 +188,19 @@ class Planner:
                 if len(items) > 1:
                     yield from items[:-1]
                     del items[:-1]
-                move = as_move(table[index], strings)
+                row = table[index]
                 index += 1
-                if isinstance(move, Rapid | Feed | ArcFeed):
-                    mz = self.machine_z(move.z, tool)
+                op = row[0]
+                if op <= Op.ARC_CCW:
+                    # Motion rows straight from the table (no Move object: most rows are
+                    # motion, and making one each was a sixth of the tape's time).
+                    _, tag, block, mx, my, mz_path, cx, cy, feed, _ = row
+                    rapid = op == Op.RAPID
+                    mz = self.machine_z(mz_path, tool)
                     if self.uncalibrated(tool):
-                        if not isinstance(move, Rapid) or move.z < z:
+                        if not rapid or mz_path < z:
                             report.error(
-                                move.block,
+                                block,
                                 f"tool {tool} is not calibrated (TCAL ****): its Z words cannot "
                                 "place the tip for this move; calibrate it in Data Block 0 or "
                                 "use z-zero=g94",
@@ -205,11 +208,11 @@ class Planner:
                         elif tool not in warned_uncalibrated:
                             warned_uncalibrated.add(tool)
                             report.warning(
-                                move.block,
+                                block,
                                 f"tool {tool} is not calibrated: its Z words take TCAL as 0, "
                                 "so the tip's height above the part is not known",
                             )
-                    if isinstance(move, Rapid):
+                    if rapid:
                         span = cycles.get(index - 1)
                         cycle = self.cycle(span, table, index - 1, (x, y, z), tool)
                         if cycle is not None:
@@ -218,29 +221,28 @@ class Planner:
                             index += used - 1
                             x, y, z = motion.end[0], motion.end[1], end_z
                             continue
-                        items.append(
-                            Motion(move.block, Kind.RAPID, (move.x, move.y, mz), tag=move.tag)
-                        )
-                    elif isinstance(move, Feed):
-                        items.append(
-                            Motion(move.block, Kind.LINE, (move.x, move.y, mz), feed=move.feed)
-                        )
+                        items.append(Motion(block, Kind.RAPID, (mx, my, mz), tag=TAGS[tag]))
+                    elif op == Op.FEED:
+                        items.append(Motion(block, Kind.LINE, (mx, my, mz), feed=feed))
                     elif profile.circular:
                         items.append(
                             Motion(
-                                move.block,
+                                block,
                                 Kind.ARC,
-                                (move.x, move.y, mz),
-                                centre=(move.cx, move.cy),
-                                clockwise=move.clockwise,
-                                feed=move.feed,
-                                full_circle=(move.x, move.y) == (x, y),
+                                (mx, my, mz),
+                                centre=(cx, cy),
+                                clockwise=op == Op.ARC_CW,
+                                feed=feed,
+                                full_circle=(mx, my) == (x, y),
                             )
                         )
                     else:
-                        items.extend(self.chords(move, (x, y), mz, tool))
-                    x, y, z = move.x, move.y, move.z
+                        arc = as_move(row, strings)
+                        assert isinstance(arc, ArcFeed)
+                        items.extend(self.chords(arc, (x, y), mz, tool))
+                    x, y, z = mx, my, mz_path
                     continue
+                move = as_move(row, strings)
                 if isinstance(move, ProgramStop) and self.quill_hole(move, items, (x, y)):
                     continue
                 items.extend(self.aux(move, changes))

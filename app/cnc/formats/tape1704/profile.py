@@ -167,6 +167,17 @@ PROFILE_OPTIONS: tuple[Option, ...] = (
 )
 
 
+def half_even(numerator: int, denominator: int) -> int:
+    """numerator / denominator (denominator > 0) rounded half to even, as
+    `round(Fraction(numerator, denominator))` in integers alone (a tape rounds a length or
+    feed per word: a Fraction each was a fifth of the tape's time)."""
+    quotient, remainder = divmod(numerator, denominator)
+    twice = 2 * remainder
+    if twice > denominator or (twice == denominator and quotient % 2):
+        quotient += 1
+    return quotient
+
+
 @dataclass(frozen=True)
 class TapeFormat:
     """How numbers are punched for one machine configuration (seed 000 §2, §4).
@@ -208,8 +219,7 @@ class TapeFormat:
 
     def units(self, nm: int) -> int:
         """`nm` rounded once (half-even) to the resolution, in units of the last digit."""
-        ratio = self.step_nm // self.digit_nm
-        return round(Fraction(nm, self.step_nm)) * ratio
+        return half_even(nm, self.step_nm) * (self.step_nm // self.digit_nm)
 
     def show(self, units: int) -> str:
         """A word value as a length for messages, e.g. `99.9999 in`."""
@@ -219,8 +229,7 @@ class TapeFormat:
 
     def feed_value(self, feed_nm: int) -> int:
         """A feed (nm/min) as its F word value, rounded to the feed step."""
-        value = round(Fraction(feed_nm, self.feed_unit_nm * self.feed_step))
-        return value * self.feed_step
+        return half_even(feed_nm, self.feed_unit_nm * self.feed_step) * self.feed_step
 
     def show_feed(self, value: int) -> str:
         number = Fraction(value * self.feed_unit_nm, self.unit_nm)

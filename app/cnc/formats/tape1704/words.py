@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from app.cnc.emit.target import Report
 from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion
-from app.cnc.formats.tape1704.profile import Profile, TapeFormat
+from app.cnc.formats.tape1704.profile import Profile, TapeFormat, half_even
 from app.cnc.geometry import arc_sweep
 
 Point = tuple[int, int, int | None]
@@ -99,6 +99,7 @@ class Rounder:
         self.profile = profile
         self.start = start
         self.report = Report("rounding")
+        self.limit = fmt.max_units
 
     def first(self) -> Point:
         """The start in tape units."""
@@ -110,6 +111,8 @@ class Rounder:
         fmt, report = self.fmt, self.report
         pos = self.first()
         carry_restart = False
+        # fmt.units inlined for the end points (three a move): the same half-even rounding.
+        step, ratio, limit = fmt.step_nm, fmt.step_nm // fmt.digit_nm, self.limit
         for item in items:
             if isinstance(item, Aux):
                 if item.preset_z:
@@ -117,8 +120,17 @@ class Rounder:
                 yield item
                 continue
             ex, ey, ez = item.end
-            end = (fmt.units(ex), fmt.units(ey), None if ez is None else fmt.units(ez))
-            self.check_capacity(item.block, end)
+            end = (
+                half_even(ex, step) * ratio,
+                half_even(ey, step) * ratio,
+                None if ez is None else half_even(ez, step) * ratio,
+            )
+            if not (
+                -limit <= end[0] <= limit
+                and -limit <= end[1] <= limit
+                and (end[2] is None or -limit <= end[2] <= limit)
+            ):
+                self.check_capacity(item.block, end)
             item.restart = item.restart or carry_restart
             carry_restart = False
             if item.kind in (Kind.LINE, Kind.ARC, Kind.CYCLE):
@@ -161,7 +173,9 @@ class Rounder:
             pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
 
     def check_capacity(self, block: int, point: Sequence[int | None], axes: str = "XYZ") -> None:
-        limit = self.fmt.max_units
+        limit = self.limit
+        if all(value is None or -limit <= value <= limit for value in point):
+            return
         for axis, value in zip(axes, point, strict=True):
             if value is not None and abs(value) > limit:
                 self.report.error(
@@ -175,6 +189,8 @@ class Rounder:
         programmed feed, one it rounds is reported (never silently)."""
         fmt = self.fmt
         value = fmt.feed_value(feed_nm)
+        if fmt.feed_min <= value <= fmt.feed_max and value * fmt.feed_unit_nm == feed_nm:
+            return value  # carried exactly: nothing to say (and no words made to say it)
         programmed = fmt.show_programmed_feed(feed_nm)
         if value < fmt.feed_min:
             self.report.error(
@@ -331,7 +347,7 @@ class Words:
             words = [("N", str(self.number % 1000)), *words]
             self.number += profile.sequence_increment
         joiner = "\t" if profile.tabs else ""
-        text = joiner.join(letter + value for letter, value in words)
+        text = joiner.join([letter + value for letter, value in words])
         if comment:
             text += f" ({comment})"
         line = Line(text, block, leader_after=leader_after)

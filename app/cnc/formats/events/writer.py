@@ -51,6 +51,7 @@ chose where the manual is vague (docs/readings.md):
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace

@@ -1,0 +1,74 @@
+"""Pocket: planning an irregular POCKET (issue 22) against the routines' pockets.
+
+Each golden POCKET program (`tests/golden/pocket-*`) is compiled in a fresh child on a cold
+cache: the time is the best of up to five compiles, almost all of it the pocket engine
+(pyclipper offsets, the exact rings, the links and the cleanup search). Baseline in the
+same child: the golden CIRCLE and FRAME POCKET programs, compiled the same way. What it
+tells a programmer: how long an edit of a pocket's blocks takes to answer (an edit of any
+other block reuses the compiled pocket), and how many moves the plan makes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from bench.common import (
+    ROOT,
+    Result,
+    Section,
+    best_time,
+    fmt_count,
+    fmt_ratio,
+    fmt_seconds,
+    run_child,
+    table,
+)
+
+CASES = ("pocket-islands", "pocket-mm", "pocket-loop")
+BASELINES = ("circle-pocket", "frame-pocket")
+
+
+def compile_case(name: str) -> Result:
+    """Best cold compile of golden case `name` and what it holds (in a child)."""
+    from app.cnc import document
+    from app.cnc.compiler import Cache, compile_program
+    from app.cnc.interpret import interpret
+
+    text = (Path(ROOT) / "tests" / "golden" / name / "program.json").read_text(encoding="utf-8")
+    program = document.loads(text)
+    seconds = best_time(lambda: compile_program(program, Cache()))
+    moves = len(interpret(program).moves)
+
+    return {"seconds": seconds, "moves": moves, "blocks": len(program.blocks)}
+
+
+def run(timeout: float = 300.0) -> Section:
+    section = Section("Pocket: planning an irregular POCKET")
+    base: list[float] = []
+    rows: list[list[str]] = []
+    for name in (*BASELINES, *CASES):
+        r = run_child("bench.pocket:compile_case", {"name": name}, timeout)
+        if "error" in r:
+            rows.append([name, f"failed: {r['error']}", "", "", ""])
+            continue
+        if name in BASELINES:
+            base.append(r["seconds"])
+        ratio = fmt_ratio(r["seconds"] / min(base)) if base else ""
+        rows.append(
+            [
+                f"`{name}`" + (" (baseline)" if name in BASELINES else ""),
+                fmt_count(r["blocks"]),
+                fmt_count(r["moves"]),
+                fmt_seconds(r["seconds"]),
+                ratio,
+            ]
+        )
+    section.lines += [
+        "Each golden program compiled in a fresh process on a cold cache, best of up to five;",
+        "*moves* are its whole tool path's;",
+        "*× baseline* is the time over the faster of the CIRCLE and FRAME POCKET goldens,",
+        "same run. An edit of a POCKET's blocks replans it; an edit elsewhere does not.",
+        "",
+        *table(["program", "blocks", "moves", "compile", "× baseline"], rows),
+    ]
+    return section

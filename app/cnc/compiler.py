@@ -59,6 +59,7 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.memo import Memo
 from app.cnc.mill import Finding, Path, plan_sequence
 from app.cnc.path import (
     HOLE,
@@ -144,7 +145,7 @@ class NodeResult:
     findings: list[Finding]
 
 
-class Cache:
+class Cache(Memo[NodeResult]):
     """Compiled top-level nodes by (blocks, entry state, Data Block 0 and units): an edit
     recompiles only what changed.
 
@@ -153,36 +154,8 @@ class Cache:
     threads (a web server's requests).
     """
 
-    def __init__(self, rows: int = 1 << 19) -> None:
-        self.budget = rows
-        self.held = 0
-        self.entries: OrderedDict[object, tuple[NodeResult, int]] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-        self.lock = threading.Lock()
-
-    def get(self, key: object) -> NodeResult | None:
-        with self.lock:
-            found = self.entries.get(key)
-            if found is None:
-                self.misses += 1
-                return None
-            self.hits += 1
-            self.entries.move_to_end(key)
-            return found[0]
-
     def put(self, key: object, value: NodeResult) -> None:
-        rows = size(value.node) + 1
-        if rows > self.budget // 10:
-            return
-        with self.lock:
-            if key in self.entries:
-                return
-            self.entries[key] = (value, rows)
-            self.held += rows
-            while self.held > self.budget:
-                _, (_, dropped) = self.entries.popitem(last=False)
-                self.held -= dropped
+        self.keep(key, value, size(value.node) + 1)
 
 
 @dataclass(slots=True, frozen=True)

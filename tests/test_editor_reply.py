@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from dataclasses import replace
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -16,6 +18,7 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app import create_app
+from app.cnc.blocks import Hole
 from app.web import get_library
 from bench.editor import HTMX, edit_form
 from bench.programs import editor_program
@@ -67,3 +70,34 @@ def test_an_edit_answers_with_the_rows_it_changed(app: Flask) -> None:
     assert "<svg" in shown and 'id="total" hx-swap-oob="true"' in shown
     # DRILL 11's new X is in the drawing the reply asked for.
     assert "Cycle time" in shown
+
+
+def test_an_edit_from_a_version_another_worker_showed_answers_with_its_rows(app: Flask) -> None:
+    """Under gunicorn the page of the version an edit starts from may have come from the
+    other worker, so this one never worked out that version's rows: the reply is still the
+    rows that changed (worked out from the stored version), not the whole list page."""
+    program = editor_program(500)
+    with app.app_context():
+        library = get_library()
+        program_id = library.create(program).id
+        client: FlaskClient = app.test_client()
+        page = client.get(f"/programs/{program_id}?edit=11").get_data(as_text=True)
+        # The other worker saves version 2 (DRILL 21 moved) and shows it; this process has
+        # worked out only version 1's rows.
+        first = program.blocks[20]
+        assert isinstance(first, Hole)
+        moved = replace(first, x=first.x + Decimal("0.03"))
+        blocks = (*program.blocks[:20], moved, *program.blocks[21:])
+        library.save(program_id, replace(program, blocks=blocks), based_on=1)
+    answer = client.post(
+        f"/programs/{program_id}/blocks",
+        data=edit_form(csrf_of(page), 2, 1, 500),  # DRILL 11 to a new X
+        headers=HTMX,
+    )
+    assert answer.status_code == 200
+    text = answer.get_data(as_text=True)
+    rows = {int(n) for n in OOB_ROW.findall(text)}
+    assert 11 in rows and len(rows) <= 3, rows
+    assert 'id="version" hx-swap-oob="true">v3<' in text
+    assert 'id="blocks"' not in text
+    assert len(text.encode()) < 15_000

@@ -8,7 +8,8 @@ went), the cycle time, the version the row buttons post, and the new drawing.
 
 What a version of a program shows (its problems, its preview and times) is worked out once
 and kept for the last few versions (`shown_of`): the GET after an edit, and the rows of the
-version an edit starts from, cost nothing.
+version an edit starts from, cost nothing when this process showed it (else they are worked
+out from the stored version, mostly from the compile's and the cycle time's kept nodes).
 """
 
 from __future__ import annotations
@@ -143,13 +144,6 @@ def shown_of(program: Program) -> Shown:
     return found
 
 
-def cached(program: Program) -> Shown | None:
-    """`shown_of(program)` if it was worked out already, else None (nothing is computed)."""
-    with _LOCK:
-        found = _SHOWN.get(id(program))
-    return found if found is not None and found.program is program else None
-
-
 @dataclass(frozen=True)
 class Row:
     """One row of the block list."""
@@ -180,19 +174,32 @@ def row(shown: Shown, number: int, current: bool = False) -> Row:
 
 def changed_rows(old: Shown, new: Shown, first: int, last: int) -> list[Row]:
     """The rows `first`…`last` of `new` that do not read as they did in `old` (same blocks
-    count: an edit in place)."""
-    return [
-        fresh
-        for number in range(first, last + 1)
-        if (fresh := row(new, number)) != row(old, number)
-    ]
+    count: an edit in place). A row is made of its block, problems and time: where all
+    three are the same as before (most rows of an edit: the same block object, the same
+    figures), the row is the same and is not made again."""
+    changed = []
+    for number in range(first, last + 1):
+        if (
+            old.program.blocks[number - 1] is new.program.blocks[number - 1]
+            and old.per_block.get(number) == new.per_block.get(number)
+            and old.by_block.get(number) == new.by_block.get(number)
+        ):
+            continue
+        fresh = row(new, number)
+        if fresh != row(old, number):
+            changed.append(fresh)
+    return changed
 
 
 # -- contexts and rendering ---------------------------------------------------------------------
 
 
-def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) -> dict[str, Any]:
-    """The block list's page: the page of `focus` unless the entry asks for another."""
+def list_context(
+    stored: StoredProgram, shown: Shown, entry: Entry, focus: int, rows: bool = True
+) -> dict[str, Any]:
+    """The block list's page: the page of `focus` unless the entry asks for another.
+    `rows` False: its bounds (`first`, `last`) without the rows (an edit's reply that sends
+    only the rows that changed)."""
     count = len(stored.program.blocks)
     pages = page_of(max(count, 1))  # "new block…" ends the last page
     page = min(entry.page or page_of(focus), pages)
@@ -200,7 +207,8 @@ def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) 
     last = min(count, first + PAGE_SIZE - 1)
     current = entry.at if entry.editing else 0
     return {
-        "rows": [row(shown, n, n == current) for n in range(first, last + 1)],
+        "rows": [row(shown, n, n == current) for n in range(first, last + 1)] if rows else [],
+        "last": last,
         "block_count": count,
         "page": page,
         "pages": pages,
@@ -301,15 +309,19 @@ def render_reply(
 
     `focus` is the block the list stays at (the edited one). `in_place`: the edit kept
     every block where it was, so the rows can be compared one for one with the version the
-    edit started from — when that version's rows are still known (else, and when blocks
-    moved, the whole list page is sent)."""
+    edit started from (worked out here when this process did not show that version: under
+    gunicorn the other worker may have); when blocks moved, the whole list page is sent."""
     shown = shown_of(saved.program)
-    listing = list_context(saved, shown, entry, focus)
-    changed: list[Row] | None = None
-    old = cached(before) if in_place else None
-    if old is not None:
-        last = listing["first"] + len(listing["rows"]) - 1
-        changed = changed_rows(old, shown, listing["first"], last)
+    if not in_place:
+        return render_template(
+            "editor/_reply.html",
+            **_common(saved),
+            **list_context(saved, shown, entry, focus),
+            **entry_context(saved, entry, shown.problems),
+            changed=None,
+        ), 200
+    listing = list_context(saved, shown, entry, focus, rows=False)
+    changed = changed_rows(shown_of(before), shown, listing["first"], listing["last"])
     return render_template(
         "editor/_reply.html",
         **_common(saved),

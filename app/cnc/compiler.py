@@ -59,7 +59,7 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.memo import Memo
+from app.cnc.memo import ByObject, Memo
 from app.cnc.mill import Finding, Path, plan_sequence
 from app.cnc.path import (
     HOLE,
@@ -158,6 +158,42 @@ class Cache(Memo[NodeResult]):
         self.keep(key, value, size(value.node) + 1)
 
 
+class _Key:
+    """A top-level node's cache key: (its blocks, shape, entry state, Data Block 0 and
+    units), with its hash worked out once (a lookup hashes a key twice) from each block's
+    hash, kept per block object (most blocks are the same objects edit after edit)."""
+
+    __slots__ = ("hash", "parts")
+
+    def __init__(
+        self,
+        blocks: tuple[Block, ...],
+        shape: object,
+        state: State,
+        context: object,
+        context_hash: int,
+    ) -> None:
+        self.parts = (blocks, shape, state, context)
+        self.hash = hash((tuple(_block_hash(b) for b in blocks), shape, state, context_hash))
+
+    def __hash__(self) -> int:
+        return self.hash
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Key) and self.hash == other.hash and self.parts == other.parts
+
+
+_BLOCK_HASHES: ByObject[int] = ByObject()
+
+
+def _block_hash(block: Block) -> int:
+    found = _BLOCK_HASHES.get(block)
+    if found is None:
+        found = hash(block)
+        _BLOCK_HASHES.keep(block, found)
+    return found
+
+
 @dataclass(slots=True, frozen=True)
 class Compiled:
     """A compiled program: its path and the problems its geometry has (block numbers
@@ -226,6 +262,7 @@ class _Compiler:
         db0 = program.block0
         self.cache = cache
         self.context = (db0, units)
+        self.context_hash = hash(self.context)
         self.z_retract = to_nm(db0.z_retract, units)
         self.tools = {
             t.number: ToolInfo(
@@ -276,11 +313,12 @@ class _Compiler:
         top: list[Node] = []
         for node in build_nodes(self.blocks, tolerant=True):
             first = _first_index(node)
-            key = (
+            key = _Key(
                 tuple(self.blocks[i] for i in _indexes(node)),
                 _shape(node, first),
                 self.state(),
                 self.context,
+                self.context_hash,
             )
             found = self.cache.get(key) if self.cache is not None else None
             if found is None:

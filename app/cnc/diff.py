@@ -16,6 +16,7 @@ from typing import Any
 
 from app.cnc.blocks import Block, DataBlock0, Program, field_label
 from app.cnc.kinds import REGISTRY
+from app.cnc.memo import ByObject
 
 
 def _show(value: Any) -> str:
@@ -39,7 +40,7 @@ def _key(block: Block) -> tuple[Any, ...]:
 # once). Cleared when full; a clear happens only between two diffs' numberings.
 TOKENS = 1 << 15
 _BY_KEY: dict[tuple[Any, ...], int] = {}
-_BY_ID: dict[int, tuple[Block, int]] = {}
+_BY_OBJECT: ByObject[int] = ByObject(TOKENS)
 _LOCK = threading.Lock()
 
 
@@ -48,18 +49,17 @@ def _tokens(old: Sequence[Block], new: Sequence[Block]) -> tuple[list[int], list
     sequence matcher compares (the same matches as comparing the keys, without hashing
     every block's values on every save)."""
     with _LOCK:
-        if len(_BY_ID) + len(old) + len(new) > TOKENS:
-            _BY_ID.clear()
+        if len(_BY_KEY) + len(old) + len(new) > TOKENS:
+            _BY_OBJECT.entries.clear()
             _BY_KEY.clear()
         return [_token(b) for b in old], [_token(b) for b in new]
 
 
 def _token(block: Block) -> int:
-    seen = _BY_ID.get(id(block))
-    if seen is not None and seen[0] is block:
-        return seen[1]
-    token = _BY_KEY.setdefault(_key(block), len(_BY_KEY))
-    _BY_ID[id(block)] = (block, token)
+    token = _BY_OBJECT.get(block)
+    if token is None:
+        token = _BY_KEY.setdefault(_key(block), len(_BY_KEY))
+        _BY_OBJECT.keep(block, token)
     return token
 
 

@@ -51,3 +51,25 @@ class Memo(Generic[V]):
             while self.held > self.budget:
                 _, (_, dropped) = self.entries.popitem(last=False)
                 self.held -= dropped
+
+
+class ByObject(Generic[V]):
+    """A value per object, by identity (the same block objects come back edit after edit:
+    what was worked out for one is looked up without hashing its values). Each entry keeps
+    its object alive, so no id in it is reused meanwhile; cleared when `limit` is reached.
+    Safe to share between threads."""
+
+    def __init__(self, limit: int = 1 << 15) -> None:
+        self.limit = limit
+        self.entries: dict[int, tuple[object, V]] = {}
+        self.lock = threading.Lock()
+
+    def get(self, obj: object) -> V | None:
+        found = self.entries.get(id(obj))
+        return found[1] if found is not None and found[0] is obj else None
+
+    def keep(self, obj: object, value: V) -> None:
+        with self.lock:
+            if len(self.entries) >= self.limit:
+                self.entries.clear()
+            self.entries[id(obj)] = (obj, value)

@@ -44,6 +44,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 
@@ -108,9 +109,9 @@ def retract_height(z_up: int, z_retract: int) -> int:
     return max(z_up, 0) + z_retract
 
 
-@dataclass(frozen=True, slots=True)
-class State:
-    """Where the control is between nodes: what a node's moves depend on."""
+class State(NamedTuple):
+    """Where the control is between nodes: what a node's moves depend on. (A tuple: made,
+    compared and hashed once per node per compile, and a tuple does that fastest.)"""
 
     x: int
     y: int
@@ -156,6 +157,11 @@ class Cache(Memo[NodeResult]):
 
     def put(self, key: object, value: NodeResult) -> None:
         self.keep(key, value, size(value.node) + 1)
+
+
+# A top-level node's one placement: where it was compiled (read only; shared by every Run).
+_HERE = np.zeros((1, 2), dtype=np.int64)
+_HERE.flags.writeable = False
 
 
 class _Key:
@@ -312,9 +318,10 @@ class _Compiler:
     def run(self) -> Compiled:
         top: list[Node] = []
         for node in build_nodes(self.blocks, tolerant=True):
-            first = _first_index(node)
+            indexes = _indexes(node)
+            first = indexes[0]
             key = _Key(
-                tuple(self.blocks[i] for i in _indexes(node)),
+                tuple(self.blocks[i] for i in indexes),
                 _shape(node, first),
                 self.state(),
                 self.context,
@@ -326,7 +333,7 @@ class _Compiler:
                 if self.cache is not None:
                     self.cache.put(key, found)
             self.restore(found.exit)
-            top.append(Run(found.node, np.zeros((1, 2), dtype=np.int64), first + 1))
+            top.append(Run(found.node, _HERE, first + 1))
             self.findings += [_shifted(f, first + 1) for f in found.findings]
         self.base = 0
         last = len(self.blocks)
@@ -853,10 +860,6 @@ def _indexes(node: object) -> list[int]:
     assert isinstance(node, LoopPattern)
     inner = [i for child in node.body for i in _indexes(child)]
     return sorted({*inner, node.rep})
-
-
-def _first_index(node: object) -> int:
-    return _indexes(node)[0]
 
 
 def _shape(node: object, first: int) -> object:

@@ -213,7 +213,10 @@ class Compiled:
 # The nodes every compile in this process shares, and the last few programs compiled:
 # validation, the preview, the time and an export of the same program compile it once.
 SHARED_CACHE = Cache()
-_RECENT: OrderedDict[Program, Compiled] = OrderedDict()
+# By what the compile reads of a program, by object for its blocks and Data Block 0 (a
+# program's hash would hash every block's values): each entry keeps its program, so no id
+# in a key is reused while the entry is in.
+_RECENT: OrderedDict[tuple[int, int, Units], tuple[Program, Compiled]] = OrderedDict()
 _RECENT_SIZE = 8
 _RECENT_LOCK = threading.Lock()
 
@@ -228,14 +231,15 @@ def compile_program(program: Program, cache: Cache | None = None) -> Compiled:
     """
     if cache is not None:
         return _Compiler(program, cache).run()
+    key = (id(program.blocks), id(program.block0), program.units)
     with _RECENT_LOCK:
-        found = _RECENT.get(program)
+        found = _RECENT.get(key)
         if found is not None:
-            _RECENT.move_to_end(program)
-            return found
+            _RECENT.move_to_end(key)
+            return found[1]
     result = _Compiler(program, SHARED_CACHE).run()
     with _RECENT_LOCK:
-        _RECENT[program] = result
+        _RECENT[key] = (program, result)
         while len(_RECENT) > _RECENT_SIZE:
             _RECENT.popitem(last=False)
     return result

@@ -169,7 +169,7 @@ def _top_level(root: Node) -> Iterator[tuple[Node, int, bool]]:
     numbers relative to `base`); else the node as it is, blocks absolute (base 0)."""
     nodes = root.nodes if isinstance(root, Seq) else [root]
     for node in nodes:
-        if isinstance(node, Run) and len(node.offsets) == 1 and not node.offsets.any():
+        if isinstance(node, Run) and node.offsets.tolist() == [[0, 0]]:
             yield node.node, node.base, True
         else:
             yield node, 0, False
@@ -250,7 +250,8 @@ class _Totals:
     def add(self, timed: _Timed, base: int) -> None:
         """Add `timed`, its block numbers + `base`."""
         self.result.tool_changes += timed.tool_changes
-        self.result.operator_waits += [(block + base, why) for block, why in timed.waits]
+        if timed.waits:
+            self.result.operator_waits += [(block + base, why) for block, why in timed.waits]
         self.pending.append((timed, base))
         self.count += len(timed.seconds)
         if self.count >= FLAT_ROWS:

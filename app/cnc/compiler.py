@@ -52,6 +52,7 @@ from app.cnc import limits
 from app.cnc.blocks import (
     Block,
     BoltCircle,
+    DataBlock0,
     Hole,
     HoleOp,
     Mode,
@@ -190,6 +191,18 @@ class _Key:
 
 
 _BLOCK_HASHES: ByObject[int] = ByObject()
+# One object per distinct (Data Block 0, units): every node's key holds it, and a key
+# compared with a kept one then finds it the same object instead of comparing every tool
+# (each version read from the library has a Data Block 0 object of its own).
+_CONTEXTS: dict[tuple[DataBlock0, Units], tuple[DataBlock0, Units]] = {}
+_CONTEXT_LOCK = threading.Lock()
+
+
+def _interned(context: tuple[DataBlock0, Units]) -> tuple[DataBlock0, Units]:
+    with _CONTEXT_LOCK:
+        if len(_CONTEXTS) > 64:
+            _CONTEXTS.clear()
+        return _CONTEXTS.setdefault(context, context)
 
 
 def _block_hash(block: Block) -> int:
@@ -271,7 +284,7 @@ class _Compiler:
         units = program.units
         db0 = program.block0
         self.cache = cache
-        self.context = (db0, units)
+        self.context = _interned((db0, units))
         self.context_hash = hash(self.context)
         self.z_retract = to_nm(db0.z_retract, units)
         self.tools = {

@@ -5,14 +5,18 @@ The program (bench/programs.py `editor_program`: holes, bolt circles, pockets, c
 LOOPs) is created through the library API in a temporary SQLite database; gunicorn is
 started on a free 127.0.0.1 port. One client then does what the editor's htmx form does:
 POST /programs/<id>/blocks with `edit=N`, the DRILL's fields and the version it was shown,
-and gets the editor fragment back with the new block list and SVG preview. Each edit moves
-one DRILL (block 1, 11, 21... in turn) so every save is a real change and a new revision.
+and gets the reply back (the entry panel, the rows that changed, the cycle time), which asks
+for the new drawing; the client then GETs it, as the page does. Each edit moves one DRILL
+(block 1, 11, 21... in turn) so every save is a real change and a new revision. With two
+workers an edit may land on the worker that did not show the version it starts from (it
+then reads that version and works out its rows).
 
 Baselines in the same run, same server: a static file (the server's floor) and the GET of
 the editor page (the same rendering without the save). Then, in a child process, the parts
 of one edit timed alone (document JSON, revision summary, validation, interpretation,
-estimate, drawing, the whole request through Flask's test client) to show where the time
-goes. Target (issue 10): p95 ≤ 50 ms.
+estimate, the compile and cycle time of an edited version, the rows of a starting version
+another worker saved, drawing, the whole request through Flask's test client) to show where
+the time goes. Targets (issues 10 and 18): p95 ≤ 50 ms, reply ≤ 50 kB.
 """
 
 from __future__ import annotations
@@ -141,11 +145,13 @@ def parts_case(blocks: int) -> Result:
     from app import create_app
     from app.cnc import document
     from app.cnc.blocks import Hole
+    from app.cnc.compiler import compile_program
     from app.cnc.diff import summary
     from app.cnc.emit.svg import draw
     from app.cnc.estimate import estimate
     from app.cnc.interpret import interpret
     from app.cnc.validate import validate
+    from app.web.editor_page import shown_of
     from app.web.preview import preview
     from bench.common import best_time
     from bench.programs import editor_program
@@ -162,6 +168,7 @@ def parts_case(blocks: int) -> Result:
 
     text = document.dumps(program)
     toolpath = interpret(program)
+    shown_of(program)
     parts = {
         "document.loads (a version not read before; none per edit now)": lambda: document.loads(
             text
@@ -171,6 +178,12 @@ def parts_case(blocks: int) -> Result:
         "validate an edited version (once per edit)": lambda: validate(edited()),
         "interpret": lambda: interpret(program),
         "estimate": lambda: estimate(toolpath),
+        "compile + cycle time of an edited version (the nodes it left alone are kept)": (
+            lambda: estimate(compile_program(edited()).path)
+        ),
+        "a starting version another worker saved: read it, validate it, time it (rows)": (
+            lambda: shown_of(document.loads(text))
+        ),
         "draw (SVG)": lambda: draw(program, embedded_style=False),
         "editor preview() = validate + compile + estimate + draw": lambda: preview(program),
     }

@@ -18,7 +18,7 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app import create_app
-from app.cnc.blocks import Hole
+from app.cnc.blocks import Copy, Hole
 from app.web import get_library
 from bench.editor import HTMX, edit_form
 from bench.programs import editor_program
@@ -101,3 +101,33 @@ def test_an_edit_from_a_version_another_worker_showed_answers_with_its_rows(app:
     assert 'id="version" hx-swap-oob="true">v3<' in text
     assert 'id="blocks"' not in text
     assert len(text.encode()) < 15_000
+
+
+def test_a_copy_that_makes_more_blocks_answers_with_the_list(app: Flask) -> None:
+    """EXEC of a COPY of blocks 1-3 puts three blocks where the COPY stood: the blocks after
+    it move, so the reply is the whole list page (it answered 500 before: the rows were
+    compared one for one with a version of fewer blocks)."""
+    program = editor_program(20)
+    program = replace(program, blocks=(*program.blocks, Copy(from_block=1, to_block=3)))
+    count = len(program.blocks)
+    with app.app_context():
+        program_id = get_library().create(program).id
+    client: FlaskClient = app.test_client()
+    page = client.get(f"/programs/{program_id}?edit={count}").get_data(as_text=True)
+    form = {
+        "csrf_token": csrf_of(page),
+        "version": "1",
+        "edit": str(count),
+        "kind": "COPY",
+        "units": "inch",
+        "from_block": "1",
+        "to_block": "3",
+        "xof": "1",
+        "action": "exec",
+    }
+    answer = client.post(f"/programs/{program_id}/blocks", data=form, headers=HTMX)
+    assert answer.status_code == 200
+    text = answer.get_data(as_text=True)
+    assert 'id="blocks"' in text and 'data-block="23"' in text
+    with app.app_context():
+        assert len(get_library().get(program_id).program.blocks) == count + 2

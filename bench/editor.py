@@ -55,6 +55,28 @@ HTMX = {"HX-Request": "true"}
 DRAWING = re.compile(r'id="drawing-refresh"[^>]*hx-get="([^"]+)"')
 
 
+# A row's digest of what it shows, as the page keeps it (templates/editor/_row.html).
+SHOWN = re.compile(r'name="shown" value="(\d+):([0-9a-f]+)"')
+
+
+class ShownRows:
+    """The rows a browser shows, as digests: read from the pages it opened and from each
+    reply's rows; an edit sends those of the edited block's page, as the page does."""
+
+    def __init__(self) -> None:
+        self.digests: dict[int, str] = {}
+
+    def read(self, body: str) -> None:
+        self.digests.update((int(n), digest) for n, digest in SHOWN.findall(body))
+
+    def of_page(self, block: int, blocks: int) -> list[str]:
+        from app.web.editor_page import PAGE_SIZE
+
+        first = (block - 1) // PAGE_SIZE * PAGE_SIZE + 1
+        last = min(blocks, first + PAGE_SIZE - 1)
+        return [f"{n}:{self.digests[n]}" for n in range(first, last + 1) if n in self.digests]
+
+
 def _stats(seconds: list[float]) -> dict[str, float]:
     return {
         "n": len(seconds),
@@ -95,6 +117,12 @@ def server_case(blocks: int, edits: int, workers: int, time_limit: float) -> Res
                 return {"error": f"editor page answered {page.status} without a form"}
             static = [client.get("/static/app.css").seconds for _ in range(30)]
             pages = [client.get(f"/programs/{program_id}").seconds for _ in range(10)]
+            # Each page of the list the edits go to, as the machinist pages to the block.
+            shown = ShownRows()
+            from app.web.editor_page import page_of
+
+            for number in range(1, page_of(blocks) + 1):
+                shown.read(client.get(f"/programs/{program_id}/list?page={number}", HTMX).body)
             latencies: list[float] = []
             drawings: list[float] = []
             statuses: dict[str, int] = {}
@@ -104,13 +132,14 @@ def server_case(blocks: int, edits: int, workers: int, time_limit: float) -> Res
             for k in range(edits + 2 * workers):
                 if time.monotonic() - started > time_limit:
                     break
-                answer = client.post(
-                    f"/programs/{program_id}/blocks", edit_form(csrf, version, k, blocks), HTMX
-                )
+                form = edit_form(csrf, version, k, blocks)
+                sent = {**form, "shown": shown.of_page(int(form["edit"]), blocks)}
+                answer = client.post(f"/programs/{program_id}/blocks", sent, HTMX)
                 statuses[str(answer.status)] = statuses.get(str(answer.status), 0) + 1
                 if answer.status != 200:
                     return {"error": f"edit {k} answered {answer.status}: {answer.body[:200]}"}
                 version = answer.version() or version + 1
+                shown.read(answer.body)
                 sizes.append(len(answer.body.encode()))
                 asked = DRAWING.search(answer.body)
                 if asked is None:
@@ -225,18 +254,20 @@ def parts_case(blocks: int) -> Result:
         assert csrf_found and version_found
         csrf, version = csrf_found.group(1), int(version_found.group(1))
         times, sizes = [], []
+        shown = ShownRows()
+        shown.read(page)
+        shown.read(client.get(f"/programs/{program_id}/list?page=2", headers=HTMX).get_data(True))
 
         def edit(k: int) -> float:
             nonlocal version
+            form = edit_form(csrf, version, k, blocks)
+            sent = {**form, "shown": shown.of_page(int(form["edit"]), blocks)}
             started = time.perf_counter()
-            answer = client.post(
-                f"/programs/{program_id}/blocks",
-                data=edit_form(csrf, version, k, blocks),
-                headers=HTMX,
-            )
+            answer = client.post(f"/programs/{program_id}/blocks", data=sent, headers=HTMX)
             seconds = time.perf_counter() - started
             assert answer.status_code == 200, answer.status_code
             body = answer.get_data(as_text=True)
+            shown.read(body)
             sizes.append(len(body.encode()))
             found = VERSION.search(body)
             version = int(found.group(1)) if found else version + 1

@@ -131,3 +131,37 @@ def test_a_copy_that_makes_more_blocks_answers_with_the_list(app: Flask) -> None
     assert 'id="blocks"' in text and 'data-block="23"' in text
     with app.app_context():
         assert len(get_library().get(program_id).program.blocks) == count + 2
+
+
+SHOWN = re.compile(r'name="shown" value="(\d+):([0-9a-f]+)"')
+
+
+def test_an_edit_sent_with_the_rows_shown_answers_with_the_rows_that_differ(app: Flask) -> None:
+    """The page keeps a digest of what each row shows and an edit sends them back: the reply
+    holds the rows that differ from what the browser shows, whichever worker showed them
+    (here row 5 is shown stale, as if it were left from an older version)."""
+    with app.app_context():
+        program_id = get_library().create(editor_program(500)).id
+    client: FlaskClient = app.test_client()
+    page = client.get(f"/programs/{program_id}?edit=11").get_data(as_text=True)
+    shown = dict(SHOWN.findall(page))
+    assert sorted(int(n) for n in shown) == list(range(1, 101))
+    shown["5"] = "0" * 16
+    form = edit_form(csrf_of(page), 1, 1, 500)  # DRILL 11 to a new X
+    data = {**form, "shown": [f"{n}:{d}" for n, d in shown.items()]}
+    answer = client.post(f"/programs/{program_id}/blocks", data=data, headers=HTMX)
+    assert answer.status_code == 200
+    text = answer.get_data(as_text=True)
+    rows = {int(n) for n in OOB_ROW.findall(text)}
+    assert {5, 11} <= rows and len(rows) <= 4, rows
+    # Each row sent carries its new digest, so the next edit sends what is shown now.
+    sent = dict(SHOWN.findall(text))
+    assert set(sent) == {str(n) for n in rows} and sent["5"] == shown_now(client, program_id, 5)
+    assert 'id="blocks"' not in text
+
+
+def shown_now(client: FlaskClient, program_id: int, number: int) -> str:
+    """The digest the page shows now for row `number`."""
+    page = client.get(f"/programs/{program_id}?edit={number}").get_data(as_text=True)
+    digests: dict[str, str] = dict(SHOWN.findall(page))
+    return digests[str(number)]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import hashlib
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -27,6 +28,7 @@ from flask import render_template, request
 from app.cnc.blocks import Block, Mode, Program, open_loops
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
+from app.cnc.memo import ByObject
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
@@ -68,7 +70,19 @@ def is_htmx() -> bool:
 
 def block_summary(block: Block) -> str:
     """The block's values in one line, the way the control's block list reads: what its
-    entry form asks for (its type and sub-type are in its title)."""
+    entry form asks for (its type and sub-type are in its title). Kept per block object
+    (most blocks of one version are the blocks of the version before)."""
+    found = _SUMMARIES.get(block)
+    if found is None:
+        found = _summary(block)
+        _SUMMARIES.keep(block, found)
+    return found
+
+
+_SUMMARIES: ByObject[str] = ByObject()
+
+
+def _summary(block: Block) -> str:
     parts = []
     for f in REGISTRY.prompted(type(block), REGISTRY.sub_kind_of(block)):
         value = getattr(block, f.name)
@@ -156,6 +170,14 @@ class Row:
     has_error: bool
     current: bool = False
 
+    @property
+    def digest(self) -> str:
+        """What the row shows (title, values, time, problems), as 16 hex digits: the page
+        keeps it beside the row and an edit sends it back (the same text in every worker)."""
+        shown = [self.title, self.summary, self.seconds]
+        shown += [f"{p.severity.value}\x1e{p.field or ''}\x1e{p.message}" for p in self.problems]
+        return hashlib.blake2b("\x1f".join(shown).encode(), digest_size=8).hexdigest()
+
 
 def row(shown: Shown, number: int, current: bool = False) -> Row:
     block = shown.program.blocks[number - 1]
@@ -170,6 +192,17 @@ def row(shown: Shown, number: int, current: bool = False) -> Row:
         any(p.severity is Severity.ERROR for p in problems),
         current,
     )
+
+
+def shown_digests() -> dict[int, str]:
+    """The rows the page shows, as the edit's form sent them (`shown`: "number:digest");
+    empty when it sent none (a page without them, a client of its own)."""
+    found = {}
+    for value in request.form.getlist("shown"):
+        number, _, digest = value.partition(":")
+        if number.isdigit() and digest:
+            found[int(number)] = digest
+    return found
 
 
 def changed_rows(old: Shown, new: Shown, first: int, last: int) -> list[Row]:
@@ -309,8 +342,10 @@ def render_reply(
 
     `focus` is the block the list stays at (the edited one). `in_place`: the edit kept
     every block where it was, so the rows can be compared one for one with the version the
-    edit started from (worked out here when this process did not show that version: under
-    gunicorn the other worker may have); when blocks moved, the whole list page is sent."""
+    edit started from; those are the digests the page sent with the edit (`shown_digests`:
+    what the browser shows, whichever worker showed it), else that version's rows (worked
+    out here when this process did not show it: under gunicorn the other worker may have).
+    When blocks moved, the whole list page is sent."""
     shown = shown_of(saved.program)
     if not in_place:
         return render_template(
@@ -321,7 +356,13 @@ def render_reply(
             changed=None,
         ), 200
     listing = list_context(saved, shown, entry, focus, rows=False)
-    changed = changed_rows(shown_of(before), shown, listing["first"], listing["last"])
+    first, last = listing["first"], listing["last"]
+    seen = shown_digests()
+    if all(n in seen for n in range(first, last + 1)):
+        # What the browser shows: no need for the version the edit started from.
+        changed = [r for n in range(first, last + 1) if (r := row(shown, n)).digest != seen[n]]
+    else:
+        changed = changed_rows(shown_of(before), shown, first, last)
     return render_template(
         "editor/_reply.html",
         **_common(saved),

@@ -40,19 +40,26 @@ def csrf_of(page: str) -> str:
     return found.group(1)
 
 
+def edit_drill_11(
+    client: FlaskClient, program_id: int, page: str, version: int, shown: list[str] | None = None
+) -> tuple[str, set[int]]:
+    """Move DRILL 11 to a new X from the editor `page` showing `version` (sending the rows'
+    digests `shown`, as the page does, when given): the reply and the rows it sends."""
+    form: dict[str, str | list[str]] = {**edit_form(csrf_of(page), version, 1, 500)}
+    if shown is not None:
+        form["shown"] = shown
+    answer = client.post(f"/programs/{program_id}/blocks", data=form, headers=HTMX)
+    assert answer.status_code == 200
+    text = answer.get_data(as_text=True)
+    return text, {int(n) for n in OOB_ROW.findall(text)}
+
+
 def test_an_edit_answers_with_the_rows_it_changed(app: Flask) -> None:
     with app.app_context():
         program_id = get_library().create(editor_program(500)).id
     client: FlaskClient = app.test_client()
     page = client.get(f"/programs/{program_id}?edit=11").get_data(as_text=True)
-    answer = client.post(
-        f"/programs/{program_id}/blocks",
-        data=edit_form(csrf_of(page), 1, 1, 500),  # DRILL 11 to a new X
-        headers=HTMX,
-    )
-    assert answer.status_code == 200
-    text = answer.get_data(as_text=True)
-    rows = {int(n) for n in OOB_ROW.findall(text)}
+    text, rows = edit_drill_11(client, program_id, page, 1)
     assert 11 in rows and len(rows) <= 3, rows  # the DRILL, and what its move retimed
     assert 'id="total" hx-swap-oob="true"' in text
     assert 'id="version" hx-swap-oob="true">v2<' in text
@@ -89,14 +96,7 @@ def test_an_edit_from_a_version_another_worker_showed_answers_with_its_rows(app:
         moved = replace(first, x=first.x + Decimal("0.03"))
         blocks = (*program.blocks[:20], moved, *program.blocks[21:])
         library.save(program_id, replace(program, blocks=blocks), based_on=1)
-    answer = client.post(
-        f"/programs/{program_id}/blocks",
-        data=edit_form(csrf_of(page), 2, 1, 500),  # DRILL 11 to a new X
-        headers=HTMX,
-    )
-    assert answer.status_code == 200
-    text = answer.get_data(as_text=True)
-    rows = {int(n) for n in OOB_ROW.findall(text)}
+    text, rows = edit_drill_11(client, program_id, page, 2)
     assert 11 in rows and len(rows) <= 3, rows
     assert 'id="version" hx-swap-oob="true">v3<' in text
     assert 'id="blocks"' not in text
@@ -147,12 +147,7 @@ def test_an_edit_sent_with_the_rows_shown_answers_with_the_rows_that_differ(app:
     shown = dict(SHOWN.findall(page))
     assert sorted(int(n) for n in shown) == list(range(1, 101))
     shown["5"] = "0" * 16
-    form = edit_form(csrf_of(page), 1, 1, 500)  # DRILL 11 to a new X
-    data = {**form, "shown": [f"{n}:{d}" for n, d in shown.items()]}
-    answer = client.post(f"/programs/{program_id}/blocks", data=data, headers=HTMX)
-    assert answer.status_code == 200
-    text = answer.get_data(as_text=True)
-    rows = {int(n) for n in OOB_ROW.findall(text)}
+    text, rows = edit_drill_11(client, program_id, page, 1, [f"{n}:{d}" for n, d in shown.items()])
     assert {5, 11} <= rows and len(rows) <= 4, rows
     # Each row sent carries its new digest, so the next edit sends what is shown now.
     sent = dict(SHOWN.findall(text))

@@ -5,14 +5,18 @@ The program (bench/programs.py `editor_program`: holes, bolt circles, pockets, c
 LOOPs) is created through the library API in a temporary SQLite database; gunicorn is
 started on a free 127.0.0.1 port. One client then does what the editor's htmx form does:
 POST /programs/<id>/blocks with `edit=N`, the DRILL's fields and the version it was shown,
-and gets the editor fragment back with the new block list and SVG preview. Each edit moves
-one DRILL (block 1, 11, 21... in turn) so every save is a real change and a new revision.
+and gets the reply back (the entry panel, the rows that changed, the cycle time), which asks
+for the new drawing; the client then GETs it, as the page does. Each edit moves one DRILL
+(block 1, 11, 21... in turn) so every save is a real change and a new revision. With two
+workers an edit may land on the worker that did not show the version it starts from (it
+then reads that version and works out its rows).
 
 Baselines in the same run, same server: a static file (the server's floor) and the GET of
 the editor page (the same rendering without the save). Then, in a child process, the parts
 of one edit timed alone (document JSON, revision summary, validation, interpretation,
-estimate, drawing, the whole request through Flask's test client) to show where the time
-goes. Target (issue 10): p95 ≤ 50 ms.
+estimate, the compile and cycle time of an edited version, the rows of a starting version
+another worker saved, drawing, the whole request through Flask's test client) to show where
+the time goes. Targets (issues 10 and 18): p95 ≤ 50 ms, reply ≤ 50 kB.
 """
 
 from __future__ import annotations
@@ -49,6 +53,28 @@ TARGET_BYTES = 50_000  # issue 18: the reply to an edit ≤ 50 kB
 HTMX = {"HX-Request": "true"}
 # The element of an edit's reply that asks for the new drawing.
 DRAWING = re.compile(r'id="drawing-refresh"[^>]*hx-get="([^"]+)"')
+
+
+# A row's digest of what it shows, as the page keeps it (templates/editor/_row.html).
+SHOWN = re.compile(r'name="shown" value="(\d+):([0-9a-f]+)"')
+
+
+class ShownRows:
+    """The rows a browser shows, as digests: read from the pages it opened and from each
+    reply's rows; an edit sends those of the edited block's page, as the page does."""
+
+    def __init__(self) -> None:
+        self.digests: dict[int, str] = {}
+
+    def read(self, body: str) -> None:
+        self.digests.update((int(n), digest) for n, digest in SHOWN.findall(body))
+
+    def of_page(self, block: int, blocks: int) -> list[str]:
+        from app.web.editor_page import PAGE_SIZE
+
+        first = (block - 1) // PAGE_SIZE * PAGE_SIZE + 1
+        last = min(blocks, first + PAGE_SIZE - 1)
+        return [f"{n}:{self.digests[n]}" for n in range(first, last + 1) if n in self.digests]
 
 
 def _stats(seconds: list[float]) -> dict[str, float]:
@@ -91,6 +117,12 @@ def server_case(blocks: int, edits: int, workers: int, time_limit: float) -> Res
                 return {"error": f"editor page answered {page.status} without a form"}
             static = [client.get("/static/app.css").seconds for _ in range(30)]
             pages = [client.get(f"/programs/{program_id}").seconds for _ in range(10)]
+            # Each page of the list the edits go to, as the machinist pages to the block.
+            shown = ShownRows()
+            from app.web.editor_page import page_of
+
+            for number in range(1, page_of(blocks) + 1):
+                shown.read(client.get(f"/programs/{program_id}/list?page={number}", HTMX).body)
             latencies: list[float] = []
             drawings: list[float] = []
             statuses: dict[str, int] = {}
@@ -100,13 +132,14 @@ def server_case(blocks: int, edits: int, workers: int, time_limit: float) -> Res
             for k in range(edits + 2 * workers):
                 if time.monotonic() - started > time_limit:
                     break
-                answer = client.post(
-                    f"/programs/{program_id}/blocks", edit_form(csrf, version, k, blocks), HTMX
-                )
+                form = edit_form(csrf, version, k, blocks)
+                sent = {**form, "shown": shown.of_page(int(form["edit"]), blocks)}
+                answer = client.post(f"/programs/{program_id}/blocks", sent, HTMX)
                 statuses[str(answer.status)] = statuses.get(str(answer.status), 0) + 1
                 if answer.status != 200:
                     return {"error": f"edit {k} answered {answer.status}: {answer.body[:200]}"}
                 version = answer.version() or version + 1
+                shown.read(answer.body)
                 sizes.append(len(answer.body.encode()))
                 asked = DRAWING.search(answer.body)
                 if asked is None:
@@ -141,11 +174,13 @@ def parts_case(blocks: int) -> Result:
     from app import create_app
     from app.cnc import document
     from app.cnc.blocks import Hole
+    from app.cnc.compiler import compile_program
     from app.cnc.diff import summary
     from app.cnc.emit.svg import draw
     from app.cnc.estimate import estimate
     from app.cnc.interpret import interpret
     from app.cnc.validate import validate
+    from app.web.editor_page import shown_of
     from app.web.preview import preview
     from bench.common import best_time
     from bench.programs import editor_program
@@ -162,6 +197,7 @@ def parts_case(blocks: int) -> Result:
 
     text = document.dumps(program)
     toolpath = interpret(program)
+    shown_of(program)
     parts = {
         "document.loads (a version not read before; none per edit now)": lambda: document.loads(
             text
@@ -171,6 +207,12 @@ def parts_case(blocks: int) -> Result:
         "validate an edited version (once per edit)": lambda: validate(edited()),
         "interpret": lambda: interpret(program),
         "estimate": lambda: estimate(toolpath),
+        "compile + cycle time of an edited version (the nodes it left alone are kept)": (
+            lambda: estimate(compile_program(edited()).path)
+        ),
+        "a starting version another worker saved: read it, validate it, time it (rows)": (
+            lambda: shown_of(document.loads(text))
+        ),
         "draw (SVG)": lambda: draw(program, embedded_style=False),
         "editor preview() = validate + compile + estimate + draw": lambda: preview(program),
     }
@@ -212,18 +254,20 @@ def parts_case(blocks: int) -> Result:
         assert csrf_found and version_found
         csrf, version = csrf_found.group(1), int(version_found.group(1))
         times, sizes = [], []
+        shown = ShownRows()
+        shown.read(page)
+        shown.read(client.get(f"/programs/{program_id}/list?page=2", headers=HTMX).get_data(True))
 
         def edit(k: int) -> float:
             nonlocal version
+            form = edit_form(csrf, version, k, blocks)
+            sent = {**form, "shown": shown.of_page(int(form["edit"]), blocks)}
             started = time.perf_counter()
-            answer = client.post(
-                f"/programs/{program_id}/blocks",
-                data=edit_form(csrf, version, k, blocks),
-                headers=HTMX,
-            )
+            answer = client.post(f"/programs/{program_id}/blocks", data=sent, headers=HTMX)
             seconds = time.perf_counter() - started
             assert answer.status_code == 200, answer.status_code
             body = answer.get_data(as_text=True)
+            shown.read(body)
             sizes.append(len(body.encode()))
             found = VERSION.search(body)
             version = int(found.group(1)) if found else version + 1

@@ -19,7 +19,7 @@ import socket
 import subprocess
 import time
 import urllib.parse
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -154,13 +154,14 @@ class Client:
         self,
         method: str,
         path: str,
-        form: Mapping[str, str] | None = None,
+        form: Mapping[str, str | Sequence[str]] | None = None,
         headers: Mapping[str, str] | None = None,
     ) -> Response:
         sent = dict(headers or {})
         body = None
         if form is not None:
-            body = urllib.parse.urlencode(form)
+            # A list is a field sent once per value, as a form's same-named inputs are.
+            body = urllib.parse.urlencode(form, doseq=True)
             sent["Content-Type"] = "application/x-www-form-urlencoded"
         if self.cookies:
             sent["Cookie"] = "; ".join(f"{k}={v}" for k, v in self.cookies.items())
@@ -188,6 +189,9 @@ class Client:
         return self.request("GET", path, headers=headers)
 
     def post(
-        self, path: str, form: Mapping[str, str], headers: Mapping[str, str] | None = None
+        self,
+        path: str,
+        form: Mapping[str, str | Sequence[str]],
+        headers: Mapping[str, str] | None = None,
     ) -> Response:
         return self.request("POST", path, form=form, headers=headers)

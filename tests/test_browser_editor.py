@@ -97,6 +97,27 @@ def test_after_editing_block_301_of_552_the_list_stays_at_it(page: Page, served:
     assert in_list_view(page, 301)
 
 
+def test_an_edit_brings_back_a_row_the_page_shows_stale(page: Page, served: Served) -> None:
+    """The page sends what each row shows with an edit (a digest per row): the reply brings
+    back every row that differs from it, whichever server worker showed the page; here row
+    5 is made to show something else before DRILL 11 is edited."""
+    program_id = served.create(editor_program(120))
+    page.goto(f"{served.url}/programs/{program_id}?edit=11")
+    expect(page.locator("#entry h2")).to_contain_text("Block 11")
+    settle(page)
+    page.evaluate(
+        """() => {
+        const row = document.querySelector('.block-row[data-block="5"]');
+        row.querySelector('.summary').textContent = 'stale';
+        row.querySelector('input[name=shown]').value = '5:0000000000000000';
+    }"""
+    )
+    page.keyboard.type("1.25")  # X, the first prompt
+    page.keyboard.press("Control+Enter")
+    expect(page.locator('.block-row[data-block="11"] .summary')).to_contain_text("X 1.25")
+    expect(page.locator('.block-row[data-block="5"] .summary')).not_to_have_text("stale")
+
+
 # -- the control's keystrokes (issue 20 items 1-3, 6) --------------------------------------
 
 D = Decimal

@@ -5,12 +5,14 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
+from dataclasses import replace
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
 
 from app.cnc import document
-from app.cnc.blocks import Program
+from app.cnc.blocks import Hole, Pos, Program
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, RAPID_NM_PER_MIN, Estimate, estimate
@@ -28,7 +30,7 @@ from app.cnc.toolpath import (
     Toolpath,
 )
 from app.cnc.units import Units
-from bench.programs import sized
+from bench.programs import editor_program, sized
 
 TESTS = Path(__file__).parent
 CORPUS = sorted(
@@ -158,3 +160,25 @@ def test_lengths_too_large_to_square_in_64_bits() -> None:
         moves=[Rapid(1, -far, -far, -far), Feed(2, far, -far, far, 254_000_000)],
     )
     assert figures(estimate(toolpath)) == figures(reference(toolpath))
+
+
+def test_an_edit_gives_the_figures_of_the_edited_program() -> None:
+    """The figures of the top-level nodes an edit leaves alone are kept from the estimate
+    before it; the edited program's figures are still its own, to the last bit: a block
+    moved (the nodes after it enter at another place), one inserted at the front (every
+    node keeps its figures under new block numbers), a tool change added."""
+    program = editor_program(200)
+    first = program.blocks[0]
+    assert isinstance(first, Hole)
+    moved = replace(first, x=first.x + Decimal("0.25"))
+    edits = [
+        replace(program, blocks=(moved, *program.blocks[1:])),
+        replace(program, blocks=(Pos(x=Decimal(1), y=Decimal(2), tool=1), *program.blocks)),
+        replace(program, blocks=(*program.blocks[:3], replace(first, tool=2), *program.blocks[3:])),
+    ]
+    for machine in (None, MACHINES["capped feed, OTIME"]):
+        estimate(compile_program(program).path, machine=machine)
+        for edited in edits:
+            assert figures(estimate(compile_program(edited).path, machine=machine)) == figures(
+                reference(interpret(edited), machine)
+            )

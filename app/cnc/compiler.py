@@ -43,6 +43,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
+from typing import NamedTuple
 
 import numpy as np
 
@@ -50,6 +51,7 @@ from app.cnc import limits
 from app.cnc.blocks import (
     Block,
     BoltCircle,
+    DataBlock0,
     Hole,
     HoleOp,
     Mode,
@@ -58,6 +60,7 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.memo import ByObject, Memo
 from app.cnc.mill import Finding, Path, length, plan_sequence
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
@@ -99,9 +102,9 @@ def retract_height(z_up: int, z_retract: int) -> int:
     return max(z_up, 0) + z_retract
 
 
-@dataclass(frozen=True, slots=True)
-class State:
-    """Where the control is between nodes: what a node's moves depend on."""
+class State(NamedTuple):
+    """Where the control is between nodes: what a node's moves depend on. (A tuple: made,
+    compared and hashed once per node per compile, and a tuple does that fastest.)"""
 
     x: int
     y: int
@@ -136,7 +139,7 @@ class NodeResult:
     findings: list[Finding]
 
 
-class Cache:
+class Cache(Memo[NodeResult]):
     """Compiled top-level nodes by (blocks, entry state, Data Block 0 and units): an edit
     recompiles only what changed.
 
@@ -145,36 +148,61 @@ class Cache:
     threads (a web server's requests).
     """
 
-    def __init__(self, rows: int = 1 << 19) -> None:
-        self.budget = rows
-        self.held = 0
-        self.entries: OrderedDict[object, tuple[NodeResult, int]] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-        self.lock = threading.Lock()
-
-    def get(self, key: object) -> NodeResult | None:
-        with self.lock:
-            found = self.entries.get(key)
-            if found is None:
-                self.misses += 1
-                return None
-            self.hits += 1
-            self.entries.move_to_end(key)
-            return found[0]
-
     def put(self, key: object, value: NodeResult) -> None:
-        rows = size(value.node) + 1
-        if rows > self.budget // 10:
-            return
-        with self.lock:
-            if key in self.entries:
-                return
-            self.entries[key] = (value, rows)
-            self.held += rows
-            while self.held > self.budget:
-                _, (_, dropped) = self.entries.popitem(last=False)
-                self.held -= dropped
+        self.keep(key, value, size(value.node) + 1)
+
+
+# A top-level node's one placement: where it was compiled (read only; shared by every Run).
+_HERE = np.zeros((1, 2), dtype=np.int64)
+_HERE.flags.writeable = False
+
+
+class _Key:
+    """A top-level node's cache key: (its blocks, shape, entry state, Data Block 0 and
+    units), with its hash worked out once (a lookup hashes a key twice) from each block's
+    hash, kept per block object (most blocks are the same objects edit after edit)."""
+
+    __slots__ = ("hash", "parts")
+
+    def __init__(
+        self,
+        blocks: tuple[Block, ...],
+        shape: object,
+        state: State,
+        context: object,
+        context_hash: int,
+    ) -> None:
+        self.parts = (blocks, shape, state, context)
+        self.hash = hash((tuple(_block_hash(b) for b in blocks), shape, state, context_hash))
+
+    def __hash__(self) -> int:
+        return self.hash
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, _Key) and self.hash == other.hash and self.parts == other.parts
+
+
+_BLOCK_HASHES: ByObject[int] = ByObject()
+# One object per distinct (Data Block 0, units): every node's key holds it, and a key
+# compared with a kept one then finds it the same object instead of comparing every tool
+# (each version read from the library has a Data Block 0 object of its own).
+_CONTEXTS: dict[tuple[DataBlock0, Units], tuple[DataBlock0, Units]] = {}
+_CONTEXT_LOCK = threading.Lock()
+
+
+def _interned(context: tuple[DataBlock0, Units]) -> tuple[DataBlock0, Units]:
+    with _CONTEXT_LOCK:
+        if len(_CONTEXTS) > 64:
+            _CONTEXTS.clear()
+        return _CONTEXTS.setdefault(context, context)
+
+
+def _block_hash(block: Block) -> int:
+    found = _BLOCK_HASHES.get(block)
+    if found is None:
+        found = hash(block)
+        _BLOCK_HASHES.keep(block, found)
+    return found
 
 
 @dataclass(slots=True, frozen=True)
@@ -190,7 +218,10 @@ class Compiled:
 # The nodes every compile in this process shares, and the last few programs compiled:
 # validation, the preview, the time and an export of the same program compile it once.
 SHARED_CACHE = Cache()
-_RECENT: OrderedDict[Program, Compiled] = OrderedDict()
+# By what the compile reads of a program, by object for its blocks and Data Block 0 (a
+# program's hash would hash every block's values): each entry keeps its program, so no id
+# in a key is reused while the entry is in.
+_RECENT: OrderedDict[tuple[int, int, Units], tuple[Program, Compiled]] = OrderedDict()
 _RECENT_SIZE = 8
 _RECENT_LOCK = threading.Lock()
 
@@ -205,14 +236,15 @@ def compile_program(program: Program, cache: Cache | None = None) -> Compiled:
     """
     if cache is not None:
         return _Compiler(program, cache).run()
+    key = (id(program.blocks), id(program.block0), program.units)
     with _RECENT_LOCK:
-        found = _RECENT.get(program)
+        found = _RECENT.get(key)
         if found is not None:
-            _RECENT.move_to_end(program)
-            return found
+            _RECENT.move_to_end(key)
+            return found[1]
     result = _Compiler(program, SHARED_CACHE).run()
     with _RECENT_LOCK:
-        _RECENT[program] = result
+        _RECENT[key] = (program, result)
         while len(_RECENT) > _RECENT_SIZE:
             _RECENT.popitem(last=False)
     return result
@@ -244,7 +276,8 @@ class _Compiler:
         units = program.units
         db0 = program.block0
         self.cache = cache
-        self.context = (db0, units)
+        self.context = _interned((db0, units))
+        self.context_hash = hash(self.context)
         self.z_retract = to_nm(db0.z_retract, units)
         self.tools = {
             t.number: ToolInfo(
@@ -294,12 +327,14 @@ class _Compiler:
     def run(self) -> Compiled:
         top: list[Node] = []
         for node in build_nodes(self.blocks, tolerant=True):
-            first = _first_index(node)
-            key = (
-                tuple(self.blocks[i] for i in _indexes(node)),
+            indexes = _indexes(node)
+            first = indexes[0]
+            key = _Key(
+                tuple(self.blocks[i] for i in indexes),
                 _shape(node, first),
                 self.state(),
                 self.context,
+                self.context_hash,
             )
             found = self.cache.get(key) if self.cache is not None else None
             if found is None:
@@ -307,7 +342,7 @@ class _Compiler:
                 if self.cache is not None:
                     self.cache.put(key, found)
             self.restore(found.exit)
-            top.append(Run(found.node, np.zeros((1, 2), dtype=np.int64), first + 1))
+            top.append(Run(found.node, _HERE, first + 1))
             self.findings += [_shifted(f, first + 1) for f in found.findings]
         self.base = 0
         last = len(self.blocks)
@@ -916,10 +951,6 @@ def _indexes(node: object) -> list[int]:
     assert isinstance(node, LoopPattern)
     inner = [i for child in node.body for i in _indexes(child)]
     return sorted({*inner, node.rep})
-
-
-def _first_index(node: object) -> int:
-    return _indexes(node)[0]
 
 
 def _shape(node: object, first: int) -> object:

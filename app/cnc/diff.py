@@ -9,11 +9,14 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import enum
+import threading
+from collections.abc import Sequence
 from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import Block, DataBlock0, Program, field_label
 from app.cnc.kinds import REGISTRY
+from app.cnc.memo import ByObject
 
 
 def _show(value: Any) -> str:
@@ -30,6 +33,34 @@ def _show(value: Any) -> str:
 
 def _key(block: Block) -> tuple[Any, ...]:
     return (type(block).__name__, *(getattr(block, f.name) for f in REGISTRY.fields(type(block))))
+
+
+# Each distinct block content as a small number (`_tokens`), and each block object's number
+# (two versions of a program share most of their block objects: the key of each is made
+# once). Cleared when full; a clear happens only between two diffs' numberings.
+TOKENS = 1 << 15
+_BY_KEY: dict[tuple[Any, ...], int] = {}
+_BY_OBJECT: ByObject[int] = ByObject(TOKENS)
+_LOCK = threading.Lock()
+
+
+def _tokens(old: Sequence[Block], new: Sequence[Block]) -> tuple[list[int], list[int]]:
+    """The blocks of two versions as numbers, equal where their keys are equal: what the
+    sequence matcher compares (the same matches as comparing the keys, without hashing
+    every block's values on every save)."""
+    with _LOCK:
+        if len(_BY_KEY) + len(old) + len(new) > TOKENS:
+            _BY_OBJECT.entries.clear()
+            _BY_KEY.clear()
+        return [_token(b) for b in old], [_token(b) for b in new]
+
+
+def _token(block: Block) -> int:
+    token = _BY_OBJECT.get(block)
+    if token is None:
+        token = _BY_KEY.setdefault(_key(block), len(_BY_KEY))
+        _BY_OBJECT.keep(block, token)
+    return token
 
 
 def field_changes(old: Any, new: Any) -> list[str]:
@@ -69,8 +100,7 @@ def diff(old: Program, new: Program) -> list[str]:
     if old.block0 != new.block0:
         details = field_changes(old.block0, new.block0) + _tool_changes(old.block0, new.block0)
         lines.append("Data Block 0: " + "; ".join(details))
-    a_keys = [_key(b) for b in old.blocks]
-    b_keys = [_key(b) for b in new.blocks]
+    a_keys, b_keys = _tokens(old.blocks, new.blocks)
     matcher = difflib.SequenceMatcher(a=a_keys, b=b_keys, autojunk=False)
     for op, i1, i2, j1, j2 in matcher.get_opcodes():
         if op == "equal":

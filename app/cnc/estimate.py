@@ -17,11 +17,16 @@ the same figures to the last bit as adding one move at a time in Python floats: 
 are the exact integer sums of squares rounded once, arcs use the math module, and every
 sum adds its terms in move order (tests/test_estimate.py keeps the one-move-at-a-time
 estimate as the reference).
+
+Each top-level node's per-move figures are kept (`TIMED`, bounded) by the node the compiler
+handed out and where the tool enters it, so the estimate after an edit times only the nodes
+the edit changed; the sums are still added move by move over the whole program.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from decimal import Decimal
 
@@ -31,7 +36,22 @@ import numpy.typing as npt
 from app.cnc.geometry import arc_sweep
 from app.cnc.limits import RAPID_IPM
 from app.cnc.machine import MachineModel
-from app.cnc.path import HOLE, MOVE, Chunk, CompiledPath, Op, Rows, row_batches
+from app.cnc.memo import Memo
+from app.cnc.path import (
+    FLAT_ROWS,
+    HOLE,
+    MOVE,
+    Chunk,
+    CompiledPath,
+    Node,
+    Op,
+    Rows,
+    Run,
+    Seq,
+    row_batches,
+    size,
+    walk,
+)
 from app.cnc.toolpath import (
     ArcFeed,
     Dwell,
@@ -117,15 +137,144 @@ def estimate(
             operator = float(machine.operator_seconds)
     result = Estimate(assumptions=assumptions(tool_change_seconds, machine))
     clock = _Clock(path.start, path.initial_tool, rapid_rate, max_feed, tool_change_seconds)
-    chunks = path.chunks() if isinstance(path, CompiledPath) else [chunk_of(path)]
-    for rows, strings in row_batches(chunks):
-        clock.add(rows, strings, result)
-    result.per_block = clock.per_block.totals()
-    result.per_tool = clock.per_tool.totals()
+    totals = _Totals(result)
+    if isinstance(path, CompiledPath):
+        for node, base, shared in _top_level(path.root):
+            _time_node(node, base, shared, clock, totals)
+    else:
+        for rows, strings in row_batches([chunk_of(path)]):
+            totals.add(clock.time(rows, strings), 0)
+    totals.flush()
+    result.per_block = totals.per_block.totals()
+    result.per_tool = totals.per_tool.totals()
     result.operator = operator
     # Added in the order the blocks first came, as the figures always were.
-    result.total = clock.per_block.total() + operator
+    result.total = totals.per_block.total() + operator
     return result
+
+
+# -- each top-level node timed once per entry state ----------------------------------------
+#
+# The compiler caches each top-level node by its blocks and entry state and hands out the
+# same node object again after an edit (compiler.py). A node's moves take the same seconds
+# whenever the tool enters it at the same place with the same tool and rates, so each
+# node's per-move figures are kept here by (node, entry, rates) and an edit re-times only
+# the nodes it changed. The sums are still added move by move over the whole program
+# (`_Totals`): the figures do not depend on what was kept.
+
+
+def _top_level(root: Node) -> Iterator[tuple[Node, int, bool]]:
+    """(node, base, shared) for each top-level stretch of a compiled path: `shared` when
+    the node is one the compiler keeps (a top-level Run placed once where it stands, block
+    numbers relative to `base`); else the node as it is, blocks absolute (base 0)."""
+    nodes = root.nodes if isinstance(root, Seq) else [root]
+    for node in nodes:
+        if isinstance(node, Run) and node.offsets.tolist() == [[0, 0]]:
+            yield node.node, node.base, True
+        else:
+            yield node, 0, False
+
+
+def _time_node(node: Node, base: int, shared: bool, clock: _Clock, totals: _Totals) -> None:
+    """Time `node`'s moves from where `clock` stands (from the memo when it was timed from
+    there before) and add them to `totals`, its block numbers + `base`."""
+    if not shared or size(node) + 1 > TIMED.budget // 10:
+        # Not one the compiler keeps, or too large to keep: timed as it streams by.
+        for rows, strings in row_batches(walk(node, base=base)):
+            totals.add(clock.time(rows, strings), 0)
+        return
+    key = (id(node), clock.entry(), clock.rates())
+    found = TIMED.get(key)
+    if found is None or found[0] is not node:
+        parts = [clock.time(rows, strings) for rows, strings in row_batches(walk(node))]
+        timed = _Timed.joined(parts, clock.entry())
+        # The node is kept with its figures, so no other node can take its id meanwhile.
+        TIMED.keep(key, (node, timed), size(node) + 1)
+    else:
+        timed = found[1]
+        clock.enter(timed.exit)
+    totals.add(timed, base)
+
+
+# Per-move figures of top-level nodes: (node, figures) by (id(node), entry, rates).
+TIMED: Memo[tuple[Node, _Timed]] = Memo()
+
+# What each move's seconds count towards besides its block and tool.
+_OTHER, _RAPID, _CUTTING, _DWELL = 0, 1, 2, 3
+
+
+@dataclass(slots=True)
+class _Timed:
+    """Moves timed: per move its seconds, block, tool and kind (_RAPID…); the tool changes
+    and operator waits among them, and where the clock stands after them (x, y, z, tool)."""
+
+    seconds: npt.NDArray[np.float64]
+    blocks: npt.NDArray[np.int64]
+    tools: npt.NDArray[np.int64]
+    kinds: npt.NDArray[np.int8]
+    tool_changes: int
+    waits: list[tuple[int, str]]
+    exit: tuple[int, int, int, int]
+
+    @staticmethod
+    def joined(parts: list[_Timed], entry: tuple[int, int, int, int]) -> _Timed:
+        """`parts` one after another (nothing timed: where the clock was, `entry`)."""
+        if len(parts) == 1:
+            return parts[0]
+        if not parts:
+            empty = np.zeros(0, dtype=np.int64)
+            return _Timed(np.zeros(0), empty, empty, np.zeros(0, np.int8), 0, [], entry)
+        return _Timed(
+            np.concatenate([p.seconds for p in parts]),
+            np.concatenate([p.blocks for p in parts]),
+            np.concatenate([p.tools for p in parts]),
+            np.concatenate([p.kinds for p in parts]),
+            sum(p.tool_changes for p in parts),
+            [w for p in parts for w in p.waits],
+            parts[-1].exit,
+        )
+
+
+class _Totals:
+    """The sums, added in move order over stretches of timed moves: stretches are gathered
+    into batches of at least FLAT_ROWS moves (numpy's cost per call, not per move, would
+    dominate a program of many small nodes)."""
+
+    def __init__(self, result: Estimate) -> None:
+        self.result = result
+        self.per_block = _Sums()
+        self.per_tool = _Sums()
+        self.pending: list[tuple[_Timed, int]] = []
+        self.count = 0
+
+    def add(self, timed: _Timed, base: int) -> None:
+        """Add `timed`, its block numbers + `base`."""
+        self.result.tool_changes += timed.tool_changes
+        if timed.waits:
+            self.result.operator_waits += [(block + base, why) for block, why in timed.waits]
+        self.pending.append((timed, base))
+        self.count += len(timed.seconds)
+        if self.count >= FLAT_ROWS:
+            self.flush()
+
+    def flush(self) -> None:
+        if not self.pending:
+            return
+        parts, self.pending, self.count = self.pending, [], 0
+        seconds = np.concatenate([t.seconds for t, _ in parts])
+        kinds = np.concatenate([t.kinds for t, _ in parts])
+        blocks = np.concatenate([t.blocks for t, _ in parts])
+        if any(base for _, base in parts):
+            blocks = blocks + np.repeat(
+                np.array([base for _, base in parts], dtype=np.int64),
+                [len(t.blocks) for t, _ in parts],
+            )
+        result = self.result
+        result.rapid = _running(result.rapid, seconds[kinds == _RAPID])
+        result.cutting = _running(result.cutting, seconds[kinds == _CUTTING])
+        result.dwell = _running(result.dwell, seconds[kinds == _DWELL])
+        self.per_block.add(blocks, seconds)
+        self.per_tool.add(np.concatenate([t.tools for t, _ in parts]), seconds)
 
 
 class _Sums:
@@ -180,7 +329,7 @@ _SQUARE_SAFE = 1 << 30
 
 
 class _Clock:
-    """The estimate's state between chunks: where the tool is, which tool, the sums."""
+    """Where the tool is between stretches of moves and which tool it is; the rates."""
 
     def __init__(
         self,
@@ -195,16 +344,26 @@ class _Clock:
         self.rapid_rate = rapid_rate
         self.max_feed = max_feed
         self.tool_change_seconds = tool_change_seconds
-        self.per_block = _Sums()
-        self.per_tool = _Sums()
         self.arcs: dict[tuple[int, int, int, int, bool], float] = {}
 
-    def add(self, rows: Rows, strings: tuple[str, ...], result: Estimate) -> None:
-        """Time a batch of moves (vectorised) and add them to `result` and the sums;
-        `strings` are the texts of its STOP rows."""
+    def entry(self) -> tuple[int, int, int, int]:
+        """Where the clock stands: x, y, z, tool."""
+        return self.x, self.y, self.z, self.tool
+
+    def enter(self, state: tuple[int, int, int, int]) -> None:
+        """Stand where `entry()` said (after moves timed before)."""
+        self.x, self.y, self.z, self.tool = state
+
+    def rates(self) -> tuple[int, int | None, float]:
+        """What a move's seconds depend on besides where it starts."""
+        return self.rapid_rate, self.max_feed, self.tool_change_seconds
+
+    def time(self, rows: Rows, strings: tuple[str, ...]) -> _Timed:
+        """Time a batch of moves (vectorised) from where the clock stands, and move the
+        clock to their end; `strings` are the texts of its STOP rows."""
         n = len(rows)
         if not n:
-            return
+            return _Timed.joined([], self.entry())
         op = rows["op"]
         motion = op <= Op.ARC_CCW
         line = op <= Op.FEED
@@ -244,15 +403,15 @@ class _Clock:
         dwells = op == Op.DWELL
         seconds[dwells] = rows["value"][dwells] / 1000
         seconds[tool_rows] = self.tool_change_seconds
-        result.rapid = _running(result.rapid, seconds[op == Op.RAPID])
-        result.cutting = _running(result.cutting, seconds[(op == Op.FEED) | arc])
-        result.dwell = _running(result.dwell, seconds[dwells])
-        result.tool_changes += int(np.count_nonzero(tool_rows))
-        waits = np.flatnonzero((op == Op.STOP) | (op == Op.INDEX))
-        for k in waits.tolist():
+        kinds = np.zeros(n, dtype=np.int8)
+        kinds[op == Op.RAPID] = _RAPID
+        kinds[(op == Op.FEED) | arc] = _CUTTING
+        kinds[dwells] = _DWELL
+        waits = []
+        for k in np.flatnonzero((op == Op.STOP) | (op == Op.INDEX)).tolist():
             row = rows[k]
             reason = strings[row["value"]] if row["op"] == Op.STOP else INDEX_REASON
-            result.operator_waits.append((int(row["block"]), reason))
+            waits.append((int(row["block"]), reason))
         # The tool each row runs with: a tool change's own time is the new tool's.
         if tool_rows.any():
             changed = np.where(tool_rows, np.arange(n), -1)
@@ -260,8 +419,6 @@ class _Clock:
             tools = _take(rows["value"], changed, self.tool)
         else:
             tools = np.full(n, self.tool, dtype=np.int64)
-        self.per_block.add(rows["block"].astype(np.int64), seconds)
-        self.per_tool.add(tools, seconds)
         last = np.flatnonzero(motion)
         if len(last):
             self.x, self.y = int(rows["x"][last[-1]]), int(rows["y"][last[-1]])
@@ -271,6 +428,15 @@ class _Clock:
         changes = np.flatnonzero(tool_rows)
         if len(changes):
             self.tool = int(rows["value"][changes[-1]])
+        return _Timed(
+            seconds,
+            rows["block"].astype(np.int64),
+            tools,
+            kinds,
+            len(changes),
+            waits,
+            self.entry(),
+        )
 
 
 def _arc_lengths(

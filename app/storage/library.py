@@ -26,8 +26,9 @@ from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
 from app.cnc import document
-from app.cnc.blocks import Hole, Program
+from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
+from app.cnc.memo import ByObject
 from app.cnc.sizes import TooLarge, check_block_count
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
@@ -123,16 +124,29 @@ def _info(row: ProgramRow) -> ProgramInfo:
 
 def search_words(program: Program) -> str:
     """What a content search matches: tool numbers (T3), block types, hole operations."""
-    words = set()
+    words: set[str] = set()
     for block in program.blocks:
-        words.add(block.kind)
-        words.update(block.title.split())
+        words |= _block_words(block)
+    words.update(f"T{tool.number}" for tool in program.block0.tools)
+    return " ".join(sorted(words)).lower()
+
+
+# Each block's words, by block object (a save writes a version that shares all but the
+# edited block with the one before).
+_WORDS: ByObject[frozenset[str]] = ByObject()
+
+
+def _block_words(block: Block) -> frozenset[str]:
+    found = _WORDS.get(block)
+    if found is None:
+        words = {block.kind, *block.title.split()}
         if isinstance(block, Hole):
             words.add(block.op.value)
         if block.tool_number is not None:
             words.add(f"T{block.tool_number}")
-    words.update(f"T{tool.number}" for tool in program.block0.tools)
-    return " ".join(sorted(words)).lower()
+        found = frozenset(words)
+        _WORDS.keep(block, found)
+    return found
 
 
 def _columns(program: Program) -> dict[str, Any]:

@@ -244,6 +244,8 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
             entry.message = f"Not done: {exc.message}"
             entry.errors = {"from_block": exc.message}
             return render_entry(stored, entry, 422)
+    # An EXEC'd COPY puts its copies where it stood: the blocks after it move.
+    in_place = in_place and len(new_program.blocks) == len(program.blocks)
     refused = value_problems(new_program, range(at, at + len(parsed.blocks)))
     if refused:
         # As the control refuses an out-of-range entry: nothing is saved, the values stay

@@ -8,13 +8,15 @@ went), the cycle time, the version the row buttons post, and the new drawing.
 
 What a version of a program shows (its problems, its preview and times) is worked out once
 and kept for the last few versions (`shown_of`): the GET after an edit, and the rows of the
-version an edit starts from, cost nothing.
+version an edit starts from, cost nothing when this process showed it (else they are worked
+out from the stored version, mostly from the compile's and the cycle time's kept nodes).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import enum
+import hashlib
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -26,6 +28,7 @@ from flask import render_template, request
 from app.cnc.blocks import Block, Mode, Program, open_loops
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
+from app.cnc.memo import ByObject
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
@@ -67,7 +70,19 @@ def is_htmx() -> bool:
 
 def block_summary(block: Block) -> str:
     """The block's values in one line, the way the control's block list reads: what its
-    entry form asks for (its type and sub-type are in its title)."""
+    entry form asks for (its type and sub-type are in its title). Kept per block object
+    (most blocks of one version are the blocks of the version before)."""
+    found = _SUMMARIES.get(block)
+    if found is None:
+        found = _summary(block)
+        _SUMMARIES.keep(block, found)
+    return found
+
+
+_SUMMARIES: ByObject[str] = ByObject()
+
+
+def _summary(block: Block) -> str:
     parts = []
     for f in REGISTRY.prompted(type(block), REGISTRY.sub_kind_of(block)):
         value = getattr(block, f.name)
@@ -143,13 +158,6 @@ def shown_of(program: Program) -> Shown:
     return found
 
 
-def cached(program: Program) -> Shown | None:
-    """`shown_of(program)` if it was worked out already, else None (nothing is computed)."""
-    with _LOCK:
-        found = _SHOWN.get(id(program))
-    return found if found is not None and found.program is program else None
-
-
 @dataclass(frozen=True)
 class Row:
     """One row of the block list."""
@@ -161,6 +169,14 @@ class Row:
     problems: tuple[Problem, ...]
     has_error: bool
     current: bool = False
+
+    @property
+    def digest(self) -> str:
+        """What the row shows (title, values, time, problems), as 16 hex digits: the page
+        keeps it beside the row and an edit sends it back (the same text in every worker)."""
+        shown = [self.title, self.summary, self.seconds]
+        shown += [f"{p.severity.value}\x1e{p.field or ''}\x1e{p.message}" for p in self.problems]
+        return hashlib.blake2b("\x1f".join(shown).encode(), digest_size=8).hexdigest()
 
 
 def row(shown: Shown, number: int, current: bool = False) -> Row:
@@ -178,21 +194,45 @@ def row(shown: Shown, number: int, current: bool = False) -> Row:
     )
 
 
+def shown_digests() -> dict[int, str]:
+    """The rows the page shows, as the edit's form sent them (`shown`: "number:digest");
+    empty when it sent none (a page without them, a client of its own)."""
+    found = {}
+    for value in request.form.getlist("shown"):
+        number, _, digest = value.partition(":")
+        if number.isdigit() and digest:
+            found[int(number)] = digest
+    return found
+
+
 def changed_rows(old: Shown, new: Shown, first: int, last: int) -> list[Row]:
     """The rows `first`…`last` of `new` that do not read as they did in `old` (same blocks
-    count: an edit in place)."""
-    return [
-        fresh
-        for number in range(first, last + 1)
-        if (fresh := row(new, number)) != row(old, number)
-    ]
+    count: an edit in place). A row is made of its block, problems and time: where all
+    three are the same as before (most rows of an edit: the same block object, the same
+    figures), the row is the same and is not made again."""
+    changed = []
+    for number in range(first, last + 1):
+        if (
+            old.program.blocks[number - 1] is new.program.blocks[number - 1]
+            and old.per_block.get(number) == new.per_block.get(number)
+            and old.by_block.get(number) == new.by_block.get(number)
+        ):
+            continue
+        fresh = row(new, number)
+        if fresh != row(old, number):
+            changed.append(fresh)
+    return changed
 
 
 # -- contexts and rendering ---------------------------------------------------------------------
 
 
-def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) -> dict[str, Any]:
-    """The block list's page: the page of `focus` unless the entry asks for another."""
+def list_context(
+    stored: StoredProgram, shown: Shown, entry: Entry, focus: int, rows: bool = True
+) -> dict[str, Any]:
+    """The block list's page: the page of `focus` unless the entry asks for another.
+    `rows` False: its bounds (`first`, `last`) without the rows (an edit's reply that sends
+    only the rows that changed)."""
     count = len(stored.program.blocks)
     pages = page_of(max(count, 1))  # "new block…" ends the last page
     page = min(entry.page or page_of(focus), pages)
@@ -200,7 +240,8 @@ def list_context(stored: StoredProgram, shown: Shown, entry: Entry, focus: int) 
     last = min(count, first + PAGE_SIZE - 1)
     current = entry.at if entry.editing else 0
     return {
-        "rows": [row(shown, n, n == current) for n in range(first, last + 1)],
+        "rows": [row(shown, n, n == current) for n in range(first, last + 1)] if rows else [],
+        "last": last,
         "block_count": count,
         "page": page,
         "pages": pages,
@@ -301,15 +342,27 @@ def render_reply(
 
     `focus` is the block the list stays at (the edited one). `in_place`: the edit kept
     every block where it was, so the rows can be compared one for one with the version the
-    edit started from — when that version's rows are still known (else, and when blocks
-    moved, the whole list page is sent)."""
+    edit started from; those are the digests the page sent with the edit (`shown_digests`:
+    what the browser shows, whichever worker showed it), else that version's rows (worked
+    out here when this process did not show it: under gunicorn the other worker may have).
+    When blocks moved, the whole list page is sent."""
     shown = shown_of(saved.program)
-    listing = list_context(saved, shown, entry, focus)
-    changed: list[Row] | None = None
-    old = cached(before) if in_place else None
-    if old is not None:
-        last = listing["first"] + len(listing["rows"]) - 1
-        changed = changed_rows(old, shown, listing["first"], last)
+    if not in_place:
+        return render_template(
+            "editor/_reply.html",
+            **_common(saved),
+            **list_context(saved, shown, entry, focus),
+            **entry_context(saved, entry, shown.problems),
+            changed=None,
+        ), 200
+    listing = list_context(saved, shown, entry, focus, rows=False)
+    first, last = listing["first"], listing["last"]
+    seen = shown_digests()
+    if all(n in seen for n in range(first, last + 1)):
+        # What the browser shows: no need for the version the edit started from.
+        changed = [r for n in range(first, last + 1) if (r := row(shown, n)).digest != seen[n]]
+    else:
+        changed = changed_rows(shown_of(before), shown, first, last)
     return render_template(
         "editor/_reply.html",
         **_common(saved),

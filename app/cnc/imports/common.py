@@ -15,6 +15,7 @@ import enum
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from fractions import Fraction
+from functools import lru_cache
 
 from app.cnc import limits
 from app.cnc.units import Units
@@ -173,6 +174,7 @@ def decimal_of(nm: int, units: Units) -> Decimal:
     return (Decimal(nm // step) if nm % step == 0 else Decimal(nm) / step).scaleb(-places)
 
 
+@lru_cache(maxsize=4096)  # a report shows the same few heights and offsets many times
 def show(nm: int | float, units: Units, places: int | None = None) -> str:
     """A length for messages, in `units` with the unit's dump places (`0.7955 in`)."""
     digits = units.dump_places if places is None else places

@@ -66,6 +66,13 @@ from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units
 
 NUMBER = re.compile(NUMBER_TEXT)
 SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
+# The commonest line, read in one match: N, G0-G3 or G80, X, Y, Z, I, J, F, each perhaps,
+# in this order (`_Reader.fast_words` takes the numbers as written).
+USUAL = re.compile(
+    rf"[ \t]*(?:N([0-9]+)[ \t]*)?(?:G(0?[0-3]|80)[ \t]*)?(?:X({NUMBER_TEXT})[ \t]*)?"
+    rf"(?:Y({NUMBER_TEXT})[ \t]*)?(?:Z({NUMBER_TEXT})[ \t]*)?(?:I({NUMBER_TEXT})[ \t]*)?"
+    rf"(?:J({NUMBER_TEXT})[ \t]*)?(?:F({NUMBER_TEXT}))?"
+)
 # A word with the blanks before it (the column is counted from their lengths).
 PAIRS = re.compile(rf"([ \t]*)([A-Za-z])({NUMBER_TEXT})")
 MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
@@ -155,7 +162,8 @@ ALLOWED = set("XYZIJKRFSTMGNPQLHDO")
 # Blocks `_Reader.plain` executes: these letters and (at most) one of these codes.
 AXES_AND_FEED = frozenset("NXYZF")
 LINEAR = frozenset({"0", "1"})
-LINEAR_CODES = {"0": "0", "00": "0", "1": "1", "01": "1"}  # G words `fast_motion` takes
+# The G words `fast_words` takes, as written, and their code.
+MOTION_CODES = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
 NO_CODES: dict[str, Word] = {}
 # The letters a word may have, either case, to the upper case (O: the careful reader).
 LETTERS = {c: c for c in ALLOWED - {"O"}} | {c.lower(): c for c in ALLOWED - {"O"}}
@@ -210,21 +218,26 @@ _CODES: dict[str, str] = {}
 _POWERS = [10**k for k in range(32)]
 
 
-_NM: dict[tuple[str, int], int] = {}
-
-
 def text_nm(text: str, nm_per_unit: int) -> int:
     """A number as written (NUMBER_TEXT: sign, digits, point) times `nm_per_unit`, rounded
     half-even to whole nm, computed on the digits as integers: exactly what
-    `int((Decimal(text) * nm_per_unit).to_integral_value())` gives, without the Decimal.
-    Remembered: a file writes the same few heights, feeds and offsets over and over."""
+    `int((Decimal(text) * nm_per_unit).to_integral_value())` gives, without the Decimal."""
+    return text_length(text, nm_per_unit)[0]
+
+
+_LENGTHS: dict[tuple[str, int], tuple[int, int]] = {}
+
+
+def text_length(text: str, nm_per_unit: int) -> tuple[int, int]:
+    """`text_nm` and the decimal places `text` is written with. Remembered: a file writes
+    the same few heights, feeds and offsets over and over."""
     key = (text, nm_per_unit)
-    nm = _NM.get(key)
-    if nm is None:
-        if len(_NM) >= 1 << 16:
-            _NM.clear()
-        nm = _NM[key] = _text_nm(text, nm_per_unit)
-    return nm
+    found = _LENGTHS.get(key)
+    if found is None:
+        if len(_LENGTHS) >= 1 << 16:
+            _LENGTHS.clear()
+        found = _LENGTHS[key] = (_text_nm(text, nm_per_unit), places(text))
+    return found
 
 
 def _text_nm(text: str, nm_per_unit: int) -> int:
@@ -232,10 +245,10 @@ def _text_nm(text: str, nm_per_unit: int) -> int:
     body = text[1:] if text[0] in "+-" else text
     whole, _, fraction = body.partition(".")
     scaled = int(whole + fraction or "0") * nm_per_unit
-    places = len(fraction)
-    if places == 0:
+    written = len(fraction)
+    if written == 0:
         return -scaled if negative else scaled
-    divisor = _POWERS[places] if places < len(_POWERS) else int(10**places)
+    divisor = _POWERS[written] if written < len(_POWERS) else int(10**written)
     quotient, remainder = divmod(scaled, divisor)
     twice = 2 * remainder
     if twice > divisor or (twice == divisor and quotient & 1):
@@ -247,14 +260,6 @@ def places(text: str) -> int:
     """How many decimal places a number is written with."""
     point = text.find(".")
     return 0 if point < 0 else len(text) - point - 1
-
-
-def in_range(text: str | None, nm: int | None, k: int, shift: list[int]) -> bool:
-    """The range check of `_Reader.length` on an axis word `text` whose target is `nm`
-    (`shift[k]` added), for `fast_motion`: True when the word is absent or within it."""
-    if text is None or nm is None:
-        return True
-    return -MAX_ABS_NM <= nm - shift[k] <= MAX_ABS_NM
 
 
 def digit_text(text: str) -> str:
@@ -343,6 +348,9 @@ class _Reader:
                     self.notes.ignored(number, f"after {where}: not imported")
                 continue
             line = raw.rstrip()
+            usual = USUAL.fullmatch(line)
+            if usual and line and self.fast_words(number, *usual.groups()):
+                continue
             if SIMPLE.fullmatch(line):
                 # Only words (the usual line): one pass of PAIRS reads them all.
                 pairs = PAIRS.findall(line)
@@ -436,13 +444,8 @@ class _Reader:
         `execute` makes of it, without Word and Block objects. Nothing is changed and False
         returned for any other line, or where `execute` would report or refuse something
         (it then reads the line and says so)."""
-        units = self.units
-        if units is None or self.incremental:
-            return False
         x = y = z = f = g = n = None
         for _space, letter, text in pairs:
-            if len(text) > MAX_DIGITS:
-                return False
             if letter == "X" and x is None:
                 x = text
             elif letter == "Y" and y is None:
@@ -457,13 +460,48 @@ class _Reader:
                 n = text
             else:
                 return False
-        motion = self.motion if g is None else LINEAR_CODES.get(g)
+        return self.fast_words(number, n, g, x, y, z, None, None, f)
+
+    def fast_words(
+        self,
+        number: int,
+        n: str | None,
+        g: str | None,
+        x: str | None,
+        y: str | None,
+        z: str | None,
+        i: str | None,
+        j: str | None,
+        f: str | None,
+    ) -> bool:
+        """`fast_motion` of the words' numbers as written (None: not on the line)."""
+        units = self.units
+        if units is None or self.incremental:
+            return False
+        for text in (n, x, y, z, i, j, f):
+            if text is not None and len(text) > MAX_DIGITS:
+                return False
+        motion = self.motion if g is None else MOTION_CODES.get(g)
+        if motion is None:
+            return False
+        if motion == "80":
+            # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
+            if g is None or any(t is not None for t in (x, y, z, i, j, f)):
+                return False
+            self.motion = "80"
+            self.cycle_drilled = False
+            return True
         per = NM_PER_INCH if units is Units.INCH else NM_PER_MM
         feed = self.feed
         if f is not None:
             if not is_positive(f):
                 return False
             feed = text_nm(f, per)
+        if i is not None or j is not None:
+            # (I/J with no axis word moves nothing: `execute` then only sets the modes.)
+            if (motion != "2" and motion != "3") or x is y is z is None:
+                return False
+            return self.fast_arc(number, (x, y, z, i, j), motion, feed, per)
         if motion in CYCLES and g is None and z is None and (x is not None or y is not None):
             return self.fast_hole(number, x, y, feed, per)
         if (motion != "0" and motion != "1") or (g is not None and self.cycle_drilled):
@@ -473,26 +511,11 @@ class _Reader:
             return True
         if motion == "1" and feed is None:
             return False
-        decimals = self.decimals
-        shift = self.shift
-        if x is None:
-            nx = self.x
-        else:
-            nx = text_nm(x, per) + shift[0]
-            decimals = max(decimals, places(x))
-        if y is None:
-            ny = self.y
-        else:
-            ny = text_nm(y, per) + shift[1]
-            decimals = max(decimals, places(y))
-        if z is None:
-            nz = self.z
-        else:
-            nz = text_nm(z, per) + shift[2]
-            decimals = max(decimals, places(z))
-        if nx is None or ny is None or not in_range(x, nx, 0, shift):
+        axes = self.fast_axes(x, y, z, per)
+        if axes is None:
             return False
-        if not in_range(y, ny, 1, shift) or not in_range(z, nz, 2, shift):
+        nx, ny, nz, decimals = axes
+        if nx is None or ny is None:
             return False
         self.decimals = decimals
         self.feed, self.motion = feed, motion
@@ -509,6 +532,71 @@ class _Reader:
         self.cycle_drilled = False
         return True
 
+    def fast_arc(
+        self,
+        number: int,
+        words: tuple[str | None, str | None, str | None, str | None, str | None],
+        motion: str,
+        feed: int | None,
+        per: int,
+    ) -> bool:
+        """`fast_words` for an arc by its centre (I, J; G90.1 or G91.1) in the XY plane at
+        one depth from a known point: what `execute` and `arc` make of it when they have
+        nothing to report or refuse (`check_arc`'s tests included)."""
+        x, y, z, i, j = words
+        sx, sy = self.x, self.y
+        if feed is None or self.plane != "17" or sx is None or sy is None:
+            return False
+        axes = self.fast_axes(x, y, z, per)
+        if axes is None:
+            return False
+        nx, ny, nz, decimals = axes
+        if nx is None or ny is None or (nz is not None and self.z is not None and nz != self.z):
+            return False
+        offsets = [0, 0]
+        for k, text in enumerate((i, j)):
+            if text is not None:
+                nm, written = text_length(text, per)
+                if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                    return False
+                offsets[k] = nm
+                decimals = max(decimals, written)
+        if self.arc_absolute:
+            cx, cy = offsets[0] + self.shift[0], offsets[1] + self.shift[1]
+        else:
+            cx, cy = sx + offsets[0], sy + offsets[1]
+        units = self.units
+        assert units is not None
+        r1 = math.dist((sx, sy), (cx, cy))
+        if r1 == 0 or arc_end_off(r1, math.dist((nx, ny), (cx, cy)), units):
+            return False
+        self.decimals = decimals
+        self.feed, self.motion = feed, motion
+        self.change_pending = None
+        clockwise = motion == "2"
+        self.steps.append(Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp))
+        self.moves_made = self.moved = True
+        self.x, self.y, self.z = nx, ny, nz
+        self.cycle_drilled = False
+        return True
+
+    def fast_axes(
+        self, x: str | None, y: str | None, z: str | None, per: int
+    ) -> tuple[int | None, int | None, int | None, int] | None:
+        """Where absolute axis words go, as `target` has it (an axis without a word stays
+        where it is), and the decimal places the file is then written to; None when a word
+        is out of `length`'s range. Changes nothing."""
+        decimals = self.decimals
+        out = [self.x, self.y, self.z]
+        for k, text in enumerate((x, y, z)):
+            if text is not None:
+                nm, written = text_length(text, per)
+                if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                    return None
+                out[k] = nm + self.shift[k]
+                decimals = max(decimals, written)
+        return out[0], out[1], out[2], decimals
+
     def fast_hole(
         self, number: int, x: str | None, y: str | None, feed: int | None, per: int
     ) -> bool:
@@ -520,17 +608,13 @@ class _Reader:
             return False
         if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
             return False
-        shift = self.shift
-        nx = self.x if x is None else text_nm(x, per) + shift[0]
-        ny = self.y if y is None else text_nm(y, per) + shift[1]
-        if nx is None or ny is None or not in_range(x, nx, 0, shift):
+        axes = self.fast_axes(x, y, None, per)
+        if axes is None:
             return False
-        if not in_range(y, ny, 1, shift):
+        nx, ny, _, decimals = axes
+        if nx is None or ny is None:
             return False
-        if x is not None:
-            self.decimals = max(self.decimals, places(x))
-        if y is not None:
-            self.decimals = max(self.decimals, places(y))
+        self.decimals = decimals
         assert code is not None and self.units is not None
         self.feed = feed
         self.change_pending = None
@@ -621,11 +705,8 @@ class _Reader:
     def length(self, word: Word, block: Block) -> int:
         """A dimension word in nm (in the current units)."""
         units = self.units or self.current_units()
-        text = word.text
-        point = text.find(".")
-        if point >= 0 and len(text) - point - 1 > self.decimals:
-            self.decimals = len(text) - point - 1
-        nm = text_nm(text, NM_PER_INCH if units is Units.INCH else NM_PER_MM)
+        nm, written = text_length(word.text, NM_PER_INCH if units is Units.INCH else NM_PER_MM)
+        self.decimals = max(self.decimals, written)
         if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
             raise failure(block.line, word.column, f"{word.letter}{word.text} is out of range")
         return nm

@@ -68,10 +68,12 @@ NUMBER = re.compile(NUMBER_TEXT)
 SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
 # The commonest line, read in one match: N, G0-G3 or G80, X, Y, Z, I, J, F, each perhaps,
 # in this order (`_Reader.fast_words` takes the numbers as written).
+# Its numbers have at most 12 digits and point (MAX_DIGITS: no need to count them again).
+_SHORT = rf"[+-]?(?=[0-9.]{{1,{MAX_DIGITS}}}(?![0-9.])){NUMBER_TEXT.removeprefix('[+-]?')}"
 USUAL = re.compile(
-    rf"[ \t]*(?:N([0-9]+)[ \t]*)?(?:G(0?[0-3]|80)[ \t]*)?(?:X({NUMBER_TEXT})[ \t]*)?"
-    rf"(?:Y({NUMBER_TEXT})[ \t]*)?(?:Z({NUMBER_TEXT})[ \t]*)?(?:I({NUMBER_TEXT})[ \t]*)?"
-    rf"(?:J({NUMBER_TEXT})[ \t]*)?(?:F({NUMBER_TEXT}))?"
+    rf"[ \t]*(?:N([0-9]{{1,{MAX_DIGITS}}})[ \t]*)?(?:G(0?[0-3]|80)[ \t]*)?(?:X({_SHORT})[ \t]*)?"
+    rf"(?:Y({_SHORT})[ \t]*)?(?:Z({_SHORT})[ \t]*)?(?:I({_SHORT})[ \t]*)?"
+    rf"(?:J({_SHORT})[ \t]*)?(?:F({_SHORT}))?"
 )
 # A word with the blanks before it (the column is counted from their lengths).
 PAIRS = re.compile(rf"([ \t]*)([A-Za-z])({NUMBER_TEXT})")
@@ -460,6 +462,9 @@ class _Reader:
                 n = text
             else:
                 return False
+        for word in (n, x, y, z, f):
+            if word is not None and len(word) > MAX_DIGITS:
+                return False  # (USUAL's numbers are no longer than this)
         return self.fast_words(number, n, g, x, y, z, None, None, f)
 
     def fast_words(
@@ -478,9 +483,6 @@ class _Reader:
         units = self.units
         if units is None or self.incremental:
             return False
-        for text in (n, x, y, z, i, j, f):
-            if text is not None and len(text) > MAX_DIGITS:
-                return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
         if motion is None:
             return False
@@ -587,15 +589,30 @@ class _Reader:
         where it is), and the decimal places the file is then written to; None when a word
         is out of `length`'s range. Changes nothing."""
         decimals = self.decimals
-        out = [self.x, self.y, self.z]
-        for k, text in enumerate((x, y, z)):
-            if text is not None:
-                nm, written = text_length(text, per)
-                if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                    return None
-                out[k] = nm + self.shift[k]
-                decimals = max(decimals, written)
-        return out[0], out[1], out[2], decimals
+        nx, ny, nz = self.x, self.y, self.z
+        # Written out per axis: this runs for nearly every line of a long file.
+        if x is not None:
+            nm, written = _LENGTHS.get((x, per)) or text_length(x, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            nx = nm + self.shift[0]
+            if written > decimals:
+                decimals = written
+        if y is not None:
+            nm, written = _LENGTHS.get((y, per)) or text_length(y, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            ny = nm + self.shift[1]
+            if written > decimals:
+                decimals = written
+        if z is not None:
+            nm, written = _LENGTHS.get((z, per)) or text_length(z, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            nz = nm + self.shift[2]
+            if written > decimals:
+                decimals = written
+        return nx, ny, nz, decimals
 
     def fast_hole(
         self, number: int, x: str | None, y: str | None, feed: int | None, per: int

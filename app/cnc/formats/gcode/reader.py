@@ -590,26 +590,28 @@ class _Reader:
         is out of `length`'s range. Changes nothing."""
         decimals = self.decimals
         nx, ny, nz = self.x, self.y, self.z
-        # Written out per axis: this runs for nearly every line of a long file.
+        shift = self.shift
+        # Written out per axis: this runs for nearly every line of a long file. Without a
+        # G92 shift the remembered nm object itself is kept (one int for every repeat).
         if x is not None:
             nm, written = _LENGTHS.get((x, per)) or text_length(x, per)
             if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
                 return None
-            nx = nm + self.shift[0]
+            nx = nm + shift[0] if shift[0] else nm
             if written > decimals:
                 decimals = written
         if y is not None:
             nm, written = _LENGTHS.get((y, per)) or text_length(y, per)
             if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
                 return None
-            ny = nm + self.shift[1]
+            ny = nm + shift[1] if shift[1] else nm
             if written > decimals:
                 decimals = written
         if z is not None:
             nm, written = _LENGTHS.get((z, per)) or text_length(z, per)
             if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
                 return None
-            nz = nm + self.shift[2]
+            nz = nm + shift[2] if shift[2] else nm
             if written > decimals:
                 decimals = written
         return nx, ny, nz, decimals

@@ -13,8 +13,11 @@ import math
 from decimal import Decimal as D
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
+from app.cnc.formats.gcode.reader import text_nm
 from app.cnc.imports import ImportFailure, NoteKind, read_program
 from app.cnc.problems import Severity
 from app.cnc.units import Units
@@ -410,3 +413,49 @@ def test_hole_operation_of_each_cycle() -> None:
     for code, op in [(81, HoleOp.DRILL), (85, HoleOp.BORE), (86, HoleOp.BORE), (74, HoleOp.TAP)]:
         block = gcode(HEAD + f"G{code} X1 Y1 R0.1 Z-0.5 F5\nM30\n").blocks[0]
         assert isinstance(block, Hole) and block.op is op
+
+
+# -- the reader's fast lane (issue 19) ----------------------------------------------------
+
+NUMBER_WRITTEN = st.from_regex(r"\A[+-]?(?:0{0,3}[0-9]{1,6}(?:\.[0-9]{0,6})?|\.[0-9]{1,6})\Z")
+
+
+@settings(max_examples=400, deadline=None)
+@given(NUMBER_WRITTEN, st.sampled_from([Units.INCH, Units.MM]))
+def test_lengths_are_read_to_the_same_nm_as_decimal_arithmetic(text: str, units: Units) -> None:
+    """Lengths are read from the digits as integers: the same nm, rounded half-even, as
+    Decimal arithmetic on the number as written gives."""
+    assert text_nm(text, units.nm) == int((D(text) * units.nm).to_integral_value())
+
+
+def _usual_program(moves: list[tuple[str, str, str, str]]) -> str:
+    lines = ["G20 G90", "G0 Z0.1000", "X0 Y0", "G1 Z-0.1 F4.5"]
+    for code, letter, value, feed in moves:
+        lines.append(f"{code} {letter}{value} {feed}".strip())
+    return "\n".join([*lines, "G0 Z0.2", "M30"]) + "\n"
+
+
+MOVES = st.lists(
+    st.tuples(
+        st.sampled_from(["", "G1", "G01"]),
+        st.sampled_from(["X", "Y"]),
+        st.from_regex(r"\A-?[0-9]\.[0-9]{1,5}\Z"),
+        st.sampled_from(["", "F6", "F7.25"]),
+    ),
+    min_size=1,
+    max_size=12,
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(MOVES)
+def test_the_usual_lines_read_as_the_careful_reader_reads_them(
+    moves: list[tuple[str, str, str, str]],
+) -> None:
+    """The upper-case file goes through the reader's fast lane, the same file in lower case
+    through the word-by-word reader: the same program and the same report."""
+    text = _usual_program(moves)
+    fast = read_program(text.encode(), "t", "gcode")
+    careful = read_program(text.lower().encode(), "t", "gcode")
+    assert fast.program == careful.program
+    assert [str(n) for n in fast.report] == [str(n) for n in careful.report]

@@ -23,10 +23,14 @@ from app.cnc.imports.steps import Parsed
 def program_from_motion(parsed: Parsed) -> Program:
     """The program whose blocks make the motion of `parsed`; the report goes to its notes.
 
+    Consumes `parsed.steps`: the list is emptied once segmented, so that the steps (the
+    biggest part of a long file) are not held while the operations are recognised.
+
     Raises ImportFailure (from segmenting) for motion no block can make.
     """
     notes = parsed.notes
     found = segment(parsed)
+    parsed.steps = []
     tol = parsed.tolerance
     ops = merge_pecks(found.ops, tol)
     diameters = {n: t.diameter for n, t in parsed.tools.items() if t.diameter}

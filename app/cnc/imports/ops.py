@@ -217,9 +217,8 @@ def _sign(op: Op, origin: XY, sig: Signature) -> None:
             _sign(body, (ax, ay), sig)
 
 
-def same_pattern(a: Signature, b: Signature, tolerance: int) -> bool:
-    return (
-        a.labels == b.labels
-        and len(a.numbers) == len(b.numbers)
-        and all(abs(p - q) <= tolerance for p, q in zip(a.numbers, b.numbers, strict=True))
-    )
+def close_numbers(a: list[int], b: list[int], tolerance: int) -> bool:
+    """As many numbers in `a` as in `b`, each within `tolerance` of its own."""
+    if a == b:  # a pattern repeated by exact steps (the usual case): no loop needed
+        return True
+    return len(a) == len(b) and all(abs(p - q) <= tolerance for p, q in zip(a, b, strict=True))

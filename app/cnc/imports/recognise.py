@@ -25,7 +25,8 @@ its finest numbers, `Parsed.tolerance`); otherwise the operations stay explicit 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from collections.abc import Hashable
+from dataclasses import dataclass, replace
 from decimal import ROUND_HALF_EVEN, Decimal
 
 from app.cnc import limits
@@ -63,7 +64,7 @@ from app.cnc.imports.ops import (
     RoutineOp,
     Signature,
     anchor,
-    same_pattern,
+    close_numbers,
     signature,
     tools_of,
 )
@@ -501,8 +502,11 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
     if not isinstance(first, HoleOpR) or i + MIN_BOLT_HOLES > len(ops):
         return None
     run: list[HoleOpR] = []
-    for op in ops[i : i + limits.MAX_BOLT_HOLES]:
-        if not isinstance(op, HoleOpR) or op.spec != first.spec or (op.message and run):
+    spec = first.spec
+    # Indexing, not a slice: a slice would copy up to MAX_BOLT_HOLES ops at every i.
+    for k in range(i, min(len(ops), i + limits.MAX_BOLT_HOLES)):
+        op = ops[k]
+        if not isinstance(op, HoleOpR) or op.spec != spec or (op.message and run):
             break
         run.append(op)
         if op.stop:
@@ -617,10 +621,13 @@ class _LoopFinder:
 
     def one_pass(self, ops: list[Op]) -> list[Op]:
         sigs = [signature(op) for op in ops]
+        seen = _Kinds()
+        kinds = [seen.of(sig.labels) for sig in sigs]
+        anchors = [anchor(op) for op in ops]
         out: list[Op] = []
         i = 0
         while i < len(ops):
-            found = self.best_run(ops, sigs, i)
+            found = self.best_run(ops, _Seen(sigs, kinds, anchors), i)
             if found is None:
                 out.append(ops[i])
                 i += 1
@@ -636,14 +643,16 @@ class _LoopFinder:
             i += length * count
         return out
 
-    def best_run(self, ops: list[Op], sigs: list[Signature], i: int) -> tuple[int, int, XY] | None:
+    def best_run(self, ops: list[Op], seen: _Seen, i: int) -> tuple[int, int, XY] | None:
         best: tuple[int, int, XY] | None = None
         n = len(ops)
+        tol = self.tol
+        kinds, anchors, sigs = seen.kinds, seen.anchors, seen.sigs
         for length in range(1, min(MAX_LOOP_BODY, (n - i) // 2) + 1):
-            a0, a1 = anchor(ops[i]), anchor(ops[i + length])
+            a0, a1 = anchors[i], anchors[i + length]
             raw = (a1[0] - a0[0], a1[1] - a0[1])
-            along_x = abs(raw[1]) <= self.tol and abs(raw[0]) > self.tol
-            along_y = abs(raw[0]) <= self.tol and abs(raw[1]) > self.tol
+            along_x = abs(raw[1]) <= tol and abs(raw[0]) > tol
+            along_y = abs(raw[0]) <= tol and abs(raw[1]) > tol
             if not (along_x or along_y):
                 continue
             units = _units(ops[i])
@@ -653,21 +662,21 @@ class _LoopFinder:
             count = 1
             while i + (count + 1) * length <= n and count <= limits.MAX_REPEAT:
                 base = i + count * length
-                ok = all(
-                    same_pattern(sigs[base + t], sigs[i + t], self.tol)
-                    and _close(
-                        anchor(ops[base + t]),
-                        (
-                            anchor(ops[i + t])[0] + count * step[0],
-                            anchor(ops[i + t])[1] + count * step[1],
-                        ),
-                        self.tol,
-                    )
-                    for t in range(length)
-                )
-                if not ok:
-                    break
-                count += 1
+                dx, dy = count * step[0], count * step[1]
+                for t in range(length):
+                    here, there = base + t, i + t
+                    # Same kind first (an int compare): most candidates fail there.
+                    if kinds[here] != kinds[there]:
+                        break
+                    moved, first = anchors[here], anchors[there]
+                    if abs(moved[0] - first[0] - dx) > tol or abs(moved[1] - first[1] - dy) > tol:
+                        break
+                    if not close_numbers(sigs[here].numbers, sigs[there].numbers, tol):
+                        break
+                else:
+                    count += 1
+                    continue
+                break
             if count < 2 or count * length < 3:
                 continue
             if best is None or count * length > best[0] * best[1]:
@@ -694,6 +703,36 @@ class _LoopFinder:
             return None
         nx, ny = (count - 1, 0) if step[1] == 0 else (0, count - 1)
         return LoopOp([], body, step, nx, ny, head_added=head)
+
+
+@dataclass(frozen=True)
+class _Seen:
+    """One pass's view of its operations: signatures, their kinds (equal labels, equal
+    kind), anchors."""
+
+    sigs: list[Signature]
+    kinds: list[int]
+    anchors: list[XY]
+
+
+class _Kinds:
+    """Numbers for signatures' labels: equal labels, equal number (hashed when they can
+    be, else compared with the kinds met so far)."""
+
+    def __init__(self) -> None:
+        self.hashed: dict[tuple[Hashable, ...], int] = {}
+        self.unhashable: list[list[Hashable]] = []
+
+    def of(self, labels: list[Hashable]) -> int:
+        key = tuple(labels)
+        try:
+            return self.hashed.setdefault(key, len(self.hashed))
+        except TypeError:
+            for k, other in enumerate(self.unhashable):
+                if other == labels:
+                    return -1 - k
+            self.unhashable.append(labels)
+            return -len(self.unhashable)
 
 
 def _units(op: Op) -> Units:

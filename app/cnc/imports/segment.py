@@ -58,6 +58,10 @@ from app.cnc.imports.steps import (
 from app.cnc.units import Units, to_nm
 
 DWELL = limits.HOLE_DWELL_SECONDS
+# isinstance tuples, made once (a `A | B` union is built again on every evaluation).
+MOTIONS = (Rapid, Feed, Arc)
+CUTS = (Feed, Arc)
+QUIET = (SpindleOff, Stop, ToolChange, End, Coolant, Message)  # steps a spindle stop allows
 TAP_OUT = {Units.INCH: to_nm(limits.TAP_FEED_OUT_INCH, Units.INCH), Units.MM: 7_620_000}
 
 # Canned cycles and the hole operation each becomes, with what differs (seed 003's tables,
@@ -111,7 +115,7 @@ def is_two_axis(steps: list[Step]) -> bool:
     for step in steps:
         if isinstance(step, Cycle):
             return False
-        if isinstance(step, Rapid | Feed | Arc) and step.z is not None:
+        if isinstance(step, MOTIONS) and step.z is not None:
             heights.add(step.z)
     return len(heights) <= 1
 
@@ -125,7 +129,7 @@ def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
         step = steps[k]
         if isinstance(step, Feed) and (step.x, step.y) == at:
             continue
-        return isinstance(step, Feed | Arc)
+        return isinstance(step, CUTS)
     return False
 
 
@@ -180,11 +184,11 @@ class _Segmenter:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
                 continue
-            if not isinstance(step, SpindleOff | Stop | ToolChange | End | Coolant | Message):
+            if not isinstance(step, QUIET):
                 self.note_spindle_off()
             if isinstance(step, Rapid):
                 self.rapid(step)
-            elif isinstance(step, Feed | Arc):
+            elif isinstance(step, CUTS):
                 i = self.feed(i)
                 continue
             elif isinstance(step, Cycle):
@@ -319,7 +323,7 @@ class _Segmenter:
 
     def feed(self, i: int) -> int:
         step = self.steps[i]
-        assert isinstance(step, Feed | Arc)
+        assert isinstance(step, CUTS)
         same_xy = isinstance(step, Feed) and (step.x, step.y) == (self.x, self.y)
         if same_xy:
             if step.z is not None and self.z is None and not self.two_axis:

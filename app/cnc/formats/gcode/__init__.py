@@ -15,7 +15,7 @@ from app.cnc.blocks import Program
 from app.cnc.formats.gcode import boss, writer
 from app.cnc.formats.gcode.reader import parse_gcode
 from app.cnc.imports import wordaddress
-from app.cnc.imports.common import ImportNote, decode_text
+from app.cnc.imports.common import ImportNote, collector_paused, decode_text
 from app.cnc.imports.motion import program_from_motion
 from app.cnc.imports.registry import Content, Importer, Sniff, register_importer
 
@@ -35,5 +35,6 @@ class GcodeImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
-        parsed = parse_gcode(decode_text(data), name)
-        return program_from_motion(parsed), parsed.notes.report()
+        with collector_paused():
+            parsed = parse_gcode(decode_text(data), name)
+            return program_from_motion(parsed), parsed.notes.report()

@@ -37,6 +37,7 @@ from decimal import Decimal
 
 from app.cnc.imports.common import (
     MAX_ABS_NM,
+    MAX_DIGITS,
     Notes,
     arc_end_off,
     check_digits,
@@ -61,11 +62,21 @@ from app.cnc.imports.steps import (
     ToolData,
 )
 from app.cnc.numbers import NUMBER_TEXT
-from app.cnc.units import Units
+from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units
 
 NUMBER = re.compile(NUMBER_TEXT)
 SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
-PAIR = re.compile(rf"([A-Za-z])({NUMBER_TEXT})")
+# The commonest line, read in one match: N, G0-G3 or G80, X, Y, Z, I, J, F, each perhaps,
+# in this order (`_Reader.fast_words` takes the numbers as written).
+# Its numbers have at most 12 digits and point (MAX_DIGITS: no need to count them again).
+_SHORT = rf"[+-]?(?=[0-9.]{{1,{MAX_DIGITS}}}(?![0-9.])){NUMBER_TEXT.removeprefix('[+-]?')}"
+USUAL = re.compile(
+    rf"[ \t]*(?:N([0-9]{{1,{MAX_DIGITS}}})[ \t]*)?(?:G(0?[0-3]|80)[ \t]*)?(?:X({_SHORT})[ \t]*)?"
+    rf"(?:Y({_SHORT})[ \t]*)?(?:Z({_SHORT})[ \t]*)?(?:I({_SHORT})[ \t]*)?"
+    rf"(?:J({_SHORT})[ \t]*)?(?:F({_SHORT}))?"
+)
+# A word with the blanks before it (the column is counted from their lengths).
+PAIRS = re.compile(rf"([ \t]*)([A-Za-z])({NUMBER_TEXT})")
 MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
 HEADER = re.compile(r"^(.*) PART ([0-9]{1,8}|-) MILLBLOCKS$")
 # MillBlocks' set-up comments (emit/gcode.py): part zero and each tool's diameter and length.
@@ -150,6 +161,14 @@ NOTED_M = {
 REFUSED_M = {"98": "a subprogram call", "99": "a subprogram return"}
 AXES = ("X", "Y", "Z")
 ALLOWED = set("XYZIJKRFSTMGNPQLHDO")
+# Blocks `_Reader.plain` executes: these letters and (at most) one of these codes.
+AXES_AND_FEED = frozenset("NXYZF")
+LINEAR = frozenset({"0", "1"})
+# The G words `fast_words` takes, as written, and their code.
+MOTION_CODES = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
+NO_CODES: dict[str, Word] = {}
+# The letters a word may have, either case, to the upper case (O: the careful reader).
+LETTERS = {c: c for c in ALLOWED - {"O"}} | {c.lower(): c for c in ALLOWED - {"O"}}
 LETTER_HINT = {
     "A": "a rotary axis",
     "B": "a rotary axis",
@@ -160,25 +179,99 @@ LETTER_HINT = {
 }
 
 
-@dataclass
 class Word:
-    """A letter and its number as written, and the column the letter is in."""
+    """A letter and its number as written, and the column the letter is in.
 
-    letter: str
-    text: str
-    column: int
-    value: Decimal = field(init=False)
+    Slotted and without a `Decimal` made up front: a file has a few words on each of its
+    (up to millions of) lines, and most are lengths, read straight to nm (`text_nm`).
+    """
 
-    def __post_init__(self) -> None:
-        self.value = Decimal(self.text)
+    __slots__ = ("column", "letter", "text")
+
+    def __init__(self, letter: str, text: str, column: int) -> None:
+        self.letter = letter
+        self.text = text
+        self.column = column
+
+    def __repr__(self) -> str:
+        return f"Word({self.letter!r}, {self.text!r}, {self.column})"
+
+    @property
+    def value(self) -> Decimal:
+        """The number, exactly as written."""
+        return Decimal(self.text)
 
     @property
     def code(self) -> str:
         """A G or M code's number as written in the tables (`0`, `92.1`)."""
-        value = self.value
-        if value == value.to_integral_value():
-            return str(int(value))
-        return format(value.normalize(), "f")
+        code = _CODES.get(self.text)
+        if code is None:
+            value = self.value
+            if value == value.to_integral_value():
+                code = str(int(value))
+            else:
+                code = format(value.normalize(), "f")
+            if len(_CODES) < 4096:  # G/M numbers: a file uses a handful
+                _CODES[self.text] = code
+        return code
+
+
+_CODES: dict[str, str] = {}
+_POWERS = [10**k for k in range(32)]
+
+
+def text_nm(text: str, nm_per_unit: int) -> int:
+    """A number as written (NUMBER_TEXT: sign, digits, point) times `nm_per_unit`, rounded
+    half-even to whole nm, computed on the digits as integers: exactly what
+    `int((Decimal(text) * nm_per_unit).to_integral_value())` gives, without the Decimal."""
+    return text_length(text, nm_per_unit)[0]
+
+
+_LENGTHS: dict[tuple[str, int], tuple[int, int]] = {}
+
+
+def text_length(text: str, nm_per_unit: int) -> tuple[int, int]:
+    """`text_nm` and the decimal places `text` is written with. Remembered: a file writes
+    the same few heights, feeds and offsets over and over."""
+    key = (text, nm_per_unit)
+    found = _LENGTHS.get(key)
+    if found is None:
+        if len(_LENGTHS) >= 1 << 16:
+            _LENGTHS.clear()
+        found = _LENGTHS[key] = (_text_nm(text, nm_per_unit), places(text))
+    return found
+
+
+def _text_nm(text: str, nm_per_unit: int) -> int:
+    negative = text[0] == "-"
+    body = text[1:] if text[0] in "+-" else text
+    whole, _, fraction = body.partition(".")
+    scaled = int(whole + fraction or "0") * nm_per_unit
+    written = len(fraction)
+    if written == 0:
+        return -scaled if negative else scaled
+    divisor = _POWERS[written] if written < len(_POWERS) else int(10**written)
+    quotient, remainder = divmod(scaled, divisor)
+    twice = 2 * remainder
+    if twice > divisor or (twice == divisor and quotient & 1):
+        quotient += 1
+    return -quotient if negative else quotient
+
+
+def places(text: str) -> int:
+    """How many decimal places a number is written with."""
+    point = text.find(".")
+    return 0 if point < 0 else len(text) - point - 1
+
+
+def digit_text(text: str) -> str:
+    """A number's digits, without sign and point (for `check_digits`)."""
+    return text.lstrip("+-").replace(".", "")
+
+
+def is_positive(text: str) -> bool:
+    """`Decimal(text) > 0` for a number as written (NUMBER_TEXT)."""
+    return text[0] != "-" and any(ch in "123456789" for ch in text)
 
 
 @dataclass
@@ -230,6 +323,7 @@ class _Reader:
         # (line, T, index of its ToolChange step) of an M6 that no cut has confirmed yet
         self.change_pending: tuple[int, int, int] | None = None
         self.moved = False
+        self.moves_made = False  # a Rapid, Feed or Arc is among the steps
         self.x: int | None = None
         self.y: int | None = None
         self.z: int | None = None
@@ -255,7 +349,18 @@ class _Reader:
                     where = "the closing %" if self.percent >= 2 else "the program end"
                     self.notes.ignored(number, f"after {where}: not imported")
                 continue
-            block = self.read_line(number, raw)
+            line = raw.rstrip()
+            usual = USUAL.fullmatch(line)
+            if usual and line and self.fast_words(number, *usual.groups()):
+                continue
+            if SIMPLE.fullmatch(line):
+                # Only words (the usual line): one pass of PAIRS reads them all.
+                pairs = PAIRS.findall(line)
+                if self.fast_motion(number, pairs):
+                    continue
+                block = self.simple_line(number, pairs) or self.read_line(number, line)
+            else:
+                block = self.read_line(number, line)
             if block is not None:
                 self.execute(block)
         units = self.program_units or Units.INCH
@@ -280,9 +385,9 @@ class _Reader:
             start_z=self.start_z,
         )
 
-    def read_line(self, number: int, raw: str) -> Block | None:
-        """Split one line into words and comments. Returns None for a line with no words."""
-        line = raw.rstrip()
+    def read_line(self, number: int, line: str) -> Block | None:
+        """Split one line (without trailing blanks) into words and comments, one character
+        at a time, saying what is wrong where. Returns None for a line with no words."""
         stripped = line.lstrip()
         if not stripped:
             return None
@@ -302,20 +407,6 @@ class _Reader:
         words: list[Word] = []
         comments: list[str] = []
         n = len(line)
-        if SIMPLE.fullmatch(line, pos):
-            # Only words (the usual line): read them in one go.
-            for match in PAIR.finditer(line, pos):
-                letter = match.group(1).upper()
-                if letter in LETTER_HINT or letter == "O" or letter not in ALLOWED:
-                    break  # the careful reader below says what is wrong
-                digits = match.group(2).lstrip("+-").replace(".", "")
-                if not check_digits(digits):
-                    break
-                words.append(Word(letter, match.group(2), match.start() + 1))
-            else:
-                pos = n
-            if pos != n:
-                words = []
         while pos < n:
             ch = line[pos]
             if ch in " \t":
@@ -347,7 +438,231 @@ class _Reader:
             if comments and not self.name and not self.moved and not self.steps:
                 self.title(number, comments[0])
             return None
-        block = Block(number, words, " ".join(comments))
+        return self.make_block(number, words, " ".join(comments))
+
+    def fast_motion(self, number: int, pairs: list[tuple[str, str, str]]) -> bool:
+        """A line of X/Y/Z/F/N words and perhaps G0 or G1 (PAIRS of a SIMPLE line), in
+        absolute coordinates from a known point: the state changes and the step that
+        `execute` makes of it, without Word and Block objects. Nothing is changed and False
+        returned for any other line, or where `execute` would report or refuse something
+        (it then reads the line and says so)."""
+        x = y = z = f = g = n = None
+        for _space, letter, text in pairs:
+            if letter == "X" and x is None:
+                x = text
+            elif letter == "Y" and y is None:
+                y = text
+            elif letter == "Z" and z is None:
+                z = text
+            elif letter == "F" and f is None:
+                f = text
+            elif letter == "G" and g is None:
+                g = text
+            elif letter == "N" and n is None:
+                n = text
+            else:
+                return False
+        for word in (n, x, y, z, f):
+            if word is not None and len(word) > MAX_DIGITS:
+                return False  # (USUAL's numbers are no longer than this)
+        return self.fast_words(number, n, g, x, y, z, None, None, f)
+
+    def fast_words(
+        self,
+        number: int,
+        n: str | None,
+        g: str | None,
+        x: str | None,
+        y: str | None,
+        z: str | None,
+        i: str | None,
+        j: str | None,
+        f: str | None,
+    ) -> bool:
+        """`fast_motion` of the words' numbers as written (None: not on the line)."""
+        units = self.units
+        if units is None or self.incremental:
+            return False
+        motion = self.motion if g is None else MOTION_CODES.get(g)
+        if motion is None:
+            return False
+        if motion == "80":
+            # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
+            if g is None or any(t is not None for t in (x, y, z, i, j, f)):
+                return False
+            self.motion = "80"
+            self.cycle_drilled = False
+            return True
+        per = NM_PER_INCH if units is Units.INCH else NM_PER_MM
+        feed = self.feed
+        if f is not None:
+            if not is_positive(f):
+                return False
+            feed = text_nm(f, per)
+        if i is not None or j is not None:
+            # (I/J with no axis word moves nothing: `execute` then only sets the modes.)
+            if (motion != "2" and motion != "3") or x is y is z is None:
+                return False
+            return self.fast_arc(number, (x, y, z, i, j), motion, feed, per)
+        if motion in CYCLES and g is None and z is None and (x is not None or y is not None):
+            return self.fast_hole(number, x, y, feed, per)
+        if (motion != "0" and motion != "1") or (g is not None and self.cycle_drilled):
+            return False
+        if x is None and y is None and z is None:
+            self.feed, self.motion = feed, motion
+            return True
+        if motion == "1" and feed is None:
+            return False
+        axes = self.fast_axes(x, y, z, per)
+        if axes is None:
+            return False
+        nx, ny, nz, decimals = axes
+        if nx is None or ny is None:
+            return False
+        self.decimals = decimals
+        self.feed, self.motion = feed, motion
+        if motion == "0":
+            if not self.moves_made and x is None and y is None:
+                self.start_z = nz
+            self.steps.append(Rapid(number, nx, ny, nz, units))
+        else:
+            assert feed is not None
+            self.change_pending = None
+            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp))
+        self.moves_made = self.moved = True
+        self.x, self.y, self.z = nx, ny, nz
+        self.cycle_drilled = False
+        return True
+
+    def fast_arc(
+        self,
+        number: int,
+        words: tuple[str | None, str | None, str | None, str | None, str | None],
+        motion: str,
+        feed: int | None,
+        per: int,
+    ) -> bool:
+        """`fast_words` for an arc by its centre (I, J; G90.1 or G91.1) in the XY plane at
+        one depth from a known point: what `execute` and `arc` make of it when they have
+        nothing to report or refuse (`check_arc`'s tests included)."""
+        x, y, z, i, j = words
+        sx, sy = self.x, self.y
+        if feed is None or self.plane != "17" or sx is None or sy is None:
+            return False
+        axes = self.fast_axes(x, y, z, per)
+        if axes is None:
+            return False
+        nx, ny, nz, decimals = axes
+        if nx is None or ny is None or (nz is not None and self.z is not None and nz != self.z):
+            return False
+        offsets = [0, 0]
+        for k, text in enumerate((i, j)):
+            if text is not None:
+                nm, written = text_length(text, per)
+                if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                    return False
+                offsets[k] = nm
+                decimals = max(decimals, written)
+        if self.arc_absolute:
+            cx, cy = offsets[0] + self.shift[0], offsets[1] + self.shift[1]
+        else:
+            cx, cy = sx + offsets[0], sy + offsets[1]
+        units = self.units
+        assert units is not None
+        r1 = math.dist((sx, sy), (cx, cy))
+        if r1 == 0 or arc_end_off(r1, math.dist((nx, ny), (cx, cy)), units):
+            return False
+        self.decimals = decimals
+        self.feed, self.motion = feed, motion
+        self.change_pending = None
+        clockwise = motion == "2"
+        self.steps.append(Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp))
+        self.moves_made = self.moved = True
+        self.x, self.y, self.z = nx, ny, nz
+        self.cycle_drilled = False
+        return True
+
+    def fast_axes(
+        self, x: str | None, y: str | None, z: str | None, per: int
+    ) -> tuple[int | None, int | None, int | None, int] | None:
+        """Where absolute axis words go, as `target` has it (an axis without a word stays
+        where it is), and the decimal places the file is then written to; None when a word
+        is out of `length`'s range. Changes nothing."""
+        decimals = self.decimals
+        nx, ny, nz = self.x, self.y, self.z
+        shift = self.shift
+        # Written out per axis: this runs for nearly every line of a long file. Without a
+        # G92 shift the remembered nm object itself is kept (one int for every repeat).
+        if x is not None:
+            nm, written = _LENGTHS.get((x, per)) or text_length(x, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            nx = nm + shift[0] if shift[0] else nm
+            if written > decimals:
+                decimals = written
+        if y is not None:
+            nm, written = _LENGTHS.get((y, per)) or text_length(y, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            ny = nm + shift[1] if shift[1] else nm
+            if written > decimals:
+                decimals = written
+        if z is not None:
+            nm, written = _LENGTHS.get((z, per)) or text_length(z, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            nz = nm + shift[2] if shift[2] else nm
+            if written > decimals:
+                decimals = written
+        return nx, ny, nz, decimals
+
+    def fast_hole(
+        self, number: int, x: str | None, y: str | None, feed: int | None, per: int
+    ) -> bool:
+        """`fast_motion` for the next hole of the canned cycle in effect (X/Y, perhaps F,
+        absolute): what `cycle` makes of it when it has nothing to report or refuse."""
+        code = self.motion
+        r, bottom, start_z = self.cycle_r, self.cycle_z, self.z
+        if r is None or bottom is None or start_z is None or feed is None or bottom >= r:
+            return False
+        if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
+            return False
+        axes = self.fast_axes(x, y, None, per)
+        if axes is None:
+            return False
+        nx, ny, _, decimals = axes
+        if nx is None or ny is None:
+            return False
+        self.decimals = decimals
+        assert code is not None and self.units is not None
+        self.feed = feed
+        self.change_pending = None
+        clear = max(start_z, r) if self.return_initial else r
+        peck = (self.cycle_q or 0) if code in ("73", "83") else 0
+        self.steps.append(
+            Cycle(number, int(code), nx, ny, r, bottom, clear, feed, peck, self.cycle_p, self.units)
+        )
+        self.x, self.y, self.z = nx, ny, clear
+        self.moved = self.cycle_drilled = True
+        return True
+
+    def simple_line(self, number: int, pairs: list[tuple[str, str, str]]) -> Block | None:
+        """The block of a SIMPLE line's PAIRS; None when a word needs the careful reader
+        (a letter it refuses, too many digits) to say what is wrong."""
+        words: list[Word] = []
+        column = 1
+        for space, letter, text in pairs:
+            column += len(space)
+            letter = LETTERS.get(letter, "")
+            if not letter or (len(text) > MAX_DIGITS and not check_digits(digit_text(text))):
+                return None
+            words.append(Word(letter, text, column))
+            column += 1 + len(text)
+        return self.make_block(number, words, "")
+
+    def make_block(self, number: int, words: list[Word], comment: str) -> Block:
+        """The block of `words`: G and M codes apart, other letters once each."""
+        block = Block(number, words, comment)
         for word in words:
             if word.letter == "G":
                 block.gs.append(word)
@@ -388,8 +703,7 @@ class _Reader:
                 raise failure(number, pos + 2, "parameters and expressions are not supported")
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
-        digits = match.group().lstrip("+-").replace(".", "")
-        if not check_digits(digits):
+        if not check_digits(digit_text(match.group())):
             raise failure(number, pos + 2, f"{letter}{match.group()}: too many digits")
         words.append(Word(letter, match.group(), pos + 1))
         return match.end()
@@ -409,11 +723,10 @@ class _Reader:
 
     def length(self, word: Word, block: Block) -> int:
         """A dimension word in nm (in the current units)."""
-        units = self.current_units()
-        if "." in word.text:
-            self.decimals = max(self.decimals, len(word.text.split(".")[1]))
-        nm = int((word.value * units.nm).to_integral_value())
-        if abs(nm) > MAX_ABS_NM:
+        units = self.units or self.current_units()
+        nm, written = text_length(word.text, NM_PER_INCH if units is Units.INCH else NM_PER_MM)
+        self.decimals = max(self.decimals, written)
+        if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
             raise failure(block.line, word.column, f"{word.letter}{word.text} is out of range")
         return nm
 
@@ -425,6 +738,9 @@ class _Reader:
         return self.units
 
     def integer(self, word: Word, block: Block, low: int, high: int) -> int:
+        text = word.text
+        if text.isdigit() and text.isascii() and low <= int(text) <= high:
+            return int(text)  # the usual word (T2, H1, S1200): no Decimal needed
         value = word.value
         if value != value.to_integral_value() or not low <= value <= high:
             raise failure(
@@ -437,15 +753,21 @@ class _Reader:
     # -- a block ----------------------------------------------------------------------------
 
     def execute(self, block: Block) -> None:
-        codes = self.g_codes(block)
+        # Every step below is guarded by the words it needs, so the usual line (a few axis
+        # words, perhaps a motion code and F) goes through only the checks that concern it.
+        codes = self.g_codes(block) if block.gs else NO_CODES
         m_codes = [(m, m.code) for m in block.ms]
         line = block.line
+        other = block.other
         for word, code in m_codes:
             if code in REFUSED_M:
                 raise failure(line, word.column, f"M{code}: {REFUSED_M[code]} is not supported")
+        if other.keys() <= AXES_AND_FEED and not m_codes and codes.keys() <= LINEAR:
+            self.plain(block, codes)
+            return
         f = block.get("F")
         if f is not None and "4" not in codes:
-            if f.value <= 0:
+            if not is_positive(f.text):
                 raise failure(line, f.column, f"F{f.text}: a feed must be more than 0")
             self.feed = self.rate(f)
         s = block.get("S")
@@ -511,6 +833,21 @@ class _Reader:
                 self.steps.append(End(line))
                 self.ended_at = line
                 self.notes.became(line, f"M{code}: the end of the program")
+
+    def plain(self, block: Block, codes: dict[str, Word]) -> None:
+        """`execute` for a block of axis words, F and N, with G0 or G1 or no G code: what
+        `execute` would do for it (no spindle, tool, mode or M step applies), in order."""
+        f = block.other.get("F")
+        if f is not None:
+            if not is_positive(f.text):
+                raise failure(block.line, f.column, f"F{f.text}: a feed must be more than 0")
+            self.feed = self.rate(f)
+        if codes:
+            motion_word = codes.get("0") or codes["1"]
+            self.set_motion(block, motion_word, False)
+        other = block.other
+        if "X" in other or "Y" in other or "Z" in other:
+            self.move(block)
 
     def modes(self, block: Block, codes: dict[str, Word]) -> None:
         """Plane, units, compensation, tool length, coordinate system, distance, return."""
@@ -766,6 +1103,7 @@ class _Reader:
             return
         x, y, z = self.target(block)
         self.steps.append(Rapid(line, x, y, z, self.current_units()))
+        self.moves_made = True
         self.x, self.y, self.z = x, y, z
         self.moved = True
         self.cycle_drilled = False
@@ -778,37 +1116,43 @@ class _Reader:
     # -- motion -------------------------------------------------------------------------------
 
     def rate(self, word: Word) -> int:
-        units = self.current_units()
-        return int((word.value * units.nm).to_integral_value())
+        units = self.units or self.current_units()
+        return text_nm(word.text, NM_PER_INCH if units is Units.INCH else NM_PER_MM)
 
     def target(self, block: Block) -> tuple[int, int, int | None]:
         """Where the axis words go, in part coordinates (G90/G91, G92 shift)."""
-        out: list[int | None] = []
-        for k, axis in enumerate(AXES):
-            word = block.get(axis)
-            current = getattr(self, axis.lower())
-            if word is None:
-                if current is None and axis != "Z":
-                    current = 0
-                    if block.has("X") or block.has("Y") or self.motion != "0":
-                        self.note_zero(block.line, axis)
-                out.append(current)
-                continue
-            value = self.length(word, block)
-            if self.incremental:
-                if current is None:
-                    if axis == "Z":
-                        raise failure(
-                            block.line, word.column, "Z incremental from an unknown height"
-                        )
-                    current = 0
-                    self.note_zero(block.line, axis)
-                out.append(current + value)
-            else:
-                out.append(value + self.shift[k])
-        x, y, z = out
+        other = block.other
+        x_word, y_word, z_word = other.get("X"), other.get("Y"), other.get("Z")
+        x, y = self.x, self.y
+        if x_word is None:
+            if x is None:
+                x = 0
+                if y_word is not None or self.motion != "0":
+                    self.note_zero(block.line, "X")
+        else:
+            x = self.axis_target(block, x_word, x, 0)
+        if y_word is None:
+            if y is None:
+                y = 0
+                if x_word is not None or self.motion != "0":
+                    self.note_zero(block.line, "Y")
+        else:
+            y = self.axis_target(block, y_word, y, 1)
+        z = self.z if z_word is None else self.axis_target(block, z_word, self.z, 2)
         assert x is not None and y is not None
         return x, y, z
+
+    def axis_target(self, block: Block, word: Word, current: int | None, k: int) -> int:
+        """Where one axis word goes (`k`: 0 X, 1 Y, 2 Z; `current`: where it is)."""
+        value = self.length(word, block)
+        if not self.incremental:
+            return value + self.shift[k]
+        if current is None:
+            if k == 2:
+                raise failure(block.line, word.column, "Z incremental from an unknown height")
+            current = 0
+            self.note_zero(block.line, AXES[k])
+        return current + value
 
     def note_zero(self, line: int, axis: str) -> None:
         self.notes.assumed(line, f"{axis} not known yet: the tool starts over part zero ({axis}0)")
@@ -828,16 +1172,17 @@ class _Reader:
         if motion != "0":
             self.change_pending = None
         if motion == "0":
-            if not any(isinstance(s, Rapid | Feed | Arc) for s in self.steps) and not (
-                block.has("X") or block.has("Y")
-            ):
+            if not self.moves_made and not (block.has("X") or block.has("Y")):
                 self.start_z = z  # the first move, up or down to where the program starts
             self.steps.append(Rapid(line, x, y, z, units))
+            self.moves_made = True
         elif motion == "1":
             feed = self.need_feed(block)
             self.steps.append(Feed(line, x, y, z, feed, units, self.comp))
+            self.moves_made = True
         else:
             self.arc(block, x, y, z, motion == "2")
+            self.moves_made = True
         self.x, self.y, self.z = x, y, z
         self.moved = True
         self.cycle_drilled = False

@@ -15,15 +15,21 @@ from tests.test_browser import browser, page, server, shot  # noqa: F401 - fixtu
 from tests.test_import_dxf import bracket
 
 
-def test_choose_a_profile_and_holes_from_a_drawing(page: Page, server: str, tmp_path: Path) -> None:  # noqa: F811
+def open_bracket(tab: Page, address: str, tmp_path: Path) -> None:
+    """Upload the bracket drawing from the library page, holes up to 0.25 in, and wait for
+    the choosing page to show it."""
     drawing = tmp_path / "bracket.dxf"
     drawing.write_bytes(bracket())
-    page.goto(server + "/")
-    card = page.locator("form.card", has_text="From a drawing (DXF)")
+    tab.goto(address + "/")
+    card = tab.locator("form.card", has_text="From a drawing (DXF)")
     card.locator('input[type="file"]').set_input_files(str(drawing))
     card.locator('input[name="hole-diameter"]').fill("0.25")
     card.get_by_role("button", name="Open and choose contours").click()
-    expect(page.locator("#dxf-view svg")).to_be_visible()
+    expect(tab.locator("#dxf-view svg")).to_be_visible()
+
+
+def test_choose_a_profile_and_holes_from_a_drawing(page: Page, server: str, tmp_path: Path) -> None:  # noqa: F811
+    open_bracket(page, server, tmp_path)
     expect(page.locator(".page.drawings .hint").first).to_contain_text("3 contours, 10 holes")
     shot(page, "drawings-1-opened")
 
@@ -74,14 +80,7 @@ def test_choose_a_pocket_with_islands_from_a_drawing(
 ) -> None:
     """Click the profile, make it a POCKET and the bore and the slot its islands; the blocks
     and their contours are shown; added to a new program, the editor draws the pocket."""
-    drawing = tmp_path / "bracket.dxf"
-    drawing.write_bytes(bracket())
-    page.goto(server + "/")
-    card = page.locator("form.card", has_text="From a drawing (DXF)")
-    card.locator('input[type="file"]').set_input_files(str(drawing))
-    card.locator('input[name="hole-diameter"]').fill("0.25")
-    card.get_by_role("button", name="Open and choose contours").click()
-    expect(page.locator("#dxf-view svg")).to_be_visible()
+    open_bracket(page, server, tmp_path)
     profile = page.locator("#dxf-view g.contour").filter(
         has=page.locator('.segment[data-segment="7"]')
     )

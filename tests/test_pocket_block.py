@@ -8,6 +8,8 @@ the blocks, walked here independently of the app's own reading of them.
 
 from __future__ import annotations
 
+import math
+import tracemalloc
 from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
@@ -22,6 +24,7 @@ from shapely.geometry import LineString, Point, Polygon
 from app.cnc import document
 from app.cnc.blocks import (
     Block,
+    Comp,
     DataBlock0,
     Direction,
     Hole,
@@ -485,3 +488,147 @@ def test_verify_finds_material_left_in_the_pocket() -> None:
     left = [f for f in result.findings if f.kind == "rest material"]
     assert [f.block for f in left] == [2]
     assert 3.35 < left[0].x / 25.4e6 < 3.65 and 0.35 < left[0].y / 25.4e6 < 0.65
+
+
+# -- what an adversarial review found (each failed before its fix) --------------------------
+
+
+def _review_program(*contour: Block, step: str | None = None, finish: str | None = None) -> Program:
+    """T1 DIA 0.25, RPM 1500; DRILL at 0,0 (Z UP .1, Z DN -.25) + POCKET + `contour`."""
+    drill = Hole(
+        op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.25"), feed_z=D(5), tool=1
+    )
+    pocket = Pocket(
+        feed_xy=D(10),
+        tool=1,
+        step_over=None if step is None else D(step),
+        finish=None if finish is None else D(finish),
+    )
+    tools = (Tool(number=1, diameter=D("0.25"), rpm=1500, tcal=D(0)),)
+    return Program(
+        name="review",
+        block0=DataBlock0(current_tool=1, tools=tools),
+        blocks=(drill, pocket, *contour),
+    )
+
+
+def _rectangle(w: str, h: str) -> tuple[PocketLine, ...]:
+    return (
+        PocketLine(x=D(w), y=D(0)),
+        PocketLine(x=D(w), y=D(h)),
+        PocketLine(x=D(0), y=D(h)),
+        PocketLine(x=D(0), y=D(0)),
+    )
+
+
+def test_an_island_without_its_contour_is_an_error_and_verify_answers() -> None:
+    """An ISLAND with no PKT blocks after it made the whole pocket vanish from every output
+    with no message, and verify raised (zip of an empty contour)."""
+    program = _review_program(*_rectangle("2", "1.5"), Island(x=D("0.5"), y=D("0.5")))
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert errors == [
+        "block 7: ISLAND without its contour: PKT LINE and PKT ARC blocks follow it and "
+        "draw the island back to its start point"
+    ]
+    verify(program)  # answers (the pocket is not cut), does not raise
+
+
+def test_a_step_over_that_would_make_hundreds_of_passes_is_refused_not_crashed() -> None:
+    """STEP .001 on a 2.4 in square raised RecursionError (a 500 in the editor)."""
+    program = _review_program(*_rectangle("2.4", "2.4"), step="0.001")
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert len(errors) == 1 and errors[0].startswith("block 2, STEP: a step-over of 0.0010 in")
+
+
+def test_a_finish_allowance_wider_than_the_tool_can_take_is_refused() -> None:
+    """FIN CUT .3 with a 0.25 tool was taken: the finishing pass cut full width, plunged
+    again into solid material and added a score of cleanup spikes."""
+    program = _review_program(*_rectangle("2", "1.5"), finish="0.3")
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert errors == [
+        "block 2, FIN CUT: 0.300 in is more than the finishing pass can take: at most the "
+        "tool's radius, 0.125 in"
+    ]
+
+
+def test_blocks_after_a_closed_boundary_without_an_island_are_named() -> None:
+    """A PKT LINE after the boundary closed (an ISLAND missing, or deleted) said only
+    "the contour is not closed: it ends 1.4142 in from where it starts"."""
+    program = _review_program(*_rectangle("2", "1.5"), PocketLine(x=D(1), y=D(1)))
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert errors == [
+        "block 7: the boundary closes at block 6, so PKT LINE starts nothing: begin an "
+        "island with an ISLAND block first"
+    ]
+
+
+def test_an_arc_about_its_own_start_says_so() -> None:
+    program = _review_program(
+        PocketLine(x=D(2), y=D(0)),
+        PocketArc(direction=Direction.CCW, x=D(2), y=D(0)),
+        PocketArcEnd(x=D(2), y=D(0)),
+        PocketLine(x=D(0), y=D(0)),
+    )
+    errors = [str(p) for p in validate(program) if p.severity is Severity.ERROR]
+    assert "block 4: the arc's centre is its start point; the radius would be zero" in errors
+
+
+def test_messages_about_a_pocket_name_the_pocket() -> None:
+    """STOP on a POCKET was refused twice; CUTTER COMP before a POCKET spoke of CIRCLE and
+    FRAME; a tool without DIA spoke of cutter-compensated milling; an open boundary ending
+    in an arc was named on the arc's XY-CENT, not its XY-END where it ends."""
+    program = _review_program(*_rectangle("2", "1.5"))
+    blocks = list(program.blocks)
+    blocks[1] = replace(blocks[1], stop=True)
+    said = [str(p) for p in validate(replace(program, blocks=tuple(blocks)))]
+    assert said == ["block 2, STOP: a POCKET block cannot carry STOP"]
+    drill = program.blocks[0]
+    assert isinstance(drill, Hole)
+    blocks = [replace(drill, comp=Comp.RIGHT), *program.blocks[1:]]
+    said = [str(p) for p in validate(replace(program, blocks=tuple(blocks)))]
+    assert said == [
+        "block 1, CUTTER COMP: warning: cutter compensation on the DRILL before a POCKET; a "
+        "POCKET keeps the tool off its wall and islands by itself, so it has no effect"
+    ]
+    no_dia = replace(program, block0=replace(program.block0, tools=(Tool(number=1, rpm=900),)))
+    assert "a POCKET needs the cutter's measured diameter" in str(validate(no_dia)[0])
+    open_arc = _review_program(
+        PocketLine(x=D(2), y=D(0)),
+        PocketArc(direction=Direction.CCW, x=D(2), y=D(1)),
+        PocketArcEnd(x=D(2), y=D(2)),
+    )
+    said = [str(p) for p in validate(open_arc) if p.severity is Severity.ERROR]
+    assert len(said) == 1 and said[0].startswith("block 5: the contour is not closed")
+
+
+def _lobed(lines: int) -> Program:
+    """A pocket whose wall is `lines` short PKT LINEs round a lobed outline (radius
+    2 + 0.1·cos 7θ in): what a DXF of a curved part gives."""
+    points = []
+    for k in range(1, lines + 1):
+        a = 2 * math.pi * k / lines
+        r = 2 + 0.1 * math.cos(7 * a)
+        points.append((D(f"{r * math.cos(a):.3f}"), D(f"{r * math.sin(a):.3f}")))
+    program = _review_program(*(PocketLine(x=x, y=y) for x, y in points))
+    drill = program.blocks[0]
+    assert isinstance(drill, Hole)
+    start = replace(drill, x=points[-1][0], y=points[-1][1])
+    return replace(program, blocks=(start, *program.blocks[1:]))
+
+
+def test_verify_of_a_wall_of_many_blocks_keeps_no_array_per_block() -> None:
+    """A wall of 200 PKT LINEs: verify held every element's distances to every cell at once
+    (2.7 GB for 200 lines, past 20 GB for 2000). It keeps the nearest so far instead."""
+    program = _lobed(200)
+    assert [str(p) for p in validate(program) if p.severity is Severity.ERROR] == []
+    grid, placed = prepare(program, cells=200)
+    simulation = simulate(grid, placed, None, 25_400)
+    geometry = programmed_geometry(program)
+    tracemalloc.start()
+    try:
+        check_part(Verification(program, simulation), geometry, 25_400)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    cells = grid.nx * grid.ny
+    assert peak < 40 * 8 * cells, f"{peak / 1e6:.0f} MB for {cells} cells"

@@ -37,6 +37,7 @@ from app.cnc.blocks import (
     Pocket,
     PocketArc,
     PocketArcEnd,
+    PocketLine,
     Program,
     Rep,
     field_label,
@@ -551,7 +552,7 @@ class _Checker:
                 )
             if (
                 block.stop
-                and not isinstance(block, MillArc)
+                and REGISTRY.of(block).stoppable  # else refused as it is, once
                 and self.inside_mill_sequence(index)
                 and _in_sequence(blocks[index + 1])
             ):
@@ -652,7 +653,16 @@ class _Checker:
                 f"{block.type_name} must follow a POCKET block or another of its contour "
                 f"blocks; {before}",
             )
-        elif isinstance(block, Island) and isinstance(previous, Pocket):
+        elif isinstance(block, Island) and not isinstance(nxt, PocketLine | PocketArc):
+            self.add(
+                number,
+                None,
+                ERROR,
+                Rule.POCKET_ORDER,
+                "ISLAND without its contour: PKT LINE and PKT ARC blocks follow it and draw "
+                "the island back to its start point",
+            )
+        if isinstance(block, Island) and isinstance(previous, Pocket):
             self.add(
                 number,
                 None,
@@ -690,8 +700,13 @@ class _Checker:
                     "TOOL #",
                     ERROR,
                     Rule.TOOL_NO_DIAMETER,
-                    f"tool {tool_number} has no DIA in Data Block 0; cutter-compensated "
-                    "milling needs the cutter's measured diameter",
+                    f"tool {tool_number} has no DIA in Data Block 0; "
+                    + (
+                        "a POCKET needs the cutter's measured diameter to keep off its wall "
+                        "and islands"
+                        if isinstance(block, Pocket)
+                        else "cutter-compensated milling needs the cutter's measured diameter"
+                    ),
                 )
         for first, last, what in self.sequences():
             sequence_tool = self.blocks[first].tool_number
@@ -747,7 +762,12 @@ class _Checker:
                     WARNING,
                     Rule.COMP_ON_ROUTINE,
                     f"cutter compensation on the DRILL before a {blocks[index + 1].type_name}; "
-                    "CIRCLE and FRAME routines compensate by themselves, so it has no effect",
+                    + (
+                        "a POCKET keeps the tool off its wall and islands by itself"
+                        if isinstance(blocks[index + 1], Pocket)
+                        else "CIRCLE and FRAME routines compensate by themselves"
+                    )
+                    + ", so it has no effect",
                 )
         if any(p.severity is ERROR for p in self.problems):
             return

@@ -9,6 +9,9 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numpy as np
+import numpy.typing as npt
+
 from app.cnc.mill import Element, Path, Pt, cross, distance_to_element, intersections, signed_area
 from app.cnc.pocketing import regions
 from app.cnc.pocketing.model import PocketFinding, PocketIssue
@@ -79,31 +82,57 @@ def contour_problems(name: str, path: Path, units: Units) -> list[PocketFinding]
     return found
 
 
+def _boxes(path: Path, starts: list[Pt]) -> npt.NDArray[np.float64]:
+    """Each element's bounding box (x0, y0, x1, y1; an arc's whole circle's), grown by the
+    distance at which two elements count as touching."""
+    grow = 10 * CLOSE_NM
+    boxes = []
+    for start, element in zip(starts, path.elements, strict=True):
+        if element.centre is None:
+            xs, ys = (start[0], element.end[0]), (start[1], element.end[1])
+            boxes.append((min(xs), min(ys), max(xs), max(ys)))
+        else:
+            (cx, cy), r = element.centre, math.dist(start, element.centre)
+            boxes.append((cx - r, cy - r, cx + r, cy + r))
+    found: npt.NDArray[np.float64] = np.array(boxes, dtype=np.float64).reshape(-1, 4)
+    found += np.array([-grow, -grow, grow, grow])
+    return found
+
+
 def _crossings(name: str, path: Path, starts: list[Pt], units: Units) -> list[PocketFinding]:
     n = len(path.elements)
-    for i in range(n):
-        for j in range(i + 1, n):
-            a, b = path.elements[i], path.elements[j]
-            shared = [
-                p
-                for p, adjacent in ((a.end, j == i + 1), (path.start, i == 0 and j == n - 1))
-                if adjacent
+    # Only elements whose boxes overlap can meet: a contour of hundreds of blocks would
+    # otherwise compare every pair (the pairs come in the same order as before).
+    box = _boxes(path, starts)
+    near = (
+        (box[:, None, 0] <= box[None, :, 2])
+        & (box[None, :, 0] <= box[:, None, 2])
+        & (box[:, None, 1] <= box[None, :, 3])
+        & (box[None, :, 1] <= box[:, None, 3])
+    )
+    for i, j in zip(*np.nonzero(np.triu(near, 1)), strict=True):
+        i, j = int(i), int(j)
+        a, b = path.elements[i], path.elements[j]
+        shared = [
+            p
+            for p, adjacent in ((a.end, j == i + 1), (path.start, i == 0 and j == n - 1))
+            if adjacent
+        ]
+        for p in _meets(starts[i], a, starts[j], b):
+            if any(math.dist(p, q) <= 10 * CLOSE_NM for q in shared):
+                continue
+            return [
+                _finding(
+                    PocketIssue.SELF_INTERSECTING,
+                    name,
+                    j + 1,
+                    b,
+                    f"element {j + 1} crosses or touches element {i + 1} of the same "
+                    f"contour at X {show(p[0], units)} Y {show(p[1], units)}; a pocket "
+                    "contour must not cross itself",
+                    p,
+                )
             ]
-            for p in _meets(starts[i], a, starts[j], b):
-                if any(math.dist(p, q) <= 10 * CLOSE_NM for q in shared):
-                    continue
-                return [
-                    _finding(
-                        PocketIssue.SELF_INTERSECTING,
-                        name,
-                        j + 1,
-                        b,
-                        f"element {j + 1} crosses or touches element {i + 1} of the same "
-                        f"contour at X {show(p[0], units)} Y {show(p[1], units)}; a pocket "
-                        "contour must not cross itself",
-                        p,
-                    )
-                ]
     return []
 
 

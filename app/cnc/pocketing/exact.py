@@ -17,7 +17,10 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+import numpy as np
+import numpy.typing as npt
 
 from app.cnc.mill import (
     Element,
@@ -75,6 +78,27 @@ class Carrier:
             return math.inf
         return abs(math.dist(p, self.origin) - self.radius)
 
+    def distances(self, points: npt.NDArray[np.float64], slack: float) -> npt.NDArray[np.float64]:
+        """`distance` for every row (x, y) of `points` at once, the same numbers."""
+        qx, qy = points[:, 0] - self.origin[0], points[:, 1] - self.origin[1]
+        if self.direction is not None:
+            dx, dy = self.direction
+            along = qx * dx + qy * dy
+            within = np.zeros(len(points), dtype=bool)
+            for lo, hi in self.spans:
+                within |= (lo - slack <= along) & (along <= hi + slack)
+            return np.where(within, np.abs(dx * qy - dy * qx), math.inf)
+        within = np.zeros(len(points), dtype=bool)
+        angle = np.arctan2(qy, qx)
+        slack_angle = slack / max(self.radius, 1.0) + 1e-9
+        for start, turn in self.spans:
+            if turn >= 2 * math.pi - 1e-9:
+                within[:] = True
+                break
+            along = np.mod((start - angle) if self.clockwise else (angle - start), 2 * math.pi)
+            within |= (along <= turn + slack_angle) | (along >= 2 * math.pi - slack_angle)
+        return np.where(within, np.abs(np.hypot(qx, qy) - self.radius), math.inf)
+
     def element_stub(self) -> tuple[Pt, Element]:
         """A start and element on this carrier's full line/circle (for intersections)."""
         if self.direction is not None:
@@ -105,13 +129,13 @@ def _within_spans(carrier: Carrier, p: Pt, slack: float) -> bool:
 def carriers(contours: Sequence[Path], d: float, tolerance: float) -> list[Carrier]:
     """The carriers of the level `d` nm into the region, for contours oriented with the
     region on their left. Identical lines/circles are merged (their spans joined)."""
-    found: list[Carrier] = []
+    level = _Level()
     for ci, contour in enumerate(contours):
         starts = [contour.start] + [e.end for e in contour.elements[:-1]]
         for ei, (start, element) in enumerate(zip(starts, contour.elements, strict=True)):
             moved = _moved(start, element, d, tolerance, (ci, ei))
             if moved is not None:
-                _merge(found, moved, tolerance)
+                level.merge(moved)
             nxt = (ei + 1) % len(contour.elements)
             corner = element.end
             t1 = tangent(start, element, at_end=True)
@@ -119,8 +143,7 @@ def carriers(contours: Sequence[Path], d: float, tolerance: float) -> list[Carri
             turn = math.atan2(cross(t1, t2), dot(t1, t2))
             if turn < -TURN_EPS:  # a right turn: a reflex corner of the region
                 n1 = left_normal(t1)
-                _merge(
-                    found,
+                level.merge(
                     Carrier(
                         corner,
                         None,
@@ -128,10 +151,9 @@ def carriers(contours: Sequence[Path], d: float, tolerance: float) -> list[Carri
                         True,
                         ((math.atan2(n1[1], n1[0]), -turn),),
                         ((ci, nxt),),
-                    ),
-                    tolerance,
+                    )
                 )
-    return found
+    return level.found
 
 
 def _moved(
@@ -161,44 +183,85 @@ def _moved(
     )
 
 
-def _merge(found: list[Carrier], new: Carrier, tolerance: float) -> None:
-    """Add `new`, joining it to an existing carrier that is the same line or circle."""
-    for k, old in enumerate(found):
-        if new.direction is not None and old.direction is not None:
-            same = (
-                abs(cross(old.direction, new.direction)) < TURN_EPS
-                and dot(old.direction, new.direction) > 0
-                and abs(cross(old.direction, sub(new.origin, old.origin))) <= 1.0
-            )
-            if same:
+def _same(old: Carrier, new: Carrier) -> bool:
+    """True when `new` lies on `old`'s line or circle (travelled the same way)."""
+    if new.direction is not None and old.direction is not None:
+        return (
+            abs(cross(old.direction, new.direction)) < TURN_EPS
+            and dot(old.direction, new.direction) > 0
+            and abs(cross(old.direction, sub(new.origin, old.origin))) <= 1.0
+        )
+    if new.direction is None and old.direction is None:
+        return (
+            math.dist(old.origin, new.origin) <= 1.0
+            and abs(old.radius - new.radius) <= 1.0
+            and old.clockwise == new.clockwise
+        )
+    return False
+
+
+_ANGLE_STEP = 1e-6  # rad: lines the same within TURN_EPS fall in one bucket or the next
+_ANGLES = round(2 * math.pi / _ANGLE_STEP)
+_LENGTH_STEP = 1_000.0  # nm: lines, circles the same within 1 nm (a few at 99 in) likewise
+
+
+def _keys(carrier: Carrier) -> list[tuple[object, ...]]:
+    """The index buckets a carrier the same as `carrier` can be in (its own first)."""
+    if carrier.direction is not None:
+        dx, dy = carrier.direction
+        a = round(math.atan2(dy, dx) / _ANGLE_STEP) % _ANGLES
+        c = round(cross(carrier.direction, carrier.origin) / _LENGTH_STEP)
+        return [("line", (a + i) % _ANGLES, c + j) for i in (0, -1, 1) for j in (0, -1, 1)]
+    x = round(carrier.origin[0] / _LENGTH_STEP)
+    y = round(carrier.origin[1] / _LENGTH_STEP)
+    r = round(carrier.radius / _LENGTH_STEP)
+    return [
+        ("circle", carrier.clockwise, x + i, y + j, r + k)
+        for i in (0, -1, 1)
+        for j in (0, -1, 1)
+        for k in (0, -1, 1)
+    ]
+
+
+class _Level:
+    """A level's carriers being gathered: identical lines/circles merged (their spans
+    joined into the first), found through buckets, not by comparing with every carrier."""
+
+    def __init__(self) -> None:
+        self.found: list[Carrier] = []
+        self.buckets: dict[tuple[object, ...], list[int]] = {}
+
+    def merge(self, new: Carrier) -> None:
+        keys = _keys(new)
+        candidates = sorted({k for key in keys for k in self.buckets.get(key, ())})
+        for k in candidates:
+            old = self.found[k]
+            if not _same(old, new):
+                continue
+            if old.direction is not None:
                 shift = dot(sub(new.origin, old.origin), old.direction)
                 spans = tuple((lo + shift, hi + shift) for lo, hi in new.spans)
-                found[k] = Carrier(
-                    old.origin,
-                    old.direction,
-                    0.0,
-                    False,
-                    old.spans + spans,
-                    old.sources + new.sources,
+                self.found[k] = replace(
+                    old, spans=old.spans + spans, sources=old.sources + new.sources
                 )
-                return
-        elif new.direction is None and old.direction is None:
-            same = (
-                math.dist(old.origin, new.origin) <= 1.0
-                and abs(old.radius - new.radius) <= 1.0
-                and old.clockwise == new.clockwise
-            )
-            if same:
-                found[k] = Carrier(
-                    old.origin,
-                    None,
-                    old.radius,
-                    old.clockwise,
-                    old.spans + new.spans,
-                    old.sources + new.sources,
+            else:
+                self.found[k] = replace(
+                    old, spans=old.spans + new.spans, sources=old.sources + new.sources
                 )
-                return
-    found.append(new)
+            return
+        self.buckets.setdefault(keys[0], []).append(len(self.found))
+        self.found.append(new)
+
+
+def _carriers_at(points: list[Pt], level: Sequence[Carrier], tolerance: float) -> list[set[int]]:
+    """For each point, the carriers it lies on within `tolerance` (one numpy pass per
+    carrier over all the points: a contour of hundreds of blocks has as many carriers)."""
+    at = np.array(points, dtype=np.float64)
+    on: list[set[int]] = [set() for _ in points]
+    for k, carrier in enumerate(level):
+        for i in np.flatnonzero(carrier.distances(at, tolerance) <= tolerance).tolist():
+            on[i].add(k)
+    return on
 
 
 @dataclass(frozen=True)
@@ -223,7 +286,7 @@ def exact_ring(
     n = len(points)
     if n < 3:
         return None
-    on = [{k for k, c in enumerate(level) if c.distance(p, tolerance) <= tolerance} for p in points]
+    on = _carriers_at(points, level, tolerance)
     labels: list[set[int]] = []
     for i in range(n):
         a, b = points[i], points[(i + 1) % n]
@@ -374,8 +437,8 @@ def matched_sources(
 ) -> tuple[tuple[int, int], ...]:
     """The (contour, element) sources of every carrier some ring point lies on."""
     found: set[tuple[int, int]] = set()
-    for x, y in ring:
-        for carrier in level:
-            if carrier.distance((float(x), float(y)), tolerance) <= tolerance:
-                found.update(carrier.sources)
+    at = np.array(ring, dtype=np.float64).reshape(-1, 2)
+    for carrier in level:
+        if (carrier.distances(at, tolerance) <= tolerance).any():
+            found.update(carrier.sources)
     return tuple(sorted(found))

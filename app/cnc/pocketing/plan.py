@@ -62,7 +62,8 @@ from app.cnc.units import Units
 
 DEFAULT_CHORDAL_TOLERANCE = 500  # nm: arcs become chords no farther than this from the arc
 RESIDUE_NM = 5_000  # nm: uncut material narrower than this (0.0002 in) is not chased
-MAX_LEVELS = 5_000  # more offset levels than this: the step-over is too small for the pocket
+MAX_LEVELS = 150  # more offset levels than this: the step-over is too small for the pocket
+# (each level is a ring per piece, planned in Python: hundreds take tens of seconds)
 MAX_CLEANUPS = 400  # cleanup moves per pocket before the planner reports what is left
 
 
@@ -659,7 +660,7 @@ def _tool_too_large(r: float, units: Units) -> PocketFinding:
         PocketIssue.TOOL_TOO_LARGE,
         Severity.ERROR,
         f"boundary: the {show(2 * r, units)} tool fits nowhere inside the pocket; it is "
-        "narrower than the tool everywhere",
+        "nowhere wider than the tool",
         "boundary",
     )
 

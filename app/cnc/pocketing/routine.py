@@ -121,13 +121,36 @@ def _typed_centre(
 
 
 def arc_findings(contours: list[Contour], units: Units) -> list[Finding]:
-    """An arc whose XY-END is off the radius of its start by more than half the programming
-    resolution: the control would cut a divot (MILL ARC); a pocket's wall cannot have one."""
+    """An arc about its own start; an arc whose XY-END is off the radius of its start by
+    more than half the programming resolution (the control would cut a divot, MILL ARC; a
+    pocket's wall cannot have one); a block after its contour closed (an ISLAND missing)."""
     found: list[Finding] = []
     for contour in contours:
         at = contour.path.start
+        closed_at = 0
         for element in contour.path.elements:
-            if element.centre is not None:
+            if closed_at:
+                kind = "PKT ARC" if element.centre is not None else "PKT LINE"
+                found.append(
+                    Finding(
+                        element.block,
+                        Rule.POCKET_ORDER,
+                        Severity.ERROR,
+                        f"the {contour.name} closes at block {closed_at}, so {kind} starts "
+                        "nothing: begin an island with an ISLAND block first",
+                    )
+                )
+                break
+            if element.centre is not None and math.dist(at, element.centre) < 1:
+                found.append(
+                    Finding(
+                        element.block,
+                        Rule.POCKET_CONTOUR,
+                        Severity.ERROR,
+                        "the arc's centre is its start point; the radius would be zero",
+                    )
+                )
+            elif element.centre is not None:
                 r_start = math.dist(at, element.centre)
                 r_end = math.dist(element.end, element.centre)
                 if abs(r_start - r_end) > half_step(units):
@@ -144,6 +167,8 @@ def arc_findings(contours: list[Contour], units: Units) -> list[Finding]:
                         )
                     )
             at = element.end
+            if math.dist(at, contour.path.start) < 1:
+                closed_at = element.block + (1 if element.centre is not None else 0)
     return found
 
 
@@ -181,7 +206,9 @@ def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
         # the blocks is at fault, which validation reports (Rule.POCKET_ORDER).
         return SequencePlan([], 0, at.start, findings)
     findings += arc_findings(contours, units)
-    if at.tool_radius == 0 or findings:
+    if findings:
+        return SequencePlan([], 0, at.start, findings)
+    if at.tool_radius == 0:
         # No DIA: validation reports it on the TOOL # (check_tools).
         return SequencePlan([], 0, at.start, findings)
     diameter = 2 * at.tool_radius
@@ -203,6 +230,18 @@ def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
         )
         return SequencePlan([], 0, at.start, findings)
     finish = rough_wall(units) if block.finish is None else to_nm(block.finish, units)
+    if finish > at.tool_radius:
+        findings.append(
+            Finding(
+                at.number,
+                Rule.POCKET_STEP,
+                Severity.ERROR,
+                f"{message_length(finish, units)} is more than the finishing pass can take: "
+                f"at most the tool's radius, {message_length(at.tool_radius, units)}",
+                "FIN CUT",
+            )
+        )
+        return SequencePlan([], 0, at.start, findings)
     plan = plan_pocket(
         contours[0].path,
         [c.path for c in contours[1:]],
@@ -228,6 +267,8 @@ def _finding(found: PocketFinding, contours: list[Contour], pocket: int) -> Find
     contour = next((c for c in contours if c.name == found.contour), None)
     field: str | None = None
     block = found.block or (pocket if contour is None else contour.first)
+    if found.issue is PocketIssue.OPEN_CONTOUR and contour is not None:
+        block = contour.last  # where the contour ends: an arc's XY-END, not its XY-CENT
     if found.issue in (PocketIssue.STEP_OVER, PocketIssue.TOOL_TOO_LARGE):
         block, field = pocket, "STEP" if found.issue is PocketIssue.STEP_OVER else "TOOL #"
     message = found.message

@@ -126,6 +126,8 @@ def programmed_geometry(program: Program) -> Programmed:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
             if mill.routine and isinstance(program.blocks[mill.routine - 1], Pocket):
+                if mill.start == mill.end:
+                    continue  # not cut: its plan has errors, which validation names
                 # A POCKET's walls and islands are finished surfaces, as a compensated
                 # contour's: the part outside the boundary and inside each island.
                 walls = []

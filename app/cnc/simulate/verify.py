@@ -293,14 +293,19 @@ def _contour_gouges(
     )
     if qx.size == 0:
         return []
-    measures = [
-        _element_measures(qx, qy, s, e) for s, e in zip(starts, contour.elements, strict=True)
-    ]
-    dist = np.stack([m[0] for m in measures])
-    nearest = np.argmin(dist, axis=0)
-    pick = nearest[None, ...]
-    left = np.take_along_axis(np.stack([m[1] for m in measures]), pick, 0)[0]
-    interior = np.take_along_axis(np.stack([m[2] for m in measures]), pick, 0)[0]
+    # The nearest element of each cell, kept as the elements go by (the first of equals):
+    # stacking every element's measures would hold elements × cells arrays at once.
+    best = np.full(qx.shape, np.inf)
+    nearest = np.zeros(qx.shape, dtype=np.int64)
+    left = np.zeros(qx.shape)
+    interior = np.zeros(qx.shape, dtype=bool)
+    for k, (s, e) in enumerate(zip(starts, contour.elements, strict=True)):
+        dist, side, within = _element_measures(qx, qy, s, e)
+        closer = dist < best
+        best = np.where(closer, dist, best)
+        nearest[closer] = k
+        left = np.where(closer, side, left)
+        interior = np.where(closer, within, interior)
     inward = left if contour.part_left else -left
     h = heights[rows, cols]
     cut = h < grid.stock.top - tol

@@ -139,12 +139,16 @@ def test_chunks_give_the_same_figures_as_the_move_objects(case: Path) -> None:
 
 @pytest.mark.parametrize("family", ["grid", "bolts", "pockets"])
 def test_large_looped_programs_match_too(family: str) -> None:
-    """Tens of thousands of moves, chunked and tiled: every per-block sum is still the
-    same sequence of additions as one move at a time."""
+    """Tens of thousands of moves, chunked and tiled, each LOOP pattern timed once per
+    place the tool enters it from (the rest its figures again, the moves up to its first
+    motion re-timed): every per-block sum is still the same sequence of additions as one
+    move at a time, at every machine's rates."""
     program = sized(family, 40_000)
-    assert figures(estimate(compile_program(program).path)) == figures(
-        reference(interpret(program))
-    )
+    path = compile_program(program).path
+    toolpath = interpret(program)
+    for name, machine in MACHINES.items():
+        wanted = figures(reference(toolpath, machine))
+        assert figures(estimate(path, machine=machine)) == wanted, name
 
 
 def test_lengths_too_large_to_square_in_64_bits() -> None:

@@ -20,15 +20,18 @@ estimate as the reference).
 
 Each top-level node's per-move figures are kept (`TIMED`, bounded) by the node the compiler
 handed out and where the tool enters it, so the estimate after an edit times only the nodes
-the edit changed; the sums are still added move by move over the whole program.
+the edit changed. Within one estimate a LOOP's pattern is timed once per place the tool
+enters it from (relative to the placement): its other placements take the same per-move
+figures (`_Placed`). The sums are still added move by move over the whole program.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -45,6 +48,7 @@ from app.cnc.path import (
     CompiledPath,
     Node,
     Op,
+    Piece,
     Rows,
     Run,
     Seq,
@@ -139,8 +143,9 @@ def estimate(
     clock = _Clock(path.start, path.initial_tool, rapid_rate, max_feed, tool_change_seconds)
     totals = _Totals(result)
     if isinstance(path, CompiledPath):
+        placed = _Placed()
         for node, base, shared in _top_level(path.root):
-            _time_node(node, base, shared, clock, totals)
+            _time_node(node, base, shared, clock, totals, placed)
     else:
         for rows, strings in row_batches([chunk_of(path)]):
             totals.add(clock.time(rows, strings), 0)
@@ -175,25 +180,141 @@ def _top_level(root: Node) -> Iterator[tuple[Node, int, bool]]:
             yield node, 0, False
 
 
-def _time_node(node: Node, base: int, shared: bool, clock: _Clock, totals: _Totals) -> None:
+def _time_node(
+    node: Node, base: int, shared: bool, clock: _Clock, totals: _Totals, placed: _Placed
+) -> None:
     """Time `node`'s moves from where `clock` stands (from the memo when it was timed from
     there before) and add them to `totals`, its block numbers + `base`."""
     if not shared or size(node) + 1 > TIMED.budget // 10:
-        # Not one the compiler keeps, or too large to keep: timed as it streams by.
-        for rows, strings in row_batches(walk(node, base=base)):
-            totals.add(clock.time(rows, strings), 0)
+        # Not one the compiler keeps, or too large to keep: timed as it is placed.
+        _time_tree(node, 0, 0, base, clock, totals, placed)
         return
     key = (id(node), clock.entry(), clock.rates())
     found = TIMED.get(key)
     if found is None or found[0] is not node:
-        parts = [clock.time(rows, strings) for rows, strings in row_batches(walk(node))]
-        timed = _Timed.joined(parts, clock.entry())
+        parts = _Parts()
+        _time_tree(node, 0, 0, 0, clock, parts, placed)
+        timed = parts.joined(clock.entry())
         # The node is kept with its figures, so no other node can take its id meanwhile.
         TIMED.keep(key, (node, timed), size(node) + 1)
     else:
         timed = found[1]
         clock.enter(timed.exit)
     totals.add(timed, base)
+
+
+# -- each pattern timed once per place the tool enters it from -----------------------------
+#
+# A move's seconds depend only on the move and on where the tool stands before it (and the
+# tool, the rates): every length is an integer difference of nm, every arc's figure a
+# function of its ends' places from its centre. A LOOP's placed pattern is its pattern
+# moved, so its moves take the same seconds as the pattern's whenever the tool enters it
+# from the same place relative to it; only a placement entered from elsewhere (the first
+# of a row, say) is timed again. The per-move seconds are the same numbers in the same
+# order, so the sums (added move by move in `_Totals`) are the same to the last bit.
+
+
+class _Sink(Protocol):
+    def add(self, timed: _Timed, base: int) -> None: ...
+
+
+class _Parts:
+    """Timed stretches gathered into one (`joined`), block numbers + their base."""
+
+    def __init__(self) -> None:
+        self.parts: list[_Timed] = []
+
+    def add(self, timed: _Timed, base: int) -> None:
+        if base:
+            blocks = timed.blocks + base
+            waits = [(block + base, why) for block, why in timed.waits]
+            timed = replace(timed, blocks=blocks, waits=waits)
+        self.parts.append(timed)
+
+    def joined(self, entry: tuple[int, int, int, int]) -> _Timed:
+        return _Timed.joined(self.parts, entry)
+
+
+# A node as it stands wherever it is placed: a run is its pattern and its offsets from the
+# first one (the compiler makes a run per row of a LOOP's grid, each its own object).
+_Shape = tuple[int, int, bytes]
+_Entry = tuple[int, int, int, int]
+
+
+def _shape(node: Node) -> tuple[_Shape, Node, int, int]:
+    """`node`'s shape, the node to walk for it (placed at its own origin) and that origin
+    (x, y nm: where the node places it; 0, 0 but for a run, its first offset)."""
+    if not isinstance(node, Run) or not len(node.offsets):
+        return (id(node), 0, b""), node, 0, 0
+    fx, fy = node.offsets[0].tolist()
+    steps = node.offsets - node.offsets[0]
+    shape = (id(node.node), node.base, steps.tobytes())
+    return shape, Run(node.node, steps, node.base), fx, fy
+
+
+class _Placed:
+    """The figures of shapes timed during one estimate, by shape and entry (relative to the
+    shape's origin); bounded (beyond `ROWS` moves in all, no more are kept)."""
+
+    ROWS = 1 << 17
+
+    def __init__(self) -> None:
+        self.held = 0
+        self.timed: dict[tuple[_Shape, _Entry], _Timed] = {}
+        self.nodes: list[Node] = []  # kept alive, so no id in a shape is reused meanwhile
+
+    def time(self, node: Node, dx: int, dy: int, clock: _Clock) -> _Timed:
+        """The figures of `node` placed at (dx, dy), from where `clock` stands; the clock
+        ends where the node leaves the tool."""
+        shape, unplaced, fx, fy = _shape(node)
+        ox, oy = dx + fx, dy + fy
+        x, y, z, tool = clock.entry()
+        key = (shape, (x - ox, y - oy, z, tool))
+        timed = self.timed.get(key)
+        if timed is None:
+            # Timed where the shape stands at its origin, from the same place relative to it.
+            clock.enter(key[1])
+            parts = [clock.time(rows, strings) for rows, strings in row_batches(walk(unplaced))]
+            timed = _Timed.joined(parts, clock.entry())
+            if self.held + len(timed.seconds) <= self.ROWS:
+                self.held += len(timed.seconds)
+                self.timed[key] = timed
+                self.nodes.append(node)
+        ex, ey, ez, et = timed.exit
+        clock.enter((ex + ox, ey + oy, ez, et))
+        return timed
+
+
+def _time_tree(
+    node: Node, dx: int, dy: int, base: int, clock: _Clock, sink: _Sink, placed: _Placed
+) -> None:
+    """Time `node` placed at (dx, dy), its block numbers + `base`, from where `clock`
+    stands, and add its moves to `sink` in order; the clock ends where the node leaves the
+    tool. A node of at most FLAT_ROWS moves (or a piece) is timed in one go (`_Placed`)
+    and kept by its shape and where the tool enters it relative to the shape's origin; a
+    larger one is timed child by child and placement by placement, so each placement of a
+    pattern entered as one before it takes that one's figures."""
+    if isinstance(node, Piece) or size(node) <= FLAT_ROWS:
+        sink.add(placed.time(node, dx, dy, clock), base)
+    elif not _repeats(node):
+        # Nothing in it is placed twice: timed as it streams by, in batches.
+        for rows, strings in row_batches(walk(node, dx, dy, base)):
+            sink.add(clock.time(rows, strings), 0)
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            _time_tree(child, dx, dy, base, clock, sink, placed)
+    else:
+        for ox, oy in node.offsets.tolist():
+            _time_tree(node.node, dx + ox, dy + oy, base + node.base, clock, sink, placed)
+
+
+def _repeats(node: Node) -> bool:
+    """Whether `node` places anything more than once."""
+    if isinstance(node, Piece):
+        return False
+    if isinstance(node, Run):
+        return len(node.offsets) > 1 or _repeats(node.node)
+    return any(_repeats(child) for child in node.nodes)
 
 
 # Per-move figures of top-level nodes: (node, figures) by (id(node), entry, rates).
@@ -235,10 +356,15 @@ class _Timed:
         )
 
 
+# Moves summed per batch: a few MB of temporaries at most.
+SUM_ROWS = 1 << 16
+
+
 class _Totals:
     """The sums, added in move order over stretches of timed moves: stretches are gathered
-    into batches of at least FLAT_ROWS moves (numpy's cost per call, not per move, would
-    dominate a program of many small nodes)."""
+    into batches of at least SUM_ROWS moves (numpy's cost per call, not per move, would
+    dominate a program of many small nodes; the stretches of a placed pattern are the
+    pattern's figures again, so gathering them costs nothing until the batch is summed)."""
 
     def __init__(self, result: Estimate) -> None:
         self.result = result
@@ -254,7 +380,7 @@ class _Totals:
             self.result.operator_waits += [(block + base, why) for block, why in timed.waits]
         self.pending.append((timed, base))
         self.count += len(timed.seconds)
-        if self.count >= FLAT_ROWS:
+        if self.count >= SUM_ROWS:
             self.flush()
 
     def flush(self) -> None:

@@ -7,6 +7,7 @@ golden corpus and generated programs in tests/test_referee.py.
 from __future__ import annotations
 
 import re
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -14,7 +15,15 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from app.cnc import document
-from app.cnc.blocks import Program
+from app.cnc.blocks import (
+    DataBlock0,
+    Hole,
+    HoleOp,
+    Pocket,
+    PocketLine,
+    Program,
+    Tool,
+)
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.emit.target import Report, Severity, export, get_target
@@ -174,3 +183,50 @@ def test_runs_written_in_one_go_are_the_lines_written_one_by_one(
         writer.write()
         texts.append(lines)
     assert texts[0] == texts[1]
+
+
+# -- the first plunge (found by a review of POCKET; older than it) ---------------------------
+
+
+def _first_cut_knows_xy(text: str) -> bool:
+    """True when X and Y have both been written before the first move down from the start
+    height (the machine's XY at the start is wherever the operator left the table)."""
+    seen_x = seen_y = False
+    start_z: float | None = None
+    for line in text.splitlines():
+        words = re.findall(r"([XYZ])(-?[0-9.]+)", line.split("(")[0])
+        for letter, value in words:
+            if letter == "X":
+                seen_x = True
+            elif letter == "Y":
+                seen_y = True
+            elif start_z is None:
+                start_z = float(value)
+            elif float(value) < start_z:
+                return seen_x and seen_y
+    return True
+
+
+@pytest.mark.parametrize("target", ["gcode-linuxcnc", "gcode-fanuc", "gcode-prototrak"])
+def test_the_first_plunge_names_x_and_y_even_at_part_zero(target: str) -> None:
+    """A mill sequence (here a POCKET) whose first plunge is at X0 Y0 went down without any
+    X or Y word: the tool went down wherever the table happened to be."""
+    d = Decimal
+    blocks = (
+        Hole(
+            op=HoleOp.DRILL, x=d(-1), y=d(-1), z_up=d("0.1"), z_dn=d("-0.25"), feed_z=d(5), tool=1
+        ),
+        Pocket(feed_xy=d(10), tool=1),
+        PocketLine(x=d(1), y=d(-1)),
+        PocketLine(x=d(1), y=d(1)),
+        PocketLine(x=d(-1), y=d(1)),
+        PocketLine(x=d(-1), y=d(-1)),
+    )
+    tools = (Tool(number=1, diameter=d("0.25"), rpm=1500, tcal=d(0)),)
+    program = Program(name="zero", block0=DataBlock0(current_tool=1, tools=tools), blocks=blocks)
+    text = export(program, target).data.decode()
+    assert _first_cut_knows_xy(text), text[:400]
+    for case in sorted((Path(__file__).parent / "golden").iterdir()):
+        expected = case / f"expected.{target}"
+        if expected.exists():
+            assert _first_cut_knows_xy(expected.read_text(encoding="utf-8")), case.name

@@ -470,19 +470,21 @@ class Writer:
 
     # -- moves ----------------------------------------------------------------------------
 
-    def axis_words(self, wx: str, wy: str, wz: str | None) -> list[str]:
+    def axis_words(self, wx: str, wy: str, wz: str | None, down: bool = False) -> list[str]:
         """The axis words of a move to the written (wx, wy, wz): those whose written value
         changes. Until the first move across, the control's XY is unknown: that move names
-        both."""
+        both, and so does a first move down (`down`) where the tool path starts at its
+        XY (a plunge at part zero: the table is wherever the operator left it)."""
         words = []
         moves_xy = wx != self.wx or wy != self.wy
-        if wx != self.wx or (moves_xy and not self.xy_known):
+        name_xy = not self.xy_known and (moves_xy or down)
+        if wx != self.wx or name_xy:
             words.append(f"X{wx}")
-        if wy != self.wy or (moves_xy and not self.xy_known):
+        if wy != self.wy or name_xy:
             words.append(f"Y{wy}")
         if wz is not None and wz != self.wz:
             words.append(f"Z{wz}")
-        self.xy_known = self.xy_known or moves_xy
+        self.xy_known = self.xy_known or name_xy
         return words
 
     def motion_word(self, motion: str) -> str:
@@ -504,7 +506,7 @@ class Writer:
     def move(self, row: Row, wx: str, wy: str, wz: str, z: int, chunk: Chunk) -> None:
         op, _tag, block, _x, _y, _z, cx, cy, feed, value = row
         if op == Op.RAPID or op == Op.FEED:
-            words = self.axis_words(wx, wy, wz)
+            words = self.axis_words(wx, wy, wz, down=z < self.z)
             if words:
                 if op == Op.RAPID:
                     self.line(self.motion_word("0"), *words)

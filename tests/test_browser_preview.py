@@ -25,10 +25,12 @@ from app.cnc.blocks import (
     Comp,
     DataBlock0,
     Direction,
+    Frame,
     Hole,
     HoleOp,
     MillLine,
     MillQcir,
+    Placement,
     Pos,
     Program,
     Tool,
@@ -368,3 +370,24 @@ def test_an_edit_redraws_the_preview_after_its_reply(page: Page, library: Librar
     expect(page.locator('#preview circle.hole[cx="4.5"]')).to_have_count(1)
     expect(page.locator('#preview circle.hole[cx="3"]')).to_have_count(0)
     expect(page.locator("#total")).to_contain_text("Cycle time")
+
+
+def test_tool_width_is_the_tools_width(page: Page, library: Library) -> None:
+    """ "tool width" drew the band about four times too wide (the base rule's 1 px stroke, in
+    inches, overrode the band's own width): it runs past the wall and over the islands, so
+    the part looked gouged. Found by a review of POCKET; FRAME pockets were drawn alike."""
+    url = library.add(
+        program(
+            "Pocket with the tool's width",
+            drill("0", "0", tool=2),
+            Frame(placement=Placement.POCKET, xl=D(3), yw=D(2), feed_xy=D(10), tool=2),
+        )
+    )
+    page.goto(url)
+    page.locator("[data-swept]").check()
+    band = page.locator("#preview path.swept").first
+    expect(band).to_be_visible()
+    widths = band.evaluate(
+        "p => [parseFloat(getComputedStyle(p).strokeWidth), p.getAttribute('stroke-width')]"
+    )
+    assert math.isclose(widths[0], float(widths[1])) and float(widths[1]) == 0.5, widths

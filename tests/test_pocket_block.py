@@ -632,3 +632,13 @@ def test_verify_of_a_wall_of_many_blocks_keeps_no_array_per_block() -> None:
         tracemalloc.stop()
     cells = grid.nx * grid.ny
     assert peak < 40 * 8 * cells, f"{peak / 1e6:.0f} MB for {cells} cells"
+
+
+def test_a_curve_drawn_as_short_lines_is_not_called_narrow() -> None:
+    """A lobed wall of 100 PKT LINEs (curvature radius at least 0.58 in, a 0.25 in tool)
+    gave ten 'narrower than the tool' warnings, for the fillets at its joints. The narrow
+    slot of the bad corpus still warns (tests/bad/pocket-narrow-slot)."""
+    program = _lobed(100)
+    assert [str(p) for p in validate(program)] == []
+    for uncut, gouge in measure(program):
+        assert uncut < 1e4 and gouge < 1e4

@@ -572,7 +572,7 @@ def _narrow(
         if not regions.thicker_than(piece.rings, RESIDUE_NM, match):
             continue
         touched = _touched(piece, contours, 4 * match)
-        if _is_corner(touched, contours):
+        if _is_corner(touched, contours) or _in_corners(piece, touched, contours, r):
             continue
         described = ", ".join(_describe(names, contours, c, e) for c, e in touched[:4])
         if len(touched) > 4:
@@ -615,6 +615,37 @@ def _is_corner(touched: list[tuple[int, int]], contours: list[Path]) -> bool:
     n = len(contours[touched[0][0]].elements)
     a, b = touched[0][1], touched[1][1]
     return (b - a) % n in (1, n - 1)
+
+
+def _in_corners(
+    piece: regions.Component, touched: list[tuple[int, int]], contours: list[Path], r: float
+) -> bool:
+    """True when the piece touches one unbroken stretch of one contour and lies within one
+    and a half tool radii of the joints between its elements: the fillets a round tool
+    leaves in a curve drawn as short lines (a DXF's polyline), merged along the stretch,
+    not a passage narrower than the tool (which reaches farther from every joint)."""
+    if not touched or len({c for c, _ in touched}) != 1:
+        return False
+    contour = contours[touched[0][0]]
+    n = len(contour.elements)
+    indexes = sorted(e for _, e in touched)
+    # One stretch, possibly across the contour's start: at most one gap between neighbours.
+    gaps = sum(
+        1 for a, b in zip(indexes, indexes[1:] + indexes[:1], strict=True) if (b - a) % n != 1
+    )
+    if gaps > 1 or len(indexes) == n:
+        return False
+    joints = [contour.elements[e].end for e in indexes]
+    # Every point of the piece's outline, not its vertices only: a long sliver along a
+    # wall has vertices near joints at its two ends and none between.
+    points: list[Pt] = []
+    for ring in piece.rings:
+        for (ax, ay), (bx, by) in zip(ring, ring[1:] + ring[:1], strict=True):
+            steps = max(1, math.ceil(math.hypot(bx - ax, by - ay) / (r / 2)))
+            points += [
+                (ax + (bx - ax) * k / steps, ay + (by - ay) * k / steps) for k in range(steps)
+            ]
+    return all(any(math.dist(p, j) <= 1.5 * r for j in joints) for p in points)
 
 
 def _describe(names: list[str], contours: list[Path], c: int, e: int) -> str:

@@ -642,3 +642,24 @@ def test_a_curve_drawn_as_short_lines_is_not_called_narrow() -> None:
     assert [str(p) for p in validate(program)] == []
     for uncut, gouge in measure(program):
         assert uncut < 1e4 and gouge < 1e4
+
+
+def test_an_island_touching_the_wall_is_not_also_called_narrow() -> None:
+    """An island drawn against the wall got the 'touches the wall' warning and two 'narrower
+    than the tool' warnings for the corners where it meets the wall, which every round tool
+    leaves (found by the review of POCKET)."""
+    island = (
+        Island(x=D(0), y=D(1)),
+        PocketLine(x=D(1), y=D(1)),
+        PocketLine(x=D(1), y=D(2)),
+        PocketLine(x=D(0), y=D(2)),
+        PocketLine(x=D(0), y=D(1)),
+    )
+    program = _review_program(*_rectangle("4", "3"), *island)
+    said = [str(p) for p in validate(program)]
+    assert said == [
+        "block 7: warning: island 1 touches or crosses the pocket's wall; the pocket is cut "
+        "around what is left of the boundary without it (the island joins the wall)"
+    ]
+    for uncut, gouge in measure(program):
+        assert uncut < 1e4 and gouge < 1e4

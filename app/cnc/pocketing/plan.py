@@ -116,7 +116,9 @@ def plan_pocket(
         return PocketPlan((), tuple(findings), t)
     reachable = levels[0][1]
     opening = regions.offset(reachable, r, t)
-    findings += _narrow(regions.difference(region, opening), contours, names, r, match, units)
+    findings += _narrow(
+        regions.difference(region, opening), contours, names, r, match, units, rings, t
+    )
     planner = _Planner(
         contours=contours,
         names=names,
@@ -565,6 +567,8 @@ def _narrow(
     r: float,
     match: float,
     units: Units,
+    rings: list[regions.Ring],
+    t: float,
 ) -> list[PocketFinding]:
     """Material the tool cannot reach that is more than a corner it cannot get into."""
     found = []
@@ -573,6 +577,8 @@ def _narrow(
             continue
         touched = _touched(piece, contours, 4 * match)
         if _is_corner(touched, contours) or _in_corners(piece, touched, contours, r):
+            continue
+        if _where_contours_meet(piece, touched, rings, r, t):
             continue
         described = ", ".join(_describe(names, contours, c, e) for c, e in touched[:4])
         if len(touched) > 4:
@@ -646,6 +652,30 @@ def _in_corners(
                 (ax + (bx - ax) * k / steps, ay + (by - ay) * k / steps) for k in range(steps)
             ]
     return all(any(math.dist(p, j) <= 1.5 * r for j in joints) for p in points)
+
+
+def _where_contours_meet(
+    piece: regions.Component,
+    touched: list[tuple[int, int]],
+    rings: list[regions.Ring],
+    r: float,
+    t: float,
+) -> bool:
+    """True when the piece lies within one and a half tool radii of where the contours it
+    touches meet (an island against the wall or another island, reported as such): the
+    corners there are fillets every round tool leaves, not a narrow passage."""
+    touched_contours = sorted({c for c, _ in touched})
+    if len(touched_contours) < 2:
+        return False
+    grown = {c: regions.offset([rings[c]], 2 * t + 2, t) for c in touched_contours}
+    meeting: list[regions.Ring] = []
+    for k, a in enumerate(touched_contours):
+        for b in touched_contours[k + 1 :]:
+            meeting += regions.intersection(grown[a], grown[b])
+    if not meeting:
+        return False
+    near = regions.offset(meeting, 1.5 * r, t)
+    return all(regions.inside(near, (x, y)) for ring in piece.rings for x, y in ring)
 
 
 def _describe(names: list[str], contours: list[Path], c: int, e: int) -> str:

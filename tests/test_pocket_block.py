@@ -663,3 +663,18 @@ def test_an_island_touching_the_wall_is_not_also_called_narrow() -> None:
     ]
     for uncut, gouge in measure(program):
         assert uncut < 1e4 and gouge < 1e4
+
+
+def test_a_pkt_arc_without_its_other_half_is_named() -> None:
+    centre_only = _review_program(
+        PocketLine(x=D(2), y=D(0)),
+        PocketArc(direction=Direction.CCW, x=D(2), y=D(1)),
+        PocketLine(x=D(0), y=D(0)),
+    )
+    assert "block 4: PKT ARC XY-CENT without its XY-END block just after it" in [
+        str(p) for p in validate(centre_only)
+    ]
+    end_only = _review_program(PocketLine(x=D(2), y=D(0)), PocketArcEnd(x=D(0), y=D(0)))
+    assert "block 4: PKT ARC XY-END without its XY-CENT block just before it" in [
+        str(p) for p in validate(end_only)
+    ]

@@ -632,6 +632,11 @@ BLOCK_CLASSES: tuple[type[Block], ...] = REGISTRY.classes
 MILL_CONTOUR_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.CONTOUR)
 MILL_ROUTINE_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.ROUTINE)
 POCKET_GEOMETRY_CLASSES: tuple[type[Block], ...] = REGISTRY.mill_classes(Mill.GEOMETRY)
+# The arcs entered as two blocks: (XY-CENT kind, XY-END kind, their names in messages).
+ARC_PAIRS: tuple[tuple[type[Block], type[Block], str, str], ...] = (
+    (MillArc, ArcEnd, "ARC XY-CENT", "XY-END"),
+    (PocketArc, PocketArcEnd, "PKT ARC XY-CENT", "PKT ARC XY-END"),
+)
 LOOP_CAPABLE_CLASSES: tuple[type[Block], ...] = tuple(
     cls for cls in BLOCK_CLASSES if REGISTRY.kind(cls).loopable
 )

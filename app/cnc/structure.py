@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from app.cnc.blocks import (
+    ARC_PAIRS,
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
     POCKET_GEOMETRY_CLASSES,
@@ -21,9 +22,6 @@ from app.cnc.blocks import (
     Copy,
     Hole,
     HoleOp,
-    MillArc,
-    PocketArc,
-    PocketArcEnd,
     Pos,
     Rep,
 )
@@ -161,18 +159,15 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
             # An arc without its XY-END (or an XY-END without its arc): the blocks before
             # it run.
             for k, i in enumerate(mills):
-                centre, end_kind = (
-                    (PocketArc, PocketArcEnd)
-                    if isinstance(blocks[i], PocketArc | PocketArcEnd)
-                    else (MillArc, ArcEnd)
+                dangling = any(
+                    (
+                        isinstance(blocks[i], centre)
+                        and (i + 1 >= end or not isinstance(blocks[i + 1], end_kind))
+                    )
+                    or (isinstance(blocks[i], end_kind) and not isinstance(blocks[i - 1], centre))
+                    for centre, end_kind, _, _ in ARC_PAIRS
                 )
-                dangling_arc = isinstance(blocks[i], centre) and (
-                    i + 1 >= end or not isinstance(blocks[i + 1], end_kind)
-                )
-                dangling_end = isinstance(blocks[i], end_kind) and not isinstance(
-                    blocks[i - 1], centre
-                )
-                if dangling_arc or dangling_end:
+                if dangling:
                     mills = mills[:k]
                     break
             if not mills:

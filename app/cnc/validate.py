@@ -17,6 +17,7 @@ from typing import Any
 
 from app.cnc import limits
 from app.cnc.blocks import (
+    ARC_PAIRS,
     MILL_CONTOUR_CLASSES,
     MILL_ROUTINE_CLASSES,
     POCKET_GEOMETRY_CLASSES,
@@ -32,7 +33,6 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     Island,
-    MillArc,
     Mode,
     Pocket,
     PocketArc,
@@ -514,25 +514,8 @@ class _Checker:
                         f"BOLT CIR {block.op.value} must follow a standard {block.op.value} "
                         f"block, which gives the centre; {before}",
                     )
-            elif isinstance(block, ArcEnd):
-                if not isinstance(previous, MillArc):
-                    self.add(
-                        number,
-                        None,
-                        ERROR,
-                        Rule.ARC_END_ORDER,
-                        "XY-END without its XY-CENT block just before it",
-                    )
-            elif isinstance(block, MillArc):
-                nxt = blocks[index + 1] if index + 1 < len(blocks) else None
-                if not isinstance(nxt, ArcEnd):
-                    self.add(
-                        number,
-                        None,
-                        ERROR,
-                        Rule.ARC_END_ORDER,
-                        "ARC XY-CENT without its XY-END block just after it",
-                    )
+            else:
+                self.check_arc_pair(index, block, previous)
             if is_mill(block) and not isinstance(block, ArcEnd):
                 self.check_mill_order(index, block, previous)
             if isinstance(block, (Pocket, *POCKET_GEOMETRY_CLASSES)):
@@ -598,6 +581,19 @@ class _Checker:
                 f"another mill block; {before}",
             )
 
+    def check_arc_pair(self, index: int, block: Block, previous: Block | None) -> None:
+        """An arc's XY-CENT block has its XY-END right after it, and an XY-END its XY-CENT
+        right before it (MILL ARC and PKT ARC alike, ARC_PAIRS)."""
+        nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
+        for centre, end, centre_name, end_name in ARC_PAIRS:
+            if isinstance(block, end) and not isinstance(previous, centre):
+                message = f"{end_name} without its XY-CENT block just before it"
+            elif isinstance(block, centre) and not isinstance(nxt, end):
+                message = f"{centre_name} without its XY-END block just after it"
+            else:
+                continue
+            self.add(index + 1, None, ERROR, Rule.ARC_END_ORDER, message)
+
     def check_pocket_order(self, index: int, block: Block, previous: Block | None) -> None:
         """A POCKET's contour blocks follow it (or each other); an arc's XY-CENT and XY-END
         go together; a POCKET needs depths (it retracts between passes)."""
@@ -626,23 +622,7 @@ class _Checker:
                 )
             return
         if isinstance(block, PocketArcEnd):
-            if not isinstance(previous, PocketArc):
-                self.add(
-                    number,
-                    None,
-                    ERROR,
-                    Rule.ARC_END_ORDER,
-                    "PKT ARC XY-END without its XY-CENT block just before it",
-                )
-            return
-        if isinstance(block, PocketArc) and not isinstance(nxt, PocketArcEnd):
-            self.add(
-                number,
-                None,
-                ERROR,
-                Rule.ARC_END_ORDER,
-                "PKT ARC XY-CENT without its XY-END block just after it",
-            )
+            return  # its order is its XY-CENT's (check_arc_pair)
         if not isinstance(previous, (Pocket, *POCKET_GEOMETRY_CLASSES)):
             before = f"block {index} is {previous.title}" if previous else "it is first"
             self.add(

@@ -375,11 +375,9 @@ class _Builder:
                 continue
             feed = self.feed(element.block, block)
             centre = None if element.centre is None else _round(element.centre)
-            halves: list[tuple[XY, bool]] = [(target, True)]
-            if centre is not None and target == current:
-                # A full circle: two half circles through the opposite point.
-                opposite = (2 * centre[0] - current[0], 2 * centre[1] - current[1])
-                halves = [(opposite, False), (target, True)]
+            ends = _arc_ends(current, target, centre)
+            halves = [(end, k == len(ends) - 1) for k, end in enumerate(ends)]
+            if len(ends) == 2:
                 self.report.rewritten(
                     element.block, "a full-circle arc is written as two half-circle events"
                 )
@@ -484,10 +482,7 @@ class _Builder:
             return current  # shorter than the grid's step: nothing to write
         if centre is not None and target != current:
             target = _on_radius(current, target, centre, step)
-        halves = [target]
-        if centre is not None and target == current:
-            halves = [(2 * centre[0] - current[0], 2 * centre[1] - current[1]), target]
-        for end in halves:
+        for end in _arc_ends(current, target, centre):
             events.append(
                 Mill(
                     number,
@@ -1059,6 +1054,14 @@ class EventsTarget(Target):
         check_events(events, path, report)
         line_end = "\r\n" if options.get("line_end", "crlf") == "crlf" else "\n"
         out.write(render(events, line_end).encode("ascii"))
+
+
+def _arc_ends(current: XY, target: XY, centre: XY | None) -> list[XY]:
+    """Where the events of a move from `current` end: `target`, or for a full circle (an
+    arc that ends where it starts) two half circles, through the opposite point."""
+    if centre is None or target != current:
+        return [target]
+    return [(2 * centre[0] - current[0], 2 * centre[1] - current[1]), target]
 
 
 def _on_grid(p: Pt, step: int) -> XY:

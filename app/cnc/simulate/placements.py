@@ -9,7 +9,9 @@ step grow with the program's distinct pieces, not with its moves.
 
 A Run's placements are entered in the same state relative to their offset (the compiler
 groups them that way); `place` checks it (the end of one placement must lead to the entry
-of the next) and splits a group where it does not hold.
+of the next) and splits a group where it does not hold — unless only the move in differs
+and it runs above the stock, where it cuts and hits nothing: a bolt circle's holes, each
+entered from the hole before, are then one (`loose`) group.
 """
 
 from __future__ import annotations
@@ -23,16 +25,20 @@ import numpy as np
 from app.cnc.blocks import Program
 from app.cnc.path import CompiledPath, Node, Piece, Seq
 from app.cnc.simulate.segments import I64, Entry, Segments, ToolShapes, piece_segments
+from app.cnc.units import to_nm
 
 
 @dataclass
 class Group:
     """`segments` (piece coordinates) placed at each of `offsets` (k × 2, nm) in turn;
-    `key` names the segments: equal keys, equal segments (the same moves, entered alike)."""
+    `key` names the segments: equal keys, equal segments (the same moves, entered alike).
+    `loose`: the placements are entered from different places above the stock (the holes
+    of a bolt circle): the first segment's start is the first placement's only."""
 
     segments: Segments
     offsets: I64
     key: tuple[object, ...]
+    loose: bool = False
 
     @property
     def count(self) -> int:
@@ -66,15 +72,19 @@ class Placed:
 def place(program: Program, path: CompiledPath) -> Placed:
     """The motions of `path` (compiled from `program`) as placed groups."""
     shapes = ToolShapes.of(program, path.tools)
-    walker = _Walker(shapes, Entry(*path.start, path.initial_tool))
+    # The stock's top (nm): the program's stock, or part Z0 for one sized from the extent
+    # (stock.py). A move above it cuts nothing and hits nothing.
+    top = 0 if program.stock is None else to_nm(program.stock.z, program.units)
+    walker = _Walker(shapes, Entry(*path.start, path.initial_tool), top)
     walker.visit(path.root, 0, 0, 0)
     return Placed(walker.groups, shapes)
 
 
 class _Walker:
-    def __init__(self, shapes: ToolShapes, entry: Entry) -> None:
+    def __init__(self, shapes: ToolShapes, entry: Entry, top: int) -> None:
         self.shapes = shapes
         self.at = entry
+        self.top = top
         self.groups: list[Group] = []
         self.made: dict[tuple[object, ...], tuple[Segments, Entry]] = {}
         # Pieces by content: the compiler may hold equal pieces as distinct objects (one
@@ -100,6 +110,11 @@ class _Walker:
             if len(group.segments):
                 self.groups.append(group)
 
+    def _entered_above(self, segments: Segments) -> bool:
+        """True when the first segment (the move in from where the tool was) is above the
+        stock's top at both ends."""
+        return bool(len(segments)) and min(segments.z0[0], segments.z1[0]) >= self.top
+
     def _groups(self, piece: Piece, offsets: I64, base: int) -> Iterator[Group]:
         while len(offsets):
             ox, oy = offsets[0].tolist()
@@ -114,16 +129,18 @@ class _Walker:
             # Placement p + 1 is entered where placement p leaves: alike when that is the
             # entry moved by the step between their offsets.
             step = offsets[:-1] - offsets[1:]
-            alike = (
-                (leave.x + step[:, 0] == entry.x)
-                & (leave.y + step[:, 1] == entry.y)
-                & (leave.z == entry.z)
-                & (leave.tool == entry.tool)
-            )
+            same_height = (leave.z == entry.z) & (leave.tool == entry.tool)
+            exact = (leave.x + step[:, 0] == entry.x) & (leave.y + step[:, 1] == entry.y)
+            # Only the first segment, the move from where the tool was, depends on where
+            # the placement is entered from; above the stock it cuts and hits nothing, so
+            # placements entered from anywhere at this height are alike (a bolt circle's
+            # holes, each entered from the hole before).
+            loose = self._entered_above(segments)
+            alike = np.full(len(step), same_height) if loose else exact & same_height
             count = 1 + (int(np.argmin(alike)) if not alike.all() else len(alike))
             last = offsets[count - 1].tolist()
             self.at = Entry(leave.x + last[0], leave.y + last[1], leave.z, leave.tool)
-            yield Group(segments, offsets[:count], key)
+            yield Group(segments, offsets[:count], key, loose and not exact[: count - 1].all())
             offsets = offsets[count:]
 
     def _digest(self, piece: Piece) -> bytes:

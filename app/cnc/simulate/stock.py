@@ -122,6 +122,10 @@ def extent_stock(placed: Placed, units: Units) -> Stock:
         s = group.segments
         if any_cut:
             s = s.select(cutting(s))
+        elif group.loose:
+            # Its first segment starts where the first placement was entered from, which
+            # is not where the others were: every start but that one is another's end.
+            s = s.select(np.arange(1, len(s)))
         if not len(s):
             continue
         r = s.radius

@@ -316,17 +316,23 @@ class _Run:
         n = len(group.segments)
         kinds, which = np.unique(self.phases(offsets), axis=0, return_inverse=True)
         which = which.reshape(-1)
+        # Placements whose phase has no stamp are swept together, not a phase at a time (a
+        # bolt circle's holes each fall at a phase of their own).
+        swept: list[I64] = []
         for k, (fx, fy) in enumerate(kinds.tolist()):
             members = np.flatnonzero(which == k)
             stamp = self._stamp(shape, s, fx, fy)
             if stamp is None:
-                self._sweep_placements(s, useful, offsets[members], members, first, n)
+                swept.append(members)
                 continue
             mx = (grid.stock.x0 - offsets[members, 0] - fx) // res
             my = (grid.stock.y0 - offsets[members, 1] - fy) // res
             self.pending.append(_Pending(stamp, first + members * n, mx, my))
             if sum(p.stamp.keys.size for p in self.pending) > STAMP_CELLS:
                 self.flush()
+        if swept:
+            members = np.sort(np.concatenate(swept))
+            self._sweep_placements(s, useful, offsets[members], members, first, n)
 
     def _stamp(self, shape: _Shape, s: Segments, fx: int, fy: int) -> _Stamp | None:
         """The stamp of `s` (a group's useful segments, piece coordinates) for placements

@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint typecheck pytest system-deps regen-golden clean bench bench-serial load
+.PHONY: run test lint typecheck pytest system-deps native regen-golden clean bench bench-serial load
 HOST ?= 127.0.0.1
 PORT ?= 5000
 WORKERS ?= 2
@@ -21,10 +21,16 @@ $(STAMP): pyproject.toml constraints.txt
 system-deps:
 	bash scripts/install-system-deps
 
+# The G-code importer's hot modules compiled with mypyc (app/cnc/native.py; ~2 min the first
+# time and after they change, nothing otherwise). Needs gcc and Python's headers.
+native: $(STAMP)
+	$(PY) scripts/build-native
+
 # The web editor on http://127.0.0.1:5000 with the library in instance/ (SQLite; set
 # DATABASE_URL for PostgreSQL). The database is migrated (and given its demo programs the
 # first time) before the workers start.
 run: $(STAMP)
+	$(PY) scripts/build-native || echo "make run: importing G-code from the sources (slower)" >&2
 	$(VENV)/bin/millblocks db upgrade
 	$(VENV)/bin/gunicorn --bind $(HOST):$(PORT) --workers $(WORKERS) --access-logfile - 'app:create_app()'
 
@@ -39,7 +45,7 @@ typecheck: $(STAMP)
 # so the storage tests run on SQLite and on a real PostgreSQL. -t puts the cluster in a
 # temporary directory even as root, so two runs side by side do not collide.
 # pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
-pytest: $(STAMP) system-deps
+pytest: $(STAMP) system-deps native
 	pg_virtualenv -t $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
@@ -49,7 +55,7 @@ DURATION ?= 60
 
 # Benchmarks (issue 10): figures and same-run ratios into docs/benchmarks.md (~6-10 min,
 # bounded at 15). Not part of `make test`.
-bench: $(STAMP) system-deps
+bench: $(STAMP) system-deps native
 	$(PY) -m pip install --quiet --no-deps -r bench/requirements.txt
 	$(PY) -m bench.run
 
@@ -69,4 +75,5 @@ regen-golden: $(STAMP)
 	MILLBLOCKS_REGEN_GOLDEN=1 $(PY) -m pytest tests/test_golden.py tests/test_verify.py -q -k "golden"
 
 clean:
+	-$(PY) scripts/build-native --clean
 	rm -rf $(VENV) .mypy_cache .pytest_cache .ruff_cache .hypothesis

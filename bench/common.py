@@ -136,8 +136,11 @@ class Budget:
 BUDGET = Budget()
 
 
-def run_child(target: str, args: dict[str, Any], timeout: float) -> Result:
-    """Run `module:function(**args)` in a fresh interpreter; its result dict.
+def run_child(
+    target: str, args: dict[str, Any], timeout: float, env: dict[str, str] | None = None
+) -> Result:
+    """Run `module:function(**args)` in a fresh interpreter (with `env` added to the
+    environment); its result dict.
 
     A failure or a time-out comes back as {"error": "..."}, never as an exception, so one
     broken case is reported in the table and the others still run. The child runs in its
@@ -154,6 +157,7 @@ def run_child(target: str, args: dict[str, Any], timeout: float) -> Result:
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,
+        env=None if env is None else {**os.environ, **env},
     )
     try:
         stdout, stderr = child.communicate(timeout=limit)

@@ -10,7 +10,9 @@ valid program.
 
 - ours: `app.cnc.imports.read_as` with the G-code importer (parse, motion, recognition of
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
-  program it returns.
+  program it returns — as the app runs it, with the importer compiled by mypyc
+  (app/cnc/native.py; `make bench` builds it), and again from its sources
+  (MILLBLOCKS_NATIVE=0) for the compiled build's own ratio.
 - rs274: LinuxCNC's interpreter in batch mode (`-g`), canonical calls to /dev/null; wall
   time of the process (its start-up, ~20 ms, is included and reported).
 - pygcode 0.2.1: `Line(text)` per line and `Machine.process_block` (its own interpreter);
@@ -128,6 +130,7 @@ def ours_case(path: str) -> Result:
     """(child) Our reader (`imports.read_as` with the G-code importer: the web's and the
     CLI's size limits are theirs, not the reader's), then the compiler on the program it
     returns."""
+    from app.cnc import native
     from app.cnc.compiler import compile_program
     from app.cnc.imports import read_as
     from app.cnc.imports.registry import get_importer
@@ -148,6 +151,7 @@ def ours_case(path: str) -> Result:
         "peak": peak,
         "blocks": len(program.blocks),
         "moves": moves,
+        "compiled": sorted(set(native.status().values())) == ["compiled"],
     }
 
 
@@ -246,6 +250,9 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
             results = {
                 "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
                 "ours": run_child("bench.gcode_import:ours_case", args, timeout),
+                "sources": run_child(
+                    "bench.gcode_import:ours_case", args, timeout, {"MILLBLOCKS_NATIVE": "0"}
+                ),
             }
             if lines == LINES:
                 results["pygcode"] = run_child(
@@ -258,6 +265,7 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
             label = {
                 "rs274": "LinuxCNC `rs274 -g` (baseline)",
                 "ours": "ours: `read_as` + `compile_program`",
+                "sources": "ours, from the sources (`MILLBLOCKS_NATIVE=0`)",
                 "pygcode": "pygcode `Line` + `Machine.process_block`",
             }[name]
             if "unavailable" in r or "error" in r:
@@ -270,13 +278,16 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
             detail = ""
             if name == "rs274":
                 detail = f"{fmt_bytes(size)}; process start-up {fmt_seconds(r['startup'])} included"
-            elif name == "ours":
+            elif name in ("ours", "sources"):
                 detail = (
                     f"read {fmt_seconds(r['seconds'])} → {r['blocks']} blocks, compile "
                     f"{fmt_seconds(r['compile_seconds'])} → {fmt_count(r['moves'])} moves; "
                     f"peak {fmt_bytes(r['peak'])}"
                 )
-                if lines == LINES:
+                if name == "ours":
+                    built = "compiled" if r["compiled"] else "**not compiled** (`make native`)"
+                    detail = f"{built}; {detail}"
+                if name == "ours" and lines == LINES:
                     headline = (seconds, r["cpu"], referee["seconds"], referee["cpu"])
             elif name == "pygcode":
                 detail = (
@@ -306,7 +317,8 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
         "pockets, G1/G2 contours, padded with single-axis moves); *× rs274* is lines per",
         "second over rs274's on the same file in the same run, by wall time and by CPU time",
         "(user + system: less moved by other work on the machine); *per line* shows",
-        "linearity.",
+        "linearity. *Ours* is the importer as the app runs it, compiled by mypyc",
+        "(app/cnc/native.py); *from the sources* is the same code interpreted.",
         "",
         *table(
             [

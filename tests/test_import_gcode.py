@@ -11,16 +11,17 @@ from __future__ import annotations
 
 import math
 from decimal import Decimal as D
+from fractions import Fraction
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
-from app.cnc.formats.gcode.reader import text_nm
+from app.cnc.formats.gcode.reader import USUAL, text_nm, usual_words
 from app.cnc.imports import ImportFailure, NoteKind, read_program
 from app.cnc.problems import Severity
-from app.cnc.units import Units
+from app.cnc.units import Units, half_even
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture_text
 
@@ -459,3 +460,45 @@ def test_the_usual_lines_read_as_the_careful_reader_reads_them(
     careful = read_program(text.lower().encode(), "t", "gcode")
     assert fast.program == careful.program
     assert [str(n) for n in fast.report] == [str(n) for n in careful.report]
+
+
+WORD_LETTERS = st.sampled_from(list("NGXYZIJFMSTngx"))
+WORD_NUMBERS = st.one_of(
+    st.from_regex(r"\A[+-]?(?:[0-9]{1,14}(?:\.[0-9]{0,4})?|\.[0-9]{1,4})\Z"),
+    st.sampled_from(["0", "00", "01", "1", "2", "3", "03", "80", "81", "4", "-1", "1.", ".", ""]),
+)
+BLANKS = st.sampled_from(["", " ", " ", " ", "  ", "\t"])
+LINES = st.lists(st.tuples(BLANKS, WORD_LETTERS, WORD_NUMBERS), max_size=9).map(
+    lambda words: "".join(f"{blank}{letter}{number}" for blank, letter, number in words)
+)
+
+
+@settings(max_examples=3000, deadline=None)
+@given(LINES)
+def test_the_tidy_lines_scanned_give_the_pattern_groups(line: str) -> None:
+    """`usual_words` reads a line only where USUAL does, and to the same groups: it is
+    the compiled reader's shortcut for USUAL, never a second grammar."""
+    words = usual_words(line)
+    match = USUAL.fullmatch(line)
+    if words is not None:
+        assert match is not None, line
+        assert tuple(words) == match.groups(), line
+
+
+def test_the_tidy_lines_of_a_long_file_are_all_scanned() -> None:
+    """Every line of the benchmark's file that USUAL reads (our writer's style: one blank
+    between words) is read by the shortcut too."""
+    from bench.gcode_import import gcode_text
+
+    lines = gcode_text(20_000).splitlines()
+    usual = [(line, match.groups()) for line in lines if line and (match := USUAL.fullmatch(line))]
+    assert len(usual) > 19_000
+    assert all(usual_words(line) == list(groups) for line, groups in usual)
+
+
+@settings(max_examples=2000, deadline=None)
+@given(st.integers(-(10**30), 10**30), st.integers(1, 10**15))
+def test_half_even_is_the_fraction_rounded(numerator: int, denominator: int) -> None:
+    """Lengths and feeds are rounded in integers: exactly Python's rounding of the exact
+    quotient (half to even), for either sign."""
+    assert half_even(numerator, denominator) == round(Fraction(numerator, denominator))

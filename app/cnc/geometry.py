@@ -35,8 +35,9 @@ def bolt_circle_points(
     Each coordinate is rounded once to the nanometre.
     """
     points = []
+    first = float(angle_deg)
     for k in range(holes):
-        theta = math.radians(float(angle_deg) + k * 360.0 / holes)
+        theta = math.radians(first + k * 360.0 / holes)
         points.append(
             (
                 centre[0] + round_nm(-radius * math.sin(theta)),

@@ -35,7 +35,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
-from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from app.cnc.blocks import (
@@ -56,7 +55,7 @@ from app.cnc.blocks import (
 from app.cnc.geometry import arc_sweep, resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.problems import Rule, Severity
-from app.cnc.units import Units, message_length, to_nm
+from app.cnc.units import Units, half_even, message_length, to_nm
 
 if TYPE_CHECKING:
     from app.cnc.pocketing.model import PocketPlan
@@ -96,7 +95,7 @@ def peck_levels(z_up: int, z_dn: int, pecks: int) -> list[int]:
     Level k (1…N) is Z UP − k·(Z UP − Z DN)/N, rounded once to the nanometre.
     """
     span = z_up - z_dn
-    return [z_up - round(Fraction(k * span, pecks)) for k in range(1, pecks + 1)]
+    return [z_up - half_even(k * span, pecks) for k in range(1, pecks + 1)]
 
 
 def rough_depth(units: Units) -> int:

@@ -20,8 +20,10 @@ from decimal import Decimal
 from fractions import Fraction
 from functools import lru_cache
 
+from mypy_extensions import mypyc_attr
+
 from app.cnc import limits
-from app.cnc.units import Units
+from app.cnc.units import Units, half_even
 
 XY = tuple[int, int]
 
@@ -83,6 +85,7 @@ def failure(line: int, column: int | None, message: str) -> ImportFailure:
     return ImportFailure(where, message, line)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)  # the DXF reader's DxfNotes (not compiled)
 @dataclass
 class Notes:
     """The report under construction; `where` turns a line number into words. The same
@@ -164,7 +167,7 @@ def resolution_nm(units: Units) -> int:
 def quantize_nm(nm: int, units: Units) -> int:
     """`nm` rounded (half-even) to the programming resolution of `units`, still in nm."""
     step = resolution_nm(units)
-    return round(Fraction(nm, step)) * step
+    return half_even(nm, step) * step
 
 
 def decimal_of(nm: int, units: Units) -> Decimal:

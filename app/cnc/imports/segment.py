@@ -81,6 +81,9 @@ CYCLE_OPS: dict[int, tuple[HoleOp, str]] = {
     89: (HoleOp.BORE, ""),
 }
 
+# `Segmenter.hole_spec`'s key: the HoleSpec's fields, its enums by identity.
+SpecKey = tuple[int, int | None, int | None, int | None, int, int, int]
+
 
 @dataclass
 class ToolUse:
@@ -166,6 +169,7 @@ class _Segmenter:
         self.two_axis = is_two_axis(self.steps)
         self.ended = False
         self.message: tuple[int, str] | None = None
+        self.specs: dict[SpecKey, HoleSpec] = {}
 
     # -- the walk --------------------------------------------------------------------------
 
@@ -273,7 +277,7 @@ class _Segmenter:
         if moved and self.quill_cycle:
             # Seed 000 §4: G99 makes a complete down-up quill cycle at every position.
             self.pending = None
-            spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, step.units)
+            spec = self.hole_spec(HoleOp.DRILL, None, None, None, 1, self.tool, step.units)
             self.add(HoleOpR([step.line], (step.x, step.y), spec))
             self.notes.became(step.line, "G99 quill cycle at this position: a 2-axis DRILL")
 
@@ -308,6 +312,25 @@ class _Segmenter:
             if isinstance(step, ToolChange):
                 return step.tool
         return 1
+
+    def hole_spec(
+        self,
+        op: HoleOp,
+        z_up: int | None,
+        z_dn: int | None,
+        feed_z: int | None,
+        pecks: int,
+        tool: int,
+        units: Units,
+    ) -> HoleSpec:
+        """The HoleSpec of these parameters, one object for all the holes that share them
+        (a file drills thousands of holes alike; a frozen dataclass is dear to make)."""
+        # The enums by identity: an Enum's hash is a Python call, and they are singletons.
+        key = (id(op), z_up, z_dn, feed_z, pecks, tool, id(units))
+        spec = self.specs.get(key)
+        if spec is None:
+            spec = self.specs[key] = HoleSpec(op, z_up, z_dn, feed_z, pecks, tool, units)
+        return spec
 
     def add(self, op: Op) -> None:
         if self.message is not None and not isinstance(op, LoopOp):
@@ -505,7 +528,7 @@ class _Segmenter:
                     f"peck levels {shown}: a MillBlocks DRILL with {pecks} pecks spaces them "
                     "evenly from Z UP to Z DN",
                 )
-        spec = HoleSpec(op, z_up, bottom, feed_z, pecks, self.tool, spec_units)
+        spec = self.hole_spec(op, z_up, bottom, feed_z, pecks, self.tool, spec_units)
         self.add(HoleOpR(sorted(set(lines)), at, spec))
         if how:
             self.notes.assumed(lines[0], how)
@@ -600,7 +623,7 @@ class _Segmenter:
             )
         self.z = depth
         self.x, self.y = x, y
-        spec = HoleSpec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
+        spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
         all_lines = sorted({*lines, *(e.line for e in elements)})
         self.add(MillOp(all_lines, at, spec, comp, elements))
         self.awaiting_retract = (lines[0], z_up)
@@ -648,7 +671,7 @@ class _Segmenter:
                 + ("" if stops else " (the file has no stops there)"),
             )
         self.x, self.y = x, y
-        spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, first.units)
+        spec = self.hole_spec(HoleOp.DRILL, None, None, None, 1, self.tool, first.units)
         all_lines = sorted({*lines, *(e.line for e in elements)})
         self.add(MillOp(all_lines, at, spec, Comp.NONE, elements, quill_stops=stops))
         return j
@@ -681,7 +704,7 @@ class _Segmenter:
         if step.code in (82, 89) and step.dwell != DWELL:
             dwell = "no dwell" if step.dwell is None else f"dwell {step.dwell} s"
             how = f"G{step.code} with {dwell}; MillBlocks dwells 0.8 s at the bottom"
-        spec = HoleSpec(op, step.r, step.bottom, step.feed, pecks, self.tool, step.units)
+        spec = self.hole_spec(op, step.r, step.bottom, step.feed, pecks, self.tool, step.units)
         self.add(HoleOpR(lines, at, spec))
         if how:
             self.notes.assumed(step.line, how)
@@ -738,7 +761,7 @@ class _Segmenter:
                 self.quill_stop = step.line
                 return i + 1
             pending, self.pending = self.pending, None
-            spec = HoleSpec(HoleOp.DRILL, None, None, None, 1, self.tool, pending.units)
+            spec = self.hole_spec(HoleOp.DRILL, None, None, None, 1, self.tool, pending.units)
             self.add(HoleOpR([pending.line, step.line], pending.at, spec))
             if step.optional:
                 self.notes.assumed(step.line, "M1 (optional stop) read as the stop for the quill")

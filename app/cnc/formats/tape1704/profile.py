@@ -13,7 +13,7 @@ from typing import Any
 from app.cnc.blocks import Program
 from app.cnc.formats.tape1704 import codes
 from app.cnc.options import Option, OptionError, OptionKind
-from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units, to_nm
+from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units, half_even, to_nm
 
 # --- the machine profile ----------------------------------------------------------------
 
@@ -165,17 +165,6 @@ PROFILE_OPTIONS: tuple[Option, ...] = (
         choices=("separate", "together"),
     ),
 )
-
-
-def half_even(numerator: int, denominator: int) -> int:
-    """numerator / denominator (denominator > 0) rounded half to even, as
-    `round(Fraction(numerator, denominator))` in integers alone (a tape rounds a length or
-    feed per word: a Fraction each was a fifth of the tape's time)."""
-    quotient, remainder = divmod(numerator, denominator)
-    twice = 2 * remainder
-    if twice > denominator or (twice == denominator and quotient % 2):
-        quotient += 1
-    return quotient
 
 
 @dataclass(frozen=True)

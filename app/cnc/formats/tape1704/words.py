@@ -25,8 +25,9 @@ from dataclasses import dataclass
 
 from app.cnc.emit.target import Report
 from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion
-from app.cnc.formats.tape1704.profile import Profile, TapeFormat, half_even
+from app.cnc.formats.tape1704.profile import Profile, TapeFormat
 from app.cnc.geometry import arc_sweep
+from app.cnc.units import half_even
 
 Point = tuple[int, int, int | None]
 Vector = tuple[float, float, float]

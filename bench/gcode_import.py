@@ -12,7 +12,8 @@ valid program.
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
   program it returns — as the app runs it, with the importer compiled by mypyc
   (app/cnc/native.py; `make bench` builds it), and again from its sources
-  (MILLBLOCKS_NATIVE=0) for the compiled build's own ratio.
+  (MILLBLOCKS_NATIVE=0) for the compiled build's own ratio. Each is the faster of two
+  fresh processes, as rs274 is.
 - rs274: LinuxCNC's interpreter in batch mode (`-g`), canonical calls to /dev/null; wall
   time of the process (its start-up, ~20 ms, is included and reported).
 - pygcode 0.2.1: `Line(text)` per line and `Machine.process_block` (its own interpreter);
@@ -127,9 +128,9 @@ def write_file(directory: Path, lines: int = LINES) -> Path:
 
 
 def ours_case(path: str) -> Result:
-    """(child) Our reader (`imports.read_as` with the G-code importer: the web's and the
-    CLI's size limits are theirs, not the reader's), then the compiler on the program it
-    returns."""
+    """(child; `run` takes the faster of two) Our reader (`imports.read_as` with the
+    G-code importer: the web's and the CLI's size limits are theirs, not the reader's),
+    then the compiler on the program it returns."""
     from app.cnc import native
     from app.cnc.compiler import compile_program
     from app.cnc.imports import read_as
@@ -153,6 +154,19 @@ def ours_case(path: str) -> Result:
         "moves": moves,
         "compiled": sorted(set(native.status().values())) == ["compiled"],
     }
+
+
+def ours_runs(args: dict[str, str], timeout: float, env: dict[str, str]) -> list[Result]:
+    """Ours in two fresh children, as rs274 is run twice: the same treatment for both."""
+    return [run_child("bench.gcode_import:ours_case", args, timeout, env) for _ in range(2)]
+
+
+def faster(results: list[Result]) -> Result:
+    """The run with the shorter total time (read + compile); a failed run if both failed."""
+    done = [r for r in results if "seconds" in r]
+    if not done:
+        return results[0]
+    return min(done, key=lambda r: r["seconds"] + r["compile_seconds"])
 
 
 def children_cpu() -> float:
@@ -249,10 +263,8 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
             args = {"path": str(path)}
             results = {
                 "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
-                "ours": run_child("bench.gcode_import:ours_case", args, timeout),
-                "sources": run_child(
-                    "bench.gcode_import:ours_case", args, timeout, {"MILLBLOCKS_NATIVE": "0"}
-                ),
+                "ours": faster(ours_runs(args, timeout, {})),
+                "sources": faster(ours_runs(args, timeout, {"MILLBLOCKS_NATIVE": "0"})),
             }
             if lines == LINES:
                 results["pygcode"] = run_child(

@@ -14,9 +14,11 @@ from __future__ import annotations
 import enum
 from decimal import Decimal
 from fractions import Fraction
+from typing import Final
 
-NM_PER_INCH = 25_400_000
-NM_PER_MM = 1_000_000
+# Final: the compiled importer (app.cnc.native) then has them as constants.
+NM_PER_INCH: Final = 25_400_000
+NM_PER_MM: Final = 1_000_000
 
 
 class Units(enum.Enum):

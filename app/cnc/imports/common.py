@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from fractions import Fraction
 from functools import lru_cache
+from typing import Final
 
 from mypy_extensions import mypyc_attr
 
@@ -29,10 +30,10 @@ XY = tuple[int, int]
 
 # A number with more digits than this is not a dimension anyone meant (and would make
 # floats overflow): the importers refuse it, naming where it is.
-MAX_DIGITS = 12
+MAX_DIGITS: Final = 12
 # Dimensions beyond ±10 000 in (254 m) are refused as unreadable; the control's own limits
 # (99.999 in) are left to validation, so a program with a bad value can still be corrected.
-MAX_ABS_NM = 10_000 * 25_400_000
+MAX_ABS_NM: Final = 10_000 * 25_400_000
 
 
 class NoteKind(enum.Enum):

@@ -28,6 +28,7 @@ import math
 from collections.abc import Hashable
 from dataclasses import dataclass, replace
 from decimal import ROUND_HALF_EVEN, Decimal
+from typing import Final
 
 from app.cnc import limits
 from app.cnc.blocks import (
@@ -77,6 +78,7 @@ Seg = tuple[bool, Pt, Pt | None, bool]  # (is arc, end, centre, clockwise)
 MAX_LOOP_BODY = 32  # operations in one repeated pattern
 MAX_FRAME_CUTS = 400  # a frame routine's passes are fewer cuts than this
 MIN_BOLT_HOLES = 3
+HUNDREDTH: Final = Decimal("0.01")  # a BOLT CIR's angle is in hundredths of a degree
 
 
 # -- pecks through a mill sequence ----------------------------------------------------------
@@ -506,7 +508,10 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
     # Indexing, not a slice: a slice would copy up to MAX_BOLT_HOLES ops at every i.
     for k in range(i, min(len(ops), i + limits.MAX_BOLT_HOLES)):
         op = ops[k]
-        if not isinstance(op, HoleOpR) or op.spec != spec or (op.message and run):
+        # (`is` first: the segmenter shares one HoleSpec between holes alike.)
+        if not isinstance(op, HoleOpR) or (op.spec is not spec and op.spec != spec):
+            break
+        if op.message and run:
             break
         run.append(op)
         if op.stop:
@@ -570,7 +575,7 @@ def _bolt_of(
         return None
     dx, dy = p[0][0] - centre[0], p[0][1] - centre[1]
     theta = math.degrees(math.atan2(-dx, -dy)) % 360
-    angle = Decimal(repr(theta)).quantize(Decimal("0.01"), rounding=ROUND_HALF_EVEN)
+    angle = Decimal(repr(theta)).quantize(HUNDREDTH, rounding=ROUND_HALF_EVEN)
     if angle >= 360:
         angle -= 360
     made = bolt_circle_points(cq, rq, count, angle)

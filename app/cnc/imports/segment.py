@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass, field
 from decimal import Decimal
 from itertools import islice
+from typing import Final, TypeGuard
 
 from app.cnc import limits
 from app.cnc.blocks import Comp, HoleOp
@@ -57,16 +58,12 @@ from app.cnc.imports.steps import (
 )
 from app.cnc.units import Units, to_nm
 
-DWELL = limits.HOLE_DWELL_SECONDS
-# isinstance tuples, made once (a `A | B` union is built again on every evaluation).
-MOTIONS = (Rapid, Feed, Arc)
-CUTS = (Feed, Arc)
-QUIET = (SpindleOff, Stop, ToolChange, End, Coolant, Message)  # steps a spindle stop allows
-TAP_OUT = {Units.INCH: to_nm(limits.TAP_FEED_OUT_INCH, Units.INCH), Units.MM: 7_620_000}
+DWELL: Final = limits.HOLE_DWELL_SECONDS
+TAP_OUT: Final = {Units.INCH: to_nm(limits.TAP_FEED_OUT_INCH, Units.INCH), Units.MM: 7_620_000}
 
 # Canned cycles and the hole operation each becomes, with what differs (seed 003's tables,
 # seed 000 §4's fixed-cycle sequences). Dwell and feed-out details are reported per hole.
-CYCLE_OPS: dict[int, tuple[HoleOp, str]] = {
+CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
     73: (HoleOp.DRILL, "G73 breaks chips with short retracts; MillBlocks pecks back to Z UP"),
     74: (HoleOp.TAP, "G74 taps left-hand; MillBlocks' TAP reverses the tool's own direction"),
     76: (HoleOp.BORE, "G76 fine boring orients the spindle and shifts; MillBlocks feeds out"),
@@ -112,13 +109,31 @@ def segment(parsed: Parsed) -> Segmented:
     return _Segmenter(parsed).run()
 
 
+# The kinds of step, as functions with the classes written out: a tuple of classes held in a
+# variable is a Python tuple built and walked on every test once compiled (app.cnc.native),
+# where the classes written out are a test of the type each.
+
+
+def is_motion(step: Step) -> TypeGuard[Rapid | Feed | Arc]:
+    return isinstance(step, (Rapid, Feed, Arc))
+
+
+def is_cut(step: Step) -> TypeGuard[Feed | Arc]:
+    return isinstance(step, (Feed, Arc))
+
+
+def is_quiet(step: Step) -> bool:
+    """A step a spindle stop allows after it (the stop is then not reported)."""
+    return isinstance(step, (SpindleOff, Stop, ToolChange, End, Coolant, Message))
+
+
 def is_two_axis(steps: list[Step]) -> bool:
     """True when Z never changes and there are no canned cycles: the quill is by hand."""
     heights: set[int] = set()
     for step in steps:
         if isinstance(step, Cycle):
             return False
-        if isinstance(step, MOTIONS) and step.z is not None:
+        if is_motion(step) and step.z is not None:
             heights.add(step.z)
     return len(heights) <= 1
 
@@ -132,7 +147,7 @@ def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
         step = steps[k]
         if isinstance(step, Feed) and (step.x, step.y) == at:
             continue
-        return isinstance(step, CUTS)
+        return is_cut(step)
     return False
 
 
@@ -188,11 +203,11 @@ class _Segmenter:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
                 continue
-            if not isinstance(step, QUIET):
+            if not is_quiet(step):
                 self.note_spindle_off()
             if isinstance(step, Rapid):
                 self.rapid(step)
-            elif isinstance(step, CUTS):
+            elif is_cut(step):
                 i = self.feed(i)
                 continue
             elif isinstance(step, Cycle):
@@ -346,7 +361,7 @@ class _Segmenter:
 
     def feed(self, i: int) -> int:
         step = self.steps[i]
-        assert isinstance(step, CUTS)
+        assert is_cut(step)
         same_xy = isinstance(step, Feed) and (step.x, step.y) == (self.x, self.y)
         if same_xy:
             if step.z is not None and self.z is None and not self.two_axis:

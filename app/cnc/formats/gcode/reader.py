@@ -34,6 +34,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from decimal import Decimal
+from typing import Final
 
 from app.cnc.imports.common import (
     MAX_ABS_NM,
@@ -64,20 +65,20 @@ from app.cnc.imports.steps import (
 from app.cnc.numbers import NUMBER_TEXT
 from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units, half_even
 
-NUMBER = re.compile(NUMBER_TEXT)
-SIMPLE = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
+NUMBER: Final = re.compile(NUMBER_TEXT)
+SIMPLE: Final = re.compile(rf"(?:[ \t]*[A-Za-z]{NUMBER_TEXT})+[ \t]*")
 # The commonest line, read in one match: N, G0-G3 or G80, X, Y, Z, I, J, F, each perhaps,
 # in this order (`_Reader.fast_words` takes the numbers as written).
 # Its numbers have at most 12 digits and point (MAX_DIGITS: no need to count them again).
 _SHORT = rf"[+-]?(?=[0-9.]{{1,{MAX_DIGITS}}}(?![0-9.])){NUMBER_TEXT.removeprefix('[+-]?')}"
-USUAL = re.compile(
+USUAL: Final = re.compile(
     rf"[ \t]*(?:N([0-9]{{1,{MAX_DIGITS}}})[ \t]*)?(?:G(0?[0-3]|80)[ \t]*)?(?:X({_SHORT})[ \t]*)?"
     rf"(?:Y({_SHORT})[ \t]*)?(?:Z({_SHORT})[ \t]*)?(?:I({_SHORT})[ \t]*)?"
     rf"(?:J({_SHORT})[ \t]*)?(?:F({_SHORT}))?"
 )
 # A word with the blanks before it (the column is counted from their lengths).
-PAIRS = re.compile(rf"([ \t]*)([A-Za-z])({NUMBER_TEXT})")
-MAX_STEPS = 2_000_000  # L repeats could make any number of holes from one line
+PAIRS: Final = re.compile(rf"([ \t]*)([A-Za-z])({NUMBER_TEXT})")
+MAX_STEPS: Final = 2_000_000  # L repeats could make any number of holes from one line
 HEADER = re.compile(r"^(.*) PART ([0-9]{1,8}|-) MILLBLOCKS$")
 # MillBlocks' set-up comments (emit/gcode.py): part zero and each tool's diameter and length.
 SETUP_ZERO = re.compile(
@@ -106,8 +107,8 @@ MODAL_GROUPS: dict[str, set[str]] = {
     "non-modal": {"4", "10", "28", "30", "45", "46", "47", "48", "53", "92", "92.1", "92.2"}
     | {"92.3"},
 }
-GROUP_OF = {code: group for group, codes in MODAL_GROUPS.items() for code in codes}
-CYCLES = {"73", "74", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89"}
+GROUP_OF: Final = {code: group for group, codes in MODAL_GROUPS.items() for code in codes}
+CYCLES: Final = {"73", "74", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89"}
 # Codes of seed 003's tables that change the motion in ways a data-block program cannot hold.
 REFUSED_G = {
     "33": "thread cutting",
@@ -162,13 +163,13 @@ REFUSED_M = {"98": "a subprogram call", "99": "a subprogram return"}
 AXES = ("X", "Y", "Z")
 ALLOWED = set("XYZIJKRFSTMGNPQLHDO")
 # Blocks `_Reader.plain` executes: these letters and (at most) one of these codes.
-AXES_AND_FEED = frozenset("NXYZF")
-LINEAR = frozenset({"0", "1"})
+AXES_AND_FEED: Final = frozenset("NXYZF")
+LINEAR: Final = frozenset({"0", "1"})
 # The G words `fast_words` takes, as written, and their code.
-MOTION_CODES = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
+MOTION_CODES: Final = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
 NO_CODES: dict[str, Word] = {}
 # The letters a word may have, either case, to the upper case (O: the careful reader).
-LETTERS = {c: c for c in ALLOWED - {"O"}} | {c.lower(): c for c in ALLOWED - {"O"}}
+LETTERS: Final = {c: c for c in ALLOWED - {"O"}} | {c.lower(): c for c in ALLOWED - {"O"}}
 LETTER_HINT = {
     "A": "a rotary axis",
     "B": "a rotary axis",
@@ -180,10 +181,11 @@ LETTER_HINT = {
 
 
 # `USUAL`'s slots by word letter (N G X Y Z I J F), for `usual_words`.
-_SLOTS = {ord(letter): slot for slot, letter in enumerate("NGXYZIJF")}
-_MOTION_TEXTS = frozenset({"0", "1", "2", "3", "00", "01", "02", "03", "80"})
+_SLOTS: Final = {ord(letter): slot for slot, letter in enumerate("NGXYZIJF")}
+_MOTION_TEXTS: Final = frozenset({"0", "1", "2", "3", "00", "01", "02", "03", "80"})
 # This module compiled (app.cnc.native): `usual_words` before the pattern.
-SCAN_FIRST = not __file__.endswith(".py")
+SCAN_FIRST: Final = not __file__.endswith(".py")
+INCH: Final = Units.INCH  # (compiled: a constant, not a look-up on the class per line)
 
 
 def usual_words(line: str) -> list[str | None] | None:
@@ -271,7 +273,7 @@ class Word:
 
 
 _CODES: dict[str, str] = {}
-_POWERS = [10**k for k in range(32)]
+_POWERS: Final = [10**k for k in range(32)]
 
 
 def text_nm(text: str, nm_per_unit: int) -> int:
@@ -282,7 +284,7 @@ def text_nm(text: str, nm_per_unit: int) -> int:
 
 
 # nm per unit → number as written → (nm, decimal places): `text_length`'s memory.
-_LENGTHS: dict[int, dict[str, tuple[int, int]]] = {}
+_LENGTHS: Final[dict[int, dict[str, tuple[int, int]]]] = {}
 
 
 def text_length(text: str, nm_per_unit: int) -> tuple[int, int]:
@@ -548,7 +550,7 @@ class _Reader:
             self.motion = "80"
             self.cycle_drilled = False
             return True
-        per = NM_PER_INCH if units is Units.INCH else NM_PER_MM
+        per = NM_PER_INCH if units is INCH else NM_PER_MM
         feed = self.feed
         if f is not None:
             if not is_positive(f):

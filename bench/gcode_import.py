@@ -216,7 +216,7 @@ def pygcode_case(path: str, limit: float = PYGCODE_LIMIT) -> Result:
     """(child) pygcode: parse every line and run it through its Machine, for at most
     `limit` seconds."""
     try:
-        import pygcode  # type: ignore[import-untyped]
+        import pygcode
     except ImportError:
         return {"unavailable": "pygcode is not installed (pip install -r bench/requirements.txt)"}
     lines = Path(path).read_text().splitlines()

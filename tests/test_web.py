@@ -432,6 +432,30 @@ def test_importing_an_events_file_shows_its_report(client: FlaskClient, app: Fla
     assert f'href="/programs/{new.id}"' in page
 
 
+def test_a_note_on_hundreds_of_lines_names_the_first_few(client: FlaskClient) -> None:
+    """A grid of bolt circles repeats its notes on every circle: the report page lists the
+    first eight lines and counts the rest, as the command line's report does, instead of
+    a column of hundreds of line numbers."""
+    import io
+
+    from bench.gcode_import import gcode_text
+
+    response = client.post(
+        "/programs/import",
+        data={
+            "csrf_token": token(client),
+            "file": (io.BytesIO(gcode_text(5_000).encode()), "grid.ngc"),
+            "format": "",
+        },
+        content_type="multipart/form-data",
+    )
+    page = response.get_data(as_text=True)
+    assert response.status_code == 201, page
+    listed = re.findall(r"\(also lines ([0-9, ]+?)(?: and (\d+) more)?\)</td>", page)
+    assert listed and any(int(rest or 0) > 100 for _, rest in listed)
+    assert all(len(numbers.split(", ")) <= 8 for numbers, _ in listed)
+
+
 def test_a_file_that_cannot_be_imported_saves_nothing(client: FlaskClient, app: Flask) -> None:
     import io
 

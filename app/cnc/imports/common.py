@@ -59,13 +59,20 @@ class ImportNote:
     also: tuple[int, ...] = ()
     unit: str = "line"  # what `line` and `also` count: "line" or "tape block"
 
+    @property
+    def also_text(self) -> str:
+        """The further lines in words, the first eight of them (`also lines 48, 84 and 3
+        more`); empty when there are none. A bolt-circle grid repeats a note on hundreds of
+        lines: the report names where it starts, not all of them."""
+        if not self.also:
+            return ""
+        shown = ", ".join(str(n) for n in self.also[:8])
+        rest = len(self.also) - 8
+        return f"also {self.unit}s {shown}{f' and {rest} more' if rest > 0 else ''}"
+
     def __str__(self) -> str:
         place = self.where or ("file" if self.line is None else f"line {self.line}")
-        more = ""
-        if self.also:
-            shown = ", ".join(str(n) for n in self.also[:8])
-            rest = len(self.also) - 8
-            more = f" (also {self.unit}s {shown}{f' and {rest} more' if rest > 0 else ''})"
+        more = f" ({self.also_text})" if self.also else ""
         return f"{self.kind.value}: {place}: {self.message}{more}"
 
 

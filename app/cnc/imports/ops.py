@@ -170,7 +170,7 @@ def tools_of(op: Op) -> set[int]:
 
 def all_lines(op: Op) -> list[int]:
     if isinstance(op, LoopOp):
-        return sorted({*op.lines, *(line for body in op.body for line in all_lines(body))})
+        return sorted({*op.lines, *[line for body in op.body for line in all_lines(body)]})
     return op.lines
 
 

@@ -312,7 +312,7 @@ class RoutineFinder:
                             add(block, middle)
             start = end
         # Frames: the extent of the cuts is one pass, its corners arcs about the frame's.
-        points = [_f(op.at), *(seg[1] for seg in cuts)]
+        points = [_f(op.at), *[seg[1] for seg in cuts]]
         lines = [seg for seg in cuts if not seg[0]]
         if len(lines) < 4 or len(cuts) > MAX_FRAME_CUTS:
             return found

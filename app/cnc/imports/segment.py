@@ -639,7 +639,7 @@ class _Segmenter:
         self.z = depth
         self.x, self.y = x, y
         spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
-        all_lines = sorted({*lines, *(e.line for e in elements)})
+        all_lines = sorted({*lines, *[e.line for e in elements]})
         self.add(MillOp(all_lines, at, spec, comp, elements))
         self.awaiting_retract = (lines[0], z_up)
         return j
@@ -687,7 +687,7 @@ class _Segmenter:
             )
         self.x, self.y = x, y
         spec = self.hole_spec(HoleOp.DRILL, None, None, None, 1, self.tool, first.units)
-        all_lines = sorted({*lines, *(e.line for e in elements)})
+        all_lines = sorted({*lines, *[e.line for e in elements]})
         self.add(MillOp(all_lines, at, spec, Comp.NONE, elements, quill_stops=stops))
         return j
 

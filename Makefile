@@ -45,7 +45,8 @@ typecheck: $(STAMP)
 # so the storage tests run on SQLite and on a real PostgreSQL. -t puts the cluster in a
 # temporary directory even as root, so two runs side by side do not collide.
 # pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
-pytest: $(STAMP) system-deps native
+pytest: $(STAMP) system-deps
+	$(PY) scripts/build-native
 	pg_virtualenv -t $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
@@ -55,7 +56,8 @@ DURATION ?= 60
 
 # Benchmarks (issue 10): figures and same-run ratios into docs/benchmarks.md (~6-10 min,
 # bounded at 15). Not part of `make test`.
-bench: $(STAMP) system-deps native
+bench: $(STAMP) system-deps
+	$(PY) scripts/build-native
 	$(PY) -m pip install --quiet --no-deps -r bench/requirements.txt
 	$(PY) -m bench.run
 

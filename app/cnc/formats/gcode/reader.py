@@ -192,7 +192,7 @@ def usual_words(line: str) -> list[str | None] | None:
     """USUAL's groups for the tidiest of its lines, read a character at a time: words in
     USUAL's order, each once, one blank between them, no leading blank, numbers with at
     most a minus sign. None for any other line (USUAL then decides), so that where this
-    gives groups they are USUAL's (tests/imports/test_usual_words.py holds them equal).
+    gives groups they are USUAL's (tests/test_import_gcode.py holds them equal).
 
     Compiled (app.cnc.native) this is about three times as fast as the pattern; in Python
     it is slower, and the reader then does not use it (`SCAN_FIRST`).

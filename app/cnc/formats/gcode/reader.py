@@ -290,21 +290,15 @@ _LENGTHS: Final[dict[int, dict[str, tuple[int, int]]]] = {}
 def text_length(text: str, nm_per_unit: int) -> tuple[int, int]:
     """`text_nm` and the decimal places `text` is written with. Remembered: a file writes
     the same few heights, feeds and offsets over and over."""
-    known = lengths_in(nm_per_unit)
+    known = _LENGTHS.get(nm_per_unit)
+    if known is None:
+        known = _LENGTHS[nm_per_unit] = {}
     found = known.get(text)
     if found is None:
         if len(known) >= 1 << 16:
             known.clear()
         found = known[text] = (_text_nm(text, nm_per_unit), places(text))
     return found
-
-
-def lengths_in(nm_per_unit: int) -> dict[str, tuple[int, int]]:
-    """The lengths remembered in one unit (for a lookup without `text_length`'s call)."""
-    known = _LENGTHS.get(nm_per_unit)
-    if known is None:
-        known = _LENGTHS[nm_per_unit] = {}
-    return known
 
 
 def _text_nm(text: str, nm_per_unit: int) -> int:
@@ -646,33 +640,18 @@ class _Reader:
         where it is), and the decimal places the file is then written to; None when a word
         is out of `length`'s range. Changes nothing."""
         decimals = self.decimals
-        nx, ny, nz = self.x, self.y, self.z
-        shift = self.shift
-        known = lengths_in(per)
-        # Written out per axis: this runs for nearly every line of a long file. Without a
-        # G92 shift the remembered nm object itself is kept (one int for every repeat).
-        if x is not None:
-            nm, written = known.get(x) or text_length(x, per)
+        ends = [self.x, self.y, self.z]
+        for k, text in enumerate((x, y, z)):
+            if text is None:
+                continue
+            nm, written = text_length(text, per)
             if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
                 return None
-            nx = nm + shift[0] if shift[0] else nm
-            if written > decimals:
-                decimals = written
-        if y is not None:
-            nm, written = known.get(y) or text_length(y, per)
-            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                return None
-            ny = nm + shift[1] if shift[1] else nm
-            if written > decimals:
-                decimals = written
-        if z is not None:
-            nm, written = known.get(z) or text_length(z, per)
-            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                return None
-            nz = nm + shift[2] if shift[2] else nm
-            if written > decimals:
-                decimals = written
-        return nx, ny, nz, decimals
+            # Without a G92 shift the remembered nm object itself is kept (one int for
+            # every repeat of a number in a long file).
+            ends[k] = nm + self.shift[k] if self.shift[k] else nm
+            decimals = max(decimals, written)
+        return ends[0], ends[1], ends[2], decimals
 
     def fast_hole(
         self, number: int, x: str | None, y: str | None, feed: int | None, per: int

@@ -73,8 +73,17 @@ def test_a_correct_part_reports_nothing(case: str) -> None:
     assert findings(case) == []
 
 
-def test_a_slot_into_a_finished_contour_is_a_gouge_named_by_its_block() -> None:
-    assert findings("contour-gouge") == [(8, "gouge")]
+def test_a_slot_the_program_cuts_into_a_profile_is_its_intent_not_a_gouge() -> None:
+    # Block 8 mills a slot (CUT none) 0.3 in into the part the profile of blocks 1-6
+    # finishes: a keyway the program asks for. The intended part is the stock less what
+    # every block means to remove, the slot's swath included, so this is no gouge (it
+    # was one before verify judged the intended part).
+    result = verify(load(CASES_DIR / "slot-into-profile" / "program.json"))
+    assert result.findings == []
+    grid = result.simulation.grid
+    cell = grid.cell_of(round(1.5 * INCH), round(0.2 * INCH))
+    assert cell is not None
+    assert result.simulation.heights()[cell] == pytest.approx(-0.1 * INCH)
 
 
 def test_the_compensation_gouge_validation_warns_of_is_found_in_the_part() -> None:
@@ -295,17 +304,17 @@ def test_cli_verify_prints_the_report_and_exits_1_on_findings(tmp_path: Path) ->
         main,
         [
             "verify",
-            str(CASES_DIR / "contour-gouge" / "program.json"),
+            str(CASES_DIR / "contour-start-gouge-mm" / "program.json"),
             "--png",
             str(png),
             "--stl",
             str(stl),
             "--resolution",
-            "0.01",
+            "0.2",
         ],
     )
     assert bad.exit_code == 1
-    assert "block 8: gouge: cuts at least" in bad.output
+    assert "block 5: gouge: cuts 5.900 mm into the finished contour of block 2" in bad.output
     assert png.read_bytes().startswith(b"\x89PNG") and stl.stat().st_size > 84
 
 

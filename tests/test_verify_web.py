@@ -24,12 +24,12 @@ def add(app: Flask, case: str) -> int:
 
 
 def test_the_page_lists_the_findings_by_block_with_links(app: Flask, client: FlaskClient) -> None:
-    pid = add(app, "contour-gouge")
+    pid = add(app, "contour-start-gouge-mm")
     page = client.get(f"/programs/{pid}/verify")
     assert page.status_code == 200
     text = page.get_data(as_text=True)
-    assert f'href="/programs/{pid}?edit=8"' in text
-    assert "gouge: cuts at least 0.2475 in into the finished contour of block 6" in text
+    assert f'href="/programs/{pid}?edit=5"' in text
+    assert "gouge: cuts 5.985 mm into the finished contour of block 2" in text
     assert "/static/verify.js" in text and "<script>" not in text and "style=" not in text
 
 
@@ -133,9 +133,9 @@ def test_the_editor_links_to_the_finished_part(app: Flask, client: FlaskClient) 
 def test_the_editor_s_verify_panel_reads_the_findings_per_block(
     app: Flask, client: FlaskClient
 ) -> None:
-    pid = add(app, "contour-gouge")
+    pid = add(app, "contour-start-gouge-mm")
     editor = client.get(f"/programs/{pid}").get_data(as_text=True)
     assert f'data-report="/programs/{pid}/verify/report"' in editor
     fragment = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
-    assert 'class="finding" data-block="8"' in fragment
-    assert f'href="/programs/{pid}?edit=8"' in fragment and "MILL STD" in fragment
+    assert 'class="finding" data-block="5"' in fragment
+    assert f'href="/programs/{pid}?edit=5"' in fragment and "MILL STD" in fragment

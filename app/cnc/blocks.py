@@ -692,7 +692,9 @@ class Stock:
     """The raw stock the part is cut from, for the simulation (not a control setting).
 
     `x`, `y` are its lower-left corner and `z` its top face, in part coordinates; `xl`, `yw`,
-    `zh` its size along X, Y and Z (down from the top). Lengths in the program's units.
+    `zh` its size along X, Y and Z (down from the top). `clear` is the room under it (the
+    height of the parallels it sits on): a cut may go that far below its bottom, as a
+    through hole does; 0 when it sits on the vise or the table. Lengths in the program's units.
     """
 
     x: Decimal = prompt("X", LENGTH)
@@ -701,6 +703,7 @@ class Stock:
     xl: Decimal = prompt("XL", LENGTH)
     yw: Decimal = prompt("YW", LENGTH)
     zh: Decimal = prompt("ZH", LENGTH)
+    clear: Decimal = prompt("CLEAR", LENGTH, Decimal(0))
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -63,7 +63,10 @@ def to_dict(program: Program) -> dict[str, Any]:
     }
     # Written only when set, so documents without a stock read and write as before.
     if program.stock is not None:
-        data["stock"] = _fields_out(program.stock)
+        stock = _fields_out(program.stock)
+        if not stock["clear"]:
+            del stock["clear"]  # no room under the stock: documents read and write as before
+        data["stock"] = stock
     return data
 
 

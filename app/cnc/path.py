@@ -441,6 +441,51 @@ def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]
             yield from walk(node.node, dx + ox, dy + oy, base + node.base)
 
 
+def placed_holes(
+    node: Node, dx: int = 0, dy: int = 0, base: int = 0
+) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.void]]]:
+    """Every hole of `node` in cutting order, without placing its moves: (block numbers,
+    HOLE rows moved to where each is cut) per piece placed. For the rules that read only
+    the holes (a tap's pilot): a LOOP of holes costs its holes, not its moves."""
+    if isinstance(node, Piece):
+        if len(node.holes):
+            holes = _placed_holes(node.holes, len(node.rows), np.array([[dx, dy]], np.int64))
+            yield node.rows["block"][node.holes["start"]] + (node.base + base), holes
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            yield from placed_holes(child, dx, dy, base)
+    elif isinstance(node.node, Piece):
+        piece = node.node
+        if len(piece.holes):
+            offsets = node.offsets + np.array([dx, dy], dtype=np.int64)
+            blocks = piece.rows["block"][piece.holes["start"]] + (piece.base + base + node.base)
+            yield np.tile(blocks, len(offsets)), _placed_holes(piece.holes, len(piece), offsets)
+    else:
+        for ox, oy in node.offsets.tolist():
+            yield from placed_holes(node.node, dx + ox, dy + oy, base + node.base)
+
+
+def lowest_by_block(node: Node, base: int = 0, out: dict[int, int] | None = None) -> dict[int, int]:
+    """The lowest Z (nm) any move of each block reaches, by block number. Z does not move
+    with a LOOP's placements, so each repeated node is read once."""
+    found: dict[int, int] = {} if out is None else out
+    if isinstance(node, Piece):
+        rows = node.rows
+        moving = rows["op"] <= Op.ARC_CCW  # RAPID, FEED and the arcs
+        if moving.any():
+            blocks = rows["block"][moving] + (node.base + base)
+            zs = rows["z"][moving]
+            for block in np.unique(blocks).tolist():
+                low = int(zs[blocks == block].min())
+                found[block] = min(low, found.get(block, low))
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            lowest_by_block(child, base, found)
+    else:
+        lowest_by_block(node.node, base + node.base, found)
+    return found
+
+
 def _placed_holes(
     holes: npt.NDArray[np.void], n: int, offsets: npt.NDArray[np.int64]
 ) -> npt.NDArray[np.void]:

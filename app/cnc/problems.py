@@ -90,6 +90,8 @@ class Rule(enum.Enum):
     POCKET_TWO_AXIS = "pocket-two-axis"
     COMP_ON_ROUTINE = "comp-on-routine"
     MESSAGE = "message"
+    PILOT = "pilot"
+    BELOW_STOCK = "below-stock"
 
 
 @dataclass(frozen=True, slots=True)

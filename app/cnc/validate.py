@@ -46,6 +46,7 @@ from app.cnc.compiler import compile_program
 from app.cnc.kinds import REGISTRY, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
+from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units, format_decimal
 
@@ -175,6 +176,7 @@ class _Checker:
         self.check_tools()
         self.check_copy()
         self.check_two_axis()
+        self.check_process()
         self.problems.sort(key=lambda p: -1 if p.block is None else p.block)
 
     # -- program and Data Block 0 -------------------------------------------------------
@@ -753,6 +755,12 @@ class _Checker:
             return
         for finding in compile_program(self.program).findings:
             self.add(finding.block, finding.field, finding.severity, finding.rule, finding.message)
+
+    def check_process(self) -> None:
+        """What a machinist checks before the first chip (a tap's pilot, the stock's bottom),
+        from the compiled path: only for a program without errors, whose path is whole."""
+        if not any(p.severity is ERROR for p in self.problems):
+            self.problems += process_problems(self.program, compile_program(self.program))
 
     # -- COPY -------------------------------------------------------------------------------
 

@@ -42,6 +42,7 @@ STOCK_FIELDS = (
     ("xl", "XL"),
     ("yw", "YW"),
     ("zh", "ZH"),
+    ("clear", "CLEAR"),
 )
 
 
@@ -151,7 +152,7 @@ def parse_stock(form: Any, units: Units) -> tuple[Stock | None, dict[str, str]]:
     errors: dict[str, str] = {}
     for name, label in STOCK_FIELDS:
         raw = form.get(name, "").strip()
-        if raw == "" and name == "z":
+        if raw == "" and name in ("z", "clear"):
             raw = "0"
         try:
             value = Decimal(raw)
@@ -162,6 +163,9 @@ def parse_stock(form: Any, units: Units) -> tuple[Stock | None, dict[str, str]]:
             continue
         if name in ("xl", "yw", "zh") and value <= 0:
             errors[name] = f"{label}: must be more than 0"
+            continue
+        if name == "clear" and value < 0:
+            errors[name] = f"{label}: the room under the stock cannot be negative; 0 or more"
             continue
         if abs(value) >= 10_000:
             errors[name] = f"{label}: {raw} is out of range; allowed less than 10000"

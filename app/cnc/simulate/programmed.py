@@ -11,12 +11,16 @@ coordinates.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Pocket, Program
 from app.cnc.compiler import compile_program
 from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
+from app.cnc.path import MillSpan, Op, Rows
+from app.cnc.pocketing.regions import element_points
 from app.cnc.pocketing.routine import contours_at
+from app.cnc.process import placed_hole_list
 from app.cnc.units import to_nm
 
 
@@ -32,6 +36,9 @@ class Contour:
     part_left: bool
     tool_radius: int
     depth: int | None
+    # Where the tool's centre went cutting it (polylines, float nm), for an open contour or
+    # a slot, whose waste is the tool's swath: empty for a closed contour.
+    swept: tuple[tuple[tuple[float, float], ...], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -52,17 +59,20 @@ class Routine:
     width: int = 0
     height: int = 0
     corner_radius: int = 0
+    drill: int = 0  # the DRILL block that starts it
 
 
 @dataclass(frozen=True)
 class HoleSpec:
-    """A DRILL, BORE or TAP hole at (x, y), programmed to `depth` (Z DN) by `block`."""
+    """A DRILL, BORE or TAP hole at (x, y), programmed to `depth` (Z DN) by `block`, with a
+    tool of `radius` (0: Data Block 0 gives no diameter)."""
 
     block: int
     op: HoleOp
     x: int
     y: int
     depth: int
+    radius: int = 0
 
 
 @dataclass(frozen=True)
@@ -84,14 +94,23 @@ class Programmed:
     routines: list[Routine] = field(default_factory=list)
     holes: list[HoleSpec] = field(default_factory=list)
     pockets: list[PocketArea] = field(default_factory=list)
+    # Contours cut with the tool's centre on them (CUT none): a slot, not a finished
+    # surface; `part_left` means nothing here.
+    slots: list[Contour] = field(default_factory=list)
 
 
 def _routine(
-    block: Circle | Frame, number: int, start: tuple[int, int], radius: int, depth: int | None
+    block: Circle | Frame,
+    number: int,
+    start: tuple[int, int],
+    radius: int,
+    depth: int | None,
+    drill: int,
 ) -> Routine:
     units = block.units
     common = {
         "block": number,
+        "drill": drill,
         "inside": block.placement in INSIDE_PLACEMENTS,
         "pocket": block.placement is Placement.POCKET,
         "tool_radius": radius,
@@ -115,13 +134,14 @@ def programmed_geometry(program: Program) -> Programmed:
     compiled = compile_program(program).path
     found = Programmed()
     seen: set[tuple[int, int, int]] = set()
+    for placed in placed_hole_list(program, compiled):
+        if (placed.block, placed.x, placed.y) not in seen:
+            seen.add((placed.block, placed.x, placed.y))
+            radius = 0 if placed.diameter is None else placed.diameter // 2
+            found.holes.append(
+                HoleSpec(placed.block, placed.op, placed.x, placed.y, placed.bottom, radius)
+            )
     for chunk in compiled.chunks():
-        blocks = chunk.rows["block"]
-        for hole in chunk.hole_spans():
-            number = int(blocks[hole.start])
-            if (number, hole.x, hole.y) not in seen:
-                seen.add((number, hole.x, hole.y))
-                found.holes.append(HoleSpec(number, hole.op, hole.x, hole.y, hole.bottom))
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -151,20 +171,47 @@ def programmed_geometry(program: Program) -> Programmed:
                 routine = program.blocks[mill.routine - 1]
                 assert isinstance(routine, Circle | Frame)
                 found.routines.append(
-                    _routine(routine, mill.routine, (mill.x, mill.y), radius, mill.depth)
+                    _routine(
+                        routine, mill.routine, (mill.x, mill.y), radius, mill.depth, mill.drill
+                    )
                 )
                 continue
             contour = mill.contour()
-            if mill.comp != Comp.NONE.value and radius > 0 and contour is not None:
-                found.contours.append(
-                    Contour(
-                        drill=mill.drill,
-                        start=contour.start,
-                        elements=contour.elements,
-                        # CUT RT puts the tool right of the contour: the part is on the left.
-                        part_left=mill.comp == Comp.RIGHT.value,
-                        tool_radius=radius,
-                        depth=mill.depth,
-                    )
+            if contour is None or not contour.elements or mill.start == mill.end:
+                continue
+            compensated = mill.comp != Comp.NONE.value and radius > 0
+            closed = math.dist(contour.start, contour.elements[-1].end) < 1.0
+            (found.contours if compensated else found.slots).append(
+                Contour(
+                    drill=mill.drill,
+                    start=contour.start,
+                    elements=contour.elements,
+                    # CUT RT puts the tool right of the contour: the part is on the left.
+                    part_left=mill.comp == Comp.RIGHT.value,
+                    tool_radius=radius,
+                    depth=mill.depth,
+                    swept=() if closed and compensated else _swept(chunk.rows, mill),
                 )
+            )
     return found
+
+
+def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:
+    """The tool centre's cutting moves of a mill span as polylines (arcs in chords of
+    1 µm): a rapid ends one."""
+    lines: list[tuple[tuple[float, float], ...]] = []
+    current: list[tuple[float, float]] = []
+    for op, x, y, cx, cy in rows[["op", "x", "y", "cx", "cy"]][mill.start : mill.end].tolist():
+        end = (float(x), float(y))
+        if op == Op.RAPID:
+            if len(current) > 1:
+                lines.append(tuple(current))
+            current = [end]
+        elif op == Op.FEED:
+            current.append(end)
+        elif op in (Op.ARC_CW, Op.ARC_CCW) and current:
+            arc = Element(0, end, (float(cx), float(cy)), op == Op.ARC_CW)
+            current += element_points(current[-1], arc, 1_000.0)
+    if len(current) > 1:
+        lines.append(tuple(current))
+    return tuple(lines)

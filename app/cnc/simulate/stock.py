@@ -40,7 +40,8 @@ class Stock:
     """The raw block in part coordinates, nm: X x0…x1, Y y0…y1, Z bottom…top.
 
     `given` is True when the program's own stock was used, False when it was sized from
-    the program's extent.
+    the program's extent. `clear` is the room under it (parallels): how far below `bottom`
+    a cut may go.
     """
 
     x0: int
@@ -50,6 +51,7 @@ class Stock:
     bottom: int
     top: int
     given: bool = False
+    clear: int = 0
 
     def describe(self, units: Units) -> str:
         def f(nm: int) -> str:
@@ -58,7 +60,9 @@ class Stock:
         how = "the program's stock" if self.given else "sized from the program's extent"
         return (
             f"X {f(self.x0)} to {f(self.x1)}, Y {f(self.y0)} to {f(self.y1)}, "
-            f"Z {f(self.bottom)} to {f(self.top)} {units.symbol} ({how})"
+            f"Z {f(self.bottom)} to {f(self.top)} {units.symbol}"
+            + (f", {f(self.clear)} {units.symbol} clear below" if self.clear else "")
+            + f" ({how})"
         )
 
 
@@ -82,6 +86,12 @@ def program_stock(stock: StockBlock, units: Units) -> Stock:
                 f"stock, {label}: must be more than 0, got {getattr(stock, name)}", name
             )
     limit = HEIGHT_LIMIT[units]
+    if not 0 <= stock.clear <= limit:
+        raise StockError(
+            f"stock, CLEAR: the room under the stock must be 0 to {limit} {units.symbol}, "
+            f"got {stock.clear}",
+            "clear",
+        )
     if abs(stock.z) > limit:
         raise StockError(
             f"stock, Z TOP: must be within ±{limit} {units.symbol}, got {stock.z}", "z"
@@ -101,6 +111,7 @@ def program_stock(stock: StockBlock, units: Units) -> Stock:
         bottom=top - to_nm(stock.zh, units),
         top=top,
         given=True,
+        clear=to_nm(stock.clear, units),
     )
 
 

@@ -472,7 +472,9 @@ def _lattice(grid: Grid, x0: int, y0: int, nx: int, ny: int) -> Grid:
     """A grid of `grid`'s cell size whose first cell's corner is (x0, y0) (nm)."""
     res = round(grid.resolution)
     stock = grid.stock
-    box = Stock(x0, y0, x0 + nx * res, y0 + ny * res, stock.bottom, stock.top, stock.given)
+    box = Stock(
+        x0, y0, x0 + nx * res, y0 + ny * res, stock.bottom, stock.top, stock.given, stock.clear
+    )
     return Grid(box, grid.resolution, nx, ny)
 
 

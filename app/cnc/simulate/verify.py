@@ -30,8 +30,19 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.mill import Element, Path
+from app.cnc.mill import Path
 from app.cnc.pocketing.regions import path_points
+from app.cnc.process import process_problems
+from app.cnc.simulate.intended import (
+    Intent,
+    element_measures,
+    fill,
+    intended,
+    is_closed,
+    part_inside,
+    routine_sdf,
+    window,
+)
 from app.cnc.simulate.placements import Placed, place
 from app.cnc.simulate.programmed import (
     Contour,
@@ -40,7 +51,7 @@ from app.cnc.simulate.programmed import (
     Routine,
     programmed_geometry,
 )
-from app.cnc.simulate.segments import BOOL, F64
+from app.cnc.simulate.segments import BOOL, DEFAULT_DIAMETER, F64
 from app.cnc.simulate.stock import (
     Grid,
     Stock,
@@ -172,21 +183,51 @@ def verify(
             "moves the quill by hand)"
         )
     check_part(result, geometry, tol)
+    result.findings = sorted(
+        result.findings + _process_findings(program), key=lambda f: (f.block, f.kind, f.message)
+    )
     return result
 
 
 def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
-    """Measure the simulated part against what the program asks for (`tol` nm): every
-    finding goes into `result.findings`, sorted by block."""
+    """Measure the simulated part against the part the program means to make (`tol` nm):
+    every finding goes into `result.findings`, sorted by block."""
     sim = result.simulation
     heights = sim.heights()
     owners = sim.owner_blocks()
     u = result.units
+    default_radius = to_nm(DEFAULT_DIAMETER[u], u) // 2
+    intent = intended(sim.grid, geometry, tol, default_radius)
     found: list[Finding] = []
     for contour in geometry.contours:
-        found += _contour_gouges(sim.grid, heights, owners, contour, tol, u)
+        found += _contour_gouges(sim.grid, heights, owners, contour, tol, u, intent)
+        found += _contour_rest(sim.grid, heights, contour, geometry, tol, u)
+    if not sim.grid.stock.given:
+        inner = sorted(
+            {
+                c.drill
+                for c in geometry.contours
+                if c.depth is not None
+                and is_closed(c)
+                and not part_inside(c)
+                and not any(c in p.contours for p in geometry.pockets)
+            }
+        )
+        if inner:
+            result.notes.append(
+                (
+                    f"the closed contours from blocks {', '.join(map(str, inner))} are cut "
+                    "with the tool inside, so what each encloses"
+                    if len(inner) > 1
+                    else f"the closed contour from block {inner[0]} is cut with the tool "
+                    "inside, so what it encloses"
+                )
+                + " is waste; with the stock sized from the program, verify cannot tell "
+                "whether the cut goes through, so it does not check that the inside is "
+                "cleared (save the stock to have it checked)"
+            )
     for routine in geometry.routines:
-        found += _routine_findings(sim.grid, heights, owners, routine, tol, u)
+        found += _routine_findings(sim.grid, heights, owners, routine, tol, u, intent)
     for pocket in geometry.pockets:
         found += _pocket_findings(sim.grid, heights, pocket, tol, u)
     found += _hole_findings(sim.grid, heights, owners, geometry, tol, u)
@@ -194,24 +235,16 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     result.findings = sorted(found, key=lambda f: (f.block, f.kind, f.message))
 
 
+def _process_findings(program: Program) -> list[Finding]:
+    """The process rules `check` reports too (a tap's pilot, a cut below the stock), as
+    findings: the same problems, from the same code."""
+    return [
+        Finding(p.block or 0, "process", p.message, 0.0, 0.0)
+        for p in process_problems(program, compile_program(program))
+    ]
+
+
 # -- cells near a shape --------------------------------------------------------------------
-
-
-def _window(
-    grid: Grid, x0: float, y0: float, x1: float, y1: float
-) -> tuple[slice, slice, F64, F64]:
-    """The rows and columns of cells whose centres lie in [x0, x1] × [y0, y1], and the
-    centres' coordinates as (rows, columns) arrays."""
-    res = grid.resolution
-    j0 = max(0, math.ceil((x0 - grid.x0) / res - 0.5))
-    j1 = min(grid.nx, math.floor((x1 - grid.x0) / res - 0.5) + 1)
-    i0 = max(0, math.ceil((y0 - grid.y0) / res - 0.5))
-    i1 = min(grid.ny, math.floor((y1 - grid.y0) / res - 0.5) + 1)
-    j1, i1 = max(j0, j1), max(i0, i1)
-    xs = grid.x0 + (np.arange(j0, j1) + 0.5) * res
-    ys = grid.y0 + (np.arange(i0, i1) + 0.5) * res
-    qx, qy = np.meshgrid(xs, ys)
-    return slice(i0, i1), slice(j0, j1), qx, qy
 
 
 def _worst(
@@ -241,36 +274,6 @@ def _len(nm: float, u: Units) -> str:
 # -- compensated contours ------------------------------------------------------------------
 
 
-def _element_measures(
-    qx: F64, qy: F64, start: tuple[float, float], element: Element
-) -> tuple[F64, F64, BOOL]:
-    """(distance, signed distance to the left of travel, beside the element's interior)
-    of each point to a contour element."""
-    sx, sy = start
-    ex, ey = element.end
-    if element.centre is None:
-        dx, dy = ex - sx, ey - sy
-        length = math.hypot(dx, dy) or 1.0
-        t = ((qx - sx) * dx + (qy - sy) * dy) / (length * length)
-        left = (dx * (qy - sy) - dy * (qx - sx)) / length
-        tc = np.clip(t, 0.0, 1.0)
-        dist = np.hypot(qx - (sx + tc * dx), qy - (sy + tc * dy))
-        return dist, left, (t >= 0) & (t <= 1)
-    cx, cy = element.centre
-    ra = math.hypot(sx - cx, sy - cy)
-    rho = np.hypot(qx - cx, qy - cy)
-    a0 = math.atan2(sy - cy, sx - cx)
-    a1 = math.atan2(ey - cy, ex - cx)
-    sweep = ((a0 - a1) if element.clockwise else (a1 - a0)) % (2 * math.pi) or 2 * math.pi
-    ap = np.arctan2(qy - cy, qx - cx)
-    along = ((a0 - ap) if element.clockwise else (ap - a0)) % (2 * math.pi)
-    interior = along <= sweep
-    ends = np.minimum(np.hypot(qx - sx, qy - sy), np.hypot(qx - ex, qy - ey))
-    dist = np.where(interior, np.abs(rho - ra), ends)
-    left = (rho - ra) if element.clockwise else (ra - rho)
-    return dist, left, interior
-
-
 def _contour_gouges(
     grid: Grid,
     heights: F64,
@@ -278,6 +281,7 @@ def _contour_gouges(
     contour: Contour,
     tol: int,
     u: Units,
+    intent: Intent,
 ) -> list[Finding]:
     band = 2.0 * contour.tool_radius
     starts = [contour.start] + [e.end for e in contour.elements[:-1]]
@@ -288,7 +292,7 @@ def _contour_gouges(
         default=0.0,
     )
     xs, ys = [p[0] for p in pts], [p[1] for p in pts]
-    rows, cols, qx, qy = _window(
+    rows, cols, qx, qy = window(
         grid, min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach
     )
     if qx.size == 0:
@@ -300,7 +304,7 @@ def _contour_gouges(
     left = np.zeros(qx.shape)
     interior = np.zeros(qx.shape, dtype=bool)
     for k, (s, e) in enumerate(zip(starts, contour.elements, strict=True)):
-        dist, side, within = _element_measures(qx, qy, s, e)
+        dist, side, within = element_measures(qx, qy, s, e)
         closer = dist < best
         best = np.where(closer, dist, best)
         nearest[closer] = k
@@ -308,7 +312,9 @@ def _contour_gouges(
         interior = np.where(closer, within, interior)
     inward = left if contour.part_left else -left
     h = heights[rows, cols]
-    cut = h < grid.stock.top - tol
+    # Removed below what any other block means to cut there (a pocket beside the wall, a
+    # hole through its band are the program's intent, not damage).
+    cut = h < intent.allowed_besides(contour.drill, rows, cols) - tol
     mask = interior & (inward > tol) & (inward <= band) & cut
     block_of = np.array([e.block for e in contour.elements])[nearest]
     findings = []
@@ -328,21 +334,108 @@ def _contour_gouges(
     return findings
 
 
+def _contour_rest(
+    grid: Grid,
+    heights: F64,
+    contour: Contour,
+    geometry: Programmed,
+    tol: int,
+    u: Units,
+) -> list[Finding]:
+    """A closed contour cut with the tool inside it says the part is outside: what it
+    encloses is waste, to be cleared where the tool fits (an inner profile, a pocket's
+    wall). Material left standing there is rest material, unless the cut goes through the
+    stock and the slug falls out. This is how a contour cut on the wrong side shows: an
+    outer profile cut from inside leaves the whole part standing inside its groove."""
+    if contour.depth is None or not is_closed(contour) or part_inside(contour):
+        return []
+    if any(contour in p.contours for p in geometry.pockets):
+        return []  # a POCKET's wall: the pocket's own check
+    if not grid.stock.given:
+        return []  # whether the cut goes through is unknown: check_part notes it
+    r = float(contour.tool_radius)
+    chord = grid.resolution / 4
+    ring = path_points(Path(contour.start, contour.elements), chord)
+    side, other = ("RT", "LT") if contour.part_left else ("LT", "RT")
+    if contour.depth <= grid.stock.bottom:
+        # Through: what it encloses drops out as a slug. Holes, pockets or contours cut
+        # inside it say the slug is the part, cut on the wrong side.
+        inside_blocks = sorted(
+            {h.block for h in geometry.holes if _holds(ring, h.x, h.y)}
+            | {t.block for t in geometry.routines if _holds(ring, *_routine_point(t))}
+            | {c.drill for c in geometry.contours if c is not contour and _holds(ring, *c.start)}
+        )
+        if not inside_blocks:
+            return []
+        x, y = contour.start
+        return [
+            Finding(
+                contour.drill,
+                "gouge",
+                f"cut {side} puts the tool inside the closed contour of block {contour.drill} "
+                "and the cut goes through the stock, so what it encloses drops out as a slug "
+                f"with the features of block{'s' if len(inside_blocks) > 1 else ''} "
+                f"{', '.join(map(str, inside_blocks))} in it: if the part is inside the "
+                f"contour, cut on the other side (CUT {other}); as programmed it comes out "
+                f"{_len(2 * r, u)} undersize",
+                x,
+                y,
+            )
+        ]
+    xs, ys = [p[0] for p in ring], [p[1] for p in ring]
+    rows, cols, qx, qy = window(grid, min(xs), min(ys), max(xs), max(ys))
+    if qx.size == 0:
+        return []
+    inside = fill(grid, [ring])[rows, cols]
+    for kept in geometry.contours:
+        if kept is not contour and is_closed(kept) and part_inside(kept):
+            island = path_points(Path(kept.start, kept.elements), chord)
+            inside &= ~fill(grid, [island])[rows, cols]
+    for routine in geometry.routines:
+        if not routine.inside:
+            inside &= routine_sdf(routine, qx, qy, 0.0) > 0
+    nearest = np.full(qx.shape, np.inf)
+    starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+    for start, element in zip(starts, contour.elements, strict=True):
+        nearest = np.minimum(nearest, element_measures(qx, qy, start, element)[0])
+    left = heights[rows, cols] - contour.depth
+    rest = inside & (nearest >= r + tol) & (left > tol)
+    findings = []
+    for _, thick, x, y, cells in _worst(rest, left, qx, qy, None):
+        area = cells * grid.resolution**2
+        findings.append(
+            Finding(
+                contour.drill,
+                "rest material",
+                f"{area / u.nm**2:.4f} {u.symbol}² inside the closed contour of block "
+                f"{contour.drill} stands {_len(thick, u)} above its Z DN at {_at(x, y, u)}: "
+                f"cut {side} puts the tool inside it, so the part is outside and the inside "
+                f"is waste; clear it (a POCKET), cut through the stock, or, if the part is "
+                f"inside the contour, cut on the other side (CUT {other})",
+                x,
+                y,
+            )
+        )
+    return findings
+
+
+def _holds(ring: list[tuple[float, float]], x: float, y: float) -> bool:
+    """Whether the closed polygon `ring` holds the point (even-odd)."""
+    inside = False
+    for (ax, ay), (bx, by) in zip(ring, ring[1:] + ring[:1], strict=True):
+        if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+            inside = not inside
+    return inside
+
+
+def _routine_point(routine: Routine) -> tuple[float, float]:
+    """A point inside a routine's finished contour: its centre."""
+    if routine.is_frame:
+        return routine.corner[0] + routine.width / 2, routine.corner[1] + routine.height / 2
+    return routine.centre
+
+
 # -- circle and frame routines -------------------------------------------------------------
-
-
-def _routine_sdf(routine: Routine, qx: F64, qy: F64, corner: float) -> F64:
-    """Signed distance (nm; negative inside) to the routine's finished contour, a frame's
-    corners rounded to `corner` where that is more than its own corner radius."""
-    if not routine.is_frame:
-        return np.hypot(qx - routine.centre[0], qy - routine.centre[1]) - routine.radius
-    hx, hy = routine.width / 2, routine.height / 2
-    cx, cy = routine.corner[0] + hx, routine.corner[1] + hy
-    r = min(max(corner, routine.corner_radius), hx, hy)
-    px = np.abs(qx - cx) - (hx - r)
-    py = np.abs(qy - cy) - (hy - r)
-    outside = np.hypot(np.maximum(px, 0), np.maximum(py, 0))
-    return outside + np.minimum(np.maximum(px, py), 0) - r
 
 
 def _routine_findings(
@@ -352,6 +445,7 @@ def _routine_findings(
     routine: Routine,
     tol: int,
     u: Units,
+    intent: Intent,
 ) -> list[Finding]:
     if routine.depth is None or routine.tool_radius <= 0:
         return []
@@ -362,17 +456,17 @@ def _routine_findings(
     else:
         (cx, cy), rad = routine.centre, routine.radius
         x0, y0, x1, y1 = cx - rad, cy - rad, cx + rad, cy + rad
-    rows, cols, qx, qy = _window(grid, x0 - 2 * r, y0 - 2 * r, x1 + 2 * r, y1 + 2 * r)
+    rows, cols, qx, qy = window(grid, x0 - 2 * r, y0 - 2 * r, x1 + 2 * r, y1 + 2 * r)
     if qx.size == 0:
         return []
     h = heights[rows, cols]
     own = owners[rows, cols]
-    sdf = _routine_sdf(routine, qx, qy, 0.0)
+    sdf = routine_sdf(routine, qx, qy, 0.0)
     part = sdf if routine.inside else -sdf
     tool_side = -part
-    cut = h < grid.stock.top - tol
     findings = []
-    gouged = (part > tol) & (part <= r) & cut
+    allowed = intent.allowed_besides(routine.drill, rows, cols)
+    gouged = (part > tol) & (part <= r) & (h < allowed - tol)
     for culprit, depth, x, y, _ in _worst(gouged, part, qx, qy, own):
         findings.append(
             Finding(
@@ -407,18 +501,6 @@ def _routine_findings(
 # -- irregular pockets ---------------------------------------------------------------------
 
 
-def _inside(points: list[tuple[float, float]], qx: F64, qy: F64) -> BOOL:
-    """Which points (qx, qy) a closed polygon holds (even-odd crossings)."""
-    inside = np.zeros(qx.shape, dtype=bool)
-    for (ax, ay), (bx, by) in zip(points, points[1:] + points[:1], strict=True):
-        if ay == by:
-            continue
-        crosses = (ay > qy) != (by > qy)
-        x_at = ax + (qy - ay) * (bx - ax) / (by - ay)
-        inside ^= crosses & (qx < x_at)
-    return inside
-
-
 def _pocket_findings(
     grid: Grid, heights: F64, pocket: PocketArea, tol: int, u: Units
 ) -> list[Finding]:
@@ -433,17 +515,17 @@ def _pocket_findings(
     outlines = [path_points(Path(c.start, c.elements), chord) for c in pocket.contours]
     xs = [p[0] for p in outlines[0]]
     ys = [p[1] for p in outlines[0]]
-    rows, cols, qx, qy = _window(grid, min(xs), min(ys), max(xs), max(ys))
+    rows, cols, qx, qy = window(grid, min(xs), min(ys), max(xs), max(ys))
     if qx.size == 0:
         return []
-    inside = _inside(outlines[0], qx, qy)
+    inside = fill(grid, [outlines[0]])[rows, cols]
     for island in outlines[1:]:
-        inside &= ~_inside(island, qx, qy)
+        inside &= ~fill(grid, [island])[rows, cols]
     nearest = np.full(qx.shape, np.inf)
     for contour in pocket.contours:
         starts = [contour.start] + [e.end for e in contour.elements[:-1]]
         for start, element in zip(starts, contour.elements, strict=True):
-            nearest = np.minimum(nearest, _element_measures(qx, qy, start, element)[0])
+            nearest = np.minimum(nearest, element_measures(qx, qy, start, element)[0])
     left = heights[rows, cols] - max(pocket.depth, grid.stock.bottom)
     rest = inside & (nearest >= r + tol) & (left > tol)
     findings = []

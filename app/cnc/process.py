@@ -1,0 +1,335 @@
+"""Process rules: what a machinist checks before the first chip, read from the compiled path.
+
+Two rules that need no simulation, so `check` and the editor report them as the blocks are
+typed, and Verify reports the same problems as findings (one rule, one place):
+
+- **Pilot.** A TAP or BORE needs a hole already there: an earlier DRILL, BORE or TAP at the
+  same point, smaller than this tool and at least as deep, or a pocket (CIRCLE/FRAME
+  POCKET, an irregular POCKET) already cleared to that depth around the point. A tap
+  driven into solid metal breaks; a boring bar plunged into it does too. Earlier means an
+  earlier block: within a LOOP the patterns' own order does not matter, since a pilot
+  drilled at the same point by a later pattern is still a later block's hole only when
+  the blocks say so.
+- **Below the stock.** With the program's own stock, no move goes lower than the stock's
+  bottom less its CLEAR (the parallels' height): deeper is the vise, the parallels or the
+  table. A through hole is declared by giving the stock that room.
+
+Both are warnings: the program can still run (a tapped hole's pilot may come from an earlier
+set-up), but the programmer must look. Lengths in nm inside, printed in the program's units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.cnc.blocks import (
+    Block,
+    BoltCircle,
+    Circle,
+    Frame,
+    Hole,
+    HoleOp,
+    Placement,
+    Pocket,
+    Program,
+)
+from app.cnc.compiler import Compiled
+from app.cnc.mill import Element
+from app.cnc.mill import Path as MillPath
+from app.cnc.path import (
+    HOLE_OPS,
+    CompiledPath,
+    Node,
+    Piece,
+    Run,
+    Seq,
+    lowest_by_block,
+    placed_holes,
+)
+from app.cnc.pocketing.regions import path_points
+from app.cnc.pocketing.routine import contours_at
+from app.cnc.problems import Problem, Rule, Severity
+from app.cnc.units import Units, format_length, to_nm
+
+# Two holes this close (nm) are at the same point: half the finest step a program can type
+# (0.001 mm), far below any drill's wander.
+SAME_POINT = 500
+
+
+@dataclass(frozen=True, slots=True)
+class PlacedHole:
+    """A hole where it is cut: `block` (the TAP block, or the BOLT CIR that placed it),
+    the operation, (x, y) and `bottom` (Z DN) in nm, and its tool's diameter (None: not
+    given in Data Block 0)."""
+
+    block: int
+    op: HoleOp
+    x: int
+    y: int
+    bottom: int
+    diameter: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class Cleared:
+    """An area a mill sequence clears to `depth` before block `block` is cut: `outline`
+    (float nm, a closed polygon) with nothing left inside."""
+
+    block: int
+    outline: tuple[tuple[float, float], ...]
+    depth: int
+
+
+def hole_tool(blocks: tuple[Block, ...], number: int) -> int:
+    """The tool number of the hole block `number` (1-based): its own, or for a BOLT CIR the
+    tool of the standard block before it that gives its hole parameters (0: none)."""
+    index = number - 1
+    while index >= 0:
+        block = blocks[index]
+        if isinstance(block, Hole):
+            return block.tool
+        if not isinstance(block, BoltCircle):
+            return 0
+        index -= 1
+    return 0
+
+
+def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
+    """Every hole of the compiled program in cutting order (LOOP patterns and bolt circles
+    placed), each with its tool's diameter."""
+    found: list[PlacedHole] = []
+    tools: dict[int, int] = {}
+    for blocks, holes in placed_holes(path.root):
+        for block, op, x, y, bottom in zip(
+            blocks.tolist(),
+            holes["op"].tolist(),
+            holes["x"].tolist(),
+            holes["y"].tolist(),
+            holes["bottom"].tolist(),
+            strict=True,
+        ):
+            if block not in tools:
+                tools[block] = hole_tool(program.blocks, block)
+            info = path.tools.get(tools[block])
+            diameter = None if info is None else info.diameter
+            found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
+    return found
+
+
+def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
+    """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
+    irregular POCKETs; a sequence whose plan has errors clears nothing)."""
+    found: list[Cleared] = []
+    for routine_number, x, y, cut, depth in _mill_spans(path.root):
+        if not routine_number or not cut or depth is None:
+            continue
+        routine = program.blocks[routine_number - 1]
+        if isinstance(routine, Pocket):
+            drawn = contours_at(program.blocks, routine_number, (x, y))
+            outline = next(c.path for c in drawn if c.name == "boundary")
+        elif isinstance(routine, Circle | Frame) and routine.placement is Placement.POCKET:
+            outline = _routine_outline(routine, (x, y))
+        else:
+            continue
+        found.append(Cleared(routine_number, tuple(path_points(outline, 2_000)), depth))
+    return found
+
+
+def _mill_spans(
+    node: Node, dx: int = 0, dy: int = 0
+) -> list[tuple[int, int, int, bool, int | None]]:
+    """(routine block, x, y, cut, depth) of every mill span of `node`, placed, in order."""
+    out: list[tuple[int, int, int, bool, int | None]] = []
+    if isinstance(node, Piece):
+        for m in node.mills:
+            routine = m.routine + node.base if m.routine else 0
+            out.append((routine, m.x + dx, m.y + dy, m.start != m.end, m.depth))
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            out += _mill_spans(child, dx, dy)
+    elif isinstance(node, Run):
+        inner = _mill_spans(node.node)
+        if inner:
+            for ox, oy in node.offsets.tolist():
+                out += [
+                    (r + node.base if r else 0, x + dx + ox, y + dy + oy, c, d)
+                    for r, x, y, c, d in inner
+                ]
+    return out
+
+
+def _routine_outline(routine: Circle | Frame, origin: tuple[int, int]) -> MillPath:
+    """A CIRCLE's or FRAME's finished contour as a path (origin: the centre, or the
+    frame's lower-left corner)."""
+    units = routine.units
+    ox, oy = float(origin[0]), float(origin[1])
+    if isinstance(routine, Circle):
+        r = float(to_nm(routine.radius, units))
+        top = (ox, oy + r)
+        bottom = (ox, oy - r)
+        return MillPath(top, (Element(0, bottom, (ox, oy), True), Element(0, top, (ox, oy), True)))
+    w, h = float(to_nm(routine.xl, units)), float(to_nm(routine.yw, units))
+    c = min(float(to_nm(routine.corner_radius, units)), w / 2, h / 2)
+    corners = [
+        ((ox + w - c, oy), (ox + w, oy + c), (ox + w - c, oy + c)),
+        ((ox + w, oy + h - c), (ox + w - c, oy + h), (ox + w - c, oy + h - c)),
+        ((ox + c, oy + h), (ox, oy + h - c), (ox + c, oy + h - c)),
+        ((ox, oy + c), (ox + c, oy), (ox + c, oy + c)),
+    ]
+    elements = []
+    for line_end, arc_end, centre in corners:
+        elements.append(Element(0, line_end))
+        if c > 0:
+            elements.append(Element(0, arc_end, centre, False))
+    return MillPath((ox + c, oy), tuple(elements))
+
+
+def _inside(outline: tuple[tuple[float, float], ...], x: float, y: float) -> bool:
+    inside = False
+    for (ax, ay), (bx, by) in zip(outline, outline[1:] + outline[:1], strict=True):
+        if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+            inside = not inside
+    return inside
+
+
+def _length(nm: int, units: Units) -> str:
+    return f"{format_length(nm, units)} {units.symbol}"
+
+
+def _at(hole: PlacedHole, units: Units) -> str:
+    return f"X {format_length(hole.x, units)} Y {format_length(hole.y, units)}"
+
+
+def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
+    """A TAP or BORE with no smaller, deep enough hole or cleared pocket before it at its
+    point: one warning per block (a bolt circle's holes counted), naming the first."""
+    path = compiled.path
+    units = program.units
+    holes = placed_hole_list(program, path)
+    if not any(h.op is not HoleOp.DRILL for h in holes):
+        return []
+    cleared = cleared_areas(program, path)
+    # Earlier holes by point, on a lattice of SAME_POINT cells (a point's neighbours too).
+    by_cell: dict[tuple[int, int], list[PlacedHole]] = {}
+    for hole in holes:
+        by_cell.setdefault((hole.x // SAME_POINT, hole.y // SAME_POINT), []).append(hole)
+    # Per block: (count, first hole, why) of its holes without a pilot.
+    faults: dict[int, tuple[int, PlacedHole, str, str | None]] = {}
+    for hole in holes:
+        if hole.op is HoleOp.DRILL:
+            continue
+        cx, cy = hole.x // SAME_POINT, hole.y // SAME_POINT
+        before = [
+            other
+            for i in (-1, 0, 1)
+            for j in (-1, 0, 1)
+            for other in by_cell.get((cx + i, cy + j), ())
+            if other.block < hole.block
+            and abs(other.x - hole.x) <= SAME_POINT
+            and abs(other.y - hole.y) <= SAME_POINT
+        ]
+        if any(
+            area.block < hole.block
+            and area.depth <= hole.bottom
+            and _inside(area.outline, hole.x, hole.y)
+            for area in cleared
+        ):
+            continue
+        why, field = _no_pilot(hole, before, units)
+        if not why:
+            continue
+        count, first, first_why, first_field = faults.get(hole.block, (0, hole, why, field))
+        faults[hole.block] = (count + 1, first, first_why, first_field)
+    problems = []
+    for block, (count, first, why, field) in sorted(faults.items()):
+        what = first.op.value
+        many = f"{count} {what} holes; the first, " if count > 1 else ""
+        problems.append(
+            Problem(
+                block,
+                field,
+                Severity.WARNING,
+                f"{many}{what} at {_at(first, units)}: {why}",
+                Rule.PILOT,
+            )
+        )
+    return problems
+
+
+def _no_pilot(hole: PlacedHole, before: list[PlacedHole], units: Units) -> tuple[str, str | None]:
+    """Why the holes `before` (earlier, at the same point) are no pilot for `hole`, and the
+    field to change; ("", None) when one of them is."""
+    tool = "tap" if hole.op is HoleOp.TAP else "boring bar"
+    depth = format_length(hole.bottom, units)
+    if not before:
+        return (
+            f"nothing is drilled there before it, so the {tool} goes into solid material; "
+            f"drill a smaller hole there first, at least to Z DN {depth}",
+            None,
+        )
+    smaller = [
+        h
+        for h in before
+        if h.diameter is None or hole.diameter is None or h.diameter < hole.diameter
+    ]
+    if not smaller:
+        widest = before[-1]
+        assert widest.diameter is not None and hole.diameter is not None
+        return (
+            f"the hole of block {widest.block} there ({_length(widest.diameter, units)}) is "
+            f"not smaller than this tool ({_length(hole.diameter, units)}), so the {tool} "
+            "cuts nothing; drill the pilot with a smaller drill",
+            None,
+        )
+    deepest = min(smaller, key=lambda h: h.bottom)
+    if deepest.bottom > hole.bottom:
+        return (
+            f"goes to Z DN {depth}, {_length(deepest.bottom - hole.bottom, units)} below the "
+            f"bottom of the hole of block {deepest.block} there (Z DN "
+            f"{format_length(deepest.bottom, units)}), so the {tool} bottoms in solid "
+            f"material; drill deeper first, or {'tap' if hole.op is HoleOp.TAP else 'bore'} "
+            "shallower",
+            "Z DN",
+        )
+    return "", None
+
+
+def below_stock_problems(program: Program, compiled: Compiled) -> list[Problem]:
+    """Moves below the bottom of the program's own stock, past its CLEAR: one warning per
+    block, with how far. Nothing without a stock (one sized from the program holds every
+    cut)."""
+    stock = program.stock
+    if stock is None:
+        return []
+    units = program.units
+    bottom = to_nm(stock.z - stock.zh, units)
+    room = to_nm(stock.clear, units)
+    floor = bottom - room
+    problems = []
+    for block, low in sorted(lowest_by_block(compiled.path.root).items()):
+        if low >= floor or block <= 0:
+            continue
+        under = f", {_length(room, units)} of room under it" if room else ""
+        advice = (
+            "more than the room under it: cut shallower or give the stock more CLEAR"
+            if room
+            else "into the vise, the parallels or the table: cut shallower, or give the "
+            "stock its CLEAR (the parallels' height) for a through cut"
+        )
+        problems.append(
+            Problem(
+                block,
+                "Z DN",
+                Severity.WARNING,
+                f"cuts to Z {format_length(low, units)}, {_length(bottom - low, units)} below "
+                f"the stock's bottom (Z {format_length(bottom, units)}{under}): {advice}",
+                Rule.BELOW_STOCK,
+            )
+        )
+    return problems
+
+
+def process_problems(program: Program, compiled: Compiled) -> list[Problem]:
+    """Both process rules' warnings, in block order."""
+    found = pilot_problems(program, compiled) + below_stock_problems(program, compiled)
+    return sorted(found, key=lambda p: p.block or 0)

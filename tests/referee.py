@@ -43,12 +43,14 @@ READER = {
     "punch-eia": "tape",
     "events": "events",
     "json": "json",
+    "tape-boss": "boss",
 }
 
-# The finest step each format writes (nm), by program unit: G-code and tape 0.0001 in /
-# 0.001 mm, events 0.0001 in / 0.01 mm (seed 003 §2.2.4), the JSON document exact.
+# The finest step each format writes (nm), by program unit: G-code, BOSS and tape 0.0001 in
+# / 0.001 mm, events 0.0001 in / 0.01 mm (seed 003 §2.2.4), the JSON document exact.
 RESOLUTION = {
     "gcode": {Units.INCH: 2_540, Units.MM: 1_000},
+    "boss": {Units.INCH: 2_540, Units.MM: 1_000},
     "tape": {Units.INCH: 2_540, Units.MM: 1_000},
     "events": {Units.INCH: 2_540, Units.MM: 10_000},
     "json": {Units.INCH: 0, Units.MM: 0},
@@ -57,6 +59,7 @@ RESOLUTION = {
 # 1 mm/min (F3.1 / F4).
 FEED_STEP = {
     "gcode": {Units.INCH: 2_540, Units.MM: 1_000},
+    "boss": {Units.INCH: 2_540, Units.MM: 1_000},
     "tape": {Units.INCH: 2_540_000, Units.MM: 1_000_000},
     # The Plus's feeds top at 99.9 ipm and 2535 mm/min (seed 003 §2.2.4), where MillBlocks
     # allows 100 ipm and 2540 mm/min (read back in steps of 2 mm/min).

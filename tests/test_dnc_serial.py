@@ -29,6 +29,7 @@ from app.dnc.framing import EndReason, add_parity, outgoing
 from app.dnc.record import Direction, TransferRecord
 from app.dnc.service import (
     CaptureImportError,
+    import_capture,
     program_from_capture,
     receive_program,
     send_program,
@@ -395,11 +396,12 @@ def test_events_capture_imports_through_the_import_package(events: bytes) -> Non
         assert len(program.blocks) > 0
 
 
-def test_a_boss_machine_capture_is_not_read_as_a_1704_tape(sample: Program) -> None:
+def test_a_boss_machine_capture_is_read_as_a_boss_tape(sample: Program) -> None:
     """What reads a target's output back is the target's `reads_back`, not a guess from
-    its name: nothing reads a BOSS tape (`tape-boss` is no 1704 tape), so the receive says
-    so instead of a 1704 reader's error about the first line."""
-    data = export(sample, "tape-boss").data
+    its name: a BOSS machine's capture (`tape-boss`, no 1704 tape) is read by the BOSS
+    reader, its segments joined (issue 29 #8; before, nothing read it back)."""
+    data = export(sample, "tape-boss", {"segment": "300"}).data
+    assert data.count(b"#0") > 1
     now = datetime(2025, 3, 1)
     result = ReceiveResult(
         port="/dev/ttyS0",
@@ -412,8 +414,11 @@ def test_a_boss_machine_capture_is_not_read_as_a_1704_tape(sample: Program) -> N
         outcome=Outcome.OK,
         text=data.decode("ascii"),
     )
-    with pytest.raises(CaptureImportError, match="nothing reads tape-boss output back"):
-        program_from_capture(result, "tape-boss")
+    program, report = import_capture(result, "tape-boss", "received")
+    assert program.units is sample.units
+    assert len(program.blocks) > 0
+    assert report.startswith("Import report (boss):")
+    assert "segments (#0 … $) joined into one program" in report
 
 
 def test_a_background_job_reports_progress_and_can_be_cancelled(

@@ -113,7 +113,7 @@ def test_one_failure_type_for_everything() -> None:
     with pytest.raises(ImportFailure) as caught:
         read_program(b"G20\nG0 X1 (\xd8 cutter)\n", "x", "gcode")
     assert str(caught.value) == "line 2, column 8: byte 0xD8 is not text (UTF-8)"
-    assert list(importers()) == ["json", "events", "gcode", "tape", "dxf"]
+    assert list(importers()) == ["json", "events", "gcode", "boss", "tape", "dxf"]
 
 
 def test_result_report_as_text_is_in_file_order() -> None:

@@ -62,6 +62,7 @@ TARGETS = {
     "tape": ["tape-ascii", "tape-eia"],
     "punch": ["punch-eia", "punch-ascii"],
     "json": ["json"],
+    "boss": ["tape-boss"],
 }
 WORDS = {
     "gcode": "G0 G1 G2 G3 G4 G17 G18 G20 G21 G28 G40 G41 G42 G43 G45 G80 G81 G82 G83 G84 G85 "
@@ -70,6 +71,8 @@ WORDS = {
     "events": "G100 G101 G102 G103 G104 G105 G106 G107 G108 G109 G20 G21 G90 G91 PN1 X Y "
     "XB YB XE YE XC YC XD YD XO YO I J A R CR CR- F T TC D FE LE RE FC DR HL N 0 1 -1 1.2A "
     "0I .5 +1234 A 1 ; % ( ) \n",
+    "boss": "%#0 #0 $ %#1 #1 T1/ G00 G01 G02 G03 G04 G70 G71 G90 G91 X Y Z I J F S T M02 M03 M06 "
+    "X0.8 1. -2.5 25.4 0 % $ # ( ) / \r \n",
     "tape": "N001 G00 G01 G02 G03 G20 G30 G50 G04 G80 G81 G90 G91 G94 G98 G99 X Y Z I J K R "
     "F S T M00 M03 M06 M30 M50 M51 5000 -25000 100000 1.2345 ( ) % ; \t \n / &",
 }
@@ -135,6 +138,12 @@ def survives(data: bytes, fmt: str | None) -> None:
 @given(inputs("gcode"))
 def test_gcode_reader_raises_only_import_failures(data: bytes) -> None:
     survives(data, "gcode")
+
+
+@FUZZ
+@given(inputs("boss"))
+def test_boss_reader_raises_only_import_failures(data: bytes) -> None:
+    survives(data, "boss")
 
 
 @FUZZ

@@ -1,11 +1,11 @@
 """Round trips: program → export → import → interpret gives the same moves.
 
 For every golden program (tests/golden/*/program.json), through the G-code (LinuxCNC) and
-ProtoTRAK Plus events targets, and through the 1704 tape as an ASCII listing and an EIA
-punch image, the blocks read back must cut the program's moves (`referee.trace`): in X, Y
-and Z where the format carries Z, at the program's feeds, every end point and arc centre
-within the target's resolution — unless the difference is one of these, each allowed for
-its reason:
+ProtoTRAK Plus events targets, through the 1704 tape as an ASCII listing and an EIA punch
+image, and through the BOSS tape (in one segment, and in many), the blocks read back must
+cut the program's moves (`referee.trace`): in X, Y and Z where the format carries Z, at the
+program's feeds, every end point and arc centre within the target's resolution — unless the
+difference is one of these, each allowed for its reason:
 
 - **Compensated contours** (G-code, tape): the file holds the tool centre's path, which
   comes back as an uncompensated contour rounded to the program resolution (0.001 in):
@@ -16,7 +16,9 @@ its reason:
   events carry it (`support.two_axis`): no depths, no pecks; IN/TAN and OUT/TAN routines
   as INSIDE/OUTSIDE (the Plus enters its own way, seed 003 §2.2.5); the routine's
   direction kept; the user enters the spindle speeds the file lacks.
-- **EIA tapes** are compared in XY: nothing on them says a tool's TCAL (`XY_ONLY`).
+- **EIA and BOSS tapes** are compared in XY: nothing on them says a tool's TCAL
+  (`XY_ONLY`; tests/test_referee.py compares their Z as the machine moves it), nor, having
+  no comments, a tool's diameter (`ROUNDED`). A BOSS tape says its units (G70/G71).
 - **G20/G21 decides** the unit of every block read back: a millimetre block in an inch
   file comes back as an inch block, rounded to 0.001 in and 0.1 ipm (`MIXED`).
 
@@ -63,8 +65,15 @@ TARGET = {
     "tape-ascii": {Units.INCH: 2_540, Units.MM: 1_000},
     "punch-eia": {Units.INCH: 2_540, Units.MM: 1_000},
     "events": {Units.INCH: 2_540, Units.MM: 10_000},
+    "tape-boss": {Units.INCH: 2_540, Units.MM: 1_000},
 }
-FORMAT = {"gcode-linuxcnc": "gcode", "tape-ascii": "tape", "punch-eia": "tape", "events": "events"}
+FORMAT = {
+    "gcode-linuxcnc": "gcode",
+    "tape-ascii": "tape",
+    "punch-eia": "tape",
+    "events": "events",
+    "tape-boss": "boss",
+}
 # Half the programming resolution (0.001 in, 0.01 mm): what rounding a point may move it.
 HALF_STEP = {Units.INCH: 12_700, Units.MM: 5_000}
 
@@ -84,6 +93,14 @@ ROUNDED: dict[str, dict[str, str]] = {
         "frame-2p-outside-conventional-reverse-spindle": NO_DIAMETER,
     },
     "events": {},
+    # A BOSS tape has no comments (seed 004 gives it none): like an EIA tape, nothing says a
+    # tool's diameter.
+    "tape-boss": {
+        "contour-cut-right": COMPENSATED,
+        "frame-pocket": NO_DIAMETER,
+        "frame-pocket-mm": NO_DIAMETER,
+        "frame-2p-outside-conventional-reverse-spindle": NO_DIAMETER,
+    },
 }
 # G-code round trips that give back the very same blocks, not only the same path: every
 # golden case but these (each for its reason).
@@ -123,6 +140,10 @@ XY_ONLY: dict[str, dict[str, str]] = {
     # (Z RET above Z UP, or above tool zero where Z UP is negative) cannot follow.
     "punch-eia": {"*": "an EIA tape cannot say each tool's TCAL"},
     "events": {"*": "events are 2-axis (no Z)"},
+    # The BOSS tape's Z words include each tool's TCAL (no length offsets on it) and nothing
+    # on it says what the TCAL is: as on an EIA tape. tests/test_referee.py compares its Z
+    # as the machine moves it.
+    "tape-boss": {"*": "a BOSS tape cannot say each tool's TCAL"},
 }
 PECK_LEVELS = (
     "a 2P pocket with pecks comes back as a routine per level: between levels it retracts "
@@ -180,7 +201,9 @@ def _round_trip(case: Path, target: str) -> tuple[Program, Program, int]:
     return original, result.program, worst
 
 
-@pytest.mark.parametrize("target", ["gcode-linuxcnc", "events", "tape-ascii", "punch-eia"])
+@pytest.mark.parametrize(
+    "target", ["gcode-linuxcnc", "events", "tape-ascii", "punch-eia", "tape-boss"]
+)
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_golden_round_trip(case: Path, target: str) -> None:
     """The blocks read back cut the program's moves, in X, Y and Z (where the format
@@ -205,6 +228,26 @@ def test_golden_round_trip(case: Path, target: str) -> None:
     else:
         # Events and tapes carry no spindle speeds: the only errors ask for them.
         assert {p.rule for p in problems} <= {Rule.TOOL_NO_RPM}
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_a_segmented_boss_tape_gives_back_the_one_segment_program(case: Path) -> None:
+    """Seed 004 §8.1.1: the BOSS tape in segments of 300 characters (11 of the corpus' tapes
+    need several) reads back as the very program the tape in one segment does, and the
+    report says how many segments were joined."""
+    original = load(case)
+    try:
+        whole = export(original, "tape-boss").data
+        data = export(original, "tape-boss", {"segment": "300"}).data
+    except ExportError:
+        pytest.skip("a stretch longer than a segment, or no TCAL: the export says which")
+    one = read_program(whole, case.name)
+    many = read_program(data, case.name)
+    assert many.format == "boss"
+    assert many.program == one.program
+    count = data.count(b"#0")
+    joined = f"{count} segment{'s' if count > 1 else ''} (#0 … $) joined into one program"
+    assert any(n.message == joined for n in many.report)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

@@ -579,3 +579,33 @@ def test_the_set_up_sheet_of_uncalibrated_tools_offers_the_touch_off_choice(
     taken = client.get(link.group(1).replace("&amp;", "&")).get_data(as_text=True)
     assert 'class="offer' not in taken and 'role="alert"' not in taken
     assert "Tape length" in taken
+
+
+def test_the_upload_takes_a_segmented_boss_tape(client: FlaskClient, app: Flask) -> None:
+    """Issue 29 #8: a BOSS tape in real-time segments (seed 004 §8.1.1) is one program."""
+    import io
+
+    from app.cnc import document
+    from app.cnc.emit.target import export
+    from app.cnc.units import Units
+
+    bolt = document.loads(
+        (Path(__file__).parent / "golden" / "metric-drill-bolt" / "program.json").read_text()
+    )
+    tape = export(bolt, "tape-boss", {"segment": "120"}).data
+    response = client.post(
+        "/programs/import",
+        data={
+            "csrf_token": token(client),
+            "file": (io.BytesIO(tape), "bolt.bos"),
+            "format": "",
+        },
+        content_type="multipart/form-data",
+    )
+    page = response.get_data(as_text=True)
+    assert response.status_code == 201, page
+    assert "was read as <strong>boss</strong>" in page
+    assert "segments (#0 … $) joined into one program" in page
+    with app.app_context():
+        [new] = [p for p in get_library().programs() if p.name == "bolt"]
+        assert get_library().get(new.id).program.units is Units.MM

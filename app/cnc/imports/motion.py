@@ -88,7 +88,9 @@ def program_from_motion(parsed: Parsed) -> Program:
         coolants={n: use.coolant for n, use in found.tools.items() if use.coolant},
     )
     db0 = block0(setup, ops, notes)
-    source = {"gcode": "G-code", "tape": "1704 tape"}.get(parsed.format, parsed.format)
+    source = {"gcode": "G-code", "tape": "1704 tape", "boss": "BOSS tape"}.get(
+        parsed.format, parsed.format
+    )
     return make_program(
         parsed.name,
         parsed.part_number,

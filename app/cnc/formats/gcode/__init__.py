@@ -3,8 +3,8 @@ the Bridgeport BOSS tape.
 
 dialects.py says what each dialect does differently (and the options they share);
 writer.py writes any dialect from a compiled program, boss.py the BOSS's segmented tape;
-reader.py reads RS274/NGC and Fanuc files into motion, which app.cnc.imports recognises as
-data blocks.
+reader.py reads RS274/NGC, Fanuc and BOSS words into motion, which app.cnc.imports recognises
+as data blocks; bossread.py joins a BOSS tape's segments for it.
 """
 
 from __future__ import annotations
@@ -13,13 +13,14 @@ from collections.abc import Mapping
 
 from app.cnc.blocks import Program
 from app.cnc.formats.gcode import boss, writer
+from app.cnc.formats.gcode.bossread import join_segments, looks_segmented
 from app.cnc.formats.gcode.reader import parse_gcode
 from app.cnc.imports import wordaddress
 from app.cnc.imports.common import ImportNote, collector_paused, decode_text
 from app.cnc.imports.motion import program_from_motion
-from app.cnc.imports.registry import Content, Importer, Sniff, register_importer
+from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
 
-__all__ = ["GcodeImporter", "boss", "writer"]
+__all__ = ["BossImporter", "GcodeImporter", "boss", "writer"]
 
 
 @register_importer
@@ -37,4 +38,39 @@ class GcodeImporter(Importer):
     ) -> tuple[Program, list[ImportNote]]:
         with collector_paused():
             parsed = parse_gcode(decode_text(data), name)
+            return program_from_motion(parsed), parsed.notes.report()
+
+
+@register_importer
+class BossImporter(Importer):
+    """A Bridgeport BOSS tape as `tape-boss` writes it: real-time segments (`%#0 … $`,
+    seed 004 §8.1.1) joined into one program, G70 inch and G71 metric."""
+
+    name = "boss"
+    label = "a BOSS tape"
+    description = "a Bridgeport BOSS tape (segments %#0 … $, G70/G71)"
+    rank = 35
+
+    def sniff(self, content: Content) -> Sniff | None:
+        if content.text is None:
+            return None
+        found = looks_segmented(content.plain)
+        return Sniff(Strength.CONTENT, found) if found else None
+
+    def read(
+        self, data: bytes, name: str, options: Mapping[str, str]
+    ) -> tuple[Program, list[ImportNote]]:
+        with collector_paused():
+            tape = join_segments(decode_text(data))
+            parsed = parse_gcode(tape.text, name)
+            parsed.format = "boss"
+            count = len(tape.opened)
+            first = tape.opened[0] if tape.opened else None
+            segments = "1 segment" if count == 1 else f"{count} segments"
+            parsed.notes.became(first, f"{segments} (#0 … $) joined into one program")
+            if count and not tape.ended:
+                parsed.notes.assumed(
+                    None,
+                    "the tape does not end '$', '$' (seed 004 §8.1.1 g): read to its end",
+                )
             return program_from_motion(parsed), parsed.notes.report()

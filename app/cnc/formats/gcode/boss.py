@@ -154,7 +154,7 @@ class _BossWriter(Writer):
 class BossTarget(GcodeTarget):
     name = "tape-boss"
     label = "Bridgeport BOSS tape"
-    reads_back = None
+    reads_back = "boss"
     description = "Bridgeport BOSS tape: real-time segments (%#0 … $), rotary table on Y"
     extension = "bos"
     dialect = BOSS

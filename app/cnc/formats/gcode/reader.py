@@ -98,7 +98,9 @@ MODAL_GROUPS: dict[str, set[str]] = {
     "distance": {"90", "91"},
     "arc distance": {"90.1", "91.1"},
     "feed mode": {"93", "94", "95"},
-    "units": {"20", "21"},
+    # G70/G71: the units of the BOSS (seed 004 §8.2.3, §8.3.1) and older Fanuc-style
+    # controls (seed 002 §19: G70 inch input, G71 metric input); not in seed 003's tables.
+    "units": {"20", "21", "70", "71"},
     "cutter compensation": {"40", "41", "42", "41.1", "42.1"},
     "tool length": {"43", "43.1", "44", "49"},
     "return mode": {"98", "99"},
@@ -819,6 +821,13 @@ class _Reader:
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
             else:
+                if self.tool == 0 and self.moves_made:
+                    # Moves before the first change, with no tool named (a BOSS tape has no
+                    # length offsets to name it): the tape reader's reading, tool 1.
+                    self.initial_tool = 1
+                    self.notes.assumed(
+                        None, "the file does not say which tool it starts with: tool 1"
+                    )
                 self.steps.append(ToolChange(line, self.selected_tool))
                 self.change_pending = (line, self.selected_tool, len(self.steps) - 1)
                 self.tool = self.selected_tool
@@ -898,16 +907,19 @@ class _Reader:
                         f"G{code} selects the {'XZ' if code == '18' else 'YZ'} plane; "
                         "MillBlocks cuts arcs in XY only (an arc while it is on is refused)",
                     )
-        for code in ("20", "21"):
+        for code in ("20", "21", "70", "71"):
             if code in codes:
-                self.units = Units.INCH if code == "20" else Units.MM
+                self.units = Units.INCH if code in ("20", "70") else Units.MM
                 if self.program_units is None:
                     self.program_units = self.units
                     u = self.units
+                    older = ""
+                    if code in ("70", "71"):
+                        older = f" (G{code} as the BOSS and older controls mean it: G2{code[1]})"
                     self.notes.became(
                         line,
                         f"G{code}: the program and every block are {u.value} (numbers finer "
-                        f"than {u.resolution} {u.symbol} are rounded, each reported)",
+                        f"than {u.resolution} {u.symbol} are rounded, each reported){older}",
                     )
                 elif self.units is not self.program_units:
                     self.notes.assumed(

@@ -115,7 +115,7 @@ def _open(client: FlaskClient, data: bytes) -> tuple[str, str]:
     return location, found.group(1)
 
 
-def sides(program: Program) -> dict[tuple[int, int, int, int], tuple[Comp, bool]]:
+def sides(program: Program) -> dict[tuple[int, ...], tuple[Comp, bool]]:
     """For each milled contour, by its box (in 0.001 in): the tool side on its DRILL and
     whether it goes round clockwise."""
     drills = [b for b in program.blocks if isinstance(b, Hole) and b.comp is not Comp.NONE]

@@ -93,10 +93,40 @@
     refresh();
   });
 
-  // A field changed by hand (an order typed, a direction chosen): show its blocks.
+  // A field changed by hand (an order typed, a direction chosen, a depth or the tool's
+  // diameter): show its blocks and their tool path.
   document.addEventListener("change", function (event) {
-    var inFields = event.target.closest && event.target.closest("#choices .tables");
+    var inFields = event.target.closest &&
+      event.target.closest("#choices .tables, #choices fieldset.cutting");
     if (inFields) { refresh(); }
   });
-  document.addEventListener("DOMContentLoaded", mark);
+  // The tool path of the chosen blocks drawn on the drawing itself: the tool centre and the
+  // band the tool's diameter sweeps, copied from the blocks' preview (the server draws it
+  // with the core's cutter compensation; the drawing and the preview share coordinates:
+  // part zero at the drawing's origin, the program's units, Y up through a flip).
+  function overlay() {
+    var drawing = document.querySelector("#dxf-view svg");
+    if (!drawing) { return; }
+    var old = drawing.querySelector("g.tool-centre");
+    if (old) { old.remove(); }
+    var paths = document.querySelectorAll(
+      "#result .chosen-preview g.block path.feed, #result .chosen-preview g.block path.swept"
+    );
+    if (!paths.length) { return; }
+    var layer = document.createElementNS("http://www.w3.org/2000/svg", "g");
+    layer.setAttribute("class", "tool-centre");
+    layer.setAttribute("transform", "scale(1,-1)");
+    var title = document.createElementNS("http://www.w3.org/2000/svg", "title");
+    title.textContent = "the tool centre and the width the tool sweeps";
+    layer.appendChild(title);
+    // The bands first, the centre lines over them.
+    Array.prototype.slice.call(paths)
+      .sort(function (a, b) { return (b.classList.contains("swept") ? 1 : 0) - (a.classList.contains("swept") ? 1 : 0); })
+      .forEach(function (path) { layer.appendChild(path.cloneNode(false)); });
+    drawing.appendChild(layer);
+  }
+
+  document.addEventListener("htmx:after:swap", overlay);
+  document.addEventListener("htmx:afterSwap", overlay);
+  document.addEventListener("DOMContentLoaded", function () { mark(); overlay(); });
 })();

@@ -7,11 +7,13 @@ land in the editor on its first block. Screenshots go to test-output/screenshots
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 
 from playwright.sync_api import Page, expect
 
 from tests.test_browser import browser, page, server, shot  # noqa: F401 - fixtures
+from tests.test_drawings_side import outline_and_slot
 from tests.test_import_dxf import bracket
 
 
@@ -96,12 +98,14 @@ def test_choose_a_pocket_with_islands_from_a_drawing(
     ]
     for other in others:
         page.locator(f'select[name="c{other}_pocket"]').select_option("island")
-    expect(page.locator("#result h2")).to_have_text("25 blocks")
+    # With the tool's diameter the preview plans the pocket's passes (seconds in pure Python).
+    expect(page.locator("#result h2")).to_have_text("25 blocks", timeout=20_000)
     expect(page.locator("#result ol.blocks li", has_text="ISLAND")).to_have_count(2)
-    # The drawing has no tool diameter: the pocket's contours are drawn, and the tool's
-    # DIA is asked for before it can be cut.
+    # The tool's diameter is on the page (its default, shown): the pocket's contours and the
+    # tool's path are drawn; the RPM left blank is asked for before it can be cut.
     expect(page.locator("#result .chosen-preview svg path.contour").first).to_be_attached()
-    expect(page.locator("#result ul.problems")).to_contain_text("has no DIA")
+    expect(page.locator("#result .chosen-preview svg path.feed").first).to_be_attached()
+    expect(page.locator("#result ul.problems")).to_contain_text("RPM")
     shot(page, "drawings-4-pocket-chosen")
     page.locator('input[name="name"]').fill("Bracket pocket")
     page.get_by_role("button", name="Add the blocks").click()
@@ -109,3 +113,79 @@ def test_choose_a_pocket_with_islands_from_a_drawing(
     expect(page.locator('.block-row[data-block="2"]')).to_contain_text("POCKET")
     expect(page.locator('.block-row[data-block="14"]')).to_contain_text("ISLAND")
     shot(page, "drawings-5-pocket-in-the-editor")
+
+
+def tool_path_reach(tab: Page) -> tuple[float, float]:
+    """How far right and up (in) the tool centre drawn on the drawing goes (the outline's
+    right side and top; its start and end lie on its left and bottom sides)."""
+    size = tab.evaluate(
+        """() => {
+          const lines = document.querySelectorAll("#dxf-view g.tool-centre path.feed");
+          let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+          lines.forEach((p) => {
+            const b = p.getBBox();
+            x0 = Math.min(x0, b.x); y0 = Math.min(y0, b.y);
+            x1 = Math.max(x1, b.x + b.width); y1 = Math.max(y1, b.y + b.height);
+          });
+          return [x1, y1];  // part coordinates, Y up (the layer flips them)
+        }"""
+    )
+    return (round(size[0], 3), round(size[1], 3))
+
+
+def wait_for_reach(tab: Page, right: float, top: float) -> None:
+    """Wait (up to 5 s) for the tool path on the drawing to reach this far; the page redraws
+    it after each answer from the server."""
+    deadline = time.monotonic() + 5
+    while True:
+        reach = tool_path_reach(tab)
+        if reach == (right, top):
+            return
+        assert time.monotonic() < deadline, f"the tool path reaches {reach}, not {right, top}"
+        tab.wait_for_timeout(100)
+
+
+def test_the_tool_centre_path_is_drawn_on_the_drawing_on_the_side_chosen(
+    page: Page,  # noqa: F811 - the fixture
+    server: str,  # noqa: F811
+    tmp_path: Path,
+) -> None:
+    """Issue 29.3: click a 4 x 3 in outline and the slot inside it; before anything is
+    added, the drawing shows the tool centre a tool radius outside the outline and inside
+    the slot (the rule: outer from outside, inner from inside), with the band the tool's
+    diameter sweeps; a larger tool, or the tool side changed, redraws it."""
+    drawing = tmp_path / "plate.dxf"
+    drawing.write_bytes(outline_and_slot())
+    page.goto(server + "/")
+    card = page.locator("form.card", has_text="From a drawing (DXF)")
+    card.locator('input[type="file"]').set_input_files(str(drawing))
+    card.get_by_role("button", name="Open and choose contours").click()
+    expect(page.locator("#dxf-view svg")).to_be_visible()
+    # The depths, feeds and tool are asked for, their defaults in sight.
+    expect(page.get_by_label("Tool Ø")).to_have_value("0.250")
+    expect(page.get_by_label("FEEDR XY")).to_have_value("10.0")
+    expect(page.locator('select[name="c0_dir"]')).to_have_value("cw")
+    expect(page.locator('select[name="c1_dir"]')).to_have_value("ccw")
+    page.locator('#dxf-view g.contour[data-contour="0"] .segment[data-segment="0"]').click(
+        force=True
+    )
+    page.locator('#dxf-view g.contour[data-contour="1"] .segment[data-segment="0"]').click(
+        force=True
+    )
+    expect(page.locator("#result h2")).to_have_text("13 blocks")
+    layer = page.locator("#dxf-view g.tool-centre")
+    expect(layer.locator("path.feed").first).to_be_attached()
+    expect(layer.locator("path.swept").first).to_have_attribute("stroke-width", "0.25")
+    # Outside the 4 x 3 outline by the tool's radius: right to 4.125, up to 3.125.
+    wait_for_reach(page, 4.125, 3.125)
+    shot(page, "drawings-6-tool-centre")
+
+    page.get_by_label("Tool Ø").fill("0.5")
+    page.get_by_label("Tool Ø").press("Tab")
+    expect(layer.locator("path.swept").first).to_have_attribute("stroke-width", "0.5")
+    wait_for_reach(page, 4.25, 3.25)
+    # The outline with the tool on the right: cut inside it, a tool radius in.
+    page.locator('select[name="c0_comp"]').select_option("right")
+    expect(page.locator("#result ol.blocks li").first).to_contain_text("DRILL CUT RT")
+    wait_for_reach(page, 3.75, 2.75)
+    shot(page, "drawings-7-tool-centre-inside")

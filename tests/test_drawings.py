@@ -53,6 +53,17 @@ def _bracket() -> Drawing:
     return read_drawing(bracket(), "bracket", parse_options({"hole-diameter": "0.25"}))
 
 
+# The page's depths, feeds and tool as its fields offer them (inch).
+CUTTING = {
+    "z_up": "0.100",
+    "z_dn": "-0.100",
+    "feed_z": "5.0",
+    "feed_xy": "10.0",
+    "tool": "1",
+    "tool_dia": "0.250",
+}
+
+
 def _profile(drawing: Drawing) -> int:
     """The bracket's outside profile: the contour of 8 segments."""
     return next(k for k, c in enumerate(drawing.contours) if len(c.segments) == 8)
@@ -254,6 +265,7 @@ def test_upload_choose_preview_and_add_to_a_new_program(app: Flask) -> None:
     form = {
         "csrf_token": token,
         "hole-diameter": "0.25",
+        **CUTTING,
         f"c{profile}_order": "2",
         f"c{profile}_start": "3",
         f"c{profile}_dir": "cw",
@@ -273,10 +285,10 @@ def test_upload_choose_preview_and_add_to_a_new_program(app: Flask) -> None:
     assert stored.program.name == "From DXF"
     titles = [b.title for b in stored.program.blocks]
     assert titles[0] == "DRILL" and titles[1] == "DRILL CUT RT" and len(titles) == 10
-    # Validation asks for what the drawing cannot give (the tool's RPM and diameter), and
-    # nothing else: the geometry chosen is sound.
+    # Validation asks only for what was left blank (the tool's RPM): the depths, feeds and
+    # diameter were entered, and the geometry chosen is sound.
     rules = {p.rule.name for p in validate(stored.program)}
-    assert rules == {"TOOL_NO_RPM", "TOOL_NO_DIAMETER"}
+    assert rules == {"TOOL_NO_RPM"}
 
 
 def test_the_page_makes_a_pocket_of_a_contour_and_islands_of_those_inside_it(app: Flask) -> None:
@@ -293,6 +305,7 @@ def test_the_page_makes_a_pocket_of_a_contour_and_islands_of_those_inside_it(app
     form = {
         "csrf_token": token,
         "hole-diameter": "0.25",
+        **CUTTING,
         f"c{profile}_order": "1",
         f"c{profile}_pocket": "pocket",
         f"c{bore}_pocket": "island",
@@ -327,6 +340,7 @@ def test_add_into_a_program_refused_where_it_would_split_it_leaves_it_as_it_was(
     form = {
         "csrf_token": token,
         "hole-diameter": "0.25",
+        **CUTTING,
         "c0_order": "1",
         "target": "existing",
         "program": str(info.id),
@@ -349,8 +363,9 @@ def test_add_into_a_program_refused_where_it_would_split_it_leaves_it_as_it_was(
     with app.app_context():
         after = get_library().get(info.id)
     assert after.info.version == info.version + 1
-    # The bore (contour 1) is a circle: a CIRCLE routine cuts it exactly.
-    assert [b.title for b in after.program.blocks[1:3]] == ["DRILL", "CIRCLE OUTSIDE"]
+    # The bore (contour 1) is a circle: a CIRCLE routine cuts it exactly, from inside (it
+    # lies inside the profile: the rule `millblocks import` follows).
+    assert [b.title for b in after.program.blocks[1:3]] == ["DRILL", "CIRCLE INSIDE"]
     assert after.program.blocks[3:] == _host().blocks[1:]
 
 
@@ -359,7 +374,7 @@ def test_bad_fields_and_unknown_drawings_are_answered_plainly(app: Flask) -> Non
     location = _upload(client, bracket(), **{"hole-diameter": "0.25"})
     key = _key(location)
     token = csrf(client, location)
-    base = {"csrf_token": token, "hole-diameter": "0.25"}
+    base = {"csrf_token": token, "hole-diameter": "0.25", **CUTTING}
     cases = {
         "c0_order=x": ({"c0_order": "x"}, "contour 1 order: &#39;x&#39; is not a whole number"),
         "twice": (
@@ -421,8 +436,15 @@ def test_hostile_values_in_every_field_are_answered_not_crashed(
     key = _key(location)
     token = csrf(client, location)
     fields = ["c0_order", "c0_start", "c0_tool", "h0_order", "holes_tool", "after", "program"]
+    fields += [*CUTTING, "tool_rpm", "c0_dir", "c0_comp", "c0_routine", "milling"]
     for field in fields:
-        form = {"csrf_token": token, "hole-diameter": "0.25", "c0_order": "1", field: value}
+        form = {
+            "csrf_token": token,
+            "hole-diameter": "0.25",
+            **CUTTING,
+            "c0_order": "1",
+            field: value,
+        }
         for action in ("preview", "add"):
             extra = {"target": "existing"} if field in ("after", "program") else {}
             answer = client.post(f"/drawings/{key}/{action}", data={**form, **extra})

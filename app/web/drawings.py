@@ -3,7 +3,12 @@ blocks they make, add them to a program.
 
 The drawing is kept in the library by its content (`Library.put_drawing`) while it is chosen
 from. The page is a form: each contour and hole has an order number (blank: not chosen),
-each contour its start segment, direction, compensation side, INSIDE/OUTSIDE and tool.
+each contour its start segment, direction, compensation side, INSIDE/OUTSIDE and tool; the
+direction, side and INSIDE/OUTSIDE it offers are the rule `millblocks import` follows
+(`cut_sides`: outer contours from outside, inner ones from inside, climb unless the page's
+milling option says conventional), and the machinist may change them. The depths, feeds and
+the tool (number, diameter, RPM) are asked for, with defaults shown in their fields
+(`cutting_defaults`), and checked by `read_cutting`.
 Clicking the drawing fills those fields (static/drawings.js); without JavaScript they are
 typed. Every request re-reads the drawing with the page's options, so the page is the
 whole state and any worker can answer it.
@@ -19,9 +24,11 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
+from app.cnc.blocks import MillingMode
 from app.cnc.emit.svg import draw
-from app.cnc.formats.dxf.blocks import holds
+from app.cnc.formats.dxf.blocks import cut_sides, holds
 from app.cnc.formats.dxf.choice import (
+    CUTTING_FIELDS,
     DIRECTIONS,
     Choice,
     ChoiceError,
@@ -32,8 +39,10 @@ from app.cnc.formats.dxf.choice import (
     PocketChoice,
     chosen_blocks,
     contour_comp,
+    cutting_defaults,
     drawing_svg,
     insert_blocks,
+    read_cutting,
 )
 from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
 from app.cnc.imports.common import ImportFailure
@@ -50,7 +59,10 @@ from app.web.extensions import get_library
 bp = Blueprint("drawings", __name__)
 
 # The reader options the page carries in its address (names as the CLI's --option takes them).
-OPTION_FIELDS = ("units", "drawing-units", "layer", "hole-diameter", "tolerance", "feed")
+# FEEDR XY is not one of them here: the page asks for it with the depths (CUTTING_FIELDS).
+OPTION_FIELDS = ("units", "drawing-units", "layer", "hole-diameter", "tolerance")
+# Climb or conventional milling: the page's option, carried in its address like the units.
+MILLING = "milling"
 
 
 @bp.post("/drawings")
@@ -87,7 +99,7 @@ def preview(key: str) -> tuple[str, int]:
     """The blocks the choices make, their tool path and the report."""
     drawing, options = _drawing(key, request.form)
     try:
-        chosen = chosen_blocks(drawing, read_choices(request.form, drawing))
+        chosen = _chosen(drawing, request.form)
     except ChoiceError as exc:
         return _page(key, drawing, options, request.form, None, str(exc), 422)
     return _page(key, drawing, options, request.form, chosen, "", 200)
@@ -105,7 +117,7 @@ def add(key: str) -> Response | tuple[str, int]:
     try:
         if target == "new":
             drawing, options = _drawing(key, form)
-            chosen = chosen_blocks(drawing, read_choices(form, drawing))
+            chosen = _chosen(drawing, form)
             if not chosen.blocks:
                 raise ChoiceError("nothing is chosen: click contours or holes first")
             name = form.get("name", "").strip() or drawing.name
@@ -118,10 +130,19 @@ def add(key: str) -> Response | tuple[str, int]:
         program_id = _whole(form.get("program", ""), "program")
         after = _whole(form.get("after", "0") or "0", "after block")
         stored = library.get(program_id)
-        # The blocks are made in the program's units, whatever the drawing's are.
+        # The blocks are made in the program's units, whatever the drawing's are; the depths
+        # and feeds typed on the page are in the page's units, so those must be the same.
+        page_drawing, _ = _drawing(key, form)
+        if stored.program.units is not page_drawing.units:
+            raise PlacementError(
+                f"the program is in {stored.program.units.symbol} and the depths and feeds "
+                f"on this page in {page_drawing.units.symbol}: choose Program units "
+                f"{stored.program.units.symbol}, Read again, and enter them in "
+                f"{stored.program.units.symbol}"
+            )
         units_option["units"] = "metric" if stored.program.units is Units.MM else "inch"
         drawing, options = _drawing(key, units_option)
-        chosen = chosen_blocks(drawing, read_choices(form, drawing))
+        chosen = _chosen(drawing, form)
         if not chosen.blocks:
             raise ChoiceError("nothing is chosen: click contours or holes first")
         program, _added_tools = insert_blocks(stored.program, chosen, after)
@@ -146,8 +167,25 @@ class _Item:
     index: int
 
 
-def read_choices(form: Any, drawing: Drawing) -> list[Choice]:
-    """The choices the form holds, in their order; consecutive holes are one group.
+def milling(source: Any) -> MillingMode:
+    """The page's milling option (climb unless it says conventional)."""
+    value = source.get(MILLING, "") or ""
+    return MillingMode.CONVENTIONAL if value == "conventional" else MillingMode.CLIMB
+
+
+def _chosen(drawing: Drawing, form: Any) -> Chosen:
+    """The blocks of the form's choices, with its depths, feeds and tool."""
+    if form.get(MILLING, "") not in ("", "climb", "conventional"):
+        raise ChoiceError(f"milling {form.get(MILLING)!r}: allowed climb, conventional")
+    cutting, tool = read_cutting(drawing.units, form)
+    choices = read_choices(form, drawing, tool)
+    return chosen_blocks(drawing, choices, cutting, milling(form))
+
+
+def read_choices(form: Any, drawing: Drawing, tool: int = 1) -> list[Choice]:
+    """The choices the form holds, in their order; consecutive holes are one group. A
+    contour's direction, tool side or routine placement left blank is the rule's
+    (`cut_sides`); its tool left blank is `tool` (the page's tool).
 
     Raises ChoiceError naming the field for an order that is not a whole number from 1,
     an order given twice, a segment that is not in its contour, or a tool outside 1-24."""
@@ -210,22 +248,28 @@ def read_choices(form: Any, drawing: Drawing) -> list[Choice]:
                     if p != k
                 )
             )
-            tool = _tool(form.get(f"c{k}_tool", "1"), f"contour {k + 1} tool")
-            choices.append(PocketChoice(k, held, start, tool))
+            pocket_tool = _tool(form.get(f"c{k}_tool", ""), f"contour {k + 1} tool", tool)
+            choices.append(PocketChoice(k, held, start, pocket_tool))
             continue
-        direction = form.get(f"c{k}_dir", "drawn") or "drawn"
-        if direction not in DIRECTIONS:
+        direction = form.get(f"c{k}_dir", "") or None
+        if direction is not None and direction not in DIRECTIONS:
             raise ChoiceError(
                 f"contour {k + 1} direction {direction!r}: allowed {', '.join(DIRECTIONS)}"
             )
+        comp = form.get(f"c{k}_comp", "") or ""
+        if comp not in ("", "left", "right", "none"):
+            raise ChoiceError(f"contour {k + 1} tool side {comp!r}: allowed left, right, none")
+        routine = form.get(f"c{k}_routine", "") or ""
+        if routine not in ("", "inside", "outside"):
+            raise ChoiceError(f"contour {k + 1} routine {routine!r}: allowed inside, outside")
         choices.append(
             ContourChoice(
                 contour=k,
                 start=start,
                 direction=direction,
-                comp=contour_comp(form.get(f"c{k}_comp", "")),
-                inside=bool(form.get(f"c{k}_inside")),
-                tool=_tool(form.get(f"c{k}_tool", "1"), f"contour {k + 1} tool"),
+                comp=contour_comp(comp),
+                inside=None if not routine else routine == "inside",
+                tool=_tool(form.get(f"c{k}_tool", ""), f"contour {k + 1} tool", tool),
             )
         )
     if group:
@@ -246,8 +290,8 @@ def _whole(text: str, label: str) -> int:
         raise ChoiceError(f"{label}: {exc}") from None
 
 
-def _tool(text: str, label: str) -> int:
-    tool = _whole(text or "1", label)
+def _tool(text: str, label: str, blank: int = 1) -> int:
+    tool = _whole(text or str(blank), label)
     if not 1 <= tool <= 24:
         raise ChoiceError(f"{label}: {tool}; allowed 1 to 24")
     return tool
@@ -288,7 +332,11 @@ def _page(
     if chosen is not None and chosen.blocks:
         program = chosen.program(drawing.name, drawing.units)
         problems = [p for p in validate(program) if p.severity is Severity.ERROR]
-        preview_svg = draw(program, embedded_style=False)
+        # The tool centre (cutter compensation as the control cuts it) and the band the
+        # tool's diameter sweeps: which side of each contour the cutter goes.
+        preview_svg = draw(program, swept=True, embedded_style=False)
+    mode = milling(form or request.args)
+    cutting = cutting_defaults(drawing.units)
     context = {
         "key": key,
         "drawing": drawing,
@@ -300,6 +348,10 @@ def _page(
         "problems": problems,
         "error": error,
         "directions": DIRECTIONS,
+        "sides": cut_sides(drawing, mode),
+        "milling": mode.value,
+        "cutting_fields": CUTTING_FIELDS,
+        "cutting": {name: form.get(name, cutting[name]) for name in cutting},
         "programs": get_library().programs("", "name"),
         "units": drawing.units,
         "scale": 1 / drawing.units.nm,

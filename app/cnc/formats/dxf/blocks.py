@@ -1,5 +1,6 @@
 """A DXF drawing's contours and holes as data blocks (issue 22).
 
+    cut_sides(drawing, milling=CLIMB) -> [CutSide]      # which side each contour is cut from
     contour_ops(drawing, contour, start=0, clockwise=None, comp=None, tool=1, inside=False) -> Op
     contour_blocks(drawing, contour, ...same choices) -> (blocks, report)
     program_from_drawing(drawing) -> Program
@@ -12,10 +13,16 @@ equal corner arcs) DRILL + FRAME, where the routine cuts exactly that contour (v
 the programming grid). Holes become DRILL blocks, and BOLT CIR where three or more of one
 diameter are equally spaced on a circle.
 
+Which side the cutter goes is one rule, `cut_sides`, used by the whole-drawing conversion
+(`millblocks import`) and the choosing page alike: an outer contour (held by no other
+closed contour, or by an even number) is cut from outside, an inner one (a hole or slot
+inside another contour) from inside; climb milling with a clockwise spindle (Data Block
+0's default): outer contours clockwise and inner ones counter-clockwise, both with the tool
+on the left (CUT LT); conventional milling the reverse, with the tool on the right (CUT
+RT); open contours are tool-centre paths (no compensation), cut as drawn.
+
 The whole-drawing conversion chooses: holes first, then inner contours, then outer ones
-(the outside profile last); climb milling with a clockwise spindle (Data Block 0's
-default): outer contours clockwise and inner ones counter-clockwise, both with the tool on
-the left (CUT LT); open contours are tool-centre paths (no compensation). Each starts at its
+(the outside profile last), each on the side `cut_sides` gives. Each starts at its
 lowest, then leftmost, point. The drawing has no depths, tools or speeds: the program is a
 2-axis program (as an events import is) with tool 1, and the report says what to enter.
 """
@@ -23,8 +30,19 @@ lowest, then leftmost, point. The drawing has no depths, tools or speeds: the pr
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
-from app.cnc.blocks import Block, Circle, Comp, DataBlock0, Frame, HoleOp, Placement, Program
+from app.cnc.blocks import (
+    Block,
+    Circle,
+    Comp,
+    DataBlock0,
+    Frame,
+    HoleOp,
+    MillingMode,
+    Placement,
+    Program,
+)
 from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Hole, Segment
 from app.cnc.imports.build import Builder, SetUp, block0, make_program, used_tools
 from app.cnc.imports.common import (
@@ -46,9 +64,34 @@ from app.cnc.pocketing import regions
 CHORD_NM = 500  # chords within 0.5 µm of an arc when deciding which contour holds which
 
 
-def hole_spec(drawing: Drawing, tool: int = 1) -> HoleSpec:
-    """A DRILL without depths (a 2-axis block: the drawing has none), in the program's units."""
-    return HoleSpec(HoleOp.DRILL, None, None, None, 1, tool, drawing.units)
+@dataclass(frozen=True)
+class Cutting:
+    """What a drawing cannot give and the machinist enters (the choosing page): the DRILL's
+    Z UP, Z DN and FEEDR Z (nm, nm/min; all None: a 2-axis program, the quill moved by hand)
+    and the mill blocks' FEEDR XY (None: the drawing's `feed`, the reader option), and the
+    diameter and RPM of tools by number (nm; a tool not given has none)."""
+
+    z_up: int | None = None
+    z_dn: int | None = None
+    feed_z: int | None = None
+    feed_xy: int | None = None
+    diameters: tuple[tuple[int, int], ...] = ()
+    rpms: tuple[tuple[int, int], ...] = ()
+
+    @property
+    def has_depth(self) -> bool:
+        return self.z_up is not None and self.z_dn is not None
+
+
+NO_CUTTING = Cutting()
+
+
+def hole_spec(drawing: Drawing, tool: int = 1, cutting: Cutting = NO_CUTTING) -> HoleSpec:
+    """A DRILL with the depths and FEEDR Z of `cutting` (none by default: a 2-axis block, the
+    drawing has no depths), in the program's units."""
+    return HoleSpec(
+        HoleOp.DRILL, cutting.z_up, cutting.z_dn, cutting.feed_z, 1, tool, drawing.units
+    )
 
 
 def as_path(contour: Contour) -> Path:
@@ -75,16 +118,18 @@ def contour_ops(
     comp: Comp | None = None,
     tool: int = 1,
     inside: bool = False,
+    cutting: Cutting = NO_CUTTING,
 ) -> Op:
     """The operation that cuts `contour`: from the start of its segment `start` (closed
     contours; an open one starts at either end: 0 or the last index), round it `clockwise`
     or not (None: as drawn), the tool on the `comp` side (None: left — climb with a
     clockwise spindle). A closed contour that a CIRCLE or FRAME routine cuts exactly becomes
     that routine (INSIDE when `inside`, else OUTSIDE; the routine's own direction comes
-    from Data Block 0)."""
-    spec = hole_spec(drawing, tool)
+    from Data Block 0). The DRILL's depths and the feed are `cutting`'s."""
+    spec = hole_spec(drawing, tool, cutting)
+    feed = drawing.feed if cutting.feed_xy is None else cutting.feed_xy
     lines = list(contour.sources)
-    routine = _routine(drawing, contour, inside, tool) if contour.closed else None
+    routine = _routine(drawing, contour, inside, tool, feed) if contour.closed else None
     if routine is not None:
         at, block = routine
         return RoutineOp(lines, at, spec, block)
@@ -101,14 +146,17 @@ def contour_ops(
     elif start:
         segments = [s.reversed() for s in reversed(segments)]
     side = Comp.NONE if not contour.closed else (comp or Comp.LEFT)
-    elements = [
-        Element(s.source, s.end, s.centre, s.clockwise, None, drawing.feed) for s in segments
-    ]
+    elements = [Element(s.source, s.end, s.centre, s.clockwise, None, feed) for s in segments]
     return MillOp(lines, segments[0].start, spec, side, elements)
 
 
 def pocket_ops(
-    drawing: Drawing, boundary: Contour, islands: list[Contour], start: int = 0, tool: int = 1
+    drawing: Drawing,
+    boundary: Contour,
+    islands: list[Contour],
+    start: int = 0,
+    tool: int = 1,
+    cutting: Cutting = NO_CUTTING,
 ) -> PocketOp:
     """The DRILL + POCKET that clears the inside of the closed `boundary` (drawn from the
     start of its segment `start`) round the closed `islands` (each from its first segment).
@@ -124,8 +172,8 @@ def pocket_ops(
     return PocketOp(
         [*boundary.sources, *(s for i in islands for s in i.sources)],
         segments[0].start,
-        hole_spec(drawing, tool),
-        drawing.feed,
+        hole_spec(drawing, tool, cutting),
+        drawing.feed if cutting.feed_xy is None else cutting.feed_xy,
         elements(segments),
         [(i.segments[0].start, elements(list(i.segments))) for i in islands],
     )
@@ -171,11 +219,11 @@ def _halves(circle: Segment) -> list[Segment]:
 
 
 def _routine(
-    drawing: Drawing, contour: Contour, inside: bool, tool: int
+    drawing: Drawing, contour: Contour, inside: bool, tool: int, feed_nm: int
 ) -> tuple[XY, Circle | Frame] | None:
     units = drawing.units
     placement = Placement.INSIDE if inside else Placement.OUTSIDE
-    feed = feed_decimal(drawing.feed, units)
+    feed = feed_decimal(feed_nm, units)
 
     def on_grid(*values: int) -> bool:
         return all(quantize_nm(v, units) == v for v in values)
@@ -266,6 +314,44 @@ def nesting(contours: list[Contour]) -> list[int]:
     return depths
 
 
+@dataclass(frozen=True)
+class CutSide:
+    """Which side of a contour the cutter goes, and which way round it cuts.
+
+    `inner`: the contour lies inside another closed contour (held by an odd number of
+    them): a hole or slot, cut from inside (a CIRCLE/FRAME routine INSIDE). `clockwise`:
+    the way round (None: an open contour, cut as drawn). `comp`: the compensation side that
+    puts the tool on the waste side going that way (NONE for an open contour)."""
+
+    inner: bool
+    clockwise: bool | None
+    comp: Comp
+
+    @property
+    def direction(self) -> str:
+        """As the choosing page names it: "cw", "ccw" or "drawn" (an open contour)."""
+        if self.clockwise is None:
+            return "drawn"
+        return "cw" if self.clockwise else "ccw"
+
+
+def cut_sides(drawing: Drawing, milling: MillingMode = MillingMode.CLIMB) -> list[CutSide]:
+    """For each contour of `drawing`, the side the cutter goes and the way round: outer
+    contours from outside, inner ones from inside; `milling` CLIMB (a clockwise spindle, as
+    the drawing gives no speeds): outside clockwise and inside counter-clockwise with the
+    tool on the left; CONVENTIONAL the reverse with the tool on the right (DESIGN.md §3)."""
+    climb = milling is MillingMode.CLIMB
+    comp = Comp.LEFT if climb else Comp.RIGHT
+    sides = []
+    for contour, depth in zip(drawing.contours, nesting(drawing.contours), strict=True):
+        inner = depth % 2 == 1
+        if not contour.closed:
+            sides.append(CutSide(inner, None, Comp.NONE))
+        else:
+            sides.append(CutSide(inner, climb != inner, comp))
+    return sides
+
+
 def program_from_drawing(drawing: Drawing) -> Program:
     """Every hole and contour of the drawing as blocks (the choices in the module doc)."""
     notes = drawing.notes
@@ -279,17 +365,18 @@ def program_from_drawing(drawing: Drawing) -> Program:
             resolution_half(drawing),
             notes,
         )
-    depths = nesting(drawing.contours)
+    sides = cut_sides(drawing)
     order = sorted(
         range(len(drawing.contours)),
-        key=lambda k: (depths[k] % 2 == 0, _lowest(drawing.contours[k]), k),
+        key=lambda k: (not sides[k].inner, _lowest(drawing.contours[k]), k),
     )
     ops = list(hole_ops)
     for k in order:
-        contour = drawing.contours[k]
-        inside = depths[k] % 2 == 1
+        contour, side = drawing.contours[k], sides[k]
         start = _start_index(contour)
-        ops.append(contour_ops(drawing, contour, start, clockwise=not inside, inside=inside))
+        ops.append(
+            contour_ops(drawing, contour, start, side.clockwise, side.comp, inside=side.inner)
+        )
     builder = Builder(notes)
     builder.run(ops)
     builder.flush_rounding()
@@ -301,24 +388,34 @@ def program_from_drawing(drawing: Drawing) -> Program:
     )
 
 
-def drawing_block0(drawing: Drawing, ops: list[Op], notes: Notes) -> DataBlock0:
-    """Data Block 0 for the blocks of `ops` (each tool they use, without diameter or RPM),
-    and the notes that say what the drawing could not give: depths, diameters."""
+def drawing_block0(
+    drawing: Drawing, ops: list[Op], notes: Notes, cutting: Cutting = NO_CUTTING
+) -> DataBlock0:
+    """Data Block 0 for the blocks of `ops` (each tool they use, with the diameter and RPM
+    `cutting` gives it, else none), and the notes that say what is still missing: depths,
+    diameters."""
     tools = [tool for tool, _ in used_tools(ops)]
-    if ops:
+    diameters = dict(cutting.diameters)
+    if ops and not cutting.has_depth:
         notes.needs(
             None,
             "the drawing has no depths: the blocks have no Z UP / Z DN (a 2-axis program, the "
             "quill moved by hand); enter them to cut under program control",
         )
+    if ops:
         every = " (every block)" if len(tools) == 1 else ""
         for tool in tools:
-            notes.needs(
-                None,
-                f"tool {tool}{every} has no diameter in the drawing: enter it in Data Block 0 "
-                "(cutter compensation and CIRCLE/FRAME need it)",
-            )
-    setup = SetUp(units=drawing.units, tools={tool: ToolData() for tool in tools})
+            if tool not in diameters:
+                notes.needs(
+                    None,
+                    f"tool {tool}{every} has no diameter in the drawing: enter it in Data "
+                    "Block 0 (cutter compensation and CIRCLE/FRAME need it)",
+                )
+    setup = SetUp(
+        units=drawing.units,
+        tools={tool: ToolData(diameter=diameters.get(tool)) for tool in tools},
+        rpms={tool: rpm for tool, rpm in cutting.rpms if tool in tools},
+    )
     return block0(setup, ops, notes)
 
 

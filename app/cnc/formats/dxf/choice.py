@@ -1,11 +1,14 @@
 """What the machinist chose from a drawing, as blocks (issue 22's choosing page).
 
-    chosen_blocks(drawing, choices) -> Chosen(blocks, report)
+    read_cutting(units, fields) -> Cutting               # raises ChoiceError naming the field
+    chosen_blocks(drawing, choices, cutting, milling) -> Chosen(blocks, report)
     insert_blocks(program, blocks, after) -> Program      # raises PlacementError
     drawing_svg(drawing, chosen=()) -> str
 
 A choice is a contour (which one, where the cut starts, which way round, which side the
-tool is on, INSIDE or OUTSIDE when a routine cuts it exactly, the tool), a pocket (a closed
+tool is on, INSIDE or OUTSIDE when a routine cuts it exactly, the tool; the way round, the
+side and INSIDE/OUTSIDE left out are `blocks.cut_sides`'s: outer contours from outside,
+inner ones from inside, climb — the rule `millblocks import` uses), a pocket (a closed
 contour whose inside is cleared round the closed contours inside it chosen as its
 islands: DRILL + POCKET + PKT blocks), or a group of holes
 (in the order they are to be drilled, made into a BOLT CIR where three or more of one
@@ -21,14 +24,19 @@ the drawing's origin), Y up.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from decimal import Decimal
 
 import svgwrite
 
-from app.cnc.blocks import Block, BoltCircle, Comp, DataBlock0, Mode, Program
+from app.cnc import limits
+from app.cnc.blocks import Block, BoltCircle, Comp, DataBlock0, MillingMode, Mode, Program
 from app.cnc.formats.dxf.blocks import (
+    NO_CUTTING,
+    Cutting,
     contour_ops,
+    cut_sides,
     drawing_block0,
     holds,
     hole_spec,
@@ -40,8 +48,9 @@ from app.cnc.imports.build import Builder
 from app.cnc.imports.common import ImportNote
 from app.cnc.imports.ops import HoleOpR, Op, PocketOp
 from app.cnc.imports.recognise import find_bolt_circles
+from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
-from app.cnc.units import Units
+from app.cnc.units import Units, to_nm
 
 DIRECTIONS = ("drawn", "cw", "ccw")
 
@@ -51,15 +60,15 @@ class ContourChoice:
     """Cut contour `contour` (an index into `Drawing.contours`) from the start of its segment
     `start` (an open contour: 0 from its first end, any other value from its last), round
     it `direction` ("drawn", "cw" or "ccw"; closed contours), the tool on the `comp` side
-    (None: LEFT for a closed contour, none for an open one, which is a tool-centre path),
-    with tool `tool`. `inside`: where a CIRCLE or FRAME routine cuts the contour exactly,
-    cut it from the INSIDE (else OUTSIDE)."""
+    (an open contour is a tool-centre path), with tool `tool`. `inside`: where a CIRCLE or
+    FRAME routine cuts the contour exactly, cut it from the INSIDE (else OUTSIDE). Each of
+    `direction`, `comp` and `inside` left None is the rule's (`blocks.cut_sides`)."""
 
     contour: int
     start: int = 0
-    direction: str = "drawn"
+    direction: str | None = None
     comp: Comp | None = None
-    inside: bool = False
+    inside: bool | None = None
     tool: int = 1
 
 
@@ -116,8 +125,15 @@ class Chosen:
         )
 
 
-def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
-    """The blocks that cut `choices` in order, and the report (see the module's note).
+def chosen_blocks(
+    drawing: Drawing,
+    choices: Sequence[Choice],
+    cutting: Cutting = NO_CUTTING,
+    milling: MillingMode = MillingMode.CLIMB,
+) -> Chosen:
+    """The blocks that cut `choices` in order, with the depths, feeds and tool diameters of
+    `cutting`, and the report (see the module's note). A contour's way round, side and
+    INSIDE/OUTSIDE not chosen are `cut_sides(drawing, milling)`'s.
 
     Raises ChoiceError for a contour or hole index not in the drawing, a hole chosen twice,
     a direction other than DIRECTIONS or a tool outside 1-24."""
@@ -129,25 +145,31 @@ def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
     ops: list[Op] = []
     used: set[int] = set()
     holes_used: set[int] = set()
+    sides = cut_sides(drawing, milling) if any(_open(c) for c in choices) else []
     for choice in choices:
         if not 1 <= choice.tool <= 24:
             raise ChoiceError(f"tool {choice.tool}: allowed 1 to 24")
         if isinstance(choice, PocketChoice):
-            ops.append(_pocket(drawing, choice))
+            ops.append(_pocket(drawing, choice, cutting))
             for k in (choice.contour, *choice.islands):
                 used.update(drawing.contours[k].sources)
         elif isinstance(choice, ContourChoice):
             contour = _contour(drawing, choice.contour)
-            if choice.direction not in DIRECTIONS:
+            # What the choice leaves open is the rule's (sides are made when one does).
+            side = sides[choice.contour] if sides else None
+            direction = choice.direction or (side.direction if side else "drawn")
+            if direction not in DIRECTIONS:
                 raise ChoiceError(
-                    f"contour {choice.contour + 1}: direction {choice.direction!r}; "
+                    f"contour {choice.contour + 1}: direction {direction!r}; "
                     f"allowed {', '.join(DIRECTIONS)}"
                 )
             start = _start(contour, choice.start)
-            clockwise = None if choice.direction == "drawn" else choice.direction == "cw"
+            clockwise = None if direction == "drawn" else direction == "cw"
+            comp = choice.comp if choice.comp is not None or side is None else side.comp
+            inside = choice.inside if choice.inside is not None or side is None else side.inner
             ops.append(
                 contour_ops(
-                    drawing, contour, start, clockwise, choice.comp, choice.tool, choice.inside
+                    drawing, contour, start, clockwise, comp, choice.tool, bool(inside), cutting
                 )
             )
             used.update(contour.sources)
@@ -160,7 +182,8 @@ def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
                     raise ChoiceError(f"hole {k + 1} is chosen twice")
                 holes_used.add(k)
                 hole = drawing.holes[k]
-                group.append(HoleOpR([hole.source], hole.centre, hole_spec(drawing, choice.tool)))
+                spec = hole_spec(drawing, choice.tool, cutting)
+                group.append(HoleOpR([hole.source], hole.centre, spec))
                 used.add(hole.source)
             if choice.bolt_circles:
                 group = find_bolt_circles(group, resolution_half(drawing), notes)
@@ -168,7 +191,8 @@ def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
     builder = Builder(notes)
     builder.run(ops)
     builder.flush_rounding()
-    block0 = drawing_block0(drawing, ops, notes)
+    block0 = drawing_block0(drawing, ops, notes, cutting)
+    block0 = replace(block0, milling=milling)
     # One line per kind, listing every entity it applies to.
     for contour in drawing.contours:
         if not set(contour.sources) & used:
@@ -181,7 +205,14 @@ def chosen_blocks(drawing: Drawing, choices: Sequence[Choice]) -> Chosen:
     return Chosen(tuple(builder.blocks), block0, tuple(notes.report()))
 
 
-def _pocket(drawing: Drawing, choice: PocketChoice) -> PocketOp:
+def _open(choice: Choice) -> bool:
+    """A contour choice that leaves something to the rule."""
+    return isinstance(choice, ContourChoice) and (
+        choice.direction is None or choice.comp is None or choice.inside is None
+    )
+
+
+def _pocket(drawing: Drawing, choice: PocketChoice, cutting: Cutting) -> PocketOp:
     """The pocket's operation; ChoiceError for a contour that is open, an island outside
     the boundary, or a contour chosen twice."""
     boundary = _contour(drawing, choice.contour)
@@ -200,7 +231,114 @@ def _pocket(drawing: Drawing, choice: PocketChoice) -> PocketOp:
                 "lies inside its pocket's boundary"
             )
         islands.append(island)
-    return pocket_ops(drawing, boundary, islands, _start(boundary, choice.start), choice.tool)
+    start = _start(boundary, choice.start)
+    return pocket_ops(drawing, boundary, islands, start, choice.tool, cutting)
+
+
+# -- what the drawing cannot give: depths, feeds, the tool ---------------------------------
+
+# The page's fields, as (form name, label in messages).
+CUTTING_FIELDS = (
+    ("z_up", "Z UP"),
+    ("z_dn", "Z DN"),
+    ("feed_z", "FEEDR Z"),
+    ("feed_xy", "FEEDR XY"),
+    ("tool", "tool"),
+    ("tool_dia", "tool Ø"),
+    ("tool_rpm", "RPM"),
+)
+
+
+def cutting_defaults(units: Units) -> dict[str, str]:
+    """The values the choosing page offers (shown in its fields, never assumed unseen): 0.1
+    in above the top to 0.1 in deep at 5 ipm down, 10 ipm along, tool 1 a 1/4 in end mill,
+    its RPM left for the machinist; in mm 2.5 above to 2.5 deep, 126 and 250 mm/min, 6 mm."""
+    if units is Units.INCH:
+        values = ("0.100", "-0.100", "5.0", "10.0", "1", "0.250", "")
+    else:
+        values = ("2.50", "-2.50", "126", "250", "1", "6.00", "")
+    return {name: value for (name, _), value in zip(CUTTING_FIELDS, values, strict=True)}
+
+
+def read_cutting(units: Units, fields: Mapping[str, str]) -> tuple[Cutting, int]:
+    """The depths, feeds and tool the page's fields give (in `units`), and the tool's number.
+
+    Z UP, Z DN and FEEDR Z all blank: a 2-axis program (no depths). Raises ChoiceError
+    naming the field for a value that is not a number, not on the programming resolution,
+    out of the control's range, a Z DN not below Z UP, or one depth given without the
+    other."""
+
+    def text(name: str) -> str:
+        return (fields.get(name) or "").strip()
+
+    def number(name: str, label: str) -> Decimal:
+        try:
+            return parse_decimal(text(name), exponent=False)
+        except NumberError as exc:
+            raise ChoiceError(f"{label}: {exc}") from None
+
+    def length(name: str, label: str) -> int:
+        value = number(name, label)
+        high = limits.MAX_DIMENSION[units]
+        if abs(value) > high:
+            raise ChoiceError(f"{label}: {value} {units.symbol}; allowed -{high} to {high}")
+        if value != value.quantize(units.resolution):
+            raise ChoiceError(
+                f"{label}: {value} is finer than the control's {units.resolution} {units.symbol}"
+            )
+        return to_nm(value, units)
+
+    def feed(name: str, label: str, allowed: limits.FeedLimits) -> int:
+        value = number(name, label)
+        if not allowed.low <= value <= allowed.high or value % allowed.step:
+            raise ChoiceError(
+                f"{label}: {value} {units.feed_symbol}; allowed {allowed.low} to "
+                f"{allowed.high} in steps of {allowed.step}"
+            )
+        return to_nm(value, units)
+
+    depths = [name for name in ("z_up", "z_dn", "feed_z") if text(name)]
+    z_up = z_dn = feed_z = None
+    if depths:
+        labels = dict(CUTTING_FIELDS)
+        for name in ("z_up", "z_dn", "feed_z"):
+            if not text(name):
+                raise ChoiceError(
+                    f"{labels[name]}: no value given; enter it (or leave Z UP, Z DN and "
+                    "FEEDR Z all blank for a 2-axis program, the quill moved by hand)"
+                )
+        z_up = length("z_up", "Z UP")
+        z_dn = length("z_dn", "Z DN")
+        if z_dn >= z_up:
+            raise ChoiceError(
+                f"Z DN: {text('z_dn')} is not below Z UP {text('z_up')}; Z DN is the depth "
+                "the tool cuts at, below Z UP"
+            )
+        feed_z = feed("feed_z", "FEEDR Z", limits.FEED_Z[units])
+    feed_xy = feed("feed_xy", "FEEDR XY", limits.FEED_XY[units])
+    try:
+        tool = parse_int(text("tool"))
+    except NumberError as exc:
+        raise ChoiceError(f"tool: {exc}") from None
+    if not 1 <= tool <= 24:
+        raise ChoiceError(f"tool: {tool}; allowed 1 to 24")
+    diameter = length("tool_dia", "tool Ø")
+    if diameter <= 0:
+        raise ChoiceError(f"tool Ø: {text('tool_dia')}; the tool's diameter is more than 0")
+    rpms: tuple[tuple[int, int], ...] = ()
+    if text("tool_rpm"):
+        try:
+            rpm = parse_int(text("tool_rpm"))
+        except NumberError as exc:
+            raise ChoiceError(f"RPM: {exc}") from None
+        if not limits.MIN_RPM <= rpm <= limits.MAX_RPM:
+            raise ChoiceError(
+                f"RPM: {rpm}; allowed {limits.MIN_RPM} to {limits.MAX_RPM} (a clockwise "
+                "spindle; leave it blank to enter it in Data Block 0)"
+            )
+        rpms = ((tool, rpm),)
+    cutting = Cutting(z_up, z_dn, feed_z, feed_xy, ((tool, diameter),), rpms)
+    return cutting, tool
 
 
 def _contour(drawing: Drawing, index: int) -> Contour:

@@ -579,3 +579,25 @@ def test_the_set_up_sheet_of_uncalibrated_tools_offers_the_touch_off_choice(
     taken = client.get(link.group(1).replace("&amp;", "&")).get_data(as_text=True)
     assert 'class="offer' not in taken and 'role="alert"' not in taken
     assert "Tape length" in taken
+
+
+def test_a_program_with_errors_downloads_as_its_json_document(app: Flask) -> None:
+    """The export page and the download write the JSON document of a program with errors
+    (issue 29 point 6), its problems in the report as warnings; G-code still refuses it."""
+    from app.cnc import document
+
+    golden = Path(__file__).parent / "golden" / "drill-single" / "program.json"
+    program = document.loads(golden.read_text().replace('"feed_z": 5', '"feed_z": 300'))
+    with app.app_context():
+        program_id = get_library().create(program).id
+    client = app.test_client()
+    page = client.get(f"/programs/{program_id}/export?target=json&go=1")
+    text = page.get_data(as_text=True)
+    assert page.status_code == 200
+    assert "warning: block 1: error, written as it is" in text
+    assert "FEEDR Z: 300 ipm" in text
+    download = client.get(f"/programs/{program_id}/export/download?target=json")
+    assert download.status_code == 200
+    assert document.loads(download.get_data(as_text=True)) == program
+    refused = client.get(f"/programs/{program_id}/export/download?target=gcode-linuxcnc")
+    assert refused.status_code == 422

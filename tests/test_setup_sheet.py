@@ -183,3 +183,24 @@ def test_the_cli_set_up_sheet_prints_stock_names_and_holes(tmp_path: Path) -> No
     assert "      1/4-20 TAP\n" in out
     assert "HOLE  BLOCK  X           Y           TOOL  Z DN        OPERATION" in out
     assert "   4      4  -1.5910     -1.5910        3  -0.5000     tap (1/4-20 TAP)" in out
+
+
+# -- the name in G-code -------------------------------------------------------------------
+
+
+def test_gcode_names_the_tool_in_its_set_up_comments_and_reads_back() -> None:
+    from app.cnc.emit.target import export
+    from app.cnc.imports import read_program
+
+    program = named(golden("bolt-circle-bore-tap"), 3, "1/4-20 tap")
+    text = export(program, "gcode-linuxcnc").data.decode()
+    assert "(SET-UP: T3 IS 1/4-20 TAP)\n(SET-UP: T3 DIA 0.2010 LENGTH H03 = 0.3750, ITS TCAL)" in (
+        text
+    )
+    # Without names the output is as before (the goldens hold it byte for byte).
+    plain = export(golden("bolt-circle-bore-tap"), "gcode-linuxcnc").data.decode()
+    assert " IS " not in plain and text.replace("(SET-UP: T3 IS 1/4-20 TAP)\n", "") == plain
+    # Read back, the tool has its name (in the comment's upper case).
+    back = read_program(text.encode(), "back", "gcode").program
+    tool = back.block0.tool(3)
+    assert tool is not None and tool.name == "1/4-20 TAP"

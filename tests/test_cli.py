@@ -191,3 +191,38 @@ def test_every_file_command_takes_every_format(tmp_path: Path) -> None:
     code, out, err = run("check", "--format", "events", str(ngc))
     assert code == 2 and out == ""
     assert err.startswith(f"Error: {ngc}: ")
+
+
+def test_json_export_writes_a_program_with_errors(tmp_path: Path) -> None:
+    """The JSON document is the program: it is written errors and all (issue 29 point 6),
+    the problems on stderr as warnings; every other target still refuses the program."""
+    from app.cnc import document
+
+    program = (GOLDEN / "drill-single" / "program.json").read_text()
+    path = tmp_path / "fast.json"
+    path.write_text(program.replace('"feed_z": 5', '"feed_z": 300'))
+    out = tmp_path / "out.json"
+    code, _, err = run("export", str(path), "--to", "json", "-o", str(out))
+    assert code == 0, err
+    assert document.loads(out.read_text()) == document.loads(path.read_text())
+    assert "warning: block 1: error, written as it is" in err
+    assert "FEEDR Z: 300 ipm is outside the allowed range 0.1 to 250 ipm" in err
+    code, _, _ = run("export", str(path), "--to", "gcode-linuxcnc", "-o", str(tmp_path / "g"))
+    assert code == 1 and not (tmp_path / "g").exists()
+
+
+def test_an_events_import_with_errors_converts_to_json(tmp_path: Path) -> None:
+    """A ProtoTRAK Plus events file whose tools have no RPM and whose frame is too small
+    for its tool: refused by G-code, converted to the JSON document to be fixed."""
+    from app.cnc import document
+    from app.cnc.imports import read_program
+
+    source = Path(__file__).parent / "imports" / "seed003-2.2.5.cnc"
+    out = tmp_path / "part.json"
+    code, _, err = run("export", str(source), "--to", "json", "-o", str(out))
+    assert code == 0, err
+    assert "warning: block 37: error, written as it is" in err
+    imported = read_program(source.read_bytes(), source.stem).program
+    assert document.loads(out.read_text()) == imported
+    code, _, err = run("export", str(source), "--to", "gcode-linuxcnc")
+    assert code == 1 and "fix them before exporting" in err

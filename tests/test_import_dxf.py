@@ -444,3 +444,19 @@ def test_a_chosen_contour_with_its_start_direction_and_side() -> None:
         "MILL ARC XY-END",
     ]
     assert isinstance(reverse[0], Hole) and (reverse[0].x, reverse[0].y) == (first.x, first.y)
+
+
+def test_a_drawing_without_tool_diameters_converts_to_json(tmp_path: Path) -> None:
+    """An imported drawing's tools have no diameter yet: G-code refuses it, the JSON
+    document takes it (issue 29 point 6), so it can be loaded, fixed and saved."""
+    path = tmp_path / "bracket.dxf"
+    path.write_bytes(bracket())
+    out = tmp_path / "bracket.json"
+    runner = CliRunner()
+    converted = runner.invoke(main, ["export", str(path), "--to", "json", "-o", str(out)])
+    refused = runner.invoke(main, ["export", str(path), "--to", "gcode-linuxcnc"])
+    assert refused.exit_code == 1 and "has no DIA in Data Block 0" in refused.stderr
+    assert converted.exit_code == 0, converted.stderr
+    assert "has no DIA in Data Block 0" in converted.stderr
+    program = document.loads(out.read_text())
+    assert program == read_program(bracket(), "bracket", None, {}).program

@@ -609,3 +609,25 @@ def test_the_upload_takes_a_segmented_boss_tape(client: FlaskClient, app: Flask)
     with app.app_context():
         [new] = [p for p in get_library().programs() if p.name == "bolt"]
         assert get_library().get(new.id).program.units is Units.MM
+
+
+def test_a_program_with_errors_downloads_as_its_json_document(app: Flask) -> None:
+    """The export page and the download write the JSON document of a program with errors
+    (issue 29 point 6), its problems in the report as warnings; G-code still refuses it."""
+    from app.cnc import document
+
+    golden = Path(__file__).parent / "golden" / "drill-single" / "program.json"
+    program = document.loads(golden.read_text().replace('"feed_z": 5', '"feed_z": 300'))
+    with app.app_context():
+        program_id = get_library().create(program).id
+    client = app.test_client()
+    page = client.get(f"/programs/{program_id}/export?target=json&go=1")
+    text = page.get_data(as_text=True)
+    assert page.status_code == 200
+    assert "warning: block 1: error, written as it is" in text
+    assert "FEEDR Z: 300 ipm" in text
+    download = client.get(f"/programs/{program_id}/export/download?target=json")
+    assert download.status_code == 200
+    assert document.loads(download.get_data(as_text=True)) == program
+    refused = client.get(f"/programs/{program_id}/export/download?target=gcode-linuxcnc")
+    assert refused.status_code == 422

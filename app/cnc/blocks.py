@@ -655,7 +655,10 @@ class Tool:
 
     `rpm` may be negative (spindle counter-clockwise, e.g. left-hand taps); None means no RPM
     was entered, which makes the tool unusable (the control's emergency stop). `tcal` is the
-    tool's calibrated Z zero; None shows as "****" (uncalibrated).
+    tool's calibrated Z zero; None shows as "****" (uncalibrated). `name` is what the
+    machinist calls it ("#7 DRILL", "1/4-20 TAP"; "" for none): for the set-up sheet and
+    the G-code set-up comments, never a control setting (`TOOL_NAME_LENGTH` characters of
+    `TOOL_NAME_CHARACTERS`, checked by validation).
     """
 
     number: int = prompt("TOOL #", TOOL)
@@ -663,6 +666,31 @@ class Tool:
     rpm: int | None = prompt("RPM", COUNT, None)
     tcal: Decimal | None = prompt("TCAL", LENGTH, None)
     coolant: Coolant = prompt("COOLANT", CHOICE, Coolant.OFF)
+    name: str = prompt("NAME", TEXT, "")
+
+
+# A tool's name goes into G-code comments and onto the set-up sheet: what a comment holds
+# (no parentheses or semicolons, which end it), short enough for a tool table's column.
+TOOL_NAME_LENGTH = 24
+TOOL_NAME_CHARACTERS = frozenset(
+    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 .,-:/#+=*"
+)
+
+
+def tool_name_fault(name: str) -> str:
+    """What is wrong with a tool's name ("" when nothing): too long, or a character a
+    comment cannot hold."""
+    allowed = f"allowed up to {TOOL_NAME_LENGTH} letters, digits, spaces and . , - : / # + = *"
+    if len(name) > TOOL_NAME_LENGTH:
+        return f"{len(name)} characters is too long; {allowed}"
+    bad = sorted({c for c in name if c not in TOOL_NAME_CHARACTERS})
+    if bad:
+        return (
+            "has characters a G-code comment cannot hold: "
+            + " ".join(repr(c) for c in bad)
+            + f"; {allowed}"
+        )
+    return ""
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -286,6 +286,7 @@ class _Compiler:
                 rpm=t.rpm,
                 tcal=None if t.tcal is None else to_nm(t.tcal, units),
                 coolant=t.coolant.value,
+                name=t.name,
             )
             for t in db0.tools
         }

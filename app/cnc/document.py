@@ -57,7 +57,7 @@ def to_dict(program: Program) -> dict[str, Any]:
             "current_tool": db0.current_tool,
             "milling": db0.milling.value,
             "z_retract": _out(db0.z_retract),
-            "tools": [_fields_out(tool) for tool in db0.tools],
+            "tools": [_tool_out(tool) for tool in db0.tools],
         },
         "blocks": [_block_out(block) for block in program.blocks],
     }
@@ -175,6 +175,15 @@ def _block_out(block: Block) -> dict[str, Any]:
     data.update(_fields_out(block))
     for name, _ in kind.fixed:
         del data[name]
+    return data
+
+
+def _tool_out(tool: Tool) -> dict[str, Any]:
+    """A tool's fields; its name only when it has one (documents without names read and
+    write as before)."""
+    data = _fields_out(tool)
+    if not tool.name:
+        del data["name"]
     return data
 
 

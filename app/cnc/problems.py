@@ -50,6 +50,7 @@ class Rule(enum.Enum):
     TOOL_NO_RPM = "tool-no-rpm"
     TOOL_NO_TCAL = "tool-no-tcal"
     TOOL_NO_DIAMETER = "tool-no-diameter"
+    TOOL_NAME = "tool-name"
     TOOL_CHANGE_IN_SEQUENCE = "tool-change-in-sequence"
     LOOP_WITHOUT_REP = "loop-without-rep"
     REP_WITHOUT_LOOP = "rep-without-loop"

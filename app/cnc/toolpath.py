@@ -192,13 +192,15 @@ class Repetition:
 
 @dataclass(frozen=True, slots=True)
 class ToolInfo:
-    """What the tool path knows of a tool: diameter and calibration in nm, signed RPM."""
+    """What the tool path knows of a tool: diameter and calibration in nm, signed RPM,
+    and its name (Data Block 0 NAME, "" for none) for the set-up comments."""
 
     number: int
     diameter: int | None
     rpm: int | None
     tcal: int | None
     coolant: str = "off"
+    name: str = ""
 
 
 @dataclass(slots=True)

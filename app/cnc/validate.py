@@ -41,6 +41,7 @@ from app.cnc.blocks import (
     Program,
     Rep,
     field_label,
+    tool_name_fault,
 )
 from app.cnc.compiler import compile_program
 from app.cnc.kinds import REGISTRY, Value
@@ -226,6 +227,9 @@ class _Checker:
                     f"tool {tool.number} is listed twice; each tool number once",
                 )
             seen.add(tool.number)
+            fault = tool_name_fault(tool.name)
+            if fault:
+                self.add(0, f"{where} NAME", ERROR, Rule.TOOL_NAME, fault)
             if tool.diameter is not None:
                 self.check_length(0, f"{where} DIA", tool.diameter, units, positive=True)
             if tool.tcal is not None:

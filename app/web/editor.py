@@ -439,14 +439,16 @@ def _db0_field(label: str | None) -> str:
     text = label or ""
     if text.startswith("TOOL ") and " " in text[5:]:
         number, what = text[5:].split(" ", 1)
-        return {"DIA": "dia", "RPM": "rpm", "TCAL": "tcal"}.get(what, "dia") + f"_{number}"
+        fields = {"DIA": "dia", "RPM": "rpm", "TCAL": "tcal", "NAME": "name"}
+        return fields.get(what, "dia") + f"_{number}"
     return {"X": "x_offset", "Y": "y_offset", "CUR-TOOL": "current_tool", "Z RET": "z_retract"}.get(
         text, "x_offset"
     )
 
 
 def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
-    """Data Block 0 from its form: offsets, current tool, milling, Z RET, 24 tool lines."""
+    """Data Block 0 from its form: offsets, current tool, milling, Z RET, 24 tool lines
+    (number, DIA, RPM, TCAL, coolant, name)."""
     errors: dict[str, str] = {}
 
     def number(name: str, label: str, required: bool = True) -> Decimal | None:
@@ -477,8 +479,12 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
         coolant = {"flood": Coolant.FLOOD, "mist": Coolant.MIST}.get(
             form.get(f"coolant_{n}", ""), Coolant.OFF
         )
-        if dia is not None or rpm is not None or tcal is not None:
-            tools.append(Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal, coolant=coolant))
+        # The name as typed (validation says what it may hold, naming the tool).
+        name = form.get(f"name_{n}", "").strip()
+        if dia is not None or rpm is not None or tcal is not None or name:
+            tools.append(
+                Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal, coolant=coolant, name=name)
+            )
     block0 = DataBlock0(
         x_offset=number("x_offset", "X") or Decimal(0),
         y_offset=number("y_offset", "Y") or Decimal(0),

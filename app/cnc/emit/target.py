@@ -28,7 +28,7 @@ from typing import Any, BinaryIO, ClassVar, Protocol
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.copy import resolve_copies
+from app.cnc.copy import CopyError, resolve_copies
 from app.cnc.machine import MachineModel, check_travel
 from app.cnc.needs import unmet
 from app.cnc.options import Option, OptionError, OptionKind
@@ -239,6 +239,10 @@ class Target(ABC):
     end_mark: ClassVar[bytes] = b"%"
     # Whether data bytes can be the XON/XOFF codes (then software flow control cannot run).
     flow_codes_in_data: ClassVar[bool] = False
+    # The program document itself, not a tool path: it writes any program, errors and all
+    # (a program is fixed by writing it, loading it and editing it), with every problem in
+    # the report as a warning. Such a target implements `write_program`.
+    document: ClassVar[bool] = False
 
     def needs_for(self, options: Mapping[str, Any]) -> frozenset[Need]:
         """The needs with these (parsed) options; a target whose options change what it
@@ -278,6 +282,12 @@ class Target(ABC):
 
         By default the whole Toolpath is made and handed to `emit`."""
         out.write(self.emit(program, path.toolpath(), options, report))
+
+    def write_program(
+        self, program: Program, options: Mapping[str, Any], report: Report, out: Out
+    ) -> None:
+        """A `document` target's output: the program as it is, valid or not."""
+        raise NotImplementedError(f"{self.name} is not a document target")
 
     def emit(
         self, program: Program, toolpath: Toolpath, options: Mapping[str, Any], report: Report
@@ -362,9 +372,14 @@ def export(
     and collision zone, and a crossing is an error naming the block. Raises OptionError for
     bad options and ExportError when the program has validation errors or the target (or
     the machine) reports errors; what was written to `out` by then is not an export.
+
+    A `document` target (the JSON program) is the exception: it writes any program, and
+    its report lists the program's problems as warnings (see `_export_document`).
     """
     target = get_target(name)
     options = target.parse_options(raw_options or {})
+    if target.document:
+        return _export_document(program, target, options, out)
     program = resolve_copies(program)
     needs = target.needs_for(options)
     # The control's needs are checked by validation; a target has its own (and may lack
@@ -404,6 +419,42 @@ def export(
         if out is None:
             sink.close()
         raise ExportError(f"{target.name} cannot take this program", problems, report)
+    return Export(
+        target.name,
+        sink,
+        counted.size,
+        target.extension,
+        target.media_type,
+        report,
+        owned=out is None,
+    )
+
+
+def _export_document(
+    program: Program, target: Target, options: Mapping[str, Any], out: BinaryIO | None
+) -> Export:
+    """Write the program document, errors and all: it is how a program that does not run
+    yet (an import whose tools have no diameters) is kept to be fixed. Every validation
+    problem goes in the report as a warning naming its block and field; a COPY that cannot
+    be carried out is left in the document as the operator's choice."""
+    report = Report(target.name)
+    try:
+        program = resolve_copies(program)
+    except CopyError as exc:
+        report.warning(exc.block, f"COPY not carried out, written as it is: {exc.message}")
+    for problem in validate(program):
+        where = f"{problem.field}: " if problem.field else ""
+        if problem.severity.value == "error":
+            where = f"error, written as it is (fix it before the program runs): {where}"
+        report.warning(problem.block, f"{where}{problem.message}")
+    sink: BinaryIO = out if out is not None else _spool()
+    counted = _Counted(sink)
+    try:
+        target.write_program(program, options, report, counted)
+    except BaseException:
+        if out is None:
+            sink.close()
+        raise
     return Export(
         target.name,
         sink,

@@ -38,6 +38,7 @@ from app.cnc.blocks import (
     Program,
     Rep,
     Tool,
+    tool_name_fault,
 )
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports.common import (
@@ -445,7 +446,16 @@ def block0(setup: SetUp, ops: list[Op], notes: Notes) -> DataBlock0:
         if data.tcal is not None:
             tcal = decimal_of(quantize_nm(data.tcal, units), units)
         coolant = Coolant(setup.coolants.get(number, "off"))
-        tools.append(Tool(number=number, diameter=diameter, rpm=rpm, tcal=tcal, coolant=coolant))
+        tools.append(
+            Tool(
+                number=number,
+                diameter=diameter,
+                rpm=rpm,
+                tcal=tcal,
+                coolant=coolant,
+                name=data.name if not tool_name_fault(data.name) else "",
+            )
+        )
         if number in first_use and rpm is None:
             notes.needs(
                 first_use[number],

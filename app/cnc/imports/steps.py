@@ -171,10 +171,12 @@ Step = (
 
 @dataclass(frozen=True)
 class ToolData:
-    """What a file says about a tool besides its number: diameter and TCAL in nm."""
+    """What a file says about a tool besides its number: diameter and TCAL in nm, and the
+    name MillBlocks' set-up comments give it ("" for none)."""
 
     diameter: int | None = None
     tcal: int | None = None
+    name: str = ""
 
 
 @dataclass

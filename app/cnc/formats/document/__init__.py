@@ -2,7 +2,8 @@
 
 Its model, reader and writer are app/cnc/document.py (the library stores programs in it
 and the editor owns it); this package offers it to the two registries: the `json` target
-writes the program itself (not its tool path), the `json` importer reads a document back
+writes the program itself (not its tool path) - any program, errors and all, its problems
+reported as warnings (a `document` target) - and the `json` importer reads a document back
 with its executed or cancelled COPY blocks carried out.
 """
 
@@ -28,6 +29,12 @@ class JsonTarget(Target):
     extension = "json"
     media_type = "application/json"
     reads_back = "json"
+    document = True
+
+    def write_program(
+        self, program: Program, options: Mapping[str, Any], report: Report, out: Out
+    ) -> None:
+        out.write(document.dumps(program).encode("utf-8"))
 
     def write(
         self,
@@ -37,7 +44,7 @@ class JsonTarget(Target):
         report: Report,
         out: Out,
     ) -> None:
-        out.write(document.dumps(program).encode("utf-8"))
+        self.write_program(program, options, report, out)
 
 
 @register_importer

@@ -89,6 +89,7 @@ SETUP_TOOL = re.compile(
     r"(?: = (-?\d+\.\d+), ITS TCAL|: UNCALIBRATED, MEASURE IT)$",
     re.ASCII,
 )
+SETUP_NAME = re.compile(r"^SET-UP: T(\d{1,2}) IS (.+)$", re.ASCII)
 
 # LinuxCNC's modal groups (one code of each per block), seed 003 Table 5 plus Fanuc's.
 MODAL_GROUPS: dict[str, set[str]] = {
@@ -394,6 +395,7 @@ class _Reader:
         self.decimals = 0
         self.offsets: tuple[int, int] | None = None
         self.tools: dict[int, ToolData] = {}
+        self.tool_names: dict[int, str] = {}
         self.active_length = 0  # nm: the tool length offset in effect (G43 H: the TCAL)
         self.start_z: int | None = None
         self.percent = 0
@@ -1101,6 +1103,12 @@ class _Reader:
 
     def setup_comment(self, line: int, comment: str) -> None:
         """A MillBlocks set-up comment: part zero, or a tool's diameter and length (TCAL)."""
+        named = SETUP_NAME.match(comment)
+        if named is not None:
+            # The name comes before its tool's diameter and length comment.
+            self.tool_names[int(named.group(1))] = named.group(2).strip()
+            self.notes.became(line, f"the set-up comment of tool {named.group(1)}: its name")
+            return
         zero = SETUP_ZERO.match(comment)
         tool = SETUP_TOOL.match(comment)
         units = self.current_units()
@@ -1113,6 +1121,7 @@ class _Reader:
             self.tools[number] = ToolData(
                 diameter=None if dia is None else decimal_nm(dia, units),
                 tcal=None if tcal is None else decimal_nm(tcal, units),
+                name=self.tool_names.get(number, ""),
             )
             self.notes.became(
                 line, f"the set-up comment of tool {number}: its DIA and TCAL (Data Block 0)"

@@ -437,6 +437,10 @@ class Writer:
             # The diameter too: cutter compensation and routines were planned with it, and an
             # importer needs it to read the tool-centre path back as the blocks it came from.
             dia = "" if tool.diameter is None else f" DIA {lengths(tool.diameter)}"
+            if tool.name:
+                # What the shop calls it, on a line of its own: the diameter and length
+                # comment below stays as readers know it.
+                self.comment(f"SET-UP: T{number} IS {tool.name}")
             if tool.tcal is None:
                 length = "measured (uncalibrated)"
                 self.comment(

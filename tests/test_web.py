@@ -376,6 +376,16 @@ def test_download_is_what_the_page_shows(client: FlaskClient) -> None:
     assert data == expected
 
 
+def test_rep_s_nx_and_ny_say_they_count_repeats_not_patterns(client: FlaskClient) -> None:
+    """NX 2 makes three patterns in X (seed 001 §3.4.5.3); the prompts said only "NX"."""
+    page = client.get("/programs/2?edit=3").get_data(as_text=True)
+    for axis in "XY":
+        assert (
+            f"repeats in {axis} after the first pattern, not the number of patterns "
+            "(2: three in all)" in page
+        )
+
+
 def test_history_diff_and_restore(client: FlaskClient) -> None:
     csrf = token(client)
     client.post(

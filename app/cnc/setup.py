@@ -1,11 +1,12 @@
 """The set-up sheet: what the operator needs on paper to set up and run a program.
 
 The 1704 manual's programming manuscript (seed 000 Fig. 1-3) brought up to date: part zero
-and the Data Block 0 offsets, the tool list with diameter, RPM (and gear range, seed 001
-§3.4.4: 60-500 low, 500-4000 high), calibration, coolant and the first block each tool
-cuts; cycle time per tool and in total; for a target, its compatibility report (with the
-tape length for tape); and the tool path picture. A pure function of the program, the
-target's report and the machine: the web page and the CLI render the same content.
+and the Data Block 0 offsets, the tool list with diameter, RPM (and the gear range on the
+machine's spindle; the control's, seed 001 §3.4.4: 60-500 low, 500-4000 high), calibration,
+coolant and the first block each tool cuts; cycle time per tool and in total; for a target,
+its compatibility report (with the tape length for tape); and the tool path picture. A pure
+function of the program, the target's report and the machine: the web page and the CLI
+render the same content.
 """
 
 from __future__ import annotations
@@ -19,10 +20,10 @@ from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Report
 from app.cnc.estimate import Estimate, estimate, format_seconds
 from app.cnc.interpret import interpret
-from app.cnc.limits import GEAR_CHANGE_RPM
 from app.cnc.machine import MachineModel
 from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, Op
+from app.cnc.spindle import CONTROL, Spindle
 from app.cnc.units import format_decimal
 
 
@@ -59,13 +60,16 @@ class SetupSheet:
     report: list[str] = field(default_factory=list)
 
 
-def gear(rpm: int | None) -> str:
-    """The gear range an RPM needs (seed 001 §3.4.4), and the direction."""
+def gear(rpm: int | None, spindle: Spindle = CONTROL) -> str:
+    """The gear range an RPM needs on the machine's spindle (the control's: seed 001 §3.4.4),
+    and the direction."""
     if rpm is None:
         return "no RPM: the control stops if this tool is used"
     direction = "reverse" if rpm < 0 else "forward"
-    speed = abs(rpm)
-    return f"{'low' if speed <= GEAR_CHANGE_RPM else 'high'} gear, {direction}"
+    if not spindle.runs(rpm):
+        return f"outside the spindle's range ({spindle.text()} rpm), {direction}"
+    named = spindle.gear(rpm)
+    return f"{named}, {direction}" if named else direction
 
 
 def first_cuts(path: CompiledPath) -> dict[int, int]:
@@ -117,7 +121,7 @@ def setup_sheet(
                 number=tool.number,
                 diameter="—" if tool.diameter is None else f"{format_decimal(tool.diameter)} {u}",
                 rpm="—" if tool.rpm is None else str(tool.rpm),
-                gear=gear(tool.rpm),
+                gear=gear(tool.rpm, (machine.spindle if machine else None) or CONTROL),
                 tcal="****" if tool.tcal is None else f"{format_decimal(tool.tcal)} {u}",
                 coolant=tool.coolant.value,
                 first_block=cuts.get(tool.number),

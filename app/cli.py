@@ -258,7 +258,7 @@ def _target_names() -> list[str]:
     "--machine",
     "machine_name",
     default=None,
-    help="A library machine: its options (-O overrides) and its travel limits are used.",
+    help="A library machine: its options (-O overrides), travel limits and spindle range are used.",
 )
 def export(
     file: str,

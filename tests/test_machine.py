@@ -3,6 +3,7 @@ block; the cycle time follows the machine's rates (seed 002 §2 presets)."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from decimal import Decimal as D
 from pathlib import Path
 
@@ -16,6 +17,8 @@ from app.cnc.estimate import estimate, report
 from app.cnc.interpret import interpret
 from app.cnc.machine import PRESETS, MachineError, check_travel, read_machine
 from app.cnc.path import CompiledPath
+from app.cnc.setup import gear
+from app.cnc.spindle import read_spindle
 
 GOLDEN = Path(__file__).parent / "golden"
 
@@ -59,6 +62,8 @@ def test_the_seed_002_presets() -> None:
     }
     assert kt800.zone == (D("4.00"), D("19.50")) and kt800.rapid == D(400)
     assert PRESETS["kt-200-optional"].travel["x"] == (D(0), D(30))
+    spindle = kt180.spindle
+    assert spindle is not None and spindle.gears == ((4, 4000),)  # "4 to 4000 rpms"
 
 
 def test_a_move_past_the_travel_is_refused_with_its_block() -> None:
@@ -139,3 +144,73 @@ def test_cycle_time_per_machine() -> None:
     assert "Operator time (OTIME) 1:00.0" in report(with_otime)
     single = estimate(toolpath, machine=read_machine({"operator_seconds": "60"}))
     assert single.total - estimate(toolpath).total == pytest.approx(60)
+
+
+# -- the spindle ---------------------------------------------------------------------------
+
+
+def fast(rpm: int) -> Program:
+    """The drill of `part`, its tool at `rpm`."""
+    program = part("5", "1")
+    tool = replace(program.block0.tools[0], rpm=rpm)
+    return replace(program, block0=replace(program.block0, tools=(tool,)))
+
+
+def errors_of(refused: pytest.ExceptionInfo[ExportError]) -> list[str]:
+    report = refused.value.report
+    assert report is not None
+    return [str(e) for e in report.entries if e.severity.value == "error"]
+
+
+def test_a_machine_s_spindle_range_decides_the_rpm_an_export_takes() -> None:
+    """The RPM limit was 4000 for every machine (a validation error); a LinuxCNC mill whose
+    profile says its spindle runs 100-24000 rpm takes 9000, and a machine with the control's
+    gears, or no machine with a spindle range, refuses it naming the tool."""
+    linuxcnc = read_machine({"name": "Mill 2", "spindle": "100-24000"})
+    assert linuxcnc.spindle is not None and linuxcnc.spindle.gears == ((100, 24000),)
+    assert "S9000 M3" in export(fast(9000), "gcode-linuxcnc", machine=linuxcnc).data.decode()
+    assert "S9000 M4" in export(fast(-9000), "gcode-linuxcnc", machine=linuxcnc).data.decode()
+    with pytest.raises(ExportError) as refused:
+        export(fast(9000), "gcode-linuxcnc")
+    assert errors_of(refused) == [
+        "error: program: tool 1 runs at 9000 rpm; the ProtoTRAK-style control's spindle runs "
+        "60 to 4000 rpm (60-500 low gear, 500-4000 high gear), or -60 to -4000 in reverse (no "
+        "machine with a spindle range was chosen): choose a machine whose profile gives its "
+        "spindle range (spindle=LOW-HIGH), or change the tool's RPM"
+    ]
+    geared = read_machine({"name": "Bridgeport", "spindle": "60-500, 500-4000"})
+    with pytest.raises(ExportError) as refused:
+        export(fast(50), "gcode-linuxcnc", machine=geared)
+    assert errors_of(refused) == [
+        "error: program: tool 1 runs at 50 rpm; Bridgeport's spindle runs 60 to 4000 rpm "
+        "(60-500 low gear, 500-4000 high gear), or -60 to -4000 in reverse: change the tool's "
+        "RPM, or choose a machine that runs it"
+    ]
+    assert export(fast(200), "gcode-linuxcnc", machine=linuxcnc).size > 0
+
+
+def test_without_s_words_the_spindle_is_not_the_export_s_business() -> None:
+    """The JSON document and a tape whose spindle is set by hand write any RPM."""
+    assert export(fast(9000), "json").size > 0
+    assert export(fast(9000), "tape-eia").size > 0
+
+
+def test_bad_spindle_ranges_are_named() -> None:
+    with pytest.raises(MachineError, match="spindle: 'fast' is not a range of speeds"):
+        read_machine({"spindle": "fast"})
+    with pytest.raises(MachineError, match="spindle: 4000-500: a gear runs from a lower"):
+        read_machine({"spindle": "4000-500"})
+    with pytest.raises(MachineError, match="spindle: 60-500: list the gears from the slowest up"):
+        read_machine({"spindle": "500-4000, 60-500"})
+    assert (
+        read_machine({"spindle": [[60, 500], [500, 4000]]}).spindle
+        == read_machine({"spindle": "60-500,500-4000"}).spindle
+    )
+
+
+def test_the_set_up_sheet_names_the_gear_of_the_machine_s_spindle() -> None:
+    assert gear(300) == "low gear, forward" and gear(-2000) == "high gear, reverse"
+    three = read_spindle("50-400, 400-1500, 1500-6000")
+    assert gear(5000, three) == "gear 3 of 3, forward"
+    assert gear(9000, read_spindle("100-24000")) == "forward"
+    assert gear(9000) == "outside the spindle's range (60-500, 500-4000 rpm), forward"

@@ -17,7 +17,7 @@ from alembic.migration import MigrationContext
 from sqlalchemy import Engine, inspect, text
 
 from app.cnc import document
-from app.cnc.blocks import Hole, Program
+from app.cnc.blocks import Hole, Program, Stock
 from app.storage.db import downgrade, make_engine, upgrade
 from app.storage.demo import demo_programs
 from app.storage.library import Library, LibraryError, Machine, NotFound, StaleSave, open_library
@@ -129,6 +129,22 @@ def test_save_records_a_revision_with_a_summary(library: Library) -> None:
     assert [r.version for r in revisions] == [1, 2]
     assert revisions[1].author == "ben"
     assert revisions[1].summary == "block 2 BOLT CIR DRILL deleted (old numbering)"
+
+
+def test_a_change_of_stock_alone_is_described_in_the_history(library: Library) -> None:
+    """Saving a new stock (the Verify page's form, or `stock` in the document) was recorded as
+    "saved without changes"."""
+    info = library.create(program())
+    four = Stock(x=D("0.5"), y=D("0.5"), xl=D(4), yw=D(3), zh=D(1))
+    library.save(info.id, replace(program(), stock=four), based_on=1)
+    library.save(info.id, replace(program(), stock=replace(four, zh=D("0.750"))), based_on=2)
+    library.save(info.id, replace(program(), notes="face first"), based_on=3)
+    assert [r.summary for r in library.revisions(info.id)][1:] == [
+        "stock: none (sized from the program's extent) → 4 × 3 × 1 in at X 0.5, Y 0.5, Z TOP 0",
+        "stock: 4 × 3 × 1 in at X 0.5, Y 0.5, Z TOP 0 → 4 × 3 × 0.75 in at X 0.5, Y 0.5, Z TOP 0",
+        "notes: '' → 'face first'; "
+        "stock: 4 × 3 × 0.75 in at X 0.5, Y 0.5, Z TOP 0 → none (sized from the program's extent)",
+    ]
 
 
 def test_stale_save_is_refused_and_nothing_is_lost(library: Library) -> None:

@@ -88,6 +88,9 @@ def test_the_stock_is_saved_with_the_program_and_refused_when_wrong(
     with app.app_context():
         stock = get_library().get(pid).program.stock
     assert stock is not None and stock.zh == Decimal("0.75") and stock.xl == Decimal(4)
+    with app.app_context():
+        history = get_library().revisions(pid)
+    assert history[-1].summary.startswith("stock: none (sized from the program's extent) → 4 × 3")
     page = client.get(url).get_data(as_text=True)
     assert (
         "X 0.5000 to 4.5000, Y 0.5000 to 3.5000, Z -0.7500 to 0.0000 in (the program&#39;s stock)"

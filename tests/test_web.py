@@ -177,26 +177,39 @@ def test_out_of_range_value_is_refused_beside_its_field(client: FlaskClient) -> 
         assert get_library().get(2).info.version == 1
 
 
+def db0_form(csrf: str, version: int, rpm: str) -> dict[str, str]:
+    return {
+        "csrf_token": csrf,
+        "version": str(version),
+        "x_offset": "0",
+        "y_offset": "0",
+        "current_tool": "1",
+        "milling": "climb",
+        "z_retract": "0.1",
+        "dia_1": "0.25",
+        "rpm_1": rpm,
+    }
+
+
 def test_data_block_0_refuses_values_out_of_range(client: FlaskClient) -> None:
-    csrf = token(client)
-    response = client.post(
-        "/programs/2/db0",
-        data={
-            "csrf_token": csrf,
-            "version": "1",
-            "x_offset": "0",
-            "y_offset": "0",
-            "current_tool": "1",
-            "milling": "climb",
-            "z_retract": "0.1",
-            "dia_1": "0.25",
-            "rpm_1": "9000",
-        },
-    )
+    response = client.post("/programs/2/db0", data=db0_form(token(client), 1, "120000"))
     assert response.status_code == 422
-    assert "TOOL 1 RPM: 9000 is outside the spindle" in response.get_data(as_text=True)
+    assert "TOOL 1 RPM: 120000 is not a spindle speed; allowed 1 to 99999" in response.get_data(
+        as_text=True
+    )
     with client.application.app_context():
         assert get_library().get(2).info.version == 1
+
+
+def test_an_rpm_beyond_the_control_s_spindle_is_saved_with_a_warning(client: FlaskClient) -> None:
+    """9000 rpm was refused: the RPM limit is the machine's (a LinuxCNC mill may run it), so
+    the program keeps it and the editor warns that the control's spindle does not."""
+    response = client.post("/programs/2/db0", data=db0_form(token(client), 1, "9000"))
+    assert response.status_code == 302
+    with client.application.app_context():
+        assert get_library().get(2).program.block0.tools[0].rpm == 9000
+    page = client.get("/programs/2/db0").get_data(as_text=True)
+    assert "9000 is outside the control&#39;s spindle range, 60 to 4000 rpm" in page
 
 
 def test_empty_name_is_refused(client: FlaskClient) -> None:
@@ -374,6 +387,16 @@ def test_download_is_what_the_page_shows(client: FlaskClient) -> None:
     with client.application.app_context():
         expected = make(get_library().get(3).program, "tape-eia").data
     assert data == expected
+
+
+def test_rep_s_nx_and_ny_say_they_count_repeats_not_patterns(client: FlaskClient) -> None:
+    """NX 2 makes three patterns in X (seed 001 §3.4.5.3); the prompts said only "NX"."""
+    page = client.get("/programs/2?edit=3").get_data(as_text=True)
+    for axis in "XY":
+        assert (
+            f"repeats in {axis} after the first pattern, not the number of patterns "
+            "(2: three in all)" in page
+        )
 
 
 def test_history_diff_and_restore(client: FlaskClient) -> None:
@@ -631,3 +654,33 @@ def test_a_program_with_errors_downloads_as_its_json_document(app: Flask) -> Non
     assert document.loads(download.get_data(as_text=True)) == program
     refused = client.get(f"/programs/{program_id}/export/download?target=gcode-linuxcnc")
     assert refused.status_code == 422
+
+
+def test_the_machine_chosen_for_export_decides_the_rpm(app: Flask, client: FlaskClient) -> None:
+    """A tool at 9000 rpm: refused for LinuxCNC G-code with no machine (the control's 60 to
+    4000 rpm), written for a LinuxCNC mill whose profile says its spindle runs 100-24000."""
+    from app.web.machines import SERIAL_DEFAULTS
+
+    csrf = token(client)
+    assert client.post("/programs/2/db0", data=db0_form(csrf, 1, "9000")).status_code == 302
+    machine = {**SERIAL_DEFAULTS, "csrf_token": csrf, "name": "Fast mill"}
+    bad = client.post(
+        "/machines", data={**machine, "target": "gcode-linuxcnc", "limits": "spindle=fast"}
+    )
+    assert bad.status_code == 422
+    assert "Not saved: limits: spindle: &#39;fast&#39; is not a range of speeds" in bad.get_data(
+        as_text=True
+    )
+    saved = client.post(
+        "/machines", data={**machine, "target": "gcode-linuxcnc", "limits": "spindle=100-24000"}
+    )
+    assert saved.status_code == 302
+    refused = client.get("/programs/2/export?target=gcode-linuxcnc&go=1")
+    assert refused.status_code == 422
+    assert (
+        "tool 1 runs at 9000 rpm; the ProtoTRAK-style control&#39;s spindle runs 60 to 4000 rpm"
+        in refused.get_data(as_text=True)
+    )
+    exported = client.get("/programs/2/export?machine=Fast+mill&target=gcode-linuxcnc&go=1")
+    assert exported.status_code == 200
+    assert "S9000 M3" in exported.get_data(as_text=True)

@@ -583,9 +583,15 @@ class Island(Block):
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
 
 
+# Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
+# (NX + 1) × (NY + 1) patterns.
+REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"
+
+
 @dataclass(frozen=True, kw_only=True)
 class Rep(Block):
-    """REP: closes the innermost open LOOP; X/Y step between patterns, NX/NY extra copies."""
+    """REP: closes the innermost open LOOP; X/Y step between patterns, NX/NY the repeats after
+    the first pattern ((NX + 1) × (NY + 1) patterns in all)."""
 
     kind: ClassVar[str] = "REP"
     KIND: ClassVar[Kind] = Kind(
@@ -596,8 +602,8 @@ class Rep(Block):
     mode: Mode = prompt("ABS/INC", CHOICE, Mode.INC, prompted=False)
     x: Decimal = prompt("X", LENGTH, Decimal(0), role=Role.STEP_X)
     y: Decimal = prompt("Y", LENGTH, Decimal(0), role=Role.STEP_Y)
-    nx: int = prompt("NX", COUNT, 0, low=0, high=limits.MAX_REPEAT)
-    ny: int = prompt("NY", COUNT, 0, low=0, high=limits.MAX_REPEAT)
+    nx: int = prompt("NX", COUNT, 0, low=0, high=limits.MAX_REPEAT, help=REPEATS.format(axis="X"))
+    ny: int = prompt("NY", COUNT, 0, low=0, high=limits.MAX_REPEAT, help=REPEATS.format(axis="Y"))
 
 
 @dataclass(frozen=True, kw_only=True)

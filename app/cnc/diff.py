@@ -14,9 +14,10 @@ from collections.abc import Sequence
 from decimal import Decimal
 from typing import Any
 
-from app.cnc.blocks import Block, DataBlock0, Program, field_label
+from app.cnc.blocks import Block, DataBlock0, Program, Stock, field_label
 from app.cnc.kinds import REGISTRY
 from app.cnc.memo import ByObject
+from app.cnc.units import Units
 
 
 def _show(value: Any) -> str:
@@ -88,6 +89,20 @@ def _tool_changes(old: DataBlock0, new: DataBlock0) -> list[str]:
     return changes
 
 
+def _length(value: Decimal) -> str:
+    return f"{value.normalize():f}"
+
+
+def _stock(stock: Stock | None, program: Program) -> str:
+    """The stock as the History reads it: its size, then where its corner and top are."""
+    if stock is None:
+        return "none (sized from the program's extent)"
+    unit = "in" if program.units is Units.INCH else "mm"
+    size = " × ".join(_length(v) for v in (stock.xl, stock.yw, stock.zh))
+    corner = ", ".join(f"{k} {_length(v)}" for k, v in (("X", stock.x), ("Y", stock.y)))
+    return f"{size} {unit} at {corner}, Z TOP {_length(stock.z)}"
+
+
 def diff(old: Program, new: Program) -> list[str]:
     """What changed from `old` to `new`, one line per change, block numbers as in `new`."""
     lines: list[str] = []
@@ -97,6 +112,8 @@ def diff(old: Program, new: Program) -> list[str]:
             lines.append(f"{label}: {a!r} → {b!r}")
     if old.units != new.units:
         lines.append(f"units: {old.units.value} → {new.units.value}")
+    if old.stock != new.stock:
+        lines.append(f"stock: {_stock(old.stock, old)} → {_stock(new.stock, new)}")
     if old.block0 != new.block0:
         details = field_changes(old.block0, new.block0) + _tool_changes(old.block0, new.block0)
         lines.append("Data Block 0: " + "; ".join(details))

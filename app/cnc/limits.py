@@ -5,7 +5,8 @@ From seed 001 §3.4.5.1 unless marked as our reading:
 - FEEDR Z 0.1-250.0 ipm or 2-6350 mm/min, FEEDR XY 0.1-100.0 ipm or 2-2540 mm/min, metric
   feeds in steps of 2 mm/min; inch feeds to 0.1 ipm (the ranges are written to one decimal);
 - up to 24 tools, 40 pecks, 250 bolt-circle holes, bolt-circle angle to 0.01°;
-- RPM 60-500 low gear, 500-4000 high gear, negative for counter-clockwise (§3.4.4).
+- RPM 60-500 low gear, 500-4000 high gear, negative for counter-clockwise (§3.4.4): the
+  control's spindle; a machine profile may give its own (app.cnc.spindle).
 
 Our readings where the manual gives no number: a dimension's magnitude is at most 99.999 in
 (2539.99 mm), the size of the 1704's ±99.9999 in capacity and far beyond any knee mill's

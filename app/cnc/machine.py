@@ -1,7 +1,8 @@
 """What a machine can do: travel limits, a collision zone, rapid and feed rates, times.
 
 Seed 002 §2 gives the Kearney & Trecker Milwaukee-Matic models' limits and collision zones
-(and §5's LIMIT word the way to change them); those are the presets here. A tool path is
+(and §5's LIMIT word the way to change them); those are the presets here. A machine's
+spindle range (app.cnc.spindle) decides the RPM an export to it takes. A tool path is
 checked against a machine in machine coordinates: X and Y are part coordinates plus the
 Data Block 0 offsets of part zero, Z is the tool's Z plus its calibration (TCAL; an
 uncalibrated tool counts as 0). Every move that would leave the travel, or enter the
@@ -22,10 +23,12 @@ from typing import Any
 
 import numpy as np
 
+from app.cnc.blocks import Program
 from app.cnc.geometry import arc_sweep
 from app.cnc.motions import motions
 from app.cnc.numbers import NumberError, parse_decimal
 from app.cnc.path import CompiledPath, Op, as_move
+from app.cnc.spindle import CONTROL, Spindle, SpindleError, read_spindle, refusal
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units, format_length, to_nm
 
@@ -48,6 +51,7 @@ class MachineModel:
     max_feed: Decimal | None = None  # per minute, linear motion
     tool_change_seconds: Decimal | None = None
     operator_seconds: Decimal | None = None  # OTIME: added once to the printed cycle time
+    spindle: Spindle | None = None  # None: the profile gives none (the control's is assumed)
 
     def nm(self, value: Decimal) -> int:
         return to_nm(value, self.units)
@@ -65,6 +69,8 @@ PRESETS: dict[str, MachineModel] = {
         },
         (Decimal("2.88"), Decimal("6.50")),
         max_feed=Decimal(400),
+        # "RPM range is from 4 to 4000 rpms" (the 200/600's depends on its headstock).
+        spindle=Spindle(((4, 4000),), "the Kearney & Trecker Milwaukee-Matic 180"),
     ),
     "kt-200": MachineModel(
         "Kearney & Trecker Milwaukee-Matic 200/600",
@@ -106,7 +112,8 @@ PRESETS: dict[str, MachineModel] = {
 def read_machine(data: Mapping[str, Any]) -> MachineModel:
     """A machine from its stored description: `{"preset": "kt-180"}` and/or explicit
     `units`, `x`/`y`/`z` ([min, max]), `zone` ([Y min, Z min]), `rapid`, `max_feed`,
-    `tool_change_seconds`, `operator_seconds`. Raises MachineError naming the field."""
+    `tool_change_seconds`, `operator_seconds`, `spindle` (`100-24000`, or gear ranges
+    `60-500, 500-4000`). Raises MachineError naming the field."""
     base = MachineModel()
     preset = data.get("preset")
     if preset:
@@ -128,8 +135,15 @@ def read_machine(data: Mapping[str, Any]) -> MachineModel:
     zone = base.zone
     if "zone" in data:
         zone = None if data["zone"] in (None, "", []) else _pair(data["zone"], "zone")
+    name = str(data.get("name", base.name))
+    spindle = base.spindle
+    if data.get("spindle") not in (None, ""):
+        try:
+            spindle = read_spindle(data["spindle"], name or "the machine chosen")
+        except SpindleError as exc:
+            raise MachineError(f"spindle: {exc}") from None
     return MachineModel(
-        name=str(data.get("name", base.name)),
+        name=name,
         units=units,
         travel=travel,
         zone=zone,
@@ -137,6 +151,7 @@ def read_machine(data: Mapping[str, Any]) -> MachineModel:
         max_feed=_number(data, "max_feed", base.max_feed),
         tool_change_seconds=_number(data, "tool_change_seconds", base.tool_change_seconds),
         operator_seconds=_number(data, "operator_seconds", base.operator_seconds),
+        spindle=spindle,
     )
 
 
@@ -161,6 +176,16 @@ def _number(data: Mapping[str, Any], name: str, default: Decimal | None) -> Deci
     if value <= 0:
         raise MachineError(f"{name}: {value} must be more than 0")
     return value
+
+
+def check_spindle(program: Program, spindle: Spindle | None) -> list[str]:
+    """Each tool of Data Block 0 whose RPM the spindle does not run (None: no machine with a
+    spindle range chosen, so the control's), one message per tool."""
+    return [
+        refusal(tool.number, tool.rpm, spindle)
+        for tool in program.block0.tools
+        if tool.rpm is not None and not (spindle or CONTROL).runs(tool.rpm)
+    ]
 
 
 @dataclass(frozen=True)

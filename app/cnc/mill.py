@@ -495,31 +495,84 @@ def compensate(
     return Geometry(result, findings)
 
 
+def nearest_on_element(p: Pt, start: Pt, element: Element) -> Pt:
+    """The point of an element (line segment or arc) nearest to `p`."""
+    if element.centre is None:
+        d = sub(element.end, start)
+        denom = dot(d, d)
+        t = 0.0 if denom == 0 else max(0.0, min(1.0, dot(sub(p, start), d) / denom))
+        return add(start, scale(d, t))
+    c = element.centre
+    if close(p, c):
+        return start
+    a0 = math.atan2(start[1] - c[1], start[0] - c[0])
+    ap = math.atan2(p[1] - c[1], p[0] - c[0])
+    along = (a0 - ap) if element.clockwise else (ap - a0)
+    along %= 2 * math.pi
+    if along <= sweep(start, element) + 1e-12:
+        return add(c, scale(sub(p, c), math.dist(start, c) / math.dist(p, c)))
+    return min((start, element.end), key=lambda q: math.dist(p, q))
+
+
+def _notch(
+    finished: Path, starts: list[Pt], k: int, centre: Pt, r: float, tolerance: float
+) -> tuple[float, int] | None:
+    """The notch the tool at `centre` is wedged in, if it is one: (width, the other wall's
+    index) when the tool overlaps element k and another element on its opposite side (the two
+    walls face each other across the tool, closer together than its diameter)."""
+    wall = nearest_on_element(centre, starts[k], finished.elements[k])
+    towards = sub(centre, wall)
+    best: tuple[float, int] | None = None
+    for j, (s, e) in enumerate(zip(starts, finished.elements, strict=True)):
+        if j == k:
+            continue
+        other = nearest_on_element(centre, s, e)
+        if r - math.dist(centre, other) <= tolerance or dot(towards, sub(centre, other)) >= 0:
+            continue
+        width = math.dist(wall, other)
+        if width < 2 * r and (best is None or width < best[0]):
+            best = (width, j)
+    return best
+
+
 def gouges(finished: Path, tool: Path, r: float, blocks: list[int], units: Units) -> list[Finding]:
     """Where the tool centre comes closer than its radius to another part of the contour.
 
     One warning per contour block cut into, naming the block whose path does it and the
-    deepest cut found at samples an eighth of the tool radius apart.
+    deepest cut found at samples an eighth of the tool radius apart. Where the tool is wedged
+    between two walls closer together than its diameter, the warning says the tool does not
+    fit (no starting point helps); otherwise it is the control's one-segment look-ahead.
     """
-    worst: dict[int, tuple[float, int]] = {}
+    worst: dict[int, tuple[float, int, Pt]] = {}
     starts = [finished.start] + [e.end for e in finished.elements[:-1]]
     tolerance = max(r * 1e-4, half_step(units))
     for point, element in sample(tool, max(r / 8, 1000.0)):
         for k, (s, e) in enumerate(zip(starts, finished.elements, strict=True)):
             depth = r - distance_to_element(point, s, e)
-            if depth > tolerance and depth > worst.get(k, (0.0, 0))[0]:
-                worst[k] = (depth, element.block)
-    return [
-        Finding(
-            blocks[k],
-            Rule.COMP_GOUGE,
-            Severity.WARNING,
+            if depth > tolerance and depth > worst.get(k, (0.0, 0, point))[0]:
+                worst[k] = (depth, element.block, point)
+    findings = []
+    for k, (depth, source, centre) in sorted(worst.items()):
+        cut = (
             f"the compensated path from block {source} cuts into block {blocks[k]} by "
-            f"{_len(depth, units)}; the control looks only one segment ahead, so choose "
-            "another starting point or split the contour",
+            f"{_len(depth, units)}"
         )
-        for k, (depth, source) in sorted(worst.items())
-    ]
+        notch = _notch(finished, starts, k, centre, r, tolerance)
+        if notch is None:
+            advice = (
+                "the control looks only one segment ahead, so choose another starting point "
+                "or split the contour"
+            )
+        else:
+            width, j = notch
+            advice = (
+                f"the notch between blocks {min(blocks[k], blocks[j])} and "
+                f"{max(blocks[k], blocks[j])} is {_len(width, units)} wide, narrower than "
+                f"the {_len(2 * r, units)} tool: the tool does not fit; use a smaller tool "
+                f"(under {_len(width, units)})"
+            )
+        findings.append(Finding(blocks[k], Rule.COMP_GOUGE, Severity.WARNING, f"{cut}; {advice}"))
+    return findings
 
 
 # -- CIRCLE and FRAME routines ------------------------------------------------------------

@@ -3,11 +3,12 @@
 The 1704 manual's programming manuscript (seed 000 Fig. 1-3) brought up to date: part zero
 and the Data Block 0 offsets, the stock to put in the vise (the program's own, or the one
 the simulation sizes from the program's extent: app/cnc/simulate's rule), the tool list
-with each tool's name, diameter, RPM (and gear range, seed 001 §3.4.4: 60-500 low,
-500-4000 high), calibration, coolant and the first block each tool cuts; the hole table
-(every hole in cutting order with its block, position, tool, depth and operation, read from
-the compiled path's hole spans); cycle time per tool and in total; for a target, its
-compatibility report (with the tape length for tape); and the tool path picture. A pure
+with each tool's name, diameter, RPM (and the gear range on the machine's spindle; the
+control's, seed 001 §3.4.4: 60-500 low, 500-4000 high), calibration, coolant and the first
+block each tool cuts; the hole table (every hole in cutting order with its block, position,
+tool, depth and operation, read from the compiled path's hole spans); cycle time per tool
+and in total; for a target, its compatibility report (with the tape length for tape); and
+the tool path picture. A pure
 function of the program, the target's report and the machine: the web page and the CLI
 render the same content.
 """
@@ -23,13 +24,13 @@ from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Report
 from app.cnc.estimate import Estimate, estimate, format_seconds
 from app.cnc.interpret import interpret
-from app.cnc.limits import GEAR_CHANGE_RPM
 from app.cnc.machine import MachineModel
 from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, Op
 from app.cnc.simulate.placements import place
 from app.cnc.simulate.stock import StockError
 from app.cnc.simulate.verify import stock_of
+from app.cnc.spindle import CONTROL, Spindle
 from app.cnc.units import Units, format_decimal, format_length
 
 # The hole table lists this many holes; a program with more says how many more there are.
@@ -98,13 +99,16 @@ class SetupSheet:
     report: list[str] = field(default_factory=list)
 
 
-def gear(rpm: int | None) -> str:
-    """The gear range an RPM needs (seed 001 §3.4.4), and the direction."""
+def gear(rpm: int | None, spindle: Spindle = CONTROL) -> str:
+    """The gear range an RPM needs on the machine's spindle (the control's: seed 001 §3.4.4),
+    and the direction."""
     if rpm is None:
         return "no RPM: the control stops if this tool is used"
     direction = "reverse" if rpm < 0 else "forward"
-    speed = abs(rpm)
-    return f"{'low' if speed <= GEAR_CHANGE_RPM else 'high'} gear, {direction}"
+    if not spindle.runs(rpm):
+        return f"outside the spindle's range ({spindle.text()} rpm), {direction}"
+    named = spindle.gear(rpm)
+    return f"{named}, {direction}" if named else direction
 
 
 def first_cuts(path: CompiledPath) -> dict[int, int]:
@@ -224,7 +228,7 @@ def setup_sheet(
                 name=tool.name,
                 diameter="—" if tool.diameter is None else f"{format_decimal(tool.diameter)} {u}",
                 rpm="—" if tool.rpm is None else str(tool.rpm),
-                gear=gear(tool.rpm),
+                gear=gear(tool.rpm, (machine.spindle if machine else None) or CONTROL),
                 tcal="****" if tool.tcal is None else f"{format_decimal(tool.tcal)} {u}",
                 coolant=tool.coolant.value,
                 first_block=cuts.get(tool.number),

@@ -15,7 +15,7 @@ from dataclasses import replace
 from decimal import Decimal
 from typing import Any
 
-from app.cnc import limits
+from app.cnc import limits, spindle
 from app.cnc.blocks import (
     ARC_PAIRS,
     MILL_CONTOUR_CLASSES,
@@ -234,14 +234,26 @@ class _Checker:
                 self.check_length(0, f"{where} DIA", tool.diameter, units, positive=True)
             if tool.tcal is not None:
                 self.check_length(0, f"{where} TCAL", tool.tcal, units)
-            if tool.rpm is not None and not limits.MIN_RPM <= abs(tool.rpm) <= limits.MAX_RPM:
+            if tool.rpm is not None and not 1 <= abs(tool.rpm) <= spindle.FIELD_MAX_RPM:
                 self.add(
                     0,
                     f"{where} RPM",
                     ERROR,
                     Rule.RANGE,
-                    f"{tool.rpm} is outside the spindle's range; allowed 60 to 4000, or -60 "
-                    "to -4000 to run in reverse (60-500 low gear, 500-4000 high gear)",
+                    f"{tool.rpm} is not a spindle speed; allowed 1 to {spindle.FIELD_MAX_RPM}, "
+                    f"or -1 to -{spindle.FIELD_MAX_RPM} to run in reverse",
+                )
+            elif tool.rpm is not None and not spindle.CONTROL.runs(tool.rpm):
+                # The machine's spindle decides (the export checks it); typed for the
+                # control's, the program is warned.
+                self.add(
+                    0,
+                    f"{where} RPM",
+                    WARNING,
+                    Rule.RANGE,
+                    f"{tool.rpm} is outside the control's spindle range, "
+                    f"{spindle.CONTROL.range_text()}; an export is refused unless the machine "
+                    "chosen runs it (the spindle range in its profile)",
                 )
 
     # -- fields -------------------------------------------------------------------------

@@ -29,7 +29,7 @@ from typing import Any, BinaryIO, ClassVar, Protocol
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.copy import CopyError, resolve_copies
-from app.cnc.machine import MachineModel, check_travel
+from app.cnc.machine import MachineModel, check_spindle, check_travel
 from app.cnc.needs import unmet
 from app.cnc.options import Option, OptionError, OptionKind
 from app.cnc.path import CompiledPath
@@ -407,6 +407,10 @@ def export(
     if machine is not None:
         for crossing in check_travel(path, machine):
             report.error(crossing.block, crossing.message)
+    if Need.SPINDLE_SPEEDS in needs:
+        # The speeds written must be ones the machine's spindle runs.
+        for message in check_spindle(program, None if machine is None else machine.spindle):
+            report.error(None, message)
     sink: BinaryIO = out if out is not None else _spool()
     counted = _Counted(sink)
     try:

@@ -183,11 +183,11 @@ def entered(toolpath: Toolpath, first_z: int) -> Toolpath:
     feed or arc) at `first_z` (the height the tool is at: unknown to the file), then a
     rapid to the highest of those rapids (the entry, with G43), then, before a feed or an
     arc, down to where the tool path is. A tool change among them starts the entry height
-    again from the Z at the change; the first change is the file's first tool call, read
+    again from the next of those rapids; the first change is the file's first tool call, read
     as the tool the program starts with."""
     x, y, z = toolpath.start
     entry = z
-    called = False
+    called = fresh = False
     moves = list(toolpath.moves)
     out: list[Move] = []
     for k, move in enumerate(moves):
@@ -196,6 +196,7 @@ def entered(toolpath: Toolpath, first_z: int) -> Toolpath:
             # first change calls the first tool (T<n> M6 before any move: the tool the
             # program starts with, for a reader).
             entry = z = move.z
+            fresh = True
             if called:
                 out.append(ToolChange(move.block, move.tool, first_z))
             called = True
@@ -204,7 +205,8 @@ def entered(toolpath: Toolpath, first_z: int) -> Toolpath:
             out.append(move)
             continue
         if isinstance(move, Rapid) and (move.x, move.y) == (x, y):
-            entry, z = max(entry, move.z), move.z
+            entry, z = (move.z if fresh else max(entry, move.z)), move.z
+            fresh = False
             continue
         ex, ey = (move.x, move.y) if isinstance(move, Rapid) else (x, y)
         block = move.block

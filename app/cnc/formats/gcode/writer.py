@@ -161,6 +161,7 @@ class Writer:
         # rapids are held back and the highest of them is where the entry comes down to.
         self.entering = False
         self.entry_z = self.z
+        self.entry_fresh = False  # a tool change before the entry: the next rapid sets it
 
     # -- words and lines ------------------------------------------------------------------
 
@@ -604,7 +605,8 @@ class Writer:
         op, _tag, block, _x, _y, _z, cx, cy, feed, value = row
         if self.entering and op <= Op.ARC_CCW:
             if self.absorbs(op, row[3], row[4]):
-                self.entry_z = max(self.entry_z, z)
+                self.entry_z = z if self.entry_fresh else max(self.entry_z, z)
+                self.entry_fresh = False
                 self.z, self.wz = z, wz
                 return
             # A rapid goes straight to its X/Y; a feed or arc starts where the tool is.
@@ -677,8 +679,11 @@ class Writer:
         self.z = z
         self.wz = self.length(z)
         if self.entering:
-            # Before the first position: the entry writes this tool's G43 with its Z.
+            # Before the first position this change is the first tool call: the entry
+            # writes its G43 with its Z, the clearance the tool path rises to next (the
+            # Z at the change is the old tool's head height, which the file never said).
             self.entry_z = z
+            self.entry_fresh = True
             return
         self.line(self.code("G", 43), self.code("H", tool))
 

@@ -20,7 +20,7 @@ import math
 import re
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from app.cnc.blocks import Program
@@ -29,7 +29,7 @@ from app.cnc.imports import read_program
 from app.cnc.imports import steps as steps_module
 from app.cnc.imports.steps import Parsed
 from app.cnc.interpret import interpret
-from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange, Toolpath
+from app.cnc.toolpath import ArcFeed, Feed, Move, Rapid, ToolChange, Toolpath
 from app.cnc.units import Units
 
 # The import format that reads each program target back, and its reader options.
@@ -179,6 +179,47 @@ def deviation(expected: list[Step], actual: list[Step], feed_step: int = 0) -> i
     return worst
 
 
+def entered(toolpath: Toolpath, first_z: int) -> Toolpath:
+    """The tool path as our G-code moves it (writer.py, `Writer.start`): the tool path's
+    Z-only rapids at its start X/Y are not written; the first position is a rapid across to
+    the X/Y of the first move that goes anywhere else (a rapid's end, or the start for a
+    feed or arc) at `first_z` (the height the tool is at: unknown to the file), then a
+    rapid to the highest of those rapids (the entry, with G43), then, before a feed or an
+    arc, down to where the tool path is. A tool change among them starts the entry height
+    again from the next of those rapids; the first change is the file's first tool call, read
+    as the tool the program starts with."""
+    x, y, z = toolpath.start
+    entry = z
+    called = fresh = False
+    moves = list(toolpath.moves)
+    out: list[Move] = []
+    for k, move in enumerate(moves):
+        if isinstance(move, ToolChange):
+            # The file says no Z before the entry: the change leaves it where it was. The
+            # first change calls the first tool (T<n> M6 before any move: the tool the
+            # program starts with, for a reader).
+            entry = z = move.z
+            fresh = True
+            if called:
+                out.append(ToolChange(move.block, move.tool, first_z))
+            called = True
+            continue
+        if not isinstance(move, Rapid | Feed | ArcFeed):
+            out.append(move)
+            continue
+        if isinstance(move, Rapid) and (move.x, move.y) == (x, y):
+            entry, z = (move.z if fresh else max(entry, move.z)), move.z
+            fresh = False
+            continue
+        ex, ey = (move.x, move.y) if isinstance(move, Rapid) else (x, y)
+        block = move.block
+        out += [Rapid(block, ex, ey, first_z), Rapid(block, ex, ey, entry)]
+        if not isinstance(move, Rapid):
+            out.append(Rapid(block, ex, ey, z))
+        return replace(toolpath, moves=out + moves[k:])
+    return replace(toolpath, moves=out)
+
+
 def file_trace(parsed: Parsed, start: tuple[int, int, int], *, machine: bool = False) -> list[Step]:
     """The moves a file says, as `trace` gives a tool path's: our parser's reading of the
     file (its steps), with each canned cycle's hole expanded here the way seed 003's tables
@@ -309,18 +350,13 @@ def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
 def ours(toolpath: Toolpath) -> list[Motion]:
     """Our motions as rs274 reports them for our G-code: in program units, from LinuxCNC's
     start on. rs274 starts at machine zero, which is program zero (G54 is the operator's,
-    not written); the exported program moves only Z until its first move across (which
-    names X and Y), so until then the XY is the machine's."""
+    not written), and the G91 G28 Z0 retract goes to machine zero too: the first move
+    across is at Z0 there (`entered`)."""
     unit = toolpath.units.nm
     x, y, z = 0.0, 0.0, 0.0
     motions = []
-    sx, sy, sz = (v / unit for v in toolpath.start)
-    moved_across = False
-    if sz != z:
-        motions.append(Motion("T", (x, y, sz)))
-        z = sz
     places = toolpath.units.dump_places
-    for move in toolpath.moves:
+    for move in entered(toolpath, 0).moves:
         if not isinstance(move, Rapid | Feed | ArcFeed):
             continue
         # Compared as written: a move shorter than the output resolution is not written.
@@ -329,9 +365,6 @@ def ours(toolpath: Toolpath) -> list[Motion]:
             round(move.y / unit, places),
             round(move.z / unit, places),
         )
-        moved_across = moved_across or (end[0], end[1]) != (sx, sy)
-        if not moved_across:
-            end = (0.0, 0.0, end[2])
         if isinstance(move, ArcFeed):
             centre = (move.cx / unit, move.cy / unit)
             motions.append(Motion("A", end, centre, move.clockwise, move.feed / unit))

@@ -41,6 +41,7 @@ from app.cnc.imports import NoteKind, read_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, Severity
 from app.cnc.sizes import MAX_IMPORT_LINES
+from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
 from tests.imports.support import (
@@ -133,7 +134,13 @@ for name in ("pocket-islands", "pocket-mm", "pocket-loop"):
 # Where the blocks read back cut the same XY path but not the same Z moves, and why. (The
 # file itself says the tool path exactly: tests/test_referee.py.)
 XY_ONLY: dict[str, dict[str, str]] = {
-    "gcode-linuxcnc": {},
+    # A lone TAP feeds out and never retracts, and the G-code's safe start (writer.py
+    # `Writer.start`) comes down to the first clearance, Z UP + Z RET, not Z RET: nothing
+    # in the file says Z RET, which comes back as that height. (Open: issue 29 point 4.)
+    "gcode-linuxcnc": {
+        "tap-inch": "a lone TAP's file does not say Z RET (the start comes down to Z UP + Z RET)",
+        "tap-metric": "a lone TAP's file does not say Z RET (the start comes down to Z UP + Z RET)",
+    },
     "tape-ascii": {},
     # An EIA tape has no comments: its Z words include each tool's TCAL and nothing says
     # what it is, so each tool's Z UP comes back shifted by it, and the retract height
@@ -174,6 +181,23 @@ def _pocket_round_trip(case: Path, target: str) -> tuple[Program, Program, int]:
     return original, result.program, round(before.hausdorff_distance(after))
 
 
+def first_tool_called(program: Program) -> Program:
+    """`program` as its G-code says it: a tool change before the first position is the
+    file's first tool call (`T<n> M6` before any move), which reads back as the tool in
+    the spindle at the start (Data Block 0's current tool)."""
+    toolpath = interpret(program)
+    x, y, _ = toolpath.start
+    for move in toolpath.moves:
+        if isinstance(move, ToolChange):
+            block0 = dataclasses.replace(program.block0, current_tool=move.tool)
+            return dataclasses.replace(program, block0=block0)
+        if isinstance(move, Feed | ArcFeed) or (
+            isinstance(move, Rapid) and (move.x, move.y) != (x, y)
+        ):
+            break
+    return program
+
+
 def _round_trip(case: Path, target: str) -> tuple[Program, Program, int]:
     if case.name in NOT_THE_SAME_BLOCKS and NOT_THE_SAME_BLOCKS[case.name] == POCKET_PASSES:
         return _pocket_round_trip(case, target)
@@ -189,6 +213,8 @@ def _round_trip(case: Path, target: str) -> tuple[Program, Program, int]:
     assert result.format == FORMAT[target]
     imported = with_rpms(result.program, speeds(original))
     expected = two_axis(original) if target == "events" else original
+    if target == "gcode-linuxcnc":
+        expected = first_tool_called(expected)
     xy_only = "*" in XY_ONLY[target] or case.name in XY_ONLY[target]
     feed_step = FEED_STEP[FORMAT[target]][original.units]
     if case.name in MIXED:

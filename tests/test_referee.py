@@ -71,6 +71,7 @@ from tests.referee import (
     READER,
     RESOLUTION,
     deviation,
+    entered,
     file_trace,
     referee_gcode,
     trace,
@@ -110,6 +111,9 @@ def assert_file_is_the_tool_path(program: Program, target: str, data: bytes) -> 
         parsed = parse_tape(data, program.name, options)
     toolpath = interpret(program)
     step = RESOLUTION[reader][units]
+    if reader == "gcode":
+        # The file's safe start: its first move across is at the height it starts at.
+        toolpath = entered(toolpath, machine_start(toolpath, machine)[2])
     expected = trace(toolpath, machine=machine, written=step)
     actual = file_trace(parsed, machine_start(toolpath, machine), machine=machine)
     # Two numbers rounded to the file's step each: their difference is off by up to one.

@@ -29,6 +29,9 @@ class Dialect:
     keep_trailing_zeros: bool  # the default of the trailing_zeros option
     line_numbers: bool  # the default of the sequence-numbers option
     largest_line_number: int  # N numbers restart after this (seed 003 §2.2.4: 0-999)
+    # The default of the tool-change option: T<n> M6 for the first tool (writer.py, "the
+    # start"); None: the dialect has no such option (the BOSS tape writes its own start).
+    first_tool_change: bool | None = None
 
     def dwell(self, seconds: Decimal, cycle: bool) -> str:
         """The dwell word of a G04 (`cycle` False) or a G82 canned cycle."""
@@ -102,6 +105,27 @@ def dialect_options(dialect: Dialect) -> tuple[Option, ...]:
             if dialect.can_write_offsets
             else ()
         ),
+        *(
+            (
+                Option(
+                    "tool-change",
+                    OptionKind.BOOL,
+                    dialect.first_tool_change,
+                    "write T<n> M6 for the first tool before its first move (the control "
+                    "asks for it, or its changer fetches it)",
+                ),
+                Option(
+                    "start-retract",
+                    OptionKind.BOOL,
+                    True,
+                    "raise Z straight up to the machine's reference point (G91 G28 Z0) "
+                    "before the first move across; off: the tool must start above the part "
+                    "at the height the report gives",
+                ),
+            )
+            if dialect.first_tool_change is not None
+            else ()
+        ),
         Option(
             "spindle-speeds",
             OptionKind.CHOICE,
@@ -134,6 +158,7 @@ LINUXCNC = Dialect(
     keep_trailing_zeros=True,
     line_numbers=False,
     largest_line_number=99999,
+    first_tool_change=True,
 )
 FANUC = Dialect(
     two_digit_codes=True,
@@ -148,6 +173,7 @@ FANUC = Dialect(
     keep_trailing_zeros=False,
     line_numbers=True,
     largest_line_number=9999,
+    first_tool_change=True,
 )
 # The ProtoTRAK's "modified Fanuc 6" (seed 003 §2.1): a Fanuc 6 post's output with a G code
 # on every line, spaces between words and `;` ending each block; line numbers 0-999 (§2.2.4).
@@ -164,6 +190,11 @@ PROTOTRAK = Dialect(
     keep_trailing_zeros=False,
     line_numbers=True,
     largest_line_number=999,
+    # Seed 003 §2.1: the Plus converts what a Fanuc 6 post writes for a machining centre
+    # with a tool changer; the manual's own sample (§2.2.6.2) calls the first tool at N2
+    # (`T1 M16`, which we read as the scan's M06: M16 is in no table of the manual, and
+    # the sample changes every later tool with M06).
+    first_tool_change=True,
 )
 # The Bridgeport BOSS (seed 004): G70/G71, decimal points, a dwell's X in seconds.
 BOSS = Dialect(

@@ -823,16 +823,24 @@ class _Reader:
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
             else:
-                if self.tool == 0 and self.moves_made:
-                    # Moves before the first change, with no tool named (a BOSS tape has no
-                    # length offsets to name it): the tape reader's reading, tool 1.
-                    self.initial_tool = 1
-                    self.notes.assumed(
-                        None, "the file does not say which tool it starts with: tool 1"
+                if self.tool == 0 and not self.moves_made:
+                    # The first tool called before any move (a post's start): the tool in
+                    # the spindle when the program starts, no change.
+                    self.initial_tool = self.tool = self.selected_tool
+                    self.notes.became(
+                        line, f"T{self.tool} M6 before any move: tool {self.tool} starts"
                     )
-                self.steps.append(ToolChange(line, self.selected_tool))
-                self.change_pending = (line, self.selected_tool, len(self.steps) - 1)
-                self.tool = self.selected_tool
+                else:
+                    if self.tool == 0:
+                        # Moves before the first change, with no tool named (a BOSS tape has
+                        # no length offsets to name it): the tape reader's reading, tool 1.
+                        self.initial_tool = 1
+                        self.notes.assumed(
+                            None, "the file does not say which tool it starts with: tool 1"
+                        )
+                    self.steps.append(ToolChange(line, self.selected_tool))
+                    self.change_pending = (line, self.selected_tool, len(self.steps) - 1)
+                    self.tool = self.selected_tool
         for _, code in m_codes:
             if code in ("3", "4"):
                 self.spindle = code == "3"
@@ -1159,6 +1167,18 @@ class _Reader:
             )
             self.x = self.y = self.z = None
             return
+        named = [a for a in AXES if block.has(a)]
+        if self.incremental and all(Decimal(block.other[a].text) == 0 for a in named):
+            # `G91 G28 Z0`, a post's retract: the intermediate point is where the tool is,
+            # so the tool goes straight to the reference point (not in the file).
+            for a in named:
+                setattr(self, a.lower(), None)
+            self.notes.assumed(
+                line,
+                f"G{code} G91 {' '.join(a + '0' for a in named)}: straight to the machine's "
+                "reference point, which the file does not give",
+            )
+            return
         x, y, z = self.target(block)
         self.steps.append(Rapid(line, x, y, z, self.current_units()))
         self.moves_made = True
@@ -1212,6 +1232,10 @@ class _Reader:
             self.note_zero(block.line, AXES[k])
         return current + value
 
+    def uncut(self) -> bool:
+        """Whether no feed, arc or cycle has been read yet."""
+        return not any(isinstance(s, Feed | Arc | Cycle) for s in self.steps)
+
     def note_zero(self, line: int, axis: str) -> None:
         self.notes.assumed(line, f"{axis} not known yet: the tool starts over part zero ({axis}0)")
 
@@ -1230,8 +1254,13 @@ class _Reader:
         if motion != "0":
             self.change_pending = None
         if motion == "0":
-            if not self.moves_made and not (block.has("X") or block.has("Y")):
-                self.start_z = z  # the first move, up or down to where the program starts
+            if not (block.has("X") or block.has("Y")) and (
+                not self.moves_made
+                or (self.start_z is None and self.z is None and z is not None and self.uncut())
+            ):
+                # The first Z move, up or down to where the program starts (after a move
+                # across at an unknown height, as a post's `G0 X Y` / `G43 Z H` starts).
+                self.start_z = z
             self.steps.append(Rapid(line, x, y, z, units))
             self.moves_made = True
         elif motion == "1":

@@ -157,6 +157,11 @@ class Writer:
         self.x, self.y, self.z = x, y, z + self.lift
         self.wx, self.wy, self.wz = self.length(x), self.length(y), self.length(self.z)
         self.lines = 0  # lines emitted
+        # The start (`start`): until the first position is written, the tool path's Z-only
+        # rapids are held back and the highest of them is where the entry comes down to.
+        self.entering = False
+        self.entry_z = self.z
+        self.entry_fresh = False  # a tool change before the entry: the next rapid sets it
 
     # -- words and lines ------------------------------------------------------------------
 
@@ -399,15 +404,108 @@ class Writer:
                     f"tool {number} is uncalibrated: its Z words are measured from wherever "
                     "the operator sets its length",
                 )
-        self.first_tool()
-        # Only Z is known at the start: the first move across writes both X and Y.
-        self.line(self.code("G", 0), f"Z{self.wz}")
-        self.motion = "0"
-        self.xy_known = False
+        self.start()
 
-    def first_tool(self) -> None:
-        if self.path.initial_tool:
-            self.line(self.code("G", 43), self.code("H", self.path.initial_tool))
+    # -- the start ------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """The safe start, as a CAM post for a Fanuc-style machining centre writes it (and
+        seed 003 §2.2.6.2, the ProtoTRAK's sample, brings each tool in):
+
+            G91 G28 Z0 / G90     Z straight up to the reference point (start-retract)
+            T1 M6                the first tool (tool-change)
+            S… M3                the spindle, where the program starts it
+            G0 X… Y…             across to the first position, at that height
+            G43 Z… H1            the length offset with the first Z: down to the clearance
+
+        Where the spindle is when the operator presses cycle start is unknown, so nothing
+        moves down before the first X/Y position: the G28 retract only goes up (to the top
+        of Z travel on a mill homed there; LinuxCNC's stored G28 position, machine home
+        unless G28.1 set another), and the first Z is written with G43, after the move
+        across. The tool path's own first moves (Z-only rapids at part zero up to its
+        clearance) are not written: the entry takes the highest of them.
+
+        The writer holds the entry until the first motion (`enter`): the spindle and
+        coolant the program starts before it stay where they are."""
+        if self.o.get("start-retract", True):
+            self.line(self.code("G", 91), self.code("G", 28), "Z0")
+            self.line(self.code("G", 90))
+        tool = self.path.initial_tool
+        if tool and self.o.get("tool-change") and not self.changes_first():
+            self.line(f"T{tool}", self.code("M", 6))
+        self.entering = True
+        self.entry_z = self.z
+        self.xy_known = False
+        self.motion = None
+
+    def changes_first(self) -> bool:
+        """Whether the tool path changes tools before its first position (then that change
+        calls the first tool). Only the rows up to there are read."""
+        for chunk in self.path.chunks():
+            rows = chunk.rows
+            for op, x, y in zip(
+                rows["op"].tolist(), rows["x"].tolist(), rows["y"].tolist(), strict=True
+            ):
+                if op == Op.TOOL:
+                    return True
+                if op <= Op.ARC_CCW and not self.absorbs(op, x, y):
+                    return False
+        return False
+
+    def absorbs(self, op: int, x: int, y: int) -> bool:
+        """Whether a row before the entry is a Z-only rapid at the start's X/Y: the tool
+        path rising (or settling) to its clearance where the spindle may not be."""
+        return op == Op.RAPID and (x, y) == (self.x, self.y)
+
+    def enter(self, x: int, y: int, z: int) -> None:
+        """The first position: across to (x, y) at the height the tool is at, then down to
+        the entry height with the first tool's length offset, then (when the tool path
+        went lower at its start) down to `z`, where the tool path is."""
+        self.entering = False
+        self.xy_known = True
+        wx, wy = self.length(x), self.length(y)
+        self.line(self.motion_word("0"), f"X{wx}", f"Y{wy}")
+        self.x, self.y, self.wx, self.wy = x, y, wx, wy
+        clear = self.length(self.entry_z)
+        tool = self.tool
+        if tool:
+            self.line(
+                self.motion_word("0"),
+                self.code("G", 43),
+                f"Z{clear}",
+                self.code("H", tool),
+            )
+        else:
+            self.line(self.motion_word("0"), f"Z{clear}")
+        self.report_start(x, y, clear, tool)
+        self.z, self.wz = self.entry_z, clear
+        if z != self.entry_z:
+            wz = self.length(z)
+            if wz != self.wz:
+                self.line(self.motion_word("0"), f"Z{wz}")
+            self.z, self.wz = z, wz
+
+    def report_start(self, x: int, y: int, clear: str, tool: int) -> None:
+        """Where the tool must be when the program starts (the report, and so the set-up
+        sheet)."""
+        offset = f" with {self.code('G', 43)} {self.code('H', tool)}" if tool else ""
+        to = f"X{self.length(x)} Y{self.length(y)}"
+        if self.o.get("start-retract", True):
+            self.report.note(
+                None,
+                f"start: the first move is Z straight up to the machine's reference point "
+                f"({self.code('G', 91)} {self.code('G', 28)} Z0: where the control's G28 "
+                f"returns, the top of Z travel on a mill homed there), then across to {to} "
+                f"at that height, then down to Z{clear}{offset}; start with the tool where it can "
+                "rise straight up",
+            )
+        else:
+            self.report.warning(
+                None,
+                f"start: start with the tool above the part at Z{clear} or higher (clear of "
+                f"every clamp): the first move is across to {to} at the height the tool is "
+                f"at, then down to Z{clear}{offset} (start-retract=no)",
+            )
 
     def survey(self) -> tuple[set[int], bool]:
         """The tools the program uses, and whether any rapid or feed leaves the start Z."""
@@ -509,6 +607,17 @@ class Writer:
 
     def move(self, row: Row, wx: str, wy: str, wz: str, z: int, chunk: Chunk) -> None:
         op, _tag, block, _x, _y, _z, cx, cy, feed, value = row
+        if self.entering and op <= Op.ARC_CCW:
+            if self.absorbs(op, row[3], row[4]):
+                self.entry_z = z if self.entry_fresh else max(self.entry_z, z)
+                self.entry_fresh = False
+                self.z, self.wz = z, wz
+                return
+            # A rapid goes straight to its X/Y; a feed or arc starts where the tool is.
+            if op == Op.RAPID:
+                self.enter(row[3], row[4], self.z)
+            else:
+                self.enter(self.x, self.y, self.z)
         if op == Op.RAPID or op == Op.FEED:
             words = self.axis_words(wx, wy, wz, down=z < self.z)
             if words:
@@ -573,6 +682,13 @@ class Writer:
         self.tool = tool
         self.z = z
         self.wz = self.length(z)
+        if self.entering:
+            # Before the first position this change is the first tool call: the entry
+            # writes its G43 with its Z, the clearance the tool path rises to next (the
+            # Z at the change is the old tool's head height, which the file never said).
+            self.entry_z = z
+            self.entry_fresh = True
+            return
         self.line(self.code("G", 43), self.code("H", tool))
 
     def index(self, block: int) -> None:
@@ -598,6 +714,8 @@ class Writer:
         the hole is not such a cycle (then its moves are written one by one)."""
         if not self.may_cycle(span) or z_end != self.z:
             return False
+        if self.entering:
+            self.enter(span.x, span.y, self.z)
         x, y, r, bottom, feed = span.x, span.y, span.r, span.bottom, span.feed
         z0 = self.z
         lift = self.lift

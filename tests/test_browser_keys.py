@@ -63,6 +63,7 @@ def test_twenty_mill_std_blocks_typed_without_a_pause_lose_no_key(
     settle(page)
     blocks = saved_blocks(served, program_id)
     assert [kind_of(b) for b in blocks[1:]] == ["MILL_STD"] * ENTRIES
+    assert page.url == f"{served.url}/programs/{program_id}"  # all in the page, no reload
     assert blocks[1:] == tuple(
         MillLine(x=x, y=y, z_dn=D("-0.3"), feed_xy=D(10), tool=1, mode=Mode.ABS)
         for x, y in expected
@@ -86,12 +87,13 @@ def test_menus_answer_without_a_request(page: Page, served: Served) -> None:
     """A menu is known in the page: the MILL sub-type menu shows at once, without asking
     the server (after closing a pocket's island a menu took 1.9 s); Esc goes back to the
     type menu the same way. Only choosing the block's type asks for its prompts."""
-    open_editor(page, served, program_of(drill("0", "0")))
+    program_id = open_editor(page, served, program_of(drill("0", "0")))
     asked: list[str] = []
 
     def record(request: Request) -> None:
         if "/entry" in request.url:
-            asked.append(request.url)
+            # Asked by htmx (a fragment), not by leaving the page.
+            asked.append(request.url if request.headers.get("hx-request") == "true" else "page")
 
     page.on("request", record)
     page.keyboard.press("5")
@@ -109,6 +111,7 @@ def test_menus_answer_without_a_request(page: Page, served: Served) -> None:
     page.keyboard.press("1")
     expect(page.locator("#entry h2")).to_contain_text("Block 2: MILL STD")
     assert len(asked) == 1 and "kind=MILL_STD" in asked[0], asked
+    assert page.url == f"{served.url}/programs/{program_id}"
 
 
 def test_the_shortcuts_are_shown_on_the_page(page: Page, served: Served) -> None:

@@ -54,18 +54,67 @@
   // Alt+letter reaches the element with that access key on every browser (browsers disagree
   // on the modifier, and some headless ones have none): a field gets the focus, anything
   // else is clicked.
-  document.addEventListener("keydown", function (event) {
-    if (!event.altKey || event.ctrlKey || event.metaKey || event.key.length !== 1) { return; }
+  function shortcut(event) {
+    if (!event.altKey || event.ctrlKey || event.metaKey || event.key.length !== 1) { return false; }
     var el = document.querySelector('[accesskey="' + event.key.toLowerCase() + '"]');
-    if (!el) { return; }
+    if (!el) { return false; }
     event.preventDefault();
     if (/^(INPUT|SELECT|TEXTAREA)$/.test(el.tagName) && el.type !== "checkbox") { el.focus(); }
     else { el.click(); }
+    return true;
+  }
+
+  // The menus are in the page: a type with sub-types shows its menu (a template the server
+  // sent with the type menu) at once, and Esc or "back" shows the type menu again. A choice
+  // that does not fit here says why, without asking the server.
+  var typeMenu = null; // the type menu's nodes while a sub-type menu is shown in its place
+
+  function showMenu(shown, nodes) {
+    var entry = document.getElementById("entry");
+    entry.querySelectorAll(".message.refused").forEach(function (el) { el.remove(); });
+    shown.replaceChildren.apply(shown, nodes);
+    if (window.htmx) { window.htmx.process(shown); }
+    focusEntry();
+  }
+
+  document.addEventListener("click", function (event) {
+    var link = event.target.closest ? event.target.closest("#entry a.choice, #entry a[data-menu-back]") : null;
+    if (!link) { return; }
+    var entry = document.getElementById("entry");
+    var shown = entry.querySelector("[data-menu-shown]");
+    if (link.classList.contains("unavailable")) {
+      event.preventDefault();
+      event.stopPropagation();
+      entry.querySelectorAll(".message.refused").forEach(function (el) { el.remove(); });
+      var note = document.createElement("p");
+      note.className = "message error refused";
+      note.setAttribute("role", "alert");
+      note.textContent = link.title;
+      entry.prepend(note);
+      return;
+    }
+    if (!shown) { return; }
+    if (link.hasAttribute("data-menu-back") && typeMenu) {
+      event.preventDefault();
+      event.stopPropagation();
+      var nodes = typeMenu;
+      typeMenu = null;
+      showMenu(shown, nodes);
+      return;
+    }
+    var menu = link.getAttribute("data-menu");
+    var template = menu && entry.querySelector('template[data-menu="' + menu + '"]');
+    if (!template) { return; }
+    event.preventDefault();
+    event.stopPropagation();
+    typeMenu = Array.from(shown.childNodes);
+    showMenu(shown, Array.from(template.content.cloneNode(true).childNodes));
   }, true);
 
   // Enter moves to the next prompt, as ENTER ADV does on the control; on the last one it
-  // enters the block. Escape goes back one step (leaving a block unsaved).
-  document.addEventListener("keydown", function (event) {
+  // enters the block. Escape goes back one step (leaving a block unsaved). Returns whether
+  // the key was taken (else it does what it does in the browser).
+  function editorKey(event) {
     var target = event.target;
     var form = target.closest ? target.closest("form.block-form, form.db0-form") : null;
     if (event.key === "Enter" && (event.ctrlKey || event.metaKey) && target.form) {
@@ -120,12 +169,112 @@
       if (back) { event.preventDefault(); back.click(); }
       return;
     }
-    if (!typing && /^[0-9]$/.test(event.key)) {
+    if (!typing && /^[0-9]$/.test(event.key) && !event.altKey && !event.ctrlKey && !event.metaKey) {
       // 0 is the tenth choice (POCKET), as on a phone's keypad.
       var choice = document.querySelector('#entry .choice[data-key="' + event.key + '"]');
       if (choice) { event.preventDefault(); choice.click(); }
     }
+  }
+
+  // No key is lost (issue 29): while the server answers a key (a block entered, a type
+  // chosen), the keys typed after it wait here and are applied in order once its answer is
+  // in the page, as the control takes keys typed ahead of its screen.
+  var queue = [];
+  var busy = 0; // requests for the editor's panels in flight
+  var busySince = 0;
+  var MODIFIERS = /^(Shift|Control|Alt|AltGraph|Meta|CapsLock|NumLock|Fn|OS)$/;
+
+  function counted(ctx) {
+    // The drawing (and the preview's parts) follow an edit on their own: no key waits on them.
+    var source = ctx && ctx.sourceElement;
+    return !(source && source.closest && source.closest("#drawing-refresh, .preview"));
+  }
+
+  document.addEventListener("htmx:before:request", function (event) {
+    var ctx = event.detail && event.detail.ctx;
+    if (!ctx || !counted(ctx) || ctx.millblocksKeys) { return; }
+    ctx.millblocksKeys = true;
+    if (busy === 0) { busySince = Date.now(); }
+    busy += 1;
   });
+  document.addEventListener("htmx:finally:request", function (event) {
+    var ctx = event.detail && event.detail.ctx;
+    if (!ctx || !ctx.millblocksKeys) { return; }
+    ctx.millblocksKeys = false;
+    busy = Math.max(0, busy - 1);
+    if (busy === 0) { drain(); }
+  });
+
+  function waiting() {
+    // A server that never answers must not keep the keyboard: after 20 s keys go through.
+    if (busy > 0 && Date.now() - busySince > 20000) { busy = 0; }
+    return busy > 0;
+  }
+
+  // One key from the queue, as if pressed now, on whatever has the focus now.
+  function replay(key) {
+    var target = document.activeElement || document.body;
+    var taken = false;
+    var event = {
+      key: key.key, ctrlKey: key.ctrlKey, altKey: key.altKey, metaKey: key.metaKey,
+      shiftKey: key.shiftKey, target: target,
+      preventDefault: function () { taken = true; },
+    };
+    if (shortcut(event)) { return; }
+    editorKey(event);
+    if (!taken) { browserDefault(target, key); }
+  }
+
+  // What the browser does with a key nobody took: a character typed into a prompt, a
+  // deletion, a button pressed, Tab to the next prompt.
+  function browserDefault(target, key) {
+    if (key.ctrlKey || key.metaKey || key.altKey) { return; }
+    var text = target.tagName === "INPUT" && !/^(checkbox|radio|button|submit|hidden)$/.test(target.type);
+    if (text && key.key.length === 1) {
+      var start = target.selectionStart === null ? target.value.length : target.selectionStart;
+      var end = target.selectionEnd === null ? start : target.selectionEnd;
+      target.setRangeText(key.key, start, end, "end");
+      target.dispatchEvent(new Event("input", { bubbles: true }));
+    } else if (text && key.key === "Backspace") {
+      var from = target.selectionStart, to = target.selectionEnd;
+      if (from === to && from > 0) { from -= 1; }
+      target.setRangeText("", from, to, "end");
+      target.dispatchEvent(new Event("input", { bubbles: true }));
+    } else if (key.key === " " && target.type === "checkbox") {
+      target.click();
+    } else if ((key.key === "Enter" || key.key === " ") && /^(BUTTON|A)$/.test(target.tagName)) {
+      target.click();
+    } else if (key.key === "Tab") {
+      var all = Array.from(document.querySelectorAll("#entry input:not([type=hidden]), #entry select, #entry button, #entry a[href]"))
+        .filter(function (el) { return !el.disabled; });
+      var at = all.indexOf(target);
+      var next = all[at + (key.shiftKey ? -1 : 1)];
+      if (next) { next.focus(); }
+    }
+  }
+
+  // One key at a time, each in its own turn: a key that asks the server (its request starts
+  // within the turn) holds the rest until the answer is in.
+  function drain() {
+    if (waiting() || queue.length === 0) { return; }
+    replay(queue.shift());
+    setTimeout(drain, 0);
+  }
+
+  document.addEventListener("keydown", function (event) {
+    if (MODIFIERS.test(event.key) || event.isComposing) { return; }
+    if (waiting() || queue.length > 0) {
+      event.preventDefault();
+      event.stopPropagation();
+      queue.push({
+        key: event.key, ctrlKey: event.ctrlKey, altKey: event.altKey,
+        metaKey: event.metaKey, shiftKey: event.shiftKey,
+      });
+      return;
+    }
+    if (shortcut(event)) { return; }
+    editorKey(event);
+  }, true);
 
   // After htmx swaps a part of the editor in, put the cursor on the first prompt (or the
   // first choice), and keep the block list in step with the entry panel.
@@ -173,8 +322,22 @@
     }
   });
 
-  document.addEventListener("htmx:after:swap", focusEntry);
-  document.addEventListener("htmx:afterSwap", focusEntry);
+  // Only a new entry panel takes the focus: the drawing that follows an edit comes in while
+  // the next block is typed, and must not move the cursor back to its first prompt.
+  var shownEntry = null;
+  function swapped() {
+    var entry = document.getElementById("entry");
+    if (entry !== shownEntry) {
+      shownEntry = entry;
+      typeMenu = null;
+      focusEntry();
+      return;
+    }
+    syncList();
+    var blocks = document.getElementById("blocks");
+    if (blocks !== shownList) { shownList = blocks; showFocus(); }
+  }
+  document.addEventListener("htmx:after:swap", swapped);
 
   var reloadTimer = null;
 
@@ -198,25 +361,103 @@
   document.addEventListener("DOMContentLoaded", function () {
     var active = document.activeElement;
     if (active && active.matches("input[data-field]")) { active.select(); }
+    shownEntry = document.getElementById("entry");
     focusEntry();
   });
   // Verify in the editor: opening the panel fetches the report per block (the simulation
-  // runs on the server) and marks the rows of the blocks it names.
-  document.addEventListener("toggle", function (event) {
-    var panel = event.target;
-    if (!panel.matches || !panel.matches("details.verify-panel") || !panel.open || panel.dataset.loaded) { return; }
-    panel.dataset.loaded = "1";
+  // runs on the server) and marks the rows of the blocks it names. A report is about one
+  // version of the program (`data-version`): once the page shows another (any edit), its
+  // block numbers may name other blocks, so it is put away, the panel says it is out of
+  // date, and one key (Alt+R, or its button) runs it again.
+  function pageVersion() {
+    var version = document.getElementById("version");
+    return version ? version.getAttribute("data-version") : null;
+  }
+
+  function unmark() {
+    document.querySelectorAll(".block-row.has-findings").forEach(function (row) { row.classList.remove("has-findings"); });
+  }
+
+  function runVerify(panel) {
     var body = panel.querySelector(".verify-body");
+    var asked = pageVersion();
+    panel.dataset.state = "running";
+    panel.dataset.version = asked || "";
+    unmark();
+    body.innerHTML = '<p class="hint">Simulating…</p>';
     fetch(panel.dataset.report, { credentials: "same-origin" }).then(function (response) {
       return response.text().then(function (text) { return { ok: response.ok, text: text }; });
     }).then(function (answer) {
-      if (!answer.ok) { body.textContent = answer.text; return; }
+      if (panel.dataset.version !== asked || panel.dataset.state !== "running") { return; } // run again meanwhile
+      if (!answer.ok) { body.textContent = answer.text; panel.dataset.state = "failed"; return; }
       body.innerHTML = answer.text;
+      var result = body.querySelector(".verify-result");
+      panel.dataset.version = result ? result.getAttribute("data-version") : "";
+      if (panel.dataset.version !== pageVersion()) { outOfDate(panel); return; }
       body.querySelectorAll(".finding[data-block]").forEach(function (finding) {
         var row = document.querySelector('.block-row[data-block="' + finding.dataset.block + '"]');
         if (row) { row.classList.add("has-findings"); }
       });
       panel.dataset.state = "ready";
+    }).catch(function () {
+      body.textContent = "Verify did not answer; press Alt+R to try again.";
+      panel.dataset.state = "failed";
     });
+  }
+
+  function outOfDate(panel) {
+    var body = panel.querySelector(".verify-body");
+    panel.dataset.state = "stale";
+    unmark();
+    var note = document.createElement("p");
+    note.className = "message warning verify-stale";
+    note.setAttribute("role", "status");
+    note.textContent = "Out of date: the program has changed since this Verify (v" +
+      panel.dataset.version + ", now v" + pageVersion() + "); its block numbers may name " +
+      "other blocks now. Press Alt+R (or the button above) to run it again.";
+    body.replaceChildren(note);
+  }
+
+  document.addEventListener("toggle", function (event) {
+    var panel = event.target;
+    if (!panel.matches || !panel.matches("details.verify-panel") || !panel.open) { return; }
+    if (!panel.dataset.state || panel.dataset.state === "failed") { runVerify(panel); }
   }, true);
+
+  document.addEventListener("click", function (event) {
+    var button = event.target.closest ? event.target.closest("[data-verify-run]") : null;
+    if (!button) { return; }
+    var panel = button.closest("details.verify-panel");
+    panel.open = true;
+    runVerify(panel);
+  });
+
+  // After every answer: a report about another version than the page shows is out of date.
+  document.addEventListener("htmx:after:swap", function () {
+    document.querySelectorAll("details.verify-panel").forEach(function (panel) {
+      var state = panel.dataset.state;
+      if ((state === "ready" || state === "running") && panel.dataset.version !== pageVersion()) {
+        if (state === "running") { panel.dataset.state = "ready"; } // its answer is put away
+        outOfDate(panel);
+      }
+    });
+    showShortcuts();
+  });
+
+  // The shortcuts are shown: each element with an access key says it in its title, and the
+  // keys legend lists them (what the page holds, so it is never out of step).
+  function showShortcuts() {
+    var named = [];
+    document.querySelectorAll("[accesskey]").forEach(function (el) {
+      var key = "Alt+" + el.getAttribute("accesskey").toUpperCase();
+      var what = (el.getAttribute("data-shortcut") || el.textContent || el.getAttribute("aria-label") ||
+        (el.labels && el.labels[0] && el.labels[0].textContent) || "").replace(/\s+/g, " ").trim();
+      if (el.title.indexOf(key) < 0) { el.title = (el.title ? el.title + " " : "") + "(" + key + ")"; }
+      if (what) { named.push(key + " " + what); }
+    });
+    document.querySelectorAll(".keys-legend [data-shortcuts]").forEach(function (span) {
+      span.textContent = named.length ? " · " + named.join(" · ") : "";
+    });
+  }
+  document.addEventListener("DOMContentLoaded", showShortcuts);
 })();

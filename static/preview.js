@@ -480,9 +480,9 @@
     }
   };
 
-  // A new drawing arrives with the page and with every htmx swap of the editor.
+  // A new drawing arrives with the page and with every htmx swap of the editor (htmx 4 names
+  // the event htmx:after:swap; the htmx 1/2 name htmx:afterSwap is never sent).
   document.addEventListener("htmx:after:swap", setupPreview);
-  document.addEventListener("htmx:afterSwap", setupPreview);
   document.addEventListener("DOMContentLoaded", setupPreview);
   // For tests and benchmarks: where a part point is on the screen.
   window.millblocksPreview = { toScreen: function (x, y) { return view ? toScreen(x, y) : null; } };

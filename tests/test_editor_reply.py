@@ -62,7 +62,7 @@ def test_an_edit_answers_with_the_rows_it_changed(app: Flask) -> None:
     text, rows = edit_drill_11(client, program_id, page, 1)
     assert 11 in rows and len(rows) <= 3, rows  # the DRILL, and what its move retimed
     assert 'id="total" hx-swap-oob="true"' in text
-    assert 'id="version" hx-swap-oob="true">v2<' in text
+    assert 'id="version" data-version="2" hx-swap-oob="true">v2<' in text
     # The drawing is not in the reply: the reply asks for it, and it follows.
     assert "<svg" not in text
     asked = re.search(r'id="drawing-refresh"[^>]*hx-get="([^"]+)"[^>]*hx-trigger="load"', text)
@@ -98,7 +98,7 @@ def test_an_edit_from_a_version_another_worker_showed_answers_with_its_rows(app:
         library.save(program_id, replace(program, blocks=blocks), based_on=1)
     text, rows = edit_drill_11(client, program_id, page, 2)
     assert 11 in rows and len(rows) <= 3, rows
-    assert 'id="version" hx-swap-oob="true">v3<' in text
+    assert 'id="version" data-version="3" hx-swap-oob="true">v3<' in text
     assert 'id="blocks"' not in text
     assert len(text.encode()) < 15_000
 

@@ -32,7 +32,7 @@ from app.cnc.memo import ByObject
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
-from app.web.forms import entry_forms, group_menu, sub_menu
+from app.web.forms import Choice, entry_forms, group_kinds, group_menu, sub_menu
 from app.web.preview import Preview, preview, times
 from app.web.preview import Shown as PreviewShown
 
@@ -269,13 +269,22 @@ def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) 
             field_problems[spec.name] = [
                 p for p in problems if p.block == number and p.field == label
             ]
+    groups = group_menu(program, entry.at, entry.loop, entry.stop)
+    menus: dict[str, list[Choice]] = {}
+    if not entry.editing and not entry.kind and not entry.group:
+        # The sub-type menus go with the type menu: the page shows them without a request.
+        kinds = group_kinds()
+        for choice in groups:
+            if not choice.reason and len(kinds.get(choice.key, ())) > 1:
+                menus[choice.key] = sub_menu(program, entry.at, choice.key)
     return {
         "problems": problems,
         "errors": [p for p in problems if p.severity is Severity.ERROR],
         "entry": entry,
+        "menus": menus,
         "kind": kind,
         "field_problems": field_problems,
-        "groups": group_menu(program, entry.at, entry.loop, entry.stop),
+        "groups": groups,
         "sub_kinds": sub_menu(program, entry.at, entry.group) if entry.group else [],
         "kinds": entry_forms(),
         "offered": not entry.editing and not entry.errors and not entry.message,

@@ -98,19 +98,27 @@ def _render(
 
 @bp.get("/programs/<int:program_id>/verify/report")
 def report(program_id: int) -> tuple[str, int]:
-    """Verify's findings per block, as a fragment for the editor's panel."""
+    """Verify's findings per block, as a fragment for the editor's panel. It says which
+    version of the program it verified (`data-version`): the panel shows it as out of date
+    once the page shows another, since block numbers change with an edit."""
     stored = load(program_id)
     if has_errors(validate(stored.program)):
-        return '<p class="hint">Fix the program\'s errors first.</p>', 200
+        return _verified(stored, '<p class="hint">Fix the program\'s errors first.</p>'), 200
     try:
         result = verify(stored.program)
     except StockError as exc:
-        return f'<p class="message error">{escape(str(exc))}</p>', 200
+        return _verified(stored, f'<p class="message error">{escape(str(exc))}</p>'), 200
     titles = {n: block.title for n, block in enumerate(stored.program.blocks, start=1)}
     html = render_template(
         "verify/report.html", stored=stored, result=result, titles=titles, removed=_removed(result)
     )
-    return html, 200
+    return _verified(stored, html), 200
+
+
+def _verified(stored: StoredProgram, html: str) -> str:
+    """The report fragment, marked with the version it is about."""
+    version = stored.info.version
+    return f'<div class="verify-result" data-version="{version}">{html}</div>'
 
 
 def _removed(result: Verification | None) -> str:

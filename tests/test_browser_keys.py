@@ -151,17 +151,17 @@ def test_the_verify_panel_is_never_stale(page: Page, served: Served) -> None:
     (its link "9 FRAME POCKET" opened what had become block 9, a MILL ARC). After an edit
     it says it is out of date and links nowhere; Alt+R runs it again, and its links name
     the blocks by their new numbers."""
-    program = document.loads((CASES_DIR / "contour-gouge" / "program.json").read_text())
+    program = document.loads((CASES_DIR / "contour-start-gouge-mm" / "program.json").read_text())
     program_id = open_editor(page, served, program)
     page.locator("details.verify-panel summary").click()
     panel = page.locator(".verify-panel .verify-body")
-    expect(panel.locator('.finding[data-block="8"] a')).to_have_attribute(
-        "href", f"/programs/{program_id}?edit=8"
+    expect(panel.locator('.finding[data-block="5"] a')).to_have_attribute(
+        "href", f"/programs/{program_id}?edit=5"
     )
-    title = page.locator('.block-row[data-block="8"] .title').inner_text()
+    title = page.locator('.block-row[data-block="5"] .title').inner_text()
     assert_links_name_their_blocks(page)
 
-    # Insert a POS before block 1: the finding's block is block 9 now.
+    # Insert a POS before block 1: the finding's block is block 6 now.
     page.locator('.block-row[data-block="1"] .block-link').click()
     page.get_by_role("link", name="Insert a block before 1").click()
     expect(page.locator("#entry h2")).to_contain_text("Block 1: type")
@@ -170,7 +170,7 @@ def test_the_verify_panel_is_never_stale(page: Page, served: Served) -> None:
     enter(page, "0", "0")
     page.keyboard.press("Control+Enter")
     expect(page.locator('.block-row[data-block="1"] .title')).to_have_text("POS")
-    expect(page.locator('.block-row[data-block="9"] .title')).to_have_text(title)
+    expect(page.locator('.block-row[data-block="6"] .title')).to_have_text(title)
     expect(page.locator(".verify-panel")).to_contain_text("Out of date")
     assert finding_links(page) == []
     expect(page.locator(".block-row.has-findings")).to_have_count(0)
@@ -178,8 +178,8 @@ def test_the_verify_panel_is_never_stale(page: Page, served: Served) -> None:
     page.keyboard.press("Alt+r")
     expect(panel.locator(".verify-result")).to_be_attached()
     expect(page.locator(".verify-panel")).not_to_contain_text("Out of date")
-    expect(panel.locator('.finding[data-block="9"] a')).to_have_attribute(
-        "href", f"/programs/{program_id}?edit=9"
+    expect(panel.locator('.finding[data-block="6"] a')).to_have_attribute(
+        "href", f"/programs/{program_id}?edit=6"
     )
     assert_links_name_their_blocks(page)
 
@@ -187,7 +187,7 @@ def test_the_verify_panel_is_never_stale(page: Page, served: Served) -> None:
 def test_a_report_answered_after_an_edit_is_out_of_date(page: Page, served: Served) -> None:
     """The report asked for before an edit and answered after it is about the version
     before: the panel says so rather than showing it under the new numbers."""
-    program = document.loads((CASES_DIR / "contour-gouge" / "program.json").read_text())
+    program = document.loads((CASES_DIR / "contour-start-gouge-mm" / "program.json").read_text())
     open_editor(page, served, program)
     hold: list[object] = []
     page.route("**/verify/report", lambda route: hold.append(route))

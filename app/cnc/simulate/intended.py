@@ -1,34 +1,38 @@
 """The intended part: what each block of the program means to remove, on the simulation's grid.
 
-Verify measures the simulated part against this, not against bare contours: a cut inside a
-finished contour's band is a gouge only where no other block means to remove that material
-(a pocket beside an outside profile, a hole drilled through a wall's band, an island's
-pocket are the program's intent, not damage).
+Verify measures the simulated part against this, not against bare contours: material
+removed where no block means to remove it is a gouge, and material left where a block
+means to clear it is rest material. A pocket beside an outside profile, a hole drilled
+through a wall's band, a slot the program cuts are the program's intent, not damage.
 
-What a block means to remove (its *waste*), each to its depth and owned by the sequence
-(the DRILL that starts it) or hole block that cuts it:
+What a block means to remove (its *waste*), each to its depth:
 
 - a hole: the cylinder of its tool's diameter;
 - a CIRCLE or FRAME routine: inside its finished contour for INSIDE, IN/TAN and POCKET,
   outside it for OUTSIDE and OUT/TAN;
 - an irregular POCKET: inside its wall, outside its islands;
-- a closed compensated contour: the whole side the tool is on (inside an inner profile,
-  outside an outer one);
+- a closed compensated contour: the whole side the tool is on (outside an outer profile,
+  inside an inner one);
 - an open compensated contour or an uncompensated one (a slot): the tool's swath.
 
-Each waste is widened by the tolerance, so a cut that reaches the exact edge of what
-another block removes is not a gouge. `Intent.allowed_besides(owner)` is, for each cell,
-the lowest Z some *other* owner means to cut there (the stock's top where none does): a
-surface's own sequence cannot excuse a cut into that surface. Lengths in nm.
+Each waste is widened by the tolerance (a cut that meets the exact edge of one is no
+gouge). `intended` draws them all at once: the shapes of one depth are filled together as a
+union (scanlines with winding numbers, so thousands of a LOOP's pockets or a bolt circle's
+holes cost their outlines' crossings of the rows plus one pass over the grid), and the
+floor is the lowest depth over the unions. `clearing` draws what CIRCLE/FRAME POCKETs must
+clear, the same way. Lengths in nm.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 import pyclipper
 
 from app.cnc.mill import Element, Path, signed_area
@@ -40,63 +44,132 @@ from app.cnc.simulate.stock import Grid
 Pt = tuple[float, float]
 
 
-def window(grid: Grid, x0: float, y0: float, x1: float, y1: float) -> tuple[slice, slice, F64, F64]:
-    """The rows and columns of cells whose centres lie in [x0, x1] × [y0, y1], and the
-    centres' coordinates as (rows, columns) arrays."""
+def window_cells(grid: Grid, x0: float, y0: float, x1: float, y1: float) -> tuple[slice, slice]:
+    """The rows and columns of cells whose centres lie in [x0, x1] × [y0, y1]."""
     res = grid.resolution
     j0 = max(0, math.ceil((x0 - grid.x0) / res - 0.5))
     j1 = min(grid.nx, math.floor((x1 - grid.x0) / res - 0.5) + 1)
     i0 = max(0, math.ceil((y0 - grid.y0) / res - 0.5))
     i1 = min(grid.ny, math.floor((y1 - grid.y0) / res - 0.5) + 1)
-    j1, i1 = max(j0, j1), max(i0, i1)
-    xs = grid.x0 + (np.arange(j0, j1) + 0.5) * res
-    ys = grid.y0 + (np.arange(i0, i1) + 0.5) * res
+    return slice(i0, max(i0, i1)), slice(j0, max(j0, j1))
+
+
+def window(grid: Grid, x0: float, y0: float, x1: float, y1: float) -> tuple[slice, slice, F64, F64]:
+    """`window_cells`, and the centres' coordinates as (rows, columns) arrays."""
+    rows, cols = window_cells(grid, x0, y0, x1, y1)
+    xs = grid.x0 + (np.arange(cols.start, cols.stop) + 0.5) * grid.resolution
+    ys = grid.y0 + (np.arange(rows.start, rows.stop) + 0.5) * grid.resolution
     qx, qy = np.meshgrid(xs, ys)
-    return slice(i0, i1), slice(j0, j1), qx, qy
+    return rows, cols, qx, qy
+
+
+def winding(grid: Grid, rings: Sequence[Sequence[Pt] | F64]) -> npt.NDArray[np.int32]:
+    """Each cell centre's winding number over the closed rings (int32, (ny, nx)): for
+    counter-clockwise rings, how many of them hold it. By scanlines, every ring's edges at
+    once: the cost is the edges' crossings of the rows plus one pass over the cells."""
+    arrays = [np.asarray(ring, dtype=np.float64).reshape(-1, 2) for ring in rings]
+    arrays = [a for a in arrays if len(a) >= 3]
+    if not arrays:
+        return np.zeros((grid.ny, grid.nx), dtype=np.int32)
+    pts = np.concatenate(arrays)
+    sizes = np.array([len(a) for a in arrays])
+    # Each vertex's next one round its own ring.
+    nxt = np.arange(1, len(pts) + 1)
+    ends = np.cumsum(sizes)
+    nxt[ends - 1] = ends - sizes
+    ax, ay = pts[:, 0], pts[:, 1]
+    bx, by = ax[nxt], ay[nxt]
+    res = grid.resolution
+    lo, hi = np.minimum(ay, by), np.maximum(ay, by)
+    # Rows whose centre y is in [lo, hi): each edge crosses those.
+    first = np.clip(np.ceil((lo - grid.y0) / res - 0.5), 0, grid.ny).astype(np.int64)
+    last = np.clip(np.ceil((hi - grid.y0) / res - 0.5), 0, grid.ny).astype(np.int64)
+    counts = np.maximum(last - first, 0)
+    total = int(counts.sum())
+    if not total:
+        return np.zeros((grid.ny, grid.nx), dtype=np.int32)
+    edge = np.repeat(np.arange(len(pts)), counts)
+    row = np.repeat(first, counts) + (
+        np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
+    )
+    yc = grid.y0 + (row + 0.5) * res
+    t = (yc - ay[edge]) / (by[edge] - ay[edge])
+    x = ax[edge] + t * (bx[edge] - ax[edge])
+    up = np.where(by[edge] > ay[edge], 1.0, -1.0)
+    # A crossing counts for the cells whose centres lie right of it: it toggles at the
+    # first cell at or right of x. An upward edge (the right side of a counter-clockwise
+    # ring) adds one to the cells left of it, so the count from the left is its negative.
+    col = np.clip(np.ceil((x - grid.x0) / res - 0.5), 0, grid.nx).astype(np.int64)
+    width = grid.nx + 1
+    flat = np.bincount(row * width + col, weights=up, minlength=grid.ny * width)
+    counted = -np.cumsum(flat.reshape(grid.ny, width), axis=1)
+    return counted[:, : grid.nx].astype(np.int32)
+
+
+def disc_rings(centres: F64, radius: float, chord: float) -> F64:
+    """Counter-clockwise polygons holding discs of `radius` about each of `centres`
+    ((k, 2) nm), within `chord`: a (k, n, 2) array."""
+    unit = np.asarray(circle_ring(0.0, 0.0, radius, chord, outward=True))
+    placed: F64 = centres[:, None, :] + unit[None, :, :]
+    return placed
 
 
 def fill(grid: Grid, rings: Sequence[Sequence[Pt]]) -> BOOL:
-    """Which cell centres of the whole grid the rings hold (even-odd), by scanlines: the
-    cost is the rings' crossings of the rows plus one pass over the cells."""
-    res = grid.resolution
-    rows_list: list[np.ndarray] = []
-    xs_list: list[np.ndarray] = []
-    for ring in rings:
-        if len(ring) < 3:
-            continue
-        pts = np.asarray(ring, dtype=np.float64)
-        ax, ay = pts[:, 0], pts[:, 1]
-        bx, by = np.roll(ax, -1), np.roll(ay, -1)
-        lo, hi = np.minimum(ay, by), np.maximum(ay, by)
-        # Rows whose centre y is in [lo, hi): each edge crosses those.
-        first = np.ceil((lo - grid.y0) / res - 0.5).astype(np.int64)
-        last = np.ceil((hi - grid.y0) / res - 0.5).astype(np.int64)  # exclusive
-        first = np.clip(first, 0, grid.ny)
-        last = np.clip(last, 0, grid.ny)
-        counts = np.maximum(last - first, 0)
-        if not counts.any():
-            continue
-        edge = np.repeat(np.arange(len(pts)), counts)
-        starts = np.repeat(first, counts)
-        offsets = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
-        row = starts + offsets
-        yc = grid.y0 + (row + 0.5) * res
-        t = (yc - ay[edge]) / (by[edge] - ay[edge])
-        rows_list.append(row)
-        xs_list.append(ax[edge] + t * (bx[edge] - ax[edge]))
-    inside = np.zeros((grid.ny, grid.nx), dtype=bool)
-    if not rows_list:
-        return inside
-    row = np.concatenate(rows_list)
-    xcross = np.concatenate(xs_list)
-    # Cells left of a crossing: centres < x. Toggle at the first cell right of it.
-    col = np.clip(np.ceil((xcross - grid.x0) / res - 0.5), 0, grid.nx).astype(np.int64)
-    toggles = np.zeros((grid.ny, grid.nx + 1), dtype=np.int32)
-    np.add.at(toggles, (row, col), 1)
-    # Crossings at or left of a cell's column, counted from the left: odd = inside.
-    np.cumsum(toggles, axis=1, out=toggles)
-    inside[:] = (toggles[:, : grid.nx] & 1).astype(bool)
-    return inside
+    """Which cell centres a closed ring holds (either direction; several rings: any
+    cell whose winding number is not 0)."""
+    held: BOOL = winding(grid, rings) != 0
+    return held
+
+
+def circle_ring(cx: float, cy: float, radius: float, chord: float, outward: bool) -> list[Pt]:
+    """A counter-clockwise polygon of a circle within `chord`: around it (`outward`, the
+    polygon holds the circle) or inside it (the circle holds the polygon)."""
+    if radius <= 0:
+        return []
+    n = max(12, math.ceil(math.pi / math.acos(max(-1.0, 1 - min(chord / radius, 2.0)))))
+    r = radius / math.cos(math.pi / n) if outward else radius
+    return [
+        (cx + r * math.cos(2 * math.pi * k / n), cy + r * math.sin(2 * math.pi * k / n))
+        for k in range(n)
+    ]
+
+
+def frame_ring(
+    x0: float, y0: float, x1: float, y1: float, corner: float, chord: float, outward: bool
+) -> list[Pt]:
+    """A counter-clockwise polygon of a rectangle with round corners of `corner` (0:
+    square), within `chord` like `circle_ring`."""
+    if x1 <= x0 or y1 <= y0:
+        return []
+    c = min(corner, (x1 - x0) / 2, (y1 - y0) / 2)
+    if c <= 0:
+        return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+    n = max(3, math.ceil((math.pi / 2) / math.acos(max(-1.0, 1 - min(chord / c, 2.0)))))
+    r = c / math.cos(math.pi / (4 * n)) if outward else c
+    points: list[Pt] = []
+    for (cx, cy), start in (
+        ((x1 - c, y0 + c), -math.pi / 2),
+        ((x1 - c, y1 - c), 0.0),
+        ((x0 + c, y1 - c), math.pi / 2),
+        ((x0 + c, y0 + c), math.pi),
+    ):
+        if outward:  # the polygon's vertices off the arc, its edges tangent to it
+            points.append((cx + c * math.cos(start), cy + c * math.sin(start)))
+            points += [
+                (cx + r * math.cos(a), cy + r * math.sin(a))
+                for a in (start + (math.pi / 2) * (2 * k + 1) / (2 * n) for k in range(n))
+            ]
+            end = start + math.pi / 2
+            points.append((cx + c * math.cos(end), cy + c * math.sin(end)))
+        else:
+            points += [
+                (
+                    cx + c * math.cos(start + (math.pi / 2) * k / n),
+                    cy + c * math.sin(start + (math.pi / 2) * k / n),
+                )
+                for k in range(n + 1)
+            ]
+    return points
 
 
 def element_measures(qx: F64, qy: F64, start: Pt, element: Element) -> tuple[F64, F64, BOOL]:
@@ -155,120 +228,140 @@ def part_inside(contour: Contour) -> bool:
 
 @dataclass
 class Intent:
-    """The lowest Z each cell is meant to be cut to, twice: `first` over every owner (and
-    `owner`, whose it is) and `second` over every owner but that one."""
+    """The lowest Z the program means to cut each cell to (`floor`, (ny, nx) nm; the
+    stock's top where no block means to cut)."""
 
-    top: float
-    first: F64
-    owner: np.ndarray
-    second: F64
+    floor: F64
 
-    @staticmethod
-    def empty(grid: Grid) -> Intent:
-        shape = (grid.ny, grid.nx)
-        top = float(grid.stock.top)
-        return Intent(top, np.full(shape, top), np.zeros(shape, np.int32), np.full(shape, top))
 
-    def add(self, owner: int, depth: float, where: BOOL, rows: slice, cols: slice) -> None:
-        """Owner `owner` means to cut to `depth` in the cells `where` of the window."""
-        first = self.first[rows, cols]
-        second = self.second[rows, cols]
-        own = self.owner[rows, cols]
-        mine = where & (own == owner)
-        np.minimum(first, depth, out=first, where=mine)
-        takes = where & ~mine & (depth < first)
-        np.copyto(second, first, where=takes)
-        np.copyto(first, depth, where=takes)
-        np.copyto(own, owner, where=takes)
-        others = where & ~mine & ~takes
-        np.minimum(second, depth, out=second, where=others)
-
-    def allowed_besides(self, owner: int, rows: slice, cols: slice) -> F64:
-        """The lowest Z any owner but `owner` means to cut each cell of the window to."""
-        first = self.first[rows, cols]
-        return np.where(self.owner[rows, cols] == owner, self.second[rows, cols], first)
+def _group(groups: dict[int, list[Any]], depth: int, ring: Sequence[Pt] | F64) -> None:
+    if len(ring) >= 3:
+        groups.setdefault(depth, []).append(ring)
 
 
 def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) -> Intent:
     """What the program means to remove, on `grid` (see the module's note)."""
-    intent = Intent.empty(grid)
-    everywhere = (slice(0, grid.ny), slice(0, grid.nx))
+    floor = np.full((grid.ny, grid.nx), float(grid.stock.top))
     chord = max(min(grid.resolution / 8, tol / 2), 100.0)
+    inside: dict[int, list[Any]] = {}
+    # Per depth, shapes whose outside is waste, each as its rings (an offset may part one).
+    outside: dict[int, list[list[Any]]] = {}
+    # Holes of one tool and depth (a LOOP's, a bolt circle's) as one array of discs.
+    discs: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for hole in geometry.holes:
-        r = (hole.radius or default_radius) + tol
-        rows, cols, qx, qy = window(grid, hole.x - r, hole.y - r, hole.x + r, hole.y + r)
-        if qx.size:
-            intent.add(hole.block, hole.depth, np.hypot(qx - hole.x, qy - hole.y) <= r, rows, cols)
+        discs.setdefault((hole.depth, hole.radius or default_radius), []).append((hole.x, hole.y))
+    for (depth, radius), points in discs.items():
+        array = disc_rings(np.asarray(points, dtype=np.float64), radius + tol, chord)
+        inside.setdefault(depth, []).extend(list(array))
     for routine in geometry.routines:
         if routine.depth is None:
             continue
+        grow = tol if routine.inside else -tol
+        shape = routine_ring(routine, grow, chord, outward=routine.inside)
         if routine.inside:
-            x0, y0, x1, y1 = _routine_box(routine)
-            rows, cols, qx, qy = window(grid, x0 - tol, y0 - tol, x1 + tol, y1 + tol)
-            if qx.size:
-                intent.add(
-                    routine.drill,
-                    routine.depth,
-                    routine_sdf(routine, qx, qy, 0.0) <= tol,
-                    rows,
-                    cols,
-                )
-        else:
-            qx, qy = _centres(grid)
-            intent.add(
-                routine.drill, routine.depth, routine_sdf(routine, qx, qy, 0.0) >= -tol, *everywhere
-            )
-    for pocket in geometry.pockets:
-        if pocket.depth is not None:
-            intent.add(
-                pocket.contours[0].drill,
-                pocket.depth,
-                _pocket_area(grid, pocket, tol, chord),
-                *everywhere,
-            )
+            _group(inside, routine.depth, shape)
+        elif len(shape) >= 3:
+            outside.setdefault(routine.depth, []).append([shape])
     for contour in geometry.contours:
         if contour.depth is None or any(contour in p.contours for p in geometry.pockets):
             continue
+        depth = _deepest(contour)
         if is_closed(contour):
-            ring = path_points(Path(contour.start, contour.elements), chord)
+            ring = _ccw(path_points(Path(contour.start, contour.elements), chord))
             if part_inside(contour):
-                where = ~fill(grid, offset([_int_ring(ring)], -tol, chord))
+                shrunk = offset([_int_ring(ring)], -tol, chord)
+                outside.setdefault(depth, []).append(
+                    [[(float(x), float(y)) for x, y in piece] for piece in shrunk]
+                )
             else:
-                where = fill(grid, offset([_int_ring(ring)], tol, chord))
-            intent.add(contour.drill, contour.depth, where, *everywhere)
+                for grown in offset([_int_ring(ring)], tol, chord):
+                    _group(inside, depth, [(float(x), float(y)) for x, y in grown])
         elif contour.swept:
             radius = (contour.tool_radius or default_radius) + tol
-            intent.add(
-                contour.drill,
-                contour.depth,
-                fill(grid, sweep_lines(contour.swept, radius, chord)),
-                *everywhere,
-            )
+            for swath in sweep_lines(contour.swept, radius, chord):
+                _group(inside, depth, [(float(x), float(y)) for x, y in swath])
     for slot in geometry.slots:
         if slot.depth is not None and slot.swept:
             radius = (slot.tool_radius or default_radius) + tol
-            intent.add(
-                slot.drill,
-                slot.depth,
-                fill(grid, sweep_lines(slot.swept, radius, chord)),
-                *everywhere,
-            )
-    return intent
+            for swath in sweep_lines(slot.swept, radius, chord):
+                _group(inside, _deepest(slot), [(float(x), float(y)) for x, y in swath])
+    for depth, rings in sorted(inside.items()):
+        np.minimum(floor, float(depth), out=floor, where=winding(grid, rings) > 0)
+    for depth, shapes in sorted(outside.items()):
+        # Outside any one of them: not inside all of them (each shape winds 0 or 1).
+        held = winding(grid, [ring for shape in shapes for ring in shape]) >= len(shapes)
+        np.minimum(floor, float(depth), out=floor, where=~held)
+    for pocket in geometry.pockets:
+        if pocket.depth is not None:
+            area = _pocket_area(grid, pocket, tol, chord)
+            np.minimum(floor, float(pocket.depth), out=floor, where=area)
+    return Intent(floor)
 
 
-def _centres(grid: Grid) -> tuple[F64, F64]:
-    xs = grid.x0 + (np.arange(grid.nx) + 0.5) * grid.resolution
-    ys = grid.y0 + (np.arange(grid.ny) + 0.5) * grid.resolution
-    qx, qy = np.meshgrid(xs, ys)
-    return qx, qy
+def clearing(grid: Grid, routines: Sequence[Routine], tol: int) -> tuple[F64, BOOL]:
+    """What CIRCLE/FRAME POCKETs must clear: the floor each cell must come down to (nm)
+    and where (every cell more than `tol` inside a pocket's finished contour, its corners
+    as programmed: a tool too big for them leaves material there)."""
+    floor = np.full((grid.ny, grid.nx), -np.inf)
+    where = np.zeros((grid.ny, grid.nx), dtype=bool)
+    chord = max(min(grid.resolution / 8, tol / 2), 100.0)
+    groups: dict[int, list[Any]] = {}
+    for routine in routines:
+        if routine.pocket and routine.depth is not None and routine.tool_radius > 0:
+            _group(groups, routine.depth, routine_ring(routine, -tol, chord, outward=False))
+    for depth, rings in sorted(groups.items(), reverse=True):
+        mask = winding(grid, rings) > 0
+        # The deepest pocket over a cell decides how low it must be.
+        np.copyto(floor, float(depth), where=mask)
+        where |= mask
+    return floor, where
 
 
-def _routine_box(routine: Routine) -> tuple[float, float, float, float]:
-    if routine.is_frame:
-        x0, y0 = routine.corner
-        return x0, y0, x0 + routine.width, y0 + routine.height
-    (cx, cy), rad = routine.centre, routine.radius
-    return cx - rad, cy - rad, cx + rad, cy + rad
+def routine_ring(routine: Routine, grow: float, chord: float, outward: bool) -> F64:
+    """A routine's finished contour moved `grow` outward (inward when negative), as a
+    counter-clockwise polygon within `chord` (see `circle_ring`): an (n, 2) array. A LOOP's
+    copies of one routine share the polygon, moved."""
+    if not routine.is_frame:
+        unit = _unit_ring(False, routine.radius, 0, 0, grow, chord, outward)
+        moved: F64 = unit + np.asarray(routine.centre)
+        return moved
+    unit = _unit_ring(
+        True, routine.width, routine.height, routine.corner_radius, grow, chord, outward
+    )
+    placed: F64 = unit + np.asarray(routine.corner)
+    return placed
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_ring(
+    is_frame: bool, a: int, b: int, corner: int, grow: float, chord: float, outward: bool
+) -> F64:
+    """A circle of radius `a` about the origin, or an `a` × `b` frame with its lower-left
+    corner there, grown by `grow` (read only: shared)."""
+    if not is_frame:
+        ring = np.asarray(circle_ring(0.0, 0.0, a + grow, chord, outward), dtype=np.float64)
+    else:
+        ring = np.asarray(
+            frame_ring(-grow, -grow, a + grow, b + grow, max(corner + grow, 0.0), chord, outward),
+            dtype=np.float64,
+        )
+    ring = ring.reshape(-1, 2)
+    ring.flags.writeable = False
+    return ring
+
+
+def _deepest(contour: Contour) -> int:
+    """A contour's lowest Z DN: the DRILL's, or a MILL block's own where it goes deeper."""
+    assert contour.depth is not None
+    return min([contour.depth] + [e.z_dn for e in contour.elements if e.z_dn is not None])
+
+
+def _ccw(points: list[Pt]) -> list[Pt]:
+    area = sum(
+        ax * by - bx * ay
+        for (ax, ay), (bx, by) in zip(points, points[1:] + points[:1], strict=True)
+    )
+    return points if area > 0 else points[::-1]
 
 
 def _int_ring(points: Sequence[Pt]) -> Ring:
@@ -287,3 +380,11 @@ def _pocket_area(grid: Grid, pocket: PocketArea, tol: int, chord: float) -> BOOL
     for island in islands:
         area &= ~fill(grid, offset([island], -tol, chord))
     return area
+
+
+def centres(grid: Grid) -> tuple[F64, F64]:
+    """The cell centres' X and Y (nm), as (ny, nx) arrays."""
+    xs = grid.x0 + (np.arange(grid.nx) + 0.5) * grid.resolution
+    ys = grid.y0 + (np.arange(grid.ny) + 0.5) * grid.resolution
+    qx, qy = np.meshgrid(xs, ys)
+    return qx, qy

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from decimal import Decimal
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +36,8 @@ from app.cnc.pocketing.regions import path_points
 from app.cnc.process import process_problems
 from app.cnc.simulate.intended import (
     Intent,
+    centres,
+    clearing,
     element_measures,
     fill,
     intended,
@@ -42,6 +45,7 @@ from app.cnc.simulate.intended import (
     part_inside,
     routine_sdf,
     window,
+    window_cells,
 )
 from app.cnc.simulate.placements import Placed, place
 from app.cnc.simulate.programmed import (
@@ -194,45 +198,77 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     every finding goes into `result.findings`, sorted by block."""
     sim = result.simulation
     heights = sim.heights()
-    owners = sim.owner_blocks()
+    owners = Owners(sim)
     u = result.units
     default_radius = to_nm(DEFAULT_DIAMETER[u], u) // 2
-    intent = intended(sim.grid, geometry, tol, default_radius)
+    grid = sim.grid
+    intent = intended(grid, geometry, tol, default_radius)
+    # Material removed below what any block means to cut there: gouges. Each is named by
+    # the surface it damaged where it lies in one's band, else as waste no block meant.
+    gouged = heights < intent.floor - tol
+    claimed = np.zeros_like(gouged)
     found: list[Finding] = []
     for contour in geometry.contours:
-        found += _contour_gouges(sim.grid, heights, owners, contour, tol, u, intent)
-        found += _contour_rest(sim.grid, heights, contour, geometry, tol, u)
-    if not sim.grid.stock.given:
-        inner = sorted(
-            {
-                c.drill
-                for c in geometry.contours
-                if c.depth is not None
-                and is_closed(c)
-                and not part_inside(c)
-                and not any(c in p.contours for p in geometry.pockets)
-            }
-        )
-        if inner:
-            result.notes.append(
-                (
-                    f"the closed contours from blocks {', '.join(map(str, inner))} are cut "
-                    "with the tool inside, so what each encloses"
-                    if len(inner) > 1
-                    else f"the closed contour from block {inner[0]} is cut with the tool "
-                    "inside, so what it encloses"
-                )
-                + " is waste; with the stock sized from the program, verify cannot tell "
-                "whether the cut goes through, so it does not check that the inside is "
-                "cleared (save the stock to have it checked)"
-            )
+        found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
+        found += _contour_rest(grid, heights, contour, geometry, tol, u)
+    pocket_floor, must_clear = clearing(grid, geometry.routines, tol)
+    left_in_pockets = must_clear & (heights > np.maximum(pocket_floor, grid.stock.bottom) + tol)
     for routine in geometry.routines:
-        found += _routine_findings(sim.grid, heights, owners, routine, tol, u, intent)
+        found += _routine_findings(
+            grid, heights, owners, routine, tol, u, gouged, claimed, left_in_pockets
+        )
     for pocket in geometry.pockets:
-        found += _pocket_findings(sim.grid, heights, pocket, tol, u)
+        found += _pocket_findings(grid, heights, pocket, tol, u)
+    crashed = {crash.block for crash in sim.crashes}
+    found += _waste_gouges(grid, heights, owners, intent, gouged & ~claimed, crashed, u)
+    if not grid.stock.given:
+        result.notes += _unjudged_inner_contours(geometry)
     found += _hole_findings(sim.grid, heights, owners, geometry, tol, u)
     found += _crash_findings(sim, u)
     result.findings = sorted(found, key=lambda f: (f.block, f.kind, f.message))
+
+
+def _unjudged_inner_contours(geometry: Programmed) -> list[str]:
+    """The note for closed contours cut from inside when the stock is sized from the
+    program: whether they go through (and the slug falls out) is unknown."""
+    inner = sorted(
+        {
+            c.drill
+            for c in geometry.contours
+            if c.depth is not None
+            and is_closed(c)
+            and not part_inside(c)
+            and not any(c in p.contours for p in geometry.pockets)
+        }
+    )
+    if not inner:
+        return []
+    which = (
+        f"the closed contours from blocks {', '.join(map(str, inner))} are cut with the tool "
+        "inside, so what each encloses"
+        if len(inner) > 1
+        else f"the closed contour from block {inner[0]} is cut with the tool inside, so what "
+        "it encloses"
+    )
+    return [
+        which + " is waste; with the stock sized from the program, verify cannot tell whether "
+        "the cut goes through, so it does not check that the inside is cleared (save the "
+        "stock to have it checked)"
+    ]
+
+
+class Owners:
+    """Which block cut each cell, worked out on first use: only a finding needs it, and
+    for a large grid it costs more than the checks (`Simulation.owner_blocks`)."""
+
+    def __init__(self, sim: Simulation) -> None:
+        self._sim = sim
+        self._blocks: np.ndarray | None = None
+
+    def __getitem__(self, key: Any) -> Any:
+        if self._blocks is None:
+            self._blocks = self._sim.owner_blocks()
+        return self._blocks[key]
 
 
 def _process_findings(program: Program) -> list[Finding]:
@@ -277,11 +313,12 @@ def _len(nm: float, u: Units) -> str:
 def _contour_gouges(
     grid: Grid,
     heights: F64,
-    owners: np.ndarray,
+    owners: Owners,
     contour: Contour,
     tol: int,
     u: Units,
-    intent: Intent,
+    gouged: BOOL,
+    claimed: BOOL,
 ) -> list[Finding]:
     band = 2.0 * contour.tool_radius
     starts = [contour.start] + [e.end for e in contour.elements[:-1]]
@@ -295,7 +332,7 @@ def _contour_gouges(
     rows, cols, qx, qy = window(
         grid, min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach
     )
-    if qx.size == 0:
+    if qx.size == 0 or not gouged[rows, cols].any():
         return []
     # The nearest element of each cell, kept as the elements go by (the first of equals):
     # stacking every element's measures would hold elements × cells arrays at once.
@@ -311,11 +348,8 @@ def _contour_gouges(
         left = np.where(closer, side, left)
         interior = np.where(closer, within, interior)
     inward = left if contour.part_left else -left
-    h = heights[rows, cols]
-    # Removed below what any other block means to cut there (a pocket beside the wall, a
-    # hole through its band are the program's intent, not damage).
-    cut = h < intent.allowed_besides(contour.drill, rows, cols) - tol
-    mask = interior & (inward > tol) & (inward <= band) & cut
+    mask = interior & (inward > tol) & (inward <= band) & gouged[rows, cols]
+    claimed[rows, cols] |= mask
     block_of = np.array([e.block for e in contour.elements])[nearest]
     findings = []
     for culprit, depth, x, y, _ in _worst(mask, inward, qx, qy, owners[rows, cols]):
@@ -441,12 +475,16 @@ def _routine_point(routine: Routine) -> tuple[float, float]:
 def _routine_findings(
     grid: Grid,
     heights: F64,
-    owners: np.ndarray,
+    owners: Owners,
     routine: Routine,
     tol: int,
     u: Units,
-    intent: Intent,
+    gouged: BOOL,
+    claimed: BOOL,
+    left_in_pockets: BOOL,
 ) -> list[Finding]:
+    """Gouges past a routine's wall, and material left beside it (or, for a POCKET, in it:
+    looked for only where `left_in_pockets` says some pocket kept material)."""
     if routine.depth is None or routine.tool_radius <= 0:
         return []
     r = float(routine.tool_radius)
@@ -456,6 +494,10 @@ def _routine_findings(
     else:
         (cx, cy), rad = routine.centre, routine.radius
         x0, y0, x1, y1 = cx - rad, cy - rad, cx + rad, cy + rad
+    rows, cols = window_cells(grid, x0 - 2 * r, y0 - 2 * r, x1 + 2 * r, y1 + 2 * r)
+    wanted = gouged[rows, cols].any() or not routine.pocket or left_in_pockets[rows, cols].any()
+    if not wanted:
+        return []  # nothing removed past its wall, nothing left in it: the usual case
     rows, cols, qx, qy = window(grid, x0 - 2 * r, y0 - 2 * r, x1 + 2 * r, y1 + 2 * r)
     if qx.size == 0:
         return []
@@ -465,9 +507,9 @@ def _routine_findings(
     part = sdf if routine.inside else -sdf
     tool_side = -part
     findings = []
-    allowed = intent.allowed_besides(routine.drill, rows, cols)
-    gouged = (part > tol) & (part <= r) & (h < allowed - tol)
-    for culprit, depth, x, y, _ in _worst(gouged, part, qx, qy, own):
+    past = (part > tol) & (part <= r) & gouged[rows, cols]
+    claimed[rows, cols] |= past
+    for culprit, depth, x, y, _ in _worst(past, part, qx, qy, own):
         findings.append(
             Finding(
                 culprit or routine.block,
@@ -491,6 +533,39 @@ def _routine_findings(
                 "rest material",
                 f"{_len(thick, u)} of material left above Z DN {where} at {_at(x, y, u)} "
                 f"({area / u.nm**2:.4f} {u.symbol}² of it)",
+                x,
+                y,
+            )
+        )
+    return findings
+
+
+def _waste_gouges(
+    grid: Grid,
+    heights: F64,
+    owners: Owners,
+    intent: Intent,
+    unclaimed: BOOL,
+    crashed: set[int],
+    u: Units,
+) -> list[Finding]:
+    """Material removed below what any block means to cut, beside no finished surface:
+    per block that cut it (a rapid's is its crash finding)."""
+    if not unclaimed.any():
+        return []
+    below = intent.floor - heights
+    qx, qy = centres(grid)
+    findings = []
+    for culprit, depth, x, y, cells in _worst(unclaimed, below, qx, qy, owners[:, :]):
+        if culprit in crashed:
+            continue
+        area = cells * grid.resolution**2
+        findings.append(
+            Finding(
+                culprit,
+                "gouge",
+                f"removes material no block means to remove: {_len(depth, u)} below the part "
+                f"as programmed at {_at(x, y, u)} ({area / u.nm**2:.4f} {u.symbol}² of it)",
                 x,
                 y,
             )
@@ -550,7 +625,7 @@ def _pocket_findings(
 def _hole_findings(
     grid: Grid,
     heights: F64,
-    owners: np.ndarray,
+    owners: Owners,
     geometry: Programmed,
     tol: int,
     u: Units,

@@ -208,7 +208,8 @@ def _unit(k: int) -> list[Block]:
     y = D((k // 10) % 10) + D("0.5")
     return [
         _hole(HoleOp.DRILL, f"{x}", f"{y}", 1, pecks=2),
-        _hole(HoleOp.BORE, f"{x + D('0.25')}", f"{y}", 1),
+        # Bored over the hole just drilled: a boring bar needs a smaller hole first.
+        _hole(HoleOp.BORE, f"{x}", f"{y}", 2),
         _hole(HoleOp.DRILL, f"{x}", f"{y + D('0.25')}", 1),
         BoltCircle(op=HoleOp.DRILL, holes=6, radius=D("0.2"), angle=D(k % 60)),
         _hole(HoleOp.DRILL, f"{x + D('0.1')}", f"{y + D('0.1')}", 2),

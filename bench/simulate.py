@@ -99,7 +99,17 @@ def simulate_case(family: str, moves: int) -> Result:
         return float(keys[-1])
 
     floor_seconds = best_time(floor, 2.0)
+
+    # Verify: the same simulation and every check of the part against what the program
+    # means to make (issue 29), as `millblocks verify` runs it (placing included).
+    from app.cnc.simulate.verify import verify
+
+    resolution = to_nm(RESOLUTION_IN, Units.INCH)
+    checked = verify(program, resolution=resolution)
+    verify_seconds = best_time(lambda: verify(program, resolution=resolution), 6.0, most=3)
     return {
+        "verify_seconds": verify_seconds,
+        "verify_findings": len(checked.findings),
         "moves": len(path),
         "segments": sim.segments,
         "swept": sim.swept,
@@ -305,4 +315,61 @@ def run(moves: int = MOVES, timeout: float = 600.0) -> Section:
             fmt_seconds(r["seconds"]),
             fmt_ratio(r["seconds"] / TARGET_SECONDS) + " of target",
         )
+        section.target(
+            f"verify {fmt_count(r['moves'])} moves, {family}, 10 x 10 in at 0.005 in "
+            f"({r['verify_findings']} findings)",
+            "≤ 2 s",
+            fmt_seconds(r["verify_seconds"]),
+            fmt_ratio(r["verify_seconds"] / TARGET_SECONDS) + " of target",
+        )
+    editor = run_child("bench.simulate:editor_verify_case", {}, timeout)
+    if "error" not in editor:
+        section.target(
+            "Verify after an edit, the 500-block editor program (validate + verify)",
+            "≤ 300 ms",
+            fmt_seconds(editor["seconds"]),
+            fmt_ratio(editor["seconds"] / EDITOR_VERIFY_SECONDS) + " of target",
+        )
+        section.lines += [
+            "",
+            "Verify after an edit: the editor's 500-block program (`bench/programs.py`) with one",
+            "block moved, validated and verified at the default grid "
+            f"({editor['nx']} × {editor['ny']} cells), as the editor's Verify panel runs it; "
+            f"the simulation alone {fmt_seconds(editor['simulate'])}.",
+        ]
     return section
+
+
+EDITOR_VERIFY_SECONDS = 0.3
+
+
+def editor_verify_case() -> Result:
+    """(child) Validate and verify the 500-block editor program after an edit (one block
+    moved), the best of a few runs, each on a program the caches have not seen."""
+    import dataclasses
+
+    from app.cnc.blocks import Hole
+    from app.cnc.simulate.verify import run_simulation, verify
+    from app.cnc.validate import validate
+    from bench.programs import editor_program
+
+    program = editor_program(500)
+    validate(program)
+    verify(program)
+    index = next(k for k in range(250, 500) if isinstance(program.blocks[k], Hole))
+    times: list[float] = []
+    result = None
+    for step in range(1, 4):
+        blocks = list(program.blocks)
+        hole = blocks[index]
+        assert isinstance(hole, Hole)
+        blocks[index] = dataclasses.replace(hole, x=hole.x + Decimal(step) / 100)
+        edited = dataclasses.replace(program, blocks=tuple(blocks))
+        began = time.perf_counter()
+        validate(edited)
+        result = verify(edited)
+        times.append(time.perf_counter() - began)
+    assert result is not None
+    simulate_seconds = best_time(lambda: run_simulation(edited), 2.0, most=3)
+    grid = result.simulation.grid
+    return {"seconds": min(times), "simulate": simulate_seconds, "nx": grid.nx, "ny": grid.ny}

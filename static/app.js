@@ -108,7 +108,15 @@
     event.preventDefault();
     event.stopPropagation();
     typeMenu = Array.from(shown.childNodes);
-    showMenu(shown, Array.from(template.content.cloneNode(true).childNodes));
+    var nodes = template.content.cloneNode(true);
+    // The template's choices name their kind; their links are made here (see _entry.html).
+    var base = template.getAttribute("data-url") || "";
+    nodes.querySelectorAll("a.choice[data-kind]").forEach(function (a) {
+      var url = base + encodeURIComponent(a.getAttribute("data-kind"));
+      a.setAttribute("href", url);
+      a.setAttribute("hx-get", url);
+    });
+    showMenu(shown, Array.from(nodes.childNodes));
   }, true);
 
   // Enter moves to the next prompt, as ENTER ADV does on the control; on the last one it

@@ -160,7 +160,7 @@ def test_new_user_builds_a_program_with_the_keyboard(page: Page, server: str) ->
         "&& e.selectionStart === 0 && e.selectionEnd === e.value.length; })()",
     )
     answer(page, "5", "3", "1", "", "0.1")
-    answer(page, "0.5", "1000", "0", "")  # tool 1: DIA, RPM, TCAL, coolant as it is
+    answer(page, "0.5", "1000", "0", "", "")  # tool 1: DIA, RPM, TCAL, coolant and name as they are
     shot(page, "02-data-block-0")
     answer(page, "0.25", "2000")
     page.keyboard.type("-1")

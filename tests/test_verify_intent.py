@@ -24,7 +24,17 @@ from hypothesis import strategies as st
 
 from app.cli import main
 from app.cnc import document
-from app.cnc.blocks import BoltCircle, DataBlock0, Hole, HoleOp, Program, Stock, Tool
+from app.cnc.blocks import (
+    BoltCircle,
+    Circle,
+    DataBlock0,
+    Hole,
+    HoleOp,
+    Placement,
+    Program,
+    Stock,
+    Tool,
+)
 from app.cnc.problems import Rule, Severity, has_errors
 from app.cnc.simulate.verify import Verification, verify
 from app.cnc.validate import validate
@@ -273,3 +283,37 @@ _HOST = {
     "pocket-deeper-than-stock": "frame",
     "profile-wrong-side": "drill",
 }
+
+
+def test_a_boss_cut_into_by_its_neighbour_is_a_gouge_of_its_wall() -> None:
+    """Two OUTSIDE circles (bosses) 0.1 in apart with a 1/2 in end mill: each one's waste
+    is its outside, but never the other boss. The second's pass cuts into the first,
+    which is a gouge of the first's wall; 0.6 in apart, with room for the tool, nothing."""
+    tools = (Tool(number=1, diameter=Decimal("0.5"), rpm=1200, tcal=Decimal(0)),)
+
+    def boss(x: str) -> tuple[Hole, Circle]:
+        return (
+            Hole(
+                op=HoleOp.DRILL,
+                x=Decimal(x),
+                y=Decimal(2),
+                z_up=Decimal("0.1"),
+                z_dn=Decimal("-0.3"),
+                feed_z=Decimal(4),
+                tool=1,
+            ),
+            Circle(placement=Placement.OUTSIDE, radius=Decimal("0.5"), feed_xy=Decimal(10), tool=1),
+        )
+
+    stock = Stock(x=Decimal(0), y=Decimal(0), xl=Decimal(5), yw=Decimal(4), zh=Decimal(1))
+    close = Program(
+        name="bosses",
+        block0=DataBlock0(current_tool=1, tools=tools),
+        blocks=(*boss("1.5"), *boss("2.6")),
+        stock=stock,
+    )
+    found = verify(close, resolution=RESOLUTION).findings
+    assert (4, "gouge") in {(f.block, f.kind) for f in found}
+    assert any("finished wall of block 2" in f.message for f in found if f.block == 4)
+    apart = dataclasses.replace(close, blocks=(*boss("1.2"), *boss("3.3")))
+    assert verify(apart, resolution=RESOLUTION).findings == []

@@ -316,8 +316,10 @@ def test_a_machines_options_are_the_fields_of_its_target(client: FlaskClient) ->
         "name": "Fanuc mill",
         "target": "gcode-fanuc",
         "options_for": "gcode-fanuc",
-        "opt_sequence-numbers": "on",  # ticked, as the page shows these two
+        "opt_sequence-numbers": "on",  # ticked, as the page shows these four
         "opt_canned-cycles": "on",
+        "opt_start-retract": "on",
+        "opt_tool-change": "on",
         "opt_sequence-increment": "5",
         "opt_trailing-zeros": "drop",  # the Fanuc default: not kept
     }

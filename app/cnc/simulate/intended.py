@@ -287,15 +287,52 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
                 _group(inside, _deepest(slot), [(float(x), float(y)) for x, y in swath])
     for depth, rings in sorted(inside.items()):
         np.minimum(floor, float(depth), out=floor, where=winding(grid, rings) > 0)
-    for depth, shapes in sorted(outside.items()):
-        # Outside any one of them: not inside all of them (each shape winds 0 or 1).
-        held = winding(grid, [ring for shape in shapes for ring in shape]) >= len(shapes)
-        np.minimum(floor, float(depth), out=floor, where=~held)
+    _outside_wastes(grid, outside, floor)
     for pocket in geometry.pockets:
         if pocket.depth is not None:
             area = _pocket_area(grid, pocket, tol, chord)
             np.minimum(floor, float(pocket.depth), out=floor, where=area)
     return Intent(floor)
+
+
+def _outside_wastes(grid: Grid, outside: dict[int, list[list[Any]]], floor: F64) -> None:
+    """Lower `floor` where outer profiles and OUTSIDE routines (bosses) mean to cut: the
+    outside of each, to its depth, but never into another boss. The waste at depth d is
+    outside every boss cut no deeper than d, and outside every deeper boss that stands
+    apart from those (two bosses side by side keep each other); a deeper boss that holds
+    a shallower one is the step it stands on, and its top between them is waste."""
+    if not outside:
+        return
+    shapes = [(depth, shape) for depth, group in outside.items() for shape in group]
+    boxes = np.array(
+        [
+            [
+                min(float(np.min(np.asarray(r)[:, 0])) for r in shape),
+                min(float(np.min(np.asarray(r)[:, 1])) for r in shape),
+                max(float(np.max(np.asarray(r)[:, 0])) for r in shape),
+                max(float(np.max(np.asarray(r)[:, 1])) for r in shape),
+            ]
+            for _, shape in shapes
+        ]
+    )
+    depths = np.array([depth for depth, _ in shapes])
+    for depth in sorted(outside):
+        level = depths >= depth  # this depth's bosses and the shallower ones
+        b = boxes[level]
+        deeper = np.flatnonzero(~level)
+        apart = [
+            k
+            for k in deeper.tolist()
+            if not (
+                (boxes[k, 0] <= b[:, 2])
+                & (b[:, 0] <= boxes[k, 2])
+                & (boxes[k, 1] <= b[:, 3])
+                & (b[:, 1] <= boxes[k, 3])
+            ).any()
+        ]
+        kept = [ring for k in np.flatnonzero(level).tolist() + apart for ring in shapes[k][1]]
+        held = winding(grid, kept) > 0
+        np.minimum(floor, float(depth), out=floor, where=~held)
 
 
 def clearing(grid: Grid, routines: Sequence[Routine], tol: int) -> tuple[F64, BOOL]:

@@ -206,12 +206,16 @@ def _unit(k: int) -> list[Block]:
     """Ten blocks of a shop program, placed by `k` (every block valid on its own)."""
     x = D(k % 10) + D("0.5")
     y = D((k // 10) % 10) + D("0.5")
+    # The bolt circle's first hole (seed 001: angle 0 below the centre, 90 to its left...),
+    # bored out: a boring bar needs a smaller hole first.
+    quarter = k % 4
+    dx, dy = ((D(0), D("-0.2")), (D("-0.2"), D(0)), (D(0), D("0.2")), (D("0.2"), D(0)))[quarter]
+    first = (x + dx, y + D("0.25") + dy)
     return [
         _hole(HoleOp.DRILL, f"{x}", f"{y}", 1, pecks=2),
-        # Bored over the hole just drilled: a boring bar needs a smaller hole first.
-        _hole(HoleOp.BORE, f"{x}", f"{y}", 2),
         _hole(HoleOp.DRILL, f"{x}", f"{y + D('0.25')}", 1),
-        BoltCircle(op=HoleOp.DRILL, holes=6, radius=D("0.2"), angle=D(k % 60)),
+        BoltCircle(op=HoleOp.DRILL, holes=6, radius=D("0.2"), angle=D(90 * quarter)),
+        _hole(HoleOp.BORE, f"{first[0]}", f"{first[1]}", 2),
         _hole(HoleOp.DRILL, f"{x + D('0.1')}", f"{y + D('0.1')}", 2),
         Circle(placement=Placement.POCKET, radius=D("0.4"), feed_xy=D(9), tool=2),
         _hole(HoleOp.DRILL, f"{x}", f"{y}", 2),

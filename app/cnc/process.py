@@ -208,7 +208,9 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
     holes = placed_hole_list(program, path)
     if not any(h.op is not HoleOp.DRILL for h in holes):
         return []
-    cleared = cleared_areas(program, path)
+    # The pockets are drawn only for a hole that no earlier hole pilots (the usual
+    # program has none).
+    cleared: list[Cleared] | None = None
     # Earlier holes by point, on a lattice of SAME_POINT cells (a point's neighbours too).
     by_cell: dict[tuple[int, int], list[PlacedHole]] = {}
     for hole in holes:
@@ -228,15 +230,17 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
             and abs(other.x - hole.x) <= SAME_POINT
             and abs(other.y - hole.y) <= SAME_POINT
         ]
+        why, field = _no_pilot(hole, before, units)
+        if not why:
+            continue
+        if cleared is None:
+            cleared = cleared_areas(program, path)
         if any(
             area.block < hole.block
             and area.depth <= hole.bottom
             and _inside(area.outline, hole.x, hole.y)
             for area in cleared
         ):
-            continue
-        why, field = _no_pilot(hole, before, units)
-        if not why:
             continue
         count, first, first_why, first_field = faults.get(hole.block, (0, hole, why, field))
         faults[hole.block] = (count + 1, first, first_why, first_field)

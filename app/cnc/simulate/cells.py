@@ -449,8 +449,11 @@ def plunges(grid: Grid, s: Segments) -> Iterator[Plunges]:
         return
     i0, j0, h, w = i0[rows], j0[rows], h[rows], w[rows]
     shapes = np.stack([h, w], axis=1)
-    kinds, which = np.unique(shapes, axis=0, return_inverse=True)
-    which = which.reshape(-1)
+    if len(shapes) == 1:  # one plunge: numpy's unique costs more than the plunge
+        kinds, which = shapes, np.zeros(1, dtype=np.int64)
+    else:
+        kinds, which = np.unique(shapes, axis=0, return_inverse=True)
+        which = which.reshape(-1)
     res = grid.resolution
     for k, (hh, ww) in enumerate(kinds.tolist()):
         members = np.flatnonzero(which == k)

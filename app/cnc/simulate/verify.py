@@ -33,7 +33,7 @@ from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.mill import Path
 from app.cnc.pocketing.regions import path_points
-from app.cnc.process import process_problems
+from app.cnc.problems import Rule
 from app.cnc.simulate.intended import (
     Intent,
     centres,
@@ -66,6 +66,7 @@ from app.cnc.simulate.stock import (
 )
 from app.cnc.simulate.sweep import Simulation, simulate
 from app.cnc.units import Units, format_length, to_nm
+from app.cnc.validate import validate
 
 DEFAULT_TOLERANCE = {Units.INCH: Decimal("0.001"), Units.MM: Decimal("0.02")}
 
@@ -274,9 +275,12 @@ class Owners:
 def _process_findings(program: Program) -> list[Finding]:
     """The process rules `check` reports too (a tap's pilot, a cut below the stock), as
     findings: the same problems, from the same code."""
+    rules = (Rule.PILOT, Rule.BELOW_STOCK)
+    # validate found them already (and keeps the answer for this very program): read them.
     return [
         Finding(p.block or 0, "process", p.message, 0.0, 0.0)
-        for p in process_problems(program, compile_program(program))
+        for p in validate(program)
+        if p.rule in rules
     ]
 
 

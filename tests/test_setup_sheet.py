@@ -132,6 +132,10 @@ def test_the_sheet_gives_the_programs_saved_stock() -> None:
     assert sheet.stock is not None and sheet.stock.given
     assert sheet.stock.size == "XL 4.0000 × YW 4.5000 × ZH 0.7500 in"
     assert sheet.stock.where == "lower-left corner X -2.0000, Y -2.0000; top Z 0.0000 in"
+    # A stock that stands on parallels for its through cuts says how high they must be.
+    raised = dataclasses.replace(program, stock=dataclasses.replace(stock, clear=Decimal("0.5")))
+    lifted = setup_sheet(raised).stock
+    assert lifted is not None and lifted.where.endswith("; on parallels, 0.5000 in clear below it")
 
 
 def test_the_sheet_sizes_the_stock_as_the_simulation_does() -> None:

@@ -180,6 +180,9 @@ def stock_line(program: Program, path: CompiledPath) -> StockLine:
         f"ZH {f(stock.top - stock.bottom)} {u.symbol}"
     )
     where = f"lower-left corner X {f(stock.x0)}, Y {f(stock.y0)}; top Z {f(stock.top)} {u.symbol}"
+    if stock.clear:
+        # Through cuts go this far below the stock: it must stand on parallels that high.
+        where += f"; on parallels, {f(stock.clear)} {u.symbol} clear below it"
     return StockLine(size, where, stock.given)
 
 

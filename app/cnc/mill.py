@@ -1053,6 +1053,17 @@ def programmed_contour(
                         "X",
                     )
                 )
+            elif centre == end:
+                found.append(
+                    Finding(
+                        number + 1,
+                        Rule.ZERO_LENGTH,
+                        Severity.ERROR,
+                        "the arc's end is its centre; an arc cannot end at its centre (the "
+                        "XY-END point must lie on the circle through the start)",
+                        "X",
+                    )
+                )
             true_centre, divot_at = true_arc(_f(reference), _f(end), _f(centre), units)
             if divot_at is not None:
                 r_start = math.dist(reference, centre)
@@ -1126,8 +1137,8 @@ def true_arc(start: Pt, end: Pt, centre: Pt, units: Units) -> tuple[Pt, Pt | Non
     programmed end, begins. No export then writes an arc whose end is off its radius.
     """
     r_start = math.dist(start, centre)
-    if r_start < EPS or close(start, end):
-        return centre, None
+    if r_start < EPS or close(start, end) or math.dist(end, centre) < EPS:
+        return centre, None  # no arc to cut: validation names the zero radius
     if abs(r_start - math.dist(end, centre)) <= half_step(units):
         return centre, None
     radial = unit(sub(end, centre))

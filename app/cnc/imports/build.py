@@ -69,7 +69,7 @@ from app.cnc.imports.ops import (
 )
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
-from app.cnc.units import Units, format_decimal
+from app.cnc.units import Units, format_decimal, format_length
 
 
 @dataclass
@@ -220,19 +220,26 @@ class Builder:
         drill = self.hole(op.spec, op.at, op.lines[0], inc, loop, stop=False)
         self.blocks[-1] = replace(drill, comp=op.comp)
         here = self.ref
+        raw = op.at  # where the file's tool is, before rounding
         mode = Mode.INC if inc else Mode.ABS
         tool = op.spec.tool
         for e in op.elements:
             x, y, end = self.place(e.end, u, inc, e.line, here)
             z_dn = self.z(e.z_dn, u, e.line, "Z DN")
             feed = self.feed(e.feed, u, e.line, "FEEDR XY")
-            if e.centre is None:
+            start, raw = raw, e.end
+            grid = here if inc else (0, 0)
+            centre = (
+                None if e.centre is None else self.arc_centre(here, end, e.centre, u, e.line, grid)
+            )
+            kept = self.arc_kept(start, here, e, end, centre, u)
+            if kept == "drop":
+                continue
+            if centre is None or kept == "line":
                 self.blocks.append(
                     MillLine(x=x, y=y, z_dn=z_dn, feed_xy=feed, tool=tool, mode=mode, units=u)
                 )
             else:
-                grid = here if inc else (0, 0)
-                centre = self.arc_centre(here, end, e.centre, u, e.line, grid)
                 direction = Direction.CW if e.clockwise else Direction.CCW
                 if _quarter(here, end, centre, direction):
                     # A quarter circle on axis-parallel centre lines: the control's QCIR.
@@ -278,28 +285,77 @@ class Builder:
         start = self.ref
         feed = self.feed(op.feed, u, op.lines[0], "FEEDR XY")
         self.blocks.append(Pocket(feed_xy=feed, tool=op.spec.tool, units=u))
-        self.pocket_contour(op.boundary, start, u)
+        self.pocket_contour(op.boundary, start, u, op.at)
         for at, elements in op.islands:
             x, y, here = self.place(at, u, False, elements[0].line if elements else op.lines[0])
             self.blocks.append(Island(x=x, y=y, units=u))
-            self.pocket_contour(elements, here, u)
+            self.pocket_contour(elements, here, u, at)
         if op.stop:
             self.blocks[-1] = replace(self.blocks[-1], stop=True)
         self.ref = start
 
-    def pocket_contour(self, elements: list[Element], here: XY, u: Units) -> None:
-        """PKT LINE and PKT ARC blocks of one closed contour from `here` (nm, on the grid)."""
+    def pocket_contour(
+        self, elements: list[Element], here: XY, u: Units, raw: XY | None = None
+    ) -> None:
+        """PKT LINE and PKT ARC blocks of one closed contour from `here` (nm, on the grid;
+        `raw`, the file's point before rounding)."""
+        raw = here if raw is None else raw
         for e in elements:
             x, y, end = self.place(e.end, u, False, e.line)
-            if e.centre is None:
+            start, raw = raw, e.end
+            centre = None if e.centre is None else self.arc_centre(here, end, e.centre, u, e.line)
+            kept = self.arc_kept(start, here, e, end, centre, u)
+            if kept == "drop":
+                continue
+            if centre is None or kept == "line":
                 self.blocks.append(PocketLine(x=x, y=y, units=u))
             else:
-                centre = self.arc_centre(here, end, e.centre, u, e.line)
                 cx, cy, _ = self.place(centre, u, False, e.line)
                 direction = Direction.CW if e.clockwise else Direction.CCW
                 self.blocks.append(PocketArc(direction=direction, x=cx, y=cy, units=u))
                 self.blocks.append(PocketArcEnd(x=x, y=y, units=u))
             here = end
+
+    def arc_kept(
+        self, raw_start: XY, start: XY, e: Element, end: XY, centre: XY | None, units: Units
+    ) -> str:
+        """How an element is written once its points are rounded: "as is", or, for an arc
+        that rounding would turn into another arc (a 0.0001 in arc whose ends round onto one
+        point reads as a full circle; one whose ends round across each other sweeps the
+        other way round), "line" (a straight move to its end) or "drop" (its ends are one
+        point at the resolution). Never an arc that sweeps other than the file's; each
+        change is reported with its line."""
+        if e.centre is None or centre is None:
+            return "as is"
+        before = arc_turn(raw_start, e.end, e.centre, e.clockwise)
+        # A centre rounded onto an end makes no arc at all (its radius there is 0).
+        degenerate = centre in (start, end) and start != end
+        after = 0.0 if degenerate else arc_turn(start, end, centre, e.clockwise)
+        if abs(after - before) <= ARC_TURN_SLACK:
+            return "as is"
+        length = before * math.dist(raw_start, e.centre)
+        what = (
+            f"the arc to X {format_length(e.end[0], units)} Y {format_length(e.end[1], units)} "
+            f"({show(round(length), units, 6)} long, {math.degrees(before):.2f}°)"
+        )
+        if start == end:
+            self.notes.became(
+                e.line,
+                f"{what}: its ends are one point at the programming resolution, so it is "
+                "left out (rounded, it would read as a full circle)",
+            )
+            return "drop"
+        turned = (
+            "its centre would fall on an end"
+            if degenerate
+            else f"it would sweep {math.degrees(after):.2f}°"
+        )
+        self.notes.became(
+            e.line,
+            f"{what}: rounded to the resolution {turned}, so it is written as a straight "
+            "move to its end",
+        )
+        return "line"
 
     def arc_centre(
         self, start: XY, end: XY, centre: XY, units: Units, line: int, grid: XY = (0, 0)
@@ -390,6 +446,22 @@ class Builder:
                 f"{first}-{last}: "
                 "LOOP … REP",
             )
+
+
+# An arc whose sweep rounding changes by more than this (radians, 10°) is no longer the
+# file's arc: rounding moves an end by at most half a resolution step, which turns an arc
+# of a few steps' radius by less, and turns a tiny one into a full circle or the other way.
+ARC_TURN_SLACK = math.radians(10)
+
+
+def arc_turn(start: XY, end: XY, centre: XY, clockwise: bool) -> float:
+    """The sweep of an arc (radians, in (0, 2π]): a full circle when its ends meet."""
+    if start == end:
+        return 2 * math.pi
+    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+    a1 = math.atan2(end[1] - centre[1], end[0] - centre[0])
+    turn = ((a0 - a1) if clockwise else (a1 - a0)) % (2 * math.pi)
+    return turn or 2 * math.pi
 
 
 def _quarter(start: XY, end: XY, centre: XY, direction: Direction) -> bool:

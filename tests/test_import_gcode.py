@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from decimal import Decimal as D
 from fractions import Fraction
+from pathlib import Path
 
 import pytest
 from hypothesis import given, settings
@@ -20,7 +21,9 @@ from hypothesis import strategies as st
 from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
 from app.cnc.formats.gcode.reader import USUAL, text_nm, usual_words
 from app.cnc.imports import ImportFailure, NoteKind, read_program
+from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
+from app.cnc.toolpath import Feed
 from app.cnc.units import Units, half_even
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture_text
@@ -502,3 +505,38 @@ def test_half_even_is_the_fraction_rounded(numerator: int, denominator: int) -> 
     """Lengths and feeds are rounded in integers: exactly Python's rounding of the exact
     quotient (half to even), for either sign."""
     assert half_even(numerator, denominator) == round(Fraction(numerator, denominator))
+
+
+# -- what CAM posts write (issue 36) -----------------------------------------------------------
+
+SAFETY_LINE = (
+    "%\nO1001\n(MASTERCAM-STYLE START)\nG20\nG0 G17 G40 G80 G90 G94 G98\nT1 M6\n"
+    "G0 G90 G54 X1. Y1. S1000 M3\nG43 H1 Z0.1\nG1 Z-0.1 F5.\nG1 X2. F10.\n"
+    "G1 G80 X2.5 Y1.5\nG0 Z1.\nM30\n%\n"
+)
+
+
+def test_a_post_s_safety_line_with_g80_beside_g0_reads_as_rs274_reads_it(tmp_path: Path) -> None:
+    """`G0 G17 G40 G80 G90 G94 G98`, Mastercam's and Haas's safety line, was refused ("G0
+    and G80 in one block are both motion codes"); rs274 reads G80 beside G0-G3 as the cycle
+    cancelled and the other code moving. The same file now imports, and its blocks cut what
+    rs274 reads from it."""
+    from tests.referee import rs274
+
+    path = tmp_path / "safety.nc"
+    path.write_text(SAFETY_LINE)
+    theirs = [m.end for m in rs274(path) if m.kind == "F"]
+    program = gcode(SAFETY_LINE)
+    cut = [
+        (round(m.x / 25_400_000, 4), round(m.y / 25_400_000, 4), round(m.z / 25_400_000, 4))
+        for m in interpret(program).moves
+        if isinstance(m, Feed)
+    ]
+    assert cut == [tuple(round(v, 4) for v in end) for end in theirs]
+
+
+def test_g80_beside_a_cycle_is_still_two_motion_codes() -> None:
+    """rs274 refuses G0 beside G81 (two motions): so does the importer, naming both."""
+    assert failure("G20\nG0 Z1\nG0 G81 X1 Z-1 R0.1 F5\n").startswith(
+        "line 3, column 4: G0 and G81 in one block are both motion codes"
+    )

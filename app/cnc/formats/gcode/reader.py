@@ -355,6 +355,12 @@ def parse_gcode(text: str, name: str = "") -> Parsed:
     return _Reader(text, name).run()
 
 
+def _cancel_beside(first: Word, second: Word) -> bool:
+    """Whether two motion codes in one block are G80 and one of G0-G3 (either order)."""
+    pair = {first.code, second.code}
+    return "80" in pair and len(pair) == 2 and (pair - {"80"}) <= {"0", "1", "2", "3"}
+
+
 class _Reader:
     def __init__(self, text: str, name: str) -> None:
         self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
@@ -1009,6 +1015,14 @@ class _Reader:
                 )
                 continue
             if group is not None and group != "non-modal":
+                if group in groups and group == "motion" and _cancel_beside(groups[group], word):
+                    # G80 beside G0-G3, as a post's safety line writes it (G0 G17 G40 G80 G90
+                    # G94 G98): rs274 cancels the cycle and keeps the other motion code.
+                    if code != "80":
+                        codes.pop(groups[group].code, None)
+                        groups[group] = word
+                        codes[code] = word
+                    continue
                 if group in groups:
                     other = groups[group]
                     raise failure(

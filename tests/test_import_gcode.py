@@ -521,18 +521,40 @@ def test_a_post_s_safety_line_with_g80_beside_g0_reads_as_rs274_reads_it(tmp_pat
     and G80 in one block are both motion codes"); rs274 reads G80 beside G0-G3 as the cycle
     cancelled and the other code moving. The same file now imports, and its blocks cut what
     rs274 reads from it."""
+
+    assert feeds_as_rs274_reads_them(SAFETY_LINE, tmp_path)
+
+
+def feeds_as_rs274_reads_them(text: str, tmp_path: Path) -> bool:
+    """Whether the imported program feeds to the end points (in) rs274 reads in `text`."""
     from tests.referee import rs274
 
-    path = tmp_path / "safety.nc"
-    path.write_text(SAFETY_LINE)
-    theirs = [m.end for m in rs274(path) if m.kind == "F"]
-    program = gcode(SAFETY_LINE)
+    path = tmp_path / "post.nc"
+    path.write_text(text)
+    theirs = [tuple(round(v, 4) for v in m.end) for m in rs274(path) if m.kind == "F"]
     cut = [
         (round(m.x / 25_400_000, 4), round(m.y / 25_400_000, 4), round(m.z / 25_400_000, 4))
-        for m in interpret(program).moves
+        for m in interpret(gcode(text)).moves
         if isinstance(m, Feed)
     ]
-    assert cut == [tuple(round(v, 4) for v in end) for end in theirs]
+    assert cut == theirs, (cut, theirs)
+    return True
+
+
+def test_g98_on_the_last_hole_of_a_g99_series_returns_to_the_initial_level(
+    tmp_path: Path,
+) -> None:
+    """Before: a G98 on the last hole of a G99 series was ignored (the tool stayed at R),
+    unreported, and the incremental cycle after it measured R and Z from R: its hole went
+    0.9 in deeper than rs274 drills it (Z-1.4 for Z-0.5). Now the G98 hole returns to where
+    the series began, the report says Data Block 0 cannot hold that second height, and
+    every hole is at rs274's depth."""
+    text = (
+        "G20 G90\nG0 X0 Y0 Z1.0\nG91 G99 G81 X1 Y1 R-0.9 Z-0.6 F5\nX1\nG98 X1\n"
+        "G81 X1 R-0.9 Z-0.6\nG80\nG90 G0 Z1.0\nM30\n"
+    )
+    assert feeds_as_rs274_reads_them(text, tmp_path)
+    assert any("line 5: the tool retracts 0.9 in above Z UP here" in n for n in report(text))
 
 
 def test_g80_beside_a_cycle_is_still_two_motion_codes() -> None:

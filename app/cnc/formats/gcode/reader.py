@@ -375,6 +375,7 @@ class _Reader:
         self.units_assumed = False
         self.motion: str | None = None
         self.cycle_drilled = False  # the last motion block drilled with a canned cycle
+        self.series_z = 0  # the Z before the series of canned cycles began (G98 returns there)
         self.incremental = False
         self.arc_absolute = False
         self.plane = "17"
@@ -663,6 +664,14 @@ class _Reader:
             decimals = max(decimals, written)
         return ends[0], ends[1], ends[2], decimals
 
+    def cycle_clear(self, start_z: int, r: int) -> int:
+        """Where a canned cycle's hole retracts to: R (G99), or (G98) the height the tool
+        was at before this series of cycles began — not the R a G99 hole before it in the
+        series left it at — or R where that is higher (RS274/NGC, as rs274 reads it)."""
+        if not self.cycle_drilled:
+            self.series_z = start_z  # the first hole of a series
+        return max(self.series_z, r) if self.return_initial else r
+
     def fast_hole(
         self, number: int, x: str | None, y: str | None, feed: int | None, per: int
     ) -> bool:
@@ -684,7 +693,7 @@ class _Reader:
         assert code is not None and self.units is not None
         self.feed = feed
         self.change_pending = None
-        clear = max(start_z, r) if self.return_initial else r
+        clear = self.cycle_clear(start_z, r)
         peck = (self.cycle_q or 0) if code in ("73", "83") else 0
         self.steps.append(
             Cycle(number, int(code), nx, ny, r, bottom, clear, feed, peck, self.cycle_p, self.units)
@@ -1413,7 +1422,7 @@ class _Reader:
             peck = self.cycle_q
         l_word = block.get("L")
         repeats = 1 if l_word is None else self.integer(l_word, block, 1, 1000)
-        clear = max(start_z, r) if self.return_initial else r
+        clear = self.cycle_clear(start_z, r)
         dx, dy = (x - x0, y - y0) if self.incremental else (0, 0)
         if len(self.steps) + repeats > MAX_STEPS:
             raise failure(line, first, f"more than {MAX_STEPS} moves: not a program to import")

@@ -562,3 +562,18 @@ def test_g80_beside_a_cycle_is_still_two_motion_codes() -> None:
     assert failure("G20\nG0 Z1\nG0 G81 X1 Z-1 R0.1 F5\n").startswith(
         "line 3, column 4: G0 and G81 in one block are both motion codes"
     )
+
+
+def test_a_1000_line_contour_is_one_short_report_line() -> None:
+    """One report line listed every block an operation became: a 1 000-line contour was a
+    line of ~40 kB. Runs of one kind are counted, and past six runs the rest is a count."""
+    moves = "".join(
+        f"G1 X{1 + (k % 2):.1f} Y{k * 0.01:.2f}\n"
+        if k % 3
+        else f"G2 X{1 + (k % 2):.1f} Y{k * 0.01:.2f} R5.\n"
+        for k in range(1, 1000)
+    )
+    text = "G20\nG0 X1 Y0 Z0.1\nG1 Z-0.1 F5\nF10\n" + moves + "G0 Z1\nM30\n"
+    lines = [n for n in report(text) if "→ blocks" in n]
+    assert lines and max(len(n) for n in lines) < 400, max(len(n) for n in lines)
+    assert any("more blocks" in n for n in lines)

@@ -174,7 +174,7 @@ class Builder:
             self.blocks[first - 1] = replace(self.blocks[first - 1], message=op.message)
         last = len(self.blocks)
         if not loop and not inc:
-            titles = ", ".join(b.title for b in self.blocks[first - 1 :])
+            titles = block_titles(self.blocks[first - 1 :])
             where = f"block {first}" if first == last else f"blocks {first}-{last}"
             self.notes.became(op.lines[0], f"{self.notes.span(op.lines)} → {where}: {titles}")
 
@@ -446,6 +446,29 @@ class Builder:
                 f"{first}-{last}: "
                 "LOOP … REP",
             )
+
+
+# A report line names at most this many runs of blocks (two more are named rather than
+# counted), then counts the rest.
+TITLE_RUNS = 6
+
+
+def block_titles(blocks: list[Block]) -> str:
+    """The blocks' titles for a report line, runs of one title counted (`MILL STD × 40`),
+    and past TITLE_RUNS runs only how many more blocks: a 1 000-line contour is a short
+    line, not 40 kB."""
+    runs: list[tuple[str, int]] = []
+    for block in blocks:
+        if runs and runs[-1][0] == block.title:
+            runs[-1] = (block.title, runs[-1][1] + 1)
+        else:
+            runs.append((block.title, 1))
+    kept = runs if len(runs) <= TITLE_RUNS + 2 else runs[:TITLE_RUNS]
+    shown = [f"{title} × {count}" if count > 1 else title for title, count in kept]
+    rest = sum(count for _, count in runs[len(kept) :])
+    if rest:
+        shown.append(f"and {rest} more block{'s' if rest > 1 else ''}")
+    return ", ".join(shown)
 
 
 # An arc whose sweep rounding changes by more than this (radians, 10°) is no longer the

@@ -246,3 +246,17 @@ def test_all_depths_blank_is_a_two_axis_program_and_said_so(app: Flask) -> None:
     shown = client.post(f"/drawings/{key}/preview", data=fields)
     assert shown.status_code == 200
     assert "a 2-axis program" in shown.get_data(as_text=True)
+
+
+def test_a_3_16_end_mill_is_taken_as_0_188_not_refused(app: Flask) -> None:
+    """A 3/16 in end mill is 0.1875 in on the shop's tool list: the page took no tool
+    finer than 0.001 in and refused it. Data Block 0 holds 0.188 (rounded half-even, as
+    every import's tools are) and the blocks are added."""
+    client = app.test_client()
+    location, key = _open(client, outline_and_slot())
+    fields = shown_fields(client.get(location).get_data(as_text=True))
+    fields.update(c0_order="1", c1_order="2", tool="2", tool_dia="0.1875")
+    added = client.post(f"/drawings/{key}/add", data={**fields, "target": "new", "name": "E"})
+    assert added.status_code == 302, added.get_data(as_text=True)
+    tool = _added(app, added).block0.tool(2)
+    assert tool is not None and tool.diameter == Decimal("0.188")

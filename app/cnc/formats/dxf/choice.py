@@ -264,7 +264,8 @@ def read_cutting(units: Units, fields: Mapping[str, str]) -> tuple[Cutting, int]
     """The depths, feeds and tool the page's fields give (in `units`), and the tool's number.
 
     Z UP, Z DN and FEEDR Z all blank: a 2-axis program (no depths). Raises ChoiceError
-    naming the field for a value that is not a number, not on the programming resolution,
+    naming the field for a value that is not a number, a depth not on the programming
+    resolution (a tool's diameter finer than it is rounded, and reported, in Data Block 0),
     out of the control's range, a Z DN not below Z UP, or one depth given without the
     other."""
 
@@ -277,12 +278,12 @@ def read_cutting(units: Units, fields: Mapping[str, str]) -> tuple[Cutting, int]
         except NumberError as exc:
             raise ChoiceError(f"{label}: {exc}") from None
 
-    def length(name: str, label: str) -> int:
+    def length(name: str, label: str, exact: bool = True) -> int:
         value = number(name, label)
         high = limits.MAX_DIMENSION[units]
         if abs(value) > high:
             raise ChoiceError(f"{label}: {value} {units.symbol}; allowed -{high} to {high}")
-        if value != value.quantize(units.resolution):
+        if exact and value != value.quantize(units.resolution):
             raise ChoiceError(
                 f"{label}: {value} is finer than the control's {units.resolution} {units.symbol}"
             )
@@ -322,7 +323,9 @@ def read_cutting(units: Units, fields: Mapping[str, str]) -> tuple[Cutting, int]
         raise ChoiceError(f"tool: {exc}") from None
     if not 1 <= tool <= 24:
         raise ChoiceError(f"tool: {tool}; allowed 1 to 24")
-    diameter = length("tool_dia", "tool Ø")
+    # A tool's size as the shop calls it (3/16 in: 0.1875): Data Block 0 holds it to the
+    # resolution, rounded and reported there, as every import's tools are.
+    diameter = length("tool_dia", "tool Ø", exact=False)
     if diameter <= 0:
         raise ChoiceError(f"tool Ø: {text('tool_dia')}; the tool's diameter is more than 0")
     rpms: tuple[tuple[int, int], ...] = ()

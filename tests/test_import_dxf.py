@@ -460,3 +460,22 @@ def test_a_drawing_without_tool_diameters_converts_to_json(tmp_path: Path) -> No
     assert "has no DIA in Data Block 0" in converted.stderr
     program = document.loads(out.read_text())
     assert program == read_program(bracket(), "bracket", None, {}).program
+
+
+def test_a_line_drawn_twice_is_named_and_cut_once() -> None:
+    """A rectangle of four lines with its bottom line drawn a second time (backwards):
+    before, the repeat became a cut-twice "open contour" whose two ends were the same
+    point; now it is left out, named as a repeat, and the rectangle stays one closed
+    contour."""
+    doc = new_drawing(units=1)
+    msp = doc.modelspace()
+    corners = [(0, 0), (4, 0), (4, 3), (0, 3)]
+    for a, b in zip(corners, corners[1:] + corners[:1], strict=True):
+        msp.add_line(a, b)
+    msp.add_line((4, 0), (0, 0))  # the bottom again
+    result = read_program(write(doc), "twice", None, None)
+    notes = [n.message for n in result.report]
+    assert any("repeats LINE" in n and "the same line drawn twice" in n for n in notes), notes
+    assert not any("is open" in n for n in notes), notes
+    # The rectangle alone: one DRILL and its FRAME, no MILL line for the repeat.
+    assert [b.title for b in result.program.blocks] == ["DRILL", "FRAME OUTSIDE"]

@@ -510,6 +510,7 @@ def _chain(
         if len(piece) > 1:
             piece[-1] = Segment(last.start, b, last.centre, last.clockwise, last.source)
         snapped.append(piece)
+    snapped = _without_repeats(snapped, notes)
     ends: dict[XY, list[int]] = {}
     for k, piece in enumerate(snapped):
         ends.setdefault(piece[0].start, []).append(k)
@@ -560,6 +561,41 @@ def _chain(
             )
         contours.append(contour)
     return contours
+
+
+def _shape(piece: list[Segment]) -> tuple[tuple[XY, XY, XY | None, bool], ...]:
+    """A piece's geometry, the same whichever way it was drawn."""
+
+    def key(segments: list[Segment]) -> tuple[tuple[XY, XY, XY | None, bool], ...]:
+        # A line has no direction of turn: reversing one flips a flag that means nothing.
+        return tuple(
+            (s.start, s.end, s.centre, s.clockwise and s.centre is not None) for s in segments
+        )
+
+    forward = key(piece)
+    backward = key([s.reversed() for s in reversed(piece)])
+    return min(forward, backward, key=repr)
+
+
+def _without_repeats(pieces: list[list[Segment]], notes: DxfNotes) -> list[list[Segment]]:
+    """The pieces less those that repeat an earlier one (a line drawn twice, either way
+    round): cut twice, it would be an open contour whose two ends are one point. Each is
+    named in the report."""
+    seen: dict[tuple[tuple[XY, XY, XY | None, bool], ...], int] = {}
+    kept: list[list[Segment]] = []
+    for piece in pieces:
+        shape = _shape(piece)
+        first = seen.get(shape)
+        if first is None:
+            seen[shape] = piece[0].source
+            kept.append(piece)
+            continue
+        notes.ignored(
+            piece[0].source,
+            f"{notes.entities[piece[0].source - 1]} repeats {notes.entities[first - 1]} "
+            "(the same line drawn twice): left out, so it is cut once",
+        )
+    return kept
 
 
 def _closes(chain: list[Segment]) -> bool:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.cnc.blocks import Program
+from app.cnc.memo import Memo
 from app.cnc.path import CompiledPath, Node, Piece, Seq
 from app.cnc.simulate.segments import I64, Entry, Segments, ToolShapes, piece_segments
 from app.cnc.units import to_nm
@@ -69,6 +70,11 @@ class Placed:
         return Segments.concatenate([g.absolute() for g in self.groups])
 
 
+# A piece's segments by (piece, what they depend on), shared by every simulation in the
+# process; each entry keeps its piece, so no id in a key is reused while it is in.
+SEGMENTS: Memo[tuple[Piece, Segments, Entry, frozenset[int]]] = Memo()
+
+
 def place(program: Program, path: CompiledPath) -> Placed:
     """The motions of `path` (compiled from `program`) as placed groups."""
     shapes = ToolShapes.of(program, path.tools)
@@ -90,6 +96,8 @@ class _Walker:
         # Pieces by content: the compiler may hold equal pieces as distinct objects (one
         # per Run of a LOOP's rows). Ids are kept with their pieces, so none is reused.
         self.digests: dict[int, tuple[Piece, bytes]] = {}
+        # The radius of each tool in the table, and (as tool 0) the default for the others.
+        self.radii = (*sorted((n, shapes.radius(n)) for n in shapes.tools), (0, shapes.radius(0)))
 
     def visit(self, node: Node, dx: int, dy: int, base: int) -> None:
         if isinstance(node, Piece):
@@ -123,7 +131,7 @@ class _Walker:
             key = (self._digest(piece), base + piece.base, entry.x, entry.y, entry.z, entry.tool)
             found = self.made.get(key)
             if found is None:
-                found = piece_segments(piece.rows, base + piece.base, entry, self.shapes)
+                found = self._segments(piece, base + piece.base, entry)
                 self.made[key] = found
             segments, leave = found
             # Placement p + 1 is entered where placement p leaves: alike when that is the
@@ -142,6 +150,36 @@ class _Walker:
             self.at = Entry(leave.x + last[0], leave.y + last[1], leave.z, leave.tool)
             yield Group(segments, offsets[:count], key, loose and not exact[: count - 1].all())
             offsets = offsets[count:]
+
+    def _segments(self, piece: Piece, shift: int, entry: Entry) -> tuple[Segments, Entry]:
+        """`piece_segments`, kept between simulations (Verify after an edit, a replay): the
+        compile gives the same piece object for every block an edit left alone. The key
+        holds what the segments depend on besides the moves: where the piece is entered, its
+        block numbers, the tools' radii and which of its blocks drill with a point."""
+        rows = piece.rows
+        if not len(rows) or len(rows) > SEGMENTS.budget // 10:
+            return piece_segments(rows, shift, entry, self.shapes)
+        blocks = rows["block"]
+        low, high = int(blocks.min()) + shift, int(blocks.max()) + shift
+        pointed = self.shapes.pointed
+        points = tuple(
+            pointed[
+                np.searchsorted(pointed, low) : np.searchsorted(pointed, high, "right")
+            ].tolist()
+        )
+        key = (id(piece), shift, entry, self.radii, points)
+        kept = SEGMENTS.get(key)
+        if kept is not None and kept[0] is piece:
+            _, segments, leave, used = kept
+            self.shapes.used.update(used)
+            return segments, leave
+        before = set(self.shapes.used)
+        self.shapes.used.clear()
+        segments, leave = piece_segments(rows, shift, entry, self.shapes)
+        used = frozenset(self.shapes.used)
+        self.shapes.used.update(before)
+        SEGMENTS.keep(key, (piece, segments, leave, used), len(rows))
+        return segments, leave
 
     def _digest(self, piece: Piece) -> bytes:
         """A name for the piece's moves (equal moves, equal names)."""

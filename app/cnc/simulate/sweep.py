@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.cnc.memo import Memo
 from app.cnc.simulate.cells import (
     DISC,
     RAMP,
@@ -141,6 +142,14 @@ class Simulation:
         blocks[cut] = self.orders.blocks_of(order[cut])
         return blocks.reshape(self.grid.ny, self.grid.nx)
 
+    def owner_at(self, i: int, j: int) -> int:
+        """The block that cut cell (i, j) (0 where nothing did): `owner_blocks` for one
+        cell, without working out the whole grid."""
+        order = int(self.keys[i * self.grid.nx + j]) & ORDER_MASK
+        if order == UNCUT:
+            return 0
+        return int(self.orders.blocks_of(np.array([order], dtype=np.int64))[0])
+
     def removed_volume(self) -> float:
         """Material removed, nm³."""
         depth = self.grid.stock.top - self.heights()
@@ -154,6 +163,49 @@ def unique_rows(table: np.ndarray) -> tuple[np.ndarray, I64, I64]:
         return table, np.zeros(1, dtype=np.int64), np.ones(1, dtype=np.int64)
     kinds, inverse, counts = np.unique(table, axis=0, return_inverse=True, return_counts=True)
     return kinds, inverse.reshape(-1), counts
+
+
+# What of each group is worth sweeping, by (group key, stock top, upto), for every
+# simulation in the process (a group's key names its motions).
+SHAPES: Memo[_Shape] = Memo()
+
+
+# The most segments one merged run of single pieces holds (see `_merged`).
+MERGE_ROWS = 1 << 16
+
+
+def _merged(groups: list[Group]) -> list[Group]:
+    """The groups in order, each run of groups placed once (a program's single pieces, one
+    per top-level block) joined into one group in part coordinates: the sweep then folds a
+    run in as few batches as its rapids to check and its tool changes allow, not one or more
+    per block. Groups placed several times (a LOOP's patterns, a bolt circle's holes) stay
+    as they are, for the stamps that serve them. The motions and their order are the same."""
+    out: list[Group] = []
+    run: list[Group] = []
+    rows = 0
+
+    def close() -> None:
+        if len(run) == 1:
+            out.append(run[0])
+        elif run:
+            segments = Segments.concatenate([g.absolute() for g in run])
+            key = ("merged", *((g.key, tuple(g.offsets[0].tolist())) for g in run))
+            out.append(Group(segments, np.zeros((1, 2), dtype=np.int64), key))
+        run.clear()
+
+    for group in groups:
+        if len(group.offsets) != 1 or group.loose:
+            close()
+            rows = 0
+            out.append(group)
+            continue
+        if rows + len(group.segments) > MERGE_ROWS:
+            close()
+            rows = 0
+        run.append(group)
+        rows += len(group.segments)
+    close()
+    return out
 
 
 def uncut_key(grid: Grid) -> int:
@@ -172,9 +224,10 @@ def simulate(
     keys = np.full(grid.cells, uncut_key(grid), dtype=np.int64)
     result = Simulation(grid, keys, OrderMap(), upto=upto, segments=total)
     run = _Run(grid, keys, result, crash_tolerance)
+    groups = _merged(placed.groups)
     # How often each shape is placed at each phase in the whole program: what a stamp of
     # it would serve.
-    for group in placed.groups:
+    for group in groups:
         shape = run.shape(group)
         if shape.stampable:
             kinds, _, counts = unique_rows(run.phases(group.offsets))
@@ -182,7 +235,7 @@ def simulate(
                 key = (shape.digest, fx, fy)
                 run.uses[key] = run.uses.get(key, 0) + count
     first = 0
-    for group in placed.groups:
+    for group in groups:
         result.orders.add(first, group.segments.block)
         run.group(group, first)
         first += group.count
@@ -233,12 +286,18 @@ class _Run:
     def shape(self, group: Group) -> _Shape:
         found = self.shapes.get(group.key)
         if found is None:
-            s = group.segments
-            useful = _useful(self.grid, s, self.result.upto)
-            tools = s.tool[useful]
-            stampable = bool(len(useful)) and not s.rapid[useful].any()
-            stampable = stampable and bool((tools == tools[0]).all())
-            found = _Shape(useful, _digest(s, useful), stampable)
+            # Kept between simulations too (Verify after an edit): a group's key names its
+            # motions, and what of them is useful depends only on the stock's top and upto.
+            key = (group.key, self.grid.stock.top, self.result.upto)
+            found = SHAPES.get(key)
+            if found is None:
+                s = group.segments
+                useful = _useful(self.grid, s, self.result.upto)
+                tools = s.tool[useful]
+                stampable = bool(len(useful)) and not s.rapid[useful].any()
+                stampable = stampable and bool((tools == tools[0]).all())
+                found = _Shape(useful, _digest(s, useful), stampable)
+                SHAPES.keep(key, found, len(s) + 1)
             self.shapes[group.key] = found
         return found
 

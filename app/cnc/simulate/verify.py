@@ -268,6 +268,8 @@ class Owners:
 
     def __getitem__(self, key: Any) -> Any:
         if self._blocks is None:
+            if isinstance(key, tuple) and all(isinstance(k, int) for k in key):
+                return self._sim.owner_at(*key)  # one cell: a hole's finding
             self._blocks = self._sim.owner_blocks()
         return self._blocks[key]
 

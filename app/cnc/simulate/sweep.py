@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -174,12 +175,13 @@ SHAPES: Memo[_Shape] = Memo()
 MERGE_ROWS = 1 << 16
 
 
-def _merged(groups: list[Group]) -> list[Group]:
+def _merged(groups: list[Group], stamped: Callable[[Group], bool]) -> list[Group]:
     """The groups in order, each run of groups placed once (a program's single pieces, one
     per top-level block) joined into one group in part coordinates: the sweep then folds a
     run in as few batches as its rapids to check and its tool changes allow, not one or more
-    per block. Groups placed several times (a LOOP's patterns, a bolt circle's holes) stay
-    as they are, for the stamps that serve them. The motions and their order are the same."""
+    per block. Groups placed several times (a LOOP's patterns, a bolt circle's holes), and
+    those a stamp will serve (`stamped`: the same motions cut at several places), stay as
+    they are. The motions and their order are the same."""
     out: list[Group] = []
     run: list[Group] = []
     rows = 0
@@ -194,7 +196,7 @@ def _merged(groups: list[Group]) -> list[Group]:
         run.clear()
 
     for group in groups:
-        if len(group.offsets) != 1 or group.loose:
+        if len(group.offsets) != 1 or group.loose or stamped(group):
             close()
             rows = 0
             out.append(group)
@@ -224,16 +226,24 @@ def simulate(
     keys = np.full(grid.cells, uncut_key(grid), dtype=np.int64)
     result = Simulation(grid, keys, OrderMap(), upto=upto, segments=total)
     run = _Run(grid, keys, result, crash_tolerance)
-    groups = _merged(placed.groups)
     # How often each shape is placed at each phase in the whole program: what a stamp of
     # it would serve.
-    for group in groups:
+    for group in placed.groups:
         shape = run.shape(group)
         if shape.stampable:
             kinds, _, counts = unique_rows(run.phases(group.offsets))
             for (fx, fy), count in zip(kinds.tolist(), counts.tolist(), strict=True):
                 key = (shape.digest, fx, fy)
                 run.uses[key] = run.uses.get(key, 0) + count
+
+    def stamped(group: Group) -> bool:
+        shape = run.shape(group)
+        if not shape.stampable:
+            return False
+        ((fx, fy),) = run.phases(group.offsets).tolist()
+        return run.uses.get((shape.digest, fx, fy), 0) > 1
+
+    groups = _merged(placed.groups, stamped)
     first = 0
     for group in groups:
         result.orders.add(first, group.segments.block)

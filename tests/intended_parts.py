@@ -308,9 +308,15 @@ _PLANTABLE = {
 def plantable(layout: Layout, mistake: str) -> bool:
     """Whether `layout` has a feature `mistake` can be planted in."""
     if mistake == "profile-wrong-side":
-        # Through, a contour cut from inside with nothing in it is a window cut out of a
-        # plate: only the features inside say the part is inside.
-        return layout.profile_depth != "through" or any(f != "empty" for f in layout.features)
+        # Through, a contour cut from inside is a window cut out of a plate unless features
+        # inside it say the slug is the part: holes do; pockets that clear most of it are
+        # the window roughed out (Verify gives them the benefit of the doubt).
+        if layout.profile_depth != "through":
+            return True
+        holes = ("drill", "tap", "bore", "through", "bolts")
+        return any(f in holes for f in layout.features) and all(
+            f in (*holes, "empty") for f in layout.features
+        )
     return any(f in _PLANTABLE[mistake] for f in layout.features)
 
 

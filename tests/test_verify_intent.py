@@ -27,9 +27,12 @@ from app.cnc import document
 from app.cnc.blocks import (
     BoltCircle,
     Circle,
+    Comp,
     DataBlock0,
+    Frame,
     Hole,
     HoleOp,
+    MillLine,
     Placement,
     Program,
     Stock,
@@ -259,11 +262,13 @@ def test_verify_finds_nothing_in_parts_made_without_mistakes(layout: Layout) -> 
     check_intended(build(layout), COARSE)
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(layouts, st.sampled_from(MISTAKES))
 def test_verify_finds_each_planted_mistake_and_names_its_block(
     layout: Layout, mistake: str
 ) -> None:
+    if not plantable(layout, mistake) and mistake == "profile-wrong-side":
+        layout = dataclasses.replace(layout, profile_depth=-0.5)  # blind: unambiguous
     if not plantable(layout, mistake):
         layout = dataclasses.replace(layout, features=(*layout.features, _HOST[mistake]))
     built = build(dataclasses.replace(layout, mistake=mistake))
@@ -317,3 +322,97 @@ def test_a_boss_cut_into_by_its_neighbour_is_a_gouge_of_its_wall() -> None:
     assert any("finished wall of block 2" in f.message for f in found if f.block == 4)
     apart = dataclasses.replace(close, blocks=(*boss("1.2"), *boss("3.3")))
     assert verify(apart, resolution=RESOLUTION).findings == []
+
+
+def test_a_through_window_roughed_out_first_is_no_wrong_side_profile() -> None:
+    """Found by an independent check: a window through a plate, roughed out by a FRAME
+    POCKET and then finished by a contour cut from inside (CUT LT, counter-clockwise),
+    was called a profile cut on the wrong side (the pocket "in the slug"). Features that
+    clear most of what the contour encloses are the window's roughing; a start hole where
+    the end mill plunges lies in the contour's own band. Holes in the slug still say the
+    part is inside."""
+    tools = (
+        Tool(number=1, diameter=Decimal("0.375"), rpm=1200, tcal=Decimal(0)),
+        Tool(number=2, diameter=Decimal("0.25"), rpm=1500, tcal=Decimal(0)),
+        Tool(number=3, diameter=Decimal("0.201"), rpm=1500, tcal=Decimal(0)),
+    )
+
+    def drill(x: str, y: str, depth: str, tool: int, comp: Comp = Comp.NONE) -> Hole:
+        return Hole(
+            op=HoleOp.DRILL,
+            x=Decimal(x),
+            y=Decimal(y),
+            z_up=Decimal("0.1"),
+            z_dn=Decimal(depth),
+            feed_z=Decimal(4),
+            tool=tool,
+            comp=comp,
+        )
+
+    def line(x: str, y: str) -> MillLine:
+        return MillLine(
+            x=Decimal(x), y=Decimal(y), z_dn=Decimal("-0.6"), feed_xy=Decimal(10), tool=1
+        )
+
+    window = (
+        drill("2", "1", "-0.6", 1, Comp.LEFT),  # counter-clockwise, tool inside
+        line("3", "1"),
+        line("3", "3"),
+        line("1", "3"),
+        line("1", "1"),
+        line("2", "1"),
+    )
+    rough = (
+        drill("1.3", "1.3", "-0.6", 2),
+        Frame(
+            placement=Placement.POCKET,
+            xl=Decimal("1.4"),
+            yw=Decimal("1.4"),
+            corner_radius=Decimal("0.2"),
+            feed_xy=Decimal(10),
+            tool=2,
+        ),
+    )
+    stock = Stock(
+        x=Decimal(0),
+        y=Decimal(0),
+        xl=Decimal(4),
+        yw=Decimal(4),
+        zh=Decimal("0.5"),
+        clear=Decimal("0.25"),
+    )
+    block0 = DataBlock0(current_tool=2, tools=tools)
+    roughed = Program(name="window", block0=block0, blocks=rough + window, stock=stock)
+    assert verify(roughed, resolution=RESOLUTION).findings == []
+    holes = (drill("1.6", "1.6", "-0.6", 3), drill("2.4", "2.4", "-0.6", 3))
+    part = dataclasses.replace(roughed, blocks=holes + window)
+    found = verify(part, resolution=RESOLUTION).findings
+    assert [(f.block, f.kind) for f in found] == [(3, "gouge")]
+    assert "with the features of blocks 1, 2 in it" in found[0].message
+
+
+# -- programs written by somebody else ------------------------------------------------------
+
+INDEPENDENT = Path(__file__).parent / "verify_independent"
+# Written apart from this code, as a machinist would: c* and the x* variants are correct
+# parts (Verify must find nothing), m* and x04c each hold one mistake, found on these blocks.
+MISTAKEN = {
+    "m01-tap-no-drill": {(4, "process"), (5, "process")},  # a tap over a spot only; none
+    "m02-drill-thru-vise": {(2, "process")},  # past the stock and its parallels
+    "m03-profile-wrong-side": {(3, "rest material")},
+    "m04-frame-corner": {(2, "rest material")},  # R.125 corners, 1/2 end mill
+    "m05-pocket-too-deep": {(1, "process"), (2, "process")},
+    "m06-bore-over-bigger": {(2, "process")},  # a 3/8 bar in a 1/2 hole
+    "m07-bosses-close": {(2, "gouge"), (4, "gouge")},
+    "m08-contour-notch": {(4, "gouge"), (5, "gouge"), (6, "gouge"), (7, "gouge")},
+    "x04c-frame-corner-small-only": {(2, "rest material")},  # R.2 corners, 1/2 end mill
+}
+INDEPENDENT_CASES = sorted(p.stem for p in INDEPENDENT.glob("*.json"))
+
+
+@pytest.mark.parametrize("name", INDEPENDENT_CASES)
+def test_programs_written_apart_get_no_false_alarm_and_no_miss(name: str) -> None:
+    program = document.loads((INDEPENDENT / f"{name}.json").read_text(encoding="utf-8"))
+    assert not has_errors(validate(program))
+    found = {(f.block, f.kind) for f in verify(program, resolution=RESOLUTION).findings}
+    assert found == MISTAKEN.get(name, set()), found

@@ -275,12 +275,12 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
         if is_closed(contour):
             ring = _ccw(path_points(Path(contour.start, contour.elements), chord))
             if part_inside(contour):
-                shrunk = offset([_int_ring(ring)], -tol, chord)
+                shrunk = offset([ccw_ring(ring)], -tol, chord)
                 outside.setdefault(depth, []).append(
                     [[(float(x), float(y)) for x, y in piece] for piece in shrunk]
                 )
             else:
-                for grown in offset([_int_ring(ring)], tol, chord):
+                for grown in offset([ccw_ring(ring)], tol, chord):
                     _group(inside, depth, [(float(x), float(y)) for x, y in grown])
         elif contour.swept:
             radius = (contour.tool_radius or default_radius) + tol
@@ -407,7 +407,7 @@ def _ccw(points: list[Pt]) -> list[Pt]:
     return points if area > 0 else points[::-1]
 
 
-def _int_ring(points: Sequence[Pt]) -> Ring:
+def ccw_ring(points: Sequence[Pt]) -> Ring:
     """Integer points, counter-clockwise (Clipper grows those by a positive offset)."""
     ring = [(round(x), round(y)) for x, y in points]
     return ring if pyclipper.Orientation(ring) else ring[::-1]
@@ -417,7 +417,7 @@ def _pocket_area(grid: Grid, pocket: PocketArea, tol: int, chord: float) -> BOOL
     """Inside a POCKET's wall and outside its islands, each edge moved `tol` outward of
     the area."""
     wall, *islands = (
-        _int_ring(path_points(Path(c.start, c.elements), chord)) for c in pocket.contours
+        ccw_ring(path_points(Path(c.start, c.elements), chord)) for c in pocket.contours
     )
     area = fill(grid, offset([wall], tol, chord))
     for island in islands:

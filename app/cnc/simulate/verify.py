@@ -32,10 +32,11 @@ import numpy as np
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.mill import Path
-from app.cnc.pocketing.regions import path_points
+from app.cnc.pocketing.regions import offset, path_points
 from app.cnc.problems import Rule
 from app.cnc.simulate.intended import (
     Intent,
+    ccw_ring,
     centres,
     clearing,
     element_measures,
@@ -398,30 +399,7 @@ def _contour_rest(
     ring = path_points(Path(contour.start, contour.elements), chord)
     side, other = ("RT", "LT") if contour.part_left else ("LT", "RT")
     if contour.depth <= grid.stock.bottom:
-        # Through: what it encloses drops out as a slug. Holes, pockets or contours cut
-        # inside it say the slug is the part, cut on the wrong side.
-        inside_blocks = sorted(
-            {h.block for h in geometry.holes if _holds(ring, h.x, h.y)}
-            | {t.block for t in geometry.routines if _holds(ring, *_routine_point(t))}
-            | {c.drill for c in geometry.contours if c is not contour and _holds(ring, *c.start)}
-        )
-        if not inside_blocks:
-            return []
-        x, y = contour.start
-        return [
-            Finding(
-                contour.drill,
-                "gouge",
-                f"cut {side} puts the tool inside the closed contour of block {contour.drill} "
-                "and the cut goes through the stock, so what it encloses drops out as a slug "
-                f"with the features of block{'s' if len(inside_blocks) > 1 else ''} "
-                f"{', '.join(map(str, inside_blocks))} in it: if the part is inside the "
-                f"contour, cut on the other side (CUT {other}); as programmed it comes out "
-                f"{_len(2 * r, u)} undersize",
-                x,
-                y,
-            )
-        ]
+        return _slug_findings(grid, contour, ring, geometry, tol, u, side, other)
     xs, ys = [p[0] for p in ring], [p[1] for p in ring]
     rows, cols, qx, qy = window(grid, min(xs), min(ys), max(xs), max(ys))
     if qx.size == 0:
@@ -457,6 +435,70 @@ def _contour_rest(
             )
         )
     return findings
+
+
+def _slug_findings(
+    grid: Grid,
+    contour: Contour,
+    ring: list[tuple[float, float]],
+    geometry: Programmed,
+    tol: int,
+    u: Units,
+    side: str,
+    other: str,
+) -> list[Finding]:
+    """A closed contour cut from inside through the stock: what it encloses drops out as a
+    slug. Features the program cuts in the slug, away from the contour's own tool band,
+    say the slug is the part and the contour is cut on the wrong side — unless they clear
+    most of it, as a window is roughed out before its wall is finished (a start hole where
+    the end mill plunges lies in the band)."""
+    r = float(contour.tool_radius)
+    chord = grid.resolution / 4
+    inner_rings = offset([ccw_ring(ring)], -2 * r - tol, chord)
+    if not inner_rings:
+        return []
+    inner = fill(grid, [[(float(x), float(y)) for x, y in piece] for piece in inner_rings])
+    cells = int(inner.sum())
+    if not cells:
+        return []
+    held = [(float(x), float(y)) for x, y in inner_rings[0]]
+    # The features the program cuts in the slug, by where each is (a hole's centre, a
+    # routine's middle, where a contour or POCKET starts): a start hole at the contour's
+    # plunge point is in its band, not in the slug.
+    features = Programmed(
+        contours=[c for c in geometry.contours if c is not contour and _holds(held, *c.start)],
+        routines=[t for t in geometry.routines if _holds(held, *_routine_point(t))],
+        holes=[h for h in geometry.holes if _holds(held, h.x, h.y)],
+        pockets=[p for p in geometry.pockets if _holds(held, *p.contours[0].start)],
+        slots=[c for c in geometry.slots if _holds(held, *c.start)],
+    )
+    inside_blocks = sorted(
+        {h.block for h in features.holes}
+        | {t.block for t in features.routines}
+        | {c.drill for c in features.contours + features.slots}
+        | {p.block for p in features.pockets}
+    )
+    if not inside_blocks:
+        return []
+    default_radius = to_nm(DEFAULT_DIAMETER[u], u) // 2
+    cut = inner & (intended(grid, features, tol, default_radius).floor < grid.stock.top - tol)
+    if cut.sum() > cells / 2:
+        return []  # they clear most of it: the window roughed out before its wall
+    x, y = contour.start
+    return [
+        Finding(
+            contour.drill,
+            "gouge",
+            f"cut {side} puts the tool inside the closed contour of block {contour.drill} "
+            "and the cut goes through the stock, so what it encloses drops out as a slug "
+            f"with the features of block{'s' if len(inside_blocks) > 1 else ''} "
+            f"{', '.join(map(str, inside_blocks))} in it: if the part is inside the "
+            f"contour, cut on the other side (CUT {other}); as programmed it comes out "
+            f"{_len(2 * r, u)} undersize",
+            x,
+            y,
+        )
+    ]
 
 
 def _holds(ring: list[tuple[float, float]], x: float, y: float) -> bool:

@@ -416,3 +416,14 @@ def test_programs_written_apart_get_no_false_alarm_and_no_miss(name: str) -> Non
     assert not has_errors(validate(program))
     found = {(f.block, f.kind) for f in verify(program, resolution=RESOLUTION).findings}
     assert found == MISTAKEN.get(name, set()), found
+
+
+def test_a_boss_cut_into_by_its_neighbour_is_one_finding_naming_its_wall() -> None:
+    """The independent check's m07: each gouge was reported twice (once past the wall's
+    one-radius band, once as waste no block meant); a tool reaches a diameter in, so the
+    wall's band is two radii wide, as a contour's is."""
+    program = document.loads((INDEPENDENT / "m07-bosses-close.json").read_text(encoding="utf-8"))
+    found = verify(program, resolution=RESOLUTION).findings
+    assert [(f.block, f.kind) for f in found] == [(2, "gouge"), (4, "gouge")]
+    assert "past the finished wall of block 4" in found[0].message
+    assert "past the finished wall of block 2" in found[1].message

@@ -1,20 +1,25 @@
-"""Verify: the simulated part measured against what the program asks for.
+"""Verify: the simulated part measured against the part the program means to make.
 
-Four kinds of finding, each named by the block at fault:
+The intended part is the stock less what each block means to remove (`intended.py`);
+findings, each named by the block at fault:
 
-- **gouge**: material removed on the part's side of a finished surface, farther in than the
-  tolerance: inside a compensated MILL contour (the side away from CUT RT/LT), outside an
-  INSIDE/IN-TAN/POCKET routine's wall, inside an OUTSIDE/OUT-TAN one's. Checked in a band
-  two tool radii wide along a contour (one along a routine's wall), so a deeper gouge reads
-  "at least"; the finding names the block whose move cut there.
-- **rest material**: material left above Z DN inside the finished contour of a POCKET, or
-  in the band one tool radius wide beside the wall of any CIRCLE/FRAME: the corners of a
-  frame whose corner radius is smaller than the tool's, a wrong depth, a missing pass.
+- **gouge**: material removed below what every block means to cut there. Beside a
+  finished surface (a compensated contour, a POCKET's wall or island, a CIRCLE/FRAME
+  wall: a band two tool radii wide) it names the surface damaged, else it is material no
+  block means to remove. Also a closed contour cut from inside through the stock around
+  features of the part: the slug that drops out is the part, cut on the wrong side.
+- **rest material**: material left above Z DN that a block means to clear: a POCKET
+  routine's inside (a frame whose corner radius is smaller than the tool's), the band one
+  tool radius wide beside any CIRCLE/FRAME wall, an irregular POCKET where the tool fits,
+  and the inside of a closed contour cut from inside (blind: an outer profile cut on the
+  wrong side leaves the whole part standing in its groove).
 - **hole depth**: a DRILL/BORE/TAP hole whose bottom at its centre is shallower or deeper
   than Z DN (a hole through the stock's bottom is through, not shallow). A drill point's
   cone is allowed for between the hole's centre and the centre of the cell it is in.
 - **crash**: a rapid move whose tool meets material (the simulation checks each rapid that
   goes below the stock's top against the part as cut so far).
+- **process**: what `check` reports too, from the same rules (`app/cnc/process.py`): a TAP
+  or BORE with no pilot, a cut below the stock's bottom past its CLEAR.
 
 Everything is measured at the cell centres of the simulation's grid, so a finding is at
 least one cell across. Lengths in nm inside, printed in the program's units.
@@ -555,7 +560,7 @@ def _routine_findings(
     part = sdf if routine.inside else -sdf
     tool_side = -part
     findings = []
-    past = (part > tol) & (part <= r) & gouged[rows, cols]
+    past = (part > tol) & (part <= 2 * r) & gouged[rows, cols]  # a cut reaches a diameter in
     claimed[rows, cols] |= past
     for culprit, depth, x, y, _ in _worst(past, part, qx, qy, own):
         findings.append(

@@ -20,6 +20,7 @@ set-up), but the programmer must look. Lengths in nm inside, printed in the prog
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from app.cnc.blocks import (
@@ -184,9 +185,10 @@ def _routine_outline(routine: Circle | Frame, origin: tuple[int, int]) -> MillPa
     return MillPath((ox + c, oy), tuple(elements))
 
 
-def _inside(outline: tuple[tuple[float, float], ...], x: float, y: float) -> bool:
+def in_ring(outline: Sequence[tuple[float, float]], x: float, y: float) -> bool:
+    """Whether the closed polygon `outline` holds the point (even-odd)."""
     inside = False
-    for (ax, ay), (bx, by) in zip(outline, outline[1:] + outline[:1], strict=True):
+    for (ax, ay), (bx, by) in zip(outline, [*outline[1:], *outline[:1]], strict=True):
         if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
             inside = not inside
     return inside
@@ -238,7 +240,7 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
         if any(
             area.block < hole.block
             and area.depth <= hole.bottom
-            and _inside(area.outline, hole.x, hole.y)
+            and in_ring(area.outline, hole.x, hole.y)
             for area in cleared
         ):
             continue

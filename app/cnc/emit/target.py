@@ -22,7 +22,7 @@ import pkgutil
 import tempfile
 import weakref
 from abc import ABC
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO, ClassVar, Protocol
 
@@ -411,18 +411,28 @@ def export(
         # The speeds written must be ones the machine's spindle runs.
         for message in check_spindle(program, None if machine is None else machine.spindle):
             report.error(None, message)
+    result = _written(
+        target, report, out, lambda sink: target.write(program, path, options, report, sink)
+    )
+    if report.has_errors:
+        result.close()
+        raise ExportError(f"{target.name} cannot take this program", problems, report)
+    return result
+
+
+def _written(
+    target: Target, report: Report, out: BinaryIO | None, write: Callable[[Out], None]
+) -> Export:
+    """What `write` writes into `out` (or into a spool, closed again if writing fails), as
+    the Export of `target` with `report`."""
     sink: BinaryIO = out if out is not None else _spool()
     counted = _Counted(sink)
     try:
-        target.write(program, path, options, report, counted)
+        write(counted)
     except BaseException:
         if out is None:
             sink.close()
         raise
-    if report.has_errors:
-        if out is None:
-            sink.close()
-        raise ExportError(f"{target.name} cannot take this program", problems, report)
     return Export(
         target.name,
         sink,
@@ -451,22 +461,8 @@ def _export_document(
         if problem.severity.value == "error":
             where = f"error, written as it is (fix it before the program runs): {where}"
         report.warning(problem.block, f"{where}{problem.message}")
-    sink: BinaryIO = out if out is not None else _spool()
-    counted = _Counted(sink)
-    try:
-        target.write_program(program, options, report, counted)
-    except BaseException:
-        if out is None:
-            sink.close()
-        raise
-    return Export(
-        target.name,
-        sink,
-        counted.size,
-        target.extension,
-        target.media_type,
-        report,
-        owned=out is None,
+    return _written(
+        target, report, out, lambda sink: target.write_program(program, options, report, sink)
     )
 
 

@@ -206,6 +206,16 @@ def element_measures(qx: F64, qy: F64, start: Pt, element: Element) -> tuple[F64
     return dist, left, interior
 
 
+def distance_to(contours: Sequence[Contour], qx: F64, qy: F64) -> F64:
+    """Each point's distance (nm) to the nearest element of any of `contours`."""
+    nearest = np.full(qx.shape, np.inf)
+    for contour in contours:
+        starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+        for start, element in zip(starts, contour.elements, strict=True):
+            nearest = np.minimum(nearest, element_measures(qx, qy, start, element)[0])
+    return nearest
+
+
 def routine_sdf(routine: Routine, qx: F64, qy: F64, corner: float) -> F64:
     """Signed distance (nm; negative inside) to the routine's finished contour, a frame's
     corners rounded to `corner` where that is more than its own corner radius."""
@@ -273,7 +283,7 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
             continue
         depth = _deepest(contour)
         if is_closed(contour):
-            ring = _ccw(path_points(Path(contour.start, contour.elements), chord))
+            ring = path_points(Path(contour.start, contour.elements), chord)
             if part_inside(contour):
                 shrunk = offset([ccw_ring(ring)], -tol, chord)
                 outside.setdefault(depth, []).append(
@@ -397,14 +407,6 @@ def _deepest(contour: Contour) -> int:
     """A contour's lowest Z DN: the DRILL's, or a MILL block's own where it goes deeper."""
     assert contour.depth is not None
     return min([contour.depth] + [e.z_dn for e in contour.elements if e.z_dn is not None])
-
-
-def _ccw(points: list[Pt]) -> list[Pt]:
-    area = sum(
-        ax * by - bx * ay
-        for (ax, ay), (bx, by) in zip(points, points[1:] + points[:1], strict=True)
-    )
-    return points if area > 0 else points[::-1]
 
 
 def ccw_ring(points: Sequence[Pt]) -> Ring:

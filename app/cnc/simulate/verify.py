@@ -39,11 +39,13 @@ from app.cnc.compiler import compile_program
 from app.cnc.mill import Path
 from app.cnc.pocketing.regions import offset, path_points
 from app.cnc.problems import Rule
+from app.cnc.process import in_ring
 from app.cnc.simulate.intended import (
     Intent,
     ccw_ring,
     centres,
     clearing,
+    distance_to,
     element_measures,
     fill,
     intended,
@@ -417,10 +419,7 @@ def _contour_rest(
     for routine in geometry.routines:
         if not routine.inside:
             inside &= routine_sdf(routine, qx, qy, 0.0) > 0
-    nearest = np.full(qx.shape, np.inf)
-    starts = [contour.start] + [e.end for e in contour.elements[:-1]]
-    for start, element in zip(starts, contour.elements, strict=True):
-        nearest = np.minimum(nearest, element_measures(qx, qy, start, element)[0])
+    nearest = distance_to([contour], qx, qy)
     left = heights[rows, cols] - contour.depth
     rest = inside & (nearest >= r + tol) & (left > tol)
     findings = []
@@ -471,11 +470,11 @@ def _slug_findings(
     # routine's middle, where a contour or POCKET starts): a start hole at the contour's
     # plunge point is in its band, not in the slug.
     features = Programmed(
-        contours=[c for c in geometry.contours if c is not contour and _holds(held, *c.start)],
-        routines=[t for t in geometry.routines if _holds(held, *_routine_point(t))],
-        holes=[h for h in geometry.holes if _holds(held, h.x, h.y)],
-        pockets=[p for p in geometry.pockets if _holds(held, *p.contours[0].start)],
-        slots=[c for c in geometry.slots if _holds(held, *c.start)],
+        contours=[c for c in geometry.contours if c is not contour and in_ring(held, *c.start)],
+        routines=[t for t in geometry.routines if in_ring(held, *_routine_point(t))],
+        holes=[h for h in geometry.holes if in_ring(held, h.x, h.y)],
+        pockets=[p for p in geometry.pockets if in_ring(held, *p.contours[0].start)],
+        slots=[c for c in geometry.slots if in_ring(held, *c.start)],
     )
     inside_blocks = sorted(
         {h.block for h in features.holes}
@@ -504,15 +503,6 @@ def _slug_findings(
             y,
         )
     ]
-
-
-def _holds(ring: list[tuple[float, float]], x: float, y: float) -> bool:
-    """Whether the closed polygon `ring` holds the point (even-odd)."""
-    inside = False
-    for (ax, ay), (bx, by) in zip(ring, ring[1:] + ring[:1], strict=True):
-        if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
-            inside = not inside
-    return inside
 
 
 def _routine_point(routine: Routine) -> tuple[float, float]:
@@ -649,11 +639,7 @@ def _pocket_findings(
     inside = fill(grid, [outlines[0]])[rows, cols]
     for island in outlines[1:]:
         inside &= ~fill(grid, [island])[rows, cols]
-    nearest = np.full(qx.shape, np.inf)
-    for contour in pocket.contours:
-        starts = [contour.start] + [e.end for e in contour.elements[:-1]]
-        for start, element in zip(starts, contour.elements, strict=True):
-            nearest = np.minimum(nearest, element_measures(qx, qy, start, element)[0])
+    nearest = distance_to(pocket.contours, qx, qy)
     left = heights[rows, cols] - max(pocket.depth, grid.stock.bottom)
     rest = inside & (nearest >= r + tol) & (left > tol)
     findings = []

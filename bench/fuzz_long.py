@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import logging
 import multiprocessing
 import random
 import signal
@@ -358,6 +359,8 @@ def _parser(kind: str) -> tuple[Callable[[bytes], object], tuple[type[BaseExcept
 
         return (lambda data: read_backup(io.BytesIO(data))), (BackupError,)
     if kind == "dxf":
+        # ezdxf warns of each repair it makes; a damaged file makes many (not crashes).
+        logging.getLogger("ezdxf").setLevel(logging.ERROR)
         return read_dxf, (ImportFailure,)
     raise ValueError(kind)
 

@@ -147,6 +147,27 @@ def minimal_dxf(entities: list[str], units: int = 1, version: str = "") -> bytes
     return (text + "".join(entities) + "0\nENDSEC\n0\nEOF\n").encode()
 
 
+def zigzag(lines: int, gap: float = 0.0) -> list[str]:
+    """`lines` LINE entities end to end, as a minimal DXF's entities (0.01 in steps), each
+    starting `gap` in after the last one ends."""
+    return [
+        f"0\nLINE\n8\n0\n10\n{k / 100 + gap}\n20\n{k % 2 / 200}\n11\n{(k + 1) / 100}\n"
+        f"21\n{(k + 1) % 2 / 200}\n"
+        for k in range(lines)
+    ]
+
+
+def squares(count: int) -> list[str]:
+    """`count` concentric squares about the origin, each of four LINE entities."""
+    found = []
+    for k in range(1, count + 1):
+        a = k / 100
+        corners = [(-a, -a), (a, -a), (a, a), (-a, a)]
+        for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
+            found.append(f"0\nLINE\n8\n0\n10\n{x0}\n20\n{y0}\n11\n{x1}\n21\n{y1}\n")
+    return found
+
+
 def binary_lines(count: int) -> bytes:
     """A binary DXF (R12: one-byte group codes) of `count` LINE entities, six tags each,
     0.01 in long end to end."""

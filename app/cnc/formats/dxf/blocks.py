@@ -16,10 +16,11 @@ diameter are equally spaced on a circle.
 Which side the cutter goes is one rule, `cut_sides`, used by the whole-drawing conversion
 (`millblocks import`) and the choosing page alike: an outer contour (no closed contour
 round it, or an even number nested round it: `enclosing`, `nesting`) is cut from outside,
-an inner one (a hole or slot inside another contour) from inside; climb milling with a clockwise spindle (Data Block
-0's default): outer contours clockwise and inner ones counter-clockwise, both with the tool
-on the left (CUT LT); conventional milling the reverse, with the tool on the right (CUT
-RT); open contours are tool-centre paths (no compensation), cut as drawn.
+an inner one (a hole or slot inside another contour) from inside; climb milling with a
+clockwise spindle (Data Block 0's default): outer contours clockwise and inner ones
+counter-clockwise, both with the tool on the left (CUT LT); conventional milling the
+reverse, with the tool on the right (CUT RT); open contours are tool-centre paths (no
+compensation), cut as drawn.
 
 The whole-drawing conversion chooses: holes first, then inner contours, then outer ones
 (the outside profile last), each on the side `cut_sides` gives. Each starts at its

@@ -20,9 +20,11 @@ the drawing at most doubles them; bench/drawings.py has the seconds.
 
 from __future__ import annotations
 
+import html
 import io
 import math
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import pyclipper
@@ -36,8 +38,10 @@ from app.cnc.imports import ImportFailure, read_program
 from app.cnc.pocketing import regions
 from app.cnc.sizes import MAX_DRAWING_ENTITIES, MAX_IMPORT_LINES
 from app.web.drawings import read_choices
+from app.web.extensions import get_library
 from tests.hostile_corpus import DXF_READ, DXF_UPLOADS, minimal_dxf, squares, zigzag
 from tests.test_import_dxf import write
+from tests.web_support import dispose, local_app
 
 
 def binary(doc: Any) -> bytes:
@@ -61,27 +65,46 @@ def test_a_binary_drawing_counts_two_lines_a_tag_as_its_text_does() -> None:
     assert "binary DXF: two lines a tag" in str(caught.value)
 
 
-def test_a_drawing_past_the_entity_limit_is_refused_naming_it() -> None:
-    """More entities than the limit in model space: refused before any is read, whichever
-    way the file says it (lines, or one polyline's vertices)."""
-    lines = zigzag(MAX_DRAWING_ENTITIES + 1)
+def polyline_past_the_limit() -> bytes:
+    """One light polyline of MAX_DRAWING_ENTITIES vertices and a line: one entity too many."""
     vertices = "".join(f"10\n{k / 100}\n20\n{k % 2 / 200}\n" for k in range(MAX_DRAWING_ENTITIES))
     polyline = (
         f"0\nLWPOLYLINE\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n{MAX_DRAWING_ENTITIES}\n"
     )
-    for data in (
-        minimal_dxf(lines),
-        minimal_dxf([polyline + "70\n0\n" + vertices, *zigzag(1)], version="AC1015"),
-    ):
+    return minimal_dxf([polyline + "70\n0\n" + vertices, *zigzag(1)], version="AC1015")
+
+
+TOO_MANY = (
+    f"model space: the drawing has {MAX_DRAWING_ENTITIES + 1:,} entities (a polyline's "
+    f"vertices count one each); a drawing is read with at most {MAX_DRAWING_ENTITIES:,}"
+)
+
+
+def test_a_drawing_past_the_entity_limit_is_refused_naming_it() -> None:
+    """More entities than the limit in model space: refused before any is read, whichever
+    way the file says it (lines, or one polyline's vertices)."""
+    for data in (minimal_dxf(zigzag(MAX_DRAWING_ENTITIES + 1)), polyline_past_the_limit()):
         with pytest.raises(ImportFailure) as caught:
             read_drawing(data, "many")
-        assert str(caught.value) == (
-            f"model space: the drawing has {MAX_DRAWING_ENTITIES + 1:,} entities (a polyline's "
-            f"vertices count one each); a drawing is read with at most "
-            f"{MAX_DRAWING_ENTITIES:,}"
-        )
+        assert str(caught.value) == TOO_MANY
     # At the limit it is read.
     assert len(read_drawing(minimal_dxf(zigzag(MAX_DRAWING_ENTITIES)), "at").contours) == 1
+
+
+def test_the_choosing_page_refuses_a_stored_drawing_past_the_entity_limit(
+    tmp_path: Path,
+) -> None:
+    """A drawing kept before the limits (or by another way in) is read again by every
+    request of the choosing page: refused there too, naming the limit."""
+    app = local_app(tmp_path)
+    try:
+        with app.app_context():
+            key = get_library().put_drawing("many", polyline_past_the_limit())
+        answer = app.test_client().get(f"/drawings/{key}")
+        assert answer.status_code == 422
+        assert TOO_MANY in html.unescape(answer.get_data(as_text=True))
+    finally:
+        dispose(app)
 
 
 # -- work in proportion to the drawing ------------------------------------------------------

@@ -42,6 +42,7 @@ if TYPE_CHECKING:
 # start in a fraction of a second, not after every format, ezdxf and SQLAlchemy are loaded.
 # Only click and the standard library are imported here.
 
+
 class Number(click.ParamType[Any, Any]):
     """A number argument read by app.cnc.numbers (click's own FLOAT takes `nan` and INT
     takes `١٢`): a float, or an int when `whole`, at least `minimum`."""

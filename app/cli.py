@@ -759,7 +759,14 @@ def db_upgrade() -> None:
     type=Number(minimum=1, whole=True),
     help="gunicorn worker processes.",
 )
-def serve(host: str, port: int, workers: int) -> None:
+@click.option(
+    "--dnc/--no-dnc",
+    default=True,
+    show_default=True,
+    help="Also start the transfer service (`millblocks dnc`); --no-dnc where it runs as its "
+    "own systemd unit.",
+)
+def serve(host: str, port: int, workers: int, dnc: bool) -> None:
     """Serve the web app with gunicorn (Linux), after bringing the database up to date.
 
     Listens on 127.0.0.1 unless told otherwise: on a shop network put the reverse proxy
@@ -767,6 +774,12 @@ def serve(host: str, port: int, workers: int) -> None:
     environment (MILLBLOCKS_*, DATABASE_URL).
     """
     library()  # migrated (and given its demo programs) once, before the workers start
+    if dnc:
+        # A process of its own, in this process group (Ctrl-C stops both); gunicorn
+        # restarting its workers, or being restarted, does not touch a transfer.
+        import subprocess
+
+        subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
     command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
     command += ["--workers", str(workers), "--access-logfile", "-", "app:create_app()"]
     click.echo(f"serving MillBlocks on http://{host}:{port}/ ({workers} workers)", err=True)
@@ -916,6 +929,46 @@ def receive_command(
         sys.exit(1)
     click.echo(got.stored.id)
     print_problems(got.program.name, validate(got.program))
+
+
+@main.command("dnc")
+@click.option(
+    "--poll",
+    default=0.5,
+    show_default=True,
+    type=Number(minimum=0.05),
+    help="Seconds between looks at the queue.",
+)
+def dnc_service(poll: float) -> None:
+    """Run the transfer service: every transfer queued by the web page, one at a time per
+    machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
+    transfers running then, naming them). Run one per library, beside the web server."""
+    from app.dnc.daemon import TransferService
+
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    running = TransferService(library(), poll=poll)
+    for transfer in running.recover():
+        click.echo(
+            f"transfer {transfer.id} ({transfer.direction} {transfer.program_name or '-'} on "
+            f"{transfer.machine}) was interrupted when the service last stopped",
+            err=True,
+        )
+    click.echo(f"transfer service running ({running.name})", err=True)
+
+    def started(transfer: Any) -> None:
+        click.echo(
+            f"transfer {transfer.id}: {transfer.direction} {transfer.program_name or '-'} "
+            f"on {transfer.machine} ({transfer.port})",
+            err=True,
+        )
+
+    for transfer in running.run(stop, on_start=started):
+        click.echo(
+            f"transfer {transfer.id} on {transfer.machine} interrupted by the stop", err=True
+        )
+    click.echo("transfer service stopped", err=True)
 
 
 @main.command("ports")

@@ -851,6 +851,7 @@ def send_command(
     machine = _transfer_machine(machine_name, port, target)
     lib = library()
     chosen, program_id = resolve_reference(program, lib)
+    revision = None if program_id is None else lib.get(program_id).info.version
     stop, cancelled = _interruptible()
     try:
         sent = service.send_program(
@@ -858,6 +859,7 @@ def send_command(
             machine,
             port=port,
             program_id=program_id,
+            revision=revision,
             author=author,
             log=TransferLog(lib).log,
             progress=_progress_printer(f"send {chosen.name}"),
@@ -919,6 +921,7 @@ def receive_command(
             progress=_progress_printer("receive"),
             cancel=cancelled,
             first_byte_timeout=first_byte_timeout,
+            compare=TransferLog(lib).compare_with_last_send,
         )
     except (TransferError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
@@ -989,10 +992,12 @@ def list_transfers(limit: int) -> None:
     for t in TransferLog(library()).recent(limit):
         total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
         error = f"  {t.error}" if t.error else ""
+        version = f" v{t.revision}" if t.revision is not None else ""
+        digest = f" sha256 {t.checksum[:12]}" if t.checksum else ""
         click.echo(
             f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
-            f"{t.program_name or '-':<20} {t.target} {t.settings}  "
-            f"{t.bytes_done}{total} bytes  {t.outcome}{error}"
+            f"{(t.program_name or '-') + version:<24} {t.target} {t.settings}  "
+            f"{t.bytes_done}{total} bytes  {t.outcome}{error}{digest}  {t.author or '-'}"
         )
 
 

@@ -314,3 +314,52 @@ def test_the_transfers_page_names_a_machines_target_in_the_shops_words(
     page = client.get("/transfers").get_data(as_text=True)
     assert "Plus — ProtoTRAK Plus (events over RS-232) on /dev/ttyS0" in page
     assert "— events on" not in page
+
+
+def test_a_send_is_logged_with_its_revision_and_checksum_and_a_receive_compared_with_it(
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
+) -> None:
+    """Traceability (issue 35): what went to which machine, by whom, which revision and its
+    SHA-256; what comes back is compared with it, block by block (an edit at the control)."""
+    import dataclasses
+    import hashlib
+    from decimal import Decimal
+
+    from app.cnc.blocks import Hole
+
+    library = library_of(app)
+    library.save_machine(Machine("Plus", "json", {}, {"port": pair.host, "end": "idle"}))
+    small = min(demo_programs(), key=lambda p: len(document.dumps(p)))
+    info = library.create(small, author="ann")
+    edited = library.save(info.id, small, based_on=1, author="ann")  # version 2
+    sent_bytes = export(small, "json").data
+    with SimulatedControl(pair.control, cps=960, parity="E", buffer_size=1 << 16) as control:
+        client.post(
+            "/transfers/send",
+            data={"csrf_token": token(client), "machine": "Plus", "program_id": info.id},
+        )
+        done = settled(TransferLog(library))
+        # The line ends lines with CR LF (the Plus's default); the checksum is the export's.
+        assert control.received(sent_bytes.replace(b"\n", b"\r\n"), timeout=WAIT)
+    assert done.outcome == "ok", done.error
+    assert done.revision == edited.version == 2
+    assert done.checksum == hashlib.sha256(sent_bytes).hexdigest()
+    page = client.get("/transfers").get_data(as_text=True)
+    assert f"sha256 {done.checksum[:12]}" in page and " v2" in page
+    # The operator changes a depth at the control and sends the program back.
+    first = small.blocks[0]  # the pocket's DRILL: its Z DN
+    assert isinstance(first, Hole)
+    changed = dataclasses.replace(
+        small, blocks=(dataclasses.replace(first, z_dn=Decimal("-0.777")), *small.blocks[1:])
+    )
+    back = json.dumps(json.loads(document.dumps(changed)), indent=1).encode("ascii")
+    with SimulatedControl(pair.control, cps=960, parity="E") as control:
+        control.send_back(back, delay=0.5)
+        client.post(
+            "/transfers/receive",
+            data={"csrf_token": token(client), "machine": "Plus", "name": "Back from the Plus"},
+        )
+        received = settled(TransferLog(library))
+    assert received.outcome == "ok", received.error
+    assert f"compared with what was last sent to Plus: {small.name} v2" in received.report
+    assert "UTC: 1 difference\n    block 1 DRILL: Z DN -0.3 → -0.777" in received.report

@@ -189,6 +189,7 @@ class TransferService:
                 stored.program,
                 machine,
                 program_id=stored.info.id,
+                revision=stored.info.version,
                 author=transfer.author,
                 log=keep,
                 progress=progress,
@@ -203,4 +204,5 @@ class TransferService:
             log=keep,
             progress=progress,
             cancel=cancel,
+            compare=self.log.compare_with_last_send,
         ).record

@@ -10,6 +10,7 @@ a partial program or an import error raise, and the library is not touched.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -86,6 +87,7 @@ def send_program(
     *,
     port: str | None = None,
     program_id: int | None = None,
+    revision: int | None = None,
     author: str = "",
     log: Log | None = None,
     progress: Progress | None = None,
@@ -94,7 +96,8 @@ def send_program(
     write_timeout: float = 10.0,
 ) -> Sent:
     """Export `program` for `machine` (its target and options) and send it to the machine's
-    port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record.
+    port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record,
+    which names the program's `revision` and the export's SHA-256.
 
     Raises SettingsError, OptionError/ExportError (the program cannot be exported) or
     DataError before the port is tried (no record); SendError after (record logged).
@@ -103,6 +106,9 @@ def send_program(
     path = port or port_of(machine.serial)
     options = machine.options if settings.target == machine.target else {}
     made = export(program, settings.target, options)
+    digest = hashlib.sha256()
+    for piece in made.chunks():
+        digest.update(piece)
 
     def record(result: SendResult) -> TransferRecord:
         entry = TransferRecord.of_send(
@@ -111,6 +117,8 @@ def send_program(
             program_id=program_id,
             program_name=program.name,
             author=author,
+            revision=revision,
+            checksum=digest.hexdigest(),
         )
         if log is not None:
             log(entry)
@@ -157,9 +165,13 @@ def receive_program(
     idle_timeout: float = 5.0,
     first_byte_timeout: float = 120.0,
     max_bytes: int = 1_000_000,
+    compare: Callable[[str, Program], str] | None = None,
 ) -> Received:
     """Receive a program from `machine`'s port (or `port`), import it as `format` (default:
     the machine's target) and add it to `library` (revision summary: where it came from).
+    `compare(machine name, program)` says how it differs from what was last sent to that
+    machine (app.storage.transfers.TransferLog.compare_with_last_send); its text goes into
+    the report.
 
     Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
@@ -194,6 +206,10 @@ def receive_program(
     except CaptureImportError as exc:
         record(result, error=str(exc))
         raise
+    if compare is not None:  # before the name given here, which is not the control's edit
+        compared = compare(machine.name, program)
+        if compared:
+            report = "\n".join(part for part in (report.rstrip("\n"), compared) if part) + "\n"
     if name:
         program = dataclasses.replace(program, name=name)
     stored = library.create(program, author, f"received from {machine.name} on {path}")

@@ -14,8 +14,10 @@ from typing import Any
 
 from sqlalchemy import CursorResult, select, update
 
+from app.cnc.blocks import Program
+from app.cnc.diff import diff
 from app.dnc.record import TransferRecord
-from app.storage.library import Library, NotFound
+from app.storage.library import Library, LibraryError, NotFound
 from app.storage.models import TransferRow
 
 STALE = timedelta(seconds=60)
@@ -54,6 +56,8 @@ class Transfer:
     author: str
     has_raw: bool
     cancel_requested: bool
+    revision: int | None = None
+    checksum: str = ""
 
     @property
     def percent(self) -> int | None:
@@ -82,6 +86,8 @@ def _view(row: TransferRow) -> Transfer:
         row.author,
         row.raw is not None,
         row.cancel_requested,
+        row.revision,
+        row.checksum,
     )
 
 
@@ -187,6 +193,9 @@ class TransferLog:
         row.author = record.author or row.author
         if record.raw is not None:
             row.raw = record.raw[:1_000_000]
+        if record.revision is not None:
+            row.revision = record.revision
+        row.checksum = record.checksum or row.checksum
 
     def cancel(self, transfer_id: int) -> None:
         """Ask a transfer to stop; a queued one is withdrawn at once."""
@@ -198,6 +207,50 @@ class TransferLog:
             if row.outcome == QUEUED:
                 row.outcome, row.error = "cancelled", "withdrawn before it started"
                 row.finished_at = row.updated_at = _now()
+
+    def last_sent(self, machine: str) -> Transfer | None:
+        """The newest whole send to `machine` (outcome ok), if any."""
+        with self.library.session() as s:
+            row = s.scalars(
+                select(TransferRow)
+                .where(
+                    TransferRow.machine == machine,
+                    TransferRow.direction == "send",
+                    TransferRow.outcome == "ok",
+                )
+                .order_by(TransferRow.id.desc())
+                .limit(1)
+            ).first()
+            return None if row is None else _view(row)
+
+    def compare_with_last_send(self, machine: str, program: Program) -> str:
+        """How `program` (received from `machine`) differs from the revision last sent to
+        that machine, block by block, in the control's words: the operator's edits at the
+        control, or an empty line when none. '' when nothing was sent to it, or the program
+        sent is no longer in the library."""
+        sent = self.last_sent(machine)
+        if sent is None or sent.program_id is None:
+            return ""
+        try:
+            if sent.revision is not None:
+                before = self.library.revision(sent.program_id, sent.revision)
+            else:
+                before = self.library.get(sent.program_id).program
+        except (NotFound, LibraryError):
+            return ""
+        version = f" v{sent.revision}" if sent.revision is not None else ""
+        what = (
+            f"compared with what was last sent to {machine}: {sent.program_name}{version}, "
+            f"{sent.started_at:%Y-%m-%d %H:%M} UTC"
+        )
+        changes = diff(before, program)
+        if not changes:
+            return f"  {what}: the same program"
+        shown = changes[:20]
+        more = f"\n    … and {len(changes) - 20} more" if len(changes) > 20 else ""
+        lines = "".join(f"\n    {change}" for change in shown)
+        count = "1 difference" if len(changes) == 1 else f"{len(changes)} differences"
+        return f"  {what}: {count}{lines}{more}"
 
     # -- the transfer service's queue -------------------------------------------------------
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -69,6 +70,12 @@ def settings_of(machine: MachineProfile) -> PortSettings:
     return PortSettings.from_serial(machine.serial, target=machine.target)
 
 
+def _hold(settings: PortSettings) -> float:
+    """How long the control may hold a send with XOFF (s): the machine's `hold`, 0 for no
+    limit (a drip feed)."""
+    return math.inf if settings.hold == 0 else float(settings.hold)
+
+
 def available_ports() -> list[tuple[str, str]]:
     """The serial ports this computer has, as (path, description), for a port picker."""
     return [(p.device, p.description) for p in sorted(serial.tools.list_ports.comports())]
@@ -92,7 +99,7 @@ def send_program(
     log: Log | None = None,
     progress: Progress | None = None,
     cancel: Cancel | None = None,
-    xoff_timeout: float = 30.0,
+    xoff_timeout: float | None = None,
     write_timeout: float = 10.0,
 ) -> Sent:
     """Export `program` for `machine` (its target and options) and send it to the machine's
@@ -131,7 +138,7 @@ def send_program(
             path,
             progress=progress,
             cancel=cancel,
-            xoff_timeout=xoff_timeout,
+            xoff_timeout=_hold(settings) if xoff_timeout is None else xoff_timeout,
             write_timeout=write_timeout,
         )
     except SendError as exc:

@@ -835,8 +835,21 @@ def _transfer_machine(name: str | None, port: str | None, target: str) -> Machin
     "--to", "target", default="events", show_default=True, help="What to send with --port alone."
 )
 @click.option("--author", default="", help="Who is sending (kept in the transfer log).")
+@click.option(
+    "--from-block",
+    "start_block",
+    default=None,
+    type=Number(minimum=1, whole=True),
+    help="Restart: send the program from this data block on (the start of a hole, bolt "
+    "circle, mill sequence or LOOP).",
+)
 def send_command(
-    program: str, machine_name: str | None, port: str | None, target: str, author: str
+    program: str,
+    machine_name: str | None,
+    port: str | None,
+    target: str,
+    author: str,
+    start_block: int | None,
 ) -> None:
     """Send a program over RS-232: to a library machine (its port, target and line
     settings), or to --port PATH at 4800 7E1.
@@ -860,6 +873,7 @@ def send_command(
             port=port,
             program_id=program_id,
             revision=revision,
+            start_block=start_block,
             author=author,
             log=TransferLog(lib).log,
             progress=_progress_printer(f"send {chosen.name}"),

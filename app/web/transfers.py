@@ -16,6 +16,8 @@ from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import targets
 from app.cnc.imports import importers
+from app.cnc.numbers import NumberError, parse_int
+from app.cnc.restart import RestartError, restart_from
 from app.dnc import service
 from app.dnc.daemon import service_alive
 from app.dnc.settings import SettingsError, port_of
@@ -85,6 +87,20 @@ def _machine(name: str) -> Machine:
     return machine
 
 
+def _start_block(text: str) -> int | None:
+    """The form's "from block" (empty: the whole program)."""
+    text = text.strip()
+    if not text:
+        return None
+    try:
+        number = parse_int(text)
+    except NumberError as exc:
+        raise _Refused(
+            f"from block {text!r}: {exc}; give a block number, or leave it empty"
+        ) from None
+    return number
+
+
 class _Refused(Exception):
     """A transfer that is not started; the message says why."""
 
@@ -98,7 +114,10 @@ def send() -> Response | tuple[str, int]:
         if not program_id.isdigit():
             raise _Refused("choose a program to send")
         stored = library.get(int(program_id))
-    except (_Refused, NotFound) as exc:
+        start_block = _start_block(request.form.get("from_block", ""))
+        if start_block is not None:
+            restart_from(stored.program, start_block)  # refused here, before it is queued
+    except (_Refused, NotFound, RestartError) as exc:
         return _page(f"Not sent: {exc}", 422)
     TransferLog(library).begin(
         "send",
@@ -109,6 +128,7 @@ def send() -> Response | tuple[str, int]:
         program_id=stored.info.id,
         program_name=stored.program.name,
         queued=True,
+        start_block=start_block,
     )
     return redirect(url_for("transfers.index"), 303)
 

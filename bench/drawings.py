@@ -53,7 +53,7 @@ def drawing_case(case: str, count: int) -> Result:
         list(doc.modelspace())
 
     def ours() -> None:
-        drawing = read_drawing(data, case, limit=len(entities))
+        drawing = read_drawing(data, case, limit=None)
         if case == "squares":
             cut_sides(drawing)
             drawing_svg(drawing)

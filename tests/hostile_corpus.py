@@ -311,8 +311,11 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["export", "@golden", "--to", "gcode-linuxcnc", "-O", "no-equals"], "NAME=VALUE"),
     *[(["time", "@golden", "--tool-change-seconds", v], "--tool-change-seconds")
       for v in ("nan", "inf", "-1", "١", "1_0")],
-    *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS if part is not None],
-    *[(["import", f"@{name}"], part) for name, _data, part in [*DXF_UPLOADS, LINES_DXF]],
+    # (Not lines.dxf: the command line reads the user's own files whole, without the line
+    # limit, and this drawing is one long open contour.)
+    *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS
+      if part is not None and name != LINES_DXF[0]],
+    *[(["import", f"@{name}"], part) for name, _data, part in DXF_UPLOADS],
     (["check", "/nonexistent/file.json"], "/nonexistent/file.json"),
     (["diff", "1", "²", "1"], "²"),
     (["restore-version", "1", "--5"], "--5"),

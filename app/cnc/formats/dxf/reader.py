@@ -20,8 +20,10 @@ of their own (reported). Circles at or under `options.hole_diameter` become hole
 is in proportion to the ends: each is compared only with those in its cell of a grid as
 wide as the tolerance and the eight cells round it.
 
-Bounds (app/cnc/sizes.py): a model space of more than MAX_DRAWING_ENTITIES entities is
-refused before any is read (a binary file past the line limit before ezdxf reads it).
+Bounds (app/cnc/sizes.py): `read_drawing` refuses a model space of more than
+MAX_DRAWING_ENTITIES entities before any is read (the choosing page reads every stored
+drawing so); an import is bounded by its file's lines, a binary DXF's tags counted as
+lines before ezdxf reads it (`check_import_size`).
 
 Raises ImportFailure naming the entity (handle, type, layer), the header variable, the
 line or binary tag where ezdxf stopped, or the limit. ezdxf reads untrusted bytes with many
@@ -43,12 +45,6 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any
-
-from ezdxf import recover
-from ezdxf.document import Drawing as EzDrawing
-from ezdxf.lldxf.const import DXFError
-from ezdxf.lldxf.tagger import binary_tags_loader
-from ezdxf.lldxf.types import DXFTag
 
 from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.numbers import NumberError, parse_int
@@ -282,17 +278,17 @@ def read_drawing(
     data: bytes,
     name: str = "",
     options: DxfOptions | None = None,
-    limit: int = MAX_DRAWING_ENTITIES,
+    limit: int | None = MAX_DRAWING_ENTITIES,
 ) -> Drawing:
     """The drawing's contours and holes in nm, with the report so far. Raises
     ImportFailure for a file ezdxf cannot read (naming where), a model space of more than
-    `limit` entities (a polyline's vertices count one each; the benchmarks lift it), a
-    unitless drawing without `drawing_units`, or units MillBlocks has no program units
-    for."""
+    `limit` entities (a polyline's vertices count one each; None: no limit, for the
+    importer, whose callers set their own, and the benchmarks), a unitless drawing without
+    `drawing_units`, or units MillBlocks has no program units for."""
     opts = options or DxfOptions()
     doc, entities = _load(data)
     size = sum(_size(entity, number) for number, entity in enumerate(entities, 1))
-    if size > limit:
+    if limit is not None and size > limit:
         raise ImportFailure(
             "model space",
             f"the drawing has {size:,} entities (a polyline's vertices count one each); "
@@ -339,15 +335,17 @@ def _default_feed(units: Units) -> int:
 # -- where ezdxf's reading ends and ours begins ----------------------------------------------
 
 
-class _BinaryTags(Iterator[DXFTag]):
+class _BinaryTags(Iterator[Any]):
     """ezdxf's tags of a binary DXF, counted, so that a failure names the tag it was in."""
 
     def __init__(self, data: bytes) -> None:
+        from ezdxf.lldxf.tagger import binary_tags_loader
+
         self._tags = binary_tags_loader(data)
         self.count = 0  # tags read whole
         self.broken = False  # the loader failed inside tag count + 1
 
-    def __next__(self) -> DXFTag:
+    def __next__(self) -> Any:
         try:
             tag = next(self._tags)
         except StopIteration:
@@ -363,6 +361,11 @@ def _load(data: bytes) -> tuple[Any, list[Any]]:
     """The document ezdxf reads from `data` (text through its recover mode, binary as is)
     and the entities of its model space. Raises ImportFailure naming where ezdxf stopped:
     the line (its message says which), the binary tag, the model space, or the file."""
+    # ezdxf is imported here, when a drawing is read: detecting a file's format and every
+    # command that reads no drawing start without it (it is a third of the CLI's start-up).
+    from ezdxf import recover
+    from ezdxf.document import Drawing as EzDrawing
+
     tags = _BinaryTags(data) if is_binary_dxf(data) else None
     try:
         if tags is not None:
@@ -410,6 +413,8 @@ def said(exc: BaseException) -> str:
     as they are, any other with its kind and the ezdxf module it came from (an
     AssertionError says nothing else); printable (see `printable`) and at most 300
     characters."""
+    from ezdxf.lldxf.const import DXFError
+
     text = str(exc)
     if not isinstance(exc, DXFError):
         frames = traceback.extract_tb(exc.__traceback__)

@@ -3,7 +3,7 @@
 What one user could do to the shop's server with a drawing, and what must happen instead:
 
 - a binary DXF was not counted by the 20 000-line import limit: it counts two lines a tag,
-  as its text form has them, and the drawing's model space is refused past
+  as its text form has them, and the drawings page refuses a model space past
   `MAX_DRAWING_ENTITIES` entities (a polyline's vertices each counted), naming the limit;
 - chaining compared every end with every other (8 000 lines: the upload killed at 30 s):
   each end is compared only with the ends in its own cell of a grid and the eight round it;

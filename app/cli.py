@@ -29,7 +29,7 @@ from typing import Any
 
 import click
 
-from app.cnc import document
+from app.cnc import document, sizes
 from app.cnc.blocks import Program
 from app.cnc.copy import CopyError, resolve_copies
 from app.cnc.emit.target import ExportError, OptionError, targets
@@ -186,8 +186,18 @@ def checked(path: str) -> Program:
 
 @click.group()
 @click.version_option(package_name="millblocks")
-def main() -> None:
+@click.option(
+    "--max-moves",
+    type=Number(minimum=1, whole=True),
+    default=sizes.MAX_MOVES,
+    show_default=True,
+    help="The moves a program may expand to (LOOPs multiplied out). A shop server keeps "
+    "the default; raise it for your own large files on your own computer.",
+)
+@click.pass_context
+def main(ctx: click.Context, max_moves: int) -> None:
     """MillBlocks: conversational mill programs to tool paths, tape and G-code."""
+    ctx.with_resource(sizes.moves_allowed(max_moves))
 
 
 @main.command()

@@ -93,6 +93,7 @@ class Rule(enum.Enum):
     MESSAGE = "message"
     PILOT = "pilot"
     BELOW_STOCK = "below-stock"
+    TOO_LARGE = "too-large"
 
 
 @dataclass(frozen=True, slots=True)

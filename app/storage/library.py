@@ -25,11 +25,11 @@ from sqlalchemy import Engine, delete, func, or_, select, update
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.cnc import document
+from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.memo import ByObject
-from app.cnc.sizes import TooLarge, check_block_count
+from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
@@ -151,9 +151,11 @@ def _block_words(block: Block) -> frozenset[str]:
 
 def _columns(program: Program) -> dict[str, Any]:
     """The row's columns for `program`. Raises LibraryError for a program past
-    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open."""
+    app.cnc.sizes.MAX_BLOCKS or MAX_MOVES (the server's, whatever a command line allows
+    for files): the library keeps only programs it can open."""
     try:
         check_block_count(len(program.blocks))
+        cost.check(program, MAX_MOVES)
     except TooLarge as exc:
         raise LibraryError(f"not stored: {exc}") from None
     return {

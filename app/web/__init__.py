@@ -17,6 +17,7 @@ from flask_wtf.csrf import CSRFError
 from werkzeug.middleware.proxy_fix import ProxyFix
 from werkzeug.routing import IntegerConverter
 
+from app.cnc import sizes
 from app.storage.db import ROOT
 from app.storage.library import open_library
 from app.web import auth, drawings, editor, export, library, machines, setup, transfers, verify
@@ -48,6 +49,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         WTF_CSRF_TIME_LIMIT=None,
         MILLBLOCKS_USER=os.environ.get("MILLBLOCKS_USER", "local"),
         MILLBLOCKS_AUTH=os.environ.get("MILLBLOCKS_AUTH", "local"),
+        MILLBLOCKS_REQUEST_SECONDS=float(os.environ.get("MILLBLOCKS_REQUEST_SECONDS", "20")),
     )
     if test_config:
         app.config.update(test_config)
@@ -69,6 +71,8 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     app.register_error_handler(404, _not_found)
     app.register_error_handler(403, _forbidden)
     app.register_error_handler(422, _refused)
+    app.register_error_handler(sizes.OverBudget, _over_budget)
+    _budget_requests(app)
     if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
         raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
@@ -83,6 +87,23 @@ class RowId(IntegerConverter):
     def __init__(self, map: Any, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("max", 999_999_999)
         super().__init__(map, *args, **kwargs)
+
+
+def _budget_requests(app: Flask) -> None:
+    """Give each request MILLBLOCKS_REQUEST_SECONDS (default 20) of work: past that the core
+    stops it (app.cnc.sizes.spend) and the page says so (503), well before gunicorn's
+    30 s timeout would kill the worker. The last line of defence behind the size limits
+    (app.cnc.sizes, app.cnc.cost), which keep every legal program far below it."""
+    seconds = float(app.config["MILLBLOCKS_REQUEST_SECONDS"])
+    if not seconds > 0:
+        raise ValueError("MILLBLOCKS_REQUEST_SECONDS is a number of seconds above 0")
+    inner = app.wsgi_app
+
+    def budgeted(environ: dict[str, Any], start_response: Any) -> Any:
+        with sizes.time_budget(seconds):
+            return inner(environ, start_response)
+
+    app.wsgi_app = budgeted  # type: ignore[method-assign]
 
 
 def _harden_cookie(app: Flask) -> None:
@@ -141,6 +162,10 @@ def _forbidden(error: Exception) -> tuple[str, int]:
 def _refused(error: Exception) -> tuple[str, int]:
     message = getattr(error, "description", "Refused")
     return render_template("errors/error.html", title="Refused", message=message), 422
+
+
+def _over_budget(error: Exception) -> tuple[str, int]:
+    return render_template("errors/error.html", title="Too much work", message=str(error)), 503
 
 
 def _not_found(error: Exception) -> tuple[str, int]:

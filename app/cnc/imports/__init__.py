@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from app.cnc import cost
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.registry import Importer, detect, get_importer, importers
@@ -76,13 +77,15 @@ def read_program(
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
-    file past the limits of app.cnc.sizes, refused before it is parsed).
+    file past the limits of app.cnc.sizes: refused before it is parsed by its bytes and
+    lines, after by its blocks and the moves they expand to, app.cnc.cost).
     """
     try:
         check_import_size(data)
         importer = detect(data) if format is None else get_importer(format)
         program, notes = read_as(importer, data, name, options or {})
         check_block_count(len(program.blocks))
+        cost.check(program)
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, importer.name)

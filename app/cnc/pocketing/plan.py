@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from app.cnc import sizes
 from app.cnc.blocks import MillingMode, Placement
 from app.cnc.mill import (
     Element,
@@ -91,7 +92,8 @@ def plan_pocket(
     is the spindle direction; None is clockwise) choose each ring's direction; `block` is
     written on every element made; `units` is for messages.
 
-    Raises nothing for bad geometry: errors come back as findings (and no passes).
+    Raises nothing for bad geometry: errors come back as findings (and no passes); raises
+    app.cnc.sizes.OverBudget when a time budget is in force and runs out.
     """
     r = float(tool_radius)
     t = float(chordal_tolerance)
@@ -234,6 +236,7 @@ class _Planner:
             leaf_entry = False
 
     def _add_ring(self, node: _Node, ring: regions.Ring, plunge_deep: bool) -> None:
+        sizes.spend()
         d, _ = self.levels[node.level]
         finish = node.level == 0
         tag = "finish" if finish else "rough"
@@ -356,6 +359,7 @@ class _Planner:
         swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
         unreachable: list[Pt] = []
         for _ in range(MAX_CLEANUPS):
+            sizes.spend()
             residue = regions.difference(opening, swept)
             pieces = [
                 c
@@ -616,6 +620,7 @@ def _levels(
     found: list[Level] = []
     d = r
     while len(found) <= MAX_LEVELS:
+        sizes.spend()
         shrunk = regions.offset(region, -d, t)
         if not shrunk:
             return found

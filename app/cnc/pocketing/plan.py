@@ -347,6 +347,8 @@ class _Planner:
         box = regions.box_of(swept)
         if box is None:
             return True
+        # Grown by the tolerance straight from the overlapping sweeps: the offset unites
+        # them as it grows them.
         near = self.cleared.near(box, [self._path_points(then)])
         done = regions.offset(near, self.t, self.t)
         extra = regions.difference(swept, done)

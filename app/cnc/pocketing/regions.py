@@ -300,7 +300,9 @@ class SweptIndex:
 
     def near(self, box: Box, also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
         """The area swept by the recorded moves and by the moves `also` (not recorded)
-        wherever it lies within `box`; beyond the box it may be cut short."""
+        wherever it lies within `box`; beyond the box it may be cut short. The rings of the
+        pieces' sweeps, overlapping: the area is where their winding is positive (as an
+        offset or a union reads them), not yet united."""
         numbers = sorted({n for cell in self._cells(box) for n in self.cells.get(cell, ())})
         found: list[Ring] = []
         for number in numbers:
@@ -326,7 +328,7 @@ class SweptIndex:
                     and max(ys) + reach >= box[1]
                 ):
                     found += sweep_lines([piece], self.radius, self.tolerance)
-        return union(found)
+        return found
 
     def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
         c = self.cell

@@ -14,6 +14,7 @@ import io
 import json
 from collections.abc import Iterator
 from datetime import UTC, datetime
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
@@ -33,6 +34,7 @@ from app.storage.library import LibraryError
 from app.storage.models import ProgramRow, RevisionRow
 from app.web.extensions import get_library
 from bench.programs import sized
+from tests.hostile_corpus import eight_island_pocket
 from tests.strategies import programs
 from tests.web_support import csrf, dispose, local_app
 
@@ -122,6 +124,19 @@ def test_an_import_past_the_limit_is_refused_naming_the_block() -> None:
     with pytest.raises(ImportFailure) as caught:
         read_program(GRID_OF_GRIDS.read_bytes(), "grid", "json")
     assert "block 2: the program would make about 1,300,130,007 moves" in str(caught.value)
+
+
+def test_a_pocket_whose_planning_multiplies_past_the_limit_is_refused_before_planning() -> None:
+    """The 8-island POCKET at 20 in with a 0.125 in tool: 135 levels across a region drawn
+    with 3 612 points (it planned for 172 s before issue 30). Refused on the POCKET, as
+    what a larger tool or STEP would change; the 10 in one (the issue's) is planned."""
+    problems = validate(eight_island_pocket(Decimal(20)))
+    assert [(p.block, p.field, p.rule) for p in problems] == [(2, "STEP", Rule.TOO_LARGE)]
+    assert "drawn with 3,612 points, 135 times (487,620 in all)" in problems[0].message
+    assert f"at most {sizes.MAX_POCKET_WORK:,}" in problems[0].message
+    compiled = compile_program(eight_island_pocket(Decimal(20)), Cache())
+    assert [f.rule for f in compiled.findings] == [Rule.TOO_LARGE] and len(compiled.path) < 10
+    assert cost.estimate(eight_island_pocket()).over is None
 
 
 # -- the library and the web ---------------------------------------------------------------

@@ -338,7 +338,7 @@ class _Compiler:
         for node in build_nodes(self.blocks, tolerant=True):
             indexes = _indexes(node)
             first = indexes[0]
-            if over.over is not None and first + 1 >= over.over:
+            if over.stop is not None and first + 1 >= over.stop:
                 self.findings.append(_too_large(over, limit))
                 break
             sizes.spend()
@@ -358,7 +358,7 @@ class _Compiler:
             if moves > limit:
                 # More than the estimate foresaw (a pocket's rings drawn as polylines):
                 # the same limit, on the moves made.
-                made = cost.Cost(moves, 0, 0, first + 1, size(found.node))
+                made = cost.Cost(moves, 0, 0, first + 1, size(found.node), stop=first + 1)
                 self.findings.append(_too_large(made, limit))
                 break
             self.restore(found.exit)
@@ -941,7 +941,7 @@ class _Compiler:
 def _too_large(over: cost.Cost, limit: int) -> Finding:
     """The error of a program past the moves it may make, on the block `over` names."""
     assert over.over is not None
-    field = "LOOP" if over.rep is not None else None
+    field = "LOOP" if over.rep is not None else "STEP" if over.levels else None
     return Finding(over.over, Rule.TOO_LARGE, Severity.ERROR, over.message(limit), field)
 
 

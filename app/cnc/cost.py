@@ -20,7 +20,7 @@ estimate cannot foresee. Pure: no Flask, database or serial code.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from decimal import Decimal
 
 from app.cnc import sizes
@@ -37,8 +37,9 @@ from app.cnc.blocks import (
     Program,
     Rep,
 )
-from app.cnc.mill import pocket_overlap
-from app.cnc.pocketing.plan import MAX_LEVELS
+from app.cnc.mill import Path, pocket_overlap, sweep
+from app.cnc.pocketing.plan import DEFAULT_CHORDAL_TOLERANCE, MAX_LEVELS
+from app.cnc.pocketing.regions import arc_steps
 from app.cnc.pocketing.routine import contours_at
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import to_nm
@@ -62,7 +63,10 @@ class Cost:
     works in), `holes` and irregular-pocket `passes`. When `moves` passes the limit it was
     checked against, `over` is the 1-based block that takes it there (the first block of
     the top-level node: a LOOP block for a LOOP) and `node_moves` that node's moves, its
-    `patterns` the LOOP's patterns in all (1 for any other node)."""
+    `patterns` the LOOP's patterns in all (1 for any other node). When a POCKET would take
+    more planning than `sizes.MAX_POCKET_WORK` first, `over` is that POCKET, `levels` and
+    `points` what its planning multiplies. Either way `stop` is the first block of the
+    top-level node the compile stops before."""
 
     moves: int
     holes: int
@@ -71,9 +75,20 @@ class Cost:
     node_moves: int = 0
     patterns: int = 1
     rep: int | None = None
+    stop: int | None = None
+    levels: int = 0
+    points: int = 0
 
     def message(self, limit: int) -> str:
         """What a refusal says: the figure, what makes it, and what is allowed."""
+        if self.levels:
+            work = self.levels * self.points
+            return (
+                f"planning this POCKET means shrinking its region, drawn with {self.points:,} "
+                f"points, {self.levels} times ({work:,} in all); a POCKET is planned from at "
+                f"most {sizes.MAX_POCKET_WORK:,}, so that it plans in seconds: a larger tool "
+                "or STEP, or fewer arcs in its contours, make it less"
+            )
         if self.rep is not None:
             what = (
                 f"this LOOP, with its REP in block {self.rep}, repeats its blocks "
@@ -94,6 +109,7 @@ class _Size:
     moves: int
     holes: int
     passes: int
+    pocket: tuple[int, int, int] | None = None  # the heaviest POCKET: block, levels, points
 
 
 def estimate(program: Program, limit: int | None = None) -> Cost:
@@ -109,16 +125,20 @@ def estimate(program: Program, limit: int | None = None) -> Cost:
         moves += size.moves
         holes += size.holes
         passes += size.passes
+        first = _first(node)
+        if over is None and size.pocket is not None:
+            block, levels, points = size.pocket
+            if levels * points > sizes.MAX_POCKET_WORK:
+                over = Cost(0, 0, 0, block, stop=first + 1, levels=levels, points=points)
         if over is None and moves > cap:
-            first = _first(node)
             if isinstance(node, LoopPattern):
                 patterns = _patterns(blocks[node.rep])
-                over = Cost(0, 0, 0, first + 1, size.moves, patterns, node.rep + 1)
+                over = Cost(0, 0, 0, first + 1, size.moves, patterns, node.rep + 1, first + 1)
             else:
-                over = Cost(0, 0, 0, first + 1, size.moves)
+                over = Cost(0, 0, 0, first + 1, size.moves, stop=first + 1)
     if over is None:
         return Cost(moves, holes, passes)
-    return Cost(moves, holes, passes, over.over, over.node_moves, over.patterns, over.rep)
+    return replace(over, moves=moves, holes=holes, passes=passes)
 
 
 def check(program: Program, limit: int | None = None) -> Cost:
@@ -159,6 +179,7 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
                 first.moves + (k - 1) * again.moves,
                 first.holes + (k - 1) * again.holes,
                 first.passes + (k - 1) * again.passes,
+                _heavier(first.pocket, again.pocket),
             ),
             after,
         )
@@ -186,9 +207,10 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
     levels = max(block.pecks, 1)
     mill = blocks[node.mills[0]]
     if isinstance(mill, Pocket):
-        rings, per_ring = _pocket(blocks, program, node)
+        rings, per_ring, work = _pocket(blocks, program, node)
         per_level = rings * per_ring + LEVEL_ROWS
-        return _Size(extra + SEQUENCE_ROWS + levels * per_level, 0, levels * rings), used
+        moves = extra + SEQUENCE_ROWS + levels * per_level
+        return _Size(moves, 0, levels * rings, (node.mills[0] + 1, *work)), used
     if isinstance(mill, MILL_ROUTINE_CLASSES):
         rings = _routine_rings(program, mill)
         two_pass = 1 if getattr(mill, "two_pass", False) else 0
@@ -203,12 +225,23 @@ def _body(
 ) -> tuple[_Size, int]:
     """One pattern of a LOOP entered with `tool`, and the tool after it."""
     moves = holes = passes = 0
+    pocket: tuple[int, int, int] | None = None
     for child in node.body:
         size, tool = _node(blocks, program, child, tool)
         moves += size.moves
         holes += size.holes
         passes += size.passes
-    return _Size(moves, holes, passes), tool
+        pocket = _heavier(pocket, size.pocket)
+    return _Size(moves, holes, passes, pocket), tool
+
+
+def _heavier(
+    a: tuple[int, int, int] | None, b: tuple[int, int, int] | None
+) -> tuple[int, int, int] | None:
+    """Of two POCKETs (block, levels, points), the one whose planning is more work."""
+    if a is None or (b is not None and b[1] * b[2] > a[1] * a[2]):
+        return b
+    return a
 
 
 def _hole_rows(block: Hole) -> int:
@@ -253,11 +286,15 @@ def _routine_rings(program: Program, block: Block) -> int:
     return 1 if step is None else room // step + 2
 
 
-def _pocket(blocks: tuple[Block, ...], program: Program, node: MillSequence) -> tuple[int, int]:
-    """(rings, moves per ring) of an irregular POCKET: a level per step-over across the
-    narrower half of its boundary's box (at most the planner's MAX_LEVELS + 1), each level
-    a ring round every contour, each ring twice the contours' elements (corner arcs and
-    trims) and its link."""
+def _pocket(
+    blocks: tuple[Block, ...], program: Program, node: MillSequence
+) -> tuple[int, int, tuple[int, int]]:
+    """(rings, moves per ring, (levels, points)) of an irregular POCKET: a level per
+    step-over across the narrower half of its boundary's box (at most the planner's
+    MAX_LEVELS + 1), each level a ring round every contour, each ring twice the contours'
+    elements (corner arcs and trims) and its link. Its planning shrinks the region (the
+    contours drawn with `points` points, each arc in chords within the planner's
+    tolerance) once per level: levels x points is what it multiplies."""
     pocket = blocks[node.mills[0]]
     drill = blocks[node.drill]
     assert isinstance(pocket, Pocket) and isinstance(drill, Hole)
@@ -266,7 +303,7 @@ def _pocket(blocks: tuple[Block, ...], program: Program, node: MillSequence) -> 
     elements = sum(len(c.path.elements) for c in contours)
     boundary = contours[0].path if contours else None
     if boundary is None or not boundary.elements:
-        return 1, 2 * elements + 2
+        return 1, 2 * elements + 2, (0, 0)
     points = [boundary.start, *(e.end for e in boundary.elements)]
     arcs = zip(points[:-1], boundary.elements, strict=True)
     reach = max((math.dist(a, e.centre) for a, e in arcs if e.centre), default=0.0)
@@ -275,4 +312,21 @@ def _pocket(blocks: tuple[Block, ...], program: Program, node: MillSequence) -> 
     half = (min(max(xs) - min(xs), max(ys) - min(ys)) + 2 * reach) / 2
     step = _step(program, pocket, pocket.step_over)
     levels = 1 if step is None else min(MAX_LEVELS + 1, int(half // step) + 2)
-    return levels * len(contours), 2 * (elements // max(len(contours), 1)) + 2
+    drawn = sum(_points(c.path) for c in contours)
+    per_ring = 2 * (elements // max(len(contours), 1)) + 2
+    return levels * len(contours), per_ring, (levels if step is not None else 0, drawn)
+
+
+def _points(path: Path) -> int:
+    """The points a contour is drawn with for planning (regions.polygon)."""
+    count = 0
+    at = path.start
+    for element in path.elements:
+        if element.centre is None:
+            count += 1
+        else:
+            radius = math.dist(at, element.centre)
+            turn = sweep(at, element) if radius > 0 else 0.0
+            count += arc_steps(radius, turn, DEFAULT_CHORDAL_TOLERANCE)
+        at = element.end
+    return count

@@ -60,6 +60,11 @@ MAX_MOVES = 1_000_000
 command answers within seconds (docs/security.md). The command line may allow more for
 the user's own files (`--max-moves`)."""
 
+MAX_POCKET_WORK = 200_000
+"""Points one POCKET's planning may shrink: the points its contours are drawn with, times
+its levels (one per step-over across it). The planner offsets the whole region once per
+level with Clipper, whose time grows with both (docs/security.md, "Pockets")."""
+
 _MOVE_LIMIT: ContextVar[int] = ContextVar("millblocks_move_limit", default=MAX_MOVES)
 
 

@@ -742,13 +742,14 @@ class _Checker:
     # -- size -------------------------------------------------------------------------------
 
     def check_size(self) -> None:
-        """A program past the moves it may expand to (app/cnc/cost.py): an error on the
-        outermost block that takes it there, before anything compiles it."""
+        """A program past the moves it may expand to, or a POCKET past the planning it may
+        take (app/cnc/cost.py): an error on the outermost block that takes it there, before
+        anything compiles it."""
         found = cost.estimate(self.program)
         if found.over is not None:
             self.add(
                 found.over,
-                "LOOP" if found.rep is not None else None,
+                "LOOP" if found.rep is not None else "STEP" if found.levels else None,
                 ERROR,
                 Rule.TOO_LARGE,
                 found.message(sizes.move_limit()),

@@ -20,6 +20,7 @@ from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
 from app.cnc.imports.registry import importers
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -161,10 +162,12 @@ def receive_program(
     """Receive a program from `machine`'s port (or `port`), import it as `format` (default:
     the machine's target) and add it to `library` (revision summary: where it came from).
 
-    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    Raises SettingsError, or TextError for a `name` the library cannot store
+    (app.cnc.text), before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
     saved.
     """
+    check_text(name, "name", NAME_LENGTH)
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
 

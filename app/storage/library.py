@@ -29,7 +29,16 @@ from app.cnc import document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.memo import ByObject
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.sizes import TooLarge, check_block_count
+from app.cnc.text import (
+    NAME_LENGTH,
+    NOTES_LENGTH,
+    SHORT_NAME_LENGTH,
+    check_text,
+    derived_name,
+    search_terms,
+)
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
@@ -151,11 +160,15 @@ def _block_words(block: Block) -> frozenset[str]:
 
 def _columns(program: Program) -> dict[str, Any]:
     """The row's columns for `program`. Raises LibraryError for a program past
-    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open."""
+    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open; TextError for
+    a name or notes past the text rule (app.cnc.text), whatever the entry."""
     try:
         check_block_count(len(program.blocks))
     except TooLarge as exc:
         raise LibraryError(f"not stored: {exc}") from None
+    check_text(program.name, "program name", NAME_LENGTH)
+    check_text(program.part_number, "part number", NAME_LENGTH)
+    check_text(program.notes, "notes", NOTES_LENGTH)
     return {
         "name": program.name,
         "part_number": program.part_number[:8],
@@ -184,6 +197,7 @@ class Library:
 
     def create(self, program: Program, author: str = "", summary_text: str = "") -> ProgramInfo:
         """Add a program; its first revision is version 1."""
+        check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
             row = ProgramRow(
@@ -216,8 +230,11 @@ class Library:
 
     def find(self, reference: str) -> StoredProgram:
         """A program by id (digits) or by exact name (not in the trash)."""
-        if reference.isdigit():
-            return self.get(int(reference))
+        if reference.isascii() and reference.isdigit():  # `²` is a digit to isdigit
+            try:
+                return self.get(parse_int(reference))
+            except NumberError:
+                raise NotFound(f"no program {reference} in the library") from None
         with self.session() as s:
             rows = s.scalars(
                 select(ProgramRow).where(
@@ -240,7 +257,7 @@ class Library:
         statement = select(ProgramRow).where(
             ProgramRow.deleted_at.is_not(None) if trash else ProgramRow.deleted_at.is_(None)
         )
-        for word in query.lower().split():
+        for word in search_terms(query):
             pattern = f"%{word}%"
             statement = statement.where(
                 or_(
@@ -266,6 +283,7 @@ class Library:
 
         Raises StaleSave (nothing written) when someone saved after `based_on`.
         """
+        check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
             row = s.get(ProgramRow, program_id)
@@ -328,7 +346,7 @@ class Library:
 
     def duplicate(self, program_id: int, author: str = "", name: str | None = None) -> ProgramInfo:
         stored = self.get(program_id)
-        copy = replace(stored.program, name=name or f"{stored.program.name} (copy)")
+        copy = replace(stored.program, name=name or derived_name(stored.program.name, " (copy)"))
         return self.create(copy, author, f"duplicated from program {program_id}")
 
     def delete(self, program_id: int) -> None:
@@ -442,11 +460,13 @@ class Library:
             row = s.get(DrawingRow, key)
             if row is None:
                 s.add(
-                    DrawingRow(key=key, name=name[:200], data=data, uploaded_at=now, author=author)
+                    DrawingRow(
+                        key=key, name=name[:NAME_LENGTH], data=data, uploaded_at=now, author=author
+                    )
                 )
             else:
                 row.uploaded_at = now
-                row.name = name[:200]
+                row.name = name[:NAME_LENGTH]
         return key
 
     def drawing(self, key: str) -> tuple[str, bytes]:
@@ -584,6 +604,8 @@ def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
 
 def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
     """Create or update a machine profile by name, in transaction `s`."""
+    check_text(machine.name, "machine name", SHORT_NAME_LENGTH)
+    check_text(machine.notes, "notes", NOTES_LENGTH)
     row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
     if row is None:
         row = MachineRow(name=machine.name, created_at=now)

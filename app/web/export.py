@@ -23,7 +23,7 @@ from app.cnc.emit.target import (
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.cnc.options import Option
 from app.storage.library import LibraryError
-from app.web.downloads import attachment
+from app.web.downloads import attachment, file_name
 from app.web.editor import is_htmx, load
 from app.web.extensions import get_library
 
@@ -215,8 +215,7 @@ def download(program_id: int) -> Response | tuple[str, int]:
         result = export(stored.program, target_name, raw, model)
     except (OptionError, ExportError) as exc:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
-    stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
-    filename = f"{stem}.{result.extension}"
+    filename = file_name(stored.program.name, result.extension, "program")
     # The export was spooled as it was made; it goes out a piece at a time.
     response = Response(result.chunks(), mimetype=result.media_type.split(";")[0])
     response.headers["Content-Length"] = str(result.size)

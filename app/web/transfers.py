@@ -16,6 +16,8 @@ from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import targets
 from app.cnc.imports import importers
+from app.cnc.numbers import NumberError, parse_int
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc import Direction, TransferRecord, jobs, service
 from app.dnc.jobs import JobState, TransferJob
 from app.dnc.service import Log
@@ -121,9 +123,11 @@ def send() -> Response | tuple[str, int]:
     try:
         machine = _machine(request.form.get("machine", ""))
         program_id = request.form.get("program_id", "")
-        if not program_id.isdigit():
-            raise _Refused("choose a program to send")
-        stored = library.get(int(program_id))
+        try:
+            number = parse_int(program_id)
+        except NumberError:
+            raise _Refused("choose a program to send") from None
+        stored = library.get(number)
     except (_Refused, NotFound) as exc:
         return _page(f"Not sent: {exc}", 422)
     author = current_user().username
@@ -168,7 +172,7 @@ def receive() -> Response | tuple[str, int]:
     except _Refused as exc:
         return _page(f"Not started: {exc}", 422)
     author = current_user().username
-    name = request.form.get("name", "").strip()
+    name = check_text(request.form.get("name", "").strip(), "name", NAME_LENGTH)
     row_id = TransferLog(library).begin(
         "receive", machine.name, port_of(machine.serial), form_format or machine.target, author
     )

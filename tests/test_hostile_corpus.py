@@ -508,3 +508,72 @@ def test_the_stl_of_a_program_named_in_any_script_downloads(
     header = response.headers["Content-Disposition"]
     header.encode("latin-1")  # what a WSGI server must send
     assert "filename*=UTF-8''%D0%94%D0%B5%D1%82%D0%B0%D0%BB%D1%8C-5-%E2%91%A0.stl" in header
+
+
+# -- what a program's name can put into a control's file ---------------------------------------
+
+CONTROL_TARGETS = (
+    "gcode-fanuc",
+    "gcode-prototrak",
+    "gcode-linuxcnc",
+    "tape-ascii",
+    "tape-eia",
+    "events",
+    "tape-boss",
+)
+HOSTILE_NAMES = (
+    "50% STEPOVER",
+    "A%\nG0 X99",
+    "ROUGH (SIDE); FINISH",
+    "XON\x11XOFF\x13EOT\x04SUB\x1aDEL\x7f",
+    "Деталь №5 ½",
+)
+
+
+@pytest.mark.parametrize("name", HOSTILE_NAMES)
+@pytest.mark.parametrize("target", CONTROL_TARGETS)
+def test_no_name_ends_a_control_s_file_or_block(target: str, name: str) -> None:
+    """A `%` in a program's name landed in the Fanuc and ProtoTRAK header comment, and `%`
+    ends a file on those controls (seed 003 §2.2.3): `%` stands only where a file starts or
+    ends, no control character but the line ends, nothing after `(` ends the comment."""
+    from dataclasses import replace
+
+    from app.cnc import document
+    from app.cnc.emit.target import export
+
+    program = replace(document.loads(DOCUMENT.read_text()), name=name, notes=name)
+    text = export(program, target, {}).data.decode("ascii")
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    assert all("%" not in line[1:] for line in lines), [ln for ln in lines if "%" in ln[1:]]
+    assert not [c for c in text if (ord(c) < 32 and c not in "\r\n\t") or ord(c) == 127]
+    for line in lines:
+        if "(" in line:  # one comment, ended by its `)` and then the block's end at most
+            inner, closed, after = line[line.index("(") + 1 :].partition(")")
+            assert closed and "(" not in inner and ";" not in inner, line
+            assert after in ("", ";"), line
+
+
+@pytest.mark.parametrize("target", ["gcode-fanuc", "gcode-prototrak", "tape-ascii"])
+def test_our_own_receive_of_a_send_with_a_percent_in_the_name_reads_the_whole_program(
+    target: str,
+) -> None:
+    """Received (app.dnc's capture, as from the port), a `%` in the header comment ended the
+    file there: the capture held no program and nothing was saved."""
+    from dataclasses import replace
+
+    from app.cnc import document
+    from app.cnc.emit.target import export
+    from app.cnc.imports import read_program
+    from app.dnc.framing import Capture, outgoing
+    from app.dnc.settings import PortSettings
+
+    def received(program: Any) -> Any:
+        settings = PortSettings(target=target)
+        capture = Capture(settings)
+        capture.feed(outgoing(export(program, target, {}).data, settings))
+        return read_program(bytes(capture.data), "received").program
+
+    program = document.loads(DOCUMENT.read_text())
+    plain = received(program)
+    assert len(plain.blocks) > 0
+    assert received(replace(program, name="100% CHECKED")).blocks == plain.blocks

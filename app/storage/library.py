@@ -28,6 +28,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from app.cnc import document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
+from app.cnc.machine import MachineError, read_machine
 from app.cnc.memo import ByObject
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.sizes import TooLarge, check_block_count
@@ -606,6 +607,11 @@ def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
     """Create or update a machine profile by name, in transaction `s`."""
     check_text(machine.name, "machine name", SHORT_NAME_LENGTH)
     check_text(machine.notes, "notes", NOTES_LENGTH)
+    if machine.limits:
+        try:
+            read_machine(machine.limits)
+        except MachineError as exc:
+            raise LibraryError(f"machine {machine.name!r}, limits: {exc}") from None
     row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
     if row is None:
         row = MachineRow(name=machine.name, created_at=now)

@@ -46,6 +46,11 @@ from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, 
 SORTS = ("name", "part_number", "updated", "created")
 DRAWING_KEEP = timedelta(days=1)
 """How long an uploaded drawing is kept for choosing from."""
+DRAWINGS_PER_USER = 10
+"""Drawings one user keeps: opening one more forgets that user's oldest."""
+DRAWING_BYTES_IN_ALL = 64 * 1024 * 1024
+"""Bytes of all users' drawings together: past it an upload is refused until the oldest
+drawing's day is over (one user alone holds at most 10 × 2 MB)."""
 DRAWING_KEY = re.compile(r"[0-9a-f]{64}")
 BACKUP_FORMAT = "millblocks-backup"
 
@@ -56,6 +61,11 @@ class LibraryError(ValueError):
 
 class NotFound(LibraryError):
     """No such program, revision or machine."""
+
+
+class DrawingsFull(LibraryError):
+    """The server keeps as many drawings as it may (DRAWING_BYTES_IN_ALL): the message says
+    when room comes back."""
 
 
 class StaleSave(LibraryError):
@@ -453,13 +463,25 @@ class Library:
 
     def put_drawing(self, name: str, data: bytes, author: str = "") -> str:
         """Keep an uploaded drawing; its key (the SHA-256 of `data`, hex). Drawings
-        uploaded more than DRAWING_DAYS ago are removed first."""
+        uploaded more than DRAWING_KEEP ago are removed first; a user keeps at most
+        DRAWINGS_PER_USER (the oldest is forgotten to make room). Raises DrawingsFull,
+        storing nothing, when all drawings together would pass DRAWING_BYTES_IN_ALL."""
         key = hashlib.sha256(data).hexdigest()
-        now = _now()
+        # To the microsecond: which of a user's drawings is the oldest decides what goes.
+        now = datetime.now(UTC).replace(tzinfo=None)
         with self.session() as s:
             s.execute(delete(DrawingRow).where(DrawingRow.uploaded_at < now - DRAWING_KEEP))
             row = s.get(DrawingRow, key)
             if row is None:
+                mine = s.scalars(
+                    select(DrawingRow.key)
+                    .where(DrawingRow.author == author)
+                    .order_by(DrawingRow.uploaded_at.desc(), DrawingRow.key)
+                ).all()
+                forget = list(mine[DRAWINGS_PER_USER - 1 :])
+                if forget:
+                    s.execute(delete(DrawingRow).where(DrawingRow.key.in_(forget)))
+                self._room_for(s, len(data), now)
                 s.add(
                     DrawingRow(
                         key=key, name=name[:NAME_LENGTH], data=data, uploaded_at=now, author=author
@@ -469,6 +491,19 @@ class Library:
                 row.uploaded_at = now
                 row.name = name[:NAME_LENGTH]
         return key
+
+    def _room_for(self, s: Session, size: int, now: datetime) -> None:
+        """Raise DrawingsFull when `size` more bytes would pass DRAWING_BYTES_IN_ALL."""
+        kept = s.scalar(select(func.coalesce(func.sum(func.length(DrawingRow.data)), 0)))
+        if int(kept or 0) + size <= DRAWING_BYTES_IN_ALL:
+            return
+        oldest = s.scalar(select(func.min(DrawingRow.uploaded_at)))
+        when = f"{(oldest or now) + DRAWING_KEEP:%Y-%m-%d %H:%M} UTC"
+        raise DrawingsFull(
+            f"the server keeps at most {DRAWING_BYTES_IN_ALL // (1024 * 1024)} MB of uploaded "
+            f"drawings and has {int(kept or 0) / (1024 * 1024):.1f} MB; each is kept a day, "
+            f"so room comes back at {when}; open the drawing again then"
+        )
 
     def drawing(self, key: str) -> tuple[str, bytes]:
         """(name, data) of the drawing `key`; NotFound when there is none (or it expired)."""

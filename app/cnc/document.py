@@ -4,8 +4,9 @@ The format is described in docs/program-format.md. `dumps` writes a deterministi
 (fixed key order, two-space indent, trailing newline); `loads` reads it back and raises
 DocumentError naming the block and field of anything malformed. Numbers are read as
 `Decimal`, so what was typed is what is kept, and checked by app.cnc.numbers (no NaN or
-Infinity, nothing beyond 1E+30); a document nested deeper than JSON's own reader goes, or
-with more than `MAX_BLOCKS` blocks, is refused whole.
+Infinity, nothing beyond 1E+30); its text by app.cnc.text (no NUL or lone surrogate, the
+name and notes within their lengths); a document nested deeper than JSON's own reader
+goes, or with more than `MAX_BLOCKS` blocks, is refused whole.
 """
 
 from __future__ import annotations

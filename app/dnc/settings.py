@@ -280,11 +280,14 @@ class PortSettings:
 
 
 def port_of(serial: Mapping[str, Any]) -> str:
-    """The machine's port path (`/dev/ttyUSB0`, `/dev/serial/by-id/…`). Raises SettingsError
-    when the machine has none."""
+    """The machine's port: a device path (`/dev/ttyUSB0`, `/dev/serial/by-id/…`) or a
+    network port's URL (`socket://host:port` for a serial device server's raw TCP port,
+    `rfc2217://host:port`). Raises SettingsError when the machine has none."""
     port = str(serial.get("port") or "").strip()
     if not port:
-        raise SettingsError("the machine has no serial port: set its port (e.g. /dev/ttyUSB0)")
+        raise SettingsError(
+            "the machine has no serial port: set its port (e.g. /dev/ttyUSB0 or socket://10.0.0.5:4001)"
+        )
     return port
 
 

@@ -15,7 +15,6 @@ import os
 import re
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 from alembic import command
@@ -23,10 +22,7 @@ from alembic.config import Config
 from sqlalchemy import Engine, create_engine, event, text
 
 from app.cnc.text import check_text
-
-ROOT = Path(__file__).resolve().parents[2]
-MIGRATIONS = ROOT / "migrations"
-DEFAULT_SQLITE = ROOT / "instance" / "millblocks.db"
+from app.resources import data_dir, instance_dir
 
 
 def database_url(url: str | None = None) -> str:
@@ -41,8 +37,9 @@ def database_url(url: str | None = None) -> str:
         elif env.startswith("postgresql://"):
             env = "postgresql+psycopg://" + env[len("postgresql://") :]
         return env
-    DEFAULT_SQLITE.parent.mkdir(parents=True, exist_ok=True)
-    return f"sqlite:///{DEFAULT_SQLITE}"
+    default = instance_dir() / "millblocks.db"
+    default.parent.mkdir(parents=True, exist_ok=True)
+    return f"sqlite:///{default}"
 
 
 def make_engine(url: str | None = None) -> Engine:
@@ -129,7 +126,7 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
     config = Config()
-    config.set_main_option("script_location", str(MIGRATIONS))
+    config.set_main_option("script_location", str(data_dir("migrations")))
     config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
     return config
 

@@ -1,12 +1,18 @@
 """The transfer log on the library's database (issue 8): every send and receive, with its
-progress while it runs and a cancel flag any web worker can set."""
+progress while it runs and a cancel flag any web worker can set.
+
+It is also the transfer service's queue (issue 35): the web page and `millblocks send
+--queue` add a row "queued"; the service (`millblocks dnc`, app.dnc.daemon) claims it —
+one atomic UPDATE from "queued" to "running", so two services never run one transfer —
+and runs it, writing its progress here."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
+from typing import Any
 
-from sqlalchemy import select
+from sqlalchemy import CursorResult, select, update
 
 from app.dnc.record import TransferRecord
 from app.storage.library import Library, NotFound
@@ -20,6 +26,8 @@ INTERRUPTED = (
     "the server process running this transfer stopped (restarted?) before it ended; "
     "check what the control has, and send or receive again"
 )
+QUEUED = "queued"
+RUNNING = "running"
 
 
 def _now() -> datetime:
@@ -90,8 +98,12 @@ class TransferLog:
         author: str,
         program_id: int | None = None,
         program_name: str = "",
+        *,
+        queued: bool = False,
     ) -> int:
-        """A running transfer's row; its id."""
+        """A transfer's row, running (or `queued` for the transfer service); its id. A
+        queued receive keeps the format asked for in `target` and the new program's name
+        in `program_name`."""
         with self.library.session() as s:
             row = TransferRow(
                 direction=direction,
@@ -103,6 +115,7 @@ class TransferLog:
                 program_name=program_name,
                 started_at=_now(),
                 updated_at=_now(),
+                outcome=QUEUED if queued else RUNNING,
             )
             s.add(row)
             s.flush()
@@ -176,11 +189,46 @@ class TransferLog:
             row.raw = record.raw[:1_000_000]
 
     def cancel(self, transfer_id: int) -> None:
+        """Ask a transfer to stop; a queued one is withdrawn at once."""
         with self.library.session() as s:
             row = s.get(TransferRow, transfer_id)
             if row is None:
                 raise NotFound(f"no transfer {transfer_id}")
             row.cancel_requested = True
+            if row.outcome == QUEUED:
+                row.outcome, row.error = "cancelled", "withdrawn before it started"
+                row.finished_at = row.updated_at = _now()
+
+    # -- the transfer service's queue -------------------------------------------------------
+
+    def queued(self) -> list[Transfer]:
+        """The transfers waiting for the service, oldest first."""
+        with self.library.session() as s:
+            rows = s.scalars(
+                select(TransferRow).where(TransferRow.outcome == QUEUED).order_by(TransferRow.id)
+            )
+            return [_view(r) for r in rows]
+
+    def claim(self, transfer_id: int) -> bool:
+        """Take a queued transfer to run it: True when this caller got it (one UPDATE from
+        queued to running, so of two services at most one does)."""
+        with self.library.session() as s:
+            done: CursorResult[Any] = s.execute(  # type: ignore[assignment]
+                update(TransferRow)
+                .where(TransferRow.id == transfer_id, TransferRow.outcome == QUEUED)
+                .values(outcome=RUNNING, started_at=_now(), updated_at=_now())
+            )
+            return bool(done.rowcount)
+
+    def interrupt_running(self, reason: str) -> list[Transfer]:
+        """Mark every running transfer as interrupted with `reason` (the service starting
+        after a crash: none of them has a process any more); those transfers."""
+        with self.library.session() as s:
+            rows = list(s.scalars(select(TransferRow).where(TransferRow.outcome == RUNNING)))
+            for row in rows:
+                row.outcome, row.error = "interrupted", reason
+                row.finished_at = row.updated_at = _now()
+            return [_view(r) for r in rows]
 
     def get(self, transfer_id: int) -> Transfer:
         with self.library.session() as s:

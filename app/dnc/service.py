@@ -23,6 +23,7 @@ from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
 from app.cnc.imports.registry import importers
 from app.cnc.restart import restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -187,10 +188,12 @@ def receive_program(
     machine (app.storage.transfers.TransferLog.compare_with_last_send); its text goes into
     the report.
 
-    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    Raises SettingsError, or TextError for a `name` the library cannot store
+    (app.cnc.text), before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
     saved.
     """
+    check_text(name, "name", NAME_LENGTH)
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
 

@@ -1,15 +1,6 @@
-"""gunicorn's settings for MillBlocks, read from the directory it starts in (`make run`,
-the shop command of the README, the benchmarks' server): the command line's --bind and
---workers still choose where and how many.
+"""gunicorn reads this file from the folder it starts in: MillBlocks' settings, kept in the
+package (app/gunicorn_conf.py) so that `millblocks serve` of an installed wheel has them."""
 
-Threads (gthread workers): a request that works for seconds (a large pocket planned for
-the first time, Verify of a large program) holds one thread, not a whole worker, so the
-other requests of the shop — a login, a library page — are answered meanwhile
-(tests/test_server_load.py). Every request's work is bounded in size (app/cnc/sizes.py,
-app/cnc/cost.py) and in time (MILLBLOCKS_REQUEST_SECONDS, 20 s: a clear refusal), well
-inside `timeout`, so no worker is killed for a slow request.
-"""
+from app.gunicorn_conf import threads, timeout, worker_class
 
-worker_class = "gthread"
-threads = 4
-timeout = 30
+__all__ = ["threads", "timeout", "worker_class"]

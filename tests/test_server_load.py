@@ -1,8 +1,9 @@
 """The server stays answering while the heaviest legal programs are worked on (issue 30).
 
 A real gunicorn (bench/server.py starts it as `make run` does: its workers, the settings of
-gunicorn.conf.py) serves accounts on a temporary SQLite library holding the 8-island
-POCKET of tests/hostile_corpus.py, the heaviest pocket the limits allow. Two users open it
+app/gunicorn_conf.py through the checkout's gunicorn.conf.py) serves accounts on a
+temporary SQLite library holding the 8-island POCKET of tests/hostile_corpus.py, a pocket
+the limits allow. Two users open it
 at once (each compile plans the pocket); meanwhile GET /login is timed. Before issue 30 the
 two GETs pinned both sync workers for the pocket's 75 s of planning and a login took 33 s;
 the assertion is on what a user notices: the login page comes back within a second while

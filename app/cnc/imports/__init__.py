@@ -68,6 +68,8 @@ def read_program(
     name: str = "",
     format: str | None = None,
     options: Mapping[str, str] | None = None,
+    *,
+    limited: bool = True,
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
     gives no name. `options` are the format's reader options (docs/imports.md): for a tape
@@ -78,14 +80,19 @@ def read_program(
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
     file past the limits of app.cnc.sizes: refused before it is parsed by its bytes and
-    lines, after by its blocks and the moves they expand to, app.cnc.cost).
+    lines, after by its blocks and the moves they expand to, app.cnc.cost). `limited=False`
+    lifts those limits: the command line converting the user's own files (a long CAM
+    program to a tape) takes files of any size (the moves it may make are then validation's
+    and the compile's, `millblocks --max-moves`); the web and the library keep them.
     """
     try:
-        check_import_size(data)
+        if limited:
+            check_import_size(data)
         importer = detect(data) if format is None else get_importer(format)
         program, notes = read_as(importer, data, name, options or {})
-        check_block_count(len(program.blocks))
-        cost.check(program)
+        if limited:
+            check_block_count(len(program.blocks))
+            cost.check(program)
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, importer.name)

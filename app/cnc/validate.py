@@ -109,6 +109,7 @@ def _identity(program: Program) -> tuple[Any, ...]:
         program.name,
         program.part_number,
         program.units,
+        sizes.move_limit(),  # the limit validation holds it to (a command line may lift it)
     )
 
 

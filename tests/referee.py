@@ -25,7 +25,7 @@ from pathlib import Path
 
 from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export
-from app.cnc.imports import read_program
+from app.cnc.imports import ImportResult, read_program
 from app.cnc.imports import steps as steps_module
 from app.cnc.imports.steps import Parsed
 from app.cnc.interpret import interpret
@@ -298,12 +298,70 @@ class Motion:
     feed: float | None = None
 
 
-def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
+def rs274(
+    path: Path, lengths: dict[int, float] | None = None, *, in_mm: bool = False
+) -> list[Motion]:
     """Run rs274 on a file; its motions (zero-length ones dropped). Fails on any error.
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
     24 tools) with the `lengths` (inches) the operator keys in from the set-up comments.
+
+    `in_mm`: every motion and feed in millimetres, whatever units the file is in (G20/G21
+    may change on the way). Before the file's first G20/G21, rs274 reads millimetres (its
+    default); the importers read inches there (docs/imports.md), and so does this, so that a
+    file that names no units is compared as the importer reads it.
     """
+    result, output = _run_rs274(path, lengths)
+    calls = [CALL.match(line) for line in output.splitlines()]
+    stray = [
+        line
+        for line, m in zip(output.splitlines(), calls, strict=True)
+        if not m and line.strip() not in ("executing", "")
+    ]
+    assert result.returncode == 0 and not stray, f"rs274 refused {path.name}:\n{output}"
+    motions: list[Motion] = []
+    position = (0.0, 0.0, 0.0)
+    feed = 0.0
+    scale = 1.0
+    defaulted = False  # rs274's own USE_LENGTH_UNITS, before the file says any
+    plane = "XY"
+    for m in calls:
+        if m is None:
+            continue
+        name, args = m.group(1), [a.strip() for a in m.group(2).split(",")]
+        if name == "USE_LENGTH_UNITS" and in_mm:
+            scale = 25.4 if "INCHES" in args[0] or not defaulted else 1.0
+            defaulted = True
+        elif name == "SELECT_PLANE":
+            plane = args[0].removeprefix("CANON_PLANE_")
+        elif name == "SET_FEED_RATE":
+            feed = float(args[0]) * scale
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
+            end = (float(args[0]) * scale, float(args[1]) * scale, float(args[2]) * scale)
+            if end != position:
+                kind = "T" if name == "STRAIGHT_TRAVERSE" else "F"
+                motions.append(Motion(kind, end, feed=None if kind == "T" else feed))
+            position = end
+        elif name == "ARC_FEED":
+            # (An arc in another plane names its axes in another order.)
+            assert plane == "XY", f"{path.name}: an arc in the {plane} plane"
+            end = (float(args[0]) * scale, float(args[1]) * scale, float(args[5]) * scale)
+            centre = (float(args[2]) * scale, float(args[3]) * scale)
+            motions.append(Motion("A", end, centre, int(args[4]) < 0, feed))
+            position = end
+    assert "PROGRAM_END" in output
+    return motions
+
+
+def rs274_reads(path: Path) -> bool:
+    """Whether rs274 reads the file to its end without an error."""
+    result, output = _run_rs274(path, None)
+    return result.returncode == 0 and "PROGRAM_END" in output
+
+
+def _run_rs274(
+    path: Path, lengths: dict[int, float] | None
+) -> tuple[subprocess.CompletedProcess[str], str]:
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
     lengths = lengths or {}
@@ -315,36 +373,7 @@ def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
         timeout=60,
         check=False,
     )
-    output = result.stdout + result.stderr
-    calls = [CALL.match(line) for line in output.splitlines()]
-    stray = [
-        line
-        for line, m in zip(output.splitlines(), calls, strict=True)
-        if not m and line.strip() not in ("executing", "")
-    ]
-    assert result.returncode == 0 and not stray, f"rs274 refused {path.name}:\n{output}"
-    motions: list[Motion] = []
-    position = (0.0, 0.0, 0.0)
-    feed = 0.0
-    for m in calls:
-        if m is None:
-            continue
-        name, args = m.group(1), [a.strip() for a in m.group(2).split(",")]
-        if name == "SET_FEED_RATE":
-            feed = float(args[0])
-        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
-            end = (float(args[0]), float(args[1]), float(args[2]))
-            if end != position:
-                kind = "T" if name == "STRAIGHT_TRAVERSE" else "F"
-                motions.append(Motion(kind, end, feed=None if kind == "T" else feed))
-            position = end
-        elif name == "ARC_FEED":
-            end = (float(args[0]), float(args[1]), float(args[5]))
-            centre = (float(args[2]), float(args[3]))
-            motions.append(Motion("A", end, centre, int(args[4]) < 0, feed))
-            position = end
-    assert "PROGRAM_END" in output
-    return motions
+    return result, result.stdout + result.stderr
 
 
 def ours(toolpath: Toolpath) -> list[Motion]:
@@ -414,3 +443,169 @@ def arc_radii_agree(toolpath: Toolpath, tol: float) -> bool:
         if isinstance(move, Rapid | Feed | ArcFeed):
             x, y = move.x, move.y
     return True
+
+
+# -- the cut path of a file, as rs274 reads it (issue 36) ------------------------------------
+
+
+@dataclass(frozen=True)
+class Cut:
+    """One feed move of a cut path (mm, mm/min): a line, or an arc about `centre` turning
+    `sweep` radians (a full circle 2π) in its direction."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    feed: float
+    centre: tuple[float, float] | None = None
+    clockwise: bool = False
+    sweep: float = 0.0
+
+    @property
+    def vertical(self) -> bool:
+        return self.centre is None and self.start[:2] == self.end[:2]
+
+
+def cut_path(motions: list[Motion], shortest: float = 0.0) -> list[Cut]:
+    """The feed moves of rs274's `motions` (from its start at 0, 0, 0), each from where the
+    tool was: what cuts. Rapids only say where the next feed starts. A straight feed no
+    longer than `shortest` in every axis is left out (blocks that hold lengths in steps of
+    that size cannot hold it; where it went, the next cut starts). Three readings make two
+    files that cut alike compare alike, and nothing else:
+
+    - a straight feed **up in Z** is left out: it retracts through what the tool has cut
+      on its way down (MillBlocks retracts at rapid, and the importers say so);
+    - a feed **down in Z** in several moves at one X/Y (a CAM's approach: down to a feed
+      height at one rate, into the work at another) is the last rate's run to the bottom:
+      a DRILL rapids to Z UP and feeds from there at its one FEEDR Z, and the importer says
+      which moves above it it read as the rapid;
+    - moves that follow each other in one line at one feed, or round one centre in one
+      direction at one feed and depth, are one move (however the blocks split them).
+    """
+    cuts: list[Cut] = []
+    position = (0.0, 0.0, 0.0)
+    joined = False  # the last cut ends where the next move starts (no rapid between)
+    for motion in motions:
+        start, position = position, motion.end
+        if motion.kind == "T":
+            joined = False
+            continue
+        assert motion.feed is not None
+        if motion.kind == "A":
+            assert motion.centre is not None and motion.clockwise is not None
+            arc = Cut(
+                start,
+                motion.end,
+                motion.feed,
+                motion.centre,
+                motion.clockwise,
+                _sweep(start, motion.end, motion.centre, motion.clockwise),
+            )
+            cuts.append(arc)
+            joined = True
+            continue
+        line = Cut(start, motion.end, motion.feed)
+        if max(abs(p - q) for p, q in zip(start, motion.end, strict=True)) <= shortest:
+            continue
+        if line.vertical and line.end[2] > line.start[2]:
+            joined = False
+            continue
+        prev = cuts[-1] if joined and cuts else None
+        if prev is not None and prev.vertical and line.vertical:
+            # Down again at the same X/Y: one run at one rate, the approach above it gone.
+            if prev.feed == line.feed:
+                line = replace(line, start=prev.start)
+            cuts.pop()
+        elif (
+            prev is not None
+            and prev.centre is None
+            and prev.feed == line.feed
+            and _in_line(prev.start, prev.end, line.end)
+        ):
+            line = replace(line, start=prev.start)
+            cuts.pop()
+        cuts.append(line)
+        joined = True
+    return cuts
+
+
+def _sweep(
+    start: tuple[float, float, float],
+    end: tuple[float, float, float],
+    centre: tuple[float, float],
+    clockwise: bool,
+) -> float:
+    """How far an arc turns (radians, in (0, 2π]; ends that meet: a full circle)."""
+    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+    a1 = math.atan2(end[1] - centre[1], end[0] - centre[0])
+    turn = (a0 - a1) if clockwise else (a1 - a0)
+    turn %= 2 * math.pi
+    return turn if turn > 1e-9 else 2 * math.pi
+
+
+def _bulge(arc: Cut) -> float:
+    """How far an arc of at most half a turn strays from its chord (mm)."""
+    assert arc.centre is not None
+    return math.dist(arc.start[:2], arc.centre) * (1 - math.cos(arc.sweep / 2))
+
+
+def _in_line(
+    a: tuple[float, float, float], b: tuple[float, float, float], c: tuple[float, float, float]
+) -> bool:
+    """Whether c goes on from a through b in one straight line (within 1 nm)."""
+    ab = [q - p for p, q in zip(a, b, strict=True)]
+    bc = [q - p for p, q in zip(b, c, strict=True)]
+    cross = (
+        ab[1] * bc[2] - ab[2] * bc[1],
+        ab[2] * bc[0] - ab[0] * bc[2],
+        ab[0] * bc[1] - ab[1] * bc[0],
+    )
+    dot = sum(p * q for p, q in zip(ab, bc, strict=True))
+    length = math.hypot(*bc)
+    return dot > 0 and length > 0 and math.hypot(*cross) / length < 1e-6
+
+
+def assert_same_cuts(expected: list[Cut], actual: list[Cut], tol: float, feed_tol: float) -> None:
+    """The two cut paths are the same moves in order: ends, starts and centres within `tol`
+    (mm), arcs in one direction turning alike (their lengths within a few `tol`), feeds
+    within `feed_tol` (mm/min). An arc so small that it strays no more than `tol` from its
+    chord may be that straight line (blocks that round its ends to `tol` cannot keep it an
+    arc). Fails naming the first move that differs."""
+    for k, (e, a) in enumerate(zip(expected, actual, strict=False)):
+        where = f"cut {k} of {len(expected)}: rs274 reads the file as {e}, our program {a}"
+        if (e.centre is None) != (a.centre is None):
+            arc = e if a.centre is None else a
+            assert arc.sweep <= math.pi and _bulge(arc) <= tol, where
+        near = all(abs(p - q) <= tol for p, q in zip(e.start + e.end, a.start + a.end, strict=True))
+        assert near, where
+        if e.centre is not None and a.centre is not None:
+            assert all(abs(p - q) <= tol for p, q in zip(e.centre, a.centre, strict=True)), where
+            assert e.clockwise == a.clockwise, where
+            radius = math.dist(e.start[:2], e.centre)
+            assert abs(e.sweep - a.sweep) * radius <= 3 * tol, where
+        assert abs(e.feed - a.feed) <= feed_tol, where
+    assert len(expected) == len(actual), (
+        f"rs274 reads {len(expected)} cuts in the file, {len(actual)} in our program"
+    )
+
+
+def referee_import(data: bytes, tmp_path: Path, name: str = "file") -> ImportResult:
+    """Import G-code `data`, export the program to LinuxCNC's G-code, and have rs274 read
+    both: the cut paths (`cut_path`) must agree within what the blocks hold — lengths to
+    0.001 in / 0.01 mm, feeds to 0.1 ipm / 2 mm/min (the control's steps). The spindle
+    speeds are exported as the file gives them, checked against no machine's range. Returns
+    the import; fails naming the first cut that differs (ImportFailure if it is refused)."""
+    result = read_program(data, name, "gcode")
+    exported = export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data
+    original, ours = tmp_path / f"{name}-original.ngc", tmp_path / f"{name}-ours.ngc"
+    original.write_bytes(data)
+    ours.write_bytes(exported)
+    metric = result.program.units is Units.MM
+    tol = (0.01 if metric else 0.0254) + 1e-6
+    feed_tol = (2.0 if metric else 2.54) + 1e-6
+    assert_same_cuts(
+        cut_path(rs274(original, in_mm=True), tol),
+        cut_path(rs274(ours, in_mm=True), tol),
+        tol,
+        feed_tol,
+    )
+    return result

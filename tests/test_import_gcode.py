@@ -27,6 +27,7 @@ from app.cnc.toolpath import Feed
 from app.cnc.units import Units, half_even
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture_text
+from tests.referee import referee_import
 
 
 def gcode(text: str) -> Program:
@@ -577,3 +578,30 @@ def test_a_1000_line_contour_is_one_short_report_line() -> None:
     lines = [n for n in report(text) if "→ blocks" in n]
     assert lines and max(len(n) for n in lines) < 400, max(len(n) for n in lines)
     assert any("more blocks" in n for n in lines)
+
+
+# Fusion 360 for Personal Use (its note in the file): rapids down are written as feeds at the
+# cutting rate, then the plunge at the plunge rate (tests/imports/gcode-corpus/fusion-led-floor).
+FUSION_PERSONAL = (
+    "(1024_block_14bit)\n(T1  D=1.4 CR=0 - ZMIN=-3 - flat end mill)\nG90 G94\nG17\nG21\n"
+    "(2D Contour5)\nT1\nS5000 M3\nG54\nG0 X-0.7 Y-0.7\nZ10\nG1 Z5 F1000\nZ2 F333.3\nZ-1\n"
+    "Y20 F1000\nX20\nY-0.7\nX-0.7\nZ-2 F333.3\nY20 F1000\nX20\nZ10\nM5\nM30\n"
+)
+
+
+def test_a_plunge_approached_at_another_rate_enters_the_work_at_the_plunge_rate(
+    tmp_path: Path,
+) -> None:
+    """Down to the feed height at one rate (G1 Z5 F1000), into the work at another (Z2
+    F333.3, Z-1): the DRILL took the first rate and plunged at 1000 mm/min from Z10, three
+    times the file's 333.3 (and so every depth change after it), reported only as "MillBlocks
+    has one FEEDR Z". Now Z UP is where the plunge rate starts (Z5), FEEDR Z is the plunge
+    rate (333.3 → 334 mm/min, the control's 2 mm/min steps), the feed above it is read as
+    the rapid to Z UP and said so, and rs274 reads the same cuts in the file and in ours."""
+    result = referee_import(FUSION_PERSONAL.encode(), tmp_path)
+    assert describe_all(result.program)[0] == "DRILL X-0.7 Y-0.7 Z5/-1 F334 T1"
+    notes = [str(n) for n in result.report]
+    assert any(
+        "line 12: feed 1000 mm/min down to Z5 mm above the plunge: read as the rapid to Z UP" in n
+        for n in notes
+    ), notes

@@ -420,7 +420,20 @@ class _Segmenter:
             while j < n:
                 s = steps[j]
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
-                    if s.feed != feed_z:
+                    if s.feed != feed_z and not levels:
+                        # Down to a feed height at one rate, into the work at another (a
+                        # CAM's approach; Fusion for Personal Use writes its rapids down so):
+                        # the tool enters the work at the last rate, from where it begins.
+                        # A DRILL rapids to Z UP and feeds from there at its one FEEDR Z.
+                        self.notes.assumed(
+                            lines[-1] if lines else s.line,
+                            f"feed {show_feed(feed_z, s.units)} down to Z"
+                            f"{show(bottom, s.units)} above the plunge: read as the rapid "
+                            f"to Z UP; the plunge from there at {show_feed(s.feed, s.units)} "
+                            f"(line {s.line}) is the FEEDR Z",
+                        )
+                        z_up, feed_z = bottom, s.feed
+                    elif s.feed != feed_z:
                         self.notes.ignored(
                             s.line,
                             f"feed {show_feed(s.feed, s.units)} in Z differs from "

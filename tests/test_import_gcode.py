@@ -605,3 +605,68 @@ def test_a_plunge_approached_at_another_rate_enters_the_work_at_the_plunge_rate(
         "line 12: feed 1000 mm/min down to Z5 mm above the plunge: read as the rapid to Z UP" in n
         for n in notes
     ), notes
+
+
+def test_a_percent_line_with_text_after_the_start_is_an_error_naming_it() -> None:
+    """Fusion's MPCNC post writes its start-up notes as `% vfd enable`; rs274 refuses such a
+    line ("Bad character '%' used"). The importer took the second `%` line for the program's
+    end and imported nothing after it: a drilling file of 190 lines became a program of no
+    blocks, said only as "after the closing %: not imported". Now the line is an error."""
+    text = "%\n(MPCNC21)\n% vfd enable\nM3 S5000\nG21\nG0 Z3\nX1 Y1\nG1 Z-1 F100\nG0 Z3\nM30\n%\n"
+    message = failure(text)
+    assert message.startswith("line 3, column 1: '% vfd enable': a % line starts or ends"), message
+    assert "comment" in message
+    # The program's closing %, with the ProtoTRAK dialect's `;`, is still the end.
+    assert describe_all(gcode("%\nG20\nG0 X1 Y1\n%;\n")) == ["POS X1 Y1 T1"]
+
+
+def test_polar_coordinates_are_named_not_an_unexpected_character() -> None:
+    """LinuxCNC's `@` (radius) and `^` (angle) words were "unexpected character '^'"."""
+    message = failure("G20\nG0 X1.5 Y0 Z0\nG91 G81 R.1 Z-.5 ^60 L6 F10\n")
+    assert message.startswith(
+        "line 3, column 18: polar coordinates (@ radius, ^ angle) are not supported"
+    ), message
+    assert failure("G20\nG0 @1 ^33\n").startswith("line 2, column 4: polar coordinates")
+
+
+def test_g53_retract_reads_as_a_move_to_a_height_the_file_does_not_give(
+    tmp_path: Path,
+) -> None:
+    """`G53 G0 Z0` (Haas and Fusion posts' retract, LinuxCNC's skeleton.ngc) was refused
+    ("a move in machine coordinates ... is not supported"). rs274 moves to the machine's Z
+    there; the file does not say where that is above the part, so the tool's Z is unknown
+    until the file moves it again — as after `G28 G91 Z0`. The cuts are rs274's."""
+    text = (
+        "G20 G90\nG53 G0 Z0\nT1 M6\nS1000 M3\nG0 X1 Y1\nG43 H1 Z0.1\nG1 Z-0.1 F5\nX2 F10\n"
+        "G0 Z0.1\nG53 G0 Z0\nG53 X0 Y0\nG0 X3 Y1\nZ0.1\nG1 Z-0.2 F5\nY2 F10\nG53 G0 Z0\nM30\n"
+    )
+    result = referee_import(text.encode(), tmp_path)
+    assert describe_all(result.program) == [
+        "DRILL X1 Y1 Z0.1/-0.1 F5 T1",
+        "MILL STD X2 Y1 F10",
+        "DRILL X3 Y1 Z0.1/-0.2 F5 T1",
+        "MILL STD X3 Y2 F10",
+    ]
+    assert any("line 2: G53 G0 Z0: the machine's Z0" in str(n) for n in result.report)
+    assert failure("G20\nG0 Z1\nG53 G1 Z0 F5\n").startswith("line 3, column 1: G53 G1")
+
+
+def test_an_arc_in_the_xz_plane_says_what_to_change_in_the_cam() -> None:
+    """Fusion's vertical lead-in (G18 G2 X… Z… I… K…) is refused; the error says it is the
+    CAM's lead arc and what to turn off, not only that MillBlocks cuts arcs in XY."""
+    text = "G21\nG0 X-1.6 Y-1.2 Z25\nG1 Z8.2 F333\nG18 G2 X-1.4 Z8 I0.2 F1000\n"
+    message = failure(text)
+    assert message.startswith("line 4, column 1: an arc in the G18 (XZ) plane"), message
+    assert "lead-in" in message and "CAM" in message
+
+
+def test_a_first_feed_in_z_says_to_give_the_height_first() -> None:
+    """drl2gcode (KiCad drill files) starts with `G1 F1200.0 Z4.0`: from a height the file
+    does not give. The error says how to give it."""
+    text = (
+        "G90\nG21\nM3 S10000.0\nG1 F1200.0 Z4.0\nG1 F1200.0 X0.0 Y0.0\nG1 F1200.0 Z0.2\n"
+        "G1 F100.0 Z-3.0\nG1 F1200.0 Z4.0\nM5\nM2\n"
+    )
+    message = failure(text)
+    assert message.startswith("line 4: a feed in Z before the file gives any height"), message
+    assert "G0 Z" in message

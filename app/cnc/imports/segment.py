@@ -368,7 +368,7 @@ class _Segmenter:
                 raise ImportFailure(
                     self.notes.where(step.line),
                     "a feed in Z before the file gives any height: where it starts (Z UP) "
-                    "is not known",
+                    "is not known; give the height first with a rapid (G0 Z…)",
                     step.line,
                 )
             if step.z is None or self.z is None or step.z == self.z:

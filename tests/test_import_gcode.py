@@ -670,3 +670,18 @@ def test_a_first_feed_in_z_says_to_give_the_height_first() -> None:
     message = failure(text)
     assert message.startswith("line 4: a feed in Z before the file gives any height"), message
     assert "G0 Z" in message
+
+
+def test_t0_m6_empties_the_spindle_and_is_no_tool_change() -> None:
+    """`T0 M6` (LinuxCNC's skeleton.ngc and Haas programs: take the tool out at the end)
+    became a change to tool 0, and the imported program had two errors ("TOOL #: 0 is
+    outside the allowed range 1 to 24") and could not be exported. It is no tool change: the
+    report says so, and the program has no errors."""
+    text = (
+        "G20 G90\nT1 M6 G43 H1\nS1000 M3\nG0 X1 Y1\nZ0.1\nG1 Z-0.1 F5\nG0 Z0.5\nX0 Y0\n"
+        "M5\nT0 M6\nM2\n"
+    )
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == ["DRILL X1 Y1 Z0.1/-0.1 F5 T1", "POS X0 Y0 T1"]
+    assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
+    assert any("line 10: T0 M6 empties the spindle" in str(n) for n in result.report)

@@ -854,6 +854,14 @@ class _Reader:
         if any(c == "6" for _, c in m_codes):
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
+            elif self.selected_tool == 0:
+                # LinuxCNC's and Haas's way to take the tool out (at the end, or before a
+                # manual change): no tool of the control's 1-24.
+                self.notes.ignored(
+                    line,
+                    "T0 M6 empties the spindle: no tool change in MillBlocks (its tools are "
+                    "1 to 24); the tool before stays in the program",
+                )
             else:
                 if self.tool == 0 and not self.moves_made:
                     # The first tool called before any move (a post's start): the tool in

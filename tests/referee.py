@@ -616,7 +616,9 @@ def referee_import(data: bytes, tmp_path: Path, name: str = "file") -> ImportRes
     result = read_program(data, name, "gcode")
     exported = export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data
     original, ours = tmp_path / f"{name}-original.ngc", tmp_path / f"{name}-ours.ngc"
-    original.write_bytes(data)
+    # rs274 refuses a UTF-8 byte-order mark (an editor on Windows writes one); the
+    # importer reads past it. The G-code after it is the same.
+    original.write_bytes(data.removeprefix(b"\xef\xbb\xbf"))
     ours.write_bytes(exported)
     metric = result.program.units is Units.MM
     tol = (0.01 if metric else 0.0254) + 1e-6

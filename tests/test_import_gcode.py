@@ -685,3 +685,45 @@ def test_t0_m6_empties_the_spindle_and_is_no_tool_change() -> None:
     assert describe_all(result.program) == ["DRILL X1 Y1 Z0.1/-0.1 F5 T1", "POS X0 Y0 T1"]
     assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
     assert any("line 10: T0 M6 empties the spindle" in str(n) for n in result.report)
+
+
+def test_coolant_turned_on_among_the_cuts_does_not_end_the_mill_sequence(
+    tmp_path: Path,
+) -> None:
+    """A Fanuc-style program turns the coolant on with the first cut (`G1 Y40 M8`, HelmanCNC's
+    beginners' example). The M8 ended the mill sequence and the next cut was refused ("a cut
+    in XY at Z-20 mm, but the tool has not fed down to it"). It is the tool's COOLANT; the
+    cuts go on, as rs274 reads them."""
+    text = (
+        "O1000\nT1 M6\nG0 G90 G40 G21 G17 G94 G80\nG54 X-75 Y-75 S500 M3\nG43 Z100 H1\n"
+        "G43 Z5\nG1 Z-20 F100\nG1 X-40\nG1 Y40 M8\nG1 X40\nG1 Y-40\nG1 X-75\nG1 Y-75\n"
+        "G0 Z100\nM30\n"
+    )
+    result = referee_import(text.encode(), tmp_path)
+    assert describe_all(result.program)[:3] == [
+        "DRILL X-75 Y-75 Z5/-20 F100 T1",
+        "MILL STD X-40 Y-75 F100",
+        "MILL STD X-40 Y40 F100",
+    ]
+    tool = result.program.block0.tool(1)
+    assert tool is not None and tool.coolant.value == "flood"
+    # On a line of its own between the plunge and the first cut, the same.
+    alone = text.replace("G1 Y40 M8\n", "G1 Y40\n").replace("G1 X-40\n", "M8\nG1 X-40\n")
+    assert describe_all(referee_import(alone.encode(), tmp_path, "alone").program)[:2] == [
+        "DRILL X-75 Y-75 Z5/-20 F100 T1",
+        "MILL STD X-40 Y-75 F100",
+    ]
+
+
+def test_an_arc_centre_on_a_rapid_or_a_line_is_an_error() -> None:
+    """`G0 X0.5 Y0. I0. J-0.5` (a circle example from diymachining.com, the G2 written as G0):
+    rs274 refuses it ("I word with no G2, G3 … to use it"); the importer reported "I0.: no
+    code on the line uses it" and imported a rapid at the cutting depth where the file's
+    author meant an arc. Now it is an error naming the word."""
+    text = "G17 G20 G90\nG0 Z0.1\nG0 X-0.5 Y0.\nG01 Z0. F5.\nG02 X0. Y0.5 I0.5 J0.\n"
+    assert failure(text + "G0 X0.5 Y0. I0. J-0.5\n").startswith(
+        "line 6, column 13: I with G0: a rapid has no arc centre"
+    )
+    assert failure(text + "G1 X0.5 Y0. J-0.5\n").startswith(
+        "line 6, column 13: J with G1: a straight feed has no arc centre"
+    )

@@ -145,7 +145,7 @@ def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
     # call, which made reading a long file quadratic.
     for k in range(j, len(steps)):
         step = steps[k]
-        if isinstance(step, Feed) and (step.x, step.y) == at:
+        if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
             continue
         return is_cut(step)
     return False
@@ -626,6 +626,11 @@ class _Segmenter:
                     Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, new_depth, s.feed)
                 )
                 comps.add(s.comp)
+            elif isinstance(s, Coolant):
+                # Coolant on with a cut (`G1 Y40 M8`): the tool's COOLANT, and the cuts go on.
+                self.coolant(s)
+                j += 1
+                continue
             else:
                 break
             new_depth = None

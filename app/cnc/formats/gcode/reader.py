@@ -1084,6 +1084,16 @@ class _Reader:
         if "41" in codes or "42" in codes:
             used.add("D")
         for letter, word in block.other.items():
+            if letter in "IJK" and letter not in used and self.motion in ("0", "1"):
+                # An arc's centre on a straight move: an arc written as G0/G1, cut straight
+                # (rs274 refuses it too).
+                what = "a rapid" if self.motion == "0" else "a straight feed"
+                raise failure(
+                    block.line,
+                    word.column,
+                    f"{letter} with G{self.motion}: {what} has no arc centre (LinuxCNC refuses "
+                    "it too); is G2 or G3 meant?",
+                )
             if letter not in used:
                 self.notes.ignored(block.line, f"{letter}{word.text}: no code on the line uses it")
 

@@ -390,7 +390,8 @@ class _Segmenter:
             raise ImportFailure(
                 self.notes.where(step.line),
                 "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
-                "down, then cuts in XY at one depth",
+                "down, then cuts in XY at one depth; have the CAM plunge (no ramp or helical "
+                "entry)",
                 step.line,
             )
         z = "" if self.z is None else f" at Z{show(self.z, self.units)}"
@@ -610,7 +611,8 @@ class _Segmenter:
                     raise ImportFailure(
                         self.notes.where(s.line),
                         "X/Y and Z fed together (a ramp): MillBlocks cuts in XY at one "
-                        "depth at a time",
+                        "depth at a time; have the CAM plunge to each depth (no ramp or "
+                        "helical entry)",
                         s.line,
                     )
                 elements.append(Element(s.line, (s.x, s.y), None, False, new_depth, s.feed))

@@ -1379,9 +1379,9 @@ class _Reader:
             raise failure(
                 line,
                 first,
-                f"an arc in the G{self.plane} ({'XZ' if self.plane == '18' else 'YZ'}) plane, "
-                "as a CAM's vertical lead-in or lead-out is: MillBlocks cuts arcs in XY "
-                "only; turn the CAM's vertical lead arcs off (a lead in XY or none)",
+                f"an arc in the G{self.plane} ({'XZ' if self.plane == '18' else 'YZ'}) plane: "
+                "MillBlocks cuts arcs in XY only; if it is a CAM's vertical lead-in or "
+                "lead-out, turn those off (a lead in XY, or none)",
             )
         if z is not None and self.z is not None and z != self.z:
             raise failure(

@@ -320,7 +320,7 @@ def rs274(
 
     `changes`: each tool change is a motion too, of kind C, where it happens.
     """
-    result, output = _run_rs274(path, lengths)
+    result, output = run_rs274(path, lengths)
     calls = [CALL.match(line) for line in output.splitlines()]
     stray = [
         line
@@ -366,13 +366,15 @@ def rs274(
 
 def rs274_reads(path: Path) -> bool:
     """Whether rs274 reads the file to its end without an error."""
-    result, output = _run_rs274(path, None)
+    result, output = run_rs274(path, None)
     return result.returncode == 0 and "PROGRAM_END" in output
 
 
-def _run_rs274(
+def run_rs274(
     path: Path, lengths: dict[int, float] | None
 ) -> tuple[subprocess.CompletedProcess[str], str]:
+    """rs274 run on `path` with a tool table beside it (tools 1-24, `lengths` in inches);
+    the result, and its output with stderr on a line of its own."""
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
     lengths = lengths or {}

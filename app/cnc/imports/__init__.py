@@ -26,7 +26,13 @@ from dataclasses import dataclass, field
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.registry import Importer, detect, get_importer, importers
-from app.cnc.sizes import TooLarge, check_block_count, check_import_size
+from app.cnc.sizes import (
+    IMPORT_LIMITS,
+    ImportLimits,
+    TooLarge,
+    check_block_count,
+    check_import_size,
+)
 
 __all__ = [
     "ImportFailure",
@@ -67,6 +73,7 @@ def read_program(
     name: str = "",
     format: str | None = None,
     options: Mapping[str, str] | None = None,
+    limits: ImportLimits = IMPORT_LIMITS,
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
     gives no name. `options` are the format's reader options (docs/imports.md): for a tape
@@ -76,10 +83,10 @@ def read_program(
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
-    file past the limits of app.cnc.sizes, refused before it is parsed).
+    file past `limits` or the block limit of app.cnc.sizes, refused before it is parsed).
     """
     try:
-        check_import_size(data)
+        check_import_size(data, limits)
         importer = detect(data) if format is None else get_importer(format)
         program, notes = read_as(importer, data, name, options or {})
         check_block_count(len(program.blocks))

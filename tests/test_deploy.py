@@ -124,6 +124,17 @@ def installed(command: str) -> list[str]:
     return [word.replace(PREFIX, sys.prefix, 1) for word in shlex.split(command)]
 
 
+def gunicorn(port: int) -> list[str]:
+    """The unit's ExecStart on `port`, with 2 workers instead of 4 (this machine's two
+    cores are shared by the whole suite)."""
+    (start,) = unit()["ExecStart"]
+    command = " ".join(installed(start))
+    for old, new in (("127.0.0.1:8000", f"127.0.0.1:{port}"), ("--workers 4", "--workers 2")):
+        assert old in command, old
+        command = command.replace(old, new)
+    return command.split(" ")
+
+
 def test_the_unit_file_passes_systemd_analyze_verify(tmp_path: Path) -> None:
     """systemd's own check (syntax, every setting known, the commands executable), with
     the commands where this checkout's virtual environment has them."""
@@ -183,7 +194,7 @@ def shop_database() -> Iterator[str]:
 
 def server_environment(database: str, instance: Path) -> dict[str, str]:
     """The environment the unit gives gunicorn: deploy/millblocks.env (this database, a
-    key) and the unit's Environment= lines (this instance folder)."""
+    key) and the unit's Environment= lines (this instance folder and runtime folder)."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("MILLBLOCKS_")}
     env.pop("DATABASE_URL", None)
     for line in (DEPLOY / "millblocks.env").read_text().splitlines():
@@ -196,6 +207,9 @@ def server_environment(database: str, instance: Path) -> dict[str, str]:
     env["MILLBLOCKS_DATABASE_URL"] = database
     env["MILLBLOCKS_SECRET_KEY"] = uuid.uuid4().hex * 2
     env["MILLBLOCKS_INSTANCE_PATH"] = str(instance)
+    runtime = instance.parent / "run"  # what the unit's RuntimeDirectory= makes
+    runtime.mkdir(exist_ok=True)
+    env["XDG_RUNTIME_DIR"] = str(runtime)
     env["MILLBLOCKS_NATIVE"] = "0"
     env["PYTHONPATH"] = str(ROOT)  # this checkout's app, wherever the venv was installed from
     return env
@@ -322,16 +336,15 @@ def test_a_shop_server_behind_nginx_with_tls(tmp_path: Path, shop_database: str)
     assert added.returncode == 0, added.stderr
 
     upstream, http_port, https_port = free_port(), free_port(), free_port()
-    (start,) = service["ExecStart"]
-    command = [w.replace("127.0.0.1:8000", f"127.0.0.1:{upstream}") for w in installed(start)]
+    command = gunicorn(upstream)
     gunicorn_log = tmp_path / "gunicorn.log"
     nginx_dir = tmp_path / "nginx"
     nginx_dir.mkdir()
     conf = nginx_conf(nginx_dir, http_port, https_port, upstream)
     with gunicorn_log.open("wb") as log:
-        gunicorn = subprocess.Popen(command, env=env, cwd=tmp_path, stdout=log, stderr=log)
+        server = subprocess.Popen(command, env=env, cwd=tmp_path, stdout=log, stderr=log)
     try:
-        wait_until_listening(upstream, gunicorn, gunicorn_log)
+        wait_until_listening(upstream, server, gunicorn_log)
         nginx = subprocess.Popen(
             ["nginx", "-c", str(conf), "-p", str(nginx_dir), "-e", str(nginx_dir / "error.log")],
             stdout=subprocess.DEVNULL,
@@ -343,7 +356,7 @@ def test_a_shop_server_behind_nginx_with_tls(tmp_path: Path, shop_database: str)
         finally:
             stop(nginx)
     finally:
-        stop(gunicorn)
+        stop(server)
     lines = gunicorn_log.read_text()
     assert "Traceback" not in lines
     assert re.search(r"INFO millblocks\.request: GET / 200 \d+ ms 127\.0\.0\.1 ana\n", lines)
@@ -545,16 +558,14 @@ def test_the_server_does_not_start_on_a_newer_database(tmp_path: Path) -> None:
     assert ended.returncode == 2
     assert said in ended.stderr and "Traceback" not in ended.stderr
     assert "2" in service["RestartPreventExitStatus"][0].split()
-    (start,) = service["ExecStart"]
-    port = free_port()
-    command = [w.replace("127.0.0.1:8000", f"127.0.0.1:{port}") for w in installed(start)]
+    command = gunicorn(free_port())
     ended = subprocess.run(
         command, env=env, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False
     )
     assert ended.returncode != 0
     assert f"MillBlocks cannot start: {said}" in ended.stderr
     assert "App failed to load." in ended.stderr  # gunicorn halts, whichever way it says so
-    assert "app/" not in ended.stderr  # no frame of MillBlocks' own code
+    assert f"{ROOT / 'app'}/" not in ended.stderr  # no frame of MillBlocks' own code
 
 
 # -- the 500 page and the log ---------------------------------------------------------------

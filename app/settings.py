@@ -5,8 +5,8 @@ The web app loads them with Flask's `app.config.from_prefixed_env("MILLBLOCKS")`
 the same call on a Config of its own (`environment()`); `apply()` then reads every setting of
 `SETTINGS` into its value, or refuses it with a `SettingError` naming the variable, the value
 and what is allowed. docs/deploy.md's table lists `SETTINGS` (tests/test_settings.py compares
-the two). The instance folder is read by `instance_path()` because Flask needs it before any
-configuration exists.
+the two). The instance folder is read by `app.resources.instance_dir()`, because Flask needs
+it before any configuration exists.
 
 Times: the library stores UTC; `shown()` writes one in the shop's zone (`TIME_ZONE`) with the
 zone's abbreviation, so no time is ever shown without saying which clock it is.
@@ -29,7 +29,6 @@ from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.sizes import MAX_IMPORT_BYTES, MAX_IMPORT_LINES
 
 PREFIX = "MILLBLOCKS"
-CHECKOUT = Path(__file__).resolve().parents[1]
 
 log = logging.getLogger("millblocks")
 
@@ -163,7 +162,7 @@ SETTINGS: tuple[Setting, ...] = (
     ),
     Setting(
         "INSTANCE_PATH",
-        "`instance/` in the checkout",
+        "`instance/` in a checkout; installed, `var/millblocks-instance` in the environment",
         _text(None),
         "The folder of the SQLite library, the generated secret key and uploaded drawings.",
     ),
@@ -267,18 +266,13 @@ def environment() -> dict[str, Any]:
     """The settings from this process's environment (for the command line), read."""
     from flask.config import Config
 
+    from app.resources import CHECKOUT
+
     config = Config(str(CHECKOUT))
     config.from_prefixed_env(PREFIX, loads=str)
     settings: dict[str, Any] = dict(config)
     apply(settings, os.environ)
     return settings
-
-
-def instance_path(given: str | None = None) -> Path:
-    """The instance folder: `given`, else MILLBLOCKS_INSTANCE_PATH, else the checkout's
-    `instance/`."""
-    chosen = given or os.environ.get(f"{PREFIX}_INSTANCE_PATH")
-    return Path(chosen).expanduser().resolve() if chosen else CHECKOUT / "instance"
 
 
 def shown(moment: datetime, zone: tzinfo, seconds: bool = False) -> str:

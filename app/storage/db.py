@@ -14,7 +14,6 @@ import fcntl
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 from alembic import command
@@ -23,10 +22,7 @@ from alembic.runtime.migration import MigrationContext
 from alembic.script import ScriptDirectory
 from sqlalchemy import Engine, create_engine, event, text
 
-from app.settings import instance_path
-
-ROOT = Path(__file__).resolve().parents[2]
-MIGRATIONS = ROOT / "migrations"
+from app.resources import data_dir, instance_dir
 
 
 class SchemaError(RuntimeError):
@@ -46,7 +42,7 @@ def database_url(url: str | None = None) -> str:
         elif env.startswith("postgresql://"):
             env = "postgresql+psycopg://" + env[len("postgresql://") :]
         return env
-    default = instance_path() / "millblocks.db"
+    default = instance_dir() / "millblocks.db"
     default.parent.mkdir(parents=True, exist_ok=True)
     return f"sqlite:///{default}"
 
@@ -109,21 +105,21 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
     config = Config()
-    config.set_main_option("script_location", str(MIGRATIONS))
+    config.set_main_option("script_location", str(data_dir("migrations")))
     config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
     return config
 
 
 def head() -> str:
     """The newest schema revision this MillBlocks knows."""
-    newest = ScriptDirectory(str(MIGRATIONS)).get_current_head()
+    newest = ScriptDirectory(str(data_dir("migrations"))).get_current_head()
     assert newest is not None, "migrations/ has no revisions"
     return newest
 
 
 def history() -> list[tuple[str, str]]:
     """Every schema revision this MillBlocks knows with what it does, oldest first."""
-    walked = ScriptDirectory(str(MIGRATIONS)).walk_revisions()
+    walked = ScriptDirectory(str(data_dir("migrations"))).walk_revisions()
     return [(r.revision, (r.doc or "").splitlines()[0]) for r in reversed(list(walked))]
 
 

@@ -19,7 +19,7 @@ from werkzeug.middleware.proxy_fix import ProxyFix
 from werkzeug.routing import IntegerConverter
 
 from app import settings
-from app.storage.db import ROOT
+from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
 from app.web import (
     auth,
@@ -56,9 +56,9 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         raise ValueError(f"config {prefixed[0]}: settings are named without the prefix here")
     app = MillBlocks(
         __name__,
-        template_folder=str(ROOT / "templates"),
-        static_folder=str(ROOT / "static"),
-        instance_path=str(settings.instance_path(given.get("INSTANCE_PATH"))),
+        template_folder=str(data_dir("templates")),
+        static_folder=str(data_dir("static")),
+        instance_path=str(given.get("INSTANCE_PATH") or instance_dir()),
     )
     app.url_map.converters["int"] = RowId
     app.config.update(

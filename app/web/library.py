@@ -89,7 +89,7 @@ def upload() -> Response | tuple[str, int]:
     }
     stem = file.filename.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     try:
-        result = read_program(data, stem, reading, options, upload_limits())
+        result = read_program(data, stem, reading, options, limits=upload_limits())
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)
     info = get_library().create(

@@ -241,8 +241,8 @@ SETTINGS: tuple[Setting, ...] = (
 
 BY_KEY = {setting.key: setting for setting in SETTINGS}
 
-DEVELOPMENT = frozenset({"NATIVE", "FUZZ_EXAMPLES", "FUZZ_RANDOM", "REGEN_GOLDEN"})
-"""MILLBLOCKS_* variables of the test suite and benchmarks, not of a server."""
+DEVELOPMENT = frozenset({"NATIVE", "MYPYC", "FUZZ_EXAMPLES", "FUZZ_RANDOM", "REGEN_GOLDEN"})
+"""MILLBLOCKS_* variables of building, the test suite and benchmarks, not of a server."""
 
 
 def apply(config: MutableMapping[str, Any], environment: Mapping[str, str]) -> None:

@@ -98,7 +98,10 @@ def fenced(name: str) -> str:
     return found.group(1)
 
 
-@pytest.mark.parametrize("name", ["millblocks.service", "millblocks.env", "nginx-millblocks.conf"])
+@pytest.mark.parametrize(
+    "name",
+    ["millblocks.service", "millblocks-dnc.service", "millblocks.env", "nginx-millblocks.conf"],
+)
 def test_the_docs_show_the_shipped_files(name: str) -> None:
     assert fenced(name) == (DEPLOY / name).read_text(encoding="utf-8")
 
@@ -135,17 +138,18 @@ def gunicorn(port: int) -> list[str]:
     return command.split(" ")
 
 
-def test_the_unit_file_passes_systemd_analyze_verify(tmp_path: Path) -> None:
+@pytest.mark.parametrize("name", ["millblocks.service", "millblocks-dnc.service"])
+def test_the_unit_files_pass_systemd_analyze_verify(tmp_path: Path, name: str) -> None:
     """systemd's own check (syntax, every setting known, the commands executable), with
     the commands where this checkout's virtual environment has them."""
-    text_ = (DEPLOY / "millblocks.service").read_text().replace(PREFIX, sys.prefix)
-    copy = tmp_path / "millblocks.service"
+    text_ = (DEPLOY / name).read_text().replace(PREFIX, sys.prefix)
+    copy = tmp_path / name
     copy.write_text(text_)
     checked = subprocess.run(
         ["systemd-analyze", "verify", str(copy)], capture_output=True, text=True, check=False
     )
     assert (checked.returncode, checked.stdout, checked.stderr) == (0, "", "")
-    broken = tmp_path / "broken" / "millblocks.service"
+    broken = tmp_path / "broken" / name
     broken.parent.mkdir()
     broken.write_text(text_.replace("ProtectSystem=strict", "ProtectSystem=strcit"))
     checked = subprocess.run(

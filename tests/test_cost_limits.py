@@ -252,7 +252,7 @@ def test_every_page_of_a_program_stored_before_the_limit_answers_with_the_refusa
 def test_a_request_past_its_time_budget_is_refused_not_killed(tmp_path: Path) -> None:
     """The last line of defence: a request whose work outlasts MILLBLOCKS_REQUEST_SECONDS
     answers 503 with what to do (here a budget no work fits in)."""
-    app = local_app(tmp_path, MILLBLOCKS_REQUEST_SECONDS=1e-9)
+    app = local_app(tmp_path, REQUEST_SECONDS=1e-9)
     try:
         response = app.test_client().get("/programs/1/drawing", headers={"HX-Request": "true"})
         assert response.status_code == 503

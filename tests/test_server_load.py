@@ -33,7 +33,6 @@ LOGIN_SECONDS = 1.0
 def shop(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Client, list[int]]]:
     url = f"sqlite:///{tmp_path / 'shop.db'}"
     monkeypatch.setenv("MILLBLOCKS_AUTH", "accounts")
-    monkeypatch.setenv("SECRET_KEY", "load test")
     library = open_library(url)
     Accounts(library).create("otto", PASSWORD, "operator")
     # Two programs, so that neither request is answered from what the other compiled.

@@ -10,11 +10,12 @@ here that imports such a file failed before.
 from __future__ import annotations
 
 import math
+import tempfile
 from decimal import Decimal
 from pathlib import Path
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from app.cnc.blocks import BoltCircle, MillLine
@@ -23,7 +24,7 @@ from app.cnc.imports import ImportFailure, read_program
 from app.cnc.imports.common import Notes
 from app.cnc.sizes import MAX_EXPANDED_LINES
 from tests.imports.support import fixture_text
-from tests.referee import rs274
+from tests.referee import Motion, rs274
 from tests.test_import_gcode import feeds_as_rs274_reads_them
 
 CORPUS = "gcode-corpus"
@@ -56,7 +57,18 @@ def theirs(expressions: list[str], tmp_path: Path) -> list[float]:
     path = tmp_path / "values.ngc"
     moves = "".join(f"G0 X-99999\nG0 X{e}\n" for e in expressions)
     path.write_text(f"G20\n{moves}M2\n")
-    return [m.end[0] for m in rs274(path) if m.kind == "T" and m.end[0] != -99999]
+    return [m.end[0] for m in steady_rs274(path) if m.kind == "T" and m.end[0] != -99999]
+
+
+def steady_rs274(path: Path) -> list[Motion]:
+    """rs274's motions, asked twice if it fails: three times in some thousand runs on the
+    shared 2-core machine rs274 ended with its output cut short after "executing", no
+    message (the same file then read, and a run of 2 000 on its own never failed); a file
+    it refuses is refused again."""
+    try:
+        return rs274(path)
+    except AssertionError:
+        return rs274(path)
 
 
 # -- expressions --------------------------------------------------------------------------
@@ -122,6 +134,34 @@ def test_the_expression_table_is_rs274s(tmp_path: Path) -> None:
     table = [(e, v) for e, v in EXPRESSIONS if e not in TOLERANCE]
     got = theirs([e for e, _ in table], tmp_path)
     assert got == pytest.approx([round(v, 4) for _, v in table], abs=1e-9)
+
+
+ANGLES = ["0", "15", "30", "45", "60", "90", "120", "150", "180", "210", "270", "330", "360"]
+ANGLES += ["37.3", "-45", "1000.5", "0.001", "89.99", "7.5"]
+# A value's last bits, made small: times 2**60 (exact), MOD 1000 (exact).
+LOW_BITS = "[[{}*1152921504606846976] MOD 1000]"
+
+
+def test_angles_as_linuxcnc_on_a_pc_computes_them(tmp_path: Path) -> None:
+    """LinuxCNC converts degrees with a long double pi and so calls sinl: SIN[30] is 0.5
+    exactly and FIX[SIN[30]*2] 1 (in doubles 0.49999999999999994 and 0). Every bit of SIN,
+    COS and TAN of these angles, and of ASIN, ACOS and ATAN, is rs274's. Before: FIX[SIN[30]
+    *2], FIX[COS[60]*2], FIX[TAN[45]] and FIX[SIN[150]*2] were 0, LinuxCNC's 1."""
+    probes = [LOW_BITS.format(f"{f}[{a}]") for a in ANGLES for f in ("SIN", "COS", "TAN")]
+    probes += [
+        LOW_BITS.format(f"{f}[{v}]") for v in ("0.5", "1", "-0.2", "0.3") for f in ("ASIN", "ACOS")
+    ]
+    probes += [LOW_BITS.format(f"ATAN[{y}]/[{x}]") for y, x in (("1", "-1"), ("-3", "4"))]
+    probes += ["[FIX[SIN[30]*2]]", "[FIX[COS[60]*2]]", "[FIX[TAN[45]]]", "[FIX[SIN[150]*2]]"]
+    assert theirs(probes, tmp_path)[-4:] == [1.0] * 4
+    assert [round(ours(p), 4) for p in probes] == theirs(probes, tmp_path)
+
+
+def test_a_computed_value_too_long_for_a_word_is_refused() -> None:
+    """Before: 10**13 was written `1` (its trailing zeros taken for decimals), so
+    `G0 X[10**13]` moved to X1."""
+    assert "too many digits" in failure("G20\nG0 X[10**13]\n")
+    assert ngc.number_text(10.0**13) == "10000000000000"
 
 
 NUMBERS = st.decimals(min_value=-99, max_value=99, places=2).map(str)
@@ -213,7 +253,7 @@ def test_every_operation_as_rs274_computes_it(
         ("G0 X#[1.5]", "line 1, column 6: 1.5: a whole number is needed here"),
         ("#<_value>=1", "line 1, column 1: #<_value> is LinuxCNC's, read-only"),
         ("#1 X5", "line 1, column 4: '=' missing"),
-        ("G0 X1.2.3 Y#1", "line 1, column 5: '1.2.3' is not a number"),
+        ("G0 Y#1 X1.2.3", "line 1, column 9: '1.2.3' is not a number"),
     ],
 )
 def test_what_linuxcnc_refuses_is_refused_where_it_is(line: str, message: str) -> None:
@@ -476,6 +516,91 @@ def test_m99_in_the_main_program_ends_it(tmp_path: Path) -> None:
     assert any("line 6: M99 in the main program: its end" in n for n in report(text))
 
 
+# -- programs against rs274 ---------------------------------------------------------------
+
+
+@st.composite
+def _programs(draw: st.DrawFn) -> str:
+    """Small LinuxCNC programs of settings, moves, if/else, while (with breaks), do,
+    repeat and calls of a subroutine, every loop bounded, each block its own label."""
+    labels = iter(range(100, 1000))
+    variables = [31, 32, 33]
+
+    def expression() -> str:
+        a, b = draw(st.sampled_from(variables)), draw(st.sampled_from(variables))
+        n = draw(st.integers(-3, 3))
+        form = draw(st.sampled_from(["#{a} + {n}", "#{a} * 0.5 - #{b}", "[#{a} MOD 3] + {n}"]))
+        return "[" + form.format(a=a, b=b, n=n) + "]"
+
+    def block(depth: int, loop: int | None) -> list[str]:
+        lines: list[str] = []
+        for _ in range(draw(st.integers(1, 3))):
+            kinds = ["set", "move", "call"] + (["if", "while", "do", "repeat"] if depth else [])
+            kinds += ["break"] if loop is not None else []
+            kind = draw(st.sampled_from(kinds))
+            v = draw(st.sampled_from(variables))
+            n = draw(st.integers(1, 3))
+            if kind == "set":
+                lines.append(f"#{v}={expression()}")
+            elif kind == "move":
+                lines.append(f"G0 X#{v} Y{expression()}")
+            elif kind == "call":
+                lines.append(f"o<s> call [#{v}] [{n}]")
+            elif kind == "break":
+                label = next(labels)
+                lines += [f"o{label} if [#{v} GT {n}]", f"o{loop} break", f"o{label} endif"]
+            elif kind == "if":
+                label = next(labels)
+                lines += [f"o{label} if [#{v} GT {n}]", *block(depth - 1, loop)]
+                if draw(st.booleans()):
+                    lines += [f"o{label} else", *block(depth - 1, loop)]
+                lines.append(f"o{label} endif")
+            elif kind == "repeat":
+                label = next(labels)
+                lines += [f"o{label} repeat [{n}]", *block(depth - 1, None), f"o{label} endrepeat"]
+            else:
+                label = next(labels)
+                counter = 40 + label % 50
+                step = f"#{counter}=[#{counter}+1]"
+                test = f"[#{counter} LT {n}]"
+                if kind == "while":
+                    body = [step, *block(depth - 1, label)]
+                    lines += [f"#{counter}=0", f"o{label} while {test}", *body]
+                    lines.append(f"o{label} endwhile")
+                else:
+                    body = [step, *block(depth - 1, label)]
+                    lines += [f"#{counter}=0", f"o{label} do", *body, f"o{label} while {test}"]
+        return lines
+
+    sub = ["o<s> sub", "#34=[#1 * 2 + #2]", "G0 X#1 Y#34", "o<s> endsub"]
+    start = [f"#{v}={draw(st.integers(-2, 2))}" for v in variables]
+    return "\n".join(["G20", *sub, *start, *block(2, None), "M2", ""])
+
+
+@given(_programs())
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_programs_run_as_rs274_runs_them(text: str) -> None:
+    """Random programs of LinuxCNC's control flow, settings and calls: every move where
+    rs274 makes it, in its order (its breaks' stale flags included)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "flow.ngc"
+        path.write_text(text)
+        theirs_ = [m.end[:2] for m in rs274(path) if m.kind == "T"]
+    ours_: list[tuple[float, float]] = []
+    here = (0.0, 0.0)
+    for line in ngc.expand(text.split("\n"), Notes()):
+        if line.text.startswith("G0 "):
+            words = {w[0]: float(w[1:]) for w in line.text.split()[1:]}
+            point = (round(words.get("X", here[0]), 4), round(words.get("Y", here[1]), 4))
+            if point != here:  # (rs274 leaves out a move to where the tool is)
+                ours_.append(point)
+            here = point
+    assert len(ours_) == len(theirs_), text
+    assert [c for p in ours_ for c in p] == pytest.approx(
+        [c for p in theirs_ for c in p], abs=1.1e-4
+    ), text
+
+
 # -- bounds -------------------------------------------------------------------------------
 
 
@@ -505,12 +630,18 @@ def test_a_subroutine_that_calls_itself_for_ever_is_refused() -> None:
 # -- the fast path ------------------------------------------------------------------------
 
 
-def test_only_files_that_need_the_front_end_go_through_it() -> None:
-    plain = fixture_text("seed003-2.2.6.1.ngc")
-    assert not ngc.needed(plain)
-    assert not ngc.needed("G20\nG0 X1 Y1\nM30\n")
-    for text in ("G0 X#1\n", "G0 X[1]\n", "o100 call\n", "N10 O1000\n", "M98 P100\n"):
-        assert ngc.needed(text), text
+def test_a_parameter_on_the_last_line_reads_the_whole_file_once_more() -> None:
+    """A file is read straight until a line needs the front end, then again from the start
+    with it: the report is that of one reading (its notes once each), and the moves are
+    those of the whole file."""
+    text = "G20\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\nG1 X1\nG1 X[1+1]\nG0 Z0.1\nM2\n"
+    notes = report(text)
+    assert sum("G20: the program and every block are inch" in n for n in notes) == 1
+    program = read_program(text.encode(), "t", "gcode").program
+    assert [b.x for b in program.blocks if isinstance(b, MillLine)] == [
+        Decimal("1.000"),
+        Decimal("2.000"),
+    ]
 
 
 # -- LinuxCNC's own examples (tests/imports/gcode-corpus, SOURCES.md) ---------------------

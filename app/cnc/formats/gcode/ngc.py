@@ -1,8 +1,9 @@
 """LinuxCNC's O-word subroutines and control flow, Fanuc M98/M99 subprograms, parameters and
 expressions: run, and expanded into the plain lines the G-code reader reads.
 
-`reader.py` runs this front end only for a file that needs it (`needed`: a `#`, a `[`, a
-line beginning with an O-word, or an M98); every other file keeps the reader's fast path.
+`reader.py` runs this front end only for a file that needs it: it reads a file straight
+until a line has a `#`, a `[`, an O-word or an M98, and then reads it again from the start
+with this; every other file keeps the reader's fast path.
 `expand` executes the file as LinuxCNC's interpreter (src/emc/rs274ngc, read from its
 sources: interp_read.cc, interp_o_word.cc, interp_execute.cc, interp_namedparams.cc) and
 yields each line it runs, in the order it runs them, with every parameter and expression
@@ -21,10 +22,11 @@ What LinuxCNC does, and so what this does:
 - **Binary operators**, left to right within a level, from the tightest: `**`; `* / MOD`;
   `+ -`; `EQ NE GT GE LT LE`; `AND OR XOR`. `-2**2` is 4 (the sign belongs to the
   number), `2**3**2` is 64. MOD is never negative (`-5 MOD 3` is 1); EQ, NE, GE and LE
-  take numbers within 1e-6 as equal; a logical or relational result is 1 or 0. ROUND rounds
-  half away from zero, FIX down, FUP up. Division by zero, a negative number to a
-  fractional power, an argument out of a function's range and a result that is not a
-  finite number are refused.
+  take numbers within 1e-6 as equal (LinuxCNC 2.9.0 on); a logical or relational result is
+  1 or 0. ROUND rounds half away from zero, FIX down, FUP up. Degrees are converted with a
+  long double pi and SIN/COS/TAN are then long double functions, as on a PC (`_trig`).
+  Division by zero, a negative number to a fractional power, an argument out of a
+  function's range and a result that is not a finite number are refused.
 - **Parameters**: `#1`-`#5000` start at 0 (`#1`-`#30` are a call's arguments: saved by
   the call and restored by its return); `#5001` and above hold the machine's state
   (offsets, positions, probe results), which a file does not give: refused. `#<name>` is
@@ -38,15 +40,18 @@ What LinuxCNC does, and so what this does:
 - **O-words**: `o<name>`/`oNNN` with `sub`/`endsub`/`return` (a subroutine, defined where
   it is written and skipped when the program flows into it), `call [a] [b] …` (up to 30
   arguments as #1-#30), `if`/`elseif`/`else`/`endif`, `while`/`endwhile`, `do`/`while`,
-  `repeat [n]`/`endrepeat` (n rounded to a whole number), `break`/`continue` (of a while or
-  do loop). Labels other than subroutines belong to the subroutine they are in; LinuxCNC
+  `repeat [n]`/`endrepeat` (n rounded half to even), `break`/`continue` (of a while or do
+  loop). Labels other than subroutines belong to the subroutine they are in; LinuxCNC
   refuses a label used for two blocks in one subroutine, and so does this (as it refuses
-  blocks that are not nested in each other, and an `if` without its `endif`).
+  blocks that are not nested in each other, and an `if` without its `endif`). The flow is
+  LinuxCNC's own (`_Run.flow`): it skips forward to the next line with a label, and its
+  break and continue flags outlive their loops — a break can keep a later do loop from
+  going round again — which is reproduced, and reported where it changes the flow.
 - **Fanuc subprograms**: `O<n>` alone on a line is a label; `M98 P<n> [L<count>]` (first
-  on its line) runs the lines after it up to its `M99` count times (L0 none), with the
-  caller's #1-#30. `M99` in the main program ends it (LinuxCNC's preview reads it so; a
-  control would start the program again). A file's `O<n>` that the program flows into is
-  its program number.
+  on its line) runs the lines after it up to its `M99` count times, with the caller's
+  #1-#30; L0 is refused (LinuxCNC skips the call but stays a call deeper). `M99` in the
+  main program ends it (LinuxCNC's preview reads it so; a control would start the program
+  again). A file's `O<n>` that the program flows into is its program number.
 - **Bounds**: at most 9 calls deep (LinuxCNC's 10 levels, the main program included), and
   at most `MAX_EXPANDED_LINES` lines run in all: a loop that never ends is refused, naming
   it, instead of running forever.
@@ -55,8 +60,9 @@ Not read: subroutines in other files (`o<name> call` for a name the file does no
 is refused, naming it), O-word numbers given by expressions, remapped codes and Python
 subroutines.
 
-The report names each call and loop: `line 12: o100 call: o100 (lines 3-9) expanded, 3
-times`, with the same note on many lines shortened as every note is.
+The report names each call and loop: `line 12: o100 call: o100 sub (lines 3-9) expanded,
+3 times`, `line 5: o7 while (lines 5-9): run 12 times`, with the same note on many lines
+shortened as every note is.
 """
 
 from __future__ import annotations
@@ -65,19 +71,14 @@ import math
 import re
 from collections.abc import Generator, Iterator
 from dataclasses import dataclass, field
+from decimal import Decimal, localcontext
+from fractions import Fraction
 from typing import Final
 
 from app.cnc.imports.common import MAX_DIGITS, ImportFailure, Notes, failure
 from app.cnc.numbers import NUMBER_TEXT
 from app.cnc.sizes import MAX_EXPANDED_LINES
 
-# A file needs the front end when it has a parameter or expression, a line beginning with
-# an O-word (after a block delete and an N word), or an M98. Anything else it could hold
-# (a `#` in a comment) is read the same by the front end: only slower.
-NEEDED: Final = re.compile(
-    r"[#\[]|^[ \t]*/?[ \t]*(?:[nN][ \t]*[0-9][0-9. \t]*)?[oO]|[mM][ \t]*0*98(?![0-9.])",
-    re.MULTILINE,
-)
 CALL_LEVELS: Final = 10  # LinuxCNC's INTERP_SUB_ROUTINE_LEVELS: the main program and 9 calls
 SUB_PARAMS: Final = 30  # #1-#30: a call's arguments
 USER_PARAMS: Final = 5000  # #1-#5000 are the program's; above, the machine's state
@@ -164,17 +165,14 @@ _MACHINE_PARAMS: Final = (
 )
 
 
-def needed(text: str) -> bool:
-    """Whether `text` has anything the front end reads (see NEEDED)."""
-    return NEEDED.search(text) is not None
-
-
 def number_text(value: float) -> str:
     """A computed value as a G-code number: at most PLACES decimals (0.25 nm in inches,
     finer than any block holds) and MAX_DIGITS digits, without trailing zeros."""
     places = PLACES
     while True:
-        text = f"{value:.{places}f}".rstrip("0").rstrip(".")
+        text = f"{value:.{places}f}"
+        if "." in text:
+            text = text.rstrip("0").rstrip(".")
         digits = len(text.lstrip("-").replace(".", "").lstrip("0"))
         if digits <= MAX_DIGITS or places == 0:
             break
@@ -1257,7 +1255,7 @@ class _Run:
                 raise self.fail(self.k, "ATAN needs two arguments: ATAN[y]/[x]")
             self.k += 1
             x = self.expression()
-            return math.degrees(math.atan2(argument, x))
+            return degrees(math.atan2(argument, x))
         try:
             return _unary(name, argument)
         except _Wrong as exc:
@@ -1272,6 +1270,77 @@ class _Run:
             return name in scope
         value = self.value()
         return 1 <= math.floor(value) <= LAST_PARAM
+
+
+# -- angles as LinuxCNC on a PC computes them --------------------------------------------
+#
+# interp_execute.cc converts degrees with M_PIl, a long double: `sin((x * M_PIl) / 180.0)`
+# is, in C++, a long double argument and so sinl (on x86, 64 significant bits), stored as
+# a double; an inverse's radians r become degrees as `(r * 180.0) / M_PIl`. In doubles
+# SIN[30] would be 0.49999999999999994 and FIX[SIN[30]*2] 0, where LinuxCNC says 1 (and
+# TAN[45] 0.9999999999999999): a loop count or a branch could differ. So the conversions
+# are done at x86's precision, exactly, and sin, cos and tan of the long double to 40
+# digits (an ARM LinuxCNC's long double is wider: the same results where they are exact).
+
+_PI_LONG: Final = Fraction(0xC90FDAA22168C235, 1 << 62)  # M_PIl on x86
+_PI: Final = Decimal("3.14159265358979323846264338327950288419716939937510582097494459")
+_DIGITS: Final = 40
+
+
+def _long(value: Fraction) -> Fraction:
+    """`value` rounded to x86's long double: 64 significant bits, half to even."""
+    if not value:
+        return value
+    size = abs(value)
+    shift = 63 - (size.numerator.bit_length() - size.denominator.bit_length())
+    scaled = size * Fraction(2) ** shift
+    if scaled < 2**63:
+        shift += 1
+        scaled *= 2
+    rounded = Fraction(round(scaled)) / Fraction(2) ** shift
+    return rounded if value > 0 else -rounded
+
+
+def degrees(radians: float) -> float:
+    """`(radians * 180.0) / M_PIl` stored as a double (an inverse function's result)."""
+    return float(_long(Fraction(radians * 180.0) / _PI_LONG))
+
+
+def _trig(name: str, angle: float) -> float:
+    """sin, cos or tan of `angle` degrees as LinuxCNC computes it (above)."""
+    x = _long(_long(Fraction(angle) * _PI_LONG) / 180)
+    if abs(x) > 10**30:  # (past what 64 digits of pi reduce: the double's)
+        value = float(x)
+        return {"sin": math.sin, "cos": math.cos, "tan": math.tan}[name](value)
+    with localcontext() as context:
+        context.prec = _DIGITS + 35
+        r = Decimal(x.numerator) / Decimal(x.denominator)
+        quarter = _PI / 2
+        turns = (r / quarter).to_integral_value()
+        r -= turns * quarter  # |r| <= pi/4, in quadrant `turns`
+        sin, cos = _sin_cos(r)
+        for _ in range(int(turns) % 4):
+            sin, cos = cos, -sin
+        result = sin if name == "sin" else cos if name == "cos" else sin / cos
+        return float(_long(Fraction(result)))
+
+
+def _sin_cos(r: Decimal) -> tuple[Decimal, Decimal]:
+    """sin and cos of a small `r` (|r| <= pi/4) by their series, to the context's digits."""
+    square = r * r
+    sin = term = r
+    k = 1
+    while abs(term) > Decimal(10) ** -(_DIGITS + 5):
+        term = -term * square / ((k + 1) * (k + 2))
+        sin += term
+        k += 2
+    cos = term = Decimal(1)
+    k = 0
+    while abs(term) > Decimal(10) ** -(_DIGITS + 5):
+        term = -term * square / ((k + 1) * (k + 2))
+        cos += term
+        k += 2
+    return sin, cos
 
 
 def _binary(left: float, operation: int, right: float) -> float:
@@ -1324,13 +1393,9 @@ def _unary(name: str, value: float) -> float:
     if name in ("acos", "asin"):
         if not -1.0 <= value <= 1.0:
             raise _Wrong(f"{name.upper()} of {number_text(value)}: only -1 to 1")
-        return math.degrees(math.acos(value) if name == "acos" else math.asin(value))
-    if name == "cos":
-        return math.cos(value * math.pi / 180.0)
-    if name == "sin":
-        return math.sin(value * math.pi / 180.0)
-    if name == "tan":
-        return math.tan(value * math.pi / 180.0)
+        return degrees(math.acos(value) if name == "acos" else math.asin(value))
+    if name in ("cos", "sin", "tan"):
+        return _trig(name, value)
     if name == "exp":
         try:
             return math.exp(value)

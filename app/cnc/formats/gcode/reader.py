@@ -24,9 +24,10 @@ stop). Readings where the dialects differ or the seed is vague (docs/imports.md)
   cycle there (no hole), while a ProtoTRAK post writing its modal code on every line
   (§2.1 rule 1, §2.2.6.2 N6-N9) means a hole — the file cannot say which.
 - **Subroutines, control flow, parameters and expressions** (LinuxCNC's O-words, Fanuc's
-  M98/M99): a file that has any is first run by `ngc.py`, which gives this reader each line
-  as it runs, values in place, with the file's line and column of each character (a
-  failure here is moved back to them). Every other file is read straight (the fast path).
+  M98/M99): at the first line that has any (`_FrontEnd`) the file is read again, run by
+  `ngc.py`, which gives this reader each line as it runs, values in place, with the file's
+  line and column of each character (a failure here is moved back to them). Every other
+  file is read straight (the fast path).
 - **M99** that reaches this reader is the main program's: its end (rs274 reads it so).
 - **@ and ^**: LinuxCNC's polar coordinates about program zero (`polar`), each L repeat of
   an incremental canned cycle turned again.
@@ -374,8 +375,20 @@ class Block:
 
 
 def parse_gcode(text: str, name: str = "") -> Parsed:
-    """Read G-code text. Raises ImportFailure naming line and column of the first problem."""
-    return _Reader(text, name).run()
+    """Read G-code text. Raises ImportFailure naming line and column of the first problem.
+
+    A file is read straight until a line needs the front end (`_FrontEnd`): then it is read
+    again from the start as `ngc.expand` runs it. So a plain file pays nothing for the
+    front end (not even a search for what it reads), and one that needs it is read once
+    more up to that line."""
+    try:
+        return _Reader(text, name, False).run()
+    except _FrontEnd:
+        return _Reader(text, name, True).run()
+
+
+class _FrontEnd(Exception):
+    """A parameter, expression, O-word or M98 where the file was read straight."""
 
 
 def _cancel_beside(first: Word, second: Word) -> bool:
@@ -385,8 +398,8 @@ def _cancel_beside(first: Word, second: Word) -> bool:
 
 
 class _Reader:
-    def __init__(self, text: str, name: str) -> None:
-        self.text = text
+    def __init__(self, text: str, name: str, expanding: bool) -> None:
+        self.expanding = expanding  # the lines come from the front end (ngc.py)
         self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         self.notes = Notes()
         self.steps: list[Step] = []
@@ -435,7 +448,7 @@ class _Reader:
     # -- the file -------------------------------------------------------------------------
 
     def run(self) -> Parsed:
-        if ngc.needed(self.text):
+        if self.expanding:
             # Subroutines, control flow, parameters or expressions: the lines as they run,
             # the front end told after each whether the program has ended.
             runs = ngc.expand(self.lines, self.notes)
@@ -538,6 +551,8 @@ class _Reader:
                 break
             elif (ch.isascii() and ch.isalpha()) or ch in "@^":
                 pos = self.word(number, line, pos, words)
+            elif ch in "#[" and not self.expanding:
+                raise _FrontEnd
             else:
                 raise failure(number, pos + 1, f"unexpected character {ch!r}")
         for comment in comments:
@@ -786,12 +801,16 @@ class _Reader:
             )
         match = NUMBER.match(line, pos + 1)
         if letter == "O":
-            # (An O-word beginning its line is the front end's, ngc.py.)
+            if not self.expanding:
+                raise _FrontEnd
+            # (An O-word beginning its line is the front end's.)
             raise failure(number, pos + 1, "an O-word (O number or subroutine) must begin its line")
         if letter not in ALLOWED and letter not in POLAR:
             raise failure(number, pos + 1, f"'{ch}' is not a G-code word letter")
         if match is None:
             after = line[pos + 1 : pos + 4]
+            if after[:1] in ("#", "[") and not self.expanding:
+                raise _FrontEnd
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
         if not check_digits(digit_text(match.group())):
@@ -851,6 +870,8 @@ class _Reader:
         line = block.line
         other = block.other
         for word, code in m_codes:
+            if code == "98" and not self.expanding:
+                raise _FrontEnd
             if code in REFUSED_M:
                 raise failure(line, word.column, f"M{code}: {REFUSED_M[code]} is not supported")
         if other.keys() <= AXES_AND_FEED and not m_codes and codes.keys() <= LINEAR:

@@ -12,18 +12,17 @@ from __future__ import annotations
 
 import fcntl
 import os
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 from alembic import command
 from alembic.config import Config
 from sqlalchemy import Engine, create_engine, event, text
 
-ROOT = Path(__file__).resolve().parents[2]
-MIGRATIONS = ROOT / "migrations"
-DEFAULT_SQLITE = ROOT / "instance" / "millblocks.db"
+from app.cnc.text import check_text
+from app.resources import data_dir, instance_dir
 
 
 def database_url(url: str | None = None) -> str:
@@ -38,8 +37,9 @@ def database_url(url: str | None = None) -> str:
         elif env.startswith("postgresql://"):
             env = "postgresql+psycopg://" + env[len("postgresql://") :]
         return env
-    DEFAULT_SQLITE.parent.mkdir(parents=True, exist_ok=True)
-    return f"sqlite:///{DEFAULT_SQLITE}"
+    default = instance_dir() / "millblocks.db"
+    default.parent.mkdir(parents=True, exist_ok=True)
+    return f"sqlite:///{default}"
 
 
 def make_engine(url: str | None = None) -> Engine:
@@ -48,8 +48,34 @@ def make_engine(url: str | None = None) -> Engine:
     if resolved.startswith("sqlite"):
         engine = create_engine(resolved, connect_args={"timeout": 30})
         event.listen(engine, "connect", _sqlite_pragmas)
-        return engine
-    return create_engine(resolved, pool_pre_ping=True)
+    else:
+        engine = create_engine(resolved, pool_pre_ping=True)
+    event.listen(engine, "before_cursor_execute", _text_rule)
+    return engine
+
+
+_BIND_NUMBER = re.compile(r"_\d+$")
+
+
+def _text_rule(
+    _conn: Any,
+    _cursor: Any,
+    _statement: str,
+    parameters: Any,
+    context: Any,
+    _executemany: bool,
+) -> None:
+    """Every string a statement sends to the database, stored or looked up, meets the one
+    text rule (app.cnc.text): a NUL or a lone surrogate is a TextError naming the column,
+    not PostgreSQL's `ValueError` or an encoding error from the driver (a 500). The
+    entries check their fields with their limits first; this is the net under them."""
+    compiled = getattr(context, "compiled_parameters", None)
+    rows = compiled if compiled else [parameters]
+    for row in rows:
+        items = row.items() if isinstance(row, dict) else enumerate(row or ())
+        for key, value in items:
+            if isinstance(value, str):
+                check_text(value, _BIND_NUMBER.sub("", str(key)))
 
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
@@ -100,7 +126,7 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
     config = Config()
-    config.set_main_option("script_location", str(MIGRATIONS))
+    config.set_main_option("script_location", str(data_dir("migrations")))
     config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
     return config
 

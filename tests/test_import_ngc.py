@@ -61,10 +61,10 @@ def theirs(expressions: list[str], tmp_path: Path) -> list[float]:
 
 
 def steady_rs274(path: Path) -> list[Motion]:
-    """rs274's motions, asked twice if it fails: three times in some thousand runs on the
-    shared 2-core machine rs274 ended with its output cut short after "executing", no
-    message (the same file then read, and a run of 2 000 on its own never failed); a file
-    it refuses is refused again."""
+    """rs274's motions, asked twice if it fails: rs274 maps its tool table in $HOME, and
+    runs overlapping elsewhere on the machine made it end now and then with its output cut
+    short after "executing" and no message (three times in some thousand runs here; 2 000
+    runs on their own never failed). A file it refuses is refused again."""
     try:
         return rs274(path)
     except AssertionError:
@@ -678,6 +678,27 @@ def test_useful_subroutines_is_refused_at_the_helix_in_its_call() -> None:
         "line 27, column 1: a helix (an arc with a Z move): MillBlocks cuts arcs at one depth "
         "(in o100, called at line 79)"
     )
+
+
+def test_retval_reports_its_calls_and_debug_messages() -> None:
+    """retval.ngc: three calls of o1000 (no moves), each named; its (debug, …) messages
+    are LinuxCNC's screen output, said not carried."""
+    notes = report(fixture_text(f"{CORPUS}/retval.ngc"))
+    calls = [n for n in notes if "o1000 call: o1000 sub (lines 3-12) expanded" in n]
+    assert calls == [
+        "became: line 14: o1000 call: o1000 sub (lines 3-12) expanded (also lines 19, 24)"
+    ]
+    assert any(
+        n.startswith("ignored: line 15: (DEBUG, …): a message on LinuxCNC's screen; not carried")
+        for n in notes
+    )
+
+
+def test_a_comment_beside_a_setting_does_not_name_the_program() -> None:
+    """`#1=0.5 (DEPTH)` is a setting with a comment, not a title line (the first comment
+    alone on a line names the program)."""
+    program = read_program(b"#1=0.5 (DEPTH)\nG20\nG0 X0 Y0 Z0.1\nM2\n", "part.ngc", "gcode")
+    assert program.program.name != "DEPTH"
 
 
 def test_factorial_defines_and_never_calls() -> None:

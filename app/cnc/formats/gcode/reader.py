@@ -176,6 +176,14 @@ NOTED_G = {
     "96": "constant surface speed: not carried",
     "97": "constant surface speed cancel: not carried",
 }
+# LinuxCNC's comments that write somewhere (MSG is the next block's MESSAGE).
+OUTPUT_COMMENTS: Final = {
+    "DEBUG": "a message on LinuxCNC's screen",
+    "PRINT": "a message on LinuxCNC's terminal",
+    "LOG": "a line of LinuxCNC's log file",
+    "LOGOPEN": "opens LinuxCNC's log file",
+    "LOGAPPEND": "opens LinuxCNC's log file",
+}
 NOTED_M = {
     "48": "feed and speed overrides on: not carried",
     "49": "feed and speed overrides off: not carried",
@@ -556,10 +564,13 @@ class _Reader:
             else:
                 raise failure(number, pos + 1, f"unexpected character {ch!r}")
         for comment in comments:
+            head = comment.split(",", 1)[0].upper() if "," in comment else ""
             if comment.upper().startswith("MSG,"):
                 self.steps.append(Message(number, comment[4:].strip()))
             elif comment.startswith("SET-UP: "):
                 self.setup_comment(number, comment)
+            elif head in OUTPUT_COMMENTS:
+                self.notes.ignored(number, f"({head}, …): {OUTPUT_COMMENTS[head]}; not carried")
         if not words:
             if titles and comments and not self.name and not self.moved and not self.steps:
                 self.title(number, comments[0])

@@ -621,6 +621,12 @@ def test_too_many_lines_in_all_is_refused() -> None:
     )
 
 
+def test_an_m98_repeated_past_the_bound_is_refused_naming_it() -> None:
+    assert failure("G20\nM98 P1 L1000000\nM30\nO1\nG0 X1\nM99\n").startswith(
+        "line 2, column 1: M98 has run 25,000 times and the program 50,000 lines"
+    )
+
+
 def test_a_subroutine_that_calls_itself_for_ever_is_refused() -> None:
     assert failure("G20\no<r> sub\no<r> call\no<r> endsub\no<r> call\nM2\n").startswith(
         "line 3, column 1: o<r> call: more than 9 calls deep (LinuxCNC's limit)"

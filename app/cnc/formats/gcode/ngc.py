@@ -592,6 +592,8 @@ class _Run:
             self.notes.became(line, f"{what} expanded{'' if times == 1 else f', {times} times'}")
         for first, runs in sorted(self.loops.items()):
             c = self.controls[first]
+            if c.kind == "m98":  # (its note is the call's)
+                continue
             last = c.group[-1] if c.group else first
             self.notes.became(
                 first + 1,
@@ -609,11 +611,12 @@ class _Run:
         if self.last_loop >= 0:
             c = self.controls[self.last_loop]
             runs = self.loops.get(self.last_loop, 0)
+            what = "M98" if c.kind == "m98" else f"{c.shown} {c.kind}"
             return failure(
                 c.index + 1,
                 c.column,
-                f"{c.shown} {c.kind} has run {runs:,} times and the program {limit} lines: "
-                f"a loop that does not end? (an import runs at most {limit} lines)",
+                f"{what} has run {runs:,} times and the program {limit} lines: a loop that "
+                f"does not end? (an import runs at most {limit} lines)",
             )
         return failure(
             pc + 1,
@@ -969,6 +972,8 @@ class _Run:
         frame = _Frame(f"O{label}", target, caller=c.index + 1, back=c.index + 1)
         frame.again = times - 1
         self.enter(c, frame)
+        if times > 1:
+            self.loop(c.index)
         key = (c.index + 1, f"M98 P{label}: {self.region_text(target)}")
         self.calls[key] = self.calls.get(key, 0) + times
         return target + 1
@@ -984,6 +989,7 @@ class _Run:
         if frame.again > 0:
             frame.again -= 1
             frame.local.clear()
+            self.loop(frame.caller - 1)  # (the M98 line: counted as a loop's runs are)
             return frame.entry + 1, None
         self.frames.pop()
         return frame.back, None

@@ -73,6 +73,7 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass, field
 from decimal import Decimal, localcontext
 from fractions import Fraction
+from functools import lru_cache
 from typing import Final
 
 from app.cnc.imports.common import MAX_DIGITS, ImportFailure, Notes, failure
@@ -1289,7 +1290,6 @@ class _Run:
 # digits (an ARM LinuxCNC's long double is wider: the same results where they are exact).
 
 _PI_LONG: Final = Fraction(0xC90FDAA22168C235, 1 << 62)  # M_PIl on x86
-_PI: Final = Decimal("3.14159265358979323846264338327950288419716939937510582097494459")
 _DIGITS: Final = 40
 
 
@@ -1315,13 +1315,11 @@ def degrees(radians: float) -> float:
 def _trig(name: str, angle: float) -> float:
     """sin, cos or tan of `angle` degrees as LinuxCNC computes it (above)."""
     x = _long(_long(Fraction(angle) * _PI_LONG) / 180)
-    if abs(x) > 10**30:  # (past what 64 digits of pi reduce: the double's)
-        value = float(x)
-        return {"sin": math.sin, "cos": math.cos, "tan": math.tan}[name](value)
+    whole = len(str(abs(int(x))))  # the digits before the point (pi needs as many more)
     with localcontext() as context:
-        context.prec = _DIGITS + 35
+        context.prec = _DIGITS + 10 + whole
         r = Decimal(x.numerator) / Decimal(x.denominator)
-        quarter = _PI / 2
+        quarter = _pi(context.prec) / 2
         turns = (r / quarter).to_integral_value()
         r -= turns * quarter  # |r| <= pi/4, in quadrant `turns`
         sin, cos = _sin_cos(r)
@@ -1329,6 +1327,27 @@ def _trig(name: str, angle: float) -> float:
             sin, cos = cos, -sin
         result = sin if name == "sin" else cos if name == "cos" else sin / cos
         return float(_long(Fraction(result)))
+
+
+@lru_cache(maxsize=8)
+def _pi(digits: int) -> Decimal:
+    """pi to `digits` significant digits (Machin: 16 atan 1/5 - 4 atan 1/239)."""
+    with localcontext() as context:
+        context.prec = digits + 10
+
+        def atan_inverse(n: int) -> Decimal:
+            total = term = Decimal(1) / n
+            k = 1
+            while term:
+                term /= -n * n
+                total += term / (2 * k + 1)
+                k += 1
+            return total
+
+        pi = 16 * atan_inverse(5) - 4 * atan_inverse(239)
+    with localcontext() as context:
+        context.prec = digits
+        return +pi
 
 
 def _sin_cos(r: Decimal) -> tuple[Decimal, Decimal]:

@@ -298,16 +298,27 @@ class Motion:
     feed: float | None = None
 
 
-def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
+def rs274(
+    path: Path,
+    lengths: dict[int, float] | None = None,
+    diameters: dict[int, float] | None = None,
+) -> list[Motion]:
     """Run rs274 on a file; its motions (zero-length ones dropped). Fails on any error.
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
-    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments.
+    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments and
+    the `diameters` (in the file's units; 0 where not given) cutter compensation uses.
     """
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
     lengths = lengths or {}
-    table.write_text("".join(f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D0 ;\n" for n in range(1, 25)))
+    diameters = diameters or {}
+    table.write_text(
+        "".join(
+            f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D{diameters.get(n, 0.0):.8f} ;\n"
+            for n in range(1, 25)
+        )
+    )
     result = subprocess.run(
         [RS274, "-t", str(table), "-g", str(path)],
         capture_output=True,

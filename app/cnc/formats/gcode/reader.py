@@ -380,6 +380,8 @@ class _Reader:
         self.arc_absolute = False
         self.plane = "17"
         self.comp = ""
+        self.comp_tool = 0  # G41/G42's D (0: the tool in the spindle)
+        self.arc_barred = False  # G40 has just ended compensation: the next move is a line
         self.return_initial = True
         self.feed: int | None = None
         self.speed: int | None = None
@@ -543,10 +545,10 @@ class _Reader:
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
         units = self.units
-        if units is None or self.incremental:
+        if units is None or self.incremental or self.arc_barred:
             return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
-        if motion is None:
+        if motion is None or (motion == "0" and self.comp):
             return False
         if motion == "80":
             # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
@@ -590,7 +592,7 @@ class _Reader:
         else:
             assert feed is not None
             self.change_pending = None
-            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp))
+            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp, self.comp_tool))
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -638,7 +640,9 @@ class _Reader:
         self.feed, self.motion = feed, motion
         self.change_pending = None
         clockwise = motion == "2"
-        self.steps.append(Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -680,6 +684,8 @@ class _Reader:
         code = self.motion
         r, bottom, start_z = self.cycle_r, self.cycle_z, self.z
         if r is None or bottom is None or start_z is None or feed is None or bottom >= r:
+            return False
+        if self.comp:
             return False
         if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
             return False
@@ -837,6 +843,10 @@ class _Reader:
         if any(c == "6" for _, c in m_codes):
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
+            elif self.selected_tool == 0:
+                self.notes.ignored(
+                    line, "T0 M6: the spindle is emptied (no tool 0 on the control); not imported"
+                )
             else:
                 if self.tool == 0 and not self.moves_made:
                     # The first tool called before any move (a post's start): the tool in
@@ -953,10 +963,16 @@ class _Reader:
                         f"{self.units.value} blocks",
                     )
         if "40" in codes:
-            self.comp = ""
+            # As rs274: the move that ends compensation goes straight from the compensated
+            # point (an arc there is refused).
+            last = next(
+                (s for s in reversed(self.steps) if isinstance(s, Rapid | Feed | Arc)), None
+            )
+            self.arc_barred = isinstance(last, Feed | Arc) and last.comp != ""
+            self.comp, self.comp_tool = "", 0
         for code, side in (("41", "left"), ("42", "right")):
             if code in codes:
-                self.comp = side
+                self.compensation(block, codes[code], side)
         for code in ("43", "45"):
             if code in codes:
                 self.length_offset(block, code)
@@ -985,6 +1001,25 @@ class _Reader:
         for code in codes:
             if NOTED_G.get(code):
                 self.notes.ignored(line, f"G{code}: {NOTED_G[code]}")
+
+    def compensation(self, block: Block, word: Word, side: str) -> None:
+        """G41/G42 [D]: cutter compensation to that side with D's diameter (the tool in the
+        spindle without D; D0 has no radius, so nothing is offset, as rs274 reads it)."""
+        if self.comp:
+            raise failure(
+                block.line,
+                word.column,
+                f"G{word.code} while cutter compensation is on: G40 must end it first (as "
+                "rs274 reads it)",
+            )
+        d = block.get("D")
+        number = 0 if d is None else self.integer(d, block, 0, 999)
+        if d is not None and number == 0:
+            self.notes.assumed(
+                block.line, f"G{word.code} D0: a radius of 0, so the path is the tool centre"
+            )
+            return
+        self.comp, self.comp_tool = side, number
 
     def set_motion(self, block: Block, word: Word, uses_axes: bool) -> None:
         new = word.code
@@ -1274,6 +1309,22 @@ class _Reader:
             self.cycle(block)
             return
         x, y, z = self.target(block)
+        if self.comp and motion == "0" and (x, y) != (self.x, self.y):
+            raise failure(
+                line,
+                block.words[0].column,
+                "a rapid move in X/Y with cutter compensation on: the control offsets it too, "
+                "and MillBlocks offsets cuts only — turn compensation on (G41/G42) with the "
+                "first cut, or off (G40) before the rapid",
+            )
+        if self.arc_barred and motion in ("2", "3"):
+            raise failure(
+                line,
+                next((w.column for w in block.gs if w.code == motion), block.words[0].column),
+                "an arc right after G40: the control refuses it (the move that ends cutter "
+                "compensation goes straight from the compensated point)",
+            )
+        self.arc_barred = False
         if motion != "0":
             self.change_pending = None
         if motion == "0":
@@ -1288,7 +1339,7 @@ class _Reader:
             self.moves_made = True
         elif motion == "1":
             feed = self.need_feed(block)
-            self.steps.append(Feed(line, x, y, z, feed, units, self.comp))
+            self.steps.append(Feed(line, x, y, z, feed, units, self.comp, self.comp_tool))
             self.moves_made = True
         else:
             self.arc(block, x, y, z, motion == "2")
@@ -1338,7 +1389,9 @@ class _Reader:
             where = i_word or j_word
             assert where is not None
             check_arc(line, where.column, (sx, sy), (x, y), (cx, cy), units)
-        self.steps.append(Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
 
     def centre_from_radius(
         self,
@@ -1388,6 +1441,12 @@ class _Reader:
         assert code is not None
         units = self.current_units()
         first = block.words[0].column
+        if self.comp:
+            raise failure(
+                line,
+                first,
+                f"G{code} with cutter compensation on: rs274 refuses a canned cycle then",
+            )
         self.change_pending = None
         x0, y0 = self.x or 0, self.y or 0
         x, y, _ = self.target(block)

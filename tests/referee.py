@@ -307,7 +307,8 @@ def rs274(
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
     24 tools) with the `lengths` (inches) the operator keys in from the set-up comments and
-    the `diameters` (in the file's units; 0 where not given) cutter compensation uses.
+    the `diameters` (inches, the table's unit whatever the file's; 0 where not given) that
+    cutter compensation (G41/G42) offsets by.
     """
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")

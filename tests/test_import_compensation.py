@@ -273,14 +273,17 @@ def test_what_rs274_refuses_is_refused_naming_the_line() -> None:
     """An entry move no longer than the tool radius (rs274: "Length of cutter compensation
     entry move is not greater than the tool radius")."""
     text = "G20\nG10 L1 P1 R0.5\nG0 X-0.3 Y0 Z0.1\nG1 Z-0.1 F5\nG41 X0 Y0\nX1\nG40\nM30\n"
-    with pytest.raises(ImportFailure, match="line 5: cutter compensation .*entry move is not"):
+    with pytest.raises(ImportFailure, match=r"line 5: cutter compensation .*entry move is not"):
         read_program(text.encode(), "t", "gcode")
 
 
 def test_the_existing_reading_of_a_compensated_plunge_is_kept() -> None:
     """G42 on the plunge with no diameter in the file: the compensated contour with the
     entry move as its first cut (docs/imports.md), reported as not checked."""
-    text = "G20 G90 G17\nG43 H1\nS1000 M3\nG0 Z0.1\nG0 X0 Y0\nG42 G1 Z-0.2 F4\nX2 F10\nY1\nG40 G0 Z0.1\nM30\n"
+    text = (
+        "G20 G90 G17\nG43 H1\nS1000 M3\nG0 Z0.1\nG0 X0 Y0\nG42 G1 Z-0.2 F4\nX2 F10\nY1\n"
+        "G40 G0 Z0.1\nM30\n"
+    )
     program, report = imported(text)
     [drill, *_] = program.blocks
     assert isinstance(drill, Hole) and drill.comp is Comp.RIGHT

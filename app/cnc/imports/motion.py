@@ -10,6 +10,7 @@ from __future__ import annotations
 from app.cnc.blocks import Program
 from app.cnc.imports.build import Builder, SetUp, block0, make_program
 from app.cnc.imports.common import show
+from app.cnc.imports.ops import LoopOp, Op, PosOp
 from app.cnc.imports.recognise import (
     RoutineFinder,
     find_bolt_circles,
@@ -32,10 +33,11 @@ def program_from_motion(parsed: Parsed) -> Program:
     found = segment(parsed)
     parsed.steps = []
     tol = parsed.tolerance
-    ops = merge_pecks(found.ops, tol)
     diameters = {n: t.diameter for n, t in parsed.tools.items() if t.diameter}
     rpms = {n: use.rpm for n, use in found.tools.items()}
     finder = RoutineFinder(diameters, rpms, tol, notes)
+    ops = finder.two_pass_with_pecks(found.ops)
+    ops = merge_pecks(ops, tol)
     ops = finder.run(ops)
     ops = find_bolt_circles(ops, tol, notes)
     ops = find_loops(ops, tol, notes)
@@ -44,7 +46,11 @@ def program_from_motion(parsed: Parsed) -> Program:
     builder.flush_rounding()
     units = parsed.units
     z_retract = None
+    # A retract's Z UP is its operation's: a level of pecks merged into one DRILL retracts
+    # above the DRILL's Z UP, not above the level it was re-entered at.
+    z_ups = _z_ups(ops)
     for line, z_up, height in found.retracts:
+        z_up = z_ups.get(line, z_up)
         value = height - max(z_up, 0)
         if value < 0:
             continue
@@ -99,3 +105,14 @@ def program_from_motion(parsed: Parsed) -> Program:
         db0,
         builder.blocks,
     )
+
+
+def _z_ups(ops: list[Op]) -> dict[int, int]:
+    """The Z UP of the operation each source line belongs to (operations with depths)."""
+    found: dict[int, int] = {}
+    for op in ops:
+        if isinstance(op, LoopOp):
+            found |= _z_ups(op.body)
+        elif not isinstance(op, PosOp) and op.spec.z_up is not None:
+            found |= dict.fromkeys(op.lines, op.spec.z_up)
+    return found

@@ -6,6 +6,8 @@ its finest numbers, `Parsed.tolerance`); otherwise the operations stay explicit 
 
 - **Pecks in a mill sequence**: the same cuts at levels that are MillBlocks' even peck
   levels from Z UP, each re-entered at the level just cut → one DRILL with # PECK.
+- **A 2P routine in pecks**: its roughing pass at each such level, the finishing pass after
+  the last → one DRILL with # PECK and the 2P routine, where the routine cuts them exactly.
 - **CIRCLE / FRAME**: for a mill sequence cut with a tool whose diameter the file gives,
   routine blocks are proposed from its arcs and extent (every placement, 2P or not, the
   direction from the cut) and planned by `app.cnc.mill` — the same code the interpreter

@@ -309,7 +309,8 @@ def rs274(
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
     24 tools) with the `lengths` (inches) the operator keys in from the set-up comments and
     the `diameters` (inches, the table's unit whatever the file's; 0 where not given) that
-    cutter compensation (G41/G42) offsets by.
+    cutter compensation (G41/G42) offsets by; a tool past 24 given either is listed too (a
+    CAM library's T32).
     """
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
@@ -318,7 +319,7 @@ def rs274(
     table.write_text(
         "".join(
             f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D{diameters.get(n, 0.0):.8f} ;\n"
-            for n in range(1, 25)
+            for n in sorted({*range(1, 25), *lengths, *diameters})
         )
     )
     # rs274 maps its tool table to $HOME/.tool.mmap: two runs at once (another test

@@ -7,6 +7,9 @@ blocks that make the same motion, `build` writes them, rounded once, with Data B
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+from app.cnc import limits
 from app.cnc.blocks import Program
 from app.cnc.imports.build import Builder, SetUp, block0, make_program
 from app.cnc.imports.common import show
@@ -18,7 +21,7 @@ from app.cnc.imports.recognise import (
     merge_pecks,
 )
 from app.cnc.imports.segment import segment
-from app.cnc.imports.steps import Parsed
+from app.cnc.imports.steps import Arc, Feed, Parsed, ToolChange
 
 
 def program_from_motion(parsed: Parsed) -> Program:
@@ -30,6 +33,7 @@ def program_from_motion(parsed: Parsed) -> Program:
     Raises ImportFailure (from segmenting) for motion no block can make.
     """
     notes = parsed.notes
+    number_tools(parsed)
     found = segment(parsed)
     parsed.steps = []
     tol = parsed.tolerance
@@ -116,3 +120,45 @@ def _z_ups(ops: list[Op]) -> dict[int, int]:
         elif not isinstance(op, PosOp) and op.spec.z_up is not None:
             found |= dict.fromkeys(op.lines, op.spec.z_up)
     return found
+
+
+def number_tools(parsed: Parsed) -> None:
+    """Tools numbered past the control's 24 (a CAM library's T32) take the lowest numbers
+    the file leaves free, in the order the file first names them, each reported; their
+    diameter, length and name go with them. Past 24 tools in all, the rest keep their
+    numbers (Data Block 0 then asks for them)."""
+    named: list[int] = []
+    lines: dict[int, int | None] = {}
+
+    def name(number: int, line: int | None) -> None:
+        if number and number not in lines:
+            named.append(number)
+            lines[number] = line
+
+    name(parsed.initial_tool, None)
+    for step in parsed.steps:
+        if isinstance(step, ToolChange):
+            name(step.tool, step.line)
+        elif isinstance(step, Feed | Arc):
+            name(step.comp_tool, step.line)
+    for number in parsed.tools:
+        name(number, None)
+    outside = [n for n in named if not 1 <= n <= limits.MAX_TOOL]
+    free = [n for n in range(1, limits.MAX_TOOL + 1) if n not in lines]
+    given = dict(zip(outside, free, strict=False))
+    if not given:
+        return
+    for old, new in given.items():
+        parsed.notes.assumed(
+            lines[old],
+            f"tool {old} is tool {new} here: the control has tools 1 to {limits.MAX_TOOL} "
+            f"(the file's T{old}, its diameter and length)",
+        )
+    steps = parsed.steps
+    for k, step in enumerate(steps):
+        if isinstance(step, ToolChange) and step.tool in given:
+            steps[k] = replace(step, tool=given[step.tool])
+        elif isinstance(step, Feed | Arc) and step.comp_tool in given:
+            steps[k] = replace(step, comp_tool=given[step.comp_tool])
+    parsed.initial_tool = given.get(parsed.initial_tool, parsed.initial_tool)
+    parsed.tools = {given.get(n, n): data for n, data in parsed.tools.items()}

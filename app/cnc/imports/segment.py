@@ -535,9 +535,15 @@ class _Segmenter:
             how = f"dwell {dwell} s; a MillBlocks DRILL dwells 0.8 s"
         pecks = 1
         if op is HoleOp.DRILL and len(levels) > 1:
-            pecks = len(levels)
+            pecks = min(len(levels), limits.MAX_PECKS)
             even = peck_levels(z_up, bottom, pecks)
-            if any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
+            if len(levels) > pecks:
+                self.notes.assumed(
+                    lines[0],
+                    f"{len(levels)} peck levels: MillBlocks drills at most {pecks}, so {pecks} "
+                    f"even pecks of {show((z_up - bottom) / pecks, spec_units)}",
+                )
+            elif any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
                 shown = ", ".join(f"Z{show(z, spec_units)}" for z in levels)
                 self.notes.assumed(
                     lines[0],
@@ -709,7 +715,12 @@ class _Segmenter:
             depth = step.r - step.bottom
             pecks = max(1, math.ceil(depth / step.peck))
             if pecks > limits.MAX_PECKS:
-                how = f"{pecks} pecks of {show(step.peck, step.units)}: more than 40"
+                how = (
+                    f"{pecks} pecks of Q{show(step.peck, step.units)}: MillBlocks drills at "
+                    f"most {limits.MAX_PECKS}, so {limits.MAX_PECKS} even pecks of "
+                    f"{show(depth / limits.MAX_PECKS, step.units)}"
+                )
+                pecks = limits.MAX_PECKS
             elif depth % step.peck:
                 how = (
                     f"pecks of Q{show(step.peck, step.units)} do not divide the depth "

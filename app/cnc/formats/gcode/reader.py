@@ -39,6 +39,7 @@ from typing import Final
 from app.cnc.imports.common import (
     MAX_ABS_NM,
     MAX_DIGITS,
+    ImportFailure,
     Notes,
     arc_end_off,
     check_digits,
@@ -382,6 +383,9 @@ class _Reader:
         self.comp = ""
         self.comp_tool = 0  # G41/G42's D (0: the tool in the spindle)
         self.arc_barred = False  # G40 has just ended compensation: the next move is a line
+        # A `G0 X Y` right after a canned cycle, until the next move says what it meant:
+        # the error if nothing does, and where it went (None: not yet moved).
+        self.undecided: tuple[ImportFailure, tuple[int, int] | None] | None = None
         self.return_initial = True
         self.feed: int | None = None
         self.speed: int | None = None
@@ -436,6 +440,8 @@ class _Reader:
                 block = self.read_line(number, line)
             if block is not None:
                 self.execute(block)
+        if self.undecided is not None:
+            raise self.undecided[0]
         units = self.program_units or Units.INCH
         if self.units_assumed:
             self.notes.assumed(None, "no G20/G21 before the first dimension: read in inches")
@@ -545,7 +551,7 @@ class _Reader:
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
         units = self.units
-        if units is None or self.incremental or self.arc_barred:
+        if units is None or self.incremental or self.arc_barred or self.undecided is not None:
             return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
         if motion is None or (motion == "0" and self.comp):
@@ -1030,14 +1036,20 @@ class _Reader:
             and not block.has("Z")
             and (block.has("X") or block.has("Y"))
         ):
-            raise failure(
-                block.line,
-                word.column,
-                f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it ends "
-                "the cycle, so no hole is drilled here; a ProtoTRAK post that writes its G "
-                "code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is meant "
-                "cannot be told: remove the G code to drill here, or put G80 before the line "
-                "to only move",
+            # Decided by what comes next: a canned cycle at that very point means the line
+            # only moved there (FreeCAD's post writes `G0 X Y` before each cycle line; a
+            # hole there would be drilled twice); anything else leaves it undecided.
+            self.undecided = (
+                failure(
+                    block.line,
+                    word.column,
+                    f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it "
+                    "ends the cycle, so no hole is drilled here; a ProtoTRAK post that writes "
+                    "its G code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is "
+                    "meant cannot be told: remove the G code to drill here, or put G80 before "
+                    "the line to only move",
+                ),
+                None,
             )
         self.motion = new
         if new not in CYCLES:
@@ -1306,9 +1318,13 @@ class _Reader:
         if motion == "80":
             raise failure(line, block.words[0].column, "axis words after G80 with no motion code")
         if motion in CYCLES:
+            if self.undecided is not None:
+                self.decide(self.target(block)[:2], True)
             self.cycle(block)
             return
         x, y, z = self.target(block)
+        if self.undecided is not None:
+            self.decide((x, y), False)
         if self.comp and motion == "0" and (x, y) != (self.x, self.y):
             raise failure(
                 line,
@@ -1347,6 +1363,18 @@ class _Reader:
         self.x, self.y, self.z = x, y, z
         self.moved = True
         self.cycle_drilled = False
+
+    def decide(self, to: tuple[int, int], hole: bool) -> None:
+        """The move after a `G0 X Y` right after a canned cycle (`undecided`): a hole at
+        that point says the line only moved; a move elsewhere leaves it ambiguous."""
+        assert self.undecided is not None
+        error, at = self.undecided
+        if at is None:
+            self.undecided = (error, to)  # the line itself: where it goes
+        elif to == at and hole:
+            self.undecided = None
+        elif to != at:
+            raise error
 
     def need_feed(self, block: Block) -> int:
         if self.feed is None:

@@ -5,13 +5,15 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint typecheck pytest system-deps native regen-golden clean bench bench-serial load
+.PHONY: run test lint typecheck pytest system-deps wheel wheel-native regen-golden clean bench bench-serial load
 HOST ?= 127.0.0.1
 PORT ?= 5000
 WORKERS ?= 2
 
-# The virtual environment is rebuilt whenever the dependency pins change.
-$(STAMP): pyproject.toml constraints.txt
+# The virtual environment is rebuilt whenever the dependency pins change. The Debian
+# packages running needs (python3-venv) are installed first, when missing.
+$(STAMP): pyproject.toml constraints.txt setup.py
+	bash scripts/install-system-deps run
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[dev]'
@@ -19,20 +21,22 @@ $(STAMP): pyproject.toml constraints.txt
 
 # Debian packages the tests need (listed in debian-packages.txt); installed only when missing.
 system-deps:
-	bash scripts/install-system-deps
+	bash scripts/install-system-deps test
 
-# The G-code importer's hot modules compiled with mypyc (app/cnc/native.py; ~2 min the first
-# time and after they change, nothing otherwise). Needs gcc and Python's headers.
-native: $(STAMP)
-	$(PY) scripts/build-native
+# The wheel a shop installs (pure Python), and the same with the G-code importer compiled by
+# mypyc (setup.py; ~2 min of gcc; needs gcc and python3-dev). Both into dist/.
+wheel: $(STAMP)
+	$(PY) -m pip wheel --quiet --no-deps -w dist .
+
+wheel-native: $(STAMP)
+	MILLBLOCKS_MYPYC=1 $(PY) -m pip wheel --quiet --no-build-isolation --no-deps -w dist .
 
 # The web editor on http://127.0.0.1:5000 with the library in instance/ (SQLite; set
 # DATABASE_URL for PostgreSQL). The database is migrated (and given its demo programs the
 # first time) before the workers start.
 run: $(STAMP)
-	$(PY) scripts/build-native || echo "make run: importing G-code from the sources (slower)" >&2
 	$(VENV)/bin/millblocks db upgrade
-	$(VENV)/bin/gunicorn --bind $(HOST):$(PORT) --workers $(WORKERS) --access-logfile - 'app:create_app()'
+	$(VENV)/bin/millblocks serve --host $(HOST) --port $(PORT) --workers $(WORKERS)
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
@@ -46,7 +50,6 @@ typecheck: $(STAMP)
 # temporary directory even as root, so two runs side by side do not collide.
 # pytest exits 5 when it collected nothing: treat that as a failure, not a pass.
 pytest: $(STAMP) system-deps
-	$(PY) scripts/build-native
 	pg_virtualenv -t $(PY) -m pytest $(PYTEST_ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing" >&2; exit 1; fi; exit $$rc
 
@@ -57,7 +60,6 @@ DURATION ?= 60
 # Benchmarks (issue 10): figures and same-run ratios into docs/benchmarks.md (~6-10 min,
 # bounded at 15). Not part of `make test`.
 bench: $(STAMP) system-deps
-	$(PY) scripts/build-native
 	$(PY) -m pip install --quiet --no-deps -r bench/requirements.txt
 	$(PY) -m bench.run
 
@@ -77,5 +79,5 @@ regen-golden: $(STAMP)
 	MILLBLOCKS_REGEN_GOLDEN=1 $(PY) -m pytest tests/test_golden.py tests/test_verify.py -q -k "golden"
 
 clean:
-	-$(PY) scripts/build-native --clean
-	rm -rf $(VENV) .mypy_cache .pytest_cache .ruff_cache .hypothesis
+	rm -rf $(VENV) build dist .mypy_cache .pytest_cache .ruff_cache .hypothesis
+	find app -name '*.so' -delete  # left by builds of older versions, which compiled in place

@@ -20,28 +20,27 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import signal
 import sys
 import threading
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
-from app.cnc import document
-from app.cnc.blocks import Program
-from app.cnc.copy import CopyError, resolve_copies
-from app.cnc.emit.target import ExportError, OptionError, targets
-from app.cnc.emit.target import export as run_export
-from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, estimate, report
-from app.cnc.imports import importers
-from app.cnc.interpret import interpret
-from app.cnc.machine import MachineError, MachineModel, read_machine
-from app.cnc.numbers import NumberError, parse_decimal, parse_int
-from app.cnc.problems import Problem, has_errors
-from app.cnc.validate import validate
-from app.storage.library import Library, LibraryError, Machine, open_library
+from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
+
+if TYPE_CHECKING:
+    from app.cnc.blocks import Program
+    from app.cnc.machine import MachineModel
+    from app.cnc.problems import Problem
+    from app.storage.library import Library, Machine
+
+# Each command imports what it needs when it runs: `millblocks --help` and a small export
+# start in a fraction of a second, not after every format, ezdxf and SQLAlchemy are loaded.
+# Only click and the standard library are imported here.
 
 
 class Number(click.ParamType[Any, Any]):
@@ -55,6 +54,8 @@ class Number(click.ParamType[Any, Any]):
         self.whole = whole
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        from app.cnc.numbers import NumberError, parse_decimal, parse_int
+
         if isinstance(value, int | float) and not isinstance(value, bool):
             return value
         try:
@@ -75,13 +76,29 @@ class ProgramFileError(click.ClickException):
 _FORMAT_KEY = "millblocks.file_format"
 
 
+class LazyChoice(click.Choice[str]):
+    """A choice whose names are looked up when the option is used or its help shown (the
+    import formats' registry loads every format: not at start-up)."""
+
+    def __init__(self, names: Callable[[], list[str]]) -> None:
+        # click.Choice's own __init__ would store the names now; they are a property here.
+        self._names = names
+        self.case_sensitive = True
+
+    @property
+    def choices(self) -> tuple[str, ...]:  # type: ignore[override]
+        return tuple(self._names())
+
+
+def _import_formats() -> list[str]:
+    from app.cnc.imports import importers
+
+    return list(importers())
+
+
 def _format_choice() -> click.Choice[str]:
     """The import formats of the registry, as a choice."""
-    return click.Choice(list(importers()))
-
-
-def _formats_help() -> str:
-    return ", ".join(importers())
+    return LazyChoice(_import_formats)
 
 
 def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
@@ -93,7 +110,7 @@ def file_format_option(command: Callable[..., Any]) -> Callable[..., Any]:
         expose_value=False,
         is_eager=True,
         callback=lambda ctx, _param, value: ctx.meta.__setitem__(_FORMAT_KEY, value),
-        help=f"What FILE is: {_formats_help()} (default: detected).",
+        help="What FILE is (default: detected from its content).",
     )(command)
 
 
@@ -116,7 +133,9 @@ def read_file(
     if chosen == "json":
         return _load_document(path, data), chosen
     try:
-        result = read_program(data, path.stem, chosen, options or {})
+        # The user's own file on their own machine: no line or block limit (the library
+        # still keeps only programs of at most app.cnc.sizes.MAX_BLOCKS blocks).
+        result = read_program(data, path.stem, chosen, options or {}, limited=False)
     except ValueError as exc:
         raise ProgramFileError(f"{path}: {exc}") from None
     click.echo(result.text(), nl=False, err=True)
@@ -124,6 +143,9 @@ def read_file(
 
 
 def _load_document(path: Path, data: bytes) -> Program:
+    from app.cnc import document
+    from app.cnc.copy import CopyError, resolve_copies
+
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -157,6 +179,8 @@ def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Progr
     path = Path(reference)
     if path.exists() or reference.endswith(".json"):
         return load_program(path), None
+    from app.storage.library import LibraryError  # a file needs no database code
+
     try:
         stored = (lib or library()).find(reference)
     except LibraryError as exc:
@@ -166,6 +190,8 @@ def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Progr
 
 def library() -> Library:
     """The library (DATABASE_URL, else instance/millblocks.db), migrated to the newest."""
+    from app.storage.library import open_library
+
     return open_library()
 
 
@@ -176,6 +202,9 @@ def print_problems(path: Path | str, problems: list[Problem]) -> None:
 
 def checked(path: str) -> Program:
     """Load and validate; exit 1 after listing the problems when there is an error."""
+    from app.cnc.problems import has_errors
+    from app.cnc.validate import validate
+
     program = resolve_program(path)
     problems = validate(program)
     print_problems(path, problems)
@@ -195,6 +224,8 @@ def main() -> None:
 @file_format_option
 def check(file: str) -> None:
     """List every problem in PROGRAM (a file, or a library id or name); exit 1 on errors."""
+    from app.cnc.validate import validate
+
     program = resolve_program(file)
     problems = validate(program)
     print_problems(file, problems)
@@ -218,6 +249,9 @@ def check(file: str) -> None:
 @click.option("--machine", "machine_name", default=None, help="Use a library machine's rates.")
 def time(file: str, tool_change_seconds: float | None, machine_name: str | None) -> None:
     """Estimate the cycle time of PROGRAM per block, per tool and in total."""
+    from app.cnc.estimate import estimate, report
+    from app.cnc.interpret import interpret
+
     program = checked(file)
     machine = None
     if machine_name:
@@ -227,6 +261,8 @@ def time(file: str, tool_change_seconds: float | None, machine_name: str | None)
 
 
 def _target_names() -> list[str]:
+    from app.cnc.emit.target import targets
+
     return list(targets())
 
 
@@ -273,6 +309,9 @@ def export(
     The output goes to standard output unless -o is given; the compatibility report (what
     the target could not express) goes to standard error.
     """
+    from app.cnc.emit.target import ExportError, OptionError
+    from app.cnc.emit.target import export as run_export
+
     raw: dict[str, str] = {}
     machine = None
     if machine_name:
@@ -329,6 +368,8 @@ def _remove(path: Path | None) -> None:
 
 
 def _library_machine(name: str) -> Machine:
+    from app.storage.library import LibraryError
+
     try:
         return library().machine(name)
     except LibraryError as exc:
@@ -336,6 +377,8 @@ def _library_machine(name: str) -> Machine:
 
 
 def _machine_model(limits: dict[str, Any], where: str) -> MachineModel | None:
+    from app.cnc.machine import MachineError, read_machine
+
     if not limits:
         return None
     try:
@@ -366,6 +409,8 @@ def _profile_options(path: Path) -> dict[str, str]:
 @click.option("--options", "show_options", is_flag=True, help="List each target's options.")
 def list_targets(show_options: bool) -> None:
     """List the export targets (and their options)."""
+    from app.cnc.emit.target import targets
+
     for name, target in targets().items():
         click.echo(f"{name:<16} {target.description}")
         needs = target.needs_for(target.parse_options({}))
@@ -411,6 +456,9 @@ def import_program(
     """Add a program file to the library: a MillBlocks JSON document, ProtoTRAK Plus
     events, G-code, a 1704 tape or a DXF drawing. Prints the import report on stderr and
     the new program's id. Exit 2, nothing saved, when the file cannot be read."""
+    from app.cnc.validate import validate
+    from app.storage.library import LibraryError
+
     reader_options: dict[str, str] = {}
     for option in options:
         key, sep, value = option.partition("=")
@@ -420,9 +468,12 @@ def import_program(
     dxf = {"layer": layer, "hole-diameter": hole_diameter, "tolerance": tolerance}
     reader_options |= {key: given for key, given in dxf.items() if given is not None}
     program, chosen = read_file(file, format, reader_options)
-    info = library().create(
-        program, author=author, summary_text=f"imported from {file.name} ({chosen})"
-    )
+    try:
+        info = library().create(
+            program, author=author, summary_text=f"imported from {file.name} ({chosen})"
+        )
+    except LibraryError as exc:
+        raise ProgramFileError(f"{file}: {exc}") from None
     print_problems(file, validate(program))
     click.echo(info.id)
 
@@ -434,6 +485,8 @@ def import_program(
 @click.option("--machine", "machine_name", default=None, help="A library machine (rates, target).")
 def setup_sheet_command(program: str, target: str | None, machine_name: str | None) -> None:
     """Print the set-up sheet of PROGRAM: part zero, tools, times, the export's report."""
+    from app.cnc.emit.target import ExportError, OptionError
+    from app.cnc.emit.target import export as run_export
     from app.cnc.setup import render_text, setup_sheet
 
     loaded = checked(program)
@@ -525,6 +578,7 @@ def verify_command(
 )
 def mirror_program(program: str, axis: str, output: Path | None) -> None:
     """Make the mirror-image (left-hand) program of PROGRAM, keeping each cut's direction."""
+    from app.cnc import document
     from app.cnc.mirror import Axis, mirror
 
     result = mirror(resolve_program(program), Axis(axis))
@@ -541,6 +595,8 @@ def mirror_program(program: str, axis: str, output: Path | None) -> None:
 @click.argument("program", metavar="PROGRAM")
 def history(program: str) -> None:
     """List the saved versions of a library PROGRAM (id or name)."""
+    from app.storage.library import LibraryError
+
     lib = library()
     try:
         stored = lib.find(program)
@@ -559,6 +615,8 @@ def history(program: str) -> None:
 @click.argument("new", type=Number(whole=True))
 def diff_versions(program: str, old: int, new: int) -> None:
     """Block-level differences between two versions of a library PROGRAM."""
+    from app.storage.library import LibraryError
+
     lib = library()
     try:
         stored = lib.find(program)
@@ -574,6 +632,8 @@ def diff_versions(program: str, old: int, new: int) -> None:
 @click.argument("version", type=Number(whole=True))
 def restore_version(program: str, version: int) -> None:
     """Make an old VERSION of a library PROGRAM current again (as a new version)."""
+    from app.storage.library import LibraryError
+
     lib = library()
     try:
         stored = lib.find(program)
@@ -609,6 +669,8 @@ def backup(archive: Path) -> None:
 @click.argument("archive", type=click.Path(path_type=Path, dir_okay=False, exists=True))
 def restore(archive: Path) -> None:
     """Add every program of a backup ARCHIVE to the library (nothing is replaced)."""
+    from app.storage.library import LibraryError
+
     try:
         count = library().restore_backup(archive)
     except LibraryError as exc:
@@ -628,6 +690,7 @@ def user() -> None:
 def user_add(username: str, role: str, password: str) -> None:
     """Create an account."""
     from app.storage.accounts import Accounts
+    from app.storage.library import LibraryError
 
     try:
         Accounts(library()).create(username, password, role)
@@ -642,6 +705,7 @@ def user_add(username: str, role: str, password: str) -> None:
 def user_password(username: str, password: str) -> None:
     """Set a user's password; every session of the user ends."""
     from app.storage.accounts import Accounts
+    from app.storage.library import LibraryError
 
     try:
         Accounts(library()).set_password(username, password)
@@ -655,6 +719,7 @@ def user_password(username: str, password: str) -> None:
 def user_end_sessions(username: str) -> None:
     """Log a user out everywhere (a lost badge, a shared terminal)."""
     from app.storage.accounts import Accounts
+    from app.storage.library import LibraryError
 
     try:
         count = Accounts(library()).end_sessions(username)
@@ -684,6 +749,44 @@ def db_upgrade() -> None:
     click.echo("database is up to date")
 
 
+@main.command("serve")
+@click.option("--host", default="127.0.0.1", show_default=True, help="The address to listen on.")
+@click.option("--port", default=5000, show_default=True, type=Number(minimum=1, whole=True))
+@click.option(
+    "--workers",
+    default=2,
+    show_default=True,
+    type=Number(minimum=1, whole=True),
+    help="gunicorn worker processes.",
+)
+@click.option(
+    "--dnc/--no-dnc",
+    default=True,
+    show_default=True,
+    help="Also start the transfer service (`millblocks dnc`); --no-dnc where it runs as its "
+    "own systemd unit.",
+)
+def serve(host: str, port: int, workers: int, dnc: bool) -> None:
+    """Serve the web app with gunicorn (Linux), after bringing the database up to date.
+
+    Listens on 127.0.0.1 unless told otherwise: on a shop network put the reverse proxy
+    of docs/deploy.md in front, which reaches it there. Settings come from the
+    environment (MILLBLOCKS_*, DATABASE_URL).
+    """
+    library()  # migrated (and given its demo programs) once, before the workers start
+    if dnc:
+        # A process of its own, in this process group (Ctrl-C stops both); gunicorn
+        # restarting its workers, or being restarted, does not touch a transfer.
+        import subprocess
+
+        subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
+    command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
+    command += ["--workers", str(workers), "--access-logfile", "-", "app:create_app()"]
+    click.echo(f"serving MillBlocks on http://{host}:{port}/ ({workers} workers)", err=True)
+    sys.stderr.flush()
+    os.execv(sys.executable, command)
+
+
 # -- RS-232 transfers (issue 8) -------------------------------------------------------------
 
 
@@ -711,6 +814,9 @@ def _progress_printer(label: str) -> Callable[[int, int | None], None]:
 def _transfer_machine(name: str | None, port: str | None, target: str) -> Machine:
     """The library machine `name`, or else a bare line on `port`: 4800 7E1, no flow
     control, sending `target` (the ProtoTRAK Plus defaults)."""
+    from app.cnc.emit.target import targets
+    from app.storage.library import Machine
+
     if name:
         return _library_machine(name)
     if not port:
@@ -738,12 +844,14 @@ def send_command(
     PROGRAM is a library id or name, or a JSON file. The transfer is logged in the library.
     Ctrl-C stops it (the control has a partial program). Exit 1 when it is cancelled.
     """
+    from app.cnc.emit.target import ExportError, OptionError
     from app.dnc import TransferError, service
     from app.storage.transfers import TransferLog
 
     machine = _transfer_machine(machine_name, port, target)
     lib = library()
     chosen, program_id = resolve_reference(program, lib)
+    revision = None if program_id is None else lib.get(program_id).info.version
     stop, cancelled = _interruptible()
     try:
         sent = service.send_program(
@@ -751,6 +859,7 @@ def send_command(
             machine,
             port=port,
             program_id=program_id,
+            revision=revision,
             author=author,
             log=TransferLog(lib).log,
             progress=_progress_printer(f"send {chosen.name}"),
@@ -793,6 +902,7 @@ def receive_command(
     that is not a whole program is refused (nothing saved; the raw bytes are in the
     transfer log). Exit 1 when nothing was saved.
     """
+    from app.cnc.validate import validate
     from app.dnc import TransferError, service
     from app.storage.transfers import TransferLog
 
@@ -811,6 +921,7 @@ def receive_command(
             progress=_progress_printer("receive"),
             cancel=cancelled,
             first_byte_timeout=first_byte_timeout,
+            compare=TransferLog(lib).compare_with_last_send,
         )
     except (TransferError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
@@ -821,6 +932,46 @@ def receive_command(
         sys.exit(1)
     click.echo(got.stored.id)
     print_problems(got.program.name, validate(got.program))
+
+
+@main.command("dnc")
+@click.option(
+    "--poll",
+    default=0.5,
+    show_default=True,
+    type=Number(minimum=0.05),
+    help="Seconds between looks at the queue.",
+)
+def dnc_service(poll: float) -> None:
+    """Run the transfer service: every transfer queued by the web page, one at a time per
+    machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
+    transfers running then, naming them). Run one per library, beside the web server."""
+    from app.dnc.daemon import TransferService
+
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    running = TransferService(library(), poll=poll)
+    for transfer in running.recover():
+        click.echo(
+            f"transfer {transfer.id} ({transfer.direction} {transfer.program_name or '-'} on "
+            f"{transfer.machine}) was interrupted when the service last stopped",
+            err=True,
+        )
+    click.echo(f"transfer service running ({running.name})", err=True)
+
+    def started(transfer: Any) -> None:
+        click.echo(
+            f"transfer {transfer.id}: {transfer.direction} {transfer.program_name or '-'} "
+            f"on {transfer.machine} ({transfer.port})",
+            err=True,
+        )
+
+    for transfer in running.run(stop, on_start=started):
+        click.echo(
+            f"transfer {transfer.id} on {transfer.machine} interrupted by the stop", err=True
+        )
+    click.echo("transfer service stopped", err=True)
 
 
 @main.command("ports")
@@ -841,10 +992,12 @@ def list_transfers(limit: int) -> None:
     for t in TransferLog(library()).recent(limit):
         total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
         error = f"  {t.error}" if t.error else ""
+        version = f" v{t.revision}" if t.revision is not None else ""
+        digest = f" sha256 {t.checksum[:12]}" if t.checksum else ""
         click.echo(
             f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
-            f"{t.program_name or '-':<20} {t.target} {t.settings}  "
-            f"{t.bytes_done}{total} bytes  {t.outcome}{error}"
+            f"{(t.program_name or '-') + version:<24} {t.target} {t.settings}  "
+            f"{t.bytes_done}{total} bytes  {t.outcome}{error}{digest}  {t.author or '-'}"
         )
 
 

@@ -136,11 +136,60 @@ class Budget:
 BUDGET = Budget()
 
 
+@dataclass(frozen=True)
+class InstalledWheel:
+    """The wheel a shop installs, with the G-code importer compiled (`make wheel-native`),
+    in a fresh virtual environment; `shim` is a directory holding only a link to bench/, so
+    a child run there imports `bench` from the checkout and `app` from site-packages."""
+
+    bin: Path
+    shim: Path
+
+
+_INSTALLED: list[InstalledWheel] = []
+
+
+def installed_wheel() -> InstalledWheel:
+    """Build and install the compiled wheel once per run (a temporary directory, removed
+    when the run ends). Raises subprocess.CalledProcessError when the build fails."""
+    if _INSTALLED:
+        return _INSTALLED[0]
+    import atexit
+    import shutil
+    import tempfile
+
+    base = Path(tempfile.mkdtemp(prefix="millblocks-bench-wheel-"))
+    atexit.register(shutil.rmtree, base, True)
+    dist = base / "dist"
+    build = [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation"]
+    subprocess.run(
+        [*build, "-w", str(dist), str(ROOT)],
+        env={**os.environ, "MILLBLOCKS_MYPYC": "1"},
+        check=True,
+        timeout=1200,
+    )
+    venv = base / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    (wheel,) = dist.glob("*.whl")
+    pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "--quiet"]
+    subprocess.run([*pip, "-c", str(ROOT / "constraints.txt"), str(wheel)], check=True, timeout=900)
+    shim = base / "shim"
+    shim.mkdir()
+    (shim / "bench").symlink_to(ROOT / "bench")
+    _INSTALLED.append(InstalledWheel(venv / "bin", shim))
+    return _INSTALLED[0]
+
+
 def run_child(
-    target: str, args: dict[str, Any], timeout: float, env: dict[str, str] | None = None
+    target: str,
+    args: dict[str, Any],
+    timeout: float,
+    env: dict[str, str] | None = None,
+    installed: InstalledWheel | None = None,
 ) -> Result:
     """Run `module:function(**args)` in a fresh interpreter (with `env` added to the
-    environment); its result dict.
+    environment); its result dict. With `installed`, the interpreter is that of the
+    installed wheel, run outside the checkout (`app` from its site-packages).
 
     A failure or a time-out comes back as {"error": "..."}, never as an exception, so one
     broken case is reported in the table and the others still run. The child runs in its
@@ -149,10 +198,15 @@ def run_child(
     if time.monotonic() > BUDGET.deadline:
         return {"error": "skipped: the run's time budget is used up"}
     limit = BUDGET.limit(timeout)
-    command = [sys.executable, "-m", "bench.child", target, json.dumps(args)]
+    python, cwd = (
+        (sys.executable, ROOT)
+        if installed is None
+        else (str(installed.bin / "python"), installed.shim)
+    )
+    command = [python, "-m", "bench.child", target, json.dumps(args)]
     child = subprocess.Popen(
         command,
-        cwd=ROOT,
+        cwd=cwd,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

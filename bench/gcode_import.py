@@ -10,10 +10,11 @@ valid program.
 
 - ours: `app.cnc.imports.read_as` with the G-code importer (parse, motion, recognition of
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
-  program it returns — as the app runs it, with the importer compiled by mypyc
-  (app/cnc/native.py; `make bench` builds it), and again from its sources
+  program it returns — as the installed app runs it: the wheel with the importer compiled
+  by mypyc (`make wheel-native`, built and installed into a fresh environment by
+  `bench.common.installed_wheel`), and again from the same wheel's sources
   (MILLBLOCKS_NATIVE=0) for the compiled build's own ratio. Each is the faster of two
-  fresh processes, as rs274 is.
+  fresh processes, as rs274 is. Whole `millblocks` processes are in bench/cli.py.
 - rs274: LinuxCNC's interpreter in batch mode (`-g`), canonical calls to /dev/null; wall
   time of the process (its start-up, ~20 ms, is included and reported).
 - pygcode 0.2.1: `Line(text)` per line and `Machine.process_block` (its own interpreter);
@@ -33,6 +34,7 @@ import time
 from pathlib import Path
 
 from bench.common import (
+    InstalledWheel,
     Result,
     Section,
     fmt_bytes,
@@ -40,6 +42,7 @@ from bench.common import (
     fmt_rate,
     fmt_ratio,
     fmt_seconds,
+    installed_wheel,
     measure,
     run_child,
     table,
@@ -156,9 +159,12 @@ def ours_case(path: str) -> Result:
     }
 
 
-def ours_runs(args: dict[str, str], timeout: float, env: dict[str, str]) -> list[Result]:
+def ours_runs(
+    args: dict[str, str], timeout: float, env: dict[str, str], installed: InstalledWheel | None
+) -> list[Result]:
     """Ours in two fresh children, as rs274 is run twice: the same treatment for both."""
-    return [run_child("bench.gcode_import:ours_case", args, timeout, env) for _ in range(2)]
+    target = "bench.gcode_import:ours_case"
+    return [run_child(target, args, timeout, env, installed) for _ in range(2)]
 
 
 def faster(results: list[Result]) -> Result:
@@ -254,6 +260,11 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
     """rs274 and ours on files of each size (linear: the same µs per line at every size),
     pygcode on the 100 000-line file only (its time limit would cut the others short)."""
     section = Section("G-code import: " + ", ".join(fmt_count(n) for n in sizes) + " lines")
+    try:
+        installed: InstalledWheel | None = installed_wheel()
+    except subprocess.SubprocessError as error:
+        section.lines.append(f"(the compiled wheel could not be built: {error})")
+        installed = None
     rows: list[list[str]] = []
     headline: tuple[float, float, float, float] | None = None
     for lines in sizes:
@@ -263,8 +274,8 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
             args = {"path": str(path)}
             results = {
                 "rs274": run_child("bench.gcode_import:rs274_case", args, timeout),
-                "ours": faster(ours_runs(args, timeout, {})),
-                "sources": faster(ours_runs(args, timeout, {"MILLBLOCKS_NATIVE": "0"})),
+                "ours": faster(ours_runs(args, timeout, {}, installed)),
+                "sources": faster(ours_runs(args, timeout, {"MILLBLOCKS_NATIVE": "0"}, installed)),
             }
             if lines == LINES:
                 results["pygcode"] = run_child(
@@ -297,7 +308,7 @@ def run(sizes: tuple[int, ...] = SIZES, timeout: float = 600.0) -> Section:
                     f"peak {fmt_bytes(r['peak'])}"
                 )
                 if name == "ours":
-                    built = "compiled" if r["compiled"] else "**not compiled** (`make native`)"
+                    built = "compiled" if r["compiled"] else "**not compiled** (no compiled wheel)"
                     detail = f"{built}; {detail}"
                 if name == "ours" and lines == LINES:
                     headline = (seconds, r["cpu"], referee["seconds"], referee["cpu"])

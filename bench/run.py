@@ -22,7 +22,7 @@ from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
-from bench import editor, exports, gcode_import, interpreter, pocket, preview, simulate
+from bench import cli, editor, exports, gcode_import, interpreter, pocket, preview, simulate
 from bench.common import (
     BUDGET,
     ROOT,
@@ -50,6 +50,9 @@ def sections(quick: bool) -> dict[str, Callable[[], Section]]:
         "export": lambda: exports.run((10_000, 100_000) if quick else exports.SIZES),
         "simulate": lambda: simulate.run(10_000 if quick else simulate.MOVES),
         "pocket": lambda: pocket.run(),
+        "cli": lambda: cli.run(
+            (10_000, 100_000) if quick else cli.IMPORT_SIZES, 100_000 if quick else cli.EXPORT_MOVES
+        ),
     }
 
 

@@ -1,10 +1,10 @@
 """(child) Import files and print what came of each, one JSON line per file.
 
-Run by tests/test_native.py twice, once with the compiled importer and once with
-MILLBLOCKS_NATIVE=0 (its sources): the two outputs must be identical. Arguments: the
-files to read; each is read as it is and, for a text file, in lower case (which takes the
-G-code reader's word-by-word path instead of its fast lane). The last line says which
-modules ran compiled.
+Run by tests/test_wheel.py twice with the installed wheel's Python, once with the compiled
+importer and once with MILLBLOCKS_NATIVE=0 (its sources): the two outputs must be
+identical. Arguments: the files to read; each is read as it is and, for a text file, in
+lower case (which takes the G-code reader's word-by-word path instead of its fast lane).
+The last line says which modules ran compiled.
 """
 
 from __future__ import annotations

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import subprocess
@@ -12,6 +13,8 @@ import pytest
 from click.testing import CliRunner
 
 from app.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
 
 GOLDEN = Path(__file__).parent / "golden"
 
@@ -226,3 +229,42 @@ def test_an_events_import_with_errors_converts_to_json(tmp_path: Path) -> None:
     assert document.loads(out.read_text()) == imported
     code, _, err = run("export", str(source), "--to", "gcode-linuxcnc")
     assert code == 1 and "fix them before exporting" in err
+
+
+def _modules_after(args: list[str], tmp_path: Path) -> set[str]:
+    """The modules a whole `millblocks ARGS` process has imported when it exits."""
+    script = (
+        "import atexit, json, sys\n"
+        "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
+        "from app.cli import main\n"
+        f"main({args!r})\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    return set(json.loads(done.stderr.strip().splitlines()[-1]))
+
+
+HEAVY = {"sqlalchemy", "alembic", "ezdxf", "flask", "numpy", "serial"}
+
+
+def test_help_imports_nothing_it_does_not_need(tmp_path: Path) -> None:
+    """Before: `millblocks --help` took 3-6 s and 94 MB, importing every format, ezdxf,
+    SQLAlchemy and Alembic to print the help. Now it loads click and the command list."""
+    loaded = _modules_after(["--help"], tmp_path)
+    assert not HEAVY & {name.split(".")[0] for name in loaded}
+    assert not [name for name in loaded if name.startswith(("app.cnc.formats", "app.storage"))]
+
+
+def test_exporting_a_file_loads_no_database_or_drawing_code(tmp_path: Path) -> None:
+    """A file's export needs the core and its target, not the library or ezdxf."""
+    out = tmp_path / "out.ngc"
+    program = ROOT / "app" / "demo" / "03-frame-pocket.json"
+    loaded = _modules_after(
+        ["export", str(program), "--to", "gcode-linuxcnc", "-o", str(out)], tmp_path
+    )
+    assert out.read_text().startswith("%")
+    tops = {name.split(".")[0] for name in loaded}
+    assert not {"sqlalchemy", "alembic", "ezdxf", "flask", "serial"} & tops
+    assert "app.storage" not in loaded

@@ -15,9 +15,10 @@ from app.cnc import document
 from app.cnc.blocks import Hole, Pos, Program
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.estimate import DEFAULT_TOOL_CHANGE_SECONDS, RAPID_NM_PER_MIN, Estimate, estimate
+from app.cnc.estimate import RAPID_NM_PER_MIN, Estimate, estimate
 from app.cnc.geometry import arc_sweep
 from app.cnc.interpret import interpret
+from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
 from app.cnc.machine import PRESETS, MachineModel, read_machine
 from app.cnc.toolpath import (
     ArcFeed,

@@ -67,11 +67,25 @@ def test_an_upload_past_the_line_limit_is_refused_and_saves_nothing(
         assert len(get_library().programs()) == before
 
 
-def test_the_cli_refuses_an_import_past_the_limit_with_exit_2(tmp_path: Path) -> None:
+def test_the_cli_converts_a_file_past_the_webs_limits(tmp_path: Path) -> None:
+    """Before: the command line refused a G-code file over 20 000 lines, on the user's own
+    machine. A long CAM program converts; only the library (which keeps programs the web
+    can open) refuses to store more than MAX_BLOCKS blocks, naming the limit (exit 2)."""
     path = tmp_path / "cam.ngc"
     path.write_bytes(straight_moves(MAX_IMPORT_LINES + 1))
-    result = CliRunner().invoke(main, ["check", str(path)])
-    assert result.exit_code == 2 and "lines" in result.stderr
+    out = tmp_path / "cam.tape"
+    result = CliRunner().invoke(main, ["export", str(path), "--to", "tape-ascii", "-o", str(out)])
+    assert result.exit_code == 0, result.stderr
+    assert out.read_bytes().count(b"\n") > MAX_IMPORT_LINES - 10
+    checked = CliRunner().invoke(main, ["check", str(path)])
+    # Read whole (the file gives no RPM: that is the program's one error, exit 1).
+    assert checked.exit_code == 1
+    assert f"{MAX_IMPORT_LINES - 3} blocks, 1 errors" in checked.stdout
+    stored = CliRunner(env={"DATABASE_URL": f"sqlite:///{tmp_path / 'lib.db'}"}).invoke(
+        main, ["import", str(path)]
+    )
+    assert stored.exit_code == 2, stored.output
+    assert f"a program has at most {MAX_BLOCKS:,}" in stored.stderr
 
 
 def big_program(blocks: int) -> Program:

@@ -37,7 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from app.cnc.geometry import arc_sweep
-from app.cnc.limits import RAPID_IPM
+from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS, RAPID_IPM
 from app.cnc.machine import MachineModel
 from app.cnc.memo import Memo
 from app.cnc.path import (
@@ -69,7 +69,6 @@ from app.cnc.toolpath import (
 )
 from app.cnc.units import NM_PER_INCH
 
-DEFAULT_TOOL_CHANGE_SECONDS = 30.0
 RAPID_NM_PER_MIN = int(RAPID_IPM) * NM_PER_INCH
 
 

@@ -33,6 +33,9 @@ MAX_REPEAT = 999
 MIN_RPM = 60
 GEAR_CHANGE_RPM = 500
 MAX_RPM = 4000
+# Our reading: the allowance for one manual tool change in the cycle time (the operator
+# stops, changes the tool, touches off), when the machine profile gives none.
+DEFAULT_TOOL_CHANGE_SECONDS = 30.0
 
 
 @dataclass(frozen=True)

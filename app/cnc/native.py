@@ -1,34 +1,26 @@
-"""The G-code importer's hot modules, compiled to C by mypyc where a build is present.
+"""The G-code importer's hot modules, compiled to C by mypyc in a wheel built for it.
 
-`make` (scripts/build-native) compiles the modules in `COMPILED` with mypyc into extension
-modules beside their sources; Python then imports the `.so` before the `.py`. The sources
-stay the reference: the compiled modules are the same code, typed by the same annotations,
-and the test suite runs against them (tests/test_native.py compares their results with the
-sources' on the import corpora).
+`MILLBLOCKS_MYPYC=1` when the wheel is built (setup.py, `make wheel-native`) compiles the
+modules in `COMPILED` into extension modules that sit beside their sources in the
+installed package; Python then imports the `.so` before the `.py`. The sources stay the
+reference: the compiled modules are the same code, typed by the same annotations, and
+tests/test_native.py installs such a wheel and compares its results with the sources' on
+the import corpora.
 
-A compiled module that no longer matches the code it was built from would run old code.
-Compiled code depends on more than its own source — mypyc puts other modules' `Final`
-constants into it and relies on their signatures — so the build records the SHA-256 of
-every source of the core (`app/cnc`, about 90 files: 4 ms to hash). `guard()` (run by
-`app.cnc.__init__`, before any of these modules is imported) compares them, and when
-anything differs, the record is missing, or the build is incomplete, every module that has
-an extension module is imported from its source: the compiled modules call each other
-directly, so one stale module makes all of them unsafe. `MILLBLOCKS_NATIVE=0` in the
-environment asks for the sources too.
-
-The check runs once, when the process starts: a server whose sources are updated under it
-keeps what it started with until it is restarted (gunicorn's workers run it again).
+A wheel's extension modules were built from the sources beside them, so they cannot be
+older than their code. Nothing is compiled into a checkout; an extension module found in
+one (left by an older build of this project) is never loaded: `guard()` (run by
+`app.cnc.__init__`, before any of these modules is imported) imports the sources there.
+`MILLBLOCKS_NATIVE=0` in the environment asks for the sources anywhere.
 
 Standard library only: this runs at every start, before anything else in the core.
 """
 
 from __future__ import annotations
 
-import hashlib
 import importlib.abc
 import importlib.machinery
 import importlib.util
-import json
 import os
 import sys
 from collections.abc import Sequence
@@ -49,21 +41,11 @@ COMPILED = (
 )
 GROUP = "native_group"  # the group's shared library: app/cnc/native_group__mypyc.*.so
 ROOT = Path(__file__).resolve().parents[2]  # the directory holding `app`
-BUILD_RECORD = ROOT / "app" / "cnc" / "native-build.json"
 SWITCH = "MILLBLOCKS_NATIVE"
 
 
 def source_path(module: str, root: Path = ROOT) -> Path:
     return root.joinpath(*module.split(".")).with_suffix(".py")
-
-
-def digests(root: Path = ROOT) -> dict[str, str]:
-    """Path (from `root`) → SHA-256 of every source of the core as it is now."""
-    core = root / "app" / "cnc"
-    return {
-        path.relative_to(root).as_posix(): hashlib.sha256(path.read_bytes()).hexdigest()
-        for path in sorted(core.rglob("*.py"))
-    }
 
 
 def extension_files(root: Path = ROOT) -> dict[str, Path]:
@@ -77,29 +59,6 @@ def extension_files(root: Path = ROOT) -> dict[str, Path]:
             parts = path.relative_to(root).with_name(path.name[: -len(suffix)]).parts
             found[".".join(parts)] = path
     return dict(sorted(found.items()))
-
-
-def compiled_file(module: str, root: Path = ROOT) -> Path | None:
-    """The extension module built for `module` beside its source, if there is one."""
-    return extension_files(root).get(module)
-
-
-def stale(root: Path = ROOT) -> list[str]:
-    """Why the compiled build must not be used, in words (empty: it is current, or
-    nothing is built)."""
-    built = extension_files(root)
-    if not built:
-        return []
-    expected = (*COMPILED, f"app.cnc.{GROUP}__mypyc")
-    reasons = [f"no extension module for {name}" for name in expected if name not in built]
-    reasons += [f"{name} is built but no longer compiled" for name in built if name not in expected]
-    try:
-        sources = json.loads((root / BUILD_RECORD.relative_to(ROOT)).read_text())["sources"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return [*reasons, "the build record is missing"]
-    now = digests(root)
-    changed = sorted({*sources, *now} - {k for k in now if sources.get(k) == now[k]})
-    return reasons + [f"{path} changed" for path in changed]
 
 
 def status() -> dict[str, str]:
@@ -136,24 +95,18 @@ class _SourceFirst(importlib.abc.MetaPathFinder):
         return importlib.util.spec_from_file_location(fullname, source)
 
 
+def in_checkout(root: Path = ROOT) -> bool:
+    """Whether `root` is a source checkout (its top level has the app's `templates/` beside
+    `app/`), not an installed package."""
+    return (root / "templates").is_dir() and (root / "app").is_dir()
+
+
 def guard() -> None:
-    """Import the compiled modules from their sources when the build is stale or switched
-    off. Must run before any of them is imported (app.cnc.__init__ calls it). A stale build
-    is said on stderr once: the import still works, at the sources' speed.
-    """
+    """Import the compiled modules from their sources in a checkout, or when switched off.
+    Must run before any of them is imported (app.cnc.__init__ calls it)."""
     if any(isinstance(finder, _SourceFirst) for finder in sys.meta_path):
         return
-    off = os.environ.get(SWITCH, "") == "0"
-    reasons = [] if off else stale()
-    if not off and not reasons:
+    if os.environ.get(SWITCH, "") != "0" and not in_checkout():
         return
-    if reasons:
-        more = f" and {len(reasons) - 2} more" if len(reasons) > 2 else ""
-        print(
-            "millblocks: the compiled G-code importer does not match the code "
-            f"({'; '.join(reasons[:2])}{more}); importing its sources instead. "
-            "`make native` rebuilds it.",
-            file=sys.stderr,
-        )
     modules = sorted({*COMPILED, *extension_files()})
     sys.meta_path.insert(0, _SourceFirst(modules, ROOT))

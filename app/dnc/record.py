@@ -42,6 +42,8 @@ class TransferRecord:
     author: str = ""
     raw: bytes | None = None
     report: str = ""
+    revision: int | None = None  # a send: the program's version
+    checksum: str = ""  # a send: SHA-256 (hex) of the export
 
     @classmethod
     def of_send(
@@ -52,6 +54,8 @@ class TransferRecord:
         program_id: int | None = None,
         program_name: str = "",
         author: str = "",
+        revision: int | None = None,
+        checksum: str = "",
     ) -> TransferRecord:
         return cls(
             direction=Direction.SEND,
@@ -68,6 +72,8 @@ class TransferRecord:
             program_id=program_id,
             program_name=program_name,
             author=author,
+            revision=revision,
+            checksum=checksum,
         )
 
     @classmethod

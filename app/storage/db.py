@@ -14,16 +14,13 @@ import fcntl
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from pathlib import Path
 from typing import Any
 
 from alembic import command
 from alembic.config import Config
 from sqlalchemy import Engine, create_engine, event, text
 
-ROOT = Path(__file__).resolve().parents[2]
-MIGRATIONS = ROOT / "migrations"
-DEFAULT_SQLITE = ROOT / "instance" / "millblocks.db"
+from app.resources import data_dir, instance_dir
 
 
 def database_url(url: str | None = None) -> str:
@@ -38,8 +35,9 @@ def database_url(url: str | None = None) -> str:
         elif env.startswith("postgresql://"):
             env = "postgresql+psycopg://" + env[len("postgresql://") :]
         return env
-    DEFAULT_SQLITE.parent.mkdir(parents=True, exist_ok=True)
-    return f"sqlite:///{DEFAULT_SQLITE}"
+    default = instance_dir() / "millblocks.db"
+    default.parent.mkdir(parents=True, exist_ok=True)
+    return f"sqlite:///{default}"
 
 
 def make_engine(url: str | None = None) -> Engine:
@@ -100,7 +98,7 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
     config = Config()
-    config.set_main_option("script_location", str(MIGRATIONS))
+    config.set_main_option("script_location", str(data_dir("migrations")))
     config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
     return config
 

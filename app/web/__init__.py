@@ -17,7 +17,7 @@ from flask_wtf.csrf import CSRFError
 from werkzeug.middleware.proxy_fix import ProxyFix
 from werkzeug.routing import IntegerConverter
 
-from app.storage.db import ROOT
+from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
 from app.web import auth, drawings, editor, export, library, machines, setup, transfers, verify
 from app.web.extensions import csrf, get_library
@@ -34,9 +34,9 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     """Build the app. `test_config` overrides configuration (DATABASE_URL, SECRET_KEY...)."""
     app = Flask(
         __name__,
-        template_folder=str(ROOT / "templates"),
-        static_folder=str(ROOT / "static"),
-        instance_path=str(ROOT / "instance"),
+        template_folder=str(data_dir("templates")),
+        static_folder=str(data_dir("static")),
+        instance_path=str(instance_dir()),
     )
     app.url_map.converters["int"] = RowId
     app.config.update(

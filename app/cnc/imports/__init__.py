@@ -67,6 +67,8 @@ def read_program(
     name: str = "",
     format: str | None = None,
     options: Mapping[str, str] | None = None,
+    *,
+    limited: bool = True,
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
     gives no name. `options` are the format's reader options (docs/imports.md): for a tape
@@ -76,13 +78,17 @@ def read_program(
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
-    file past the limits of app.cnc.sizes, refused before it is parsed).
+    file past the limits of app.cnc.sizes, refused before it is parsed). `limited=False`
+    lifts those limits: the command line converting the user's own files (a long CAM
+    program to a tape) takes files of any size; the web and the library keep them.
     """
     try:
-        check_import_size(data)
+        if limited:
+            check_import_size(data)
         importer = detect(data) if format is None else get_importer(format)
         program, notes = read_as(importer, data, name, options or {})
-        check_block_count(len(program.blocks))
+        if limited:
+            check_block_count(len(program.blocks))
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, importer.name)

@@ -31,11 +31,6 @@ from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
 from typing import Any
 
-from ezdxf import recover
-from ezdxf.document import Drawing as EzDrawing
-from ezdxf.lldxf.const import DXFError
-from ezdxf.lldxf.tagger import binary_tags_loader
-
 from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.options import Option, OptionKind
 from app.cnc.units import Units
@@ -246,6 +241,13 @@ def read_drawing(data: bytes, name: str = "", options: DxfOptions | None = None)
     """The drawing's contours and holes in nm, with the report so far. Raises
     ImportFailure for a file ezdxf cannot read, a unitless drawing without
     `drawing_units`, or units MillBlocks has no program units for."""
+    # ezdxf is imported here, when a drawing is read: detecting a file's format and every
+    # command that reads no drawing start without it (it is a third of the CLI's start-up).
+    from ezdxf import recover
+    from ezdxf.document import Drawing as EzDrawing
+    from ezdxf.lldxf.const import DXFError
+    from ezdxf.lldxf.tagger import binary_tags_loader
+
     opts = options or DxfOptions()
     try:
         if data.startswith(BINARY_SENTINEL):

@@ -1,0 +1,185 @@
+"""The command line as a user runs it: whole processes of the installed wheel.
+
+A wheel is built the way `make wheel-native` builds it (the G-code importer compiled by
+mypyc) and installed with its dependencies into a fresh virtual environment in a temporary
+directory; every command runs from another temporary directory, so what runs is what
+site-packages holds, start-up included. Each figure is the fastest of three runs (two for
+the large files), wall time of the whole process, and its peak resident size (`wait4`).
+
+Baselines, measured in the same run: a bare `python -c pass` of that environment for the
+start-up figures; LinuxCNC's `rs274 -g` reading the same G-code file for the large export
+(the file our export wrote) and the large import (the file we read).
+
+Targets (issue 31): `millblocks --help` and the export of a small program within 0.3 s of a
+bare Python start; the export of a 10^6-move program to LinuxCNC no slower than `rs274 -g`
+reading the result, at most 100 MB; G-code import of 10^5 lines (converted to a tape) at
+least as fast as `rs274 -g` reading the file, memory flat from 10^4 to 10^6 lines.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from bench.common import (
+    ROOT,
+    Result,
+    Section,
+    fmt_bytes,
+    fmt_count,
+    fmt_ratio,
+    fmt_seconds,
+    installed_wheel,
+    table,
+)
+
+START_GOAL = 0.3  # seconds over a bare Python start
+MEMORY_GOAL = 100_000_000  # bytes
+IMPORT_SIZES = (10_000, 100_000, 1_000_000)
+EXPORT_MOVES = 1_000_000
+
+
+@dataclass(frozen=True)
+class Run:
+    seconds: float
+    peak: int  # bytes
+    status: int
+
+
+def timed(command: list[str], cwd: Path, env: dict[str, str], runs: int = 3) -> Run:
+    """The fastest of `runs` runs of `command` as a whole process, and its peak RSS."""
+    best: Run | None = None
+    for _ in range(runs):
+        started = time.perf_counter()
+        child = subprocess.Popen(
+            command, cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        )
+        _, status, usage = os.wait4(child.pid, 0)
+        seconds = time.perf_counter() - started
+        run = Run(seconds, usage.ru_maxrss * 1024, os.waitstatus_to_exitcode(status))
+        if best is None or run.seconds < best.seconds:
+            best = run
+    assert best is not None
+    return best
+
+
+def measure_all(work: Path, sizes: tuple[int, ...], moves: int) -> Result:
+    """Every case; files are written with this checkout's bench helpers (in this process)."""
+    from app.cnc import document
+    from bench.gcode_import import write_file
+    from bench.programs import sized
+
+    bin_dir = installed_wheel().bin
+    here = work / "run"
+    here.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("MILLBLOCKS_", "PYTHON"))}
+    env["MILLBLOCKS_INSTANCE_PATH"] = str(here / "instance")
+    python, millblocks = str(bin_dir / "python"), str(bin_dir / "millblocks")
+    rs274 = shutil.which("rs274")
+    table_file = here / "tools.tbl"
+    table_file.write_text("".join(f"T{n} P{n} Z0.0000 D0.2500 ;\n" for n in range(1, 25)))
+    result: Result = {"bare": timed([python, "-c", "pass"], here, env).seconds}
+    result["help"] = timed([millblocks, "--help"], here, env).__dict__
+    small = ROOT / "app" / "demo" / "03-frame-pocket.json"
+    out = here / "out"
+    small_cmd = [millblocks, "export", str(small), "--to", "gcode-linuxcnc", "-o", str(out)]
+    result["small"] = timed(small_cmd, here, env).__dict__
+    big = here / "big.json"
+    big.write_text(document.dumps(sized("grid", moves)))
+    big_out = here / "big.ngc"
+    big_cmd = [millblocks, "export", str(big), "--to", "gcode-linuxcnc", "-o", str(big_out)]
+    result["export"] = {"moves": moves, **timed(big_cmd, here, env, runs=2).__dict__}
+    if rs274:
+        referee = [rs274, "-t", str(table_file), "-g", str(big_out)]
+        result["export"]["rs274"] = timed(referee, here, env, runs=2).__dict__
+    imports = []
+    for lines in sizes:
+        source = write_file(here, lines)
+        tape = here / "tape"
+        convert = [millblocks, "export", str(source), "--to", "tape-eia", "-o", str(tape)]
+        case: Result = {"lines": lines, **timed(convert, here, env, runs=2).__dict__}
+        if rs274:
+            referee = [rs274, "-t", str(table_file), "-g", str(source)]
+            case["rs274"] = timed(referee, here, env, runs=2).__dict__
+        imports.append(case)
+        source.unlink()
+    result["imports"] = imports
+    return result
+
+
+def run(sizes: tuple[int, ...] = IMPORT_SIZES, moves: int = EXPORT_MOVES) -> Section:
+    section = Section("Command line: whole processes of the installed wheel")
+    with tempfile.TemporaryDirectory(prefix="millblocks-bench-cli-") as tmp:
+        try:
+            r = measure_all(Path(tmp), sizes, moves)
+        except (subprocess.SubprocessError, OSError, AssertionError) as error:
+            section.lines.append(f"not measured: {error}")
+            return section
+    bare = r["bare"]
+    rows = [["bare `python -c pass` (baseline)", fmt_seconds(bare), "", "", ""]]
+    for key, what in (("help", "`millblocks --help`"), ("small", "export a small program")):
+        case = r[key]
+        over = case["seconds"] - bare
+        rows.append([what, fmt_seconds(case["seconds"]), fmt_seconds(over), "", _ok(case)])
+        goal = f"≤ {START_GOAL} s over bare Python"
+        section.target(f"{what}, whole process", goal, fmt_seconds(over), "")
+    export = r["export"]
+    referee = export.get("rs274")
+    ratio = referee["seconds"] / export["seconds"] if referee else None
+    rows.append(
+        [
+            f"export {fmt_count(export['moves'])} moves to LinuxCNC",
+            fmt_seconds(export["seconds"]),
+            "",
+            fmt_bytes(export["peak"]),
+            _ok(export),
+        ]
+    )
+    if referee:
+        rows.append(["`rs274 -g` reading that file", fmt_seconds(referee["seconds"]), "", "", ""])
+    section.target(
+        f"command-line export of {fmt_count(export['moves'])} moves",
+        "≥ 1× rs274, ≤ 100 MB",
+        f"{fmt_seconds(export['seconds'])}, {fmt_bytes(export['peak'])}",
+        fmt_ratio(ratio) if ratio else "–",
+    )
+    for case in r["imports"]:
+        referee = case.get("rs274")
+        ratio = referee["seconds"] / case["seconds"] if referee else None
+        rows.append(
+            [
+                f"import {fmt_count(case['lines'])} lines of G-code → tape-eia",
+                fmt_seconds(case["seconds"]),
+                "",
+                fmt_bytes(case["peak"]),
+                _ok(case)
+                + (
+                    f"; {fmt_ratio(ratio)} rs274 ({fmt_seconds(referee['seconds'])})"
+                    if referee and ratio
+                    else ""
+                ),
+            ]
+        )
+        if case["lines"] == 100_000:
+            section.target(
+                "command-line G-code import, 100 000 lines",
+                "≥ 1× rs274",
+                fmt_seconds(case["seconds"]),
+                fmt_ratio(ratio) if ratio else "–",
+            )
+    section.lines += [
+        "Whole processes of the installed compiled wheel, run from outside the checkout; the",
+        "fastest of 3 runs (2 for the large files); peak resident size from `wait4`.",
+        "",
+        *table(["command", "wall", "over bare Python", "peak RSS", "notes"], rows),
+    ]
+    return section
+
+
+def _ok(case: Result) -> str:
+    return "" if case["status"] == 0 else f"exit status {case['status']}"

@@ -45,13 +45,17 @@ if TYPE_CHECKING:
 
 class Number(click.ParamType[Any, Any]):
     """A number argument read by app.cnc.numbers (click's own FLOAT takes `nan` and INT
-    takes `١٢`): a float, or an int when `whole`, at least `minimum`."""
+    takes `١٢`): a float, or an int when `whole`, at least `minimum` (more than it when
+    `above`)."""
 
     name = "number"
 
-    def __init__(self, minimum: float | None = None, whole: bool = False) -> None:
+    def __init__(
+        self, minimum: float | None = None, whole: bool = False, above: bool = False
+    ) -> None:
         self.minimum = minimum
         self.whole = whole
+        self.above = above  # more than `minimum`, not equal to it
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -64,6 +68,10 @@ class Number(click.ParamType[Any, Any]):
             self.fail(str(exc), param, ctx)
         if self.minimum is not None and number < self.minimum:
             self.fail(f"{value!r} is below the allowed minimum {self.minimum:g}", param, ctx)
+        if self.above and number == self.minimum:
+            self.fail(
+                f"{value!r} is not allowed; it must be more than {self.minimum:g}", param, ctx
+            )
         return int(number) if self.whole else float(number)
 
 
@@ -213,7 +221,21 @@ def checked(path: str) -> Program:
     return program
 
 
-@click.group()
+class _Commands(click.Group):
+    """The command group: text that the one text rule refuses (app.cnc.text: a NUL, a lone
+    surrogate from arguments that are not UTF-8, a name or notes too long), wherever a
+    command meets it, ends the command with exit 2 and the message naming the field."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        from app.cnc.text import TextError
+
+        try:
+            return super().invoke(ctx)
+        except TextError as exc:
+            raise ProgramFileError(str(exc)) from None
+
+
+@click.group(cls=_Commands)
 @click.version_option(package_name="millblocks")
 def main() -> None:
     """MillBlocks: conversational mill programs to tool paths, tape and G-code."""
@@ -511,13 +533,13 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
 @file_format_option
 @click.option(
     "--resolution",
-    type=click.FloatRange(min=0, min_open=True),
+    type=Number(minimum=0, above=True),
     default=None,
     help="Cell size in the program's units (default: about 800 cells along the stock).",
 )
 @click.option(
     "--tolerance",
-    type=click.FloatRange(min=0),
+    type=Number(minimum=0),
     default=None,
     help="What counts, in the program's units (default 0.001 in or 0.02 mm).",
 )
@@ -835,8 +857,21 @@ def _transfer_machine(name: str | None, port: str | None, target: str) -> Machin
     "--to", "target", default="events", show_default=True, help="What to send with --port alone."
 )
 @click.option("--author", default="", help="Who is sending (kept in the transfer log).")
+@click.option(
+    "--from-block",
+    "start_block",
+    default=None,
+    type=Number(minimum=1, whole=True),
+    help="Restart: send the program from this data block on (the start of a hole, bolt "
+    "circle, mill sequence or LOOP).",
+)
 def send_command(
-    program: str, machine_name: str | None, port: str | None, target: str, author: str
+    program: str,
+    machine_name: str | None,
+    port: str | None,
+    target: str,
+    author: str,
+    start_block: int | None,
 ) -> None:
     """Send a program over RS-232: to a library machine (its port, target and line
     settings), or to --port PATH at 4800 7E1.
@@ -860,6 +895,7 @@ def send_command(
             port=port,
             program_id=program_id,
             revision=revision,
+            start_block=start_block,
             author=author,
             log=TransferLog(lib).log,
             progress=_progress_printer(f"send {chosen.name}"),

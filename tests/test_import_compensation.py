@@ -3,111 +3,35 @@
 tool-centre path otherwise, each said in the report; a change of compensation inside one
 plunge starts a new mill sequence instead of refusing the file.
 
-rs274 applies the compensation (its tool table gives the diameters), so what it cuts is
-compared with our re-interpreted program's cuts, within 0.001 in: every feed and arc that
-moves in X/Y, from where it starts to where it ends, at its depth and feed. A feed straight
-down is a plunge: MillBlocks comes down again where compensation changes, which cuts
-nothing new, so plunges are not compared; rapids are not cuts.
+rs274 applies the compensation (its tool table gives the diameters), so what it cuts
+reading the file is compared with what it cuts reading our LinuxCNC export of the imported
+program — the tool-centre path MillBlocks plans — within 0.001 in (tests/referee.py
+`referee_import`, `cut_path`: every feed move from where it starts to where it ends, at its
+depth and feed; MillBlocks coming down again where compensation changes cuts nothing new).
 """
 
 from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from decimal import Decimal
 from pathlib import Path
 
 import pytest
 
 from app.cnc.blocks import Comp, Hole, Program
+from app.cnc.emit.target import export
 from app.cnc.imports import ImportFailure, read_program
 from app.cnc.imports.compensation import CompError, Cut, control_path
-from app.cnc.interpret import interpret
-from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units
 from app.cnc.validate import validate
-from tests.referee import RS274, Motion, rs274
+from tests.referee import RS274, assert_same_cuts, cut_path, referee_import, rs274, rs274_reads
 
 CORPUS = Path(__file__).parent / "imports" / "gcode-corpus" / "linuxcnc"
 INCH = 25_400_000
-TOLERANCE = 0.001  # in
 
 needs_rs274 = pytest.mark.skipif(RS274 is None, reason="rs274 (linuxcnc-uspace) not installed")
-
-
-@dataclass(frozen=True)
-class Cut_:
-    """A move that cuts: from `start` to `end` (in, XY, and its Z), an arc about `centre`."""
-
-    start: tuple[float, float]
-    end: tuple[float, float, float]
-    centre: tuple[float, float] | None
-    clockwise: bool
-    feed: float
-
-
-def rs274_cuts(motions: list[Motion]) -> list[Cut_]:
-    cuts: list[Cut_] = []
-    at = (0.0, 0.0, 0.0)
-    for m in motions:
-        if m.kind != "T" and (m.end[0], m.end[1]) != (at[0], at[1]):
-            assert m.feed is not None
-            clockwise = bool(m.clockwise) if m.kind == "A" else False
-            cuts.append(Cut_((at[0], at[1]), m.end, m.centre, clockwise, m.feed))
-        elif m.kind == "A":
-            assert m.feed is not None and m.clockwise is not None
-            cuts.append(Cut_((at[0], at[1]), m.end, m.centre, m.clockwise, m.feed))
-        at = m.end
-    return cuts
-
-
-def our_cuts(program: Program) -> list[Cut_]:
-    toolpath = interpret(program)
-    cuts: list[Cut_] = []
-    x, y, _ = (v / INCH for v in toolpath.start)
-    for move in toolpath.moves:
-        if not isinstance(move, Rapid | Feed | ArcFeed):
-            continue
-        end = (move.x / INCH, move.y / INCH, move.z / INCH)
-        if isinstance(move, ArcFeed):
-            centre = (move.cx / INCH, move.cy / INCH)
-            cuts.append(Cut_((x, y), end, centre, move.clockwise, move.feed / INCH))
-        elif isinstance(move, Feed) and (end[0], end[1]) != (x, y):
-            cuts.append(Cut_((x, y), end, None, False, move.feed / INCH))
-        x, y = end[0], end[1]
-    return cuts
-
-
-def _joined(cuts: list[Cut_]) -> list[Cut_]:
-    """A straight cut shorter than the tolerance (the rounding of an arc's end onto the
-    grid leaves one) folded into the cut before it."""
-    out: list[Cut_] = []
-    for cut in cuts:
-        short = math.dist(cut.start, cut.end[:2]) <= TOLERANCE and cut.centre is None
-        if short and out and out[-1].end[2] == cut.end[2]:
-            out[-1] = replace(out[-1], end=cut.end)
-        else:
-            out.append(cut)
-    return out
-
-
-def assert_same_cuts(ours: list[Cut_], theirs: list[Cut_]) -> None:
-    ours, theirs = _joined(ours), _joined(theirs)
-    assert len(ours) == len(theirs), f"{len(ours)} cuts, rs274 {len(theirs)}:\n" + "\n".join(
-        f"{a}\n  {b}" for a, b in zip(ours, theirs, strict=False)
-    )
-    for n, (a, b) in enumerate(zip(ours, theirs, strict=True)):
-        where = f"cut {n}: ours {a}, rs274 {b}"
-        assert (a.centre is None) == (b.centre is None), where
-        assert all(abs(p - q) <= TOLERANCE for p, q in zip(a.start, b.start, strict=True)), where
-        assert all(abs(p - q) <= TOLERANCE for p, q in zip(a.end, b.end, strict=True)), where
-        assert abs(a.feed - b.feed) <= 0.05, where
-        if a.centre is not None and b.centre is not None:
-            assert a.clockwise == b.clockwise, where
-            assert all(abs(p - q) <= TOLERANCE for p, q in zip(a.centre, b.centre, strict=True)), (
-                where
-            )
 
 
 def imported(text: str) -> tuple[Program, list[str]]:
@@ -117,22 +41,12 @@ def imported(text: str) -> tuple[Program, list[str]]:
 
 def with_diameters(program: Program, diameters: dict[int, str]) -> Program:
     """The program with the DIA the operator enters for each tool (as the tool table has
-    it), and an RPM for every tool (the file gives none)."""
+    it)."""
     tools = tuple(
-        replace(
-            t,
-            diameter=Decimal(diameters[t.number]) if t.number in diameters else t.diameter,
-            rpm=t.rpm or 1000,
-        )
+        replace(t, diameter=Decimal(diameters[t.number])) if t.number in diameters else t
         for t in program.block0.tools
     )
     return replace(program, block0=replace(program.block0, tools=tools))
-
-
-def cut_as_rs274(text: str, program: Program, tmp_path: Path, diameters: dict[int, float]) -> None:
-    path = tmp_path / "comp.ngc"
-    path.write_text(text)
-    assert_same_cuts(our_cuts(program), rs274_cuts(rs274(path, diameters=diameters)))
 
 
 def errors(program: Program) -> list[str]:
@@ -156,9 +70,8 @@ def test_comp_g1_imports_its_change_of_compensation_as_a_new_sequence(tmp_path: 
         for n in report
     ), report
     assert not any(isinstance(b, Hole) and b.comp is not Comp.NONE for b in program.blocks)
-    program = with_diameters(program, {})
-    assert errors(program) == []
-    cut_as_rs274(text, program, tmp_path, {4: 1.0})
+    assert [e for e in errors(program) if "RPM" not in e] == []
+    referee_import(text.encode(), tmp_path, "comp", {4: 1.0})
 
 
 @needs_rs274
@@ -174,18 +87,19 @@ def test_comp_g1_without_the_diameter_is_a_compensated_contour(tmp_path: Path) -
     [drill] = [b for b in program.blocks if isinstance(b, Hole) and b.comp is Comp.LEFT]
     assert (drill.x, drill.y) == (Decimal("0.000"), Decimal("3.500"))
     program = with_diameters(program, {4: "1.0"})
-    assert errors(program) == []
-    path = tmp_path / "comp.ngc"
-    path.write_text(text)
-    theirs = rs274_cuts(rs274(path, diameters={4: 1.0}))
-    ours = our_cuts(program)
-    # The uncompensated outline, then the contour: the entry and exit moves differ (the
-    # control starts and ends them on the programmed points), what lies between does not.
-    outline = 6
-    assert_same_cuts(ours[:outline], theirs[:outline])
-    inner_ours, inner_theirs = ours[outline + 1 : -1], theirs[outline + 1 : -1]
-    # MillBlocks joins the last arc to the offset exit line (it trims the arc's end).
-    assert_same_cuts(inner_ours[:-1], inner_theirs[:-1])
+    assert [e for e in errors(program) if "RPM" not in e] == []
+    original, ours = tmp_path / "original.ngc", tmp_path / "ours.ngc"
+    original.write_text(text)
+    ours.write_bytes(export(program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data)
+    theirs = cut_path(rs274(original, diameters={4: 1.0}, in_mm=True, changes=True))
+    mine = cut_path(rs274(ours, in_mm=True, changes=True))
+    # The uncompensated outline (a plunge and 6 cuts), then the contour: the entry and exit
+    # moves differ (the control starts and ends them on the programmed points), and
+    # MillBlocks joins the last arc to the offset exit line (it trims the arc's end); every
+    # cut between is rs274's.
+    outline = 7
+    assert_same_cuts(theirs[:outline], mine[:outline], 0.0254 + 1e-6, 2.54)
+    assert_same_cuts(theirs[outline + 2 : -2], mine[outline + 2 : -2], 0.0254 + 1e-6, 2.54)
 
 
 @needs_rs274
@@ -207,8 +121,7 @@ def test_a_tangent_entry_is_a_compensated_contour_that_cuts_as_rs274(
         Comp.NONE,
         Comp.LEFT,
     ]
-    program = with_diameters(program, {})
-    cut_as_rs274(text, program, tmp_path, {4: 1.0})
+    referee_import(text.encode(), tmp_path, "comp", {4: 1.0})
 
 
 # -- compensation changing inside one plunge ------------------------------------------------
@@ -248,8 +161,8 @@ def test_each_change_of_compensation_starts_a_sequence_and_cuts_as_rs274(
     comps = [b.comp for b in program.blocks if isinstance(b, Hole)]
     assert comps == [Comp.NONE, Comp.LEFT, Comp.NONE, Comp.RIGHT, Comp.NONE], report
     assert sum("which cuts the control's path" in n for n in report) == 2
-    assert errors(program) == []
-    cut_as_rs274(POCKET_AND_PROFILE, program, tmp_path, {2: 0.25})
+    assert [e for e in errors(program) if "RPM" not in e] == []
+    referee_import(POCKET_AND_PROFILE.encode(), tmp_path, "comp", {2: 0.25})
 
 
 def test_g41_while_compensating_is_refused_as_rs274_refuses_it() -> None:
@@ -348,14 +261,11 @@ def test_generated_contours_cut_as_rs274_cuts_them(seed: int, tmp_path: Path) ->
     text, _, _, _, radius = _contour(random.Random(seed))
     path = tmp_path / "comp.ngc"
     path.write_text(text)
-    try:
-        theirs = rs274_cuts(rs274(path, diameters={1: 2 * radius}))
-    except AssertionError:
+    if rs274_reads(path, {1: 2 * radius}):
+        referee_import(text.encode(), tmp_path, "comp", {1: 2 * radius})
+    else:
         with pytest.raises(ImportFailure):
             read_program(text.encode(), "t", "gcode")
-        return
-    program, _ = imported(text)
-    assert_same_cuts(our_cuts(with_diameters(program, {})), theirs)
 
 
 @needs_rs274

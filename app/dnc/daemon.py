@@ -190,6 +190,7 @@ class TransferService:
                 machine,
                 program_id=stored.info.id,
                 revision=stored.info.version,
+                start_block=transfer.start_block,
                 author=transfer.author,
                 log=keep,
                 progress=progress,

@@ -44,6 +44,7 @@ class TransferRecord:
     report: str = ""
     revision: int | None = None  # a send: the program's version
     checksum: str = ""  # a send: SHA-256 (hex) of the export
+    start_block: int | None = None  # a send begun at this data block (a restart)
 
     @classmethod
     def of_send(
@@ -56,6 +57,7 @@ class TransferRecord:
         author: str = "",
         revision: int | None = None,
         checksum: str = "",
+        start_block: int | None = None,
     ) -> TransferRecord:
         return cls(
             direction=Direction.SEND,
@@ -74,6 +76,7 @@ class TransferRecord:
             author=author,
             revision=revision,
             checksum=checksum,
+            start_block=start_block,
         )
 
     @classmethod

@@ -22,6 +22,8 @@ from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
 from app.cnc.imports.registry import importers
+from app.cnc.restart import restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -95,6 +97,7 @@ def send_program(
     port: str | None = None,
     program_id: int | None = None,
     revision: int | None = None,
+    start_block: int | None = None,
     author: str = "",
     log: Log | None = None,
     progress: Progress | None = None,
@@ -104,7 +107,9 @@ def send_program(
 ) -> Sent:
     """Export `program` for `machine` (its target and options) and send it to the machine's
     port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record,
-    which names the program's `revision` and the export's SHA-256.
+    which names the program's `revision` and the export's SHA-256. `start_block`: send the
+    program from that data block on (app.cnc.restart: a restart after a stop or a cut-off
+    transfer; RestartError, a ValueError, when it cannot begin there).
 
     Raises SettingsError, OptionError/ExportError (the program cannot be exported) or
     DataError before the port is tried (no record); SendError after (record logged).
@@ -112,6 +117,8 @@ def send_program(
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
     options = machine.options if settings.target == machine.target else {}
+    if start_block is not None:
+        program = restart_from(program, start_block)
     made = export(program, settings.target, options)
     digest = hashlib.sha256()
     for piece in made.chunks():
@@ -126,6 +133,7 @@ def send_program(
             author=author,
             revision=revision,
             checksum=digest.hexdigest(),
+            start_block=start_block,
         )
         if log is not None:
             log(entry)
@@ -180,10 +188,12 @@ def receive_program(
     machine (app.storage.transfers.TransferLog.compare_with_last_send); its text goes into
     the report.
 
-    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    Raises SettingsError, or TextError for a `name` the library cannot store
+    (app.cnc.text), before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
     saved.
     """
+    check_text(name, "name", NAME_LENGTH)
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -20,6 +21,7 @@ from alembic import command
 from alembic.config import Config
 from sqlalchemy import Engine, create_engine, event, text
 
+from app.cnc.text import check_text
 from app.resources import data_dir, instance_dir
 
 
@@ -46,8 +48,34 @@ def make_engine(url: str | None = None) -> Engine:
     if resolved.startswith("sqlite"):
         engine = create_engine(resolved, connect_args={"timeout": 30})
         event.listen(engine, "connect", _sqlite_pragmas)
-        return engine
-    return create_engine(resolved, pool_pre_ping=True)
+    else:
+        engine = create_engine(resolved, pool_pre_ping=True)
+    event.listen(engine, "before_cursor_execute", _text_rule)
+    return engine
+
+
+_BIND_NUMBER = re.compile(r"_\d+$")
+
+
+def _text_rule(
+    _conn: Any,
+    _cursor: Any,
+    _statement: str,
+    parameters: Any,
+    context: Any,
+    _executemany: bool,
+) -> None:
+    """Every string a statement sends to the database, stored or looked up, meets the one
+    text rule (app.cnc.text): a NUL or a lone surrogate is a TextError naming the column,
+    not PostgreSQL's `ValueError` or an encoding error from the driver (a 500). The
+    entries check their fields with their limits first; this is the net under them."""
+    compiled = getattr(context, "compiled_parameters", None)
+    rows = compiled if compiled else [parameters]
+    for row in rows:
+        items = row.items() if isinstance(row, dict) else enumerate(row or ())
+        for key, value in items:
+            if isinstance(value, str):
+                check_text(value, _BIND_NUMBER.sub("", str(key)))
 
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:

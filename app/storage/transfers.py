@@ -58,6 +58,7 @@ class Transfer:
     cancel_requested: bool
     revision: int | None = None
     checksum: str = ""
+    start_block: int | None = None
 
     @property
     def percent(self) -> int | None:
@@ -88,6 +89,7 @@ def _view(row: TransferRow) -> Transfer:
         row.cancel_requested,
         row.revision,
         row.checksum,
+        row.start_block,
     )
 
 
@@ -106,6 +108,7 @@ class TransferLog:
         program_name: str = "",
         *,
         queued: bool = False,
+        start_block: int | None = None,
     ) -> int:
         """A transfer's row, running (or `queued` for the transfer service); its id. A
         queued receive keeps the format asked for in `target` and the new program's name
@@ -122,6 +125,7 @@ class TransferLog:
                 started_at=_now(),
                 updated_at=_now(),
                 outcome=QUEUED if queued else RUNNING,
+                start_block=start_block,
             )
             s.add(row)
             s.flush()
@@ -195,6 +199,8 @@ class TransferLog:
             row.raw = record.raw[:1_000_000]
         if record.revision is not None:
             row.revision = record.revision
+        if record.start_block is not None:
+            row.start_block = record.start_block
         row.checksum = record.checksum or row.checksum
 
     def cancel(self, transfer_id: int) -> None:

@@ -12,11 +12,12 @@ import secrets
 from pathlib import Path
 from typing import Any
 
-from flask import Flask, Response, render_template
+from flask import Flask, Response, render_template, request
 from flask_wtf.csrf import CSRFError
 from werkzeug.middleware.proxy_fix import ProxyFix
 from werkzeug.routing import IntegerConverter
 
+from app.cnc.text import TextError, check_text
 from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
 from app.web import auth, drawings, editor, export, library, machines, setup, transfers, verify
@@ -62,6 +63,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     for module in (auth, library, editor, drawings, export, machines, setup, transfers, verify):
         app.register_blueprint(module.bp)
     auth.init_app(app)
+    app.before_request(_text_rule)  # after the login check: strangers are sent to log in
 
     app.after_request(_security_headers)
     app.register_error_handler(CSRFError, _csrf_error)
@@ -69,6 +71,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     app.register_error_handler(404, _not_found)
     app.register_error_handler(403, _forbidden)
     app.register_error_handler(422, _refused)
+    app.register_error_handler(TextError, _refused_text)
     if app.config["MILLBLOCKS_AUTH"] not in ("local", "accounts"):
         raise ValueError("MILLBLOCKS_AUTH is 'local' or 'accounts'")
     return app
@@ -122,6 +125,27 @@ def _security_headers(response: Response) -> Response:
     response.headers.setdefault("Referrer-Policy", "same-origin")
     response.headers.setdefault("X-Frame-Options", "DENY")
     return response
+
+
+def _text_rule() -> None:
+    """Every form field, query argument, uploaded file's name and URL part meets the one
+    text rule (app.cnc.text) before a route reads it: a NUL or a lone surrogate anywhere
+    is a 422 naming the field, never a 500 from the database. The fields' lengths are
+    checked where they are stored (app.storage)."""
+    for values in (request.args, request.form):
+        for key, value in values.items(multi=True):
+            check_text(key, "a field's name")
+            check_text(value, key)
+    for key, file in request.files.items(multi=True):
+        check_text(key, "a field's name")
+        check_text(file.filename or "", f"{key} (the file's name)")
+    for key, value in (request.view_args or {}).items():
+        if isinstance(value, str):
+            check_text(value, key)
+
+
+def _refused_text(error: TextError) -> tuple[str, int]:
+    return render_template("errors/error.html", title="Refused", message=str(error)), 422
 
 
 def _csrf_error(error: CSRFError) -> tuple[str, int]:

@@ -25,6 +25,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.copy import CopyError, cancel_copy, execute_copy
 from app.cnc.kinds import REGISTRY
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units
 from app.cnc.validate import validate
@@ -149,9 +150,11 @@ def form_version() -> int | None:
 
 
 def _int(text: str | None, default: int) -> int:
+    """A whole number from a query argument or a hidden field, read by the one number
+    reader (app.cnc.numbers); `default` when there is none or it is not one."""
     try:
-        return int(text or "")
-    except ValueError:
+        return parse_int(text or "")
+    except NumberError:
         return default
 
 

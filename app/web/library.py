@@ -9,6 +9,7 @@ from werkzeug.wrappers import Response
 from app.cnc.blocks import DataBlock0, Program, Tool
 from app.cnc.imports import importers
 from app.cnc.sizes import check_import_size
+from app.cnc.text import TextError
 from app.cnc.units import Units
 from app.storage.library import SORTS, LibraryError
 from app.web.editor import current_user, is_htmx
@@ -18,12 +19,15 @@ bp = Blueprint("library", __name__)
 
 
 @bp.get("/")
-def index() -> str:
+def index() -> str | tuple[str, int]:
     query = request.args.get("q", "")
     sort = request.args.get("sort", "name")
     if sort not in SORTS:
         sort = "name"
-    programs = get_library().programs(query, sort)
+    try:
+        programs = get_library().programs(query, sort)
+    except TextError as exc:
+        return _index_with(f"Not searched: {exc}", 422)
     context = {
         "programs": programs,
         "q": query,

@@ -16,6 +16,9 @@ from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import targets
 from app.cnc.imports import importers
+from app.cnc.numbers import NumberError, parse_int
+from app.cnc.restart import RestartError, restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc import service
 from app.dnc.daemon import service_alive
 from app.dnc.settings import SettingsError, port_of
@@ -85,6 +88,20 @@ def _machine(name: str) -> Machine:
     return machine
 
 
+def _start_block(text: str) -> int | None:
+    """The form's "from block" (empty: the whole program)."""
+    text = text.strip()
+    if not text:
+        return None
+    try:
+        number = parse_int(text)
+    except NumberError as exc:
+        raise _Refused(
+            f"from block {text!r}: {exc}; give a block number, or leave it empty"
+        ) from None
+    return number
+
+
 class _Refused(Exception):
     """A transfer that is not started; the message says why."""
 
@@ -95,10 +112,15 @@ def send() -> Response | tuple[str, int]:
     try:
         machine = _machine(request.form.get("machine", ""))
         program_id = request.form.get("program_id", "")
-        if not program_id.isdigit():
-            raise _Refused("choose a program to send")
-        stored = library.get(int(program_id))
-    except (_Refused, NotFound) as exc:
+        try:
+            number = parse_int(program_id)
+        except NumberError:
+            raise _Refused("choose a program to send") from None
+        stored = library.get(number)
+        start_block = _start_block(request.form.get("from_block", ""))
+        if start_block is not None:
+            restart_from(stored.program, start_block)  # refused here, before it is queued
+    except (_Refused, NotFound, RestartError) as exc:
         return _page(f"Not sent: {exc}", 422)
     TransferLog(library).begin(
         "send",
@@ -109,6 +131,7 @@ def send() -> Response | tuple[str, int]:
         program_id=stored.info.id,
         program_name=stored.program.name,
         queued=True,
+        start_block=start_block,
     )
     return redirect(url_for("transfers.index"), 303)
 
@@ -133,7 +156,7 @@ def receive() -> Response | tuple[str, int]:
         port_of(machine.serial),
         form_format or machine.target,
         current_user().username,
-        program_name=request.form.get("name", "").strip(),
+        program_name=check_text(request.form.get("name", "").strip(), "name", NAME_LENGTH),
         queued=True,
     )
     return redirect(url_for("transfers.index"), 303)

@@ -1,4 +1,5 @@
-"""transfer log: which revision of the program was sent, and its checksum
+"""transfer log: which revision of the program was sent, its checksum, and the block a
+restart began at
 
 Revision ID: 0009
 Revises: 0008
@@ -21,9 +22,11 @@ def upgrade() -> None:
         batch_op.add_column(
             sa.Column("checksum", sa.String(length=64), nullable=False, server_default="")
         )
+        batch_op.add_column(sa.Column("start_block", sa.Integer(), nullable=True))
 
 
 def downgrade() -> None:
     with op.batch_alter_table("transfer_log", schema=None) as batch_op:
+        batch_op.drop_column("start_block")
         batch_op.drop_column("checksum")
         batch_op.drop_column("revision")

@@ -25,6 +25,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,6 +34,8 @@ import click
 from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
 
 if TYPE_CHECKING:
+    from sqlalchemy import Engine
+
     from app.cnc.blocks import Program
     from app.cnc.machine import MachineModel
     from app.cnc.problems import Problem
@@ -196,11 +199,42 @@ def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Progr
     return stored.program, stored.info.id
 
 
+class ConfigurationError(click.ClickException):
+    """A MILLBLOCKS_* setting or a database this MillBlocks cannot use (exit 2)."""
+
+    exit_code = 2
+
+
+def settings() -> dict[str, Any]:
+    """The MILLBLOCKS_* settings of the environment (app.settings), read."""
+    from app.settings import SettingError, environment
+
+    try:
+        return environment()
+    except SettingError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
 def library() -> Library:
-    """The library (DATABASE_URL, else instance/millblocks.db), migrated to the newest."""
+    """The library (MILLBLOCKS_DATABASE_URL or DATABASE_URL, else millblocks.db in the
+    instance folder), migrated to the newest; its times in the shop's zone."""
+    from app.storage.db import SchemaError
     from app.storage.library import open_library
 
-    return open_library()
+    config = settings()
+    try:
+        return open_library(
+            config["DATABASE_URL"], seed_demo=config["DEMO_PROGRAMS"], zone=config["TIME_ZONE"]
+        )
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
+def shop_time(lib: Library, moment: datetime, seconds: bool = False) -> str:
+    """A stored time in the shop's zone, labelled (app.settings.shown)."""
+    from app.settings import shown
+
+    return shown(moment, lib.zone, seconds)
 
 
 def print_problems(path: Path | str, problems: list[Problem]) -> None:
@@ -626,7 +660,7 @@ def history(program: str) -> None:
         raise click.ClickException(str(exc)) from None
     for revision in lib.revisions(stored.info.id):
         click.echo(
-            f"v{revision.version:<4} {revision.created_at:%Y-%m-%d %H:%M}  "
+            f"v{revision.version:<4} {shop_time(lib, revision.created_at)}  "
             f"{revision.author or '-':<12} {revision.summary}"
         )
 
@@ -671,10 +705,11 @@ def restore_version(program: str, version: int) -> None:
 @click.option("--trash", is_flag=True, help="List the trash instead.")
 def list_programs(query: str, sort: str | None, trash: bool) -> None:
     """List library programs matching QUERY (name, part number, notes, tools, block types)."""
-    for info in library().programs(query, sort or "name", trash):
+    lib = library()
+    for info in lib.programs(query, sort or "name", trash):
         click.echo(
             f"{info.id:>5}  {info.name:<40} {info.part_number:<8} {info.block_count:>4} blocks"
-            f"  v{info.version}  {info.updated_at:%Y-%m-%d %H:%M}"
+            f"  v{info.version}  {shop_time(lib, info.updated_at)}"
         )
 
 
@@ -766,9 +801,93 @@ def db() -> None:
 
 @db.command("upgrade")
 def db_upgrade() -> None:
-    """Bring the database up to date (every command does this by itself too)."""
-    library()
-    click.echo("database is up to date")
+    """Bring the database up to this MillBlocks' schema, and say what was done (every
+    command does this by itself too)."""
+    from app.storage.db import current
+
+    engine = _database()
+    before = _known_revision(engine)
+    after = current(library().engine)
+    where = engine.url.render_as_string(hide_password=True)
+    if before is None:
+        click.echo(f"created the database at {after} ({where})")
+    elif before == after:
+        click.echo(f"already at {after} ({where})")
+    else:
+        click.echo(f"upgraded from {before} to {after} ({where})")
+
+
+@db.command("current")
+def db_current() -> None:
+    """Say which schema revision the database is at, and the newest this MillBlocks knows
+    (exit 1 when the database is newer than this MillBlocks)."""
+    from app.storage.db import current, head, revisions
+
+    engine = _database()
+    found, newest = current(engine), head()
+    where = engine.url.render_as_string(hide_password=True)
+    if found is None:
+        click.echo(
+            f"empty: no schema yet ({where}); `millblocks db upgrade` creates it at {newest}"
+        )
+    elif found == newest:
+        click.echo(f"at {found}, the newest this MillBlocks knows ({where})")
+    elif found in revisions():
+        click.echo(
+            f"at {found}; this MillBlocks knows up to {newest}: "
+            f"`millblocks db upgrade` brings it up ({where})"
+        )
+    else:
+        click.echo(f"at {found}, newer than this MillBlocks (it knows up to {newest}) ({where})")
+        sys.exit(1)
+
+
+@db.command("downgrade")
+@click.argument("revision", required=False)
+@click.option("--yes", is_flag=True, help="Do not ask before dropping data.")
+def db_downgrade(revision: str | None, yes: bool) -> None:
+    """Take the database down to REVISION (default: one step; `base` empties it), to run an
+    older MillBlocks on it. What each undone migration added is dropped with its data:
+    back up first (docs/deploy.md)."""
+    from app.storage.db import SchemaError, current, downgrade, revisions, undone
+
+    engine = _database()
+    found = _known_revision(engine)
+    if found is None:
+        raise ConfigurationError("the database is empty: nothing to downgrade")
+    if revision is None:
+        known = revisions()
+        revision = known[known.index(found) - 1] if known.index(found) else "base"
+    try:
+        steps = undone(found, revision)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+    if not steps:
+        click.echo(f"already at {found}")
+        return
+    for step, what in steps:
+        click.echo(f"undo {step}: {what}", err=True)
+    if not yes:
+        click.confirm("The data of what these added is dropped. Go on?", abort=True, err=True)
+    downgrade(engine, revision)
+    click.echo(f"downgraded from {found} to {current(engine) or 'base (empty)'}")
+
+
+def _database() -> Engine:
+    """An engine on the configured database, without migrating it."""
+    from app.storage.db import make_engine
+
+    return make_engine(settings()["DATABASE_URL"])
+
+
+def _known_revision(engine: Engine) -> str | None:
+    """The database's revision; exit 2 with what to do when it is newer than this code."""
+    from app.storage.db import SchemaError, check_known
+
+    try:
+        return check_known(engine)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
 
 
 @main.command("serve")
@@ -803,7 +922,9 @@ def serve(host: str, port: int, workers: int, dnc: bool) -> None:
 
         subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
     command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
-    command += ["--workers", str(workers), "--access-logfile", "-", "app:create_app()"]
+    # No gunicorn access log: the app writes one line per request with its level
+    # (app/web/logs.py), so the journal would have each request twice.
+    command += ["--workers", str(workers), "app:create_app()"]
     click.echo(f"serving MillBlocks on http://{host}:{port}/ ({workers} workers)", err=True)
     sys.stderr.flush()
     os.execv(sys.executable, command)
@@ -1025,13 +1146,14 @@ def list_transfers(limit: int) -> None:
     """The newest RS-232 transfers in the log."""
     from app.storage.transfers import TransferLog
 
-    for t in TransferLog(library()).recent(limit):
+    lib = library()
+    for t in TransferLog(lib).recent(limit):
         total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
         error = f"  {t.error}" if t.error else ""
         version = f" v{t.revision}" if t.revision is not None else ""
         digest = f" sha256 {t.checksum[:12]}" if t.checksum else ""
         click.echo(
-            f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
+            f"{t.id:>5} {shop_time(lib, t.started_at)} {t.direction:<7} {t.machine:<16} "
             f"{(t.program_name or '-') + version:<24} {t.target} {t.settings}  "
             f"{t.bytes_done}{total} bytes  {t.outcome}{error}{digest}  {t.author or '-'}"
         )

@@ -17,7 +17,7 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime, timedelta
+from datetime import UTC, datetime, timedelta, tzinfo
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -40,6 +40,7 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
+from app.settings import shown
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
@@ -194,8 +195,10 @@ def _columns(program: Program) -> dict[str, Any]:
 class Library:
     """The program library on one database."""
 
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, zone: tzinfo = UTC) -> None:
         self.engine = engine
+        self.zone = zone
+        """The shop's time zone, for the times this library's messages state."""
         self.sessions = sessionmaker(engine, expire_on_commit=False)
 
     @contextmanager
@@ -341,7 +344,7 @@ class Library:
         who = row.updated_by or "someone"
         listed = "; ".join(changes[:6]) or "no change to the program itself"
         message = (
-            f"not saved: {who} saved program {row.id} at {row.updated_at:%Y-%m-%d %H:%M} UTC "
+            f"not saved: {who} saved program {row.id} at {shown(row.updated_at, self.zone)} "
             f"(version {row.version}) after the version {based_on} you started from. "
             f"Changed meanwhile: {listed}. Reload it and make your change again; "
             "nothing was overwritten."
@@ -670,11 +673,12 @@ def _machine(row: MachineRow) -> Machine:
     )
 
 
-def open_library(url: str | None = None, seed_demo: bool = True) -> Library:
+def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = UTC) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
-    the demo programs added the first time."""
+    the demo programs added the first time (unless not `seed_demo`); its messages state
+    times in `zone`."""
     engine = make_engine(url)
-    library = Library(engine)
+    library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").
     with migration_lock(engine):

@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from decimal import Decimal
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from app.cnc.blocks import Program, Tool
 from app.cnc.cutting import Cutter, Offer, offer
@@ -22,6 +23,9 @@ from app.cnc.kinds import REGISTRY
 from app.cnc.spindle import Spindle
 from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType
 from app.cnc.units import Units, format_decimal, to_nm
+
+if TYPE_CHECKING:
+    from app.cnc.machine import MachineModel
 
 # What a pick copies from the crib into Data Block 0 (TCAL too, where the crib has one).
 COPIED: tuple[str, ...] = ("diameter", "name", "crib", "kind", "flutes", "tool_material")
@@ -179,3 +183,16 @@ def feed_offers(program: Program, spindle: Spindle | None = None) -> FeedOffers:
         if values:
             found[tool.number] = values
     return FeedOffers(found)
+
+
+def machine_limits(
+    machine: MachineModel | None, units: Units
+) -> tuple[Spindle | None, Decimal | None]:
+    """A machine's spindle and its largest feed in `units` per minute (None each where the
+    machine, or its profile, gives none: the control's spindle, FEEDR's own limit)."""
+    if machine is None:
+        return None, None
+    feed = machine.max_feed
+    if feed is not None and machine.units is not units:
+        feed = feed * Decimal("25.4") if units is Units.MM else feed / Decimal("25.4")
+    return machine.spindle, feed

@@ -357,17 +357,25 @@ class Offer:
     feed_xy: Decimal | None = None
     feed_z: Decimal | None = None
     lines: tuple[str, ...] = field(default_factory=tuple)
+    feeds_at: int | None = None  # the RPM the feeds are for (the tool's own, or `rpm`)
 
     def summary(self) -> str:
-        """One line: `4000 rpm, high gear · FEEDR XY 48.0 ipm`."""
+        """One line: `4000 rpm, high gear · FEEDR XY 48.0 ipm` (`· at 500 rpm: FEEDR Z …`
+        when the feeds are for the tool's own RPM)."""
         parts = []
         if self.rpm is not None:
             parts.append(f"{self.rpm} rpm" + (f", {self.gear}" if self.gear else ""))
+        if (
+            self.feeds_at is not None
+            and self.feeds_at != self.rpm
+            and (self.feed_xy is not None or self.feed_z is not None)
+        ):
+            parts.append(f"at {self.feeds_at} rpm:")
         if self.feed_xy is not None:
             parts.append(f"FEEDR XY {feed_text(self.feed_xy, self.units)}")
         if self.feed_z is not None:
             parts.append(f"FEEDR Z {feed_text(self.feed_z, self.units)}")
-        return " · ".join(parts) or "nothing to offer"
+        return " · ".join(parts).replace(": · ", ": ") or "nothing to offer"
 
 
 def feed_text(value: Decimal, units: Units) -> str:
@@ -498,10 +506,11 @@ def offer(
     else:
         table = table_rpm(sfm, cutter.diameter)
         lines.append(f"surface speed {_speed(sfm, units)}: {how}")
-        lines.append(
-            f"RPM {table} = {_speed(sfm, Units.INCH)} × 12 / (π × {_inches(cutter.diameter)} in),"
-            " rounded down"
-        )
+        if units is Units.INCH:
+            formula = f"{_speed(sfm, units)} × 12 / (π × {_inches(cutter.diameter)} in)"
+        else:
+            formula = f"{_speed(sfm, units)} × 1000 / (π × {_mm(cutter.diameter)} mm)"
+        lines.append(f"RPM {table} = {formula}, rounded down")
         offered, note = clamp(table, spindle)
         if note:
             lines.append(f"RPM {offered}: {note}")
@@ -598,6 +607,7 @@ def offer(
         feed_xy,
         feed_z,
         tuple(lines),
+        runs,
     )
 
 
@@ -650,6 +660,10 @@ def _load(inches: Fraction, units: Units) -> str:
 
 def _inches(value: Fraction) -> str:
     return _plain(value, 4)
+
+
+def _mm(inches: Fraction) -> str:
+    return _plain(inches * MM_PER_INCH, 3)
 
 
 def _plain(value: Fraction, places: int = 1) -> str:

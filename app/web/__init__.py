@@ -19,7 +19,18 @@ from werkzeug.routing import IntegerConverter
 
 from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
-from app.web import auth, drawings, editor, export, library, machines, setup, transfers, verify
+from app.web import (
+    auth,
+    crib,
+    drawings,
+    editor,
+    export,
+    library,
+    machines,
+    setup,
+    transfers,
+    verify,
+)
 from app.web.extensions import csrf, get_library
 
 __all__ = ["create_app", "get_library"]
@@ -59,7 +70,18 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     csrf.init_app(app)
     app.extensions["millblocks.library"] = open_library(app.config["DATABASE_URL"])
 
-    for module in (auth, library, editor, drawings, export, machines, setup, transfers, verify):
+    for module in (
+        auth,
+        library,
+        editor,
+        drawings,
+        export,
+        machines,
+        setup,
+        transfers,
+        verify,
+        crib,
+    ):
         app.register_blueprint(module.bp)
     auth.init_app(app)
 

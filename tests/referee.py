@@ -17,6 +17,7 @@ never silently ignored here.
 from __future__ import annotations
 
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -298,23 +299,36 @@ class Motion:
     feed: float | None = None
 
 
+def run_rs274(table: Path, path: Path) -> subprocess.CompletedProcess[str]:
+    """rs274 on G-code file `path` with the tool table `table`, finished.
+
+    rs274 shares the tool table it loads through a file, `$HOME/.tool.mmap` (LinuxCNC's
+    tooldata_mmap): two runs at once under one HOME read each other's tools (a length of 0
+    where the table says 0.511, now and then, when the suite runs beside another). Each
+    run gets a HOME of its own, the G-code's folder."""
+    assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
+    home = path.parent / ".rs274-home"
+    home.mkdir(exist_ok=True)
+    return subprocess.run(
+        [RS274, "-t", str(table), "-g", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env={**os.environ, "HOME": str(home)},
+    )
+
+
 def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
     """Run rs274 on a file; its motions (zero-length ones dropped). Fails on any error.
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
     24 tools) with the `lengths` (inches) the operator keys in from the set-up comments.
     """
-    assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
     lengths = lengths or {}
     table.write_text("".join(f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D0 ;\n" for n in range(1, 25)))
-    result = subprocess.run(
-        [RS274, "-t", str(table), "-g", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
+    result = run_rs274(table, path)
     output = result.stdout + result.stderr
     calls = [CALL.match(line) for line in output.splitlines()]
     stray = [

@@ -18,7 +18,8 @@ sheet lists. A length not known is left out (LinuxCNC reads it as 0: touch the t
 
 Reading: each T line becomes a crib tool: number T, diameter D, TCAL Z, the name from the
 comment (characters a name cannot hold left out, cut to 24), its type, flutes, tool
-material and a tap's pitch from the words of the comment (`1/4-20 TAP`: a tap of 20 TPI);
+material and a tap's pitch and hand from the words of the comment (`1/4-20 TAP`: a
+right-hand tap of 20 TPI; `LH`: left hand);
 what is not carried (pockets other than T, X/Y and rotary offsets, lathe words) and what was
 assumed is reported line by line. A line that cannot be read is a TableError naming its line
 and column, and nothing is read. Pure core: no web, database or serial code.
@@ -39,6 +40,7 @@ from app.cnc.tools import (
     TOOL_NAME_CHARACTERS,
     TOOL_NAME_LENGTH,
     CribTool,
+    Hand,
     PitchUnit,
     ToolMaterial,
     ToolType,
@@ -201,6 +203,7 @@ def read_table(text: str, units: Units) -> TableRead:
                 tcal=tcal,
                 pitch=thread[0] if thread else None,
                 pitch_unit=thread[1] if thread else PitchUnit.TPI,
+                hand=Hand.LEFT if thread and _left_hand(entry.comment) else Hand.RIGHT,
             )
         )
     return result
@@ -228,6 +231,10 @@ def _rounded(value: Decimal, units: Units, where: str, letter: str, result: Tabl
         result.notes.append(f"{where}: {letter}{value} rounded to {rounded}")
     # As a machinist writes it: D+0.125000 is 0.125.
     return rounded.normalize() if rounded else Decimal(0)
+
+
+def _left_hand(comment: str) -> bool:
+    return re.search(r"\bLH\b|LEFT", comment.upper()) is not None
 
 
 def _flutes(comment: str) -> int | None:

@@ -365,8 +365,8 @@
   });
 
   // The feeds of the program's material follow the tool (app.cnc.crib): a new TOOL # offers
-  // its own FEEDR XY / FEEDR Z where the field still holds the last tool's offer or nothing;
-  // a feed typed is never overwritten.
+  // its own FEEDR XY / FEEDR Z where the field holds what the form offered, the last tool's
+  // offer or nothing; a feed typed is never overwritten.
   document.addEventListener("change", function (event) {
     var input = event.target;
     if (!input.matches || !input.matches("form.block-form [name=tool]")) { return; }
@@ -378,7 +378,8 @@
       if (!field) { return; }
       var before = (offers[was] || {})[name];
       var after = (offers[input.value] || {})[name];
-      if (after !== undefined && (field.value === "" || field.value === before)) { field.value = after; }
+      var offered = field.value === "" || field.value === field.defaultValue || field.value === before;
+      if (after !== undefined && offered) { field.value = after; }
     });
     form.setAttribute("data-tool-now", input.value);
   });

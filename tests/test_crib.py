@@ -573,6 +573,8 @@ def test_the_crib_s_changes_never_reach_the_program_but_are_shown(app: Flask) ->
         assert get_library().get(program_id).program.block0.tool(4).diameter == D("0.25")  # type: ignore[union-attr]
     page = client.get(f"/programs/{program_id}/db0").get_data(as_text=True)
     assert "Differs from the crib's T12: DIA 0.25 here, 0.251 in the crib" in page
+    editor = client.get(f"/programs/{program_id}").get_data(as_text=True)
+    assert "tool 4 (T12 1/4-20 TAP): DIA 0.25 here, 0.251 in the crib" in editor
     # "Take the crib's" picks it again.
     client.post(f"/programs/{program_id}/db0", data=db0_form(client, program_id) | {"repick": "4"})
     with app.app_context():
@@ -682,3 +684,57 @@ def test_reading_a_tool_table_on_the_page(app: Flask) -> None:
 
 
 __all__ = ["PASSWORD"]
+
+
+def test_a_backup_carries_the_crib_with_its_revisions(library: Library, tmp_path: Path) -> None:
+    crib = Crib(library)
+    tap = crib.create(TAP, "ana")
+    crib.save(tap.id, replace(TAP, flutes=3), 1, "ben")
+    drill = crib.create(DRILL)
+    crib.retire(drill.id)
+    archive = io.BytesIO()
+    library.backup(archive)
+    fresh = open_library(f"sqlite:///{tmp_path / 'fresh.db'}", seed_demo=False)
+    try:
+        fresh.restore_backup(io.BytesIO(archive.getvalue()))
+        restored = Crib(fresh)
+        assert [(s.tool.number, s.version) for s in restored.tools()] == [(12, 2)]
+        assert [s.tool.number for s in restored.tools(retired=True)] == [7]
+        again = restored.find("T12")
+        assert [r.summary for r in restored.revisions(again.id)][1] == "FLUTES 4 → 3"
+    finally:
+        fresh.engine.dispose()
+    # Into the library it came from: its numbers are in use, so the copies come in retired.
+    library.restore_backup(io.BytesIO(archive.getvalue()))
+    assert [s.tool.number for s in crib.tools()] == [12]
+    assert sorted(s.tool.number for s in crib.tools(retired=True)) == [7, 7, 12]
+
+
+def test_a_backup_with_a_tool_the_crib_cannot_keep_restores_nothing(
+    library: Library, tmp_path: Path
+) -> None:
+    import zipfile
+
+    crib = Crib(library)
+    crib.create(TAP)
+    archive = io.BytesIO()
+    library.backup(archive)
+    broken = io.BytesIO()
+    with (
+        zipfile.ZipFile(io.BytesIO(archive.getvalue())) as source,
+        zipfile.ZipFile(broken, "w") as out,
+    ):
+        for item in source.infolist():
+            data = source.read(item)
+            if item.filename.startswith("tools/"):
+                data = data.replace(b'"pitch": 20', b'"pitch": null')
+            out.writestr(item, data)
+    fresh = open_library(f"sqlite:///{tmp_path / 'fresh.db'}", seed_demo=False)
+    try:
+        from app.storage.backup import BackupError
+
+        with pytest.raises(BackupError, match=r"tool 1, revision 1 \(tools/1/1\.json\), PITCH"):
+            fresh.restore_backup(io.BytesIO(broken.getvalue()))
+        assert Crib(fresh).tools() == [] and fresh.programs() == []
+    finally:
+        fresh.engine.dispose()

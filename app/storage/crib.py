@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from datetime import datetime
+from typing import Any
 
 from sqlalchemy import ColumnElement, func, or_, select, update
 from sqlalchemy.exc import IntegrityError
@@ -409,3 +410,73 @@ def _merged(old: CribTool, read: CribTool) -> CribTool:
         tcal = None if tcal is None else converted(tcal, read.units, old.units)
     name = read.name if read.name != f"T{read.number}" else old.name
     return replace(old, diameter=diameter, tcal=tcal, name=name)
+
+
+# -- backups (app/storage/library.py writes and restores them whole) -------------------------
+
+
+def backup_tools(s: Session, write: Callable[[str, str], None]) -> list[dict[str, Any]]:
+    """Every crib tool's revisions written as `tools/<id>/<version>.json` through `write`,
+    and the manifest's entries for them."""
+    entries: list[dict[str, Any]] = []
+    for row in s.scalars(select(CribToolRow).order_by(CribToolRow.id)):
+        revisions = []
+        for rev in row.revisions:
+            name = f"tools/{row.id}/{rev.version}.json"
+            write(name, rev.document)
+            revisions.append(
+                {
+                    "version": rev.version,
+                    "file": name,
+                    "author": rev.author,
+                    "summary": rev.summary,
+                    "created_at": rev.created_at.isoformat(),
+                }
+            )
+        entries.append(
+            {"id": row.id, "retired": row.deleted_at is not None, "revisions": revisions}
+        )
+    return entries
+
+
+def restore_tools(s: Session, entries: Iterable[Any], now: datetime) -> None:
+    """Add a backup's crib tools (app.storage.backup.ToolEntry) with their revisions, in
+    transaction `s`. A tool whose number or name a tool in use already has (in the library
+    or earlier in the backup) is added retired, so nothing in use changes."""
+    for entry in entries:
+        first, last = entry.revisions[0], entry.revisions[-1]
+        tool = last.tool
+        taken = s.scalar(
+            select(CribToolRow).where(
+                CribToolRow.deleted_at.is_(None),
+                or_(
+                    CribToolRow.number == tool.number,
+                    func.lower(CribToolRow.name) == tool.name.lower(),
+                ),
+            )
+        )
+        row = CribToolRow(
+            number=tool.number,
+            name=tool.name,
+            kind=tool.kind.value,
+            document=last.text,
+            version=last.version,
+            created_at=first.created_at,
+            updated_at=last.created_at,
+            updated_by=last.author,
+            deleted_at=now if entry.retired or taken is not None else None,
+        )
+        s.add(row)
+        s.flush()
+        for rev in entry.revisions:
+            s.add(
+                CribRevisionRow(
+                    tool_id=row.id,
+                    version=rev.version,
+                    document=rev.text,
+                    created_at=rev.created_at,
+                    author=rev.author,
+                    summary=rev.summary,
+                )
+            )
+        s.flush()

@@ -170,7 +170,22 @@ def edit(program_id: int) -> tuple[str, int]:
     entry = entry_from_args(stored.program, request.args)
     if request.args.get("saved") == "db0":
         entry.notice = "Data Block 0 saved."
-    return render_page(stored, entry)
+    return render_page(stored, entry, crib_notes=crib_notes(stored.program))
+
+
+def crib_notes(program: Program) -> list[str]:
+    """`tool 4 (T12 1/4-20 TAP): DIA 0.25 here, 0.251 in the crib` for each tool of Data
+    Block 0 whose crib tool now differs (the crib is read only for programs that picked)."""
+    linked = [tool for tool in program.block0.tools if tool.crib is not None]
+    if not linked:
+        return []
+    crib = _crib_of(program).by_number
+    notes = []
+    for tool in linked:
+        found = differences(tool, crib.get(tool.crib or 0), program.units)
+        if found:
+            notes.append(f"tool {tool.number} (T{tool.crib} {tool.name}): " + "; ".join(found))
+    return notes
 
 
 @bp.get("/programs/<int:program_id>/entry")

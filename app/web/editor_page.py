@@ -310,8 +310,11 @@ def _common(stored: StoredProgram) -> dict[str, Any]:
     return {"stored": stored, "program": stored.program, "program_id": stored.info.id}
 
 
-def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
-    """The whole editor page."""
+def render_page(
+    stored: StoredProgram, entry: Entry, status: int = 200, crib_notes: list[str] | None = None
+) -> tuple[str, int]:
+    """The whole editor page (`crib_notes`: where Data Block 0's tools differ from the
+    crib's, said above the editor)."""
     shown = shown_of(stored.program)
     drawing = shown.drawing()
     return render_template(
@@ -320,6 +323,7 @@ def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple
         **list_context(stored, shown, entry, entry.at),
         **entry_context(stored, entry, shown.problems),
         svg=drawing.svg,
+        crib_notes=crib_notes or [],
     ), status
 
 

@@ -738,3 +738,24 @@ def test_a_backup_with_a_tool_the_crib_cannot_keep_restores_nothing(
         assert Crib(fresh).tools() == [] and fresh.programs() == []
     finally:
         fresh.engine.dispose()
+
+
+def test_odd_values_in_a_program_or_a_query_never_crash_the_pages(app: Flask) -> None:
+    """A document read from a file may hold a tap of pitch 0 (validation's error); a query
+    may hold anything: the pages answer, naming what is wrong."""
+    client = app.test_client()
+    program = tapped_part()
+    zero = replace(program.block0.tools[1], pitch=D(0))
+    odd = replace(
+        program,
+        block0=replace(program.block0, tools=(program.block0.tools[0], zero)),
+        material=Workpiece(name=MaterialName.STEEL_1018),
+    )
+    with app.app_context():
+        program_id = get_library().create(odd).id
+    assert client.get(f"/programs/{program_id}/db0").status_code == 200
+    assert client.get(f"/programs/{program_id}?kind=TAP").status_code == 200
+    headers = {"HX-Request": "true"}
+    for query in ("crib_3=" + "9" * 5000, "crib_3=T٣", "dia_3=1e999&crib_3=x", "rpm_3=--5"):
+        answer = client.get(f"/programs/{program_id}/db0/tool/3?{query}", headers=headers)
+        assert answer.status_code == 200, query

@@ -498,8 +498,8 @@ def offer(
         return Offer(units, lines=("no diameter: nothing to offer",))
     lead = (
         lead_per_rev(cutter.pitch, cutter.pitch_unit, units)
-        if cutter.kind is ToolType.TAP and cutter.pitch is not None
-        else None
+        if cutter.kind is ToolType.TAP and cutter.pitch is not None and cutter.pitch > 0
+        else None  # no pitch (or one validation refuses): no tap feed offered
     )
     if sfm is None:
         lines.append(f"surface speed: none ({how})")

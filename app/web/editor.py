@@ -538,7 +538,7 @@ class CribView:
         """A tool in use by its number (12, T12, #12) or its name (any case)."""
         wanted = text.strip()
         digits = wanted.lstrip("Tt#")
-        if digits.isdigit():
+        if digits.isascii() and digits.isdigit() and len(digits) <= 9:
             found = self.by_number.get(int(digits))
             if found is not None:
                 return found

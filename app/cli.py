@@ -28,6 +28,7 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +37,8 @@ import click
 from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
 
 if TYPE_CHECKING:
+    from sqlalchemy import Engine
+
     from app.cnc.blocks import Program
     from app.cnc.machine import MachineModel
     from app.cnc.problems import Problem
@@ -48,13 +51,17 @@ if TYPE_CHECKING:
 
 class Number(click.ParamType[Any, Any]):
     """A number argument read by app.cnc.numbers (click's own FLOAT takes `nan` and INT
-    takes `١٢`): a float, or an int when `whole`, at least `minimum`."""
+    takes `١٢`): a float, or an int when `whole`, at least `minimum` (more than it when
+    `above`)."""
 
     name = "number"
 
-    def __init__(self, minimum: float | None = None, whole: bool = False) -> None:
+    def __init__(
+        self, minimum: float | None = None, whole: bool = False, above: bool = False
+    ) -> None:
         self.minimum = minimum
         self.whole = whole
+        self.above = above  # more than `minimum`, not equal to it
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -67,6 +74,10 @@ class Number(click.ParamType[Any, Any]):
             self.fail(str(exc), param, ctx)
         if self.minimum is not None and number < self.minimum:
             self.fail(f"{value!r} is below the allowed minimum {self.minimum:g}", param, ctx)
+        if self.above and number == self.minimum:
+            self.fail(
+                f"{value!r} is not allowed; it must be more than {self.minimum:g}", param, ctx
+            )
         return int(number) if self.whole else float(number)
 
 
@@ -191,11 +202,42 @@ def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Progr
     return stored.program, stored.info.id
 
 
+class ConfigurationError(click.ClickException):
+    """A MILLBLOCKS_* setting or a database this MillBlocks cannot use (exit 2)."""
+
+    exit_code = 2
+
+
+def settings() -> dict[str, Any]:
+    """The MILLBLOCKS_* settings of the environment (app.settings), read."""
+    from app.settings import SettingError, environment
+
+    try:
+        return environment()
+    except SettingError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
 def library() -> Library:
-    """The library (DATABASE_URL, else instance/millblocks.db), migrated to the newest."""
+    """The library (MILLBLOCKS_DATABASE_URL or DATABASE_URL, else millblocks.db in the
+    instance folder), migrated to the newest; its times in the shop's zone."""
+    from app.storage.db import SchemaError
     from app.storage.library import open_library
 
-    return open_library()
+    config = settings()
+    try:
+        return open_library(
+            config["DATABASE_URL"], seed_demo=config["DEMO_PROGRAMS"], zone=config["TIME_ZONE"]
+        )
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
+def shop_time(lib: Library, moment: datetime, seconds: bool = False) -> str:
+    """A stored time in the shop's zone, labelled (app.settings.shown)."""
+    from app.settings import shown
+
+    return shown(moment, lib.zone, seconds)
 
 
 def print_problems(path: Path | str, problems: list[Problem]) -> None:
@@ -216,7 +258,21 @@ def checked(path: str) -> Program:
     return program
 
 
-@click.group()
+class _Commands(click.Group):
+    """The command group: text that the one text rule refuses (app.cnc.text: a NUL, a lone
+    surrogate from arguments that are not UTF-8, a name or notes too long), wherever a
+    command meets it, ends the command with exit 2 and the message naming the field."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        from app.cnc.text import TextError
+
+        try:
+            return super().invoke(ctx)
+        except TextError as exc:
+            raise ProgramFileError(str(exc)) from None
+
+
+@click.group(cls=_Commands)
 @click.version_option(package_name="millblocks")
 def main() -> None:
     """MillBlocks: conversational mill programs to tool paths, tape and G-code."""
@@ -514,13 +570,13 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
 @file_format_option
 @click.option(
     "--resolution",
-    type=click.FloatRange(min=0, min_open=True),
+    type=Number(minimum=0, above=True),
     default=None,
     help="Cell size in the program's units (default: about 800 cells along the stock).",
 )
 @click.option(
     "--tolerance",
-    type=click.FloatRange(min=0),
+    type=Number(minimum=0),
     default=None,
     help="What counts, in the program's units (default 0.001 in or 0.02 mm).",
 )
@@ -607,7 +663,7 @@ def history(program: str) -> None:
         raise click.ClickException(str(exc)) from None
     for revision in lib.revisions(stored.info.id):
         click.echo(
-            f"v{revision.version:<4} {revision.created_at:%Y-%m-%d %H:%M}  "
+            f"v{revision.version:<4} {shop_time(lib, revision.created_at)}  "
             f"{revision.author or '-':<12} {revision.summary}"
         )
 
@@ -652,10 +708,11 @@ def restore_version(program: str, version: int) -> None:
 @click.option("--trash", is_flag=True, help="List the trash instead.")
 def list_programs(query: str, sort: str | None, trash: bool) -> None:
     """List library programs matching QUERY (name, part number, notes, tools, block types)."""
-    for info in library().programs(query, sort or "name", trash):
+    lib = library()
+    for info in lib.programs(query, sort or "name", trash):
         click.echo(
             f"{info.id:>5}  {info.name:<40} {info.part_number:<8} {info.block_count:>4} blocks"
-            f"  v{info.version}  {info.updated_at:%Y-%m-%d %H:%M}"
+            f"  v{info.version}  {shop_time(lib, info.updated_at)}"
         )
 
 
@@ -747,9 +804,93 @@ def db() -> None:
 
 @db.command("upgrade")
 def db_upgrade() -> None:
-    """Bring the database up to date (every command does this by itself too)."""
-    library()
-    click.echo("database is up to date")
+    """Bring the database up to this MillBlocks' schema, and say what was done (every
+    command does this by itself too)."""
+    from app.storage.db import current
+
+    engine = _database()
+    before = _known_revision(engine)
+    after = current(library().engine)
+    where = engine.url.render_as_string(hide_password=True)
+    if before is None:
+        click.echo(f"created the database at {after} ({where})")
+    elif before == after:
+        click.echo(f"already at {after} ({where})")
+    else:
+        click.echo(f"upgraded from {before} to {after} ({where})")
+
+
+@db.command("current")
+def db_current() -> None:
+    """Say which schema revision the database is at, and the newest this MillBlocks knows
+    (exit 1 when the database is newer than this MillBlocks)."""
+    from app.storage.db import current, head, revisions
+
+    engine = _database()
+    found, newest = current(engine), head()
+    where = engine.url.render_as_string(hide_password=True)
+    if found is None:
+        click.echo(
+            f"empty: no schema yet ({where}); `millblocks db upgrade` creates it at {newest}"
+        )
+    elif found == newest:
+        click.echo(f"at {found}, the newest this MillBlocks knows ({where})")
+    elif found in revisions():
+        click.echo(
+            f"at {found}; this MillBlocks knows up to {newest}: "
+            f"`millblocks db upgrade` brings it up ({where})"
+        )
+    else:
+        click.echo(f"at {found}, newer than this MillBlocks (it knows up to {newest}) ({where})")
+        sys.exit(1)
+
+
+@db.command("downgrade")
+@click.argument("revision", required=False)
+@click.option("--yes", is_flag=True, help="Do not ask before dropping data.")
+def db_downgrade(revision: str | None, yes: bool) -> None:
+    """Take the database down to REVISION (default: one step; `base` empties it), to run an
+    older MillBlocks on it. What each undone migration added is dropped with its data:
+    back up first (docs/deploy.md)."""
+    from app.storage.db import SchemaError, current, downgrade, revisions, undone
+
+    engine = _database()
+    found = _known_revision(engine)
+    if found is None:
+        raise ConfigurationError("the database is empty: nothing to downgrade")
+    if revision is None:
+        known = revisions()
+        revision = known[known.index(found) - 1] if known.index(found) else "base"
+    try:
+        steps = undone(found, revision)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+    if not steps:
+        click.echo(f"already at {found}")
+        return
+    for step, what in steps:
+        click.echo(f"undo {step}: {what}", err=True)
+    if not yes:
+        click.confirm("The data of what these added is dropped. Go on?", abort=True, err=True)
+    downgrade(engine, revision)
+    click.echo(f"downgraded from {found} to {current(engine) or 'base (empty)'}")
+
+
+def _database() -> Engine:
+    """An engine on the configured database, without migrating it."""
+    from app.storage.db import make_engine
+
+    return make_engine(settings()["DATABASE_URL"])
+
+
+def _known_revision(engine: Engine) -> str | None:
+    """The database's revision; exit 2 with what to do when it is newer than this code."""
+    from app.storage.db import SchemaError, check_known
+
+    try:
+        return check_known(engine)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
 
 
 @main.command("serve")
@@ -762,7 +903,14 @@ def db_upgrade() -> None:
     type=Number(minimum=1, whole=True),
     help="gunicorn worker processes.",
 )
-def serve(host: str, port: int, workers: int) -> None:
+@click.option(
+    "--dnc/--no-dnc",
+    default=True,
+    show_default=True,
+    help="Also start the transfer service (`millblocks dnc`); --no-dnc where it runs as its "
+    "own systemd unit.",
+)
+def serve(host: str, port: int, workers: int, dnc: bool) -> None:
     """Serve the web app with gunicorn (Linux), after bringing the database up to date.
 
     Listens on 127.0.0.1 unless told otherwise: on a shop network put the reverse proxy
@@ -770,8 +918,16 @@ def serve(host: str, port: int, workers: int) -> None:
     environment (MILLBLOCKS_*, DATABASE_URL).
     """
     library()  # migrated (and given its demo programs) once, before the workers start
+    if dnc:
+        # A process of its own, in this process group (Ctrl-C stops both); gunicorn
+        # restarting its workers, or being restarted, does not touch a transfer.
+        import subprocess
+
+        subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
     command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
-    command += ["--workers", str(workers), "--access-logfile", "-", "app:create_app()"]
+    # No gunicorn access log: the app writes one line per request with its level
+    # (app/web/logs.py), so the journal would have each request twice.
+    command += ["--workers", str(workers), "app:create_app()"]
     click.echo(f"serving MillBlocks on http://{host}:{port}/ ({workers} workers)", err=True)
     sys.stderr.flush()
     os.execv(sys.executable, command)
@@ -1142,8 +1298,21 @@ def _transfer_machine(name: str | None, port: str | None, target: str) -> Machin
     "--to", "target", default="events", show_default=True, help="What to send with --port alone."
 )
 @click.option("--author", default="", help="Who is sending (kept in the transfer log).")
+@click.option(
+    "--from-block",
+    "start_block",
+    default=None,
+    type=Number(minimum=1, whole=True),
+    help="Restart: send the program from this data block on (the start of a hole, bolt "
+    "circle, mill sequence or LOOP).",
+)
 def send_command(
-    program: str, machine_name: str | None, port: str | None, target: str, author: str
+    program: str,
+    machine_name: str | None,
+    port: str | None,
+    target: str,
+    author: str,
+    start_block: int | None,
 ) -> None:
     """Send a program over RS-232: to a library machine (its port, target and line
     settings), or to --port PATH at 4800 7E1.
@@ -1158,6 +1327,7 @@ def send_command(
     machine = _transfer_machine(machine_name, port, target)
     lib = library()
     chosen, program_id = resolve_reference(program, lib)
+    revision = None if program_id is None else lib.get(program_id).info.version
     stop, cancelled = _interruptible()
     try:
         sent = service.send_program(
@@ -1165,6 +1335,8 @@ def send_command(
             machine,
             port=port,
             program_id=program_id,
+            revision=revision,
+            start_block=start_block,
             author=author,
             log=TransferLog(lib).log,
             progress=_progress_printer(f"send {chosen.name}"),
@@ -1226,6 +1398,7 @@ def receive_command(
             progress=_progress_printer("receive"),
             cancel=cancelled,
             first_byte_timeout=first_byte_timeout,
+            compare=TransferLog(lib).compare_with_last_send,
         )
     except (TransferError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
@@ -1236,6 +1409,46 @@ def receive_command(
         sys.exit(1)
     click.echo(got.stored.id)
     print_problems(got.program.name, validate(got.program))
+
+
+@main.command("dnc")
+@click.option(
+    "--poll",
+    default=0.5,
+    show_default=True,
+    type=Number(minimum=0.05),
+    help="Seconds between looks at the queue.",
+)
+def dnc_service(poll: float) -> None:
+    """Run the transfer service: every transfer queued by the web page, one at a time per
+    machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
+    transfers running then, naming them). Run one per library, beside the web server."""
+    from app.dnc.daemon import TransferService
+
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    signal.signal(signal.SIGINT, lambda *_: stop.set())
+    running = TransferService(library(), poll=poll)
+    for transfer in running.recover():
+        click.echo(
+            f"transfer {transfer.id} ({transfer.direction} {transfer.program_name or '-'} on "
+            f"{transfer.machine}) was interrupted when the service last stopped",
+            err=True,
+        )
+    click.echo(f"transfer service running ({running.name})", err=True)
+
+    def started(transfer: Any) -> None:
+        click.echo(
+            f"transfer {transfer.id}: {transfer.direction} {transfer.program_name or '-'} "
+            f"on {transfer.machine} ({transfer.port})",
+            err=True,
+        )
+
+    for transfer in running.run(stop, on_start=started):
+        click.echo(
+            f"transfer {transfer.id} on {transfer.machine} interrupted by the stop", err=True
+        )
+    click.echo("transfer service stopped", err=True)
 
 
 @main.command("ports")
@@ -1253,13 +1466,16 @@ def list_transfers(limit: int) -> None:
     """The newest RS-232 transfers in the log."""
     from app.storage.transfers import TransferLog
 
-    for t in TransferLog(library()).recent(limit):
+    lib = library()
+    for t in TransferLog(lib).recent(limit):
         total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
         error = f"  {t.error}" if t.error else ""
+        version = f" v{t.revision}" if t.revision is not None else ""
+        digest = f" sha256 {t.checksum[:12]}" if t.checksum else ""
         click.echo(
-            f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
-            f"{t.program_name or '-':<20} {t.target} {t.settings}  "
-            f"{t.bytes_done}{total} bytes  {t.outcome}{error}"
+            f"{t.id:>5} {shop_time(lib, t.started_at)} {t.direction:<7} {t.machine:<16} "
+            f"{(t.program_name or '-') + version:<24} {t.target} {t.settings}  "
+            f"{t.bytes_done}{total} bytes  {t.outcome}{error}{digest}  {t.author or '-'}"
         )
 
 

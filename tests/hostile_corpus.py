@@ -23,6 +23,7 @@ from typing import Any
 
 from app.cnc.numbers import quoted
 from app.cnc.sizes import MAX_IMPORT_LINES
+from app.cnc.text import text_fault
 
 # value typed into a number field → (reason for a decimal field, reason for a whole field)
 HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
@@ -43,7 +44,7 @@ HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
     "9" * 60: ("is not a number", "is not a whole number"),
     "1 2": ("is not a number", "is not a whole number"),
     "\u202e5": ("is not a number", "is not a whole number"),  # right-to-left override
-    "5\x00": ("is not a number", "is not a whole number"),
+    "5\x00": ("is not a number", "is not a whole number"),  # refused first by the text rule
 }
 
 BLOCK_KINDS: tuple[str, ...] = ("POS", "DRILL", "BOLT_CIR_DRILL", "MILL_STD", "ARC_C", "CIRCLE")
@@ -69,10 +70,13 @@ DB0_FIELDS: dict[str, tuple[str, bool]] = {
 # (URL, allowed statuses). Query arguments the pages read with their own rules.
 QUERIES: list[tuple[str, tuple[int, ...]]] = [
     *[(f"/programs/2?{arg}={value}", (200, 404)) for arg in ("edit", "at", "page")
-      for value in ("²", "--5", "１", "1e999", "-1", "0", "99999999999999999999", "%00", "x")],
+      for value in ("²", "--5", "１", "1e999", "-1", "0", "99999999999999999999", "x")],
+    # The one text rule (app.cnc.text) refuses a NUL or a lone surrogate in any argument.
+    *[(f"/programs/2?{arg}=%00", (422,)) for arg in ("edit", "at", "page")],
     *[(f"/programs/2/entry?{arg}", (200, 404)) for arg in (
         "group=EVIL", "kind=EVIL", "kind=BOLT_CIR_DRILL&at=1", "group=REP", "group=COPY&at=1",
-        "kind=ARC_C&at=%FF", "loop=%00", "edit=1&page=-5")],
+        "kind=ARC_C&at=%FF", "edit=1&page=-5")],
+    ("/programs/2/entry?loop=%00", (422,)),
     *[(f"/programs/2/export?target={t}", (200, 422)) for t in (
         "../../etc/passwd", "%00", "gcode-linuxcnc&go=1&opt_sequence-start=NaN",
         "gcode-linuxcnc&go=1&opt_sequence-start=%EF%BC%91", "tape-eia&go=1&opt_leader=1e999999",
@@ -80,9 +84,16 @@ QUERIES: list[tuple[str, tuple[int, ...]]] = [
     *[(f"/programs/2/export/download?target={t}", (200, 422)) for t in (
         "gcode-linuxcnc&opt_sequence-start=1_000", "nonsense", "json&opt_x=%00",
         "tape-eia&opt_leader=%D9%A3")],
-    *[(f"/?{q}", (200,)) for q in ("q=%00", "q=" + "a" * 5000, "sort=evil", "q=%27%22<>")],
+    *[(f"/?{q}", (200,)) for q in ("sort=evil", "q=%27%22<>")],
+    # A search is at most 10 words of 100 characters, and no NUL (app.cnc.text).
+    *[(f"/?{q}", (422,)) for q in ("q=%00", "q=" + "a" * 5000, "q=" + "+w" * 999)],
     *[(f"/programs/2/history?diff={v}", (200,)) for v in ("²", "-1", "1e9", "99999999999")],
     *[(u, (404,)) for u in ("/programs/99999999999999999999", "/programs/-1", "/machines/x/y")],
+    # The verify pages read `upto` with the one number reader (`²` was a 500).
+    *[(f"/programs/2/verify/{page}?upto={value}", (422,))
+      for page in ("surface", "part.png", "part.stl")
+      for value in ("²", "1E%2B999999999", "-1", "١", "99999999999999999999")],
+    ("/programs/2/verify/surface?upto=3", (200,)),
     ("/programs/2/setup?target=%00", (200, 422)),
     ("/programs/2/setup?machine=nope", (200, 422)),
 ]  # fmt: skip
@@ -133,8 +144,23 @@ DOCUMENT_VALUES: list[tuple[str, str, str]] = (
         ("format", '"other"', 'expected "millblocks-program"'),
         ("version", "2", "version 2 is not supported"),
         ("units", "null", "is not one of"),
+        # The one text rule (app.cnc.text): names and notes hold no NUL or lone surrogate
+        # (a surrogate was a 500 on both databases), and have lengths.
+        ("name", '"\\ud800"', "program, name: has a lone surrogate (U+D800)"),
+        ("name", '"a\\udfffb"', "program, name: has a lone surrogate (U+DFFF) at character 2"),
+        ("notes", '"\\udc80"', "program, notes: has a lone surrogate (U+DC80)"),
+        ("name", '"a\\u0000"', "program, name: has a NUL character (U+0000)"),
+        ("notes", '"\\u0000"', "program, notes: has a NUL character (U+0000)"),
+        ("part_number", '"\\u0000"', "program, part_number: has a NUL character"),
+        ("blocks.0.message", '"\\ud83d"', "block 1, MESSAGE: has a lone surrogate"),
+        ("data_block_0.tools.0.name", '"\\u0000"',
+         "Data Block 0, tool entry 1, NAME: has a NUL character"),
+        ("name", '"' + "x" * 201 + '"', "program, name: 201 characters is too long; allowed: "
+         "at most 200"),
+        ("notes", '"' + "x" * 4001 + '"', "program, notes: 4,001 characters is too long; "
+         "allowed: at most 4,000"),
     ]
-)
+)  # fmt: skip
 
 # Uploads to the import form: (file name, bytes, expected message part); a part of None
 # means the file is a program after all (201).
@@ -159,6 +185,12 @@ UPLOADS: list[tuple[str, bytes, str | None]] = [
     ("bigint.json", b'{"format": "millblocks-program", "version": ' + b"9" * 5000 + b"}", ""),
     ("events-nan.cnc", b"PN2 G20;\nN001 G100 XNaN Y1 T01;\n", "line 2"),
     ("events-sup.cnc", "PN2 G20;\nN001 G100 X1.0A Y²A T01;\n".encode(), "line 2"),
+    # An angle of 13 decimals once implied: refused by the number reader at its word.
+    (
+        "events-angle.cnc",
+        b"PN2 G20;\nN001 G104 XC1.0 YC1.0 HL4 R1.0 A.0000000000001 T01;\n",
+        "line 2, column 32: A.0000000000001: '.0000000000001' has too many decimal places",
+    ),
     ("tape-junk.tape", b"%\rN001 G00 X\xff\xfe\r", ""),
     ("ambiguous.txt", b"N001 G00 X1000 Y2000\nM30\n", ""),
 ]
@@ -178,12 +210,61 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["diff", "1", "²", "1"], "²"),
     (["restore-version", "1", "--5"], "--5"),
     (["transfers", "--limit", "١٠"], "١٠"),
+    # The one number reader for verify's options (inf, nan, 1e300 were tracebacks).
+    *[(["verify", "@golden", "--resolution", v], "--resolution")
+      for v in ("inf", "nan", "1e300", "NaN", "0", "-1", "²")],
+    (["verify", "@golden", "--tolerance", "inf"], "--tolerance"),
+    # The one text rule: a lone surrogate is what a command line of non-UTF-8 bytes gives.
+    (["list", " ".join(["w"] * 999)], "search: 999 words is too many; allowed: at most 10"),
+    (["list", "caf\udce9"], "search: has a lone surrogate (U+DCE9) at character 4"),
+    (["check", "no such \udcff"], "has a lone surrogate (U+DCFF)"),
+    (["history", "\udcff"], "has a lone surrogate (U+DCFF)"),
+    (["user", "add", "a\udcffb", "--role", "admin", "--password", "a long password"],
+     "user name: has a lone surrogate (U+DCFF) at character 2"),
+    (["user", "password", "ada\udcff", "--password", "a long password"],
+     "has a lone surrogate (U+DCFF)"),
+]  # fmt: skip
+
+# The one text rule (app.cnc.text) at every entry, on SQLite and on PostgreSQL (whose text
+# cannot hold a NUL: each of these was a 500 there). (method, URL, form, the field named in
+# the refusal); the NUL is in that field. Run logged in as an admin; programs 1 and 2 exist.
+NUL = "\x00"
+TEXT_ENTRIES: list[tuple[str, str, dict[str, str], str]] = [
+    ("POST", "/login", {"username": f"ana{NUL}", "password": "x"}, "username"),
+    ("POST", "/programs", {"name": f"a{NUL}b", "units": "inch"}, "name"),
+    ("POST", "/programs/1/header", {"name": f"a{NUL}", "version": "1"}, "name"),
+    ("POST", "/programs/1/header", {"name": "a", "notes": NUL, "version": "1"}, "notes"),
+    ("POST", "/programs/1/header", {"name": "a", "part_number": NUL, "version": "1"},
+     "part_number"),
+    ("POST", "/programs/1/blocks", {"kind": "POS", "x": "1", "y": "1", "message": f"A{NUL}",
+                                    "version": "1"}, "message"),
+    ("POST", "/programs/1/db0", {"name_1": f"DRILL{NUL}", "version": "1"}, "name_1"),
+    ("POST", "/programs/1/mirror", {"axis": NUL}, "axis"),
+    ("POST", "/programs/1/verify/stock", {"x": NUL, "version": "1"}, "x"),
+    ("POST", "/machines", {"name": f"m{NUL}", "target": "gcode-linuxcnc"}, "name"),
+    ("POST", "/machines", {"name": "m", "target": "gcode-linuxcnc", "notes": NUL}, "notes"),
+    ("POST", "/machines", {"name": "m", "target": "gcode-linuxcnc", "limits": f"x=0 {NUL}"},
+     "limits"),
+    ("POST", "/machines/m%00/delete", {}, "name"),
+    ("GET", "/machines/options?target=%00", {}, "target"),
+    ("POST", "/users", {"username": f"u{NUL}", "password": "a long password", "role": "operator"},
+     "username"),
+    ("POST", "/users/u%00/role", {"role": "admin"}, "username"),
+    ("POST", "/users/u%00/sessions/end", {}, "username"),
+    ("POST", "/account/password", {"current": NUL, "new": "a long password"}, "current"),
+    ("GET", "/?q=%00", {}, "q"),
+    ("GET", "/programs/1/export?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/export/download?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/setup?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/verify/surface?upto=%00", {}, "upto"),
+    ("POST", "/transfers/send", {"machine": NUL, "program_id": "1"}, "machine"),
+    ("POST", "/transfers/receive", {"machine": "m", "name": NUL}, "name"),
 ]  # fmt: skip
 
 LOGINS: list[tuple[dict[str, str], int]] = [
     ({"username": "ana", "password": "x" * 100_000}, 401),
     ({"username": "a" * 10_000, "password": "x"}, 401),
-    ({"username": "\x00", "password": "\x00"}, 401),
+    ({"username": "\x00", "password": "\x00"}, 422),  # the one text rule: no NUL
     ({"username": "ana'; DROP TABLE users; --", "password": "x"}, 401),
     ({"username": "ana\u202e", "password": "x"}, 401),
     ({"username": "", "password": ""}, 401),
@@ -200,6 +281,13 @@ class Case:
     data: dict[str, Any] = field(default_factory=dict)
     status: tuple[int, ...] = (422,)
     message: str = ""
+
+
+def refused_text(field: str, value: str) -> str:
+    """The text rule's refusal of `value` in form field `field` ("" when it has none): a
+    NUL or lone surrogate is refused before the field is read as a number."""
+    fault = text_fault(value)
+    return f"{field}: {fault}" if fault else ""
 
 
 def block_cases() -> list[Case]:
@@ -221,7 +309,8 @@ def block_cases() -> list[Case]:
                         f"{key}-{spec.name}-{value[:12]!r}",
                         {"kind": key, "field": spec.name, "value": value},
                         (422,),
-                        f"{spec.label}: {quoted(value.strip())} {reason}",
+                        refused_text(spec.name, value)
+                        or f"{spec.label}: {quoted(value.strip())} {reason}",
                     )
                 )
     return found
@@ -238,7 +327,7 @@ def db0_cases() -> list[Case]:
                     f"{name}-{value[:12]!r}",
                     {"field": name, "value": value},
                     (422,),
-                    f"{label}: {quoted(value.strip())} {reason}",
+                    refused_text(name, value) or f"{label}: {quoted(value.strip())} {reason}",
                 )
             )
     return found

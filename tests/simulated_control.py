@@ -310,3 +310,73 @@ class SimulatedControl:
 
     def _write(self, data: bytes) -> None:
         os.write(self._fd, data)
+
+
+def free_port() -> int:
+    """A TCP port on the loopback nobody listens on now."""
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+class SocketBridge:
+    """A serial device server's raw TCP port, played by socat: `url` (socket://127.0.0.1:N)
+    on one side, a pty (`control`, where the simulated control listens) on the other.
+    Like a device server, it carries bytes and makes no frame of its own."""
+
+    def __init__(self, timeout: float = 5.0) -> None:
+        if shutil.which("socat") is None:
+            raise RuntimeError("socat is not installed: apt-get install socat (Debian package)")
+        self._log = tempfile.NamedTemporaryFile("w+", prefix="socat-", suffix=".log")  # noqa: SIM115
+        self.tcp = free_port()
+        self.url = f"socket://127.0.0.1:{self.tcp}"
+        # The pty first (it exists at once, for the control to open), then the listening
+        # socket, which takes the one connection a transfer makes.
+        link = str(Path(self._log.name).with_suffix(".pty"))
+        self.process = subprocess.Popen(
+            [
+                "socat",
+                "-d",
+                "-d",
+                f"pty,raw,echo=0,link={link}",
+                f"TCP-LISTEN:{self.tcp},bind=127.0.0.1,reuseaddr",
+            ],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=self._log,
+        )
+        self.control = link
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            text = Path(self._log.name).read_text(errors="replace")
+            if "listening on" in text:
+                break
+            if self.process.poll() is not None:
+                raise RuntimeError(f"socat failed: {text}")
+            time.sleep(0.01)
+        else:
+            self.close()
+            raise RuntimeError(f"socat did not listen on {self.tcp} in {timeout} s")
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout=5)
+        self._log.close()
+
+    def __enter__(self) -> SocketBridge:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        value: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()

@@ -21,7 +21,7 @@ from flask.testing import FlaskClient
 
 from app.cli import main
 from app.cnc import document
-from app.cnc.blocks import Coolant, Program, Tool
+from app.cnc.blocks import Coolant, Hole, Program, Tool
 from app.cnc.crib import copy_of, differences, feed_offers, pick, tool_offer
 from app.cnc.cutting import MaterialName, Workpiece
 from app.cnc.problems import Rule
@@ -72,8 +72,9 @@ M6 = CribTool(
 def tapped_part() -> Program:
     """Drill #7, then tap 1/4-20 (the bad corpus's program, its feed made right)."""
     program = document.loads((BAD / "tap-feed-not-the-pitch" / "program.json").read_text())
-    tap = replace(program.blocks[1], feed_z=D(25))
-    return replace(program, blocks=(program.blocks[0], tap))
+    tap = program.blocks[1]
+    assert isinstance(tap, Hole)
+    return replace(program, blocks=(program.blocks[0], replace(tap, feed_z=D(25))))
 
 
 # -- the program's copy ------------------------------------------------------------------------
@@ -163,7 +164,9 @@ def test_the_copy_and_the_material_round_trip_through_the_document() -> None:
 def test_the_tap_rule_names_the_block_and_passes_the_right_feed() -> None:
     program = tapped_part()
     assert not [p for p in validate(program) if p.rule in (Rule.TAP_FEED, Rule.TAP_HAND)]
-    wrong = replace(program, blocks=(program.blocks[0], replace(program.blocks[1], feed_z=D(24))))
+    tap = program.blocks[1]
+    assert isinstance(tap, Hole)
+    wrong = replace(program, blocks=(program.blocks[0], replace(tap, feed_z=D(24))))
     found = [p for p in validate(wrong) if p.rule is Rule.TAP_FEED]
     assert [str(p) for p in found] == [
         "block 2, FEEDR Z: 24 ipm does not match tool 2 (1/4-20 TAP): a tap feeds one pitch per "

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import math
 import shutil
 import threading
 import time
@@ -456,3 +457,25 @@ def test_software_parity_frames_on_the_wire(pair: SocatPair) -> None:
         assert raw_line.wait_for(result.total, timeout=WAIT)
     assert bytes(raw_line.memory) == add_parity(b"%\nG0 X1\n%\n", Parity.EVEN)
     assert bytes(raw_line.memory) == outgoing(b"%\nG0 X1\n%\n", result.settings)
+
+
+def test_a_drip_feed_waits_out_xoff_holds_that_fail_an_ordinary_send(pair: SocatPair) -> None:
+    """`hold` (issue 35): how long the control may hold us with XOFF. A control that runs
+    the program as it reads it (a drip feed, for programs longer than its memory) holds the
+    line for as long as a cut takes: with `hold` 1 s its 1.6 s holds fail the send; with
+    `hold` 0 (no limit) the same control gets the whole program."""
+    data = b"%\r\n" + b"".join(b"N%03d G01 X1.0 Y2.0\r\n" % n for n in range(6)) + b"%\r\n"
+    machine = Machine("Plus", "events", {}, {"port": pair.host, "flow": "xonxoff", "hold": "1"})
+    # XOFF at 48 characters buffered, XON at 16, emptied at 20 characters a second.
+    with (
+        SimulatedControl(pair.control, parity="E", buffer_size=64, consume_cps=20),
+        pytest.raises(SendError) as caught,
+    ):
+        send_program(demo_programs()[0], machine)
+    assert "no XON for 1 s" in str(caught.value)
+    drip = PortSettings.from_serial({"flow": "xonxoff", "hold": "0"}, target="events")
+    assert drip.hold == 0 and "XOFF held without limit" in drip.describe()
+    with SimulatedControl(pair.control, parity="E", buffer_size=64, consume_cps=20) as control:
+        result = send(data, drip, pair.host, xoff_timeout=math.inf)
+        assert control.received(data, timeout=WAIT)
+    assert result.outcome is Outcome.OK and result.xoff_count >= 1 and result.held_seconds > 1.0

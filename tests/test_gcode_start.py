@@ -67,10 +67,8 @@ def rs274_motions(text: str, tmp_path: Path) -> list[tuple[str, tuple[float, flo
     lines.insert(1, "G20 G10 L2 P1 X0 Y0 Z-10")
     path = tmp_path / "start.ngc"
     path.write_text("\n".join(lines) + "\n")
-    table = tmp_path / "start.tbl"
-    table.write_text("".join(f"T{n} P{n} Z0 D0 ;\n" for n in range(1, 25)))
-    result = run_rs274(table, path)
-    assert result.returncode == 0, result.stdout + result.stderr
+    result, output = run_rs274(path, None)
+    assert result.returncode == 0, output
     motions = []
     for raw in result.stdout.splitlines():
         m = CALL.match(raw)

@@ -7,7 +7,9 @@ its G-code's `G43 H` the TCAL the set-up sheet lists.
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
 from decimal import Decimal as D
 from pathlib import Path
 
@@ -25,9 +27,27 @@ from app.cnc.tooltable import (
     write_table,
 )
 from app.cnc.units import Units
-from tests.referee import run_rs274
+from tests.referee import RS274
 
 GOLDEN = Path(__file__).parent / "golden"
+
+
+def run_rs274(table: Path, path: Path) -> subprocess.CompletedProcess[str]:
+    """rs274 on G-code file `path` with the tool table `table`. rs274 shares the tool table
+    it loads through `$HOME/.tool.mmap`: two runs at once under one HOME read each other's
+    tools, so each run gets its own HOME (as tests/referee.run_rs274 does)."""
+    assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
+    home = path.parent / ".rs274-home"
+    home.mkdir(exist_ok=True)
+    return subprocess.run(
+        [RS274, "-t", str(table), "-g", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env={**os.environ, "HOME": str(home)},
+    )
+
 
 CRIB = [
     CribTool(
@@ -174,9 +194,9 @@ def test_a_metric_crib_and_an_inch_tool_in_a_metric_table(tmp_path: Path) -> Non
     text = write_table(crib_table(tools, Units.MM), Units.MM)
     assert "T3 P3 D12.700 Z54.292 ;1/2 END MILL" in text
     seen = through_rs274(text, [1, 2, 3], tmp_path)
-    assert seen[1] == (pytest.approx(52.5), pytest.approx(3.0))
-    assert seen[2] == (pytest.approx(48.125), pytest.approx(3.0))
-    assert seen[3] == (pytest.approx(54.292), pytest.approx(6.35))
+    assert seen[1] == pytest.approx((52.5, 3.0))
+    assert seen[2] == pytest.approx((48.125, 3.0))
+    assert seen[3] == pytest.approx((54.292, 6.35))
     back = {t.number: t for t in read_table(text, Units.MM).tools}
     assert (back[2].pitch, back[2].pitch_unit) == (D(1), PitchUnit.MM)
 
@@ -271,6 +291,6 @@ def test_a_program_s_tool_table_gives_its_g_code_the_tcal_of_the_set_up_sheet(
     calls = tool_calls(out)
     assert len(calls) >= 2
     # Each tool call's G43 H applies that tool's TCAL (the set-up sheet's).
-    assert [(tool, length) for tool, length, _ in calls] == [
-        (tool, pytest.approx(float(tcal[tool] or 0), abs=1e-4)) for tool, _, _ in calls
-    ]
+    assert [length for _, length, _ in calls] == pytest.approx(
+        [float(tcal[tool] or 0) for tool, _, _ in calls], abs=1e-4
+    )

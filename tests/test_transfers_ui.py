@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -19,6 +20,7 @@ from app import create_app
 from app.cli import main
 from app.cnc import document
 from app.cnc.emit.target import export
+from app.dnc.daemon import TransferService
 from app.storage.demo import demo_programs
 from app.storage.library import Library, Machine, open_library
 from app.storage.transfers import Transfer, TransferLog
@@ -49,6 +51,19 @@ def client(app: Flask) -> FlaskClient:
     return app.test_client()
 
 
+@pytest.fixture
+def dnc(app: Flask) -> Iterator[TransferService]:
+    """The transfer service that runs what the page queues (in a thread here; its own
+    process in a shop: tests/test_dnc_service.py)."""
+    running = TransferService(library_of(app), poll=0.05)
+    stop = threading.Event()
+    thread = threading.Thread(target=running.run, args=(stop,), daemon=True)
+    thread.start()
+    yield running
+    stop.set()
+    thread.join(timeout=10)
+
+
 def library_of(app: Flask) -> Library:
     with app.app_context():
         return get_library()
@@ -61,18 +76,29 @@ def token(client: FlaskClient, url: str = "/transfers") -> str:
 
 
 def settled(log: TransferLog) -> Transfer:
-    """The newest transfer once it is no longer running."""
+    """The newest transfer once it is no longer queued or running."""
     deadline = time.monotonic() + WAIT
     while time.monotonic() < deadline:
         newest = log.recent(1)[0]
-        if newest.outcome != "running":
+        if newest.outcome not in ("queued", "running"):
             return newest
         time.sleep(0.05)
     raise AssertionError("the transfer did not end")
 
 
+def started(log: TransferLog) -> Transfer:
+    """The newest transfer once the service has started it."""
+    deadline = time.monotonic() + WAIT
+    while time.monotonic() < deadline:
+        newest = log.recent(1)[0]
+        if newest.outcome != "queued":
+            return newest
+        time.sleep(0.02)
+    raise AssertionError("the service did not start the transfer")
+
+
 def test_sending_from_the_page_puts_the_export_in_the_control(
-    app: Flask, client: FlaskClient, pair: SocatPair
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
 ) -> None:
     library = library_of(app)
     library.save_machine(Machine("Plus", "events", {}, {"port": pair.host}))
@@ -95,7 +121,7 @@ def test_sending_from_the_page_puts_the_export_in_the_control(
 
 
 def test_a_cancel_from_the_page_stops_a_send(
-    app: Flask, client: FlaskClient, pair: SocatPair
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
 ) -> None:
     library = library_of(app)
     # A control that takes 40 characters a second keeps the send running for seconds.
@@ -107,7 +133,7 @@ def test_a_cancel_from_the_page_stops_a_send(
             "/transfers/send", data={"csrf_token": csrf, "machine": "Plus", "program_id": stored.id}
         )
         log = TransferLog(library)
-        running = log.recent(1)[0]
+        running = started(log)
         assert running.outcome == "running"
         assert 'hx-trigger="every 1s"' in client.get("/transfers").get_data(as_text=True)
         response = client.post(f"/transfers/{running.id}/cancel", data={"csrf_token": csrf})
@@ -118,7 +144,7 @@ def test_a_cancel_from_the_page_stops_a_send(
 
 
 def test_receiving_from_the_page_adds_the_program(
-    app: Flask, client: FlaskClient, pair: SocatPair
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
 ) -> None:
     library = library_of(app)
     small = min(demo_programs(), key=lambda p: len(document.dumps(p)))
@@ -229,7 +255,7 @@ def test_send_to_a_bare_port_at_the_plus_defaults(
 
 
 def test_a_received_events_program_is_imported_with_its_report(
-    app: Flask, client: FlaskClient, pair: SocatPair
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
 ) -> None:
     library = library_of(app)
     sample = demo_programs()[0]
@@ -288,3 +314,52 @@ def test_the_transfers_page_names_a_machines_target_in_the_shops_words(
     page = client.get("/transfers").get_data(as_text=True)
     assert "Plus — ProtoTRAK Plus (events over RS-232) on /dev/ttyS0" in page
     assert "— events on" not in page
+
+
+def test_a_send_is_logged_with_its_revision_and_checksum_and_a_receive_compared_with_it(
+    app: Flask, client: FlaskClient, pair: SocatPair, dnc: TransferService
+) -> None:
+    """Traceability (issue 35): what went to which machine, by whom, which revision and its
+    SHA-256; what comes back is compared with it, block by block (an edit at the control)."""
+    import dataclasses
+    import hashlib
+    from decimal import Decimal
+
+    from app.cnc.blocks import Hole
+
+    library = library_of(app)
+    library.save_machine(Machine("Plus", "json", {}, {"port": pair.host, "end": "idle"}))
+    small = min(demo_programs(), key=lambda p: len(document.dumps(p)))
+    info = library.create(small, author="ann")
+    edited = library.save(info.id, small, based_on=1, author="ann")  # version 2
+    sent_bytes = export(small, "json").data
+    with SimulatedControl(pair.control, cps=960, parity="E", buffer_size=1 << 16) as control:
+        client.post(
+            "/transfers/send",
+            data={"csrf_token": token(client), "machine": "Plus", "program_id": info.id},
+        )
+        done = settled(TransferLog(library))
+        # The line ends lines with CR LF (the Plus's default); the checksum is the export's.
+        assert control.received(sent_bytes.replace(b"\n", b"\r\n"), timeout=WAIT)
+    assert done.outcome == "ok", done.error
+    assert done.revision == edited.version == 2
+    assert done.checksum == hashlib.sha256(sent_bytes).hexdigest()
+    page = client.get("/transfers").get_data(as_text=True)
+    assert f"sha256 {done.checksum[:12]}" in page and " v2" in page
+    # The operator changes a depth at the control and sends the program back.
+    first = small.blocks[0]  # the pocket's DRILL: its Z DN
+    assert isinstance(first, Hole)
+    changed = dataclasses.replace(
+        small, blocks=(dataclasses.replace(first, z_dn=Decimal("-0.777")), *small.blocks[1:])
+    )
+    back = json.dumps(json.loads(document.dumps(changed)), indent=1).encode("ascii")
+    with SimulatedControl(pair.control, cps=960, parity="E") as control:
+        control.send_back(back, delay=0.5)
+        client.post(
+            "/transfers/receive",
+            data={"csrf_token": token(client), "machine": "Plus", "name": "Back from the Plus"},
+        )
+        received = settled(TransferLog(library))
+    assert received.outcome == "ok", received.error
+    assert f"compared with what was last sent to Plus: {small.name} v2" in received.report
+    assert "UTC: 1 difference\n    block 1 DRILL: Z DN -0.3 → -0.777" in received.report

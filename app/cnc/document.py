@@ -4,8 +4,9 @@ The format is described in docs/program-format.md. `dumps` writes a deterministi
 (fixed key order, two-space indent, trailing newline); `loads` reads it back and raises
 DocumentError naming the block and field of anything malformed. Numbers are read as
 `Decimal`, so what was typed is what is kept, and checked by app.cnc.numbers (no NaN or
-Infinity, nothing beyond 1E+30); a document nested deeper than JSON's own reader goes, or
-with more than `MAX_BLOCKS` blocks, is refused whole.
+Infinity, nothing beyond 1E+30); its text by app.cnc.text (no NUL or lone surrogate, the
+name and notes within their lengths); a document nested deeper than JSON's own reader
+goes, or with more than `MAX_BLOCKS` blocks, is refused whole.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from app.cnc.cutting import Workpiece
 from app.cnc.kinds import REGISTRY
 from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
+from app.cnc.text import NAME_LENGTH, NOTES_LENGTH, text_fault
 from app.cnc.tools import Hand
 from app.cnc.units import Units
 
@@ -325,10 +327,10 @@ def from_dict(data: Any) -> Program:
     if material_data is not None and not isinstance(material_data, dict):
         raise DocumentError("material", 'expected an object like {"name": "6061"}')
     return Program(
-        name=_text(data.get("name", ""), "program, name"),
-        part_number=_text(data.get("part_number", ""), "program, part_number"),
+        name=_text(data.get("name", ""), "program, name", NAME_LENGTH),
+        part_number=_text(data.get("part_number", ""), "program, part_number", NAME_LENGTH),
         units=units,
-        notes=_text(data.get("notes", ""), "program, notes"),
+        notes=_text(data.get("notes", ""), "program, notes", NOTES_LENGTH),
         block0=block0,
         blocks=blocks,
         stock=None if stock_data is None else _was_read(_build(Stock, stock_data, "stock")),
@@ -463,8 +465,8 @@ def _convert(raw: Any, hint: Any, where: str) -> Any:
             raise DocumentError(where, str(exc)) from None
     if isinstance(hint, type) and issubclass(hint, enum.Enum):
         return _enum(hint, raw, where)
-    if hint is str:
-        return _text(raw, where)
+    if hint is str:  # a block's message, a tool's name: their rules are validation's
+        return _text(raw, where, NAME_LENGTH)
     raise TypeError(f"no JSON conversion for {hint!r}")
 
 
@@ -480,9 +482,14 @@ def _enum(cls: type[_E], raw: Any, where: str) -> _E:
     raise DocumentError(where, f"{_show(raw)} is not one of {allowed}")
 
 
-def _text(raw: Any, where: str) -> str:
+def _text(raw: Any, where: str, limit: int) -> str:
+    """A JSON string that meets the one text rule (app.cnc.text): no NUL, no lone
+    surrogate (`"\\ud800"`), at most `limit` characters."""
     if not isinstance(raw, str):
         raise DocumentError(where, f"expected text, got {_show(raw)}")
+    fault = text_fault(raw, limit)
+    if fault:
+        raise DocumentError(where, fault)
     return raw
 
 

@@ -23,6 +23,7 @@ from fractions import Fraction
 
 from app.cnc import limits
 from app.cnc.kinds import REGISTRY, Value, prompt
+from app.cnc.text import NOTES_LENGTH, text_fault
 from app.cnc.units import Units, format_decimal
 
 
@@ -199,6 +200,8 @@ def tool_faults(tool: CribTool) -> list[tuple[str, str]]:
     if tool.tcal is not None:
         faults += _length_faults("TCAL", tool.tcal, u)
     faults += thread_faults(tool.kind, tool.pitch, tool.pitch_unit, tool.hand)
+    if fault := text_fault(tool.notes, NOTES_LENGTH):
+        faults.append(("NOTES", fault))
     return faults
 
 

@@ -42,6 +42,9 @@ class TransferRecord:
     author: str = ""
     raw: bytes | None = None
     report: str = ""
+    revision: int | None = None  # a send: the program's version
+    checksum: str = ""  # a send: SHA-256 (hex) of the export
+    start_block: int | None = None  # a send begun at this data block (a restart)
 
     @classmethod
     def of_send(
@@ -52,6 +55,9 @@ class TransferRecord:
         program_id: int | None = None,
         program_name: str = "",
         author: str = "",
+        revision: int | None = None,
+        checksum: str = "",
+        start_block: int | None = None,
     ) -> TransferRecord:
         return cls(
             direction=Direction.SEND,
@@ -68,6 +74,9 @@ class TransferRecord:
             program_id=program_id,
             program_name=program_name,
             author=author,
+            revision=revision,
+            checksum=checksum,
+            start_block=start_block,
         )
 
     @classmethod

@@ -10,6 +10,8 @@ a partial program or an import error raise, and the library is not touched.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -20,6 +22,8 @@ from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
 from app.cnc.imports.registry import importers
+from app.cnc.restart import restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -68,6 +72,12 @@ def settings_of(machine: MachineProfile) -> PortSettings:
     return PortSettings.from_serial(machine.serial, target=machine.target)
 
 
+def _hold(settings: PortSettings) -> float:
+    """How long the control may hold a send with XOFF (s): the machine's `hold`, 0 for no
+    limit (a drip feed)."""
+    return math.inf if settings.hold == 0 else float(settings.hold)
+
+
 def available_ports() -> list[tuple[str, str]]:
     """The serial ports this computer has, as (path, description), for a port picker."""
     return [(p.device, p.description) for p in sorted(serial.tools.list_ports.comports())]
@@ -86,15 +96,20 @@ def send_program(
     *,
     port: str | None = None,
     program_id: int | None = None,
+    revision: int | None = None,
+    start_block: int | None = None,
     author: str = "",
     log: Log | None = None,
     progress: Progress | None = None,
     cancel: Cancel | None = None,
-    xoff_timeout: float = 30.0,
+    xoff_timeout: float | None = None,
     write_timeout: float = 10.0,
 ) -> Sent:
     """Export `program` for `machine` (its target and options) and send it to the machine's
-    port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record.
+    port (or `port`). Returns the export, the send's result (OK or CANCELLED) and the record,
+    which names the program's `revision` and the export's SHA-256. `start_block`: send the
+    program from that data block on (app.cnc.restart: a restart after a stop or a cut-off
+    transfer; RestartError, a ValueError, when it cannot begin there).
 
     Raises SettingsError, OptionError/ExportError (the program cannot be exported) or
     DataError before the port is tried (no record); SendError after (record logged).
@@ -102,7 +117,12 @@ def send_program(
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
     options = machine.options if settings.target == machine.target else {}
+    if start_block is not None:
+        program = restart_from(program, start_block)
     made = export(program, settings.target, options)
+    digest = hashlib.sha256()
+    for piece in made.chunks():
+        digest.update(piece)
 
     def record(result: SendResult) -> TransferRecord:
         entry = TransferRecord.of_send(
@@ -111,6 +131,9 @@ def send_program(
             program_id=program_id,
             program_name=program.name,
             author=author,
+            revision=revision,
+            checksum=digest.hexdigest(),
+            start_block=start_block,
         )
         if log is not None:
             log(entry)
@@ -123,7 +146,7 @@ def send_program(
             path,
             progress=progress,
             cancel=cancel,
-            xoff_timeout=xoff_timeout,
+            xoff_timeout=_hold(settings) if xoff_timeout is None else xoff_timeout,
             write_timeout=write_timeout,
         )
     except SendError as exc:
@@ -157,14 +180,20 @@ def receive_program(
     idle_timeout: float = 5.0,
     first_byte_timeout: float = 120.0,
     max_bytes: int = 1_000_000,
+    compare: Callable[[str, Program], str] | None = None,
 ) -> Received:
     """Receive a program from `machine`'s port (or `port`), import it as `format` (default:
     the machine's target) and add it to `library` (revision summary: where it came from).
+    `compare(machine name, program)` says how it differs from what was last sent to that
+    machine (app.storage.transfers.TransferLog.compare_with_last_send); its text goes into
+    the report.
 
-    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    Raises SettingsError, or TextError for a `name` the library cannot store
+    (app.cnc.text), before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
     saved.
     """
+    check_text(name, "name", NAME_LENGTH)
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
 
@@ -194,6 +223,10 @@ def receive_program(
     except CaptureImportError as exc:
         record(result, error=str(exc))
         raise
+    if compare is not None:  # before the name given here, which is not the control's edit
+        compared = compare(machine.name, program)
+        if compared:
+            report = "\n".join(part for part in (report.rstrip("\n"), compared) if part) + "\n"
     if name:
         program = dataclasses.replace(program, name=name)
     stored = library.create(program, author, f"received from {machine.name} on {path}")

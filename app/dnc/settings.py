@@ -21,6 +21,7 @@ BAUD_RATES = (110, 150, 300, 600, 1200, 2400, 4800, 9600, 19200, 38400, 57600, 1
 
 DEFAULT_TARGET = "events"
 MAX_LEADER = 10_000
+MAX_HOLD = 86_400  # s: the longest XOFF hold a machine may set (a day); 0 is no limit
 """Most NUL characters in a leader or trailer (10 000 is 21 s at 4800 baud)."""
 
 DC1 = 0x11  # XON: the control asks us to go on
@@ -126,6 +127,9 @@ class PortSettings:
     (None: the line rate). end: how a received program ends: "%" (the `%` that closes a
     program that began with `%`, else the first `%`), "idle" (only the idle timeout), or a
     word such as "M30" (the end of the line holding it). target: the export target sent.
+    hold: seconds the control may hold a send with XOFF before it fails; 0 for no limit — a
+    drip feed, where the control runs the program as it reads it and holds the line for as
+    long as a cut takes (the operator can still cancel).
     """
 
     baud: int = 4800
@@ -140,6 +144,7 @@ class PortSettings:
     cps: int | None = None
     framing: Framing = Framing.AUTO
     end: str = "%"
+    hold: int = 30
 
     # -- reading and writing the machine's dict ----------------------------------------------
 
@@ -224,6 +229,8 @@ class PortSettings:
             parts.append(f"leader {self.leader}, trailer {self.trailer} NUL")
         if self.cps is not None:
             parts.append(f"drip feed {self.cps} cps")
+        if self.hold == 0 and self.flow is Flow.XONXOFF:
+            parts.append("XOFF held without limit")
         parts.append(self.target)
         return ", ".join(parts)
 
@@ -251,6 +258,10 @@ class PortSettings:
             raise SettingsError(
                 f"drip feed {self.cps} characters per second: use 1 to the line's own rate, "
                 f"{self.line_cps:g} at {self.baud} baud {self.frame}"
+            )
+        if not 0 <= self.hold <= MAX_HOLD:
+            raise SettingsError(
+                f"hold {self.hold} s: use 1 to {MAX_HOLD} seconds, or 0 for no limit (drip feed)"
             )
         if self.framing is Framing.SOFTWARE and not Framing.can_stand_in(
             self.data_bits, self.parity
@@ -280,11 +291,14 @@ class PortSettings:
 
 
 def port_of(serial: Mapping[str, Any]) -> str:
-    """The machine's port path (`/dev/ttyUSB0`, `/dev/serial/by-id/…`). Raises SettingsError
-    when the machine has none."""
+    """The machine's port: a device path (`/dev/ttyUSB0`, `/dev/serial/by-id/…`) or a
+    network port's URL (`socket://host:port` for a serial device server's raw TCP port,
+    `rfc2217://host:port`). Raises SettingsError when the machine has none."""
     port = str(serial.get("port") or "").strip()
     if not port:
-        raise SettingsError("the machine has no serial port: set its port (e.g. /dev/ttyUSB0)")
+        raise SettingsError(
+            "the machine has no serial port: set its port (e.g. /dev/ttyUSB0 or socket://10.0.0.5:4001)"
+        )
     return port
 
 
@@ -336,6 +350,7 @@ _READERS = {
     "cps": _optional_int,
     "framing": _word({f.value: f for f in Framing}, "auto, uart or software"),
     "end": _text,
+    "hold": _int,
 }
 
 SERIAL_FIELDS = tuple(_READERS)

@@ -12,8 +12,12 @@ idle timeout, and refuses garbage. Neither function imports or stores anything: 
 turns a capture into a program (`app.dnc.service`) and keeps the `TransferRecord`.
 
 Both open the port exclusively (a second transfer on the same port is refused) and close it
-before returning. Times are seconds; rates characters per second; datetimes are UTC without
-a time zone, as the library stores them. POSIX only (the select on the port's descriptor).
+before returning. A port is a device path (`/dev/ttyUSB0`) or any URL pyserial opens
+(`serial.serial_for_url`): `socket://host:port`, a serial device server's raw TCP port,
+whose line settings are the device server's (set on the box; nothing here can set or read
+them), and `rfc2217://host:port`, whose settings are sent to the server and must be
+acknowledged. Times are seconds; rates characters per second; datetimes are UTC without a
+time zone, as the library stores them. POSIX only (the select on the port's descriptor).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import select
 import termios
 import threading
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
@@ -136,6 +141,11 @@ def _vanished(port_path: str, exc: BaseException) -> str:
     return f"port {port_path} vanished: {exc}"
 
 
+def is_network(port_path: str) -> bool:
+    """Whether `port_path` is a pyserial URL (`socket://…`, `rfc2217://…`), not a device."""
+    return "://" in port_path
+
+
 def _io_error(port_path: str, exc: BaseException) -> str:
     """The message for an error on an open port: gone (unplugged, socat ended) or other."""
     code = getattr(exc, "errno", None)
@@ -146,7 +156,8 @@ def _io_error(port_path: str, exc: BaseException) -> str:
         code in _GONE
         or "disconnected" in text
         or "Input/output error" in text
-        or not os.path.exists(port_path)
+        or "connection lost" in text.lower()
+        or (not is_network(port_path) and not os.path.exists(port_path))
     )
     return _vanished(port_path, exc) if gone else f"port {port_path} failed: {exc}"
 
@@ -188,6 +199,8 @@ def _open(
 ) -> serial.Serial:
     bytesize = serial.EIGHTBITS if software or settings.data_bits == 8 else serial.SEVENBITS
     parity = serial.PARITY_NONE if software else _PARITY[settings.parity]
+    if is_network(port_path):
+        return _open_url(settings, port_path, write_timeout, bytesize, parity)
     try:
         port = serial.Serial(
             port=port_path,
@@ -220,11 +233,53 @@ def _open(
     return port
 
 
+def _open_url(
+    settings: PortSettings, url: str, write_timeout: float, bytesize: int, parity: str
+) -> serial.Serial:
+    """A network port (any URL pyserial opens). `rfc2217://` sends the frame to the server,
+    which must acknowledge each setting (pyserial raises when it does not); `socket://`
+    carries the bytes as they are, in the frame the device server was set to."""
+    try:
+        port = serial.serial_for_url(
+            url,
+            do_not_open=True,
+            baudrate=settings.baud,
+            bytesize=bytesize,
+            parity=parity,
+            stopbits=serial.STOPBITS_TWO if settings.stop_bits == 2 else serial.STOPBITS_ONE,
+            xonxoff=False,
+            rtscts=settings.flow is Flow.RTSCTS,
+            timeout=0,
+        )
+        # A write that blocks this long fails the send. pyserial's rfc2217 client has no
+        # such timeout (it refuses to open with one): its writes go to a socket buffer, and a
+        # control that holds off is seen by the flow control.
+        if not url.lower().startswith("rfc2217:"):
+            port.write_timeout = write_timeout
+        with warnings.catch_warnings():
+            # pyserial 3.5's rfc2217 client names its reader with Thread.setDaemon/setName.
+            warnings.filterwarnings("ignore", "set(Daemon|Name)", DeprecationWarning)
+            port.open()
+    except (serial.SerialException, OSError, ValueError) as exc:
+        text = str(exc)
+        if "does not accept parameter change" in text:
+            raise _Refused(f"the server refused the settings ({text})") from None
+        raise TransferError(f"cannot open port {url}: {text}") from None
+    return port
+
+
 def _wait_input(port: serial.Serial, seconds: float) -> None:
-    """Sleep up to `seconds`, waking as soon as the control sends something."""
+    """Sleep up to `seconds`, waking as soon as the control sends something (a port with
+    no descriptor to wait on, such as rfc2217://, is looked at every 10 ms)."""
     if seconds <= 0:
         return
-    fd = port.fileno()
+    try:
+        fd = port.fileno()
+    except (AttributeError, NotImplementedError, OSError, serial.SerialException):
+        deadline = time.monotonic() + seconds
+        while port.in_waiting == 0 and time.monotonic() < deadline:
+            time.sleep(min(0.01, max(0.0, deadline - time.monotonic())))
+        return
     select.select([fd], [], [], seconds)
 
 
@@ -237,6 +292,8 @@ def _out_waiting(port: serial.Serial) -> int:
     """Bytes in the driver's transmit queue (0 where the driver cannot tell, e.g. a pty)."""
     try:
         return port.out_waiting
+    except (AttributeError, NotImplementedError):  # a network port keeps no count
+        return 0
     except OSError as exc:
         if exc.errno in _GONE:
             raise

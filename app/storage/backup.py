@@ -25,6 +25,7 @@ from app.cnc.blocks import Program
 from app.cnc.document import DocumentError
 from app.cnc.emit.target import OptionError, targets
 from app.cnc.machine import MachineError, read_machine
+from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, text_fault
 from app.cnc.tools import CribTool, tool_faults
 from app.storage.crib import tool_from_document
 from app.storage.library import BACKUP_FORMAT, LibraryError, Machine
@@ -239,7 +240,7 @@ def _revision_fields(rev: Any, where: str) -> tuple[int, str, datetime, str, str
         created = datetime.fromisoformat(_string(rev, "created_at", where))
     except ValueError:
         raise BackupError(f"{where}, created_at: not a date and time") from None
-    author = _string(rev, "author", where, "")[:100]
+    author = _string(rev, "author", where, "")[:SHORT_NAME_LENGTH]
     return version, file, created.replace(tzinfo=None), author, _string(rev, "summary", where, "")
 
 
@@ -257,9 +258,9 @@ def _machine(entry: Any, number: int) -> Machine:
     where = f"manifest, machine {number}"
     if not isinstance(entry, dict):
         raise BackupError(f"{where}: expected an object")
-    name = _string(entry, "name", where).strip()
-    if not name or len(name) > 100:
-        raise BackupError(f"{where}, name: 1 to 100 characters")
+    name = _string(entry, "name", where, limit=SHORT_NAME_LENGTH).strip()
+    if not name:
+        raise BackupError(f"{where}, name: 1 to {SHORT_NAME_LENGTH} characters")
     options = _mapping(entry, "options", where)
     if not all(isinstance(v, str) for v in options.values()):
         raise BackupError(f"{where}, options: every value is text")
@@ -268,7 +269,7 @@ def _machine(entry: Any, number: int) -> Machine:
         _string(entry, "target", where),
         options,
         _mapping(entry, "serial", where),
-        _string(entry, "notes", where, ""),
+        _string(entry, "notes", where, "", limit=NOTES_LENGTH),
         _mapping(entry, "limits", where, required=False),
     )
     target = targets().get(machine.target)
@@ -297,8 +298,14 @@ def _mapping(data: dict[str, Any], key: str, where: str, required: bool = True) 
     return value
 
 
-def _string(data: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
+def _string(
+    data: dict[str, Any], key: str, where: str, default: str | None = None, limit: int | None = None
+) -> str:
+    """Text that meets the one text rule (app.cnc.text), at most `limit` characters."""
     value = data.get(key, default)
     if not isinstance(value, str):
         raise BackupError(f"{where}, {key}: expected text")
+    fault = text_fault(value, limit)
+    if fault:
+        raise BackupError(f"{where}, {key}: {fault}")
     return value

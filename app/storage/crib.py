@@ -25,6 +25,7 @@ from sqlalchemy.orm import Session
 
 from app.cnc.document import DocumentError, read_fields, write_fields
 from app.cnc.numbers import decimal_of
+from app.cnc.text import search_terms
 from app.cnc.tools import CribTool, tool_changes, tool_faults
 from app.cnc.tooltable import TableError, converted, read_table
 from app.cnc.units import Units
@@ -106,12 +107,12 @@ class Crib:
     # -- reading ---------------------------------------------------------------------------
 
     def tools(self, query: str = "", retired: bool = False) -> list[StoredTool]:
-        """Tools in use (or the retired ones) whose name or number matches every word of
-        `query`, by number."""
+        """Tools in use (or the retired ones) whose name, type or number matches every word
+        of `query`, by number. TextError for a search the text rule refuses."""
         statement = select(CribToolRow).where(
             CribToolRow.deleted_at.is_not(None) if retired else CribToolRow.deleted_at.is_(None)
         )
-        for word in query.lower().split():
+        for word in search_terms(query):
             found = _REFERENCE.fullmatch(word)
             conditions: list[ColumnElement[bool]] = [
                 func.lower(CribToolRow.name).like(f"%{word}%"),

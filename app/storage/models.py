@@ -171,6 +171,12 @@ class TransferRow(Base):
     author: Mapped[str] = mapped_column(String(100), default="")
     raw: Mapped[bytes | None] = mapped_column(LargeBinary, default=None)
     cancel_requested: Mapped[bool] = mapped_column(Boolean, default=False)
+    # A send: the program's version, and the SHA-256 of the export (the program as the
+    # control gets it, before the line's framing), so the shop can say what ran where.
+    revision: Mapped[int | None] = mapped_column(Integer, default=None)
+    checksum: Mapped[str] = mapped_column(String(64), default="", server_default="")
+    # A restart: the data block the send began at (None: the whole program).
+    start_block: Mapped[int | None] = mapped_column(Integer, default=None)
 
     __table_args__ = (Index("ix_transfer_log_started", "started_at"),)
 

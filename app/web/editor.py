@@ -28,6 +28,7 @@ from app.cnc.copy import CopyError, cancel_copy, execute_copy
 from app.cnc.crib import copy_of, differences, machine_limits, pick, tool_offer
 from app.cnc.cutting import MaterialName, Offer, Workpiece
 from app.cnc.kinds import REGISTRY
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.spindle import Spindle
 from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType, pitch_text
@@ -155,9 +156,11 @@ def form_version() -> int | None:
 
 
 def _int(text: str | None, default: int) -> int:
+    """A whole number from a query argument or a hidden field, read by the one number
+    reader (app.cnc.numbers); `default` when there is none or it is not one."""
     try:
-        return int(text or "")
-    except ValueError:
+        return parse_int(text or "")
+    except NumberError:
         return default
 
 

@@ -30,6 +30,7 @@ from app.cnc.crib import feed_offers
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
 from app.cnc.memo import ByObject
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
@@ -201,8 +202,12 @@ def shown_digests() -> dict[int, str]:
     found = {}
     for value in request.form.getlist("shown"):
         number, _, digest = value.partition(":")
-        if number.isdigit() and digest:
-            found[int(number)] = digest
+        if not digest:
+            continue
+        try:
+            found[parse_int(number)] = digest
+        except NumberError:  # not a row this page sent
+            continue
     return found
 
 

@@ -39,6 +39,7 @@ SERIAL_DEFAULTS = {
     "leader": "0",
     "trailer": "0",
     "cps": "",
+    "hold": "30",
     "end": "%",
 }
 """The serial settings the form shows, with the defaults a new machine starts from (the

@@ -1,14 +1,14 @@
 """Transfers: sending programs to controls and receiving them back over RS-232 (issue 8).
 
-A transfer runs in a background thread (`app.dnc.jobs`); its row in the transfer log is
-what the page shows, so a poll answered by any worker process sees its progress, and a
-cancel saved by any worker reaches it within a second. Only machines configured on the
-Machines page can be used: the port comes from the machine, never from the form.
+The page queues a transfer (a row "queued" in the transfer log); the transfer service
+(`millblocks dnc`, app.dnc.daemon), a process of its own, runs it, so restarting the web
+server or losing a worker never cuts a send off. The row is what the page shows, so a poll
+answered by any worker process sees its progress, and a cancel saved by any worker reaches
+it within a second. Only machines configured on the Machines page can be used: the port
+comes from the machine, never from the form.
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
 
 from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
@@ -16,13 +16,14 @@ from werkzeug.wrappers import Response
 
 from app.cnc.emit.target import targets
 from app.cnc.imports import importers
-from app.dnc import Direction, TransferRecord, jobs, service
-from app.dnc.jobs import JobState, TransferJob
-from app.dnc.service import Log
+from app.cnc.numbers import NumberError, parse_int
+from app.cnc.restart import RestartError, restart_from
+from app.cnc.text import NAME_LENGTH, check_text
+from app.dnc import service
+from app.dnc.daemon import service_alive
 from app.dnc.settings import SettingsError, port_of
-from app.dnc.transfer import Cancel, Progress
-from app.storage.library import Library, LibraryError, Machine, NotFound
-from app.storage.transfers import TransferLog
+from app.storage.library import LibraryError, Machine, NotFound
+from app.storage.transfers import QUEUED, RUNNING, TransferLog
 from app.web.auth import current_user
 from app.web.downloads import attachment
 from app.web.extensions import get_library
@@ -43,7 +44,8 @@ def _page(message: str = "", status: int = 200) -> tuple[str, int]:
             machines=_machines(),
             programs=library.programs(),
             transfers=transfers,
-            running=any(t.outcome == "running" for t in transfers),
+            running=any(t.outcome in (QUEUED, RUNNING) for t in transfers),
+            service_alive=service_alive(library),
             formats={n: f for n, f in importers().items() if f.from_machines},
             targets=targets(),
             message=message,
@@ -61,9 +63,16 @@ def index() -> tuple[str, int]:
 @bp.get("/transfers/log")
 def log_rows() -> str:
     """The log table alone, for the page's poll while a transfer runs."""
-    transfers = TransferLog(get_library()).recent()
-    running = any(t.outcome == "running" for t in transfers)
-    return render_block("transfers/index.html", "log", transfers=transfers, running=running)
+    library = get_library()
+    transfers = TransferLog(library).recent()
+    running = any(t.outcome in (QUEUED, RUNNING) for t in transfers)
+    return render_block(
+        "transfers/index.html",
+        "log",
+        transfers=transfers,
+        running=running,
+        service_alive=service_alive(library),
+    )
 
 
 def _machine(name: str) -> Machine:
@@ -79,40 +88,22 @@ def _machine(name: str) -> Machine:
     return machine
 
 
+def _start_block(text: str) -> int | None:
+    """The form's "from block" (empty: the whole program)."""
+    text = text.strip()
+    if not text:
+        return None
+    try:
+        number = parse_int(text)
+    except NumberError as exc:
+        raise _Refused(
+            f"from block {text!r}: {exc}; give a block number, or leave it empty"
+        ) from None
+    return number
+
+
 class _Refused(Exception):
     """A transfer that is not started; the message says why."""
-
-
-def _start(
-    library: Library,
-    machine: Machine,
-    direction: Direction,
-    row_id: int,
-    work: Callable[[Log, Progress, Cancel], TransferRecord],
-) -> TransferJob:
-    """Run `work(log, progress, cancel)` in the background, mirrored into row `row_id`."""
-    transfer_log = TransferLog(library)
-    records: list[TransferRecord] = []
-
-    def on_change(job: TransferJob) -> None:
-        if job.state is JobState.RUNNING:
-            transfer_log.progress(row_id, job.done, job.total)
-            return
-        record = job.record or (records[-1] if records else None)
-        error = job.message if job.state is JobState.FAILED else ""
-        transfer_log.finish(row_id, record, job.state.value, error)
-
-    def run(progress: Progress, cancel: Cancel) -> TransferRecord:
-        return work(records.append, progress, cancel)
-
-    return jobs.start(
-        run,
-        direction=direction,
-        machine=machine.name,
-        port=port_of(machine.serial),
-        on_change=on_change,
-        remote_cancel=lambda: transfer_log.heartbeat(row_id),
-    )
 
 
 @bp.post("/transfers/send")
@@ -121,35 +112,27 @@ def send() -> Response | tuple[str, int]:
     try:
         machine = _machine(request.form.get("machine", ""))
         program_id = request.form.get("program_id", "")
-        if not program_id.isdigit():
-            raise _Refused("choose a program to send")
-        stored = library.get(int(program_id))
-    except (_Refused, NotFound) as exc:
+        try:
+            number = parse_int(program_id)
+        except NumberError:
+            raise _Refused("choose a program to send") from None
+        stored = library.get(number)
+        start_block = _start_block(request.form.get("from_block", ""))
+        if start_block is not None:
+            restart_from(stored.program, start_block)  # refused here, before it is queued
+    except (_Refused, NotFound, RestartError) as exc:
         return _page(f"Not sent: {exc}", 422)
-    author = current_user().username
-    program = stored.program
-    row_id = TransferLog(library).begin(
+    TransferLog(library).begin(
         "send",
         machine.name,
         port_of(machine.serial),
         machine.target,
-        author,
+        current_user().username,
         program_id=stored.info.id,
-        program_name=program.name,
+        program_name=stored.program.name,
+        queued=True,
+        start_block=start_block,
     )
-
-    def work(log: Log, progress: Progress, cancel: Cancel) -> TransferRecord:
-        return service.send_program(
-            program,
-            machine,
-            program_id=stored.info.id,
-            author=author,
-            log=log,
-            progress=progress,
-            cancel=cancel,
-        ).record
-
-    _start(library, machine, Direction.SEND, row_id, work)
     return redirect(url_for("transfers.index"), 303)
 
 
@@ -167,25 +150,15 @@ def receive() -> Response | tuple[str, int]:
             )
     except _Refused as exc:
         return _page(f"Not started: {exc}", 422)
-    author = current_user().username
-    name = request.form.get("name", "").strip()
-    row_id = TransferLog(library).begin(
-        "receive", machine.name, port_of(machine.serial), form_format or machine.target, author
+    TransferLog(library).begin(
+        "receive",
+        machine.name,
+        port_of(machine.serial),
+        form_format or machine.target,
+        current_user().username,
+        program_name=check_text(request.form.get("name", "").strip(), "name", NAME_LENGTH),
+        queued=True,
     )
-
-    def work(log: Log, progress: Progress, cancel: Cancel) -> TransferRecord:
-        return service.receive_program(
-            machine,
-            library,
-            format=form_format or None,
-            name=name,
-            author=author,
-            log=log,
-            progress=progress,
-            cancel=cancel,
-        ).record
-
-    _start(library, machine, Direction.RECEIVE, row_id, work)
     return redirect(url_for("transfers.index"), 303)
 
 

@@ -68,6 +68,7 @@ from app.cnc.imports.ops import (
 )
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
+from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
 from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length
 
@@ -584,12 +585,14 @@ def make_program(
     db0: DataBlock0,
     blocks: list[Block],
 ) -> Program:
-    part = part_number if part_number.isdigit() and len(part_number) <= 8 else ""
+    part = part_number if part_number.isascii() and part_number.isdigit() else ""
+    # A file's title comment may be of any length: the name and notes are cut to what the
+    # library stores (app.cnc.text), so such a file still imports.
     return Program(
-        name=name or "imported",
-        part_number=part,
+        name=name[:NAME_LENGTH] or "imported",
+        part_number=part if len(part) <= 8 else "",
         units=units,
-        notes=notes_text,
+        notes=notes_text[:NOTES_LENGTH],
         block0=db0,
         blocks=tuple(blocks),
     )

@@ -145,7 +145,7 @@ def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
     # call, which made reading a long file quadratic.
     for k in range(j, len(steps)):
         step = steps[k]
-        if isinstance(step, Feed) and (step.x, step.y) == at:
+        if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
             continue
         return is_cut(step)
     return False
@@ -368,7 +368,7 @@ class _Segmenter:
                 raise ImportFailure(
                     self.notes.where(step.line),
                     "a feed in Z before the file gives any height: where it starts (Z UP) "
-                    "is not known",
+                    "is not known; give the height first with a rapid (G0 Z…)",
                     step.line,
                 )
             if step.z is None or self.z is None or step.z == self.z:
@@ -390,7 +390,8 @@ class _Segmenter:
             raise ImportFailure(
                 self.notes.where(step.line),
                 "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
-                "down, then cuts in XY at one depth",
+                "down, then cuts in XY at one depth; have the CAM plunge (no ramp or helical "
+                "entry)",
                 step.line,
             )
         z = "" if self.z is None else f" at Z{show(self.z, self.units)}"
@@ -420,7 +421,20 @@ class _Segmenter:
             while j < n:
                 s = steps[j]
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
-                    if s.feed != feed_z:
+                    if s.feed != feed_z and not levels:
+                        # Down to a feed height at one rate, into the work at another (a
+                        # CAM's approach; Fusion for Personal Use writes its rapids down so):
+                        # the tool enters the work at the last rate, from where it begins.
+                        # A DRILL rapids to Z UP and feeds from there at its one FEEDR Z.
+                        self.notes.assumed(
+                            lines[-1] if lines else s.line,
+                            f"feed {show_feed(feed_z, s.units)} down to Z"
+                            f"{show(bottom, s.units)} above the plunge: read as the rapid "
+                            f"to Z UP; the plunge from there at {show_feed(s.feed, s.units)} "
+                            f"(line {s.line}) is the FEEDR Z",
+                        )
+                        z_up, feed_z = bottom, s.feed
+                    elif s.feed != feed_z:
                         self.notes.ignored(
                             s.line,
                             f"feed {show_feed(s.feed, s.units)} in Z differs from "
@@ -597,7 +611,8 @@ class _Segmenter:
                     raise ImportFailure(
                         self.notes.where(s.line),
                         "X/Y and Z fed together (a ramp): MillBlocks cuts in XY at one "
-                        "depth at a time",
+                        "depth at a time; have the CAM plunge to each depth (no ramp or "
+                        "helical entry)",
                         s.line,
                     )
                 elements.append(Element(s.line, (s.x, s.y), None, False, new_depth, s.feed))
@@ -613,6 +628,11 @@ class _Segmenter:
                     Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, new_depth, s.feed)
                 )
                 comps.add(s.comp)
+            elif isinstance(s, Coolant):
+                # Coolant on with a cut (`G1 Y40 M8`): the tool's COOLANT, and the cuts go on.
+                self.coolant(s)
+                j += 1
+                continue
             else:
                 break
             new_depth = None

@@ -123,7 +123,6 @@ REFUSED_G = {
     "46": "tool offset decrease (the offset value is not in the file)",
     "47": "tool offset double increase (the offset value is not in the file)",
     "48": "tool offset double decrease (the offset value is not in the file)",
-    "53": "a move in machine coordinates (not related to part zero in the file)",
     "93": "inverse time feed",
     "95": "feed per revolution",
     "7": "imaginary axis designation",
@@ -465,6 +464,17 @@ class _Reader:
         pos = len(line) - len(stripped)
         if stripped.startswith("%"):
             self.percent += 1
+            if self.percent > 1 and stripped[1:].strip() not in ("", ";"):
+                # Only the opening % may carry a label (the ProtoTRAK dialect's `%:NAME;`);
+                # a later one is the program's end, and text after it is not a program's
+                # end anyone wrote (an MPCNC post's `% vfd enable`; rs274 refuses it).
+                raise failure(
+                    number,
+                    pos + 1,
+                    f"{stripped!r}: a % line starts or ends the program and holds nothing "
+                    "else (LinuxCNC refuses this line too): put the text in a comment "
+                    "( … ) or delete the line",
+                )
             label = stripped[1:].strip().lstrip(":").rstrip(";").strip()
             if label and self.percent == 1:
                 self.name = label
@@ -498,6 +508,13 @@ class _Reader:
                 pos = self.word(number, line, pos, words)
             elif ch in "#[":
                 raise failure(number, pos + 1, "parameters and expressions are not supported")
+            elif ch in "@^":
+                raise failure(
+                    number,
+                    pos + 1,
+                    "polar coordinates (@ radius, ^ angle) are not supported: give the point "
+                    "as X and Y",
+                )
             else:
                 raise failure(number, pos + 1, f"unexpected character {ch!r}")
         for comment in comments:
@@ -837,6 +854,14 @@ class _Reader:
         if any(c == "6" for _, c in m_codes):
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
+            elif self.selected_tool == 0:
+                # LinuxCNC's and Haas's way to take the tool out (at the end, or before a
+                # manual change): no tool of the control's 1-24.
+                self.notes.ignored(
+                    line,
+                    "T0 M6 empties the spindle: no tool change in MillBlocks (its tools are "
+                    "1 to 24); the tool before stays in the program",
+                )
             else:
                 if self.tool == 0 and not self.moves_made:
                     # The first tool called before any move (a post's start): the tool in
@@ -894,6 +919,9 @@ class _Reader:
         motion_word = next((codes[c] for c in codes if GROUP_OF.get(c) == "motion"), None)
         if motion_word is not None:
             self.set_motion(block, motion_word, uses_axes)
+        if "53" in codes:
+            self.machine_move(block, codes["53"])
+            uses_axes = True
         if any(block.has(a) for a in AXES) and not uses_axes:
             self.move(block)
         self.unused(block, codes)
@@ -1056,6 +1084,16 @@ class _Reader:
         if "41" in codes or "42" in codes:
             used.add("D")
         for letter, word in block.other.items():
+            if letter in "IJK" and letter not in used and self.motion in ("0", "1"):
+                # An arc's centre on a straight move: an arc written as G0/G1, cut straight
+                # (rs274 refuses it too).
+                what = "a rapid" if self.motion == "0" else "a straight feed"
+                raise failure(
+                    block.line,
+                    word.column,
+                    f"{letter} with G{self.motion}: {what} has no arc centre (LinuxCNC refuses "
+                    "it too); is G2 or G3 meant?",
+                )
             if letter not in used:
                 self.notes.ignored(block.line, f"{letter}{word.text}: no code on the line uses it")
 
@@ -1214,6 +1252,37 @@ class _Reader:
             "machine's home (not in the file) is not",
         )
 
+    def machine_move(self, block: Block, word: Word) -> None:
+        """G53: a rapid to a place in machine coordinates (a post's `G53 G0 Z0` retract, a
+        tool change position). The file does not say where that is in part coordinates:
+        the axes it names are not known until the file moves them again (as after `G28`).
+        """
+        line = block.line
+        named = [a for a in AXES if block.has(a)]
+        if not named:
+            self.notes.ignored(line, "G53 with no axis words: nothing moves")
+            return
+        if self.motion != "0":
+            raise failure(
+                line,
+                word.column,
+                f"G53 G{self.motion}: a {'feed' if self.motion != '80' else 'move'} in "
+                "machine coordinates; where it goes in part coordinates is not in the file "
+                "(G53 is read with G0, a rapid to a machine position)",
+            )
+        for a in named:
+            setattr(self, a.lower(), None)
+        self.moved = True
+        self.cycle_drilled = False
+        words = " ".join(f"{a}{block.other[a].text}" for a in named)
+        one = len(named) == 1
+        self.notes.assumed(
+            line,
+            f"G53 G0 {words}: the machine's {words}, which the file does not give in part "
+            f"coordinates: the tool's {' and '.join(named)} {'is' if one else 'are'} not "
+            f"known until the file gives {'it' if one else 'them'} again",
+        )
+
     # -- motion -------------------------------------------------------------------------------
 
     def rate(self, word: Word) -> int:
@@ -1308,7 +1377,11 @@ class _Reader:
         first = block.words[0].column
         if self.plane != "17":
             raise failure(
-                line, first, f"an arc in the G{self.plane} plane: MillBlocks cuts arcs in XY"
+                line,
+                first,
+                f"an arc in the G{self.plane} ({'XZ' if self.plane == '18' else 'YZ'}) plane: "
+                "MillBlocks cuts arcs in XY only; if it is a CAM's vertical lead-in or "
+                "lead-out, turn those off (a lead in XY, or none)",
             )
         if z is not None and self.z is not None and z != self.z:
             raise failure(

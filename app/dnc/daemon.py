@@ -1,0 +1,209 @@
+"""The transfer service (`millblocks dnc`): one process that runs every queued transfer.
+
+A transfer at 4800 baud takes minutes. Run inside a web worker it died with the worker (a
+restart, or a worker killed by a slow page, cut a send off half-way). The web page now only
+queues it (a row "queued" in the transfer log, app.storage.transfers); this service, a
+process of its own beside the web server (systemd unit in docs/deploy.md; `millblocks
+serve` starts one too), claims queued transfers and runs each in a thread, one at a time
+per machine and any number of machines at once, writing progress into the row as the page
+polls it. A web restart touches nothing here. A cancel saved by any web worker reaches the
+transfer within a second (`remote_cancel`).
+
+When the service stops (SIGTERM, Ctrl-C) it cancels what runs and marks those rows
+interrupted, naming them; when it starts after a crash, rows still "running" have lost
+their process: it marks them interrupted and says which (the operator checks what the
+control has and sends again).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+
+from app.dnc import jobs, service
+from app.dnc.jobs import JobState, TransferJob
+from app.dnc.record import Direction, TransferRecord
+from app.dnc.settings import port_of
+from app.dnc.transfer import Cancel, Progress
+from app.storage.library import Library, LibraryError, NotFound
+from app.storage.transfers import Transfer, TransferLog
+
+log = logging.getLogger(__name__)
+
+HEARTBEAT_KEY = "dnc_service_heartbeat"
+"""The library setting the running service refreshes: its name and the time (UTC)."""
+ALIVE = timedelta(seconds=20)
+"""A service heard from within this long is taken to be running (the page says so)."""
+HEARTBEAT_EVERY = 5.0  # s
+
+INTERRUPTED_BY_CRASH = (
+    "the transfer service stopped before this transfer ended (it was restarted); check what "
+    "the control has, and send or receive again"
+)
+INTERRUPTED_BY_STOP = (
+    "the transfer service was stopped during this transfer; check what the control has, "
+    "and send or receive again"
+)
+
+
+def _now() -> datetime:
+    return datetime.now(UTC).replace(tzinfo=None, microsecond=0)
+
+
+def service_alive(library: Library, now: datetime | None = None) -> bool:
+    """Whether a transfer service has been heard from lately."""
+    value = library.setting(HEARTBEAT_KEY) or ""
+    stamp = value.rpartition(" at ")[2]
+    try:
+        seen = datetime.fromisoformat(stamp)
+    except ValueError:
+        return False
+    return (now or _now()) - seen <= ALIVE
+
+
+@dataclass
+class _Running:
+    transfer: Transfer
+    job: TransferJob
+
+
+class TransferService:
+    """Claims queued transfers and runs them; `run` until `stop` is set."""
+
+    def __init__(self, library: Library, *, poll: float = 0.5, name: str = "") -> None:
+        self.library = library
+        self.log = TransferLog(library)
+        self.poll = poll
+        self.name = name or f"{socket.gethostname()} pid {os.getpid()}"
+        self.running: dict[str, _Running] = {}  # by machine
+        self._beat = 0.0
+
+    def recover(self) -> list[Transfer]:
+        """At start: the transfers a crashed service left running, marked interrupted."""
+        return self.log.interrupt_running(INTERRUPTED_BY_CRASH)
+
+    def heartbeat(self, clock: float) -> None:
+        if clock - self._beat >= HEARTBEAT_EVERY or not self._beat:
+            self._beat = clock
+            self.library.set_setting(HEARTBEAT_KEY, f"{self.name} at {_now().isoformat()}")
+
+    def step(self) -> list[Transfer]:
+        """Forget finished transfers, then start every queued one whose machine is free;
+        those started."""
+        for machine, running in list(self.running.items()):
+            if running.job.wait(0):
+                del self.running[machine]
+        started = []
+        for transfer in self.log.queued():
+            if transfer.machine in self.running or not self.log.claim(transfer.id):
+                continue
+            job = self._start(transfer)
+            self.running[transfer.machine] = _Running(transfer, job)
+            started.append(transfer)
+            log.info(
+                "transfer %d: %s on %s started", transfer.id, transfer.direction, transfer.machine
+            )
+        return started
+
+    def run(
+        self, stop: threading.Event, on_start: Callable[[Transfer], object] | None = None
+    ) -> list[Transfer]:
+        """Run until `stop` is set; then cancel what runs and mark it interrupted. Returns
+        the transfers the stop interrupted."""
+        import time
+
+        while not stop.is_set():
+            self.heartbeat(time.monotonic())
+            for transfer in self.step():
+                if on_start is not None:
+                    on_start(transfer)
+            stop.wait(self.poll)
+        return self.shutdown()
+
+    def shutdown(self, timeout: float = 5.0) -> list[Transfer]:
+        """Cancel every running transfer, wait for it to let go of its port, and mark its
+        row interrupted (a cancelled send leaves a partial program in the control)."""
+        stopped = []
+        for running in self.running.values():
+            running.job.cancel()
+        for machine, running in list(self.running.items()):
+            running.job.wait(timeout)
+            stopped.append(running.transfer)
+            self.log.finish(running.transfer.id, None, "interrupted", INTERRUPTED_BY_STOP)
+            del self.running[machine]
+        return stopped
+
+    # -- one transfer -----------------------------------------------------------------------
+
+    def _start(self, transfer: Transfer) -> TransferJob:
+        """Run the transfer in a thread, mirrored into its row."""
+        row_id = transfer.id
+        records: list[TransferRecord] = []
+
+        def on_change(job: TransferJob) -> None:
+            if job.state is JobState.RUNNING:
+                self.log.progress(row_id, job.done, job.total)
+                return
+            record = job.record or (records[-1] if records else None)
+            error = job.message if job.state is JobState.FAILED else ""
+            self.log.finish(row_id, record, job.state.value, error)
+
+        def run(progress: Progress, cancel: Cancel) -> TransferRecord:
+            return self._work(transfer, records.append, progress, cancel)
+
+        return jobs.start(
+            run,
+            direction=Direction(transfer.direction),
+            machine=transfer.machine,
+            port=transfer.port,
+            on_change=on_change,
+            remote_cancel=lambda: self.log.heartbeat(row_id),
+        )
+
+    def _work(
+        self,
+        transfer: Transfer,
+        keep: Callable[[TransferRecord], object],
+        progress: Progress,
+        cancel: Cancel,
+    ) -> TransferRecord:
+        """The transfer itself, from what its row says (machine, program, format, name)."""
+        try:
+            machine = self.library.machine(transfer.machine)
+            port_of(machine.serial)
+        except LibraryError as exc:
+            raise ValueError(f"machine {transfer.machine}: {exc}") from None
+        if transfer.direction == Direction.SEND.value:
+            if transfer.program_id is None:
+                raise ValueError("the program to send was deleted")
+            try:
+                stored = self.library.get(transfer.program_id)
+            except NotFound:
+                raise ValueError(f"program {transfer.program_id} no longer exists") from None
+            return service.send_program(
+                stored.program,
+                machine,
+                program_id=stored.info.id,
+                revision=stored.info.version,
+                start_block=transfer.start_block,
+                author=transfer.author,
+                log=keep,
+                progress=progress,
+                cancel=cancel,
+            ).record
+        return service.receive_program(
+            machine,
+            self.library,
+            format=transfer.target if transfer.target != machine.target else None,
+            name=transfer.program_name,
+            author=transfer.author,
+            log=keep,
+            progress=progress,
+            cancel=cancel,
+            compare=self.log.compare_with_last_send,
+        ).record

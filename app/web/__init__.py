@@ -24,6 +24,7 @@ from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
 from app.web import (
     auth,
+    crib,
     drawings,
     editor,
     export,
@@ -100,6 +101,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         setup,
         transfers,
         verify,
+        crib,
     ):
         app.register_blueprint(module.bp)
     auth.init_app(app)

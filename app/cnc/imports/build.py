@@ -39,7 +39,6 @@ from app.cnc.blocks import (
     Program,
     Rep,
     Tool,
-    tool_name_fault,
 )
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports.common import (
@@ -71,6 +70,7 @@ from app.cnc.imports.ops import (
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
 from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
+from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length
 
 

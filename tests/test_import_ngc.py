@@ -473,6 +473,14 @@ def test_an_error_inside_a_subroutine_names_its_line_column_and_call() -> None:
     assert failure("G20\nG0 X[20000*1] Y1\n").startswith("line 2, column 4: X20000 is out of range")
 
 
+def test_an_error_the_reader_raises_a_line_later_keeps_its_own_column() -> None:
+    """A `G0 X Y` right after a canned cycle is decided by the move after it: its error,
+    raised while the next line is read, is at its own line's column (3 blanks in), not
+    the next line's."""
+    text = "G20\n#1=2\nG0 X0 Y0 Z1\nG81 X1 Y1 R0.1 Z-0.5 F5\n   G0 X[#1] Y[#1+1]\nG1 X[#1*3]\n"
+    assert failure(text).startswith("line 5, column 4: G0 right after a canned cycle")
+
+
 def test_fanuc_subprograms_m98_m99(tmp_path: Path) -> None:
     """M98 P<n> L<count> runs O<n> to its M99 count times with the caller's #1-#30; the
     main program's O number and an M99 after M30 are not cuts."""
@@ -664,11 +672,16 @@ def test_spiral_is_800_polar_steps(tmp_path: Path) -> None:
     assert rounded and rounded[0].endswith(" and 1552 more") and len(rounded[0]) < 400
 
 
-def test_useful_subroutines_is_refused_at_the_helix_in_its_call() -> None:
-    """useful-subroutines.ngc mills holes with helical arcs (a Z move in the arc), which
-    MillBlocks cannot cut: refused where the helix is, saying which call reached it."""
+def test_useful_subroutines_is_refused_in_the_call_that_reaches_its_first_problem() -> None:
+    """useful-subroutines.ngc mills holes with G41 and helical arcs: refused where its
+    subroutine first does what MillBlocks cannot (a rapid across with compensation on, then
+    a helix), at the subroutine's line and column, saying which call reached it."""
     text = fixture_text(f"{CORPUS}/useful-subroutines.ngc")
     assert failure(text).startswith(
+        "line 24, column 1: a rapid move in X/Y with cutter compensation on"
+    ) and failure(text).endswith("(in o100, called at line 79)")
+    without_comp = text.replace("g41 g0 x#1", "g0 x#1")
+    assert failure(without_comp).startswith(
         "line 27, column 1: a helix (an arc with a Z move): MillBlocks cuts arcs at one depth "
         "(in o100, called at line 79)"
     )

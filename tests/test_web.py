@@ -348,7 +348,7 @@ def test_oversized_upload_gets_413(client: FlaskClient) -> None:
         "/programs/import", data=body, content_type=f"multipart/form-data; boundary={boundary}"
     )
     assert response.status_code == 413
-    assert "larger than the 2 MB" in response.get_data(as_text=True)
+    assert "larger than the 2,097,152 bytes" in response.get_data(as_text=True)
 
 
 def test_markup_in_names_renders_inert(client: FlaskClient) -> None:

@@ -8,6 +8,8 @@ it would make. Pure: no Flask, database or serial code.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 MAX_BLOCKS = 5000
 """Data blocks in one program (document, import, editor)."""
 
@@ -29,18 +31,31 @@ class TooLarge(ValueError):
     """An input past one of the limits above; the message names the limit."""
 
 
-def check_import_size(data: bytes) -> None:
-    """Refuse `data` larger than the import limits (before any parsing)."""
-    if len(data) > MAX_IMPORT_BYTES:
+@dataclass(frozen=True)
+class ImportLimits:
+    """The bounds of one imported file: its bytes and its lines (a server's are settings,
+    MILLBLOCKS_MAX_UPLOAD_BYTES and MILLBLOCKS_MAX_IMPORT_LINES)."""
+
+    bytes: int = MAX_IMPORT_BYTES
+    lines: int = MAX_IMPORT_LINES
+
+
+IMPORT_LIMITS = ImportLimits()
+"""The stated limits above."""
+
+
+def check_import_size(data: bytes, limits: ImportLimits = IMPORT_LIMITS) -> None:
+    """Refuse `data` larger than `limits` (before any parsing)."""
+    if len(data) > limits.bytes:
         raise TooLarge(
-            f"the file has {len(data):,} bytes; an import is at most {MAX_IMPORT_BYTES:,} bytes"
+            f"the file has {len(data):,} bytes; an import is at most {limits.bytes:,} bytes"
         )
     lines = data.count(b"\n") + 1
     # A tape's blocks end in CR (ASCII) or EOB (EIA: 0x80); count those too.
     lines = max(lines, data.count(b"\r"), data.count(b"\x80"))
-    if lines > MAX_IMPORT_LINES:
+    if lines > limits.lines:
         raise TooLarge(
-            f"the file has {lines:,} lines; an import is at most {MAX_IMPORT_LINES:,} lines "
+            f"the file has {lines:,} lines; an import is at most {limits.lines:,} lines "
             f"and {MAX_BLOCKS:,} blocks"
         )
 

@@ -17,7 +17,7 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime, timedelta
+from datetime import UTC, datetime, timedelta, tzinfo
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -40,6 +40,7 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
+from app.settings import shown
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
@@ -194,8 +195,10 @@ def _columns(program: Program) -> dict[str, Any]:
 class Library:
     """The program library on one database."""
 
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, zone: tzinfo = UTC) -> None:
         self.engine = engine
+        self.zone = zone
+        """The shop's time zone, for the times this library's messages state."""
         self.sessions = sessionmaker(engine, expire_on_commit=False)
 
     @contextmanager
@@ -341,7 +344,7 @@ class Library:
         who = row.updated_by or "someone"
         listed = "; ".join(changes[:6]) or "no change to the program itself"
         message = (
-            f"not saved: {who} saved program {row.id} at {row.updated_at:%Y-%m-%d %H:%M} UTC "
+            f"not saved: {who} saved program {row.id} at {shown(row.updated_at, self.zone)} "
             f"(version {row.version}) after the version {based_on} you started from. "
             f"Changed meanwhile: {listed}. Reload it and make your change again; "
             "nothing was overwritten."
@@ -517,7 +520,8 @@ class Library:
             return row.name, row.data
 
     def backup(self, out: BinaryIO) -> int:
-        """Write the whole library as a zip of JSON documents; returns the program count."""
+        """Write the whole library as a zip of JSON documents (programs, machines and the
+        crib's tools, each with every revision); returns the program count."""
         with self.session() as s:
             programs = s.scalars(select(ProgramRow).order_by(ProgramRow.id)).all()
             machines = s.scalars(select(MachineRow).order_by(MachineRow.name)).all()
@@ -539,6 +543,9 @@ class Library:
                             }
                         )
                     manifest["programs"].append({**entry, "revisions": revisions})
+                from app.storage.crib import backup_tools
+
+                manifest["tools"] = backup_tools(s, lambda name, text: _write(archive, name, text))
                 manifest["machines"] = [
                     {
                         "name": m.name,
@@ -554,10 +561,12 @@ class Library:
             return len(programs)
 
     def restore_backup(self, source: BinaryIO | Path) -> int:
-        """Add every program of a backup (with its revisions) as a new library entry, and
-        create or update its machines; returns the program count. All or nothing: the
-        archive is read and checked whole first (app.storage.backup), then stored in one
-        transaction, so a bad archive changes nothing (BackupError says what is wrong)."""
+        """Add every program of a backup (with its revisions) as a new library entry,
+        create or update its machines, and add its crib tools with their revisions (one
+        whose number or name a tool in use has is added retired); returns the program
+        count. All or nothing: the archive is read and checked whole first
+        (app.storage.backup), then stored in one transaction, so a bad archive changes
+        nothing (BackupError says what is wrong)."""
         from app.storage.backup import BackupError, read_backup
 
         backup = read_backup(source)
@@ -589,6 +598,9 @@ class Library:
                         )
                 for machine in backup.machines:
                     _store_machine(s, machine, now)
+                from app.storage.crib import restore_tools
+
+                restore_tools(s, backup.tools, now)
         except SQLAlchemyError as exc:
             raise BackupError(f"the backup could not be stored: {exc.__class__.__name__}") from None
         return len(backup.programs)
@@ -670,11 +682,12 @@ def _machine(row: MachineRow) -> Machine:
     )
 
 
-def open_library(url: str | None = None, seed_demo: bool = True) -> Library:
+def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = UTC) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
-    the demo programs added the first time."""
+    the demo programs added the first time (unless not `seed_demo`); its messages state
+    times in `zone`."""
     engine = make_engine(url)
-    library = Library(engine)
+    library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").
     with migration_lock(engine):

@@ -62,7 +62,7 @@ from app.storage.library import (
 )
 from app.web.editor import current_user
 from app.web.editor_page import block_summary, is_htmx
-from app.web.extensions import get_library
+from app.web.extensions import get_library, upload_limits
 
 bp = Blueprint("drawings", __name__)
 
@@ -97,7 +97,7 @@ def upload() -> Response | tuple[str, int]:
     data = file.read()
     options = _options(request.form)
     try:
-        check_import_size(data)
+        check_import_size(data, upload_limits())
         if not is_dxf(data):
             raise ImportFailure("", "not a DXF drawing (a DXF starts with a SECTION group)")
         read_drawing(data, file.filename, parse_options(options))

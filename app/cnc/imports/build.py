@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 
+from app.cnc import limits
 from app.cnc.blocks import (
     ArcEnd,
     Block,
@@ -38,7 +39,6 @@ from app.cnc.blocks import (
     Program,
     Rep,
     Tool,
-    tool_name_fault,
 )
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports.common import (
@@ -70,6 +70,7 @@ from app.cnc.imports.ops import (
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
 from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
+from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length
 
 # Values a rounding note lists for one line; past them, a count (a line a loop runs 800
@@ -565,15 +566,18 @@ def block0(setup: SetUp, ops: list[Op], notes: Notes) -> DataBlock0:
                 f"tool {number} has no spindle speed in the file: enter its RPM in Data Block "
                 "0 (the control stops when a tool without RPM is used)",
             )
-        if not 1 <= number <= 24:
-            notes.needs(first_use.get(number), f"tool {number}: the control has tools 1 to 24")
+        if not 1 <= number <= limits.MAX_TOOL:
+            notes.needs(
+                first_use.get(number),
+                f"tool {number}: the control has tools 1 to {limits.MAX_TOOL}",
+            )
     offsets = setup.offsets or (0, 0)
     x_off = decimal_of(quantize_nm(offsets[0], units), units)
     y_off = decimal_of(quantize_nm(offsets[1], units), units)
     z_retract = Decimal("0.1") if units is Units.INCH else Decimal("2.54")
     if setup.z_retract is not None:
         z_retract = decimal_of(quantize_nm(setup.z_retract, units), units)
-    initial = setup.initial_tool if 0 <= setup.initial_tool <= 24 else 0
+    initial = setup.initial_tool if 0 <= setup.initial_tool <= limits.MAX_TOOL else 0
     return DataBlock0(
         x_offset=x_off,
         y_offset=y_off,

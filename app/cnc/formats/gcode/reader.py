@@ -408,6 +408,7 @@ def _cancel_beside(first: Word, second: Word) -> bool:
 class _Reader:
     def __init__(self, text: str, name: str, expanding: bool) -> None:
         self.expanding = expanding  # the lines come from the front end (ngc.py)
+        self.running: ngc.Line | None = None  # the front end's line being read
         self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         self.notes = Notes()
         self.steps: list[Step] = []
@@ -425,6 +426,11 @@ class _Reader:
         self.arc_absolute = False
         self.plane = "17"
         self.comp = ""
+        self.comp_tool = 0  # G41/G42's D (0: the tool in the spindle)
+        self.arc_barred = False  # G40 has just ended compensation: the next move is a line
+        # A `G0 X Y` right after a canned cycle, until the next move says what it meant:
+        # the error if nothing does, and where it went (None: not yet moved).
+        self.undecided: tuple[ImportFailure, tuple[int, int] | None] | None = None
         self.return_initial = True
         self.feed: int | None = None
         self.speed: int | None = None
@@ -462,9 +468,12 @@ class _Reader:
             runs = ngc.expand(self.lines, self.notes)
             run = next(runs, None)
             while run is not None:
+                self.running = run
                 try:
                     self.read(run.number, run.text, run.titles)
                 except ImportFailure as exc:
+                    if self.undecided is not None and exc is self.undecided[0]:
+                        raise  # (located when it was made, on its own line)
                     raise run.moved(exc) from None
                 try:
                     run = runs.send(self.percent >= 2 or self.ended_at is not None)
@@ -473,6 +482,8 @@ class _Reader:
         else:
             for number, raw in enumerate(self.lines, start=1):
                 self.read(number, raw, True)
+        if self.undecided is not None:
+            raise self.undecided[0]
         units = self.program_units or Units.INCH
         if self.units_assumed:
             self.notes.assumed(None, "no G20/G21 before the first dimension: read in inches")
@@ -494,6 +505,11 @@ class _Reader:
             initial_tool=self.initial_tool,
             start_z=self.start_z,
         )
+
+    def located(self, exc: ImportFailure) -> ImportFailure:
+        """`exc` at the file's line and column now, to be raised later (when another line
+        is read): the front end's line maps them (`ngc.Line.moved`)."""
+        return exc if self.running is None else self.running.moved(exc)
 
     def read(self, number: int, raw: str, titles: bool) -> None:
         """Read and execute line `number` (`titles`: a comment alone on it may name the
@@ -620,10 +636,10 @@ class _Reader:
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
         units = self.units
-        if units is None or self.incremental:
+        if units is None or self.incremental or self.arc_barred or self.undecided is not None:
             return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
-        if motion is None:
+        if motion is None or (motion == "0" and self.comp):
             return False
         if motion == "80":
             # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
@@ -667,7 +683,7 @@ class _Reader:
         else:
             assert feed is not None
             self.change_pending = None
-            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp))
+            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp, self.comp_tool))
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -715,7 +731,9 @@ class _Reader:
         self.feed, self.motion = feed, motion
         self.change_pending = None
         clockwise = motion == "2"
-        self.steps.append(Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -757,6 +775,8 @@ class _Reader:
         code = self.motion
         r, bottom, start_z = self.cycle_r, self.cycle_z, self.z
         if r is None or bottom is None or start_z is None or feed is None or bottom >= r:
+            return False
+        if self.comp:
             return False
         if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
             return False
@@ -1055,10 +1075,16 @@ class _Reader:
                         f"{self.units.value} blocks",
                     )
         if "40" in codes:
-            self.comp = ""
+            # As rs274: the move that ends compensation goes straight from the compensated
+            # point (an arc there is refused).
+            last = next(
+                (s for s in reversed(self.steps) if isinstance(s, Rapid | Feed | Arc)), None
+            )
+            self.arc_barred = isinstance(last, Feed | Arc) and last.comp != ""
+            self.comp, self.comp_tool = "", 0
         for code, side in (("41", "left"), ("42", "right")):
             if code in codes:
-                self.comp = side
+                self.compensation(block, codes[code], side)
         for code in ("43", "45"):
             if code in codes:
                 self.length_offset(block, code)
@@ -1088,6 +1114,25 @@ class _Reader:
             if NOTED_G.get(code):
                 self.notes.ignored(line, f"G{code}: {NOTED_G[code]}")
 
+    def compensation(self, block: Block, word: Word, side: str) -> None:
+        """G41/G42 [D]: cutter compensation to that side with D's diameter (the tool in the
+        spindle without D; D0 has no radius, so nothing is offset, as rs274 reads it)."""
+        if self.comp:
+            raise failure(
+                block.line,
+                word.column,
+                f"G{word.code} while cutter compensation is on: G40 must end it first (as "
+                "rs274 reads it)",
+            )
+        d = block.get("D")
+        number = 0 if d is None else self.integer(d, block, 0, 999)
+        if d is not None and number == 0:
+            self.notes.assumed(
+                block.line, f"G{word.code} D0: a radius of 0, so the path is the tool centre"
+            )
+            return
+        self.comp, self.comp_tool = side, number
+
     def set_motion(self, block: Block, word: Word, uses_axes: bool) -> None:
         new = word.code
         if (
@@ -1097,14 +1142,22 @@ class _Reader:
             and not block.has("Z")
             and (block.has("X") or block.has("Y"))
         ):
-            raise failure(
-                block.line,
-                word.column,
-                f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it ends "
-                "the cycle, so no hole is drilled here; a ProtoTRAK post that writes its G "
-                "code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is meant "
-                "cannot be told: remove the G code to drill here, or put G80 before the line "
-                "to only move",
+            # Decided by what comes next: a canned cycle at that very point means the line
+            # only moved there (FreeCAD's post writes `G0 X Y` before each cycle line; a
+            # hole there would be drilled twice); anything else leaves it undecided.
+            self.undecided = (
+                self.located(
+                    failure(
+                        block.line,
+                        word.column,
+                        f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it "
+                        "ends the cycle, so no hole is drilled here; a ProtoTRAK post that writes "
+                        "its G code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is "
+                        "meant cannot be told: remove the G code to drill here, or put G80 before "
+                        "the line to only move",
+                    )
+                ),
+                None,
             )
         self.motion = new
         if new not in CYCLES:
@@ -1455,9 +1508,29 @@ class _Reader:
         if motion == "80":
             raise failure(line, block.words[0].column, "axis words after G80 with no motion code")
         if motion in CYCLES:
+            if self.undecided is not None:
+                self.decide(self.target(block)[:2], True)
             self.cycle(block)
             return
         x, y, z = self.target(block)
+        if self.undecided is not None:
+            self.decide((x, y), False)
+        if self.comp and motion == "0" and (x, y) != (self.x, self.y):
+            raise failure(
+                line,
+                block.words[0].column,
+                "a rapid move in X/Y with cutter compensation on: the control offsets it too, "
+                "and MillBlocks offsets cuts only — turn compensation on (G41/G42) with the "
+                "first cut, or off (G40) before the rapid",
+            )
+        if self.arc_barred and motion in ("2", "3"):
+            raise failure(
+                line,
+                next((w.column for w in block.gs if w.code == motion), block.words[0].column),
+                "an arc right after G40: the control refuses it (the move that ends cutter "
+                "compensation goes straight from the compensated point)",
+            )
+        self.arc_barred = False
         if motion != "0":
             self.change_pending = None
         if motion == "0":
@@ -1472,7 +1545,7 @@ class _Reader:
             self.moves_made = True
         elif motion == "1":
             feed = self.need_feed(block)
-            self.steps.append(Feed(line, x, y, z, feed, units, self.comp))
+            self.steps.append(Feed(line, x, y, z, feed, units, self.comp, self.comp_tool))
             self.moves_made = True
         else:
             self.arc(block, x, y, z, motion == "2")
@@ -1480,6 +1553,18 @@ class _Reader:
         self.x, self.y, self.z = x, y, z
         self.moved = True
         self.cycle_drilled = False
+
+    def decide(self, to: tuple[int, int], hole: bool) -> None:
+        """The move after a `G0 X Y` right after a canned cycle (`undecided`): a hole at
+        that point says the line only moved; a move elsewhere leaves it ambiguous."""
+        assert self.undecided is not None
+        error, at = self.undecided
+        if at is None:
+            self.undecided = (error, to)  # the line itself: where it goes
+        elif to == at and hole:
+            self.undecided = None
+        elif to != at:
+            raise error
 
     def need_feed(self, block: Block) -> int:
         if self.feed is None:
@@ -1526,7 +1611,9 @@ class _Reader:
             where = i_word or j_word
             assert where is not None
             check_arc(line, where.column, (sx, sy), (x, y), (cx, cy), units)
-        self.steps.append(Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
 
     def centre_from_radius(
         self,
@@ -1576,6 +1663,12 @@ class _Reader:
         assert code is not None
         units = self.current_units()
         first = block.words[0].column
+        if self.comp:
+            raise failure(
+                line,
+                first,
+                f"G{code} with cutter compensation on: rs274 refuses a canned cycle then",
+            )
         self.change_pending = None
         x0, y0 = self.x or 0, self.y or 0
         x, y, _ = self.target(block)

@@ -673,28 +673,42 @@ def _differs(
 
 
 def referee_import(
-    data: bytes, tmp_path: Path, name: str = "file", diameters: dict[int, float] | None = None
+    data: bytes,
+    tmp_path: Path,
+    name: str = "file",
+    diameters: dict[int, float] | None = None,
+    as_rs274_reads: bytes | None = None,
+    any_order: bool = False,
 ) -> ImportResult:
     """Import G-code `data`, export the program to LinuxCNC's G-code, and have rs274 read
     both: the cut paths (`cut_path`) must agree within what the blocks hold — lengths to
     0.001 in / 0.01 mm, feeds to 0.1 ipm / 2 mm/min (the control's steps). The spindle
     speeds are exported as the file gives them, checked against no machine's range; the
     tool table's `diameters` (inches) are what G41/G42 in the file offset by. Returns the
-    import; fails naming the first cut that differs (ImportFailure if it is refused)."""
+    import; fails naming the first cut that differs (ImportFailure if it is refused).
+    `as_rs274_reads`: the file as rs274 is given it, when it refuses a line the import
+    reports as not carried (another control's M code). `any_order`: the cuts compared as a
+    set (holes a file drills counter-clockwise, a BOLT CIR drills clockwise)."""
     result = read_program(data, name, "gcode")
     exported = export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data
     original, ours = tmp_path / f"{name}-original.ngc", tmp_path / f"{name}-ours.ngc"
     # rs274 refuses a UTF-8 byte-order mark (an editor on Windows writes one); the
     # importer reads past it. The G-code after it is the same.
-    original.write_bytes(data.removeprefix(b"\xef\xbb\xbf"))
+    original.write_bytes(
+        (data if as_rs274_reads is None else as_rs274_reads).removeprefix(b"\xef\xbb\xbf")
+    )
     ours.write_bytes(exported)
     metric = result.program.units is Units.MM
     tol = (0.01 if metric else 0.0254) + 1e-6
     feed_tol = (2.0 if metric else 2.54) + 1e-6
-    assert_same_cuts(
-        cut_path(rs274(original, diameters=diameters, in_mm=True, changes=True)),
-        cut_path(rs274(ours, in_mm=True, changes=True)),
-        tol,
-        feed_tol,
-    )
+    theirs = cut_path(rs274(original, diameters=diameters, in_mm=True, changes=True))
+    mine = cut_path(rs274(ours, in_mm=True, changes=True))
+    if any_order:
+        theirs, mine = sorted(theirs, key=_cut_key), sorted(mine, key=_cut_key)
+    assert_same_cuts(theirs, mine, tol, feed_tol)
     return result
+
+
+def _cut_key(cut: Cut) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A cut's place, rounded below the comparison's tolerance (for `any_order`)."""
+    return tuple(round(v, 2) for v in cut.end), tuple(round(v, 2) for v in cut.start)

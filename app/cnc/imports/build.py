@@ -73,6 +73,10 @@ from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
 from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length
 
+# Values a rounding note lists for one line; past them, a count (a line a loop runs 800
+# times rounds 1 600 values).
+ROUNDED_SHOWN = 8
+
 
 @dataclass
 class SetUp:
@@ -95,7 +99,9 @@ class Builder:
         self.notes = notes
         self.blocks: list[Block] = []
         self.ref: XY = (0, 0)
-        self.rounding: dict[int, list[str]] = {}
+        # line → the values rounded on it, in order (a dict as an ordered set: a line a
+        # subroutine or loop runs many times can round hundreds)
+        self.rounding: dict[int, dict[str, None]] = {}
 
     # -- numbers --------------------------------------------------------------------------
 
@@ -109,9 +115,7 @@ class Builder:
         return rounded
 
     def log(self, line: int, text: str) -> None:
-        entries = self.rounding.setdefault(line, [])
-        if text not in entries:
-            entries.append(text)
+        self.rounding.setdefault(line, {})[text] = None
 
     def point(self, at: XY, units: Units, line: int) -> XY:
         return (self.length(at[0], units, line, "X"), self.length(at[1], units, line, "Y"))
@@ -143,10 +147,13 @@ class Builder:
 
     def flush_rounding(self) -> None:
         for line in sorted(self.rounding):
+            values = list(self.rounding[line])
+            rest = len(values) - ROUNDED_SHOWN
             self.notes.rounded(
                 line,
                 "to the programming resolution (0.001 in / 0.01 mm, feeds 0.1 ipm / 2 mm/min): "
-                + ", ".join(self.rounding[line]),
+                + ", ".join(values[:ROUNDED_SHOWN])
+                + (f" and {rest} more" if rest > 0 else ""),
             )
 
     # -- operations -------------------------------------------------------------------------

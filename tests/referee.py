@@ -304,6 +304,7 @@ class Motion:
 def rs274(
     path: Path,
     lengths: dict[int, float] | None = None,
+    diameters: dict[int, float] | None = None,
     *,
     in_mm: bool = False,
     changes: bool = False,
@@ -311,7 +312,10 @@ def rs274(
     """Run rs274 on a file; its motions (zero-length ones dropped). Fails on any error.
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
-    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments.
+    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments and
+    the `diameters` (inches, the table's unit whatever the file's; 0 where not given) that
+    cutter compensation (G41/G42) offsets by; a tool past 24 given either is listed too (a
+    CAM library's T32).
 
     `in_mm`: every motion and feed in millimetres, whatever units the file is in (G20/G21
     may change on the way). Before the file's first G20/G21, rs274 reads millimetres (its
@@ -320,7 +324,7 @@ def rs274(
 
     `changes`: each tool change is a motion too, of kind C, where it happens.
     """
-    result, output = run_rs274(path, lengths)
+    result, output = run_rs274(path, lengths, diameters)
     calls = [CALL.match(line) for line in output.splitlines()]
     stray = [
         line
@@ -364,21 +368,29 @@ def rs274(
     return motions
 
 
-def rs274_reads(path: Path) -> bool:
-    """Whether rs274 reads the file to its end without an error."""
-    result, output = run_rs274(path, None)
+def rs274_reads(path: Path, diameters: dict[int, float] | None = None) -> bool:
+    """Whether rs274 reads the file to its end without an error (its tool table's
+    `diameters` in inches, as `rs274` has them)."""
+    result, output = run_rs274(path, None, diameters)
     return result.returncode == 0 and "PROGRAM_END" in output
 
 
 def run_rs274(
-    path: Path, lengths: dict[int, float] | None
+    path: Path, lengths: dict[int, float] | None, diameters: dict[int, float] | None = None
 ) -> tuple[subprocess.CompletedProcess[str], str]:
-    """rs274 run on `path` with a tool table beside it (tools 1-24, `lengths` in inches);
-    the result, and its output with stderr on a line of its own."""
+    """rs274 run on `path` with a tool table beside it (tools 1-24 and any other `lengths`
+    or `diameters` name, both in inches); the result, and its output with stderr on a line
+    of its own."""
     assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
     table = path.with_suffix(".tbl")
     lengths = lengths or {}
-    table.write_text("".join(f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D0 ;\n" for n in range(1, 25)))
+    diameters = diameters or {}
+    table.write_text(
+        "".join(
+            f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D{diameters.get(n, 0.0):.8f} ;\n"
+            for n in sorted({*range(1, 25), *lengths, *diameters})
+        )
+    )
     # rs274 keeps its tool table in $HOME/.tool.mmap, one file for every rs274 the user
     # runs: two runs side by side (tests, or the engineers beside us) overwrite each other's
     # and one dies (SIGBUS) or misses a tool its table lists. Each run gets its own HOME.
@@ -483,6 +495,11 @@ class Cut:
         return self.centre is None and self.start[:2] == self.end[:2]
 
 
+# mm: how near a feed down must be to where the last cut ended to cut nothing new there —
+# two steps of 0.001 in: the end of the cut before and the DRILL's point are each rounded.
+REENTRY = 0.0508
+
+
 def cut_path(motions: list[Motion]) -> list[Cut]:
     """The feed moves of rs274's `motions` (from its start at 0, 0, 0), each from where the
     tool was: what cuts. Rapids only say where the next feed starts. Three readings make
@@ -496,7 +513,9 @@ def cut_path(motions: list[Motion]) -> list[Cut]:
       which moves above it it read as the rapid;
     - a feed down a hole the same tool has just cut as deep or deeper (with only rapids
       between: rs274's G83 pecks once more when its pecks divide the depth, rounding) cuts
-      nothing and is left out.
+      nothing and is left out; so does a feed down to where the tool's last cut ended
+      (within 0.002 in), as deep or deeper (MillBlocks retracts and comes down again where
+      a compensated contour starts or ends: a DRILL of its own).
 
     Moves are not joined otherwise: two lines that rounding to the blocks' steps puts in
     one line are still two moves, in the file and in the blocks alike.
@@ -525,16 +544,18 @@ def cut_path(motions: list[Motion]) -> list[Cut]:
                 _sweep(start, motion.end, motion.centre, motion.clockwise),
             )
             cuts.append(arc)
-            joined, bottom = True, None
+            joined, bottom = True, motion.end
             continue
         line = Cut(start, motion.end, motion.feed)
         if line.vertical and line.end[2] > line.start[2]:
             joined = False
             continue
-        down = line.vertical and bottom is not None and bottom[:2] == start[:2]
+        # (Steps of the blocks apart: a compensated contour's DRILL goes down where
+        # MillBlocks plans it, from its rounded start; the cut before ends where it rounds.)
+        down = line.vertical and bottom is not None and math.dist(bottom[:2], start[:2]) <= REENTRY
         if down and bottom is not None and line.end[2] >= bottom[2] - 1e-9:
             continue  # down a hole this tool has cut deeper already (a peck more)
-        bottom = line.end if line.vertical else None
+        bottom = line.end
         prev = cuts[-1] if joined and cuts else None
         if prev is not None and prev.vertical and line.vertical:
             # Down again at the same X/Y: one run at one rate, the approach above it gone.
@@ -651,26 +672,43 @@ def _differs(
     return ""
 
 
-def referee_import(data: bytes, tmp_path: Path, name: str = "file") -> ImportResult:
+def referee_import(
+    data: bytes,
+    tmp_path: Path,
+    name: str = "file",
+    diameters: dict[int, float] | None = None,
+    as_rs274_reads: bytes | None = None,
+    any_order: bool = False,
+) -> ImportResult:
     """Import G-code `data`, export the program to LinuxCNC's G-code, and have rs274 read
     both: the cut paths (`cut_path`) must agree within what the blocks hold — lengths to
     0.001 in / 0.01 mm, feeds to 0.1 ipm / 2 mm/min (the control's steps). The spindle
-    speeds are exported as the file gives them, checked against no machine's range. Returns
-    the import; fails naming the first cut that differs (ImportFailure if it is refused)."""
+    speeds are exported as the file gives them, checked against no machine's range; the
+    tool table's `diameters` (inches) are what G41/G42 in the file offset by. Returns the
+    import; fails naming the first cut that differs (ImportFailure if it is refused).
+    `as_rs274_reads`: the file as rs274 is given it, when it refuses a line the import
+    reports as not carried (another control's M code). `any_order`: the cuts compared as a
+    set (holes a file drills counter-clockwise, a BOLT CIR drills clockwise)."""
     result = read_program(data, name, "gcode")
     exported = export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data
     original, ours = tmp_path / f"{name}-original.ngc", tmp_path / f"{name}-ours.ngc"
     # rs274 refuses a UTF-8 byte-order mark (an editor on Windows writes one); the
     # importer reads past it. The G-code after it is the same.
-    original.write_bytes(data.removeprefix(b"\xef\xbb\xbf"))
+    original.write_bytes(
+        (data if as_rs274_reads is None else as_rs274_reads).removeprefix(b"\xef\xbb\xbf")
+    )
     ours.write_bytes(exported)
     metric = result.program.units is Units.MM
     tol = (0.01 if metric else 0.0254) + 1e-6
     feed_tol = (2.0 if metric else 2.54) + 1e-6
-    assert_same_cuts(
-        cut_path(rs274(original, in_mm=True, changes=True)),
-        cut_path(rs274(ours, in_mm=True, changes=True)),
-        tol,
-        feed_tol,
-    )
+    theirs = cut_path(rs274(original, diameters=diameters, in_mm=True, changes=True))
+    mine = cut_path(rs274(ours, in_mm=True, changes=True))
+    if any_order:
+        theirs, mine = sorted(theirs, key=_cut_key), sorted(mine, key=_cut_key)
+    assert_same_cuts(theirs, mine, tol, feed_tol)
     return result
+
+
+def _cut_key(cut: Cut) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A cut's place, rounded below the comparison's tolerance (for `any_order`)."""
+    return tuple(round(v, 2) for v in cut.end), tuple(round(v, 2) for v in cut.start)

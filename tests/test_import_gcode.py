@@ -368,13 +368,15 @@ def test_block_delete_numbers_and_percent() -> None:
         ("G20\nG0 X1 Y1 (open\n", "line 2, column 10: comment not closed"),
         ("G20\nG0 G1 X1\n", "line 2, column 4: G0 and G1 in one block are both motion codes"),
         ("G20\nG0 X1 X2\n", "line 2, column 7: X given twice in one block (X1 and X2)"),
-        ("G20\nG0 X#1\n", "line 2, column 5: parameters and expressions are not supported"),
+        ("G20\nG0 X#<depth>\n", "line 2, column 5: #<depth> is read before it is set"),
         ("G20\nG0 A10\n", "line 2, column 4: A: a rotary axis; MillBlocks has X, Y, Z"),
-        ("G20\nO100 sub\n", "line 2, column 1: O-word subroutines are not supported"),
+        ("G20\nO100 sub\n", "line 2, column 1: o100 sub has no o100 endsub"),
         ("G20\nG0 X1 $\n", "line 2, column 7: unexpected character '$'"),
         ("G20\nG33 X1 K0.1\n", "line 2, column 1: G33: thread cutting is not supported"),
         ("G20\nG0 Z0.1\nG1 X1 Y1\n", "line 3, column 1: a feed move with no F given yet"),
-        ("G20\nM98 P100\n", "line 2, column 1: M98: a subprogram call is not supported"),
+        ("G20\nM98 P100\n", "line 2, column 1: M98 P100: the file has no O100"),
+        ("G20\nG0 X1 M98 P100\n", "line 2, column 7: M98: a subprogram call not at the beg"),
+        ("G20\nG0 X1 O100\n", "line 2, column 7: an O-word (O number or subroutine) must "),
         (
             "G20\nG0 Z0.1\nG1 Z-0.1 F5\nX1 Z-0.2\n",
             "line 4: X/Y and Z fed together (a ramp)",
@@ -620,13 +622,22 @@ def test_a_percent_line_with_text_after_the_start_is_an_error_naming_it() -> Non
     assert describe_all(gcode("%\nG20\nG0 X1 Y1\n%;\n")) == ["POS X1 Y1 T1"]
 
 
-def test_polar_coordinates_are_named_not_an_unexpected_character() -> None:
-    """LinuxCNC's `@` (radius) and `^` (angle) words were "unexpected character '^'"."""
-    message = failure("G20\nG0 X1.5 Y0 Z0\nG91 G81 R.1 Z-.5 ^60 L6 F10\n")
-    assert message.startswith(
-        "line 3, column 18: polar coordinates (@ radius, ^ angle) are not supported"
-    ), message
-    assert failure("G20\nG0 @1 ^33\n").startswith("line 2, column 4: polar coordinates")
+def test_polar_coordinates_are_read_and_their_mistakes_named(tmp_path: Path) -> None:
+    """LinuxCNC's `@` (distance) and `^` (angle) words were "unexpected character '^'", then
+    named as not supported; they are read as rs274 reads them (hole-circle.ngc's line,
+    tests/test_import_ngc.py for the files), and what LinuxCNC refuses is refused."""
+    text = "G20\nG0 X1.5 Y0 Z0\nG91 G81 R.1 Z-.5 ^60 L6 F10\nG80\nM2\n"
+    holes = [b for b in gcode(text).blocks if isinstance(b, Hole)]
+    assert len(holes) == 1 and "6 holes equally spaced on a circle" in " ".join(report(text))
+    assert failure("G20\nG0 @1 X1\n").startswith(
+        "line 2, column 7: X beside polar coordinates (@ ^)"
+    )
+    assert failure("G20\nG0 @1\n").startswith(
+        "line 2, column 4: a polar coordinate from program zero with no angle to go at"
+    )
+    assert failure("G20\nG18\nG0 @1 ^30\n").startswith(
+        "line 3, column 4: polar coordinates (@ ^) in the G18 plane"
+    )
 
 
 def test_g53_retract_reads_as_a_move_to_a_height_the_file_does_not_give(

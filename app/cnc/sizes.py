@@ -28,6 +28,13 @@ MAX_IMPORT_LINES = 20_000
 """Lines (or tape blocks) of one imported file."""
 
 
+MAX_EXPANDED_LINES = 50_000
+"""Lines one G-code import runs, each time it runs one: a file's subroutines and loops
+(app/cnc/formats/gcode/ngc.py) repeat lines, and a loop that never ends must not hold the
+request (a loop of expressions refused at this limit: 2 s). Ten lines for every block a
+program may have."""
+
+
 class TooLarge(ValueError):
     """An input past one of the limits above; the message names the limit."""
 

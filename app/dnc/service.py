@@ -218,10 +218,44 @@ def receive_program(
         raise
     if result.outcome is Outcome.CANCELLED:
         return Received(result, record(result), None, None)
+    return keep_capture(
+        result,
+        machine,
+        library,
+        format=format,
+        name=name,
+        author=author,
+        log=log,
+        compare=compare,
+    )
+
+
+def keep_capture(
+    result: ReceiveResult,
+    machine: MachineProfile,
+    library: ProgramSink,
+    *,
+    format: str | None = None,
+    name: str = "",
+    author: str = "",
+    log: Log | None = None,
+    compare: Callable[[str, Program], str] | None = None,
+) -> Received:
+    """Import what came from `machine` (a whole receive) as `format` (default: the machine's
+    target) and add it to `library`, its record logged (see `receive_program`). Raises
+    CaptureImportError (not a program; the record logged, nothing saved)."""
+    settings = settings_of(machine)
+
+    def record(**extra: Any) -> TransferRecord:
+        entry = TransferRecord.of_receive(result, machine=machine.name, author=author, **extra)
+        if log is not None:
+            log(entry)
+        return entry
+
     try:
         program, report = import_capture(result, format or settings.target, name)
     except CaptureImportError as exc:
-        record(result, error=str(exc))
+        record(error=str(exc))
         raise
     if compare is not None:  # before the name given here, which is not the control's edit
         compared = compare(machine.name, program)
@@ -229,10 +263,8 @@ def receive_program(
             report = "\n".join(part for part in (report.rstrip("\n"), compared) if part) + "\n"
     if name:
         program = dataclasses.replace(program, name=name)
-    stored = library.create(program, author, f"received from {machine.name} on {path}")
-    entry = record(
-        result, program_id=getattr(stored, "id", None), program_name=program.name, report=report
-    )
+    stored = library.create(program, author, f"received from {machine.name} on {result.port}")
+    entry = record(program_id=getattr(stored, "id", None), program_name=program.name, report=report)
     return Received(result, entry, program, stored, report)
 
 

@@ -522,7 +522,8 @@ class Library:
             return row.name, row.data
 
     def backup(self, out: BinaryIO) -> int:
-        """Write the whole library as a zip of JSON documents; returns the program count."""
+        """Write the whole library as a zip of JSON documents (programs, machines and the
+        crib's tools, each with every revision); returns the program count."""
         with self.session() as s:
             programs = s.scalars(select(ProgramRow).order_by(ProgramRow.id)).all()
             machines = s.scalars(select(MachineRow).order_by(MachineRow.name)).all()
@@ -544,6 +545,9 @@ class Library:
                             }
                         )
                     manifest["programs"].append({**entry, "revisions": revisions})
+                from app.storage.crib import backup_tools
+
+                manifest["tools"] = backup_tools(s, lambda name, text: _write(archive, name, text))
                 manifest["machines"] = [
                     {
                         "name": m.name,
@@ -559,10 +563,12 @@ class Library:
             return len(programs)
 
     def restore_backup(self, source: BinaryIO | Path) -> int:
-        """Add every program of a backup (with its revisions) as a new library entry, and
-        create or update its machines; returns the program count. All or nothing: the
-        archive is read and checked whole first (app.storage.backup), then stored in one
-        transaction, so a bad archive changes nothing (BackupError says what is wrong)."""
+        """Add every program of a backup (with its revisions) as a new library entry,
+        create or update its machines, and add its crib tools with their revisions (one
+        whose number or name a tool in use has is added retired); returns the program
+        count. All or nothing: the archive is read and checked whole first
+        (app.storage.backup), then stored in one transaction, so a bad archive changes
+        nothing (BackupError says what is wrong)."""
         from app.storage.backup import BackupError, read_backup
 
         backup = read_backup(source)
@@ -594,6 +600,9 @@ class Library:
                         )
                 for machine in backup.machines:
                     _store_machine(s, machine, now)
+                from app.storage.crib import restore_tools
+
+                restore_tools(s, backup.tools, now)
         except SQLAlchemyError as exc:
             raise BackupError(f"the backup could not be stored: {exc.__class__.__name__}") from None
         return len(backup.programs)

@@ -25,6 +25,7 @@ from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
 from app.web import (
     auth,
+    crib,
     drawings,
     editor,
     export,
@@ -101,6 +102,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
         setup,
         transfers,
         verify,
+        crib,
     ):
         app.register_blueprint(module.bp)
     auth.init_app(app)

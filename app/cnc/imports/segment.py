@@ -38,6 +38,7 @@ from app.cnc.imports.common import (
     show,
     show_feed,
 )
+from app.cnc.imports.compensation import Part, Reading
 from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, LoopOp, MillOp, Op, PosOp
 from app.cnc.imports.steps import (
     Arc,
@@ -548,9 +549,15 @@ class _Segmenter:
             how = f"dwell {dwell} s; a MillBlocks DRILL dwells 0.8 s"
         pecks = 1
         if op is HoleOp.DRILL and len(levels) > 1:
-            pecks = len(levels)
+            pecks = min(len(levels), limits.MAX_PECKS)
             even = peck_levels(z_up, bottom, pecks)
-            if any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
+            if len(levels) > pecks:
+                self.notes.assumed(
+                    lines[0],
+                    f"{len(levels)} peck levels: MillBlocks drills at most {pecks}, so {pecks} "
+                    f"even pecks of {show((z_up - bottom) / pecks, spec_units)}",
+                )
+            elif any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
                 shown = ", ".join(f"Z{show(z, spec_units)}" for z in levels)
                 self.notes.assumed(
                     lines[0],
@@ -586,7 +593,7 @@ class _Segmenter:
         depth = bottom
         new_depth: int | None = None
         elements: list[Element] = []
-        comps: set[str] = set()
+        sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
         while j < n:
             s = steps[j]
@@ -616,7 +623,7 @@ class _Segmenter:
                         s.line,
                     )
                 elements.append(Element(s.line, (s.x, s.y), None, False, new_depth, s.feed))
-                comps.add(s.comp)
+                sides.append((s.comp, s.comp_tool))
             elif isinstance(s, Arc):
                 if s.z is not None and s.z != depth:
                     raise ImportFailure(
@@ -627,7 +634,7 @@ class _Segmenter:
                 elements.append(
                     Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, new_depth, s.feed)
                 )
-                comps.add(s.comp)
+                sides.append((s.comp, s.comp_tool))
             elif isinstance(s, Coolant):
                 # Coolant on with a cut (`G1 Y40 M8`): the tool's COOLANT, and the cuts go on.
                 self.coolant(s)
@@ -638,29 +645,24 @@ class _Segmenter:
             new_depth = None
             x, y = s.x, s.y
             j += 1
-        comp = Comp.NONE
-        if comps - {""}:
-            if len(comps) > 1:
-                first = next(e.line for e in elements)
-                raise ImportFailure(
-                    self.notes.where(first),
-                    "cutter compensation changes inside a mill sequence: MillBlocks sets it "
-                    "once, on the DRILL that starts the sequence",
-                    first,
-                )
-            comp = Comp.LEFT if comps == {"left"} else Comp.RIGHT
-            self.notes.assumed(
-                lines[0],
-                f"cutter compensation {comp.value} (G4{1 if comp is Comp.LEFT else 2}): the "
-                f"programmed contour with CUT {'LT' if comp is Comp.LEFT else 'RT'}; "
-                "MillBlocks offsets the tool itself and goes down one tool radius to the side "
-                "of the first cut",
-            )
         self.z = depth
         self.x, self.y = x, y
-        spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
-        all_lines = sorted({*lines, *[e.line for e in elements]})
-        self.add(MillOp(all_lines, at, spec, comp, elements))
+        if any(side for side, _ in sides):
+            diameters = {
+                n: t.diameter for n, t in self.parsed.tools.items() if t.diameter is not None
+            }
+            reading = Reading(self.tool, diameters, units, self.notes)
+            parts = reading.parts(at, bottom, elements, sides)
+        else:
+            parts = [Part(at, Comp.NONE, bottom, elements)]
+        for k, part in enumerate(parts):
+            if k == 0:
+                spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
+                part_lines = sorted({*lines, *[e.line for e in part.elements]})
+            else:
+                spec = self.hole_spec(HoleOp.DRILL, z_up, part.depth, feed_z, 1, self.tool, units)
+                part_lines = sorted({e.line for e in part.elements})
+            self.add(MillOp(part_lines, part.at, spec, part.comp, part.elements))
         self.awaiting_retract = (lines[0], z_up)
         return j
 
@@ -682,6 +684,14 @@ class _Segmenter:
         j = i
         while j < n:
             s = steps[j]
+            if is_cut(s) and s.comp:
+                raise ImportFailure(
+                    self.notes.where(s.line),
+                    "cutter compensation (G41/G42) in a program whose Z never changes: "
+                    "MillBlocks reads it only where a cut starts with a plunge (a 3-axis mill "
+                    "sequence)",
+                    s.line,
+                )
             if isinstance(s, Feed):
                 if (s.x, s.y) != (x, y):
                     elements.append(Element(s.line, (s.x, s.y), None, False, None, s.feed))
@@ -725,7 +735,12 @@ class _Segmenter:
             depth = step.r - step.bottom
             pecks = max(1, math.ceil(depth / step.peck))
             if pecks > limits.MAX_PECKS:
-                how = f"{pecks} pecks of {show(step.peck, step.units)}: more than 40"
+                how = (
+                    f"{pecks} pecks of Q{show(step.peck, step.units)}: MillBlocks drills at "
+                    f"most {limits.MAX_PECKS}, so {limits.MAX_PECKS} even pecks of "
+                    f"{show(depth / limits.MAX_PECKS, step.units)}"
+                )
+                pecks = limits.MAX_PECKS
             elif depth % step.peck:
                 how = (
                     f"pecks of Q{show(step.peck, step.units)} do not divide the depth "

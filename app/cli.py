@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
+from app.cnc.sizes import MAX_MOVES, moves_allowed
 
 if TYPE_CHECKING:
     from sqlalchemy import Engine
@@ -274,8 +275,18 @@ class _Commands(click.Group):
 
 @click.group(cls=_Commands)
 @click.version_option(package_name="millblocks")
-def main() -> None:
+@click.option(
+    "--max-moves",
+    type=Number(minimum=1, whole=True),
+    default=MAX_MOVES,
+    show_default=True,
+    help="The moves a program may expand to (LOOPs multiplied out). A shop server keeps "
+    "the default; raise it for your own large files on your own computer.",
+)
+@click.pass_context
+def main(ctx: click.Context, max_moves: int) -> None:
     """MillBlocks: conversational mill programs to tool paths, tape and G-code."""
+    ctx.with_resource(moves_allowed(max_moves))
 
 
 @main.command()
@@ -924,7 +935,8 @@ def serve(host: str, port: int, workers: int, dnc: bool) -> None:
         import subprocess
 
         subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
-    command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
+    command = [sys.executable, "-m", "gunicorn", "-c", "python:app.gunicorn_conf"]
+    command += ["--bind", f"{host}:{port}"]
     # No gunicorn access log: the app writes one line per request with its level
     # (app/web/logs.py), so the journal would have each request twice.
     command += ["--workers", str(workers), "app:create_app()"]

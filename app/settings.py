@@ -225,6 +225,13 @@ SETTINGS: tuple[Setting, ...] = (
         "Lines (or tape blocks) of a file imported on the web.",
     ),
     Setting(
+        "REQUEST_SECONDS",
+        "`20`",
+        _positive(20),
+        "The work one web request may do; past it the request is refused with a page saying "
+        "so (503), well inside gunicorn's 30 s timeout (docs/security.md, Bounded work).",
+    ),
+    Setting(
         "TIME_ZONE",
         "the server's (`TZ`, else `/etc/localtime`)",
         _zone,

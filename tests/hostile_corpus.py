@@ -12,6 +12,7 @@ The tables below are the corpus; `cases(surface)` expands them:
 | document | a golden document with one value replaced (DOCUMENT_VALUES)   | 422, where: reason |
 | upload   | hostile files to the import form (UPLOADS)                   | 422, file: reason |
 | cli      | hostile command-line arguments and files (CLI_CASES)         | exit 2, message   |
+| cli      | programs read but refused (CLI_REFUSALS: past the moves limit) | exit 1, message |
 | backup   | damaged backup archives (tests/test_backup_restore.py's DAMAGE, and more) | exit 2 |
 | login    | hostile login forms                                          | 401 / 429         |
 """
@@ -19,11 +20,81 @@ The tables below are the corpus; `cases(surface)` expands them:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from decimal import Decimal
+from pathlib import Path
 from typing import Any
 
+from app.cnc import document
+from app.cnc.blocks import (
+    Block,
+    DataBlock0,
+    Direction,
+    Hole,
+    HoleOp,
+    Island,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
+    PocketLine,
+    Program,
+    Tool,
+)
 from app.cnc.numbers import quoted
 from app.cnc.sizes import MAX_IMPORT_LINES
 from app.cnc.text import text_fault
+
+# -- programs whose work multiplies (issue 30) ----------------------------------------------
+
+GRID_OF_GRIDS = (
+    Path(__file__).parent / "bad" / "loops-multiply-past-the-moves-limit" / "program.json"
+).read_bytes()
+"""Five blocks, two nested LOOP/REP of 99 x 99: 10^9 moves, refused naming block 2."""
+
+
+def eight_island_pocket(
+    size: Decimal = Decimal(10), tool: Decimal = Decimal("0.125"), name: str = "BASE PLATE"
+) -> Program:
+    """One POCKET with the most islands a POCKET takes (8), every value within its limits:
+    a rounded `size` x 0.8 `size` in boundary (PKT LINE, PKT ARC), islands of lines with a
+    notch and a bump (arcs), a small tool. Before issue 30 its like validated in 75 s and
+    two requests for it held both of a shop server's workers."""
+    w, h = size, size * Decimal("0.8")
+    r = size / 10  # the boundary's corner radius
+
+    def arc(cx: Decimal, cy: Decimal, ex: Decimal, ey: Decimal, turn: Direction) -> list[Block]:
+        return [PocketArc(direction=turn, x=cx, y=cy), PocketArcEnd(x=ex, y=ey)]
+
+    ccw, cw = Direction.CCW, Direction.CW
+    zero = Decimal(0)
+    blocks: list[Block] = [
+        Hole(op=HoleOp.DRILL, x=r, y=zero, z_up=Decimal("0.1"), z_dn=Decimal("-0.25"),
+             feed_z=Decimal(5), tool=1),
+        Pocket(feed_xy=Decimal(12), tool=1),
+        PocketLine(x=w - r, y=zero), *arc(w - r, r, w, r, ccw),
+        PocketLine(x=w, y=h - r), *arc(w - r, h - r, w - r, h, ccw),
+        PocketLine(x=r, y=h), *arc(r, h - r, zero, h - r, ccw),
+        PocketLine(x=zero, y=r), *arc(r, r, r, zero, ccw),
+    ]  # fmt: skip
+    cell_w, cell_h = w / 4, h / 2
+    for i in range(4):
+        for j in range(2):
+            x0, y0 = cell_w * i + cell_w * Decimal("0.35"), cell_h * j + cell_h / 4
+            a, c = cell_w * Decimal("0.4"), cell_h / 2
+            q = c / 8
+            blocks += [
+                Island(x=x0, y=y0), PocketLine(x=x0 + a, y=y0),
+                PocketLine(x=x0 + a, y=y0 + c / 2 - q),
+                *arc(x0 + a, y0 + c / 2, x0 + a, y0 + c / 2 + q, cw),
+                PocketLine(x=x0 + a, y=y0 + c), PocketLine(x=x0, y=y0 + c),
+                PocketLine(x=x0, y=y0 + c / 2 + q),
+                *arc(x0, y0 + c / 2, x0, y0 + c / 2 - q, ccw), PocketLine(x=x0, y=y0),
+            ]  # fmt: skip
+    cutter = Tool(number=1, diameter=tool, rpm=2000, tcal=zero)
+    block0 = DataBlock0(current_tool=1, z_retract=Decimal("0.1"), tools=(cutter,))
+    return Program(name=name, block0=block0, blocks=tuple(blocks))
+
+
+EIGHT_ISLANDS = document.dumps(eight_island_pocket()).encode()
 
 # value typed into a number field → (reason for a decimal field, reason for a whole field)
 HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
@@ -193,7 +264,15 @@ UPLOADS: list[tuple[str, bytes, str | None]] = [
     ),
     ("tape-junk.tape", b"%\rN001 G00 X\xff\xfe\r", ""),
     ("ambiguous.txt", b"N001 G00 X1000 Y2000\nM30\n", ""),
+    # Issue 30: work that multiplies. Refused naming the block and the figure; the 8-island
+    # POCKET is legal and is taken (it planned for minutes).
+    ("grid-of-grids.json", GRID_OF_GRIDS, "block 2: the program would make about 1,300,130,007"),
+    ("eight-islands.json", EIGHT_ISLANDS, None),  # a document: it opens in the editor (302)
 ]
+
+# Uploads the command line reads (a program document) and then refuses to work on (exit 1,
+# CLI_REFUSALS), where the web refuses to import them (422).
+READ_BUT_REFUSED = frozenset({"grid-of-grids.json"})
 
 # CLI arguments: (argv, expected message part). Files named @name are written from UPLOADS.
 CLI_CASES: list[tuple[list[str], str]] = [
@@ -205,7 +284,8 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["export", "@golden", "--to", "gcode-linuxcnc", "-O", "no-equals"], "NAME=VALUE"),
     *[(["time", "@golden", "--tool-change-seconds", v], "--tool-change-seconds")
       for v in ("nan", "inf", "-1", "١", "1_0")],
-    *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS if part is not None],
+    *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS
+      if part is not None and name not in READ_BUT_REFUSED],
     (["check", "/nonexistent/file.json"], "/nonexistent/file.json"),
     (["diff", "1", "²", "1"], "²"),
     (["restore-version", "1", "--5"], "--5"),
@@ -223,6 +303,15 @@ CLI_CASES: list[tuple[list[str], str]] = [
      "user name: has a lone surrogate (U+DCFF) at character 2"),
     (["user", "password", "ada\udcff", "--password", "a long password"],
      "has a lone surrogate (U+DCFF)"),
+    (["--max-moves", "NaN", "check", "@golden"], "--max-moves"),
+    (["--max-moves", "0", "check", "@golden"], "--max-moves"),
+]  # fmt: skip
+
+# Programs a command reads whole but refuses to work on (exit 1, the problem on stderr).
+CLI_REFUSALS: list[tuple[list[str], str]] = [
+    ([command, "@grid-of-grids.json", *rest], "block 2, LOOP: the program would make about")
+    for command, rest in (("check", []), ("time", []), ("verify", []), ("setup-sheet", []),
+                          ("export", ["--to", "gcode-linuxcnc"]))
 ]  # fmt: skip
 
 # The one text rule (app.cnc.text) at every entry, on SQLite and on PostgreSQL (whose text
@@ -352,14 +441,17 @@ def cases(surface: str) -> list[Case]:
                 "upload",
                 name,
                 {"name": name, "bytes": data},
-                (422,) if part is not None else (201,),
-                part if part is not None else "Import report",
+                (422,) if part is not None else (302,) if name.endswith(".json") else (201,),
+                part if part is not None else "" if name.endswith(".json") else "Import report",
             )
             for name, data, part in UPLOADS
         ]
     if surface == "cli":
         return [
             Case("cli", " ".join(argv)[:60], {"argv": argv}, (2,), part) for argv, part in CLI_CASES
+        ] + [
+            Case("cli", " ".join(argv)[:60], {"argv": argv}, (1,), part)
+            for argv, part in CLI_REFUSALS
         ]
     if surface == "login":
         return [

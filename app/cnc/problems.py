@@ -97,6 +97,7 @@ class Rule(enum.Enum):
     TOOL_THREAD = "tool-thread"
     TAP_FEED = "tap-feed"
     TAP_HAND = "tap-hand"
+    TOO_LARGE = "too-large"
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,13 +1,21 @@
 """How big a program or an import may be: the stated limits that bound one request's work.
 
-A program of up to `MAX_BLOCKS` data blocks opens, validates, previews and exports in a
-bounded time (docs/security.md gives the measurements); an import is refused, naming the
-limit, before its expensive work starts: first by its bytes and lines, then by the blocks
-it would make. Pure: no Flask, database or serial code.
+A program of up to `MAX_BLOCKS` data blocks and `MAX_MOVES` moves opens, validates,
+previews and exports in a bounded time (docs/security.md gives the measurements); an
+import is refused, naming the limit, before its expensive work starts: first by its bytes
+and lines, then by the blocks it would make, then by the moves those blocks expand to
+(app/cnc/cost.py). Past the limits, one request's time is bounded too: a caller may set a
+time budget (`time_budget`), and the long loops of the core check it (`spend`), so a
+request that would run on is refused with a clear message instead of being killed.
+Pure: no Flask, database or serial code.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 MAX_BLOCKS = 5000
@@ -65,4 +73,64 @@ def check_block_count(count: int) -> None:
     if count > MAX_BLOCKS:
         raise TooLarge(
             f"the program would have {count:,} data blocks; a program has at most {MAX_BLOCKS:,}"
+        )
+
+
+MAX_MOVES = 1_000_000
+"""Moves one program may expand to (LOOPs multiplied out): the size every page, export and
+command answers within seconds (docs/security.md). The command line may allow more for
+the user's own files (`--max-moves`)."""
+
+MAX_POCKET_WORK = 200_000
+"""Points one POCKET's planning may shrink: the points its contours are drawn with, times
+its levels (one per step-over across it). The planner offsets the whole region once per
+level with Clipper, whose time grows with both (docs/security.md, "Pockets")."""
+
+_MOVE_LIMIT: ContextVar[int] = ContextVar("millblocks_move_limit", default=MAX_MOVES)
+
+
+def move_limit() -> int:
+    """The moves a program may expand to here: MAX_MOVES unless `moves_allowed` says."""
+    return _MOVE_LIMIT.get()
+
+
+@contextmanager
+def moves_allowed(limit: int) -> Iterator[None]:
+    """Allow programs of up to `limit` moves inside the block (the command line's
+    `--max-moves`, for the user's own files on the user's own computer)."""
+    token = _MOVE_LIMIT.set(limit)
+    try:
+        yield
+    finally:
+        _MOVE_LIMIT.reset(token)
+
+
+class OverBudget(TooLarge):
+    """The work of one request ran past its time budget (the message says what to do)."""
+
+
+_DEADLINE: ContextVar[tuple[float, float] | None] = ContextVar("millblocks_deadline", default=None)
+
+
+@contextmanager
+def time_budget(seconds: float) -> Iterator[None]:
+    """Give the work inside the block `seconds` of wall time: past that, `spend` raises
+    OverBudget. For a server's request, the last line of defence behind the size limits."""
+    token = _DEADLINE.set((time.monotonic() + seconds, seconds))
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def spend() -> None:
+    """Raise OverBudget when the time budget in force (if any) is used up. Called from the
+    loops whose work grows with a program (the compile's nodes and patterns, a pocket's
+    levels and rings, the walk over every move), it costs a clock read."""
+    deadline = _DEADLINE.get()
+    if deadline is not None and time.monotonic() > deadline[0]:
+        raise OverBudget(
+            f"this took more than the {deadline[1]:g} s one request may take on this server, "
+            "and was stopped; make the program smaller (fewer LOOP patterns, a larger "
+            "step-over) or run it with the millblocks command on your own computer"
         )

@@ -16,7 +16,7 @@ from decimal import Decimal
 from fractions import Fraction
 from typing import Any
 
-from app.cnc import limits, spindle
+from app.cnc import cost, limits, sizes, spindle
 from app.cnc.blocks import (
     ARC_PAIRS,
     MILL_CONTOUR_CLASSES,
@@ -121,6 +121,7 @@ def _identity(program: Program) -> tuple[Any, ...]:
         program.name,
         program.part_number,
         program.units,
+        sizes.move_limit(),  # the limit validation holds it to (a command line may lift it)
     )
 
 
@@ -183,6 +184,7 @@ class _Checker:
         self.check_block0(self.program.block0, self.program.units)
         for number, block in enumerate(self.blocks, start=1):
             self.problems += [replace(p, block=number) for p in _own_problems(block)]
+        self.check_size()
         self.check_geometry()
         self.check_loops()
         self.check_order()
@@ -833,6 +835,22 @@ class _Checker:
                 depth -= 1
                 if depth == 0:
                     yield start, index, "LOOP sequence"
+
+    # -- size -------------------------------------------------------------------------------
+
+    def check_size(self) -> None:
+        """A program past the moves it may expand to, or a POCKET past the planning it may
+        take (app/cnc/cost.py): an error on the outermost block that takes it there, before
+        anything compiles it."""
+        found = cost.estimate(self.program)
+        if found.over is not None:
+            self.add(
+                found.over,
+                "LOOP" if found.rep is not None else "STEP" if found.levels else None,
+                ERROR,
+                Rule.TOO_LARGE,
+                found.message(sizes.move_limit()),
+            )
 
     # -- geometry ------------------------------------------------------------------------
 

@@ -25,13 +25,13 @@ from sqlalchemy import Engine, delete, func, or_, select, update
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.cnc import document
+from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.machine import MachineError, read_machine
 from app.cnc.memo import ByObject
 from app.cnc.numbers import NumberError, parse_int
-from app.cnc.sizes import TooLarge, check_block_count
+from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
 from app.cnc.text import (
     NAME_LENGTH,
     NOTES_LENGTH,
@@ -172,10 +172,12 @@ def _block_words(block: Block) -> frozenset[str]:
 
 def _columns(program: Program) -> dict[str, Any]:
     """The row's columns for `program`. Raises LibraryError for a program past
-    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open; TextError for
-    a name or notes past the text rule (app.cnc.text), whatever the entry."""
+    app.cnc.sizes.MAX_BLOCKS or MAX_MOVES (the server's, whatever a command line allows
+    for files): the library keeps only programs it can open; TextError for a name or
+    notes past the text rule (app.cnc.text), whatever the entry."""
     try:
         check_block_count(len(program.blocks))
+        cost.check(program, MAX_MOVES)
     except TooLarge as exc:
         raise LibraryError(f"not stored: {exc}") from None
     check_text(program.name, "program name", NAME_LENGTH)

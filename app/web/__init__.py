@@ -19,6 +19,7 @@ from werkzeug.middleware.proxy_fix import ProxyFix
 from werkzeug.routing import IntegerConverter
 
 from app import settings
+from app.cnc import sizes
 from app.cnc.text import TextError, check_text
 from app.resources import data_dir, instance_dir
 from app.storage.library import open_library
@@ -114,6 +115,8 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     app.register_error_handler(403, _forbidden)
     app.register_error_handler(422, _refused)
     app.register_error_handler(TextError, _refused_text)
+    app.register_error_handler(sizes.OverBudget, _over_budget)
+    _budget_requests(app)
     return app
 
 
@@ -131,6 +134,21 @@ class RowId(IntegerConverter):
     def __init__(self, map: Any, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("max", 999_999_999)
         super().__init__(map, *args, **kwargs)
+
+
+def _budget_requests(app: Flask) -> None:
+    """Give each request REQUEST_SECONDS (MILLBLOCKS_REQUEST_SECONDS, default 20) of work:
+    past that the core stops it (app.cnc.sizes.spend) and the page says so (503), well
+    before gunicorn's 30 s timeout would kill the worker. The last line of defence behind
+    the size limits (app.cnc.sizes, app.cnc.cost), which keep legal programs below it."""
+    seconds = float(app.config["REQUEST_SECONDS"])
+    inner = app.wsgi_app
+
+    def budgeted(environ: dict[str, Any], start_response: Any) -> Any:
+        with sizes.time_budget(seconds):
+            return inner(environ, start_response)
+
+    app.wsgi_app = budgeted  # type: ignore[method-assign]
 
 
 def _harden_cookie(app: Flask) -> None:
@@ -211,6 +229,10 @@ def _forbidden(error: Exception) -> tuple[str, int]:
 def _refused(error: Exception) -> tuple[str, int]:
     message = getattr(error, "description", "Refused")
     return render_template("errors/error.html", title="Refused", message=message), 422
+
+
+def _over_budget(error: Exception) -> tuple[str, int]:
+    return render_template("errors/error.html", title="Too much work", message=str(error)), 503
 
 
 def _not_found(error: Exception) -> tuple[str, int]:

@@ -23,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from app.cnc import cost
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.registry import Importer, detect, get_importer, importers
@@ -85,10 +86,12 @@ def read_program(
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
-    file past `limits` or the block limit of app.cnc.sizes, refused before it is parsed).
+    file past `limits` or the block limit of app.cnc.sizes: refused before it is parsed by
+    its bytes and lines, after by its blocks and the moves they expand to, app.cnc.cost).
     `limited=False` lifts those limits: the command line converting the user's own files
-    (a long CAM program to a tape) takes files of any size; the web and the library keep
-    them (a server's `limits` are its settings).
+    (a long CAM program to a tape) takes files of any size (the moves it may make are then
+    validation's and the compile's, `millblocks --max-moves`); the web and the library
+    keep them (a server's `limits` are its settings).
     """
     try:
         if limited:
@@ -97,6 +100,7 @@ def read_program(
         program, notes = read_as(importer, data, name, options or {})
         if limited:
             check_block_count(len(program.blocks))
+            cost.check(program)
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, importer.name)

@@ -67,6 +67,7 @@ bench: $(STAMP) system-deps
 # (issue 8; ~2 min); figures in docs/rs232.md.
 bench-serial: $(STAMP) system-deps
 	$(PY) -m bench.serial_send
+	$(PY) -m bench.serial_service
 
 # Load test (issue 9): 20 + 5 editors for $(DURATION) s against gunicorn, on SQLite and on a
 # throwaway PostgreSQL cluster; figures into docs/load.md.

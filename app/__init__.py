@@ -6,6 +6,7 @@ factory is re-exported here so that `flask --app app run` finds it.
 
 from __future__ import annotations
 
+import sys
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -13,7 +14,17 @@ if TYPE_CHECKING:
 
 
 def create_app(test_config: dict[str, Any] | None = None) -> Flask:
-    """The Flask application (see app.web.create_app)."""
+    """The Flask application (see app.web.create_app), for a server to start: a setting it
+    cannot use or a database newer than this code is said in one line on stderr (the
+    journal), and the process exits with status 4, which gunicorn reads as "the app failed
+    to load" and stops on, instead of restarting workers that cannot start (the unit file
+    does not restart on it either)."""
+    from app.settings import SettingError
+    from app.storage.db import SchemaError
     from app.web import create_app as factory
 
-    return factory(test_config)
+    try:
+        return factory(test_config)
+    except (SettingError, SchemaError) as exc:
+        print(f"MillBlocks cannot start: {exc}", file=sys.stderr, flush=True)
+        raise SystemExit(4) from None

@@ -8,6 +8,9 @@
     millblocks receive --machine M     receive over RS-232 into the library (logged)
     millblocks import FILE             add a file to the library, with its import report
     millblocks verify FILE             simulate the cut; gouges, rest material, holes, crashes
+    millblocks tools list|add|edit|…   the shop's tool crib; LinuxCNC tool tables in and out
+    millblocks speeds --material 6061 --diameter 0.5 --flutes 3 --tool-material carbide
+                                       the RPM and feeds offered, with how each was found
 
 FILE is a MillBlocks JSON program, ProtoTRAK Plus events, G-code, a 1704 tape (listing or
 punch image) or a DXF drawing, detected from its content; `--format` forces one. An import
@@ -25,14 +28,18 @@ import signal
 import sys
 import threading
 from collections.abc import Callable
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import click
 
 from app.cnc.limits import DEFAULT_TOOL_CHANGE_SECONDS
+from app.cnc.sizes import MAX_MOVES, moves_allowed
 
 if TYPE_CHECKING:
+    from sqlalchemy import Engine
+
     from app.cnc.blocks import Program
     from app.cnc.machine import MachineModel
     from app.cnc.problems import Problem
@@ -45,13 +52,17 @@ if TYPE_CHECKING:
 
 class Number(click.ParamType[Any, Any]):
     """A number argument read by app.cnc.numbers (click's own FLOAT takes `nan` and INT
-    takes `١٢`): a float, or an int when `whole`, at least `minimum`."""
+    takes `١٢`): a float, or an int when `whole`, at least `minimum` (more than it when
+    `above`)."""
 
     name = "number"
 
-    def __init__(self, minimum: float | None = None, whole: bool = False) -> None:
+    def __init__(
+        self, minimum: float | None = None, whole: bool = False, above: bool = False
+    ) -> None:
         self.minimum = minimum
         self.whole = whole
+        self.above = above  # more than `minimum`, not equal to it
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
         from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -64,6 +75,10 @@ class Number(click.ParamType[Any, Any]):
             self.fail(str(exc), param, ctx)
         if self.minimum is not None and number < self.minimum:
             self.fail(f"{value!r} is below the allowed minimum {self.minimum:g}", param, ctx)
+        if self.above and number == self.minimum:
+            self.fail(
+                f"{value!r} is not allowed; it must be more than {self.minimum:g}", param, ctx
+            )
         return int(number) if self.whole else float(number)
 
 
@@ -188,11 +203,42 @@ def resolve_reference(reference: str, lib: Library | None = None) -> tuple[Progr
     return stored.program, stored.info.id
 
 
+class ConfigurationError(click.ClickException):
+    """A MILLBLOCKS_* setting or a database this MillBlocks cannot use (exit 2)."""
+
+    exit_code = 2
+
+
+def settings() -> dict[str, Any]:
+    """The MILLBLOCKS_* settings of the environment (app.settings), read."""
+    from app.settings import SettingError, environment
+
+    try:
+        return environment()
+    except SettingError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
 def library() -> Library:
-    """The library (DATABASE_URL, else instance/millblocks.db), migrated to the newest."""
+    """The library (MILLBLOCKS_DATABASE_URL or DATABASE_URL, else millblocks.db in the
+    instance folder), migrated to the newest; its times in the shop's zone."""
+    from app.storage.db import SchemaError
     from app.storage.library import open_library
 
-    return open_library()
+    config = settings()
+    try:
+        return open_library(
+            config["DATABASE_URL"], seed_demo=config["DEMO_PROGRAMS"], zone=config["TIME_ZONE"]
+        )
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
+def shop_time(lib: Library, moment: datetime, seconds: bool = False) -> str:
+    """A stored time in the shop's zone, labelled (app.settings.shown)."""
+    from app.settings import shown
+
+    return shown(moment, lib.zone, seconds)
 
 
 def print_problems(path: Path | str, problems: list[Problem]) -> None:
@@ -213,10 +259,34 @@ def checked(path: str) -> Program:
     return program
 
 
-@click.group()
+class _Commands(click.Group):
+    """The command group: text that the one text rule refuses (app.cnc.text: a NUL, a lone
+    surrogate from arguments that are not UTF-8, a name or notes too long), wherever a
+    command meets it, ends the command with exit 2 and the message naming the field."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        from app.cnc.text import TextError
+
+        try:
+            return super().invoke(ctx)
+        except TextError as exc:
+            raise ProgramFileError(str(exc)) from None
+
+
+@click.group(cls=_Commands)
 @click.version_option(package_name="millblocks")
-def main() -> None:
+@click.option(
+    "--max-moves",
+    type=Number(minimum=1, whole=True),
+    default=MAX_MOVES,
+    show_default=True,
+    help="The moves a program may expand to (LOOPs multiplied out). A shop server keeps "
+    "the default; raise it for your own large files on your own computer.",
+)
+@click.pass_context
+def main(ctx: click.Context, max_moves: int) -> None:
     """MillBlocks: conversational mill programs to tool paths, tape and G-code."""
+    ctx.with_resource(moves_allowed(max_moves))
 
 
 @main.command()
@@ -511,13 +581,13 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
 @file_format_option
 @click.option(
     "--resolution",
-    type=click.FloatRange(min=0, min_open=True),
+    type=Number(minimum=0, above=True),
     default=None,
     help="Cell size in the program's units (default: about 800 cells along the stock).",
 )
 @click.option(
     "--tolerance",
-    type=click.FloatRange(min=0),
+    type=Number(minimum=0),
     default=None,
     help="What counts, in the program's units (default 0.001 in or 0.02 mm).",
 )
@@ -604,7 +674,7 @@ def history(program: str) -> None:
         raise click.ClickException(str(exc)) from None
     for revision in lib.revisions(stored.info.id):
         click.echo(
-            f"v{revision.version:<4} {revision.created_at:%Y-%m-%d %H:%M}  "
+            f"v{revision.version:<4} {shop_time(lib, revision.created_at)}  "
             f"{revision.author or '-':<12} {revision.summary}"
         )
 
@@ -649,10 +719,11 @@ def restore_version(program: str, version: int) -> None:
 @click.option("--trash", is_flag=True, help="List the trash instead.")
 def list_programs(query: str, sort: str | None, trash: bool) -> None:
     """List library programs matching QUERY (name, part number, notes, tools, block types)."""
-    for info in library().programs(query, sort or "name", trash):
+    lib = library()
+    for info in lib.programs(query, sort or "name", trash):
         click.echo(
             f"{info.id:>5}  {info.name:<40} {info.part_number:<8} {info.block_count:>4} blocks"
-            f"  v{info.version}  {info.updated_at:%Y-%m-%d %H:%M}"
+            f"  v{info.version}  {shop_time(lib, info.updated_at)}"
         )
 
 
@@ -744,9 +815,93 @@ def db() -> None:
 
 @db.command("upgrade")
 def db_upgrade() -> None:
-    """Bring the database up to date (every command does this by itself too)."""
-    library()
-    click.echo("database is up to date")
+    """Bring the database up to this MillBlocks' schema, and say what was done (every
+    command does this by itself too)."""
+    from app.storage.db import current
+
+    engine = _database()
+    before = _known_revision(engine)
+    after = current(library().engine)
+    where = engine.url.render_as_string(hide_password=True)
+    if before is None:
+        click.echo(f"created the database at {after} ({where})")
+    elif before == after:
+        click.echo(f"already at {after} ({where})")
+    else:
+        click.echo(f"upgraded from {before} to {after} ({where})")
+
+
+@db.command("current")
+def db_current() -> None:
+    """Say which schema revision the database is at, and the newest this MillBlocks knows
+    (exit 1 when the database is newer than this MillBlocks)."""
+    from app.storage.db import current, head, revisions
+
+    engine = _database()
+    found, newest = current(engine), head()
+    where = engine.url.render_as_string(hide_password=True)
+    if found is None:
+        click.echo(
+            f"empty: no schema yet ({where}); `millblocks db upgrade` creates it at {newest}"
+        )
+    elif found == newest:
+        click.echo(f"at {found}, the newest this MillBlocks knows ({where})")
+    elif found in revisions():
+        click.echo(
+            f"at {found}; this MillBlocks knows up to {newest}: "
+            f"`millblocks db upgrade` brings it up ({where})"
+        )
+    else:
+        click.echo(f"at {found}, newer than this MillBlocks (it knows up to {newest}) ({where})")
+        sys.exit(1)
+
+
+@db.command("downgrade")
+@click.argument("revision", required=False)
+@click.option("--yes", is_flag=True, help="Do not ask before dropping data.")
+def db_downgrade(revision: str | None, yes: bool) -> None:
+    """Take the database down to REVISION (default: one step; `base` empties it), to run an
+    older MillBlocks on it. What each undone migration added is dropped with its data:
+    back up first (docs/deploy.md)."""
+    from app.storage.db import SchemaError, current, downgrade, revisions, undone
+
+    engine = _database()
+    found = _known_revision(engine)
+    if found is None:
+        raise ConfigurationError("the database is empty: nothing to downgrade")
+    if revision is None:
+        known = revisions()
+        revision = known[known.index(found) - 1] if known.index(found) else "base"
+    try:
+        steps = undone(found, revision)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
+    if not steps:
+        click.echo(f"already at {found}")
+        return
+    for step, what in steps:
+        click.echo(f"undo {step}: {what}", err=True)
+    if not yes:
+        click.confirm("The data of what these added is dropped. Go on?", abort=True, err=True)
+    downgrade(engine, revision)
+    click.echo(f"downgraded from {found} to {current(engine) or 'base (empty)'}")
+
+
+def _database() -> Engine:
+    """An engine on the configured database, without migrating it."""
+    from app.storage.db import make_engine
+
+    return make_engine(settings()["DATABASE_URL"])
+
+
+def _known_revision(engine: Engine) -> str | None:
+    """The database's revision; exit 2 with what to do when it is newer than this code."""
+    from app.storage.db import SchemaError, check_known
+
+    try:
+        return check_known(engine)
+    except SchemaError as exc:
+        raise ConfigurationError(str(exc)) from None
 
 
 @main.command("serve")
@@ -780,11 +935,331 @@ def serve(host: str, port: int, workers: int, dnc: bool) -> None:
         import subprocess
 
         subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
-    command = [sys.executable, "-m", "gunicorn", "--bind", f"{host}:{port}"]
-    command += ["--workers", str(workers), "--access-logfile", "-", "app:create_app()"]
+    command = [sys.executable, "-m", "gunicorn", "-c", "python:app.gunicorn_conf"]
+    command += ["--bind", f"{host}:{port}"]
+    # No gunicorn access log: the app writes one line per request with its level
+    # (app/web/logs.py), so the journal would have each request twice.
+    command += ["--workers", str(workers), "app:create_app()"]
     click.echo(f"serving MillBlocks on http://{host}:{port}/ ({workers} workers)", err=True)
     sys.stderr.flush()
     os.execv(sys.executable, command)
+
+
+# -- the tool crib, feeds and speeds (issue 34) ---------------------------------------------
+
+
+def _tool_types() -> list[str]:
+    from app.cnc.tools import ToolType
+
+    return [kind.value for kind in ToolType]
+
+
+def _materials() -> list[str]:
+    from app.cnc.cutting import MaterialName
+
+    return [name.value for name in MaterialName]
+
+
+def _tool_materials() -> list[str]:
+    from app.cnc.tools import ToolMaterial
+
+    return [material.value for material in ToolMaterial]
+
+
+UNITS = click.Choice(["inch", "mm"])
+
+
+def _crib() -> Any:
+    from app.storage.crib import Crib
+
+    return Crib(library())
+
+
+def _crib_tool(reference: str) -> Any:
+    """A crib tool in use by number (12, T12) or name; a usage error naming it otherwise."""
+    from app.storage.library import LibraryError
+
+    try:
+        return _crib().find(reference)
+    except LibraryError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+@main.group()
+def tools() -> None:
+    """The shop's tool crib: list, add, edit, retire, history; LinuxCNC tool tables."""
+
+
+@tools.command("list")
+@click.argument("query", required=False, default="")
+@click.option("--retired", is_flag=True, help="List the retired tools instead.")
+def tools_list(query: str, retired: bool) -> None:
+    """List the crib's tools matching QUERY (number, name or type), by number."""
+    for stored in _crib().tools(query, retired):
+        click.echo(f"{stored.tool.describe()}  v{stored.version}")
+
+
+@tools.command("show")
+@click.argument("reference", metavar="TOOL")
+def tools_show(reference: str) -> None:
+    """Show a crib tool (TOOL: its number, 12 or T12, or its name) and its history."""
+    stored = _crib_tool(reference)
+    click.echo(stored.tool.describe())
+    tool = stored.tool
+    if tool.tcal is not None:
+        click.echo(f"TCAL {tool.tcal} {tool.units.symbol}")
+    if tool.notes:
+        click.echo(f"notes: {tool.notes}")
+    for rev in _crib().revisions(stored.id):
+        click.echo(
+            f"  v{rev.version}  {rev.created_at:%Y-%m-%d %H:%M}  {rev.author or '-'}  {rev.summary}"
+        )
+
+
+def tool_options(command: Callable[..., Any]) -> Callable[..., Any]:
+    """The fields of a crib tool as options (none required: `tools add` checks)."""
+    options = [
+        click.option("--number", type=Number(whole=True), default=None, help="T number."),
+        click.option("--name", default=None, help='What the shop calls it ("#7 DRILL").'),
+        click.option("--type", "kind", type=LazyChoice(_tool_types), default=None),
+        click.option("--units", type=UNITS, default=None, help="Of its sizes (inch)."),
+        click.option("--diameter", default=None, help="Cutting diameter."),
+        click.option("--flutes", type=Number(whole=True), default=None),
+        click.option("--material", type=LazyChoice(_tool_materials), default=None),
+        click.option("--length", default=None, help="Length out of the holder."),
+        click.option("--tcal", default=None, help="Measured length offset (tool table Z)."),
+        click.option("--pitch", default=None, help="A tap's pitch: TPI (20) or mm (1)."),
+        click.option("--pitch-unit", type=click.Choice(["tpi", "mm"]), default=None),
+        click.option("--hand", type=click.Choice(["right", "left"]), default=None),
+        click.option("--notes", default=None),
+        click.option("--author", default="", help="Who (kept with the revision)."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+def _tool_from(base: Any, values: dict[str, Any]) -> Any:
+    """A crib tool: `base` (None: a new one) with the options given, each read and checked
+    as the web form reads it. A usage error names the option."""
+    from dataclasses import replace
+    from decimal import Decimal
+
+    from app.cnc.numbers import NumberError, parse_decimal
+    from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType
+    from app.cnc.units import Units
+
+    fields: dict[str, Any] = {}
+    for name in ("diameter", "length", "tcal", "pitch"):
+        raw = values.get(name)
+        if raw is None:
+            continue
+        try:
+            fields[name] = None if raw == "" else parse_decimal(raw, exponent=False)
+        except NumberError as exc:
+            raise click.UsageError(f"--{name}: {exc}") from None
+    for name in ("number", "name", "flutes", "notes"):
+        if values.get(name) is not None:
+            fields[name] = values[name]
+    enums = {
+        "kind": ToolType,
+        "units": Units,
+        "material": ToolMaterial,
+        "pitch_unit": PitchUnit,
+        "hand": Hand,
+    }
+    for name, cls in enums.items():
+        if values.get(name) is not None:
+            fields[name] = cls(values[name])
+    if base is not None:
+        return replace(base, **fields)
+    missing = [
+        f"--{n}"
+        for n in ("number", "name", "type", "diameter")
+        if values.get("kind" if n == "type" else n) is None
+    ]
+    if missing:
+        raise click.UsageError(f"a new tool needs {', '.join(missing)}")
+    fields.setdefault("diameter", Decimal(0))
+    return CribTool(**fields)
+
+
+@tools.command("add")
+@tool_options
+def tools_add(author: str, **values: Any) -> None:
+    """Add a tool to the crib (--number, --name, --type and --diameter at least)."""
+    from app.storage.library import LibraryError
+
+    try:
+        stored = _crib().create(_tool_from(None, values), author)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"added {stored.tool.describe()}")
+
+
+@tools.command("edit")
+@click.argument("reference", metavar="TOOL")
+@tool_options
+def tools_edit(reference: str, author: str, **values: Any) -> None:
+    """Change a crib tool (a new revision); options not given stay as they are."""
+    from app.storage.library import LibraryError
+
+    stored = _crib_tool(reference)
+    try:
+        saved = _crib().save(stored.id, _tool_from(stored.tool, values), stored.version, author)
+    except LibraryError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"saved v{saved.version}: {saved.tool.describe()}")
+
+
+@tools.command("retire")
+@click.argument("reference", metavar="TOOL")
+def tools_retire(reference: str) -> None:
+    """Take a tool out of use (kept with its history for the programs that picked it)."""
+    stored = _crib_tool(reference)
+    _crib().retire(stored.id)
+    click.echo(f"retired {stored.tool.title}")
+
+
+@tools.command("import")
+@click.argument("file", type=click.Path(path_type=Path, dir_okay=False, exists=True))
+@click.option("--units", type=UNITS, default="inch", show_default=True, help="The table's units.")
+@click.option("--author", default="", help="Who (kept with the revisions).")
+def tools_import(file: Path, units: str, author: str) -> None:
+    """Read a LinuxCNC tool table (.tbl) into the crib: known numbers get its diameter,
+    length and name, new numbers become tools. All or nothing; what was assumed or not
+    carried is listed."""
+    from app.cnc.units import Units
+    from app.storage.library import LibraryError
+
+    try:
+        text = file.read_text(encoding="utf-8", errors="strict")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProgramFileError(f"{file}: cannot read: {exc}") from None
+    try:
+        done = _crib().import_table(text, Units(units), author)
+    except LibraryError as exc:
+        raise ProgramFileError(f"{file}: {exc}") from None
+    click.echo(done.text(), nl=False)
+
+
+@tools.command("table")
+@click.option("--program", "reference", default=None, help="A program's tools instead.")
+@click.option("--units", type=UNITS, default=None, help="The table's units (inch).")
+@click.option("-o", "--output", type=click.Path(path_type=Path, dir_okay=False), default=None)
+def tools_table(reference: str | None, units: str | None, output: Path | None) -> None:
+    """Write a LinuxCNC tool table: the crib's tools by number (Z: each one's measured
+    length, TCAL, where known), or with --program a program's Data Block 0 tools by the
+    numbers its G-code calls (D: DIA, Z: TCAL), in the program's units."""
+    from app.cnc.tooltable import crib_table, program_table, write_table
+    from app.cnc.units import Units
+
+    if reference:
+        program = resolve_program(reference)
+        if units and Units(units) is not program.units:
+            raise click.UsageError(
+                f"--units {units}: a program's table is in its own units ({program.units.value})"
+            )
+        text = write_table(program_table(program), program.units)
+    else:
+        chosen = Units(units or "inch")
+        text = write_table(crib_table([t.tool for t in _crib().tools()], chosen), chosen)
+    if output is None:
+        click.echo(text, nl=False)
+    else:
+        output.write_text(text, encoding="utf-8")
+
+
+@main.command("speeds")
+@click.option("--material", type=LazyChoice(_materials), required=True)
+@click.option("--diameter", required=True, help="The tool's cutting diameter.")
+@click.option("--flutes", type=Number(minimum=1, whole=True), default=None)
+@click.option("--tool-material", type=LazyChoice(_tool_materials), default="hss", show_default=True)
+@click.option(
+    "--type",
+    "kind",
+    type=LazyChoice(_tool_types),
+    default=None,
+    help="The tool's type (end_mill; tap with --tap-pitch).",
+)
+@click.option("--units", type=UNITS, default="inch", show_default=True)
+@click.option("--machine", "machine_name", default=None, help="A library machine's spindle.")
+@click.option("--tap-pitch", default=None, help="A tap's pitch: TPI in inch, mm in mm.")
+@click.option("--hand", type=click.Choice(["right", "left"]), default="right", show_default=True)
+@click.option("--rpm", type=Number(whole=True), default=None, help="Feeds for this RPM instead.")
+@click.option("--surface-speed", default=None, help="custom: sfm (inch) or m/min (mm).")
+@click.option("--chip-load", default=None, help="custom: in or mm per tooth.")
+def speeds(
+    material: str,
+    diameter: str,
+    flutes: int | None,
+    tool_material: str,
+    kind: str | None,
+    units: str,
+    machine_name: str | None,
+    tap_pitch: str | None,
+    hand: str,
+    rpm: int | None,
+    surface_speed: str | None,
+    chip_load: str | None,
+) -> None:
+    """The RPM and feeds offered for a tool in a material, as the editor offers them, with
+    how each was found (the tables are cited in docs/tools.md)."""
+    from fractions import Fraction
+
+    from app.cnc.crib import machine_limits
+    from app.cnc.cutting import Cutter, MaterialName, Workpiece, offer, workpiece_faults
+    from app.cnc.numbers import NumberError, parse_decimal
+    from app.cnc.tools import Hand, PitchUnit, ToolMaterial, ToolType, thread_faults
+    from app.cnc.units import Units
+
+    chosen = Units(units)
+
+    def number(option: str, raw: str | None) -> Any:
+        if raw is None:
+            return None
+        try:
+            return parse_decimal(raw, exponent=False)
+        except NumberError as exc:
+            raise click.UsageError(f"{option}: {exc}") from None
+
+    def workpiece_of() -> Workpiece:
+        return Workpiece(
+            name=MaterialName(material),
+            surface_speed=number("--surface-speed", surface_speed),
+            chip_load=number("--chip-load", chip_load),
+        )
+
+    workpiece = workpiece_of()
+    dia = number("--diameter", diameter)
+    if dia <= 0:
+        raise click.UsageError(f"--diameter: {diameter} must be more than 0")
+    pitch = number("--tap-pitch", tap_pitch)
+    tool_kind = ToolType(kind) if kind else ToolType.TAP if pitch is not None else ToolType.END_MILL
+    pitch_unit = PitchUnit.TPI if chosen is Units.INCH else PitchUnit.MM
+    faults = [message for _, message in thread_faults(tool_kind, pitch, pitch_unit, Hand(hand))]
+    faults += workpiece_faults(workpiece, chosen)
+    if faults:
+        raise click.UsageError("; ".join(faults))
+    spindle = max_feed = None
+    where = "the control's spindle (60-500 low gear, 500-4000 high gear)"
+    if machine_name:
+        model = _machine_model(_library_machine(machine_name).limits, machine_name)
+        spindle, max_feed = machine_limits(model, chosen)
+        if spindle is not None:
+            where = f"{machine_name}'s spindle ({spindle.text()} rpm)"
+    inches = Fraction(dia) if chosen is Units.INCH else Fraction(dia) / Fraction(254, 10)
+    cutter = Cutter(
+        tool_kind, inches, flutes, ToolMaterial(tool_material), pitch, pitch_unit, Hand(hand)
+    )
+    figures = offer(workpiece, cutter, chosen, spindle, rpm, max_feed)
+    click.echo(
+        f"{workpiece.label(chosen)}: {dia} {chosen.symbol} {cutter.material.label} "
+        f"{tool_kind.label}" + (f", {flutes} flutes" if flutes else "") + f"; {where}"
+    )
+    for line in figures.lines:
+        click.echo(f"  {line}")
+    click.echo(f"offered: {figures.summary()}")
 
 
 # -- RS-232 transfers (issue 8) -------------------------------------------------------------
@@ -1003,13 +1478,14 @@ def list_transfers(limit: int) -> None:
     """The newest RS-232 transfers in the log."""
     from app.storage.transfers import TransferLog
 
-    for t in TransferLog(library()).recent(limit):
+    lib = library()
+    for t in TransferLog(lib).recent(limit):
         total = f"/{t.bytes_total}" if t.bytes_total is not None else ""
         error = f"  {t.error}" if t.error else ""
         version = f" v{t.revision}" if t.revision is not None else ""
         digest = f" sha256 {t.checksum[:12]}" if t.checksum else ""
         click.echo(
-            f"{t.id:>5} {t.started_at:%Y-%m-%d %H:%M} {t.direction:<7} {t.machine:<16} "
+            f"{t.id:>5} {shop_time(lib, t.started_at)} {t.direction:<7} {t.machine:<16} "
             f"{(t.program_name or '-') + version:<24} {t.target} {t.settings}  "
             f"{t.bytes_done}{total} bytes  {t.outcome}{error}{digest}  {t.author or '-'}"
         )

@@ -131,6 +131,13 @@
       enterBlock(target.form);
       return;
     }
+    if (event.key === "Enter" && target.matches && target.matches("input.crib-pick")) {
+      // Data Block 0's crib field: Enter picks the tool typed (the row is filled from the
+      // crib), never submits the form.
+      event.preventDefault();
+      target.dispatchEvent(new Event("change", { bubbles: true }));
+      return;
+    }
     if (event.key === "Enter" && target.matches && target.matches("#entry .choices")) {
       // On a menu a number chooses; Enter does nothing (it opened POS by accident).
       event.preventDefault();
@@ -346,6 +353,36 @@
     if (blocks !== shownList) { shownList = blocks; showFocus(); }
   }
   document.addEventListener("htmx:after:swap", swapped);
+
+  // A tool picked from the crib in Data Block 0: its row comes back filled, and the cursor
+  // goes to its RPM (offered where none was typed) to be taken or typed over.
+  document.addEventListener("htmx:after:swap", function () {
+    var row = document.querySelector("tbody.tool-row[data-picked]");
+    if (!row) { return; }
+    row.removeAttribute("data-picked");
+    var rpm = row.querySelector('input[name^="rpm_"]');
+    if (rpm) { rpm.focus(); rpm.select(); }
+  });
+
+  // The feeds of the program's material follow the tool (app.cnc.crib): a new TOOL # offers
+  // its own FEEDR XY / FEEDR Z where the field holds what the form offered, the last tool's
+  // offer or nothing; a feed typed is never overwritten.
+  document.addEventListener("change", function (event) {
+    var input = event.target;
+    if (!input.matches || !input.matches("form.block-form [name=tool]")) { return; }
+    var form = input.form;
+    var offers = JSON.parse(form.getAttribute("data-feed-offers") || "{}");
+    var was = form.getAttribute("data-tool-now") || input.defaultValue;
+    ["feed_xy", "feed_z"].forEach(function (name) {
+      var field = form.querySelector('[name="' + name + '"]');
+      if (!field) { return; }
+      var before = (offers[was] || {})[name];
+      var after = (offers[input.value] || {})[name];
+      var offered = field.value === "" || field.value === field.defaultValue || field.value === before;
+      if (after !== undefined && offered) { field.value = after; }
+    });
+    form.setAttribute("data-tool-now", input.value);
+  });
 
   var reloadTimer = null;
 

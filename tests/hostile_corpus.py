@@ -12,6 +12,7 @@ The tables below are the corpus; `cases(surface)` expands them:
 | document | a golden document with one value replaced (DOCUMENT_VALUES)   | 422, where: reason |
 | upload   | hostile files to the import form (UPLOADS)                   | 422, file: reason |
 | cli      | hostile command-line arguments and files (CLI_CASES)         | exit 2, message   |
+| cli      | programs read but refused (CLI_REFUSALS: past the moves limit) | exit 1, message |
 | backup   | damaged backup archives (tests/test_backup_restore.py's DAMAGE, and more) | exit 2 |
 | login    | hostile login forms                                          | 401 / 429         |
 """
@@ -20,10 +21,81 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass, field
+from decimal import Decimal
+from pathlib import Path
 from typing import Any
 
+from app.cnc import document
+from app.cnc.blocks import (
+    Block,
+    DataBlock0,
+    Direction,
+    Hole,
+    HoleOp,
+    Island,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
+    PocketLine,
+    Program,
+    Tool,
+)
 from app.cnc.numbers import quoted
 from app.cnc.sizes import MAX_IMPORT_LINES
+from app.cnc.text import text_fault
+
+# -- programs whose work multiplies (issue 30) ----------------------------------------------
+
+GRID_OF_GRIDS = (
+    Path(__file__).parent / "bad" / "loops-multiply-past-the-moves-limit" / "program.json"
+).read_bytes()
+"""Five blocks, two nested LOOP/REP of 99 x 99: 10^9 moves, refused naming block 2."""
+
+
+def eight_island_pocket(
+    size: Decimal = Decimal(10), tool: Decimal = Decimal("0.125"), name: str = "BASE PLATE"
+) -> Program:
+    """One POCKET with the most islands a POCKET takes (8), every value within its limits:
+    a rounded `size` x 0.8 `size` in boundary (PKT LINE, PKT ARC), islands of lines with a
+    notch and a bump (arcs), a small tool. Before issue 30 its like validated in 75 s and
+    two requests for it held both of a shop server's workers."""
+    w, h = size, size * Decimal("0.8")
+    r = size / 10  # the boundary's corner radius
+
+    def arc(cx: Decimal, cy: Decimal, ex: Decimal, ey: Decimal, turn: Direction) -> list[Block]:
+        return [PocketArc(direction=turn, x=cx, y=cy), PocketArcEnd(x=ex, y=ey)]
+
+    ccw, cw = Direction.CCW, Direction.CW
+    zero = Decimal(0)
+    blocks: list[Block] = [
+        Hole(op=HoleOp.DRILL, x=r, y=zero, z_up=Decimal("0.1"), z_dn=Decimal("-0.25"),
+             feed_z=Decimal(5), tool=1),
+        Pocket(feed_xy=Decimal(12), tool=1),
+        PocketLine(x=w - r, y=zero), *arc(w - r, r, w, r, ccw),
+        PocketLine(x=w, y=h - r), *arc(w - r, h - r, w - r, h, ccw),
+        PocketLine(x=r, y=h), *arc(r, h - r, zero, h - r, ccw),
+        PocketLine(x=zero, y=r), *arc(r, r, r, zero, ccw),
+    ]  # fmt: skip
+    cell_w, cell_h = w / 4, h / 2
+    for i in range(4):
+        for j in range(2):
+            x0, y0 = cell_w * i + cell_w * Decimal("0.35"), cell_h * j + cell_h / 4
+            a, c = cell_w * Decimal("0.4"), cell_h / 2
+            q = c / 8
+            blocks += [
+                Island(x=x0, y=y0), PocketLine(x=x0 + a, y=y0),
+                PocketLine(x=x0 + a, y=y0 + c / 2 - q),
+                *arc(x0 + a, y0 + c / 2, x0 + a, y0 + c / 2 + q, cw),
+                PocketLine(x=x0 + a, y=y0 + c), PocketLine(x=x0, y=y0 + c),
+                PocketLine(x=x0, y=y0 + c / 2 + q),
+                *arc(x0, y0 + c / 2, x0, y0 + c / 2 - q, ccw), PocketLine(x=x0, y=y0),
+            ]  # fmt: skip
+    cutter = Tool(number=1, diameter=tool, rpm=2000, tcal=zero)
+    block0 = DataBlock0(current_tool=1, z_retract=Decimal("0.1"), tools=(cutter,))
+    return Program(name=name, block0=block0, blocks=tuple(blocks))
+
+
+EIGHT_ISLANDS = document.dumps(eight_island_pocket()).encode()
 
 # value typed into a number field → (reason for a decimal field, reason for a whole field)
 HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
@@ -44,7 +116,7 @@ HOSTILE_NUMBERS: dict[str, tuple[str, str]] = {
     "9" * 60: ("is not a number", "is not a whole number"),
     "1 2": ("is not a number", "is not a whole number"),
     "\u202e5": ("is not a number", "is not a whole number"),  # right-to-left override
-    "5\x00": ("is not a number", "is not a whole number"),
+    "5\x00": ("is not a number", "is not a whole number"),  # refused first by the text rule
 }
 
 BLOCK_KINDS: tuple[str, ...] = ("POS", "DRILL", "BOLT_CIR_DRILL", "MILL_STD", "ARC_C", "CIRCLE")
@@ -70,10 +142,13 @@ DB0_FIELDS: dict[str, tuple[str, bool]] = {
 # (URL, allowed statuses). Query arguments the pages read with their own rules.
 QUERIES: list[tuple[str, tuple[int, ...]]] = [
     *[(f"/programs/2?{arg}={value}", (200, 404)) for arg in ("edit", "at", "page")
-      for value in ("²", "--5", "１", "1e999", "-1", "0", "99999999999999999999", "%00", "x")],
+      for value in ("²", "--5", "１", "1e999", "-1", "0", "99999999999999999999", "x")],
+    # The one text rule (app.cnc.text) refuses a NUL or a lone surrogate in any argument.
+    *[(f"/programs/2?{arg}=%00", (422,)) for arg in ("edit", "at", "page")],
     *[(f"/programs/2/entry?{arg}", (200, 404)) for arg in (
         "group=EVIL", "kind=EVIL", "kind=BOLT_CIR_DRILL&at=1", "group=REP", "group=COPY&at=1",
-        "kind=ARC_C&at=%FF", "loop=%00", "edit=1&page=-5")],
+        "kind=ARC_C&at=%FF", "edit=1&page=-5")],
+    ("/programs/2/entry?loop=%00", (422,)),
     *[(f"/programs/2/export?target={t}", (200, 422)) for t in (
         "../../etc/passwd", "%00", "gcode-linuxcnc&go=1&opt_sequence-start=NaN",
         "gcode-linuxcnc&go=1&opt_sequence-start=%EF%BC%91", "tape-eia&go=1&opt_leader=1e999999",
@@ -81,9 +156,16 @@ QUERIES: list[tuple[str, tuple[int, ...]]] = [
     *[(f"/programs/2/export/download?target={t}", (200, 422)) for t in (
         "gcode-linuxcnc&opt_sequence-start=1_000", "nonsense", "json&opt_x=%00",
         "tape-eia&opt_leader=%D9%A3")],
-    *[(f"/?{q}", (200,)) for q in ("q=%00", "q=" + "a" * 5000, "sort=evil", "q=%27%22<>")],
+    *[(f"/?{q}", (200,)) for q in ("sort=evil", "q=%27%22<>")],
+    # A search is at most 10 words of 100 characters, and no NUL (app.cnc.text).
+    *[(f"/?{q}", (422,)) for q in ("q=%00", "q=" + "a" * 5000, "q=" + "+w" * 999)],
     *[(f"/programs/2/history?diff={v}", (200,)) for v in ("²", "-1", "1e9", "99999999999")],
     *[(u, (404,)) for u in ("/programs/99999999999999999999", "/programs/-1", "/machines/x/y")],
+    # The verify pages read `upto` with the one number reader (`²` was a 500).
+    *[(f"/programs/2/verify/{page}?upto={value}", (422,))
+      for page in ("surface", "part.png", "part.stl")
+      for value in ("²", "1E%2B999999999", "-1", "١", "99999999999999999999")],
+    ("/programs/2/verify/surface?upto=3", (200,)),
     ("/programs/2/setup?target=%00", (200, 422)),
     ("/programs/2/setup?machine=nope", (200, 422)),
 ]  # fmt: skip
@@ -134,8 +216,23 @@ DOCUMENT_VALUES: list[tuple[str, str, str]] = (
         ("format", '"other"', 'expected "millblocks-program"'),
         ("version", "2", "version 2 is not supported"),
         ("units", "null", "is not one of"),
+        # The one text rule (app.cnc.text): names and notes hold no NUL or lone surrogate
+        # (a surrogate was a 500 on both databases), and have lengths.
+        ("name", '"\\ud800"', "program, name: has a lone surrogate (U+D800)"),
+        ("name", '"a\\udfffb"', "program, name: has a lone surrogate (U+DFFF) at character 2"),
+        ("notes", '"\\udc80"', "program, notes: has a lone surrogate (U+DC80)"),
+        ("name", '"a\\u0000"', "program, name: has a NUL character (U+0000)"),
+        ("notes", '"\\u0000"', "program, notes: has a NUL character (U+0000)"),
+        ("part_number", '"\\u0000"', "program, part_number: has a NUL character"),
+        ("blocks.0.message", '"\\ud83d"', "block 1, MESSAGE: has a lone surrogate"),
+        ("data_block_0.tools.0.name", '"\\u0000"',
+         "Data Block 0, tool entry 1, NAME: has a NUL character"),
+        ("name", '"' + "x" * 201 + '"', "program, name: 201 characters is too long; allowed: "
+         "at most 200"),
+        ("notes", '"' + "x" * 4001 + '"', "program, notes: 4,001 characters is too long; "
+         "allowed: at most 4,000"),
     ]
-)
+)  # fmt: skip
 
 
 def minimal_dxf(entities: list[str], units: int = 1, version: str = "") -> bytes:
@@ -295,11 +392,26 @@ UPLOADS: list[tuple[str, bytes, str | None]] = [
     ("bigint.json", b'{"format": "millblocks-program", "version": ' + b"9" * 5000 + b"}", ""),
     ("events-nan.cnc", b"PN2 G20;\nN001 G100 XNaN Y1 T01;\n", "line 2"),
     ("events-sup.cnc", "PN2 G20;\nN001 G100 X1.0A Y²A T01;\n".encode(), "line 2"),
+    # An angle of 13 decimals once implied: refused by the number reader at its word.
+    (
+        "events-angle.cnc",
+        b"PN2 G20;\nN001 G104 XC1.0 YC1.0 HL4 R1.0 A.0000000000001 T01;\n",
+        "line 2, column 32: A.0000000000001: '.0000000000001' has too many decimal places",
+    ),
     ("tape-junk.tape", b"%\rN001 G00 X\xff\xfe\r", ""),
     ("ambiguous.txt", b"N001 G00 X1000 Y2000\nM30\n", ""),
+    # Issue 30: work that multiplies. Refused naming the block and the figure; the 8-island
+    # POCKET is legal and is taken (it planned for minutes).
+    ("grid-of-grids.json", GRID_OF_GRIDS, "block 2: the program would make about 1,300,130,007"),
+    ("eight-islands.json", EIGHT_ISLANDS, None),  # a document: it opens in the editor (302)
+    # Issue 30: drawings past the line limit as binary, and those ezdxf crashed on.
     LINES_DXF,
     *DXF_UPLOADS,
 ]
+
+# Uploads the command line reads (a program document) and then refuses to work on (exit 1,
+# CLI_REFUSALS), where the web refuses to import them (422).
+READ_BUT_REFUSED = frozenset({"grid-of-grids.json"})
 
 # CLI arguments: (argv, expected message part). Files named @name are written from UPLOADS.
 CLI_CASES: list[tuple[list[str], str]] = [
@@ -311,21 +423,79 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["export", "@golden", "--to", "gcode-linuxcnc", "-O", "no-equals"], "NAME=VALUE"),
     *[(["time", "@golden", "--tool-change-seconds", v], "--tool-change-seconds")
       for v in ("nan", "inf", "-1", "١", "1_0")],
-    # (Not lines.dxf: the command line reads the user's own files whole, without the line
-    # limit, and this drawing is one long open contour.)
+    # (Not lines.dxf either: the command line reads the user's own files whole, without the
+    # line limit, and this drawing is one long open contour.)
     *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS
-      if part is not None and name != LINES_DXF[0]],
+      if part is not None and name not in READ_BUT_REFUSED and name != LINES_DXF[0]],
     *[(["import", f"@{name}"], part) for name, _data, part in DXF_UPLOADS],
     (["check", "/nonexistent/file.json"], "/nonexistent/file.json"),
     (["diff", "1", "²", "1"], "²"),
     (["restore-version", "1", "--5"], "--5"),
     (["transfers", "--limit", "١٠"], "١٠"),
+    # The one number reader for verify's options (inf, nan, 1e300 were tracebacks).
+    *[(["verify", "@golden", "--resolution", v], "--resolution")
+      for v in ("inf", "nan", "1e300", "NaN", "0", "-1", "²")],
+    (["verify", "@golden", "--tolerance", "inf"], "--tolerance"),
+    # The one text rule: a lone surrogate is what a command line of non-UTF-8 bytes gives.
+    (["list", " ".join(["w"] * 999)], "search: 999 words is too many; allowed: at most 10"),
+    (["list", "caf\udce9"], "search: has a lone surrogate (U+DCE9) at character 4"),
+    (["check", "no such \udcff"], "has a lone surrogate (U+DCFF)"),
+    (["history", "\udcff"], "has a lone surrogate (U+DCFF)"),
+    (["user", "add", "a\udcffb", "--role", "admin", "--password", "a long password"],
+     "user name: has a lone surrogate (U+DCFF) at character 2"),
+    (["user", "password", "ada\udcff", "--password", "a long password"],
+     "has a lone surrogate (U+DCFF)"),
+    (["--max-moves", "NaN", "check", "@golden"], "--max-moves"),
+    (["--max-moves", "0", "check", "@golden"], "--max-moves"),
+]  # fmt: skip
+
+# Programs a command reads whole but refuses to work on (exit 1, the problem on stderr).
+CLI_REFUSALS: list[tuple[list[str], str]] = [
+    ([command, "@grid-of-grids.json", *rest], "block 2, LOOP: the program would make about")
+    for command, rest in (("check", []), ("time", []), ("verify", []), ("setup-sheet", []),
+                          ("export", ["--to", "gcode-linuxcnc"]))
+]  # fmt: skip
+
+# The one text rule (app.cnc.text) at every entry, on SQLite and on PostgreSQL (whose text
+# cannot hold a NUL: each of these was a 500 there). (method, URL, form, the field named in
+# the refusal); the NUL is in that field. Run logged in as an admin; programs 1 and 2 exist.
+NUL = "\x00"
+TEXT_ENTRIES: list[tuple[str, str, dict[str, str], str]] = [
+    ("POST", "/login", {"username": f"ana{NUL}", "password": "x"}, "username"),
+    ("POST", "/programs", {"name": f"a{NUL}b", "units": "inch"}, "name"),
+    ("POST", "/programs/1/header", {"name": f"a{NUL}", "version": "1"}, "name"),
+    ("POST", "/programs/1/header", {"name": "a", "notes": NUL, "version": "1"}, "notes"),
+    ("POST", "/programs/1/header", {"name": "a", "part_number": NUL, "version": "1"},
+     "part_number"),
+    ("POST", "/programs/1/blocks", {"kind": "POS", "x": "1", "y": "1", "message": f"A{NUL}",
+                                    "version": "1"}, "message"),
+    ("POST", "/programs/1/db0", {"name_1": f"DRILL{NUL}", "version": "1"}, "name_1"),
+    ("POST", "/programs/1/mirror", {"axis": NUL}, "axis"),
+    ("POST", "/programs/1/verify/stock", {"x": NUL, "version": "1"}, "x"),
+    ("POST", "/machines", {"name": f"m{NUL}", "target": "gcode-linuxcnc"}, "name"),
+    ("POST", "/machines", {"name": "m", "target": "gcode-linuxcnc", "notes": NUL}, "notes"),
+    ("POST", "/machines", {"name": "m", "target": "gcode-linuxcnc", "limits": f"x=0 {NUL}"},
+     "limits"),
+    ("POST", "/machines/m%00/delete", {}, "name"),
+    ("GET", "/machines/options?target=%00", {}, "target"),
+    ("POST", "/users", {"username": f"u{NUL}", "password": "a long password", "role": "operator"},
+     "username"),
+    ("POST", "/users/u%00/role", {"role": "admin"}, "username"),
+    ("POST", "/users/u%00/sessions/end", {}, "username"),
+    ("POST", "/account/password", {"current": NUL, "new": "a long password"}, "current"),
+    ("GET", "/?q=%00", {}, "q"),
+    ("GET", "/programs/1/export?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/export/download?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/setup?machine=%00", {}, "machine"),
+    ("GET", "/programs/1/verify/surface?upto=%00", {}, "upto"),
+    ("POST", "/transfers/send", {"machine": NUL, "program_id": "1"}, "machine"),
+    ("POST", "/transfers/receive", {"machine": "m", "name": NUL}, "name"),
 ]  # fmt: skip
 
 LOGINS: list[tuple[dict[str, str], int]] = [
     ({"username": "ana", "password": "x" * 100_000}, 401),
     ({"username": "a" * 10_000, "password": "x"}, 401),
-    ({"username": "\x00", "password": "\x00"}, 401),
+    ({"username": "\x00", "password": "\x00"}, 422),  # the one text rule: no NUL
     ({"username": "ana'; DROP TABLE users; --", "password": "x"}, 401),
     ({"username": "ana\u202e", "password": "x"}, 401),
     ({"username": "", "password": ""}, 401),
@@ -342,6 +512,13 @@ class Case:
     data: dict[str, Any] = field(default_factory=dict)
     status: tuple[int, ...] = (422,)
     message: str = ""
+
+
+def refused_text(field: str, value: str) -> str:
+    """The text rule's refusal of `value` in form field `field` ("" when it has none): a
+    NUL or lone surrogate is refused before the field is read as a number."""
+    fault = text_fault(value)
+    return f"{field}: {fault}" if fault else ""
 
 
 def block_cases() -> list[Case]:
@@ -363,7 +540,8 @@ def block_cases() -> list[Case]:
                         f"{key}-{spec.name}-{value[:12]!r}",
                         {"kind": key, "field": spec.name, "value": value},
                         (422,),
-                        f"{spec.label}: {quoted(value.strip())} {reason}",
+                        refused_text(spec.name, value)
+                        or f"{spec.label}: {quoted(value.strip())} {reason}",
                     )
                 )
     return found
@@ -380,7 +558,7 @@ def db0_cases() -> list[Case]:
                     f"{name}-{value[:12]!r}",
                     {"field": name, "value": value},
                     (422,),
-                    f"{label}: {quoted(value.strip())} {reason}",
+                    refused_text(name, value) or f"{label}: {quoted(value.strip())} {reason}",
                 )
             )
     return found
@@ -405,14 +583,17 @@ def cases(surface: str) -> list[Case]:
                 "upload",
                 name,
                 {"name": name, "bytes": data},
-                (422,) if part is not None else (201,),
-                part if part is not None else "Import report",
+                (422,) if part is not None else (302,) if name.endswith(".json") else (201,),
+                part if part is not None else "" if name.endswith(".json") else "Import report",
             )
             for name, data, part in UPLOADS
         ]
     if surface == "cli":
         return [
             Case("cli", " ".join(argv)[:60], {"argv": argv}, (2,), part) for argv, part in CLI_CASES
+        ] + [
+            Case("cli", " ".join(argv)[:60], {"argv": argv}, (1,), part)
+            for argv, part in CLI_REFUSALS
         ]
     if surface == "login":
         return [

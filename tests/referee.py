@@ -17,6 +17,7 @@ never silently ignored here.
 from __future__ import annotations
 
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -25,7 +26,7 @@ from pathlib import Path
 
 from app.cnc.blocks import Program
 from app.cnc.emit.target import Export, export
-from app.cnc.imports import read_program
+from app.cnc.imports import ImportResult, read_program
 from app.cnc.imports import steps as steps_module
 from app.cnc.imports.steps import Parsed
 from app.cnc.interpret import interpret
@@ -289,33 +290,41 @@ CALL = re.compile(r"^\s*\d+ N[\d.]+\s+(\w+)\((.*)\)\s*$")
 
 @dataclass(frozen=True)
 class Motion:
-    """One canonical motion in program units: kind T(raverse), F(eed) or A(rc)."""
+    """One canonical motion in program units: kind T(raverse), F(eed) or A(rc), or C, a
+    tool change where the tool is (`rs274(changes=True)`)."""
 
     kind: str
     end: tuple[float, float, float]
     centre: tuple[float, float] | None = None
     clockwise: bool | None = None
     feed: float | None = None
+    tool: int = 0  # C: the tool changed to
 
 
-def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
+def rs274(
+    path: Path,
+    lengths: dict[int, float] | None = None,
+    diameters: dict[int, float] | None = None,
+    *,
+    in_mm: bool = False,
+    changes: bool = False,
+) -> list[Motion]:
     """Run rs274 on a file; its motions (zero-length ones dropped). Fails on any error.
 
     The machine's tool table lists tools 1-24 (as a shop's LinuxCNC would for this control's
-    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments.
+    24 tools) with the `lengths` (inches) the operator keys in from the set-up comments and
+    the `diameters` (inches, the table's unit whatever the file's; 0 where not given) that
+    cutter compensation (G41/G42) offsets by; a tool past 24 given either is listed too (a
+    CAM library's T32).
+
+    `in_mm`: every motion and feed in millimetres, whatever units the file is in (G20/G21
+    may change on the way). Before the file's first G20/G21, rs274 reads millimetres (its
+    default); the importers read inches there (docs/imports.md), and so does this, so that a
+    file that names no units is compared as the importer reads it.
+
+    `changes`: each tool change is a motion too, of kind C, where it happens.
     """
-    assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
-    table = path.with_suffix(".tbl")
-    lengths = lengths or {}
-    table.write_text("".join(f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D0 ;\n" for n in range(1, 25)))
-    result = subprocess.run(
-        [RS274, "-t", str(table), "-g", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    output = result.stdout + result.stderr
+    result, output = run_rs274(path, lengths, diameters)
     calls = [CALL.match(line) for line in output.splitlines()]
     stray = [
         line
@@ -326,25 +335,75 @@ def rs274(path: Path, lengths: dict[int, float] | None = None) -> list[Motion]:
     motions: list[Motion] = []
     position = (0.0, 0.0, 0.0)
     feed = 0.0
+    scale = 1.0
+    defaulted = False  # rs274's own USE_LENGTH_UNITS, before the file says any
+    plane = "XY"
     for m in calls:
         if m is None:
             continue
         name, args = m.group(1), [a.strip() for a in m.group(2).split(",")]
-        if name == "SET_FEED_RATE":
-            feed = float(args[0])
+        if name == "USE_LENGTH_UNITS" and in_mm:
+            scale = 25.4 if "INCHES" in args[0] or not defaulted else 1.0
+            defaulted = True
+        elif name == "SELECT_PLANE":
+            plane = args[0].removeprefix("CANON_PLANE_")
+        elif name == "SET_FEED_RATE":
+            feed = float(args[0]) * scale
         elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED"):
-            end = (float(args[0]), float(args[1]), float(args[2]))
+            end = (float(args[0]) * scale, float(args[1]) * scale, float(args[2]) * scale)
             if end != position:
                 kind = "T" if name == "STRAIGHT_TRAVERSE" else "F"
                 motions.append(Motion(kind, end, feed=None if kind == "T" else feed))
             position = end
+        elif name == "CHANGE_TOOL" and changes:
+            motions.append(Motion("C", position, tool=int(args[0])))
         elif name == "ARC_FEED":
-            end = (float(args[0]), float(args[1]), float(args[5]))
-            centre = (float(args[2]), float(args[3]))
+            # (An arc in another plane names its axes in another order.)
+            assert plane == "XY", f"{path.name}: an arc in the {plane} plane"
+            end = (float(args[0]) * scale, float(args[1]) * scale, float(args[5]) * scale)
+            centre = (float(args[2]) * scale, float(args[3]) * scale)
             motions.append(Motion("A", end, centre, int(args[4]) < 0, feed))
             position = end
     assert "PROGRAM_END" in output
     return motions
+
+
+def rs274_reads(path: Path, diameters: dict[int, float] | None = None) -> bool:
+    """Whether rs274 reads the file to its end without an error (its tool table's
+    `diameters` in inches, as `rs274` has them)."""
+    result, output = run_rs274(path, None, diameters)
+    return result.returncode == 0 and "PROGRAM_END" in output
+
+
+def run_rs274(
+    path: Path, lengths: dict[int, float] | None, diameters: dict[int, float] | None = None
+) -> tuple[subprocess.CompletedProcess[str], str]:
+    """rs274 run on `path` with a tool table beside it (tools 1-24 and any other `lengths`
+    or `diameters` name, both in inches); the result, and its output with stderr on a line
+    of its own."""
+    assert RS274, "rs274 (Debian linuxcnc-uspace) is not installed: run `make test`"
+    table = path.with_suffix(".tbl")
+    lengths = lengths or {}
+    diameters = diameters or {}
+    table.write_text(
+        "".join(
+            f"T{n} P{n} Z{lengths.get(n, 0.0):.8f} D{diameters.get(n, 0.0):.8f} ;\n"
+            for n in sorted({*range(1, 25), *lengths, *diameters})
+        )
+    )
+    # rs274 keeps its tool table in $HOME/.tool.mmap, one file for every rs274 the user
+    # runs: two runs side by side (tests, or the engineers beside us) overwrite each other's
+    # and one dies (SIGBUS) or misses a tool its table lists. Each run gets its own HOME.
+    result = subprocess.run(
+        [RS274, "-t", str(table), "-g", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+        env={**os.environ, "HOME": str(path.parent)},
+    )
+    # (stderr on its own line: stdout need not end with one)
+    return result, result.stdout + "\n" + result.stderr
 
 
 def ours(toolpath: Toolpath) -> list[Motion]:
@@ -414,3 +473,242 @@ def arc_radii_agree(toolpath: Toolpath, tol: float) -> bool:
         if isinstance(move, Rapid | Feed | ArcFeed):
             x, y = move.x, move.y
     return True
+
+
+# -- the cut path of a file, as rs274 reads it (issue 36) ------------------------------------
+
+
+@dataclass(frozen=True)
+class Cut:
+    """One feed move of a cut path (mm, mm/min): a line, or an arc about `centre` turning
+    `sweep` radians (a full circle 2π) in its direction."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    feed: float
+    centre: tuple[float, float] | None = None
+    clockwise: bool = False
+    sweep: float = 0.0
+
+    @property
+    def vertical(self) -> bool:
+        return self.centre is None and self.start[:2] == self.end[:2]
+
+
+# mm: how near a feed down must be to where the last cut ended to cut nothing new there —
+# two steps of 0.001 in: the end of the cut before and the DRILL's point are each rounded.
+REENTRY = 0.0508
+
+
+def cut_path(motions: list[Motion]) -> list[Cut]:
+    """The feed moves of rs274's `motions` (from its start at 0, 0, 0), each from where the
+    tool was: what cuts. Rapids only say where the next feed starts. Three readings make
+    two files that cut alike compare alike, and nothing else:
+
+    - a straight feed **up in Z** is left out: it retracts through what the tool has cut
+      on its way down (MillBlocks retracts at rapid, and the importers say so);
+    - a feed **down in Z** in several moves at one X/Y (a CAM's approach: down to a feed
+      height at one rate, into the work at another) is the last rate's run to the bottom:
+      a DRILL rapids to Z UP and feeds from there at its one FEEDR Z, and the importer says
+      which moves above it it read as the rapid;
+    - a feed down a hole the same tool has just cut as deep or deeper (with only rapids
+      between: rs274's G83 pecks once more when its pecks divide the depth, rounding) cuts
+      nothing and is left out; so does a feed down to where the tool's last cut ended
+      (within 0.002 in), as deep or deeper (MillBlocks retracts and comes down again where
+      a compensated contour starts or ends: a DRILL of its own).
+
+    Moves are not joined otherwise: two lines that rounding to the blocks' steps puts in
+    one line are still two moves, in the file and in the blocks alike.
+    """
+    cuts: list[Cut] = []
+    position = (0.0, 0.0, 0.0)
+    joined = False  # the last cut ends where the next move starts (no rapid between)
+    bottom: tuple[float, float, float] | None = None  # where the last cut, straight down, ended
+    tool = 0
+    for motion in motions:
+        start, position = position, motion.end
+        if motion.kind in "TC":
+            joined = False
+            if motion.kind == "C" and motion.tool != tool:
+                tool, bottom = motion.tool, None
+            continue
+        assert motion.feed is not None
+        if motion.kind == "A":
+            assert motion.centre is not None and motion.clockwise is not None
+            arc = Cut(
+                start,
+                motion.end,
+                motion.feed,
+                motion.centre,
+                motion.clockwise,
+                _sweep(start, motion.end, motion.centre, motion.clockwise),
+            )
+            cuts.append(arc)
+            joined, bottom = True, motion.end
+            continue
+        line = Cut(start, motion.end, motion.feed)
+        if line.vertical and line.end[2] > line.start[2]:
+            joined = False
+            continue
+        # (Steps of the blocks apart: a compensated contour's DRILL goes down where
+        # MillBlocks plans it, from its rounded start; the cut before ends where it rounds.)
+        down = line.vertical and bottom is not None and math.dist(bottom[:2], start[:2]) <= REENTRY
+        if down and bottom is not None and line.end[2] >= bottom[2] - 1e-9:
+            continue  # down a hole this tool has cut deeper already (a peck more)
+        bottom = line.end
+        prev = cuts[-1] if joined and cuts else None
+        if prev is not None and prev.vertical and line.vertical:
+            # Down again at the same X/Y: one run at one rate, the approach above it gone.
+            if prev.feed == line.feed:
+                line = replace(line, start=prev.start)
+            cuts.pop()
+        cuts.append(line)
+        joined = True
+    return cuts
+
+
+def _sweep(
+    start: tuple[float, float, float],
+    end: tuple[float, float, float],
+    centre: tuple[float, float],
+    clockwise: bool,
+) -> float:
+    """How far an arc turns (radians, in (0, 2π]; ends that meet: a full circle)."""
+    a0 = math.atan2(start[1] - centre[1], start[0] - centre[0])
+    a1 = math.atan2(end[1] - centre[1], end[0] - centre[0])
+    turn = (a0 - a1) if clockwise else (a1 - a0)
+    turn %= 2 * math.pi
+    return turn if turn > 1e-9 else 2 * math.pi
+
+
+def _bulge(arc: Cut) -> float:
+    """How far an arc of at most half a turn strays from its chord (mm)."""
+    assert arc.centre is not None
+    return math.dist(arc.start[:2], arc.centre) * (1 - math.cos(arc.sweep / 2))
+
+
+def assert_same_cuts(expected: list[Cut], actual: list[Cut], tol: float, feed_tol: float) -> None:
+    """The two cut paths are the same moves in order: ends, starts and centres within `tol`
+    (mm), arcs in one direction turning alike (their lengths within a few `tol`), feeds
+    within `feed_tol` (mm/min). Within what blocks in steps of `tol` can hold:
+
+    - a straight move no longer than two steps in any axis may be missing on either side
+      (rounded to the steps, its ends may meet; the next move starts where it went);
+    - an arc so small that it strays no more than `tol` from its chord may be that chord;
+    - an arc's end and centre may be two steps off: its centre is rounded to the steps as
+      its ends are, and the end on its start's radius moves with it (a short move then goes
+      on to the end the blocks hold, within a step of the file's);
+    - a plunge may start feeding higher than the file's (a mill sequence's depth change
+      feeds from the depth before, at FEEDR Z), never lower — no rapid goes deeper — than
+      the bottom our program has already cut there (a DRILL's peck goes back down to the
+      level just reached, where G83 stops 0.010 in above it).
+
+    Fails naming the first move that differs."""
+    i = j = 0
+    slack = tol  # how far a start may be: more just after a short move left out
+    while i < len(expected) and j < len(actual):
+        e, a = expected[i], actual[j]
+        before = actual[j - 1] if j else None
+        floor = before.end[2] if before and before.vertical and _same_xy(before, a) else None
+        problem = _differs(e, a, tol, slack, feed_tol, floor)
+        if problem and _short(e, 2 * tol):
+            i, slack = i + 1, 3 * tol
+            continue
+        if problem and _short(a, 2 * tol):
+            j, slack = j + 1, 3 * tol
+            continue
+        assert not problem, (
+            f"cut {i} of {len(expected)} ({problem}): rs274 reads the file as {e}, our program {a}"
+        )
+        i, j, slack = i + 1, j + 1, tol
+    rest = [c for c in expected[i:] if not _short(c, 2 * tol)]
+    extra = [c for c in actual[j:] if not _short(c, 2 * tol)]
+    assert not rest and not extra, (
+        f"rs274 reads {len(expected)} cuts in the file, {len(actual)} in our program; "
+        f"left over: {rest[:1] or extra[:1]}"
+    )
+
+
+def _same_xy(a: Cut, b: Cut) -> bool:
+    return a.end[:2] == b.start[:2]
+
+
+def _short(cut: Cut, length: float) -> bool:
+    return cut.centre is None and all(
+        abs(p - q) <= length for p, q in zip(cut.start, cut.end, strict=True)
+    )
+
+
+def _differs(
+    e: Cut, a: Cut, tol: float, slack: float, feed_tol: float, floor: float | None = None
+) -> str:
+    """What differs between two cuts (see `assert_same_cuts`), or "" when nothing does.
+    `floor`: how deep our program has already cut at this X/Y (the last peck's bottom)."""
+    if (e.centre is None) != (a.centre is None):
+        arc = e if a.centre is None else a
+        if arc.sweep > math.pi or _bulge(arc) > tol:
+            return "an arc and a line"
+    # An arc's centre is rounded to the step as its ends are: the end it reaches on its
+    # start's radius may be two steps from the file's (the next step's short move goes on).
+    reach = 2 * tol if e.centre is not None and a.centre is not None else tol
+    ends_near = all(abs(p - q) <= reach for p, q in zip(e.end, a.end, strict=True))
+    starts_near = all(abs(p - q) <= slack for p, q in zip(e.start, a.start, strict=True))
+    if not starts_near and e.vertical and a.vertical:
+        starts_near = all(
+            abs(p - q) <= slack for p, q in zip(e.start[:2], a.start[:2], strict=True)
+        ) and (a.start[2] >= e.start[2] - tol or (floor is not None and a.start[2] >= floor - tol))
+    if not (ends_near and starts_near):
+        return "ends"
+    if e.centre is not None and a.centre is not None:
+        if any(abs(p - q) > reach for p, q in zip(e.centre, a.centre, strict=True)):
+            return "centres"
+        if e.clockwise != a.clockwise:
+            return "directions"
+        radius = math.dist(e.start[:2], e.centre)
+        if abs(e.sweep - a.sweep) * radius > 3 * tol:
+            return "sweeps"
+    if abs(e.feed - a.feed) > feed_tol:
+        return "feeds"
+    return ""
+
+
+def referee_import(
+    data: bytes,
+    tmp_path: Path,
+    name: str = "file",
+    diameters: dict[int, float] | None = None,
+    as_rs274_reads: bytes | None = None,
+    any_order: bool = False,
+) -> ImportResult:
+    """Import G-code `data`, export the program to LinuxCNC's G-code, and have rs274 read
+    both: the cut paths (`cut_path`) must agree within what the blocks hold — lengths to
+    0.001 in / 0.01 mm, feeds to 0.1 ipm / 2 mm/min (the control's steps). The spindle
+    speeds are exported as the file gives them, checked against no machine's range; the
+    tool table's `diameters` (inches) are what G41/G42 in the file offset by. Returns the
+    import; fails naming the first cut that differs (ImportFailure if it is refused).
+    `as_rs274_reads`: the file as rs274 is given it, when it refuses a line the import
+    reports as not carried (another control's M code). `any_order`: the cuts compared as a
+    set (holes a file drills counter-clockwise, a BOLT CIR drills clockwise)."""
+    result = read_program(data, name, "gcode")
+    exported = export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data
+    original, ours = tmp_path / f"{name}-original.ngc", tmp_path / f"{name}-ours.ngc"
+    # rs274 refuses a UTF-8 byte-order mark (an editor on Windows writes one); the
+    # importer reads past it. The G-code after it is the same.
+    original.write_bytes(
+        (data if as_rs274_reads is None else as_rs274_reads).removeprefix(b"\xef\xbb\xbf")
+    )
+    ours.write_bytes(exported)
+    metric = result.program.units is Units.MM
+    tol = (0.01 if metric else 0.0254) + 1e-6
+    feed_tol = (2.0 if metric else 2.54) + 1e-6
+    theirs = cut_path(rs274(original, diameters=diameters, in_mm=True, changes=True))
+    mine = cut_path(rs274(ours, in_mm=True, changes=True))
+    if any_order:
+        theirs, mine = sorted(theirs, key=_cut_key), sorted(mine, key=_cut_key)
+    assert_same_cuts(theirs, mine, tol, feed_tol)
+    return result
+
+
+def _cut_key(cut: Cut) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A cut's place, rounded below the comparison's tolerance (for `any_order`)."""
+    return tuple(round(v, 2) for v in cut.end), tuple(round(v, 2) for v in cut.start)

@@ -20,6 +20,14 @@ allows them to follow each other:
 
 Programs are inch or metric, and some mix both units block by block (the INCH/MM field).
 
+`post_programs()` writes G-code text as CAM posts do (issue 36): Fusion 360's and Haas's
+header (G28 G91 Z0.), Mastercam's safety line (G0 G17 G40 G80 G90 G94 G98) at each tool, T M6,
+G43 H, G54, S M3, M8, drilling cycles (G81, G83 with pecks that divide the depth, as the
+blocks' evenly spaced pecks hold them) with G98/G99 and R, and a G98 on a G99 series' last
+hole, contours of G1 and G2/G3 with I/J at one depth or two, feed words as posts write them
+(only where they change), G0 Z retracts, M9 M5, M30 and %. Numbers are written to the post's
+4 decimals (inch) or 3 (mm), whole numbers with a trailing point.
+
 `shop_programs()` goes where a shop's programs go and the tests above never did (issue 16):
 mill sequences of lines, quarter circles and arcs (some over 180°, some with the end off the
 radius, a little or by a divot), cutter compensation, CIRCLE and FRAME routines (every
@@ -35,6 +43,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from decimal import Decimal
+from functools import partial
 
 from hypothesis import strategies as st
 
@@ -568,3 +577,130 @@ def shop_programs(draw: st.DrawFn, max_nodes: int = 4, *, rpm_optional: bool = F
         block0=block0,
         blocks=tuple(block for node in top for block in node),
     )
+
+
+# -- G-code as CAM posts write it (issue 36) -------------------------------------------------
+
+
+def _post_number(steps: int, units: Units) -> str:
+    """A length of `steps` file steps (0.0001 in, 0.001 mm) written as posts write it: no
+    trailing zeros, a whole number with its point (`1.`, `-0.25`, `12.5`)."""
+    places = 4 if units is Units.INCH else 3
+    return f"{Decimal(steps).scaleb(-places):f}".rstrip("0")
+
+
+def _post_feed(tenths: int) -> str:
+    """A feed of `tenths` tenths (ipm or mm/min) as posts write it (`5.`, `12.5`)."""
+    return f"{Decimal(tenths).scaleb(-1):f}".rstrip("0")
+
+
+@st.composite
+def _post_drilling(draw: st.DrawFn, units: Units, clear: int, scale: int) -> list[str]:
+    """A drilling operation: G81 or G83 at 1-4 holes, G98 or G99 (perhaps G98 on the last)."""
+    n = draw(st.integers(1, 4))
+    points = draw(
+        st.lists(
+            st.tuples(st.integers(-400, 400), st.integers(-400, 400)),
+            min_size=n,
+            max_size=n,
+            unique=True,
+        )
+    )
+    holes = [(x * 100 * scale, y * 100 * scale) for x, y in points]  # 0.01 in apart at least
+    r = draw(st.integers(1, 10)) * 100 * scale  # R 0.01-0.1 in above the top
+    depth = draw(st.integers(5, 60)) * 100 * scale
+    code = draw(st.sampled_from(("81", "83")))
+    peck = ""
+    if code == "83":
+        pecks = draw(st.integers(2, 4))
+        depth -= (r + depth) % pecks  # pecks that divide R to Z evenly
+        peck = f" Q{_post_number((r + depth) // pecks, units)}"
+    mode = draw(st.sampled_from(("G98", "G99")))
+    feed = draw(st.integers(10, 200)) * (1 if units is Units.INCH else 25)
+    w = partial(_post_number, units=units)
+    x0, y0 = holes[0]
+    lines = [f"G0 X{w(x0)} Y{w(y0)}", f"G43 Z{w(clear)} H{{tool}}"]
+    if draw(st.booleans()):
+        lines.append(f"G0 Z{w(clear // 2)}")
+    lines.append(f"{mode} G{code} X{w(x0)} Y{w(y0)} Z{w(-depth)} R{w(r)}{peck} F{_post_feed(feed)}")
+    for k, (x, y) in enumerate(holes[1:], start=2):
+        last = k == len(holes) and mode == "G99" and draw(st.booleans())
+        lines.append(f"{'G98 ' if last else ''}X{w(x)} Y{w(y)}")
+    lines += ["G80", f"G0 Z{w(clear)}"]
+    return lines
+
+
+@st.composite
+def _post_contour(draw: st.DrawFn, units: Units, clear: int, scale: int) -> list[str]:
+    """A contour: down at one X/Y, then lines and arcs (I, J) at one depth, perhaps a second
+    depth, and up at rapid."""
+    w = partial(_post_number, units=units)
+    x, y = (draw(st.integers(-300, 300)) * 100 * scale for _ in range(2))
+    depth = draw(st.integers(5, 50)) * 100 * scale
+    plunge = draw(st.integers(10, 100)) * (1 if units is Units.INCH else 25)
+    feed = draw(st.integers(20, 800)) * (1 if units is Units.INCH else 25)
+    lines = [f"G0 X{w(x)} Y{w(y)}", f"G43 Z{w(clear)} H{{tool}}"]
+    lines += [f"G0 Z{w(clear // 3)}", f"G1 Z{w(-depth)} F{_post_feed(plunge)}"]
+    written_feed = None
+    for _ in range(draw(st.integers(1, 2))):
+        for _ in range(draw(st.integers(1, 6))):
+            if draw(st.booleans()):
+                nx = x + draw(st.integers(-200, 200)) * 100 * scale
+                ny = y + draw(st.integers(-200, 200)) * 100 * scale
+                if abs(nx - x) + abs(ny - y) < 500 * scale:
+                    continue
+                move = f"G1 X{w(nx)} Y{w(ny)}"
+            else:
+                radius = draw(st.integers(1000, 20000)) * scale  # 0.1-2 in
+                start = draw(st.integers(0, 359))
+                sweep = draw(st.integers(10, 300))
+                clockwise = draw(st.booleans())
+                cx = x - round(radius * math.cos(math.radians(start)))
+                cy = y - round(radius * math.sin(math.radians(start)))
+                end = math.radians(start - sweep if clockwise else start + sweep)
+                nx = cx + round(radius * math.cos(end))
+                ny = cy + round(radius * math.sin(end))
+                code = "G2" if clockwise else "G3"
+                move = f"{code} X{w(nx)} Y{w(ny)} I{w(cx - x)} J{w(cy - y)}"
+            if written_feed != feed:
+                move, written_feed = f"{move} F{_post_feed(feed)}", feed
+            lines.append(move)
+            x, y = nx, ny
+            if draw(st.integers(0, 4)) == 0:
+                feed = draw(st.integers(20, 800)) * (1 if units is Units.INCH else 25)
+        depth += draw(st.integers(5, 30)) * 100 * scale
+        lines.append(f"G1 Z{w(-depth)} F{_post_feed(plunge)}")
+        written_feed = plunge
+    lines[-1:] = [f"G0 Z{w(clear)}"]
+    return lines
+
+
+@st.composite
+def post_programs(draw: st.DrawFn) -> str:
+    """G-code text as a CAM post writes it (see the module docstring)."""
+    units = draw(st.sampled_from(Units))
+    # File steps: 0.0001 in, or 0.001 mm scaled so the same draws make mm parts of a size.
+    scale = 1 if units is Units.INCH else 3
+    clear = 6000 if units is Units.INCH else 15_000
+    safety = draw(st.booleans())
+    lines = ["%", "O1001", "(T1 D=0.25 CR=0. - ZMIN=-0.5 - FLAT END MILL)", "G90 G94 G17"]
+    lines += ["G20" if units is Units.INCH else "G21", "G28 G91 Z0.", "G90"]
+    operations = draw(st.integers(1, 3))
+    for k in range(1, operations + 1):
+        tool = draw(st.integers(1, 24))
+        lines += ["", f"(OPERATION {k})"]
+        if k > 1:
+            lines.append("M9")
+        lines.append(f"T{tool} M6")
+        if safety:
+            lines.append("G0 G17 G40 G80 G90 G94 G98")
+        lines += [f"S{draw(st.integers(500, 4000))} M3", "G54", "M8"]
+        kind = _post_drilling if draw(st.booleans()) else _post_contour
+        body = draw(kind(units, clear, scale))
+        lines += [line.replace("{tool}", str(tool)) for line in body]
+        lines.append("M9")
+        if draw(st.booleans()):
+            lines.append("M5")
+        lines += ["G28 G91 Z0.", "G90"]
+    lines += ["M30", "%"]
+    return "\n".join(lines) + "\n"

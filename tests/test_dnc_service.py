@@ -212,14 +212,14 @@ def test_a_service_started_after_a_crash_names_what_was_left_running(tmp_path: P
 
 
 def test_several_machines_send_at_once_and_one_machine_one_at_a_time(tmp_path: Path) -> None:
-    """Three machines, four queued sends (two to one machine): the three machines run
+    """Eight machines, nine queued sends (two to one machine): the eight machines run
     together; the second send to the busy machine waits for the first."""
     library = open_library(f"sqlite:///{tmp_path / 'shop.db'}")
     stored = max(library.programs(), key=lambda p: p.block_count)
     expected = export(library.get(stored.id).program, "events").data
     log = TransferLog(library)
     with ExitStack() as stack:
-        pairs = [stack.enter_context(SocatPair()) for _ in range(3)]
+        pairs = [stack.enter_context(SocatPair()) for _ in range(8)]
         controls = [
             stack.enter_context(
                 SimulatedControl(p.control, parity="E", buffer_size=1 << 16, cps=240)
@@ -241,13 +241,13 @@ def test_several_machines_send_at_once_and_one_machine_one_at_a_time(tmp_path: P
         thread.start()
         stack.callback(thread.join, 10)
         stack.callback(stop.set)
-        _until("all four sends", lambda: all(log.get(r).outcome == "ok" for r in rows), 120)
+        _until("all nine sends", lambda: all(log.get(r).outcome == "ok" for r in rows), 180)
         assert controls[0].received(expected + expected, timeout=WAIT)
         assert all(c.received(expected, timeout=WAIT) for c in controls[1:])
     done = [log.get(r) for r in rows]
-    first_end = min(d.finished_at for d in done[:3] if d.finished_at)
-    assert all(d.started_at < first_end for d in done[:3])  # the three machines overlapped
-    assert done[0].finished_at is not None and done[3].started_at >= done[0].finished_at
+    first_end = min(d.finished_at for d in done[:8] if d.finished_at)
+    assert all(d.started_at < first_end for d in done[:8])  # the eight machines overlapped
+    assert done[0].finished_at is not None and done[8].started_at >= done[0].finished_at
 
 
 def test_a_queued_transfer_cancelled_before_it_starts_never_runs(tmp_path: Path) -> None:

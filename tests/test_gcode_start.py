@@ -9,7 +9,6 @@ starting at the machine's home 10 in above part zero.
 from __future__ import annotations
 
 import re
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -17,7 +16,7 @@ import pytest
 from app.cnc.emit.target import export, get_target
 from app.cnc.units import Units
 from tests.imports.support import CASES, load
-from tests.referee import CALL, RS274
+from tests.referee import CALL, RS274, run_rs274
 
 GCODE = ("gcode-linuxcnc", "gcode-fanuc", "gcode-prototrak")
 WORD = re.compile(r"([A-Z])\s*([-+]?[0-9.]+)")
@@ -68,17 +67,8 @@ def rs274_motions(text: str, tmp_path: Path) -> list[tuple[str, tuple[float, flo
     lines.insert(1, "G20 G10 L2 P1 X0 Y0 Z-10")
     path = tmp_path / "start.ngc"
     path.write_text("\n".join(lines) + "\n")
-    table = tmp_path / "start.tbl"
-    table.write_text("".join(f"T{n} P{n} Z0 D0 ;\n" for n in range(1, 25)))
-    assert RS274
-    result = subprocess.run(
-        [RS274, "-t", str(table), "-g", str(path)],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert result.returncode == 0, result.stdout + result.stderr
+    result, output = run_rs274(path, None)
+    assert result.returncode == 0, output
     motions = []
     for raw in result.stdout.splitlines():
         m = CALL.match(raw)

@@ -27,6 +27,7 @@ from app.cnc.toolpath import Feed
 from app.cnc.units import Units, half_even
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture_text
+from tests.referee import referee_import
 
 
 def gcode(text: str) -> Program:
@@ -367,13 +368,15 @@ def test_block_delete_numbers_and_percent() -> None:
         ("G20\nG0 X1 Y1 (open\n", "line 2, column 10: comment not closed"),
         ("G20\nG0 G1 X1\n", "line 2, column 4: G0 and G1 in one block are both motion codes"),
         ("G20\nG0 X1 X2\n", "line 2, column 7: X given twice in one block (X1 and X2)"),
-        ("G20\nG0 X#1\n", "line 2, column 5: parameters and expressions are not supported"),
+        ("G20\nG0 X#<depth>\n", "line 2, column 5: #<depth> is read before it is set"),
         ("G20\nG0 A10\n", "line 2, column 4: A: a rotary axis; MillBlocks has X, Y, Z"),
-        ("G20\nO100 sub\n", "line 2, column 1: O-word subroutines are not supported"),
+        ("G20\nO100 sub\n", "line 2, column 1: o100 sub has no o100 endsub"),
         ("G20\nG0 X1 $\n", "line 2, column 7: unexpected character '$'"),
         ("G20\nG33 X1 K0.1\n", "line 2, column 1: G33: thread cutting is not supported"),
         ("G20\nG0 Z0.1\nG1 X1 Y1\n", "line 3, column 1: a feed move with no F given yet"),
-        ("G20\nM98 P100\n", "line 2, column 1: M98: a subprogram call is not supported"),
+        ("G20\nM98 P100\n", "line 2, column 1: M98 P100: the file has no O100"),
+        ("G20\nG0 X1 M98 P100\n", "line 2, column 7: M98: a subprogram call not at the beg"),
+        ("G20\nG0 X1 O100\n", "line 2, column 7: an O-word (O number or subroutine) must "),
         (
             "G20\nG0 Z0.1\nG1 Z-0.1 F5\nX1 Z-0.2\n",
             "line 4: X/Y and Z fed together (a ramp)",
@@ -577,3 +580,161 @@ def test_a_1000_line_contour_is_one_short_report_line() -> None:
     lines = [n for n in report(text) if "→ blocks" in n]
     assert lines and max(len(n) for n in lines) < 400, max(len(n) for n in lines)
     assert any("more blocks" in n for n in lines)
+
+
+# Fusion 360 for Personal Use (its note in the file): rapids down are written as feeds at the
+# cutting rate, then the plunge at the plunge rate (tests/imports/gcode-corpus/fusion-led-floor).
+FUSION_PERSONAL = (
+    "(1024_block_14bit)\n(T1  D=1.4 CR=0 - ZMIN=-3 - flat end mill)\nG90 G94\nG17\nG21\n"
+    "(2D Contour5)\nT1\nS5000 M3\nG54\nG0 X-0.7 Y-0.7\nZ10\nG1 Z5 F1000\nZ2 F333.3\nZ-1\n"
+    "Y20 F1000\nX20\nY-0.7\nX-0.7\nZ-2 F333.3\nY20 F1000\nX20\nZ10\nM5\nM30\n"
+)
+
+
+def test_a_plunge_approached_at_another_rate_enters_the_work_at_the_plunge_rate(
+    tmp_path: Path,
+) -> None:
+    """Down to the feed height at one rate (G1 Z5 F1000), into the work at another (Z2
+    F333.3, Z-1): the DRILL took the first rate and plunged at 1000 mm/min from Z10, three
+    times the file's 333.3 (and so every depth change after it), reported only as "MillBlocks
+    has one FEEDR Z". Now Z UP is where the plunge rate starts (Z5), FEEDR Z is the plunge
+    rate (333.3 → 334 mm/min, the control's 2 mm/min steps), the feed above it is read as
+    the rapid to Z UP and said so, and rs274 reads the same cuts in the file and in ours."""
+    result = referee_import(FUSION_PERSONAL.encode(), tmp_path)
+    assert describe_all(result.program)[0] == "DRILL X-0.7 Y-0.7 Z5/-1 F334 T1"
+    notes = [str(n) for n in result.report]
+    assert any(
+        "line 12: feed 1000 mm/min down to Z5 mm above the plunge: read as the rapid to Z UP" in n
+        for n in notes
+    ), notes
+
+
+def test_a_percent_line_with_text_after_the_start_is_an_error_naming_it() -> None:
+    """Fusion's MPCNC post writes its start-up notes as `% vfd enable`; rs274 refuses such a
+    line ("Bad character '%' used"). The importer took the second `%` line for the program's
+    end and imported nothing after it: a drilling file of 190 lines became a program of no
+    blocks, said only as "after the closing %: not imported". Now the line is an error."""
+    text = "%\n(MPCNC21)\n% vfd enable\nM3 S5000\nG21\nG0 Z3\nX1 Y1\nG1 Z-1 F100\nG0 Z3\nM30\n%\n"
+    message = failure(text)
+    assert message.startswith("line 3, column 1: '% vfd enable': a % line starts or ends"), message
+    assert "comment" in message
+    # The program's closing %, with the ProtoTRAK dialect's `;`, is still the end.
+    assert describe_all(gcode("%\nG20\nG0 X1 Y1\n%;\n")) == ["POS X1 Y1 T1"]
+
+
+def test_polar_coordinates_are_read_and_their_mistakes_named(tmp_path: Path) -> None:
+    """LinuxCNC's `@` (distance) and `^` (angle) words were "unexpected character '^'", then
+    named as not supported; they are read as rs274 reads them (hole-circle.ngc's line,
+    tests/test_import_ngc.py for the files), and what LinuxCNC refuses is refused."""
+    text = "G20\nG0 X1.5 Y0 Z0\nG91 G81 R.1 Z-.5 ^60 L6 F10\nG80\nM2\n"
+    holes = [b for b in gcode(text).blocks if isinstance(b, Hole)]
+    assert len(holes) == 1 and "6 holes equally spaced on a circle" in " ".join(report(text))
+    assert failure("G20\nG0 @1 X1\n").startswith(
+        "line 2, column 7: X beside polar coordinates (@ ^)"
+    )
+    assert failure("G20\nG0 @1\n").startswith(
+        "line 2, column 4: a polar coordinate from program zero with no angle to go at"
+    )
+    assert failure("G20\nG18\nG0 @1 ^30\n").startswith(
+        "line 3, column 4: polar coordinates (@ ^) in the G18 plane"
+    )
+
+
+def test_g53_retract_reads_as_a_move_to_a_height_the_file_does_not_give(
+    tmp_path: Path,
+) -> None:
+    """`G53 G0 Z0` (Haas and Fusion posts' retract, LinuxCNC's skeleton.ngc) was refused
+    ("a move in machine coordinates ... is not supported"). rs274 moves to the machine's Z
+    there; the file does not say where that is above the part, so the tool's Z is unknown
+    until the file moves it again — as after `G28 G91 Z0`. The cuts are rs274's."""
+    text = (
+        "G20 G90\nG53 G0 Z0\nT1 M6\nS1000 M3\nG0 X1 Y1\nG43 H1 Z0.1\nG1 Z-0.1 F5\nX2 F10\n"
+        "G0 Z0.1\nG53 G0 Z0\nG53 X0 Y0\nG0 X3 Y1\nZ0.1\nG1 Z-0.2 F5\nY2 F10\nG53 G0 Z0\nM30\n"
+    )
+    result = referee_import(text.encode(), tmp_path)
+    assert describe_all(result.program) == [
+        "DRILL X1 Y1 Z0.1/-0.1 F5 T1",
+        "MILL STD X2 Y1 F10",
+        "DRILL X3 Y1 Z0.1/-0.2 F5 T1",
+        "MILL STD X3 Y2 F10",
+    ]
+    assert any("line 2: G53 G0 Z0: the machine's Z0" in str(n) for n in result.report)
+    assert failure("G20\nG0 Z1\nG53 G1 Z0 F5\n").startswith("line 3, column 1: G53 G1")
+
+
+def test_an_arc_in_the_xz_plane_says_what_to_change_in_the_cam() -> None:
+    """Fusion's vertical lead-in (G18 G2 X… Z… I… K…) is refused; the error says it is the
+    CAM's lead arc and what to turn off, not only that MillBlocks cuts arcs in XY."""
+    text = "G21\nG0 X-1.6 Y-1.2 Z25\nG1 Z8.2 F333\nG18 G2 X-1.4 Z8 I0.2 F1000\n"
+    message = failure(text)
+    assert message.startswith("line 4, column 1: an arc in the G18 (XZ) plane"), message
+    assert "lead-in" in message and "CAM" in message
+
+
+def test_a_first_feed_in_z_says_to_give_the_height_first() -> None:
+    """drl2gcode (KiCad drill files) starts with `G1 F1200.0 Z4.0`: from a height the file
+    does not give. The error says how to give it."""
+    text = (
+        "G90\nG21\nM3 S10000.0\nG1 F1200.0 Z4.0\nG1 F1200.0 X0.0 Y0.0\nG1 F1200.0 Z0.2\n"
+        "G1 F100.0 Z-3.0\nG1 F1200.0 Z4.0\nM5\nM2\n"
+    )
+    message = failure(text)
+    assert message.startswith("line 4: a feed in Z before the file gives any height"), message
+    assert "G0 Z" in message
+
+
+def test_t0_m6_empties_the_spindle_and_is_no_tool_change() -> None:
+    """`T0 M6` (LinuxCNC's skeleton.ngc and Haas programs: take the tool out at the end)
+    became a change to tool 0, and the imported program had two errors ("TOOL #: 0 is
+    outside the allowed range 1 to 24") and could not be exported. It is no tool change: the
+    report says so, and the program has no errors."""
+    text = (
+        "G20 G90\nT1 M6 G43 H1\nS1000 M3\nG0 X1 Y1\nZ0.1\nG1 Z-0.1 F5\nG0 Z0.5\nX0 Y0\n"
+        "M5\nT0 M6\nM2\n"
+    )
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == ["DRILL X1 Y1 Z0.1/-0.1 F5 T1", "POS X0 Y0 T1"]
+    assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
+    assert any("line 10: T0 M6 empties the spindle" in str(n) for n in result.report)
+
+
+def test_coolant_turned_on_among_the_cuts_does_not_end_the_mill_sequence(
+    tmp_path: Path,
+) -> None:
+    """A Fanuc-style program turns the coolant on with the first cut (`G1 Y40 M8`, HelmanCNC's
+    beginners' example). The M8 ended the mill sequence and the next cut was refused ("a cut
+    in XY at Z-20 mm, but the tool has not fed down to it"). It is the tool's COOLANT; the
+    cuts go on, as rs274 reads them."""
+    text = (
+        "O1000\nT1 M6\nG0 G90 G40 G21 G17 G94 G80\nG54 X-75 Y-75 S500 M3\nG43 Z100 H1\n"
+        "G43 Z5\nG1 Z-20 F100\nG1 X-40\nG1 Y40 M8\nG1 X40\nG1 Y-40\nG1 X-75\nG1 Y-75\n"
+        "G0 Z100\nM30\n"
+    )
+    result = referee_import(text.encode(), tmp_path)
+    assert describe_all(result.program)[:3] == [
+        "DRILL X-75 Y-75 Z5/-20 F100 T1",
+        "MILL STD X-40 Y-75 F100",
+        "MILL STD X-40 Y40 F100",
+    ]
+    tool = result.program.block0.tool(1)
+    assert tool is not None and tool.coolant.value == "flood"
+    # On a line of its own between the plunge and the first cut, the same.
+    alone = text.replace("G1 Y40 M8\n", "G1 Y40\n").replace("G1 X-40\n", "M8\nG1 X-40\n")
+    assert describe_all(referee_import(alone.encode(), tmp_path, "alone").program)[:2] == [
+        "DRILL X-75 Y-75 Z5/-20 F100 T1",
+        "MILL STD X-40 Y-75 F100",
+    ]
+
+
+def test_an_arc_centre_on_a_rapid_or_a_line_is_an_error() -> None:
+    """`G0 X0.5 Y0. I0. J-0.5` (a circle example from diymachining.com, the G2 written as G0):
+    rs274 refuses it ("I word with no G2, G3 … to use it"); the importer reported "I0.: no
+    code on the line uses it" and imported a rapid at the cutting depth where the file's
+    author meant an arc. Now it is an error naming the word."""
+    text = "G17 G20 G90\nG0 Z0.1\nG0 X-0.5 Y0.\nG01 Z0. F5.\nG02 X0. Y0.5 I0.5 J0.\n"
+    assert failure(text + "G0 X0.5 Y0. I0. J-0.5\n").startswith(
+        "line 6, column 13: I with G0: a rapid has no arc centre"
+    )
+    assert failure(text + "G1 X0.5 Y0. J-0.5\n").startswith(
+        "line 6, column 13: J with G1: a straight feed has no arc centre"
+    )

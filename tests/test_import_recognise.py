@@ -214,3 +214,21 @@ def test_g20_decides_the_unit_of_every_block() -> None:
     notes = [str(n) for n in result.report]
     assert any("G20: the program and every block are inch" in n for n in notes)
     assert any("X 1.9685 in → 1.968, Y 0.3937 in → 0.394" in n for n in notes), notes
+
+
+def test_a_2p_routine_with_pecks_comes_back_as_the_one_routine() -> None:
+    """A CIR 2P POCKET with 2 pecks cuts its roughing pass at each peck level and the
+    finishing pass after the last. Before: it came back as two routines, a one-pass CIRCLE
+    0.010 in smaller at the first level and a CIR 2P whose DRILL had Z UP -0.098 (its
+    retracts 0.1 in lower than the original's), the report saying the retract differs. Now
+    the levels are MillBlocks' even pecks, so it is the one DRILL with 2 pecks and the CIR 2P,
+    from G-code and from a 1704 tape alike."""
+    original = load(GOLDEN / "circle-2p-pocket-pecks")
+    for target, reader in (("gcode-linuxcnc", "gcode"), ("tape-ascii", "tape")):
+        result = read_program(export(original, target).data, "p", reader)
+        assert describe_all(result.program) == [
+            "DRILL X2 Y2 Z0.1/-0.3 F4 x2 T2",
+            "CIR 2P POCKET R1 F9 T2",
+        ], target
+        assert not any("above Z UP here" in str(n) for n in result.report), target
+        assert result.program.block0.z_retract == original.block0.z_retract

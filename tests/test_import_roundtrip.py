@@ -106,8 +106,6 @@ ROUNDED: dict[str, dict[str, str]] = {
 # G-code round trips that give back the very same blocks, not only the same path: every
 # golden case but these (each for its reason).
 NOT_THE_SAME_BLOCKS = {
-    "circle-2p-pocket-pecks": "a 2P pocket with pecks: each level's passes are a routine "
-    "of their own (the first level a one-pass POCKET 0.010 in smaller)",
     "contour-cut-left-inside-corners": COMPENSATED,
     "contour-cut-left-mm": COMPENSATED,
     "contour-cut-right": COMPENSATED,
@@ -152,12 +150,6 @@ XY_ONLY: dict[str, dict[str, str]] = {
     # as the machine moves it.
     "tape-boss": {"*": "a BOSS tape cannot say each tool's TCAL"},
 }
-PECK_LEVELS = (
-    "a 2P pocket with pecks comes back as a routine per level: between levels it retracts "
-    "as each routine's own DRILL does"
-)
-for target in ("gcode-linuxcnc", "tape-ascii"):
-    XY_ONLY[target]["circle-2p-pocket-pecks"] = PECK_LEVELS
 # A millimetre block in an inch file comes back in inches (G20/G21 decides), rounded to
 # 0.001 in and 0.1 ipm.
 MIXED = {"mixed-units": "a mm block comes back as an inch block, rounded"}

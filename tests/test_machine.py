@@ -214,3 +214,12 @@ def test_the_set_up_sheet_names_the_gear_of_the_machine_s_spindle() -> None:
     assert gear(5000, three) == "gear 3 of 3, forward"
     assert gear(9000, read_spindle("100-24000")) == "forward"
     assert gear(9000) == "outside the spindle's range (60-500, 500-4000 rpm), forward"
+
+
+@pytest.mark.parametrize("key", ["X", "x_travel", "travel", "Rapid", "max-feed"])
+def test_an_unknown_key_is_an_error_naming_it_and_the_allowed_keys(key: str) -> None:
+    with pytest.raises(MachineError, match=f"unknown key '{key}'") as caught:
+        read_machine({"x": "0 10", key: "0 0.5"})
+    assert "allowed: preset, name, units, x, y, z, zone, rapid, max_feed" in str(caught.value)
+    if key.lower() in ("x", "rapid"):
+        assert f"(did you mean '{key.lower()}'?)" in str(caught.value)

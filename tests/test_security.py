@@ -274,7 +274,7 @@ def test_forwarded_addresses_are_ignored_unless_the_proxy_is_trusted(app: Flask)
 
 
 def test_behind_a_trusted_proxy_each_client_counts_apart(tmp_path: Path) -> None:
-    app = accounts_app(tmp_path, MILLBLOCKS_PROXY_HOPS=1)
+    app = accounts_app(tmp_path, PROXY_HOPS=1)
     proxy = "10.0.0.1"
     client = app.test_client()
     for _ in range(5):

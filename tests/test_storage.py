@@ -57,6 +57,8 @@ def test_upgrade_head_on_an_empty_database(database_url: str) -> None:
         "transfer_log",
         "sessions",
         "drawings",
+        "crib_tools",
+        "crib_revisions",
     }
     engine.dispose()
 
@@ -77,6 +79,8 @@ def test_downgrade_and_upgrade_round_trip(database_url: str) -> None:
         "transfer_log",
         "sessions",
         "drawings",
+        "crib_tools",
+        "crib_revisions",
     }
     engine.dispose()
 

@@ -3,6 +3,7 @@ security headers, stale saves, exports and downloads."""
 
 from __future__ import annotations
 
+import html
 import re
 from collections.abc import Iterator
 from pathlib import Path
@@ -347,7 +348,7 @@ def test_oversized_upload_gets_413(client: FlaskClient) -> None:
         "/programs/import", data=body, content_type=f"multipart/form-data; boundary={boundary}"
     )
     assert response.status_code == 413
-    assert "larger than the 2 MB" in response.get_data(as_text=True)
+    assert "larger than the 2,097,152 bytes" in response.get_data(as_text=True)
 
 
 def test_markup_in_names_renders_inert(client: FlaskClient) -> None:
@@ -686,3 +687,59 @@ def test_the_machine_chosen_for_export_decides_the_rpm(app: Flask, client: Flask
     exported = client.get("/programs/2/export?machine=Fast+mill&target=gcode-linuxcnc&go=1")
     assert exported.status_code == 200
     assert "S9000 M3" in exported.get_data(as_text=True)
+
+
+@pytest.mark.parametrize("limits", ["X=0 0.5", "x_travel=0 0.5", "x=0 10\nY=0 0.5"])
+def test_a_travel_limit_under_an_unknown_key_is_refused_naming_it(
+    app: Flask, client: FlaskClient, limits: str
+) -> None:
+    """`X=0 0.5` (or `x_travel=…`) was saved and never checked, while `x=0 0.5` refused the
+    same program: a machine that let a program past its travel."""
+    from app.cnc.machine import KEYS
+    from app.web.machines import SERIAL_DEFAULTS
+
+    csrf = token(client)
+    machine = {**SERIAL_DEFAULTS, "csrf_token": csrf, "name": "Small mill"}
+    bad = client.post("/machines", data={**machine, "target": "gcode-linuxcnc", "limits": limits})
+    assert bad.status_code == 422
+    key = [line.split("=")[0] for line in limits.splitlines() if line.split("=")[0] not in KEYS]
+    page = html.unescape(bad.get_data(as_text=True))
+    assert f"Not saved: limits: unknown key '{key[0]}'" in page
+    assert f"allowed: {', '.join(KEYS)}" in page
+    with app.app_context():
+        assert get_library().machines() == []
+    # The same travel under its own key refuses the sample part, which reaches X 3.
+    saved = client.post(
+        "/machines", data={**machine, "target": "gcode-linuxcnc", "limits": "x=0 0.5"}
+    )
+    assert saved.status_code == 302
+    refused = client.get("/programs/1/export?machine=Small+mill&target=gcode-linuxcnc&go=1")
+    assert refused.status_code == 422
+    assert "X reaches" in refused.get_data(as_text=True)
+
+
+def test_a_machine_stored_with_an_unknown_key_is_never_exported_as_unlimited(
+    app: Flask, client: FlaskClient
+) -> None:
+    """A machine saved before the rule, with `X` for `x`: its exports are refused naming the
+    key (they were made as if the machine had no limits at all)."""
+    from sqlalchemy import update
+
+    from app.storage.library import Machine
+    from app.storage.models import MachineRow
+
+    with app.app_context():
+        library = get_library()
+        library.save_machine(Machine("Old mill", "gcode-linuxcnc", {}, {}, "", {"x": "0 10"}))
+        with library.session() as s:
+            s.execute(update(MachineRow).values(limits='{"X": "0 0.5"}'))
+    for url in (
+        "/programs/1/export?machine=Old+mill&target=gcode-linuxcnc&go=1",
+        "/programs/1/export/download?machine=Old+mill&target=gcode-linuxcnc",
+        "/programs/1/setup?machine=Old+mill",
+    ):
+        response = client.get(url)
+        assert response.status_code == 422, url
+        assert "machine &#39;Old mill&#39;, limits: unknown key &#39;X&#39; (did you mean" in (
+            response.get_data(as_text=True)
+        )

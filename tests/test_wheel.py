@@ -201,7 +201,8 @@ def test_the_installed_command_line_exports_as_the_checkout_does(installed: Inst
 def _import_files(tmp_path: Path) -> list[Path]:
     """Every G-code, tape, event and DXF file of the suite (the DXF reader builds on the
     compiled notes and recognition too): the goldens' exports of every block type, the
-    seed samples, the drawings, the hostile uploads and a 20 000-line file of the bench's."""
+    seed samples, the G-code corpus, the drawings, the hostile uploads and a 20 000-line
+    file of the bench's."""
     from bench.gcode_import import write_file
 
     exports = {".events", ".gcode-linuxcnc", ".gcode-fanuc", ".gcode-prototrak"}
@@ -209,6 +210,10 @@ def _import_files(tmp_path: Path) -> list[Path]:
     files = sorted(p for p in (HERE / "golden").glob("*/expected.*") if p.suffix in exports)
     samples = {".ngc", ".cnc", ".tape"}
     files += sorted(p for p in (HERE / "imports").iterdir() if p.suffix in samples)
+    # the G-code corpus: post output, and LinuxCNC's subroutines, loops and expressions
+    # (the compiled reader hands those to the front end, app/cnc/formats/gcode/ngc.py)
+    corpus = (HERE / "imports" / "gcode-corpus").rglob("*")
+    files += sorted(p for p in corpus if p.suffix in (".ngc", ".nc", ".gcode"))
     for drawing in (bracket, bulge_part, metric_plate):  # drawn with ezdxf by the DXF tests
         path = tmp_path / f"{drawing.__name__}.dxf"
         path.write_bytes(drawing())

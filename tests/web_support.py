@@ -23,7 +23,7 @@ def accounts_app(tmp_path: Path, **config: Any) -> Flask:
         {
             "DATABASE_URL": f"sqlite:///{tmp_path / 'accounts.db'}",
             "SECRET_KEY": "test",
-            "MILLBLOCKS_AUTH": "accounts",
+            "AUTH": "accounts",
             **config,
         }
     )
@@ -70,3 +70,18 @@ def log_in(
         environ_base={"REMOTE_ADDR": remote},
         headers=headers or {},
     )
+
+
+def multipart(token: str, filename: str, data: bytes) -> tuple[bytes, str]:
+    """The body and Content-Type of a browser's upload form (csrf_token and file), written
+    out whole: werkzeug's test builder spools a large body to a temporary file that it leaves
+    open when the app refuses the request unread."""
+    boundary = "millblocks-test-boundary"
+    head = (
+        f'--{boundary}\r\nContent-Disposition: form-data; name="csrf_token"\r\n\r\n'
+        f"{token}\r\n--{boundary}\r\n"
+        f'Content-Disposition: form-data; name="file"; filename="{filename}"\r\n'
+        "Content-Type: application/octet-stream\r\n\r\n"
+    )
+    body = head.encode() + data + f"\r\n--{boundary}--\r\n".encode()
+    return body, f"multipart/form-data; boundary={boundary}"

@@ -20,7 +20,9 @@ from decimal import Decimal
 from typing import Any, ClassVar
 
 from app.cnc import limits
+from app.cnc.cutting import Workpiece
 from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
+from app.cnc.tools import Hand, PitchUnit, ToolMaterial, ToolType
 from app.cnc.units import Units
 
 MAX_TOOLS = 24
@@ -663,8 +665,13 @@ class Tool:
     was entered, which makes the tool unusable (the control's emergency stop). `tcal` is the
     tool's calibrated Z zero; None shows as "****" (uncalibrated). `name` is what the
     machinist calls it ("#7 DRILL", "1/4-20 TAP"; "" for none): for the set-up sheet and
-    the G-code set-up comments, never a control setting (`TOOL_NAME_LENGTH` characters of
-    `TOOL_NAME_CHARACTERS`, checked by validation).
+    the G-code set-up comments, never a control setting (app.cnc.tools.tool_name_fault says
+    what it may hold, checked by validation).
+
+    `crib` … `hand` are the program's own copy of the crib tool it was picked from (the
+    crib's number, the tool's type, flutes, tool material, length out of the holder in the
+    program's units, a tap's pitch and hand): what the set-up sheet lists, the speeds and
+    feeds are offered from and the TAP rule checks; None where not known.
     """
 
     number: int = prompt("TOOL #", TOOL)
@@ -673,30 +680,17 @@ class Tool:
     tcal: Decimal | None = prompt("TCAL", LENGTH, None)
     coolant: Coolant = prompt("COOLANT", CHOICE, Coolant.OFF)
     name: str = prompt("NAME", TEXT, "")
-
-
-# A tool's name goes into G-code comments and onto the set-up sheet: what a comment holds
-# (no parentheses or semicolons, which end it), short enough for a tool table's column.
-TOOL_NAME_LENGTH = 24
-TOOL_NAME_CHARACTERS = frozenset(
-    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789 .,-:/#+=*"
-)
-
-
-def tool_name_fault(name: str) -> str:
-    """What is wrong with a tool's name ("" when nothing): too long, or a character a
-    comment cannot hold."""
-    allowed = f"allowed up to {TOOL_NAME_LENGTH} letters, digits, spaces and . , - : / # + = *"
-    if len(name) > TOOL_NAME_LENGTH:
-        return f"{len(name)} characters is too long; {allowed}"
-    bad = sorted({c for c in name if c not in TOOL_NAME_CHARACTERS})
-    if bad:
-        return (
-            "has characters a G-code comment cannot hold: "
-            + " ".join(repr(c) for c in bad)
-            + f"; {allowed}"
-        )
-    return ""
+    # The program's copy of the crib tool it picked (app.cnc.crib; None: not picked or not
+    # known). Written to the document only when set, so documents without them read and
+    # write as before.
+    crib: int | None = prompt("CRIB #", COUNT, None)
+    kind: ToolType | None = prompt("TYPE", CHOICE, None)
+    flutes: int | None = prompt("FLUTES", COUNT, None)
+    tool_material: ToolMaterial | None = prompt("TOOL MATERIAL", CHOICE, None)
+    length: Decimal | None = prompt("LENGTH OUT", LENGTH, None)
+    pitch: Decimal | None = prompt("PITCH", LENGTH, None)
+    pitch_unit: PitchUnit = prompt("PITCH UNIT", CHOICE, PitchUnit.TPI)
+    hand: Hand = prompt("HAND", CHOICE, Hand.RIGHT)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -744,7 +738,9 @@ class Stock:
 class Program:
     """A whole part program: identification, Data Block 0 and data blocks 1…n.
 
-    `stock` is None when the simulation should size the stock from the program's extent.
+    `stock` is None when the simulation should size the stock from the program's extent;
+    `material` None when the program states no workpiece material (no feeds and speeds are
+    offered: app.cnc.cutting).
     """
 
     name: str
@@ -754,6 +750,7 @@ class Program:
     block0: DataBlock0 = field(default_factory=DataBlock0)
     blocks: tuple[Block, ...] = ()
     stock: Stock | None = None
+    material: Workpiece | None = None
 
     def block(self, number: int) -> Block:
         """Data block `number` (1-based). Raises IndexError when it does not exist."""

@@ -47,7 +47,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from app.cnc import limits
+from app.cnc import cost, limits, sizes
 from app.cnc.blocks import (
     Block,
     BoltCircle,
@@ -78,7 +78,7 @@ from app.cnc.path import (
     size,
 )
 from app.cnc.pocketing.model import LinkKind, PocketPlan
-from app.cnc.problems import Severity
+from app.cnc.problems import Rule, Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.toolpath import ToolInfo
 from app.cnc.units import Units, to_nm
@@ -221,7 +221,7 @@ SHARED_CACHE = Cache()
 # By what the compile reads of a program, by object for its blocks and Data Block 0 (a
 # program's hash would hash every block's values): each entry keeps its program, so no id
 # in a key is reused while the entry is in.
-_RECENT: OrderedDict[tuple[int, int, Units], tuple[Program, Compiled]] = OrderedDict()
+_RECENT: OrderedDict[tuple[int, int, Units, int], tuple[Program, Compiled]] = OrderedDict()
 _RECENT_SIZE = 8
 _RECENT_LOCK = threading.Lock()
 
@@ -230,13 +230,18 @@ def compile_program(program: Program, cache: Cache | None = None) -> Compiled:
     """Compile a program (COPY blocks already carried out; a pending COPY is skipped).
 
     Never raises: a node that cannot be cut (a mill sequence whose geometry has an error)
-    is left out and its findings say why; the rest compiles. `cache` keeps compiled nodes
-    between compiles; by default the process's shared cache, and a program compiled a
-    moment ago is answered from memory.
+    is left out and its findings say why; the rest compiles. A program past the moves it
+    may make (`sizes.move_limit()`, estimated from its blocks by `cost`, and counted as
+    each top-level node is compiled) compiles up to the node that takes it past, and an
+    error names that node's first block: nothing after the compile works on more moves
+    than the limit. `cache` keeps compiled nodes between compiles; by default the
+    process's shared cache, and a program compiled a moment ago is answered from memory.
+
+    Raises sizes.OverBudget when a time budget is in force and runs out.
     """
     if cache is not None:
         return _Compiler(program, cache).run()
-    key = (id(program.blocks), id(program.block0), program.units)
+    key = (id(program.blocks), id(program.block0), program.units, sizes.move_limit())
     with _RECENT_LOCK:
         found = _RECENT.get(key)
         if found is not None:
@@ -327,9 +332,16 @@ class _Compiler:
 
     def run(self) -> Compiled:
         top: list[Node] = []
+        limit = sizes.move_limit()
+        over = cost.estimate(self.program, limit)
+        moves = 0
         for node in build_nodes(self.blocks, tolerant=True):
             indexes = _indexes(node)
             first = indexes[0]
+            if over.stop is not None and first + 1 >= over.stop:
+                self.findings.append(_too_large(over, limit))
+                break
+            sizes.spend()
             key = _Key(
                 tuple(self.blocks[i] for i in indexes),
                 _shape(node, first),
@@ -342,6 +354,13 @@ class _Compiler:
                 found = self.compile_top(node, first + 1)
                 if self.cache is not None:
                     self.cache.put(key, found)
+            moves += size(found.node)
+            if moves > limit:
+                # More than the estimate foresaw (a pocket's rings drawn as polylines):
+                # the same limit, on the moves made.
+                made = cost.Cost(moves, 0, 0, first + 1, size(found.node), stop=first + 1)
+                self.findings.append(_too_large(made, limit))
+                break
             self.restore(found.exit)
             top.append(Run(found.node, _HERE, first + 1))
             self.findings += [_shifted(f, first + 1) for f in found.findings]
@@ -432,6 +451,7 @@ class _Compiler:
         runs: list[tuple[Node, list[tuple[int, int]]]] = []
         for j in range(rep.ny + 1):
             for i in range(rep.nx + 1):
+                sizes.spend()
                 ref = (start[0] + i * step_x, start[1] + j * step_y)
                 self.reference = ref
                 if translatable:
@@ -916,6 +936,13 @@ class _Compiler:
             (op, TAG[tag], number - self.base, end[0], end[1], self.z, *centre, feed, 0)
         )
         self.x, self.y = end
+
+
+def _too_large(over: cost.Cost, limit: int) -> Finding:
+    """The error of a program past the moves it may make, on the block `over` names."""
+    assert over.over is not None
+    field = "LOOP" if over.rep is not None else "STEP" if over.levels else None
+    return Finding(over.over, Rule.TOO_LARGE, Severity.ERROR, over.message(limit), field)
 
 
 def _depths(block: Hole) -> tuple[int, int, int]:

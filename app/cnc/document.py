@@ -4,8 +4,9 @@ The format is described in docs/program-format.md. `dumps` writes a deterministi
 (fixed key order, two-space indent, trailing newline); `loads` reads it back and raises
 DocumentError naming the block and field of anything malformed. Numbers are read as
 `Decimal`, so what was typed is what is kept, and checked by app.cnc.numbers (no NaN or
-Infinity, nothing beyond 1E+30); a document nested deeper than JSON's own reader goes, or
-with more than `MAX_BLOCKS` blocks, is refused whole.
+Infinity, nothing beyond 1E+30); its text by app.cnc.text (no NUL or lone surrogate, the
+name and notes within their lengths); a document nested deeper than JSON's own reader
+goes, or with more than `MAX_BLOCKS` blocks, is refused whole.
 """
 
 from __future__ import annotations
@@ -20,9 +21,12 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import Block, DataBlock0, Program, Stock, Tool, field_label
+from app.cnc.cutting import Workpiece
 from app.cnc.kinds import REGISTRY
 from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
+from app.cnc.text import NAME_LENGTH, NOTES_LENGTH, text_fault
+from app.cnc.tools import Hand
 from app.cnc.units import Units
 
 FORMAT_NAME = "millblocks-program"
@@ -51,6 +55,11 @@ def to_dict(program: Program) -> dict[str, Any]:
         "part_number": program.part_number,
         "units": program.units.value,
         "notes": program.notes,
+    }
+    # Written only when stated, so documents without a material read and write as before.
+    if program.material is not None:
+        data["material"] = _material_out(program.material)
+    data |= {
         "data_block_0": {
             "x_offset": _out(db0.x_offset),
             "y_offset": _out(db0.y_offset),
@@ -103,6 +112,7 @@ def _without_blocks(program: Program) -> Program:
         notes=program.notes,
         block0=program.block0,
         stock=program.stock,
+        material=program.material,
     )
 
 
@@ -131,15 +141,21 @@ def as_stored(program: Program) -> Program:
     (blocks read from a document, and most typed ones) stays the same object, and so does
     the program when all of it does: what was worked out for it still applies."""
     blocks = tuple(_stored_block(block, n) for n, block in enumerate(program.blocks, 1))
-    stock = program.stock
-    if program.block0 is not _READ.get(id(program.block0)) or (
-        stock is not None and stock is not _READ.get(id(stock))
+    stock, material = program.stock, program.material
+    if (
+        program.block0 is not _READ.get(id(program.block0))
+        or (stock is not None and stock is not _READ.get(id(stock)))
+        or (material is not None and material is not _READ.get(id(material)))
     ):
         rest = loads(dumps(_without_blocks(program)))
-        if repr(rest.block0) == repr(program.block0) and repr(rest.stock) == repr(stock):
-            _was_read(program.block0)
-            if stock is not None:
-                _was_read(stock)
+        if (
+            repr(rest.block0) == repr(program.block0)
+            and repr(rest.stock) == repr(stock)
+            and repr(rest.material) == repr(material)
+        ):
+            for part in (program.block0, stock, material):
+                if part is not None:
+                    _was_read(part)
         else:
             return replace(rest, blocks=blocks)
     if all(a is b for a, b in zip(blocks, program.blocks, strict=True)):
@@ -178,13 +194,46 @@ def _block_out(block: Block) -> dict[str, Any]:
     return data
 
 
+# A tool's fields written only when set (its name, and the copy of the crib tool it was
+# picked from): documents without them read and write as before.
+_TOOL_WHEN_SET = ("name", "crib", "kind", "flutes", "tool_material", "length", "pitch")
+
+
 def _tool_out(tool: Tool) -> dict[str, Any]:
-    """A tool's fields; its name only when it has one (documents without names read and
-    write as before)."""
+    """A tool's fields; those of _TOOL_WHEN_SET only when set, its pitch unit only with a
+    pitch and its hand only when left."""
     data = _fields_out(tool)
-    if not tool.name:
-        del data["name"]
+    for name in _TOOL_WHEN_SET:
+        if data[name] in ("", None):
+            del data[name]
+    if tool.pitch is None:
+        del data["pitch_unit"]
+    if tool.hand is Hand.RIGHT:
+        del data["hand"]
     return data
+
+
+def _material_out(material: Workpiece) -> dict[str, Any]:
+    """The stated material: its name, and a custom one's figures."""
+    data = _fields_out(material)
+    for name in ("surface_speed", "chip_load"):
+        if data[name] is None:
+            del data[name]
+    return data
+
+
+def write_fields(obj: Any) -> dict[str, Any]:
+    """Any declared dataclass's fields as JSON data (numbers as typed, enums by value):
+    the document's own writing, for the other documents of the library (a crib tool)."""
+    return _fields_out(obj)
+
+
+def read_fields(cls: type[_T], data: Any, where: str) -> _T:
+    """A declared dataclass from JSON data, each field converted and checked as the
+    document's own are. Raises DocumentError naming `where` and the field."""
+    if not isinstance(data, dict):
+        raise DocumentError(where, f"expected an object, got {_show(data)}")
+    return _build(cls, data, where)
 
 
 def _fields_out(obj: Any) -> dict[str, Any]:
@@ -248,7 +297,7 @@ def from_dict(data: Any) -> Program:
             f"version {data.get('version')!r} is not supported; this MillBlocks reads version "
             f"{FORMAT_VERSION}",
         )
-    known = {"format", "version", "name", "part_number", "units", "notes"}
+    known = {"format", "version", "name", "part_number", "units", "notes", "material"}
     known |= {"data_block_0", "blocks", "stock"}
     _no_unknown("program", data, known)
     units = _enum(Units, data.get("units", "inch"), "program, units")
@@ -274,14 +323,22 @@ def from_dict(data: Any) -> Program:
     stock_data = data.get("stock")
     if stock_data is not None and not isinstance(stock_data, dict):
         raise DocumentError("stock", 'expected an object like {"x": 0, "y": 0, "xl": 4, ...}')
+    material_data = data.get("material")
+    if material_data is not None and not isinstance(material_data, dict):
+        raise DocumentError("material", 'expected an object like {"name": "6061"}')
     return Program(
-        name=_text(data.get("name", ""), "program, name"),
-        part_number=_text(data.get("part_number", ""), "program, part_number"),
+        name=_text(data.get("name", ""), "program, name", NAME_LENGTH),
+        part_number=_text(data.get("part_number", ""), "program, part_number", NAME_LENGTH),
         units=units,
-        notes=_text(data.get("notes", ""), "program, notes"),
+        notes=_text(data.get("notes", ""), "program, notes", NOTES_LENGTH),
         block0=block0,
         blocks=blocks,
         stock=None if stock_data is None else _was_read(_build(Stock, stock_data, "stock")),
+        material=(
+            None
+            if material_data is None
+            else _was_read(_build(Workpiece, material_data, "material"))
+        ),
     )
 
 
@@ -408,8 +465,8 @@ def _convert(raw: Any, hint: Any, where: str) -> Any:
             raise DocumentError(where, str(exc)) from None
     if isinstance(hint, type) and issubclass(hint, enum.Enum):
         return _enum(hint, raw, where)
-    if hint is str:
-        return _text(raw, where)
+    if hint is str:  # a block's message, a tool's name: their rules are validation's
+        return _text(raw, where, NAME_LENGTH)
     raise TypeError(f"no JSON conversion for {hint!r}")
 
 
@@ -425,9 +482,14 @@ def _enum(cls: type[_E], raw: Any, where: str) -> _E:
     raise DocumentError(where, f"{_show(raw)} is not one of {allowed}")
 
 
-def _text(raw: Any, where: str) -> str:
+def _text(raw: Any, where: str, limit: int) -> str:
+    """A JSON string that meets the one text rule (app.cnc.text): no NUL, no lone
+    surrogate (`"\\ud800"`), at most `limit` characters."""
     if not isinstance(raw, str):
         raise DocumentError(where, f"expected text, got {_show(raw)}")
+    fault = text_fault(raw, limit)
+    if fault:
+        raise DocumentError(where, fault)
     return raw
 
 

@@ -25,6 +25,7 @@ HOLE_DWELL_SECONDS = Decimal("0.8")
 TAP_FEED_OUT_INCH = Decimal("0.3")
 TAP_FEED_OUT_MM = Decimal("7.62")
 MAX_PECKS = 40
+MAX_TOOL = 24  # tools 1-24
 MAX_BOLT_HOLES = 250
 MAX_ISLANDS = 8  # islands in one POCKET (Hurco's conversational pockets take several)
 MAX_LOOP_DEPTH = 4

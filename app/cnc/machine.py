@@ -109,11 +109,33 @@ PRESETS: dict[str, MachineModel] = {
 }
 
 
+KEYS = (
+    "preset",
+    "name",
+    "units",
+    *AXES,
+    "zone",
+    "rapid",
+    "max_feed",
+    "tool_change_seconds",
+    "operator_seconds",
+    "spindle",
+)
+"""What a machine's description may hold; any other key is an error, not ignored: a travel
+limit typed `X=0 0.5` or `x_travel=…` would otherwise be saved and never checked."""
+
+
 def read_machine(data: Mapping[str, Any]) -> MachineModel:
     """A machine from its stored description: `{"preset": "kt-180"}` and/or explicit
     `units`, `x`/`y`/`z` ([min, max]), `zone` ([Y min, Z min]), `rapid`, `max_feed`,
     `tool_change_seconds`, `operator_seconds`, `spindle` (`100-24000`, or gear ranges
-    `60-500, 500-4000`). Raises MachineError naming the field."""
+    `60-500, 500-4000`). Raises MachineError naming the field, and for a key not in KEYS
+    naming it and the allowed keys."""
+    unknown = sorted(key for key in data if key not in KEYS)
+    if unknown:
+        key = str(unknown[0])
+        hint = f" (did you mean {key.lower()!r}?)" if key.lower() in KEYS else ""
+        raise MachineError(f"unknown key {key!r}{hint}; allowed: {', '.join(KEYS)}")
     base = MachineModel()
     preset = data.get("preset")
     if preset:

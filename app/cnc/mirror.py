@@ -40,6 +40,7 @@ from app.cnc.blocks import (
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.kinds import REGISTRY, Mill, Role
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
+from app.cnc.text import derived_name
 from app.cnc.units import Units, to_nm
 
 XY = tuple[int, int]
@@ -99,7 +100,7 @@ def mirror(program: Program, axis: Axis) -> Mirrored:
         plan.append(_single(block, index, targets, m, sx, sy, blocks))
         index += 1
     new_blocks = _encode(plan, program.units)
-    name = f"{program.name} (mirror {axis.value.upper()})"
+    name = derived_name(program.name, f" (mirror {axis.value.upper()})")
     notes.insert(
         0,
         f"mirrored in {axis.value.upper()} about part zero; climb and conventional cuts stay "

@@ -45,6 +45,7 @@ from decimal import Decimal
 import numpy as np
 import numpy.typing as npt
 
+from app.cnc import sizes
 from app.cnc.blocks import HoleOp
 from app.cnc.mill import Path, translated
 from app.cnc.toolpath import (
@@ -424,8 +425,11 @@ class Chunk:
 
 def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]:
     """The moves of `node` translated by (dx, dy) with `base` added to block numbers, as
-    chunks in order. A piece repeated by a run is tiled in chunks of about CHUNK_ROWS."""
+    chunks in order. A piece repeated by a run is tiled in chunks of about CHUNK_ROWS. Each
+    chunk spends from the time budget in force (app.cnc.sizes.spend), so every consumer of
+    the moves does."""
     if isinstance(node, Piece):
+        sizes.spend()
         yield _placed(node, np.array([[dx, dy]], dtype=np.int64), base)
     elif isinstance(node, Seq):
         for child in node.nodes:
@@ -435,6 +439,7 @@ def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]
         per = max(1, CHUNK_ROWS // max(1, len(piece.rows)))
         offsets = node.offsets + np.array([dx, dy], dtype=np.int64)
         for k in range(0, len(offsets), per):
+            sizes.spend()
             yield _placed(piece, offsets[k : k + per], base + node.base)
     else:
         for ox, oy in node.offsets.tolist():

@@ -93,6 +93,11 @@ class Rule(enum.Enum):
     MESSAGE = "message"
     PILOT = "pilot"
     BELOW_STOCK = "below-stock"
+    MATERIAL = "material"
+    TOOL_THREAD = "tool-thread"
+    TAP_FEED = "tap-feed"
+    TAP_HAND = "tap-hand"
+    TOO_LARGE = "too-large"
 
 
 @dataclass(frozen=True, slots=True)

@@ -3,9 +3,10 @@
 The 1704 manual's programming manuscript (seed 000 Fig. 1-3) brought up to date: part zero
 and the Data Block 0 offsets, the stock to put in the vise (the program's own, or the one
 the simulation sizes from the program's extent: app/cnc/simulate's rule), the tool list
-with each tool's name, diameter, RPM (and the gear range on the machine's spindle; the
-control's, seed 001 §3.4.4: 60-500 low, 500-4000 high), calibration, coolant and the first
-block each tool cuts; the hole table (every hole in cutting order with its block, position,
+with each tool's name, type and length out of the holder (the crib's, as the program
+copied it), diameter, RPM (and the gear range on the machine's spindle; the control's,
+seed 001 §3.4.4: 60-500 low, 500-4000 high), calibration, coolant and the first block each
+tool cuts; the hole table (every hole in cutting order with its block, position,
 tool, depth and operation, read from the compiled path's hole spans); cycle time per tool
 and in total; for a target, its compatibility report (with the tape length for tape); and
 the tool path picture. A pure
@@ -39,6 +40,9 @@ HOLE_ROWS = 500
 
 @dataclass(frozen=True)
 class ToolLine:
+    """One tool to set up: its name, type (the crib's, as the program copied it) and
+    length out of the holder, diameter, RPM and gear, calibration, coolant, first cut."""
+
     number: int
     name: str
     diameter: str
@@ -48,6 +52,17 @@ class ToolLine:
     coolant: str
     first_block: int | None
     seconds: str
+    kind: str = ""
+    length: str = ""
+
+    def description(self) -> str:
+        """`1/4-20 TAP (tap, 1.250 in out of the holder)`, or the name alone."""
+        details = [self.kind] if self.kind else []
+        if self.length:
+            details.append(f"{self.length} out of the holder")
+        if not details:
+            return self.name
+        return (f"{self.name} " if self.name else "") + f"({', '.join(details)})"
 
 
 @dataclass(frozen=True)
@@ -236,6 +251,8 @@ def setup_sheet(
                 coolant=tool.coolant.value,
                 first_block=cuts.get(tool.number),
                 seconds=format_seconds(result.per_tool.get(tool.number, 0.0)),
+                kind=tool.kind.label if tool.kind is not None else "",
+                length="" if tool.length is None else f"{format_decimal(tool.length)} {u}",
             )
         )
     if report is not None:
@@ -272,8 +289,8 @@ def render_text(sheet: SetupSheet) -> str:
             f"{t.number:>4}  {t.diameter:<12} {t.rpm:>5}  {t.gear:<25} {t.tcal:<12} "
             f"{t.coolant:<8} {first:<10} {t.seconds}"
         )
-        if t.name:
-            lines.append(f"      {t.name}")
+        if t.description():
+            lines.append(f"      {t.description()}")
     if sheet.holes:
         lines += ["", "HOLE  BLOCK  X           Y           TOOL  Z DN        OPERATION"]
         for h in sheet.holes:

@@ -1,12 +1,22 @@
 """How big a program or an import may be: the stated limits that bound one request's work.
 
-A program of up to `MAX_BLOCKS` data blocks opens, validates, previews and exports in a
-bounded time (docs/security.md gives the measurements); an import is refused, naming the
-limit, before its expensive work starts: first by its bytes and lines, then by the blocks
-it would make. Pure: no Flask, database or serial code.
+A program of up to `MAX_BLOCKS` data blocks and `MAX_MOVES` moves opens, validates,
+previews and exports in a bounded time (docs/security.md gives the measurements); an
+import is refused, naming the limit, before its expensive work starts: first by its bytes
+and lines, then by the blocks it would make, then by the moves those blocks expand to
+(app/cnc/cost.py). Past the limits, one request's time is bounded too: a caller may set a
+time budget (`time_budget`), and the long loops of the core check it (`spend`), so a
+request that would run on is refused with a clear message instead of being killed.
+Pure: no Flask, database or serial code.
 """
 
 from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
 
 MAX_BLOCKS = 5000
 """Data blocks in one program (document, import, editor)."""
@@ -20,40 +30,60 @@ text form has them."""
 
 MAX_DRAWING_ENTITIES = 5_000
 """Entities in a DXF drawing's model space (each line, arc, circle, text…, a polyline's
-vertices one each): as many as a program has blocks. Checked as ezdxf gives them, before
-any is read; the line limit keeps an uploaded file under it, this keeps every reading of a
-stored drawing there too."""
+vertices one each): as many as a program has blocks. The drawings page checks them as
+ezdxf gives them, before any is read, at every reading of a stored drawing; the line limit
+keeps an uploaded file under it."""
+
+
+MAX_EXPANDED_LINES = 50_000
+"""Lines one G-code import runs, each time it runs one: a file's subroutines and loops
+(app/cnc/formats/gcode/ngc.py) repeat lines, and a loop that never ends must not hold the
+request (a loop of expressions refused at this limit: 2 s). Ten lines for every block a
+program may have."""
 
 
 class TooLarge(ValueError):
     """An input past one of the limits above; the message names the limit."""
 
 
-def check_import_size(data: bytes) -> None:
-    """Refuse `data` larger than the import limits (before any parsing). Raises TooLarge
-    naming the limit."""
-    if len(data) > MAX_IMPORT_BYTES:
+@dataclass(frozen=True)
+class ImportLimits:
+    """The bounds of one imported file: its bytes and its lines (a server's are settings,
+    MILLBLOCKS_MAX_UPLOAD_BYTES and MILLBLOCKS_MAX_IMPORT_LINES)."""
+
+    bytes: int = MAX_IMPORT_BYTES
+    lines: int = MAX_IMPORT_LINES
+
+
+IMPORT_LIMITS = ImportLimits()
+"""The stated limits above."""
+
+
+def check_import_size(data: bytes, limits: ImportLimits = IMPORT_LIMITS) -> None:
+    """Refuse `data` larger than `limits` (before any parsing). Raises TooLarge naming the
+    limit."""
+    if len(data) > limits.bytes:
         raise TooLarge(
-            f"the file has {len(data):,} bytes; an import is at most {MAX_IMPORT_BYTES:,} bytes"
+            f"the file has {len(data):,} bytes; an import is at most {limits.bytes:,} bytes"
         )
     from app.cnc.formats.dxf.reader import binary_dxf_tags, is_binary_dxf
 
     if is_binary_dxf(data):
         # Its tags are not lines: counted (up to past the limit) as its text form's lines.
-        tags = binary_dxf_tags(data, MAX_IMPORT_LINES // 2 + 1)
-        if 2 * tags > MAX_IMPORT_LINES:
+        tags = binary_dxf_tags(data, limits.lines // 2 + 1)
+        if 2 * tags > limits.lines:
             raise TooLarge(
-                f"the file has more than {MAX_IMPORT_LINES:,} lines (binary DXF: two lines a "
-                f"tag, as in its text form); an import is at most {MAX_IMPORT_LINES:,} lines "
+                f"the file has more than {limits.lines:,} lines (binary DXF: two lines a "
+                f"tag, as in its text form); an import is at most {limits.lines:,} lines "
                 f"and {MAX_BLOCKS:,} blocks"
             )
         return
     lines = data.count(b"\n") + 1
     # A tape's blocks end in CR (ASCII) or EOB (EIA: 0x80); count those too.
     lines = max(lines, data.count(b"\r"), data.count(b"\x80"))
-    if lines > MAX_IMPORT_LINES:
+    if lines > limits.lines:
         raise TooLarge(
-            f"the file has {lines:,} lines; an import is at most {MAX_IMPORT_LINES:,} lines "
+            f"the file has {lines:,} lines; an import is at most {limits.lines:,} lines "
             f"and {MAX_BLOCKS:,} blocks"
         )
 
@@ -63,4 +93,64 @@ def check_block_count(count: int) -> None:
     if count > MAX_BLOCKS:
         raise TooLarge(
             f"the program would have {count:,} data blocks; a program has at most {MAX_BLOCKS:,}"
+        )
+
+
+MAX_MOVES = 1_000_000
+"""Moves one program may expand to (LOOPs multiplied out): the size every page, export and
+command answers within seconds (docs/security.md). The command line may allow more for
+the user's own files (`--max-moves`)."""
+
+MAX_POCKET_WORK = 200_000
+"""Points one POCKET's planning may shrink: the points its contours are drawn with, times
+its levels (one per step-over across it). The planner offsets the whole region once per
+level with Clipper, whose time grows with both (docs/security.md, "Pockets")."""
+
+_MOVE_LIMIT: ContextVar[int] = ContextVar("millblocks_move_limit", default=MAX_MOVES)
+
+
+def move_limit() -> int:
+    """The moves a program may expand to here: MAX_MOVES unless `moves_allowed` says."""
+    return _MOVE_LIMIT.get()
+
+
+@contextmanager
+def moves_allowed(limit: int) -> Iterator[None]:
+    """Allow programs of up to `limit` moves inside the block (the command line's
+    `--max-moves`, for the user's own files on the user's own computer)."""
+    token = _MOVE_LIMIT.set(limit)
+    try:
+        yield
+    finally:
+        _MOVE_LIMIT.reset(token)
+
+
+class OverBudget(TooLarge):
+    """The work of one request ran past its time budget (the message says what to do)."""
+
+
+_DEADLINE: ContextVar[tuple[float, float] | None] = ContextVar("millblocks_deadline", default=None)
+
+
+@contextmanager
+def time_budget(seconds: float) -> Iterator[None]:
+    """Give the work inside the block `seconds` of wall time: past that, `spend` raises
+    OverBudget. For a server's request, the last line of defence behind the size limits."""
+    token = _DEADLINE.set((time.monotonic() + seconds, seconds))
+    try:
+        yield
+    finally:
+        _DEADLINE.reset(token)
+
+
+def spend() -> None:
+    """Raise OverBudget when the time budget in force (if any) is used up. Called from the
+    loops whose work grows with a program (the compile's nodes and patterns, a pocket's
+    levels and rings, the walk over every move), it costs a clock read."""
+    deadline = _DEADLINE.get()
+    if deadline is not None and time.monotonic() > deadline[0]:
+        raise OverBudget(
+            f"this took more than the {deadline[1]:g} s one request may take on this server, "
+            "and was stopped; make the program smaller (fewer LOOP patterns, a larger "
+            "step-over) or run it with the millblocks command on your own computer"
         )

@@ -13,9 +13,10 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from dataclasses import replace
 from decimal import Decimal
+from fractions import Fraction
 from typing import Any
 
-from app.cnc import limits, spindle
+from app.cnc import cost, limits, sizes, spindle
 from app.cnc.blocks import (
     ARC_PAIRS,
     MILL_CONTOUR_CLASSES,
@@ -40,15 +41,26 @@ from app.cnc.blocks import (
     PocketLine,
     Program,
     Rep,
+    Tool,
     field_label,
-    tool_name_fault,
 )
 from app.cnc.compiler import compile_program
+from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
 from app.cnc.kinds import REGISTRY, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
+from app.cnc.tools import (
+    MAX_FLUTES,
+    MAX_NUMBER,
+    Hand,
+    ToolType,
+    lead_per_rev,
+    pitch_text,
+    thread_faults,
+    tool_name_fault,
+)
 from app.cnc.units import Units, format_decimal
 
 ERROR = Severity.ERROR
@@ -109,6 +121,7 @@ def _identity(program: Program) -> tuple[Any, ...]:
         program.name,
         program.part_number,
         program.units,
+        sizes.move_limit(),  # the limit validation holds it to (a command line may lift it)
     )
 
 
@@ -171,6 +184,7 @@ class _Checker:
         self.check_block0(self.program.block0, self.program.units)
         for number, block in enumerate(self.blocks, start=1):
             self.problems += [replace(p, block=number) for p in _own_problems(block)]
+        self.check_size()
         self.check_geometry()
         self.check_loops()
         self.check_order()
@@ -194,6 +208,10 @@ class _Checker:
                 Rule.PART_NUMBER,
                 f"'{part}' is not a part number; allowed up to 8 digits",
             )
+
+        if self.program.material is not None:
+            for fault in workpiece_faults(self.program.material, self.program.units):
+                self.add(None, "MATERIAL", ERROR, Rule.MATERIAL, fault)
 
     def check_block0(self, db0: DataBlock0, units: Units) -> None:
         for name in ("x_offset", "y_offset"):
@@ -234,6 +252,7 @@ class _Checker:
                 self.check_length(0, f"{where} DIA", tool.diameter, units, positive=True)
             if tool.tcal is not None:
                 self.check_length(0, f"{where} TCAL", tool.tcal, units)
+            self.check_tool_copy(tool, where, units)
             if tool.rpm is not None and not 1 <= abs(tool.rpm) <= spindle.FIELD_MAX_RPM:
                 self.add(
                     0,
@@ -255,6 +274,22 @@ class _Checker:
                     f"{spindle.CONTROL.range_text()}; an export is refused unless the machine "
                     "chosen runs it (the spindle range in its profile)",
                 )
+
+    def check_tool_copy(self, tool: Tool, where: str, units: Units) -> None:
+        """The program's copy of a crib tool: its ranges, and a pitch and hand only on a
+        tap or thread mill (app.cnc.tools.thread_faults, the crib's own rule)."""
+        if tool.crib is not None and not 1 <= tool.crib <= MAX_NUMBER:
+            message = f"{tool.crib} is outside the allowed range 1 to {MAX_NUMBER}"
+            self.add(0, f"{where} CRIB #", ERROR, Rule.RANGE, message)
+        if tool.flutes is not None and not 1 <= tool.flutes <= MAX_FLUTES:
+            message = f"{tool.flutes} is outside the allowed range 1 to {MAX_FLUTES}"
+            self.add(0, f"{where} FLUTES", ERROR, Rule.RANGE, message)
+        if tool.length is not None:
+            self.check_length(0, f"{where} LENGTH OUT", tool.length, units, positive=True)
+        for label, message in thread_faults(tool.kind, tool.pitch, tool.pitch_unit, tool.hand):
+            if label == "PITCH" and tool.pitch is None:
+                continue  # a tap copied without its pitch is only unchecked (check_taps)
+            self.add(0, f"{where} {label}", ERROR, Rule.TOOL_THREAD, message)
 
     # -- fields -------------------------------------------------------------------------
 
@@ -706,6 +741,7 @@ class _Checker:
                         else "cutter-compensated milling needs the cutter's measured diameter"
                     ),
                 )
+        self.check_taps()
         for first, last, what in self.sequences():
             sequence_tool = self.blocks[first].tool_number
             for index in range(first + 1, last + 1):
@@ -719,6 +755,68 @@ class _Checker:
                         f"tool {other} differs from tool {sequence_tool} of the {what} starting at "
                         f"block {first + 1}; one tool is used for the whole {what}",
                     )
+
+    def check_taps(self) -> None:
+        """A tap feeds exactly one pitch per turn: a TAP block's FEEDR Z is its tool's RPM ×
+        pitch, and a left-hand tap turns in reverse (a negative RPM), a right-hand one
+        forward. Checked where Data Block 0 knows the tool is a tap (its type or pitch,
+        copied from the crib)."""
+        db0 = self.program.block0
+        for number, block in enumerate(self.blocks, start=1):
+            if not (isinstance(block, Hole) and block.op is HoleOp.TAP):
+                continue
+            tool = db0.tool(block.tool)
+            if tool is None or tool.rpm is None:
+                continue
+            is_tap = tool.kind is ToolType.TAP or (tool.kind is None and tool.pitch is not None)
+            if not is_tap:
+                continue
+            what = f"tool {tool.number}" + (f" ({tool.name})" if tool.name else "")
+            if tool.hand is Hand.LEFT and tool.rpm > 0:
+                self.add(
+                    number,
+                    "TOOL #",
+                    ERROR,
+                    Rule.TAP_HAND,
+                    f"{what} is a left-hand tap but turns forward at {tool.rpm} rpm; a left-hand "
+                    f"tap runs in reverse: make its RPM negative ({-tool.rpm}) in Data Block 0",
+                )
+            elif tool.hand is Hand.RIGHT and tool.rpm < 0:
+                self.add(
+                    number,
+                    "TOOL #",
+                    ERROR,
+                    Rule.TAP_HAND,
+                    f"{what} is a right-hand tap but turns in reverse at {tool.rpm} rpm; a "
+                    f"right-hand tap runs forward: make its RPM positive ({-tool.rpm}) in "
+                    "Data Block 0",
+                )
+            if tool.pitch is None or block.feed_z is None or tool.pitch <= 0:
+                continue
+            lead = lead_per_rev(tool.pitch, tool.pitch_unit, block.units)
+            needed = tap_feed(tool.rpm, lead, block.units)
+            if Fraction(block.feed_z) == needed:
+                continue
+            u = block.units.feed_symbol
+            pitch = pitch_text(tool.pitch, tool.pitch_unit)
+            step = Fraction(limits.FEED_Z[block.units].step)
+            shown = format_decimal(block.feed_z)
+            product = f"{abs(tool.rpm)} rpm × {pitch} = {_feed(needed, block.units)} {u}"
+            if (needed / step).denominator == 1:
+                fix = f"change FEEDR Z to {_feed(needed, block.units)} or the tool's RPM"
+            else:
+                fix = (
+                    f"FEEDR Z cannot hold that ({limits.FEED_Z[block.units].step} {u} steps): "
+                    + tap_speeds_text(tool.rpm, lead, block.units)
+                )
+            self.add(
+                number,
+                "FEEDR Z",
+                ERROR,
+                Rule.TAP_FEED,
+                f"{shown} {u} does not match {what}: a tap feeds one pitch per turn, "
+                f"{product}; {fix}",
+            )
 
     def sequences(self) -> Iterator[tuple[int, int, str]]:
         """(first, last, name) index ranges of mill sequences and outermost LOOP sequences."""
@@ -737,6 +835,22 @@ class _Checker:
                 depth -= 1
                 if depth == 0:
                     yield start, index, "LOOP sequence"
+
+    # -- size -------------------------------------------------------------------------------
+
+    def check_size(self) -> None:
+        """A program past the moves it may expand to, or a POCKET past the planning it may
+        take (app/cnc/cost.py): an error on the outermost block that takes it there, before
+        anything compiles it."""
+        found = cost.estimate(self.program)
+        if found.over is not None:
+            self.add(
+                found.over,
+                "LOOP" if found.rep is not None else "STEP" if found.levels else None,
+                ERROR,
+                Rule.TOO_LARGE,
+                found.message(sizes.move_limit()),
+            )
 
     # -- geometry ------------------------------------------------------------------------
 
@@ -849,6 +963,14 @@ def copy_errors(program: Program, number: int) -> list[tuple[Rule, str]]:
     if span[0].mode is Mode.INC and any(b.mode is Mode.ABS for b in span if _has_position(b)):
         errors.append((Rule.COPY_3, COPY_MESSAGES[Rule.COPY_3]))
     return errors
+
+
+def _feed(value: Fraction, units: Units) -> str:
+    """A feed worked out exactly, as a message shows it: 25.0 (ipm), 500 (mm/min), 16.65."""
+    if units is Units.MM and value.denominator == 1:
+        return str(value.numerator)
+    text = f"{float(value):.4f}".rstrip("0")
+    return text + "0" if text.endswith(".") else text
 
 
 def _in_sequence(block: Block) -> bool:

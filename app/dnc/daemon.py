@@ -9,6 +9,12 @@ per machine and any number of machines at once, writing progress into the row as
 polls it. A web restart touches nothing here. A cancel saved by any web worker reaches the
 transfer within a second (`remote_cancel`).
 
+A machine whose serial settings have `requests on` is listened to while it is idle: what
+the control sends is either a request naming a program (app.dnc.requests), answered by
+queueing that program to the machine (an unknown name answers nothing and is logged), or a
+program, received into the library as the Transfers page's Receive would. A queued
+transfer for that machine stops the listening (within 50 ms) and takes the port.
+
 When the service stops (SIGTERM, Ctrl-C) it cancels what runs and marks those rows
 interrupted, naming them; when it starts after a crash, rows still "running" have lost
 their process: it marks them interrupted and says which (the operator checks what the
@@ -17,6 +23,7 @@ control has and sends again).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import socket
@@ -28,9 +35,18 @@ from datetime import UTC, datetime, timedelta
 from app.dnc import jobs, service
 from app.dnc.jobs import JobState, TransferJob
 from app.dnc.record import Direction, TransferRecord
+from app.dnc.requests import Request, read_request
 from app.dnc.settings import port_of
-from app.dnc.transfer import Cancel, Progress
-from app.storage.library import Library, LibraryError, NotFound
+from app.dnc.transfer import (
+    Cancel,
+    Outcome,
+    Progress,
+    ReceiveError,
+    ReceiveResult,
+    TransferError,
+    receive,
+)
+from app.storage.library import Library, LibraryError, Machine, NotFound, StoredProgram
 from app.storage.transfers import Transfer, TransferLog
 
 log = logging.getLogger(__name__)
@@ -72,6 +88,23 @@ class _Running:
     job: TransferJob
 
 
+@dataclass
+class _Listener:
+    thread: threading.Thread
+    stop: threading.Event
+
+
+LISTEN_SECONDS = 3600.0  # s: one wait for the control; then the service listens again
+LISTEN_RETRY = 5.0  # s: after a port that could not be opened
+
+
+def _answers_requests(machine: Machine) -> bool:
+    try:
+        return service.settings_of(machine).requests and bool(port_of(machine.serial))
+    except ValueError:
+        return False
+
+
 class TransferService:
     """Claims queued transfers and runs them; `run` until `stop` is set."""
 
@@ -81,6 +114,7 @@ class TransferService:
         self.poll = poll
         self.name = name or f"{socket.gethostname()} pid {os.getpid()}"
         self.running: dict[str, _Running] = {}  # by machine
+        self.listening: dict[str, _Listener] = {}  # by machine
         self._beat = 0.0
 
     def recover(self) -> list[Transfer]:
@@ -98,8 +132,16 @@ class TransferService:
         for machine, running in list(self.running.items()):
             if running.job.wait(0):
                 del self.running[machine]
+        for machine, done in list(self.listening.items()):
+            if not done.thread.is_alive():
+                del self.listening[machine]
         started = []
-        for transfer in self.log.queued():
+        queued = self.log.queued()
+        for transfer in queued:
+            holding = self.listening.get(transfer.machine)
+            if holding is not None:
+                holding.stop.set()  # it lets go of the port; the transfer starts next time
+                continue
             if transfer.machine in self.running or not self.log.claim(transfer.id):
                 continue
             job = self._start(transfer)
@@ -108,6 +150,13 @@ class TransferService:
             log.info(
                 "transfer %d: %s on %s started", transfer.id, transfer.direction, transfer.machine
             )
+        waiting = {t.machine for t in queued}
+        for profile in self.library.machines():
+            name = profile.name
+            if name in self.running or name in self.listening or name in waiting:
+                continue
+            if _answers_requests(profile):
+                self.listening[name] = self._listen(profile)
         return started
 
     def run(
@@ -128,6 +177,11 @@ class TransferService:
     def shutdown(self, timeout: float = 5.0) -> list[Transfer]:
         """Cancel every running transfer, wait for it to let go of its port, and mark its
         row interrupted (a cancelled send leaves a partial program in the control)."""
+        for listener in self.listening.values():
+            listener.stop.set()
+        for listener in self.listening.values():
+            listener.thread.join(timeout)
+        self.listening.clear()
         stopped = []
         for running in self.running.values():
             running.job.cancel()
@@ -137,6 +191,115 @@ class TransferService:
             self.log.finish(running.transfer.id, None, "interrupted", INTERRUPTED_BY_STOP)
             del self.running[machine]
         return stopped
+
+    # -- listening for requests -------------------------------------------------------------
+
+    def _listen(self, machine: Machine) -> _Listener:
+        stop = threading.Event()
+        thread = threading.Thread(
+            target=self._listen_once,
+            args=(machine, stop),
+            name=f"dnc-listen-{machine.name}",
+            daemon=True,
+        )
+        thread.start()
+        return _Listener(thread, stop)
+
+    def _listen_once(self, machine: Machine, stop: threading.Event) -> None:
+        """Wait for what the control sends (until `stop`), then answer or keep it."""
+        try:
+            settings = service.settings_of(machine)
+            result = receive(
+                settings,
+                port_of(machine.serial),
+                first_byte_timeout=LISTEN_SECONDS,
+                idle_timeout=2.0,
+                cancel=stop,
+            )
+        except ReceiveError as exc:
+            if exc.result.raw:  # something came, but not a whole program: logged
+                self.log.log(TransferRecord.of_receive(exc.result, machine=machine.name))
+            return
+        except (TransferError, ValueError) as exc:
+            log.warning("listening on %s: %s", machine.name, exc)
+            stop.wait(LISTEN_RETRY)  # a port that is busy or gone: try again later
+            return
+        if result.outcome is not Outcome.OK:
+            return
+        try:
+            self.answer(machine, result)
+        except Exception:  # a bug must not stop the service's other machines
+            log.exception("answering %s", machine.name)
+
+    def answer(self, machine: Machine, result: ReceiveResult) -> Transfer | None:
+        """What came from `machine`: a request, answered by queueing the program it names
+        (its log row says so; an unknown name is logged and answered with nothing), or a
+        program, kept as a receive. Returns the queued send, if any."""
+        author = f"request from {machine.name}"
+        request = read_request(result.text or result.data.decode("ascii", "replace"))
+        if request is None:
+            # Not a program either: logged with its reason and the raw capture.
+            with contextlib.suppress(service.CaptureImportError):
+                service.keep_capture(
+                    result,
+                    machine,
+                    self.library,
+                    author=f"sent from {machine.name}",
+                    log=self.log.log,
+                    compare=self.log.compare_with_last_send,
+                )
+            return None
+        found = self._requested(request)
+        if isinstance(found, str):
+            self.log.log(
+                TransferRecord.of_receive(
+                    result,
+                    machine=machine.name,
+                    author=author,
+                    error=f"a request for {request.describe()}: {found}; nothing was sent",
+                )
+            )
+            return None
+        self.log.log(
+            TransferRecord.of_receive(
+                result,
+                machine=machine.name,
+                author=author,
+                program_id=found.info.id,
+                program_name=found.info.name,
+                report=f"a request for {request.describe()}: {found.info.name} queued\n",
+            )
+        )
+        row = self.log.begin(
+            "send",
+            machine.name,
+            port_of(machine.serial),
+            machine.target,
+            author,
+            program_id=found.info.id,
+            program_name=found.info.name,
+            queued=True,
+        )
+        return self.log.get(row)
+
+    def _requested(self, request: Request) -> StoredProgram | str:
+        """The library program a request names (part number first, then name), or why none."""
+        if request.part_number:
+            matches = [
+                p
+                for p in self.library.programs()
+                if (p.part_number.lstrip("0") or "0") == request.part_number
+            ]
+            if len(matches) == 1:
+                return self.library.get(matches[0].id)
+            if len(matches) > 1:
+                return f"{len(matches)} programs have part number {request.part_number}"
+        if request.name:
+            try:
+                return self.library.find(request.name)
+            except LibraryError as exc:
+                return str(exc)
+        return f"no program with part number {request.part_number} in the library"
 
     # -- one transfer -----------------------------------------------------------------------
 

@@ -23,6 +23,7 @@ from app.cnc.emit.target import Export, export, targets
 from app.cnc.imports import read_program
 from app.cnc.imports.registry import importers
 from app.cnc.restart import restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
 from app.dnc.settings import PortSettings, port_of
 from app.dnc.transfer import (
@@ -187,10 +188,12 @@ def receive_program(
     machine (app.storage.transfers.TransferLog.compare_with_last_send); its text goes into
     the report.
 
-    Raises SettingsError before the port is tried; ReceiveError (garbage, timeout, vanished
+    Raises SettingsError, or TextError for a `name` the library cannot store
+    (app.cnc.text), before the port is tried; ReceiveError (garbage, timeout, vanished
     port) or CaptureImportError (not a program) after, with the record logged and nothing
     saved.
     """
+    check_text(name, "name", NAME_LENGTH)
     settings = settings_of(machine)
     path = port or port_of(machine.serial)
 
@@ -215,10 +218,44 @@ def receive_program(
         raise
     if result.outcome is Outcome.CANCELLED:
         return Received(result, record(result), None, None)
+    return keep_capture(
+        result,
+        machine,
+        library,
+        format=format,
+        name=name,
+        author=author,
+        log=log,
+        compare=compare,
+    )
+
+
+def keep_capture(
+    result: ReceiveResult,
+    machine: MachineProfile,
+    library: ProgramSink,
+    *,
+    format: str | None = None,
+    name: str = "",
+    author: str = "",
+    log: Log | None = None,
+    compare: Callable[[str, Program], str] | None = None,
+) -> Received:
+    """Import what came from `machine` (a whole receive) as `format` (default: the machine's
+    target) and add it to `library`, its record logged (see `receive_program`). Raises
+    CaptureImportError (not a program; the record logged, nothing saved)."""
+    settings = settings_of(machine)
+
+    def record(**extra: Any) -> TransferRecord:
+        entry = TransferRecord.of_receive(result, machine=machine.name, author=author, **extra)
+        if log is not None:
+            log(entry)
+        return entry
+
     try:
         program, report = import_capture(result, format or settings.target, name)
     except CaptureImportError as exc:
-        record(result, error=str(exc))
+        record(error=str(exc))
         raise
     if compare is not None:  # before the name given here, which is not the control's edit
         compared = compare(machine.name, program)
@@ -226,10 +263,8 @@ def receive_program(
             report = "\n".join(part for part in (report.rstrip("\n"), compared) if part) + "\n"
     if name:
         program = dataclasses.replace(program, name=name)
-    stored = library.create(program, author, f"received from {machine.name} on {path}")
-    entry = record(
-        result, program_id=getattr(stored, "id", None), program_name=program.name, report=report
-    )
+    stored = library.create(program, author, f"received from {machine.name} on {result.port}")
+    entry = record(program_id=getattr(stored, "id", None), program_name=program.name, report=report)
     return Received(result, entry, program, stored, report)
 
 

@@ -129,7 +129,9 @@ class PortSettings:
     word such as "M30" (the end of the line holding it). target: the export target sent.
     hold: seconds the control may hold a send with XOFF before it fails; 0 for no limit — a
     drip feed, where the control runs the program as it reads it and holds the line for as
-    long as a cut takes (the operator can still cancel).
+    long as a cut takes (the operator can still cancel). requests: the transfer service
+    listens on the port while it is idle and answers a request sent from the control with
+    the program it names (app.dnc.requests); anything else it sends is received.
     """
 
     baud: int = 4800
@@ -145,6 +147,7 @@ class PortSettings:
     framing: Framing = Framing.AUTO
     end: str = "%"
     hold: int = 30
+    requests: bool = False
 
     # -- reading and writing the machine's dict ----------------------------------------------
 
@@ -183,6 +186,8 @@ class PortSettings:
             value = getattr(self, f.name)
             if isinstance(value, enum.Enum):
                 out[f.name] = str(value.value)
+            elif isinstance(value, bool):
+                out[f.name] = "on" if value else "off"
             elif value is None:
                 out[f.name] = ""
             else:
@@ -231,6 +236,8 @@ class PortSettings:
             parts.append(f"drip feed {self.cps} cps")
         if self.hold == 0 and self.flow is Flow.XONXOFF:
             parts.append("XOFF held without limit")
+        if self.requests:
+            parts.append("answers requests")
         parts.append(self.target)
         return ", ".join(parts)
 
@@ -351,6 +358,7 @@ _READERS = {
     "framing": _word({f.value: f for f in Framing}, "auto, uart or software"),
     "end": _text,
     "hold": _int,
+    "requests": _word({"on": True, "off": False, "yes": True, "no": False}, "on or off"),
 }
 
 SERIAL_FIELDS = tuple(_READERS)

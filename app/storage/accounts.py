@@ -22,6 +22,7 @@ from sqlalchemy import delete, func, select
 from sqlalchemy.orm import Session
 from werkzeug.security import check_password_hash, generate_password_hash
 
+from app.cnc.text import SHORT_NAME_LENGTH, check_text
 from app.storage.library import Library, LibraryError, NotFound
 from app.storage.models import LoginAttemptRow, SessionRow, UserRow
 
@@ -57,9 +58,10 @@ class Accounts:
         self.library = library
 
     def create(self, username: str, password: str, role: str) -> User:
-        username = username.strip()
-        if not username or len(username) > 100:
-            raise LibraryError("a user name is 1 to 100 characters")
+        username = check_text(username.strip(), "user name", SHORT_NAME_LENGTH)
+        check_text(password, "password")
+        if not username:
+            raise LibraryError(f"a user name is 1 to {SHORT_NAME_LENGTH} characters")
         if role not in ROLES:
             raise LibraryError(f"role {role!r} is not one of {', '.join(ROLES)}")
         if len(password) < MIN_PASSWORD:
@@ -89,6 +91,7 @@ class Accounts:
 
     def check(self, username: str, password: str) -> User | None:
         """The user, when the password is right; None otherwise (same time either way)."""
+        check_text(password, "password")
         with self.library.session() as s:
             row = s.scalar(select(UserRow).where(UserRow.username == username))
             stored = row.password_hash if row else generate_password_hash("not a password")
@@ -107,6 +110,7 @@ class Accounts:
 
     def set_password(self, username: str, password: str) -> None:
         """Change a user's password; every session of the user ends."""
+        check_text(password, "password")
         if len(password) < MIN_PASSWORD:
             raise LibraryError(f"a password has at least {MIN_PASSWORD} characters")
         with self.library.session() as s:

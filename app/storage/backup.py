@@ -1,8 +1,9 @@
 """Reading a backup archive (the zip `Library.backup` writes), whole and checked, before
 anything is stored.
 
-`read_backup` validates the manifest field by field (naming the program, revision or
-machine and the field at fault), reads every revision as a program document, and inflates
+`read_backup` validates the manifest field by field (naming the program, tool, revision or
+machine and the field at fault), reads every revision as a program document (a crib
+tool's as a tool the crib can keep), and inflates
 no member past `MAX_MEMBER_BYTES` nor the archive past `MAX_TOTAL_BYTES`, counting the
 bytes it actually inflates (a zip's stated sizes are only the archive's claim). Anything
 wrong raises `BackupError`; `Library.restore_backup` then stores everything in one
@@ -21,8 +22,12 @@ from typing import Any, BinaryIO
 
 from app.cnc import document
 from app.cnc.blocks import Program
+from app.cnc.document import DocumentError
 from app.cnc.emit.target import OptionError, targets
 from app.cnc.machine import MachineError, read_machine
+from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, text_fault
+from app.cnc.tools import CribTool, tool_faults
+from app.storage.crib import tool_from_document
 from app.storage.library import BACKUP_FORMAT, LibraryError, Machine
 
 MAX_MEMBER_BYTES = 16 * 1024 * 1024
@@ -54,9 +59,30 @@ class ProgramEntry:
 
 
 @dataclass(frozen=True)
+class ToolRevision:
+    """One saved version of a crib tool, as its document and read."""
+
+    version: int
+    text: str
+    tool: CribTool
+    author: str
+    summary: str
+    created_at: datetime
+
+
+@dataclass(frozen=True)
+class ToolEntry:
+    """A crib tool of the backup with its revisions (retired or in use)."""
+
+    retired: bool
+    revisions: tuple[ToolRevision, ...]
+
+
+@dataclass(frozen=True)
 class Backup:
     programs: tuple[ProgramEntry, ...]
     machines: tuple[Machine, ...]
+    tools: tuple[ToolEntry, ...] = ()
 
 
 class _Reader:
@@ -144,10 +170,43 @@ def _backup(reader: _Reader, manifest: Any) -> Backup:
         raise BackupError(f"backup version {manifest.get('version')!r} is not 1")
     programs = _list(manifest, "programs", "manifest")
     machines = _list(manifest, "machines", "manifest", required=False)
+    tools = _list(manifest, "tools", "manifest", required=False)  # backups before the crib
     return Backup(
         tuple(_program(reader, entry, n) for n, entry in enumerate(programs, start=1)),
         tuple(_machine(entry, n) for n, entry in enumerate(machines, start=1)),
+        tuple(_tool(reader, entry, n) for n, entry in enumerate(tools, start=1)),
     )
+
+
+def _tool(reader: _Reader, entry: Any, number: int) -> ToolEntry:
+    """A crib tool's entry: each revision a tool the crib can keep."""
+    where = f"manifest, tool {number}"
+    if not isinstance(entry, dict):
+        raise BackupError(f"{where}: expected an object")
+    retired = entry.get("retired", False)
+    if not isinstance(retired, bool):
+        raise BackupError(f"{where}, retired: expected true or false")
+    revisions = _list(entry, "revisions", where)
+    if not revisions:
+        raise BackupError(f"{where}: no revisions; every tool has at least one")
+    read = []
+    for k, rev in enumerate(revisions, start=1):
+        at = f"{where}, revision {k}"
+        version, file, created, author, summary = _revision_fields(rev, at)
+        text = reader.text(file)
+        try:
+            tool = tool_from_document(text, f"{at} ({file})")
+        except (DocumentError, json.JSONDecodeError, RecursionError) as exc:
+            raise BackupError(f"{at} ({file}): {exc}") from None
+        faults = tool_faults(tool)
+        if faults:
+            label, message = faults[0]
+            raise BackupError(f"{at} ({file}), {label}: {message}")
+        read.append(ToolRevision(version, text, tool, author, summary, created))
+    versions = [r.version for r in read]
+    if versions != sorted(set(versions)):
+        raise BackupError(f"{where}: revision versions {versions} are not increasing and unique")
+    return ToolEntry(retired, tuple(read))
 
 
 def _program(reader: _Reader, entry: Any, number: int) -> ProgramEntry:
@@ -169,7 +228,8 @@ def _program(reader: _Reader, entry: Any, number: int) -> ProgramEntry:
     return ProgramEntry(deleted, read)
 
 
-def _revision(reader: _Reader, rev: Any, where: str) -> Revision:
+def _revision_fields(rev: Any, where: str) -> tuple[int, str, datetime, str, str]:
+    """A revision's version, file, time, author and summary from the manifest."""
     if not isinstance(rev, dict):
         raise BackupError(f"{where}: expected an object")
     version = rev.get("version")
@@ -180,28 +240,27 @@ def _revision(reader: _Reader, rev: Any, where: str) -> Revision:
         created = datetime.fromisoformat(_string(rev, "created_at", where))
     except ValueError:
         raise BackupError(f"{where}, created_at: not a date and time") from None
+    author = _string(rev, "author", where, "")[:SHORT_NAME_LENGTH]
+    return version, file, created.replace(tzinfo=None), author, _string(rev, "summary", where, "")
+
+
+def _revision(reader: _Reader, rev: Any, where: str) -> Revision:
+    version, file, created, author, summary = _revision_fields(rev, where)
     text = reader.text(file)
     try:
         program = document.loads(text)
     except document.DocumentError as exc:
         raise BackupError(f"{where} ({file}): {exc}") from None
-    return Revision(
-        version,
-        text,
-        program,
-        _string(rev, "author", where, "")[:100],
-        _string(rev, "summary", where, ""),
-        created.replace(tzinfo=None),
-    )
+    return Revision(version, text, program, author, summary, created)
 
 
 def _machine(entry: Any, number: int) -> Machine:
     where = f"manifest, machine {number}"
     if not isinstance(entry, dict):
         raise BackupError(f"{where}: expected an object")
-    name = _string(entry, "name", where).strip()
-    if not name or len(name) > 100:
-        raise BackupError(f"{where}, name: 1 to 100 characters")
+    name = _string(entry, "name", where, limit=SHORT_NAME_LENGTH).strip()
+    if not name:
+        raise BackupError(f"{where}, name: 1 to {SHORT_NAME_LENGTH} characters")
     options = _mapping(entry, "options", where)
     if not all(isinstance(v, str) for v in options.values()):
         raise BackupError(f"{where}, options: every value is text")
@@ -210,7 +269,7 @@ def _machine(entry: Any, number: int) -> Machine:
         _string(entry, "target", where),
         options,
         _mapping(entry, "serial", where),
-        _string(entry, "notes", where, ""),
+        _string(entry, "notes", where, "", limit=NOTES_LENGTH),
         _mapping(entry, "limits", where, required=False),
     )
     target = targets().get(machine.target)
@@ -239,8 +298,14 @@ def _mapping(data: dict[str, Any], key: str, where: str, required: bool = True) 
     return value
 
 
-def _string(data: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
+def _string(
+    data: dict[str, Any], key: str, where: str, default: str | None = None, limit: int | None = None
+) -> str:
+    """Text that meets the one text rule (app.cnc.text), at most `limit` characters."""
     value = data.get(key, default)
     if not isinstance(value, str):
         raise BackupError(f"{where}, {key}: expected text")
+    fault = text_fault(value, limit)
+    if fault:
+        raise BackupError(f"{where}, {key}: {fault}")
     return value

@@ -12,22 +12,31 @@ from __future__ import annotations
 
 import fcntl
 import os
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
 from alembic import command
 from alembic.config import Config
+from alembic.runtime.migration import MigrationContext
+from alembic.script import ScriptDirectory
 from sqlalchemy import Engine, create_engine, event, text
 
+from app.cnc.text import check_text
 from app.resources import data_dir, instance_dir
 
 
+class SchemaError(RuntimeError):
+    """A database this MillBlocks cannot use as it is (the message says what to do)."""
+
+
 def database_url(url: str | None = None) -> str:
-    """The URL to use: the argument, else DATABASE_URL, else the default SQLite file."""
+    """The URL to use: the argument, else MILLBLOCKS_DATABASE_URL, else DATABASE_URL, else
+    `millblocks.db` in the instance folder."""
     if url:
         return url
-    env = os.environ.get("DATABASE_URL")
+    env = os.environ.get("MILLBLOCKS_DATABASE_URL") or os.environ.get("DATABASE_URL")
     if env:
         # Heroku-style postgres:// URLs name the old driver; psycopg 3 is what we ship.
         if env.startswith("postgres://"):
@@ -46,8 +55,34 @@ def make_engine(url: str | None = None) -> Engine:
     if resolved.startswith("sqlite"):
         engine = create_engine(resolved, connect_args={"timeout": 30})
         event.listen(engine, "connect", _sqlite_pragmas)
-        return engine
-    return create_engine(resolved, pool_pre_ping=True)
+    else:
+        engine = create_engine(resolved, pool_pre_ping=True)
+    event.listen(engine, "before_cursor_execute", _text_rule)
+    return engine
+
+
+_BIND_NUMBER = re.compile(r"_\d+$")
+
+
+def _text_rule(
+    _conn: Any,
+    _cursor: Any,
+    _statement: str,
+    parameters: Any,
+    context: Any,
+    _executemany: bool,
+) -> None:
+    """Every string a statement sends to the database, stored or looked up, meets the one
+    text rule (app.cnc.text): a NUL or a lone surrogate is a TextError naming the column,
+    not PostgreSQL's `ValueError` or an encoding error from the driver (a 500). The
+    entries check their fields with their limits first; this is the net under them."""
+    compiled = getattr(context, "compiled_parameters", None)
+    rows = compiled if compiled else [parameters]
+    for row in rows:
+        items = row.items() if isinstance(row, dict) else enumerate(row or ())
+        for key, value in items:
+            if isinstance(value, str):
+                check_text(value, _BIND_NUMBER.sub("", str(key)))
 
 
 def _sqlite_pragmas(dbapi_connection: Any, _record: Any) -> None:
@@ -103,16 +138,83 @@ def alembic_config(engine: Engine) -> Config:
     return config
 
 
+def head() -> str:
+    """The newest schema revision this MillBlocks knows."""
+    newest = ScriptDirectory(str(data_dir("migrations"))).get_current_head()
+    assert newest is not None, "migrations/ has no revisions"
+    return newest
+
+
+def history() -> list[tuple[str, str]]:
+    """Every schema revision this MillBlocks knows with what it does, oldest first."""
+    walked = ScriptDirectory(str(data_dir("migrations"))).walk_revisions()
+    return [(r.revision, (r.doc or "").splitlines()[0]) for r in reversed(list(walked))]
+
+
+def revisions() -> list[str]:
+    """Every schema revision this MillBlocks knows, oldest first."""
+    return [revision for revision, _ in history()]
+
+
+def current(engine: Engine) -> str | None:
+    """The database's schema revision; None for an empty database."""
+    with engine.connect() as connection:
+        return MigrationContext.configure(connection).get_current_revision()
+
+
+def check_known(engine: Engine) -> str | None:
+    """The database's revision, after refusing one this MillBlocks does not know: a newer
+    MillBlocks migrated it (rolling the code back without the database), and Alembic would
+    only say "Can't locate revision"."""
+    found = current(engine)
+    if found is not None and found not in revisions():
+        newest = head()
+        raise SchemaError(
+            f"the database's schema is at revision {found}, newer than this MillBlocks "
+            f"(it knows up to {newest}): a newer MillBlocks upgraded it. Run this version "
+            f"against a copy restored from before that upgrade, or run the newer version's "
+            f"`millblocks db downgrade {newest}` first, then this one (docs/deploy.md, "
+            '"Upgrade and roll back")'
+        )
+    return found
+
+
 def upgrade(engine: Engine, revision: str = "head") -> None:
-    """Bring the database up to `revision` (an empty or older database included)."""
+    """Bring the database up to `revision` (an empty or older database included). Raises
+    SchemaError when the database is newer than this code."""
+    check_known(engine)
     config = alembic_config(engine)
     with engine.begin() as connection:
         config.attributes["connection"] = connection
         command.upgrade(config, revision)
 
 
+def undone(found: str | None, revision: str) -> list[tuple[str, str]]:
+    """The migrations a downgrade from `found` to `revision` (an id, or `base`: empty)
+    undoes, newest first. Raises SchemaError for a revision this MillBlocks does not know
+    or one above `found`."""
+    known = history()
+    ids = [r for r, _ in known]
+    if revision != "base" and revision not in ids:
+        raise SchemaError(
+            f"no schema revision {revision!r}; this MillBlocks knows {', '.join(ids)} "
+            "(and base, an empty database)"
+        )
+    top = -1 if found is None else ids.index(found)
+    bottom = -1 if revision == "base" else ids.index(revision)
+    if bottom > top:
+        raise SchemaError(
+            f"the database is at {found or 'base (empty)'}, below {revision}: "
+            "`millblocks db upgrade` goes up"
+        )
+    return list(reversed(known[bottom + 1 : top + 1]))
+
+
 def downgrade(engine: Engine, revision: str) -> None:
-    """Take the database down to `revision` (used by the migration tests)."""
+    """Take the database down to `revision` (an id, or `base`: empty). What each undone
+    migration created is dropped with its data. Raises SchemaError for a database newer than
+    this code or a revision it does not know (see `undone`)."""
+    undone(check_known(engine), revision)
     config = alembic_config(engine)
     with engine.begin() as connection:
         config.attributes["connection"] = connection

@@ -17,7 +17,7 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime, timedelta
+from datetime import UTC, datetime, timedelta, tzinfo
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -25,17 +25,33 @@ from sqlalchemy import Engine, delete, func, or_, select, update
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.cnc import document
+from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
+from app.cnc.machine import MachineError, read_machine
 from app.cnc.memo import ByObject
-from app.cnc.sizes import TooLarge, check_block_count
+from app.cnc.numbers import NumberError, parse_int
+from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
+from app.cnc.text import (
+    NAME_LENGTH,
+    NOTES_LENGTH,
+    SHORT_NAME_LENGTH,
+    check_text,
+    derived_name,
+    search_terms,
+)
+from app.settings import shown
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 
 SORTS = ("name", "part_number", "updated", "created")
 DRAWING_KEEP = timedelta(days=1)
 """How long an uploaded drawing is kept for choosing from."""
+DRAWINGS_PER_USER = 10
+"""Drawings one user keeps: opening one more forgets that user's oldest."""
+DRAWING_BYTES_IN_ALL = 64 * 1024 * 1024
+"""Bytes of all users' drawings together: past it an upload is refused until the oldest
+drawing's day is over (one user alone holds at most 10 × 2 MB)."""
 DRAWING_KEY = re.compile(r"[0-9a-f]{64}")
 BACKUP_FORMAT = "millblocks-backup"
 
@@ -46,6 +62,11 @@ class LibraryError(ValueError):
 
 class NotFound(LibraryError):
     """No such program, revision or machine."""
+
+
+class DrawingsFull(LibraryError):
+    """The server keeps as many drawings as it may (DRAWING_BYTES_IN_ALL): the message says
+    when room comes back."""
 
 
 class StaleSave(LibraryError):
@@ -151,11 +172,17 @@ def _block_words(block: Block) -> frozenset[str]:
 
 def _columns(program: Program) -> dict[str, Any]:
     """The row's columns for `program`. Raises LibraryError for a program past
-    app.cnc.sizes.MAX_BLOCKS: the library keeps only programs it can open."""
+    app.cnc.sizes.MAX_BLOCKS or MAX_MOVES (the server's, whatever a command line allows
+    for files): the library keeps only programs it can open; TextError for a name or
+    notes past the text rule (app.cnc.text), whatever the entry."""
     try:
         check_block_count(len(program.blocks))
+        cost.check(program, MAX_MOVES)
     except TooLarge as exc:
         raise LibraryError(f"not stored: {exc}") from None
+    check_text(program.name, "program name", NAME_LENGTH)
+    check_text(program.part_number, "part number", NAME_LENGTH)
+    check_text(program.notes, "notes", NOTES_LENGTH)
     return {
         "name": program.name,
         "part_number": program.part_number[:8],
@@ -170,8 +197,10 @@ def _columns(program: Program) -> dict[str, Any]:
 class Library:
     """The program library on one database."""
 
-    def __init__(self, engine: Engine) -> None:
+    def __init__(self, engine: Engine, zone: tzinfo = UTC) -> None:
         self.engine = engine
+        self.zone = zone
+        """The shop's time zone, for the times this library's messages state."""
         self.sessions = sessionmaker(engine, expire_on_commit=False)
 
     @contextmanager
@@ -184,6 +213,7 @@ class Library:
 
     def create(self, program: Program, author: str = "", summary_text: str = "") -> ProgramInfo:
         """Add a program; its first revision is version 1."""
+        check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
             row = ProgramRow(
@@ -216,8 +246,11 @@ class Library:
 
     def find(self, reference: str) -> StoredProgram:
         """A program by id (digits) or by exact name (not in the trash)."""
-        if reference.isdigit():
-            return self.get(int(reference))
+        if reference.isascii() and reference.isdigit():  # `²` is a digit to isdigit
+            try:
+                return self.get(parse_int(reference))
+            except NumberError:
+                raise NotFound(f"no program {reference} in the library") from None
         with self.session() as s:
             rows = s.scalars(
                 select(ProgramRow).where(
@@ -240,7 +273,7 @@ class Library:
         statement = select(ProgramRow).where(
             ProgramRow.deleted_at.is_not(None) if trash else ProgramRow.deleted_at.is_(None)
         )
-        for word in query.lower().split():
+        for word in search_terms(query):
             pattern = f"%{word}%"
             statement = statement.where(
                 or_(
@@ -266,6 +299,7 @@ class Library:
 
         Raises StaleSave (nothing written) when someone saved after `based_on`.
         """
+        check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
             row = s.get(ProgramRow, program_id)
@@ -312,7 +346,7 @@ class Library:
         who = row.updated_by or "someone"
         listed = "; ".join(changes[:6]) or "no change to the program itself"
         message = (
-            f"not saved: {who} saved program {row.id} at {row.updated_at:%Y-%m-%d %H:%M} UTC "
+            f"not saved: {who} saved program {row.id} at {shown(row.updated_at, self.zone)} "
             f"(version {row.version}) after the version {based_on} you started from. "
             f"Changed meanwhile: {listed}. Reload it and make your change again; "
             "nothing was overwritten."
@@ -328,7 +362,7 @@ class Library:
 
     def duplicate(self, program_id: int, author: str = "", name: str | None = None) -> ProgramInfo:
         stored = self.get(program_id)
-        copy = replace(stored.program, name=name or f"{stored.program.name} (copy)")
+        copy = replace(stored.program, name=name or derived_name(stored.program.name, " (copy)"))
         return self.create(copy, author, f"duplicated from program {program_id}")
 
     def delete(self, program_id: int) -> None:
@@ -434,20 +468,47 @@ class Library:
 
     def put_drawing(self, name: str, data: bytes, author: str = "") -> str:
         """Keep an uploaded drawing; its key (the SHA-256 of `data`, hex). Drawings
-        uploaded more than DRAWING_DAYS ago are removed first."""
+        uploaded more than DRAWING_KEEP ago are removed first; a user keeps at most
+        DRAWINGS_PER_USER (the oldest is forgotten to make room). Raises DrawingsFull,
+        storing nothing, when all drawings together would pass DRAWING_BYTES_IN_ALL."""
         key = hashlib.sha256(data).hexdigest()
-        now = _now()
+        # To the microsecond: which of a user's drawings is the oldest decides what goes.
+        now = datetime.now(UTC).replace(tzinfo=None)
         with self.session() as s:
             s.execute(delete(DrawingRow).where(DrawingRow.uploaded_at < now - DRAWING_KEEP))
             row = s.get(DrawingRow, key)
             if row is None:
+                mine = s.scalars(
+                    select(DrawingRow.key)
+                    .where(DrawingRow.author == author)
+                    .order_by(DrawingRow.uploaded_at.desc(), DrawingRow.key)
+                ).all()
+                forget = list(mine[DRAWINGS_PER_USER - 1 :])
+                if forget:
+                    s.execute(delete(DrawingRow).where(DrawingRow.key.in_(forget)))
+                self._room_for(s, len(data), now)
                 s.add(
-                    DrawingRow(key=key, name=name[:200], data=data, uploaded_at=now, author=author)
+                    DrawingRow(
+                        key=key, name=name[:NAME_LENGTH], data=data, uploaded_at=now, author=author
+                    )
                 )
             else:
                 row.uploaded_at = now
-                row.name = name[:200]
+                row.name = name[:NAME_LENGTH]
         return key
+
+    def _room_for(self, s: Session, size: int, now: datetime) -> None:
+        """Raise DrawingsFull when `size` more bytes would pass DRAWING_BYTES_IN_ALL."""
+        kept = s.scalar(select(func.coalesce(func.sum(func.length(DrawingRow.data)), 0)))
+        if int(kept or 0) + size <= DRAWING_BYTES_IN_ALL:
+            return
+        oldest = s.scalar(select(func.min(DrawingRow.uploaded_at)))
+        when = f"{(oldest or now) + DRAWING_KEEP:%Y-%m-%d %H:%M} UTC"
+        raise DrawingsFull(
+            f"the server keeps at most {DRAWING_BYTES_IN_ALL // (1024 * 1024)} MB of uploaded "
+            f"drawings and has {int(kept or 0) / (1024 * 1024):.1f} MB; each is kept a day, "
+            f"so room comes back at {when}; open the drawing again then"
+        )
 
     def drawing(self, key: str) -> tuple[str, bytes]:
         """(name, data) of the drawing `key`; NotFound when there is none (or it expired)."""
@@ -461,7 +522,8 @@ class Library:
             return row.name, row.data
 
     def backup(self, out: BinaryIO) -> int:
-        """Write the whole library as a zip of JSON documents; returns the program count."""
+        """Write the whole library as a zip of JSON documents (programs, machines and the
+        crib's tools, each with every revision); returns the program count."""
         with self.session() as s:
             programs = s.scalars(select(ProgramRow).order_by(ProgramRow.id)).all()
             machines = s.scalars(select(MachineRow).order_by(MachineRow.name)).all()
@@ -483,6 +545,9 @@ class Library:
                             }
                         )
                     manifest["programs"].append({**entry, "revisions": revisions})
+                from app.storage.crib import backup_tools
+
+                manifest["tools"] = backup_tools(s, lambda name, text: _write(archive, name, text))
                 manifest["machines"] = [
                     {
                         "name": m.name,
@@ -498,10 +563,12 @@ class Library:
             return len(programs)
 
     def restore_backup(self, source: BinaryIO | Path) -> int:
-        """Add every program of a backup (with its revisions) as a new library entry, and
-        create or update its machines; returns the program count. All or nothing: the
-        archive is read and checked whole first (app.storage.backup), then stored in one
-        transaction, so a bad archive changes nothing (BackupError says what is wrong)."""
+        """Add every program of a backup (with its revisions) as a new library entry,
+        create or update its machines, and add its crib tools with their revisions (one
+        whose number or name a tool in use has is added retired); returns the program
+        count. All or nothing: the archive is read and checked whole first
+        (app.storage.backup), then stored in one transaction, so a bad archive changes
+        nothing (BackupError says what is wrong)."""
         from app.storage.backup import BackupError, read_backup
 
         backup = read_backup(source)
@@ -533,6 +600,9 @@ class Library:
                         )
                 for machine in backup.machines:
                     _store_machine(s, machine, now)
+                from app.storage.crib import restore_tools
+
+                restore_tools(s, backup.tools, now)
         except SQLAlchemyError as exc:
             raise BackupError(f"the backup could not be stored: {exc.__class__.__name__}") from None
         return len(backup.programs)
@@ -584,6 +654,13 @@ def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
 
 def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
     """Create or update a machine profile by name, in transaction `s`."""
+    check_text(machine.name, "machine name", SHORT_NAME_LENGTH)
+    check_text(machine.notes, "notes", NOTES_LENGTH)
+    if machine.limits:
+        try:
+            read_machine(machine.limits)
+        except MachineError as exc:
+            raise LibraryError(f"machine {machine.name!r}, limits: {exc}") from None
     row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
     if row is None:
         row = MachineRow(name=machine.name, created_at=now)
@@ -607,11 +684,12 @@ def _machine(row: MachineRow) -> Machine:
     )
 
 
-def open_library(url: str | None = None, seed_demo: bool = True) -> Library:
+def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = UTC) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
-    the demo programs added the first time."""
+    the demo programs added the first time (unless not `seed_demo`); its messages state
+    times in `zone`."""
     engine = make_engine(url)
-    library = Library(engine)
+    library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").
     with migration_lock(engine):

@@ -13,6 +13,7 @@ from sqlalchemy import (
     String,
     Text,
     UniqueConstraint,
+    text,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
@@ -195,3 +196,58 @@ class DrawingRow(Base):
     author: Mapped[str] = mapped_column(String(100), default="")
 
     __table_args__ = (Index("ix_drawings_uploaded", "uploaded_at"),)
+
+
+class CribToolRow(Base):
+    """A tool of the shop's crib (app.cnc.tools.CribTool): its document (the tool's fields
+    as JSON) and bookkeeping, as a program's. `number` and `name` are columns for lookups;
+    among the tools in use (not retired) each number is one tool (a partial unique index)
+    and each name one tool (checked on save, whatever the case). `version` counts saves; a
+    save names the version it was based on. `deleted_at` set: retired (kept, with its
+    revisions, for the programs that picked it)."""
+
+    __tablename__ = "crib_tools"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    number: Mapped[int] = mapped_column(Integer)
+    name: Mapped[str] = mapped_column(String(100))
+    kind: Mapped[str] = mapped_column(String(20))
+    document: Mapped[str] = mapped_column(Text)
+    version: Mapped[int] = mapped_column(Integer, default=1)
+    created_at: Mapped[datetime]
+    updated_at: Mapped[datetime]
+    updated_by: Mapped[str] = mapped_column(String(100), default="")
+    deleted_at: Mapped[datetime | None] = mapped_column(default=None)
+
+    revisions: Mapped[list[CribRevisionRow]] = relationship(
+        back_populates="tool", cascade="all, delete-orphan", order_by="CribRevisionRow.version"
+    )
+
+    __table_args__ = (
+        Index(
+            "uq_crib_tools_number_in_use",
+            "number",
+            unique=True,
+            sqlite_where=text("deleted_at IS NULL"),
+            postgresql_where=text("deleted_at IS NULL"),
+        ),
+        Index("ix_crib_tools_name", "name"),
+    )
+
+
+class CribRevisionRow(Base):
+    """Every save of a crib tool: the whole tool, when, by whom, what changed."""
+
+    __tablename__ = "crib_revisions"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    tool_id: Mapped[int] = mapped_column(ForeignKey("crib_tools.id", ondelete="CASCADE"))
+    version: Mapped[int] = mapped_column(Integer)
+    document: Mapped[str] = mapped_column(Text)
+    created_at: Mapped[datetime]
+    author: Mapped[str] = mapped_column(String(100), default="")
+    summary: Mapped[str] = mapped_column(Text, default="")
+
+    tool: Mapped[CribToolRow] = relationship(back_populates="revisions")
+
+    __table_args__ = (UniqueConstraint("tool_id", "version", name="uq_crib_revision_version"),)

@@ -1,4 +1,4 @@
-"""Who may do what. Two modes (config MILLBLOCKS_AUTH):
+"""Who may do what. Two modes (setting AUTH, MILLBLOCKS_AUTH):
 
 - `local` (what `make run` uses): a single local user with every capability, for a
   server bound to 127.0.0.1; a request from any other address, or naming any host but
@@ -53,8 +53,6 @@ MAX_FAILURES = 5
 """Failed logins for one account from one address within WINDOW before it must wait."""
 MAX_ADDRESS_FAILURES = 20
 """Failed logins from one address, whatever the accounts, within WINDOW."""
-IDLE_MINUTES = 30
-SESSION_HOURS = 12
 OPEN = {"auth.login", "static"}
 REQUIRED = {
     "machines.save": "admin",
@@ -73,6 +71,9 @@ REQUIRED = {
     "auth.change_password": "view",
 }
 LOOPBACK_NAMES = frozenset({"localhost"})
+PUBLIC = {"health.check"}
+"""Endpoints anyone may reach from anywhere, in either mode: the health check a proxy or
+monitor asks (it says nothing but whether the database answers)."""
 
 
 def accounts() -> Accounts:
@@ -85,11 +86,8 @@ def current_user() -> User:
 
 
 def init_app(app: Flask) -> None:
-    app.config.setdefault("MILLBLOCKS_AUTH", "local")
     app.before_request(_authorise)
-    app.context_processor(
-        lambda: {"user": current_user(), "auth_mode": app.config["MILLBLOCKS_AUTH"]}
-    )
+    app.context_processor(lambda: {"user": current_user(), "auth_mode": app.config["AUTH"]})
 
 
 def _is_loopback(address: str | None) -> bool:
@@ -115,10 +113,12 @@ def is_loopback_host(host: str) -> bool:
 
 
 def _timeouts() -> tuple[timedelta, timedelta]:
+    """The idle and absolute session limits (settings SESSION_IDLE_MINUTES and
+    SESSION_HOURS, read by app.settings)."""
     config = current_app.config
-    idle = timedelta(minutes=float(config.get("MILLBLOCKS_SESSION_IDLE_MINUTES", IDLE_MINUTES)))
-    absolute = timedelta(hours=float(config.get("MILLBLOCKS_SESSION_HOURS", SESSION_HOURS)))
-    return idle, absolute
+    return timedelta(minutes=config["SESSION_IDLE_MINUTES"]), timedelta(
+        hours=config["SESSION_HOURS"]
+    )
 
 
 def _local_only(message: str) -> tuple[str, int]:
@@ -127,7 +127,9 @@ def _local_only(message: str) -> tuple[str, int]:
 
 def _authorise() -> Response | tuple[str, int] | None:
     endpoint = request.endpoint or ""
-    if current_app.config["MILLBLOCKS_AUTH"] == "local":
+    if endpoint in PUBLIC:
+        return None
+    if current_app.config["AUTH"] == "local":
         if not _is_loopback(request.remote_addr):
             return _local_only(
                 "This MillBlocks serves its local user only. To serve the shop network, "
@@ -138,7 +140,7 @@ def _authorise() -> Response | tuple[str, int] | None:
                 "This MillBlocks serves its local user only and answers only to localhost, "
                 "127.0.0.1 or [::1]; open it by one of those names."
             )
-        g.user = User(0, str(current_app.config.get("MILLBLOCKS_USER", "local")), "admin")
+        g.user = User(0, current_app.config["USER"], "admin")
         return None
     user = None
     token = session.get("sid")
@@ -188,7 +190,7 @@ def _refusal(book: Accounts, address: str, username: str) -> str:
 
 @bp.route("/login", methods=["GET", "POST"])
 def login() -> Response | tuple[str, int]:
-    if current_app.config["MILLBLOCKS_AUTH"] == "local":
+    if current_app.config["AUTH"] == "local":
         return redirect(url_for("library.index"))
     message = ""
     status = 200

@@ -6,6 +6,14 @@ import unicodedata
 from urllib.parse import quote
 
 
+def file_name(name: str, extension: str, default: str) -> str:
+    """The file a program named `name` downloads as: letters (of any script), digits, `-`
+    and `_` kept, anything else `-` (`Деталь 5` → `Деталь-5.stl`); `default` for a name
+    with nothing left."""
+    stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in name) or default
+    return f"{stem}.{extension}"
+
+
 def attachment(filename: str) -> str:
     """`attachment; filename="…"; filename*=UTF-8''…` for `filename`.
 

@@ -52,10 +52,18 @@ from app.cnc.problems import Severity
 from app.cnc.sizes import TooLarge, check_import_size
 from app.cnc.units import Units
 from app.cnc.validate import validate
-from app.storage.library import LibraryError, NotFound, StaleSave
+from app.storage.library import (
+    DRAWING_BYTES_IN_ALL,
+    DRAWING_KEEP,
+    DRAWINGS_PER_USER,
+    DrawingsFull,
+    LibraryError,
+    NotFound,
+    StaleSave,
+)
 from app.web.editor import current_user
 from app.web.editor_page import block_summary, is_htmx
-from app.web.extensions import get_library
+from app.web.extensions import get_library, upload_limits
 
 bp = Blueprint("drawings", __name__)
 
@@ -64,6 +72,20 @@ bp = Blueprint("drawings", __name__)
 OPTION_FIELDS = ("units", "drawing-units", "layer", "hole-diameter", "tolerance")
 # Climb or conventional milling: the page's option, carried in its address like the units.
 MILLING = "milling"
+
+
+@bp.app_context_processor
+def quota() -> dict[str, str]:
+    """What happens at the limits on drawings, as the upload form says it."""
+    hours = int(DRAWING_KEEP.total_seconds() // 3600)
+    return {
+        "drawing_quota": (
+            f"A drawing is kept {hours} hours for choosing from. You keep your last "
+            f"{DRAWINGS_PER_USER}: opening another forgets your oldest. The server keeps "
+            f"{DRAWING_BYTES_IN_ALL // (1024 * 1024)} MB of drawings in all; past that a "
+            "drawing is refused until the oldest one's time is over."
+        )
+    }
 
 
 @bp.post("/drawings")
@@ -76,14 +98,17 @@ def upload() -> Response | tuple[str, int]:
     data = file.read()
     options = _options(request.form)
     try:
-        check_import_size(data)
+        check_import_size(data, upload_limits())
         if not is_dxf(data):
             raise ImportFailure("", "not a DXF drawing (a DXF starts with a SECTION group)")
         read_drawing(data, file.filename, parse_options(options))
     except (ImportFailure, TooLarge, ValueError) as exc:
         return _refused(f"Not opened: {file.filename}: {exc}")
     stem = file.filename.rsplit("/", 1)[-1].rsplit(".", 1)[0]
-    key = get_library().put_drawing(stem, data, author=current_user())
+    try:
+        key = get_library().put_drawing(stem, data, author=current_user())
+    except DrawingsFull as exc:
+        return _refused(f"Not opened: {file.filename}: {exc}")
     query = urlencode({k: v for k, v in options.items() if v})
     return redirect(url_for("drawings.choose", key=key) + (f"?{query}" if query else ""))
 

@@ -16,6 +16,7 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import (
+    MAX_TOOLS,
     Block,
     Coolant,
     DataBlock0,
@@ -24,10 +25,16 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.copy import CopyError, cancel_copy, execute_copy
+from app.cnc.crib import copy_of, differences, machine_limits, pick, tool_offer
+from app.cnc.cutting import MaterialName, Offer, Workpiece
 from app.cnc.kinds import REGISTRY
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Rule, Severity
+from app.cnc.spindle import Spindle
+from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType, pitch_text
 from app.cnc.units import Units
 from app.cnc.validate import validate
+from app.storage.crib import Crib
 from app.storage.library import LibraryError, NotFound, StaleSave, StoredProgram
 from app.web.editor_page import (
     Entry,
@@ -149,9 +156,11 @@ def form_version() -> int | None:
 
 
 def _int(text: str | None, default: int) -> int:
+    """A whole number from a query argument or a hidden field, read by the one number
+    reader (app.cnc.numbers); `default` when there is none or it is not one."""
     try:
-        return int(text or "")
-    except ValueError:
+        return parse_int(text or "")
+    except NumberError:
         return default
 
 
@@ -164,7 +173,22 @@ def edit(program_id: int) -> tuple[str, int]:
     entry = entry_from_args(stored.program, request.args)
     if request.args.get("saved") == "db0":
         entry.notice = "Data Block 0 saved."
-    return render_page(stored, entry)
+    return render_page(stored, entry, crib_notes=crib_notes(stored.program))
+
+
+def crib_notes(program: Program) -> list[str]:
+    """`tool 4 (T12 1/4-20 TAP): DIA 0.25 here, 0.251 in the crib` for each tool of Data
+    Block 0 whose crib tool now differs (the crib is read only for programs that picked)."""
+    linked = [tool for tool in program.block0.tools if tool.crib is not None]
+    if not linked:
+        return []
+    crib = _crib_of(program).by_number
+    notes = []
+    for tool in linked:
+        found = differences(tool, crib.get(tool.crib or 0), program.units)
+        if found:
+            notes.append(f"tool {tool.number} (T{tool.crib} {tool.name}): " + "; ".join(found))
+    return notes
 
 
 @bp.get("/programs/<int:program_id>/entry")
@@ -372,6 +396,13 @@ def save_header(program_id: int) -> Response | tuple[str, int]:
         units=units,
         notes=form.get("notes", ""),
     )
+    if "material" in form:
+        material, error = read_material(form)
+        if error:
+            return render_template(
+                "errors/error.html", title="Not saved", message=f"Not saved: {error}"
+            ), 422
+        program = dataclasses.replace(program, material=material)
     entry = Entry(at=len(program.blocks) + 1, editing=False)
     wrong = [p for p in validate(program) if p.block is None and p.severity is Severity.ERROR]
     if wrong:
@@ -392,8 +423,9 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
     errors: dict[str, str] = {}
     message = ""
     block0 = stored.program.block0
+    speeds = Speeds.of(request.values.get("machine", ""), stored.program.units)
     if request.method == "POST":
-        block0, errors = parse_block0(request.form)
+        block0, errors = parse_block0(request.form, stored.program, speeds)
         based_on = form_version()
         if based_on is None:
             errors["version"] = MISSING_VERSION.removeprefix("Not saved: ")
@@ -420,18 +452,196 @@ def data_block_0(program_id: int) -> Response | tuple[str, int]:
             message = "Not saved: " + "; ".join(errors.values())
     problems = [p for p in validate(stored.program) if p.block == 0]
     status = 422 if errors else 409 if message else 200
+    shown = block0 if errors else stored.program.block0
+    program = dataclasses.replace(stored.program, block0=shown)
+    crib = _crib_of(program)
+    rows = [
+        tool_row(program, n, shown.tool(n), crib, speeds, request.form if errors else None)
+        for n in range(1, MAX_TOOLS + 1)
+    ]
     return (
         render_template(
             "editor/db0.html",
             stored=stored,
-            block0=block0 if not errors else stored.program.block0,
-            form=request.form if errors else None,
+            program_id=program_id,
+            block0=shown,
+            rows=rows,
             errors=errors,
             message=message,
             problems=problems,
+            crib_tools=crib.in_use,
+            machines=get_library().machines(),
+            machine_name=speeds.machine_name,
+            materials=list(MaterialName),
         ),
         status,
     )
+
+
+@bp.get("/programs/<int:program_id>/db0/tool/<int:number>", endpoint="tool_row")
+def tool_row_fragment(program_id: int, number: int) -> Response | tuple[str, int]:
+    """One tool of Data Block 0 as the form stands (the row's fields in the query), with
+    the crib tool typed or chosen in it picked (a fragment for htmx; the page otherwise)."""
+    if not 1 <= number <= MAX_TOOLS:
+        abort(404, f"Data Block 0 has tools 1 to {MAX_TOOLS}.")
+    stored = load(program_id)
+    if not is_htmx():
+        return redirect(url_for("editor.data_block_0", program_id=program_id))
+    speeds = Speeds.of(request.args.get("machine", ""), stored.program.units)
+    errors: dict[str, str] = {}
+    crib = _crib_of(stored.program)
+    tool = read_tool_row(request.args, number, stored.program, crib, speeds, errors)
+    program = stored.program
+    row = tool_row(program, number, tool, crib, speeds, request.args if errors else None)
+    return (
+        render_template(
+            "editor/_tool_row.html",
+            r=row,
+            errors=errors,
+            program_id=program_id,
+            machine_name=speeds.machine_name,
+            picked=True,
+        ),
+        200,
+    )
+
+
+tool_row_fragment.__name__ = "tool_row"
+bp.add_url_rule("/programs/<int:program_id>/db0/tool/<int:number>", "tool_row", tool_row_fragment)
+
+
+@dataclasses.dataclass(frozen=True)
+class Speeds:
+    """The machine whose spindle the offered RPM is kept to (none chosen: the control's)."""
+
+    machine_name: str = ""
+    spindle: Spindle | None = None
+    max_feed: Decimal | None = None
+
+    @classmethod
+    def of(cls, name: str, units: Units) -> Speeds:
+        from app.web.export import _machine_options
+
+        _, _, model = _machine_options(name)
+        spindle, max_feed = machine_limits(model, units)
+        return cls(name if model is not None else "", spindle, max_feed)
+
+
+@dataclasses.dataclass
+class CribView:
+    """The crib as Data Block 0 reads it: the tools in use (by number) and a lookup."""
+
+    in_use: list[CribTool]
+
+    @property
+    def by_number(self) -> dict[int, CribTool]:
+        return {tool.number: tool for tool in self.in_use}
+
+    def find(self, text: str) -> CribTool | None:
+        """A tool in use by its number (12, T12, #12) or its name (any case)."""
+        wanted = text.strip()
+        digits = wanted.lstrip("Tt#")
+        if digits.isascii() and digits.isdigit() and len(digits) <= 9:
+            found = self.by_number.get(int(digits))
+            if found is not None:
+                return found
+        return next((t for t in self.in_use if t.name.lower() == wanted.lower()), None)
+
+
+def _crib_of(program: Program) -> CribView:
+    return CribView([s.tool for s in Crib(get_library()).tools()])
+
+
+@dataclasses.dataclass
+class ToolRow:
+    """What a tool's row of Data Block 0 shows: its fields as text, the copy of the crib
+    tool it carries, where the crib differs, and the speeds and feeds offered."""
+
+    number: int
+    values: dict[str, str]
+    copy: str = ""
+    lines: list[str] = dataclasses.field(default_factory=list)
+    differences: list[str] = dataclasses.field(default_factory=list)
+    crib_known: bool = False
+    offer: Offer | None = None
+    invalid: bool = False
+
+
+ROW_KEYS: tuple[str, ...] = ("dia", "rpm", "tcal", "coolant", "name", "crib", "crib_was")
+ROW_KEYS += ("kind", "flutes", "tmat", "length", "pitch", "punit", "hand")
+
+
+def _value_text(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, Decimal):
+        return f"{value:f}"
+    if hasattr(value, "value"):
+        return str(value.value)
+    return str(value)
+
+
+def tool_row(
+    program: Program,
+    number: int,
+    tool: Tool | None,
+    crib: CribView,
+    speeds: Speeds,
+    form: Any = None,
+) -> ToolRow:
+    """Tool `number` as its row shows it (`form`: the values as typed, when refused)."""
+    if form is not None:
+        values = {key: str(form.get(f"{key}_{number}", "")) for key in ROW_KEYS}
+        return ToolRow(number, values, invalid=True)
+    if tool is None:
+        values = dict.fromkeys(ROW_KEYS, "") | {"coolant": "off"}
+        return ToolRow(number, values)
+    values = {
+        "dia": _value_text(tool.diameter),
+        "rpm": _value_text(tool.rpm),
+        "tcal": _value_text(tool.tcal),
+        "coolant": tool.coolant.value,
+        "name": tool.name,
+        "crib": _value_text(tool.crib),
+        "crib_was": _value_text(tool.crib),
+        "kind": _value_text(tool.kind),
+        "flutes": _value_text(tool.flutes),
+        "tmat": _value_text(tool.tool_material),
+        "length": _value_text(tool.length),
+        "pitch": _value_text(tool.pitch),
+        "punit": tool.pitch_unit.value if tool.pitch is not None else "",
+        "hand": tool.hand.value if tool.hand is Hand.LEFT else "",
+    }
+    row = ToolRow(number, values, copy=copy_text(tool, program.units))
+    if tool.crib is not None:
+        linked = crib.by_number.get(tool.crib)
+        row.crib_known = linked is not None
+        row.differences = differences(tool, linked, program.units)
+    if program.material is not None:
+        row.offer = tool_offer(program, tool, speeds.spindle, speeds.max_feed)
+        if row.offer is None and tool.kind is None and (tool.diameter or tool.name):
+            row.lines.append("pick it from the crib for its speeds and feeds")
+    return row
+
+
+def copy_text(tool: Tool, units: Units) -> str:
+    """The crib's description a program keeps: `T12 · tap · 4 flutes · HSS · 20 TPI`."""
+    parts = []
+    if tool.crib is not None:
+        parts.append(f"T{tool.crib}")
+    if tool.kind is not None:
+        parts.append(tool.kind.label)
+    if tool.flutes is not None:
+        parts.append(f"{tool.flutes} flutes")
+    if tool.tool_material is not None:
+        parts.append(tool.tool_material.label)
+    if tool.pitch is not None:
+        parts.append(pitch_text(tool.pitch, tool.pitch_unit))
+        if tool.hand is Hand.LEFT:
+            parts.append("left hand")
+    if tool.length is not None:
+        parts.append(f"{tool.length:f} {units.symbol} out of the holder")
+    return " · ".join(parts)
 
 
 def _db0_field(label: str | None) -> str:
@@ -439,17 +649,110 @@ def _db0_field(label: str | None) -> str:
     text = label or ""
     if text.startswith("TOOL ") and " " in text[5:]:
         number, what = text[5:].split(" ", 1)
-        fields = {"DIA": "dia", "RPM": "rpm", "TCAL": "tcal", "NAME": "name"}
+        fields = {"DIA": "dia", "RPM": "rpm", "TCAL": "tcal", "NAME": "name", "CRIB #": "crib"}
         return fields.get(what, "dia") + f"_{number}"
     return {"X": "x_offset", "Y": "y_offset", "CUR-TOOL": "current_tool", "Z RET": "z_retract"}.get(
         text, "x_offset"
     )
 
 
-def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
+def read_tool_row(
+    form: Any,
+    n: int,
+    program: Program,
+    crib: CribView,
+    speeds: Speeds,
+    errors: dict[str, str],
+    repick: bool = False,
+) -> Tool | None:
+    """Tool `n` from its row of the form (None: an empty row). A crib number or name in
+    its Crib field that is not the one the row was showing (`crib_was_n`), or `repick`,
+    picks that crib tool (app.cnc.crib.pick: the crib's DIA, name and description; the
+    RPM as typed, else the offered one); else the row's fields are the program's own."""
+
+    def number(name: str, label: str) -> Decimal | None:
+        raw = form.get(name, "").strip()
+        if raw == "":
+            return None
+        value, error = read_number(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
+        return value
+
+    def whole(name: str, label: str) -> int | None:
+        raw = form.get(name, "").strip()
+        if raw == "":
+            return None
+        value, error = read_whole(raw)
+        if error:
+            errors[name] = f"{label}: {error}"
+        return value
+
+    def choice(name: str, cls: Any, default: Any = None) -> Any:
+        raw = form.get(name, "")
+        return next((m for m in cls if m.value == raw), default)
+
+    dia = number(f"dia_{n}", f"TOOL {n} DIA")
+    rpm = whole(f"rpm_{n}", f"TOOL {n} RPM")
+    tcal = number(f"tcal_{n}", f"TOOL {n} TCAL")
+    coolant = {"flood": Coolant.FLOOD, "mist": Coolant.MIST}.get(
+        form.get(f"coolant_{n}", ""), Coolant.OFF
+    )
+    # The name as typed (validation says what it may hold, naming the tool).
+    name = form.get(f"name_{n}", "").strip()
+    typed = form.get(f"crib_{n}", "").strip()
+    was = whole(f"crib_was_{n}", f"TOOL {n} CRIB #")
+    chosen: CribTool | None = None
+    link = None
+    if typed:
+        chosen = crib.find(typed)
+        if chosen is not None:
+            link = chosen.number
+        elif was is not None and typed.lstrip("Tt#") == str(was):
+            link = was  # picked before and retired from the crib since: the copy stays
+        else:
+            errors[f"crib_{n}"] = (
+                f"TOOL {n} CRIB: no tool {typed!r} in the crib; give a tool's number (12 or "
+                "T12) or its name, or leave it empty"
+            )
+    tool = Tool(
+        number=n,
+        diameter=dia,
+        rpm=rpm,
+        tcal=tcal,
+        coolant=coolant,
+        name=name,
+        crib=link,
+        kind=choice(f"kind_{n}", ToolType),
+        flutes=whole(f"flutes_{n}", f"TOOL {n} FLUTES"),
+        tool_material=choice(f"tmat_{n}", ToolMaterial),
+        length=number(f"length_{n}", f"TOOL {n} LENGTH OUT"),
+        pitch=number(f"pitch_{n}", f"TOOL {n} PITCH"),
+        pitch_unit=choice(f"punit_{n}", PitchUnit, PitchUnit.TPI),
+        hand=choice(f"hand_{n}", Hand, Hand.RIGHT),
+    )
+    if chosen is not None and (repick or chosen.number != was):
+        offered = tool_offer(
+            program, copy_of(chosen, n, program.units), speeds.spindle, own_rpm=False
+        )
+        tool = pick(tool, chosen, n, program.units, offered.rpm if offered else None)
+    empty = Tool(number=n)
+    return None if dataclasses.replace(tool, coolant=Coolant.OFF) == empty else tool
+
+
+def parse_block0(
+    form: Any, program: Program | None = None, speeds: Speeds | None = None
+) -> tuple[DataBlock0, dict[str, str]]:
     """Data Block 0 from its form: offsets, current tool, milling, Z RET, 24 tool lines
-    (number, DIA, RPM, TCAL, coolant, name)."""
+    (number, DIA, RPM, TCAL, coolant, name, and the crib tool each was picked from)."""
     errors: dict[str, str] = {}
+    program = program or Program(name="")
+    crib = (
+        _crib_of(program)
+        if any(form.get(f"crib_{n}", "").strip() for n in range(1, 25))
+        else CribView([])
+    )
+    repick = _int(form.get("repick"), 0)
 
     def number(name: str, label: str, required: bool = True) -> Decimal | None:
         raw = form.get(name, "").strip()
@@ -472,19 +775,10 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
         return value
 
     tools = []
-    for n in range(1, 25):
-        dia = number(f"dia_{n}", f"TOOL {n} DIA", False)
-        rpm = whole(f"rpm_{n}", f"TOOL {n} RPM")
-        tcal = number(f"tcal_{n}", f"TOOL {n} TCAL", False)
-        coolant = {"flood": Coolant.FLOOD, "mist": Coolant.MIST}.get(
-            form.get(f"coolant_{n}", ""), Coolant.OFF
-        )
-        # The name as typed (validation says what it may hold, naming the tool).
-        name = form.get(f"name_{n}", "").strip()
-        if dia is not None or rpm is not None or tcal is not None or name:
-            tools.append(
-                Tool(number=n, diameter=dia, rpm=rpm, tcal=tcal, coolant=coolant, name=name)
-            )
+    for n in range(1, MAX_TOOLS + 1):
+        tool = read_tool_row(form, n, program, crib, speeds or Speeds(), errors, repick == n)
+        if tool is not None:
+            tools.append(tool)
     block0 = DataBlock0(
         x_offset=number("x_offset", "X") or Decimal(0),
         y_offset=number("y_offset", "Y") or Decimal(0),
@@ -494,6 +788,28 @@ def parse_block0(form: Any) -> tuple[DataBlock0, dict[str, str]]:
         tools=tuple(tools),
     )
     return block0, errors
+
+
+def read_material(form: Any) -> tuple[Workpiece | None, str]:
+    """The workpiece material from the program form (None: not stated), or what is wrong
+    with it (the figures' ranges are validation's)."""
+    raw = form.get("material", "")
+    if raw == "":
+        return None, ""
+    name = next((m for m in MaterialName if m.value == raw), None)
+    if name is None:
+        allowed = ", ".join(m.value for m in MaterialName)
+        return None, f"program, MATERIAL: {raw!r} is not one of {allowed}"
+    figures: dict[str, Decimal | None] = {"surface_speed": None, "chip_load": None}
+    if name is MaterialName.CUSTOM:
+        for key, label in (("surface_speed", "SURFACE SPEED"), ("chip_load", "CHIP LOAD")):
+            text = form.get(key, "").strip()
+            if text:
+                value, error = read_number(text)
+                if error:
+                    return None, f"program, {label}: {error}"
+                figures[key] = value
+    return Workpiece(name=name, **figures), ""
 
 
 def problem_text(problems: list[Problem]) -> str:

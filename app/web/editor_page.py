@@ -26,13 +26,15 @@ from typing import Any
 from flask import render_template, request
 
 from app.cnc.blocks import Block, Mode, Program, open_loops
+from app.cnc.crib import feed_offers
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
 from app.cnc.memo import ByObject
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
-from app.web.forms import Choice, entry_forms, group_kinds, group_menu, sub_menu
+from app.web.forms import Choice, EntryForm, entry_forms, group_kinds, group_menu, sub_menu
 from app.web.preview import Preview, preview, times
 from app.web.preview import Shown as PreviewShown
 
@@ -200,8 +202,12 @@ def shown_digests() -> dict[int, str]:
     found = {}
     for value in request.form.getlist("shown"):
         number, _, digest = value.partition(":")
-        if number.isdigit() and digest:
-            found[int(number)] = digest
+        if not digest:
+            continue
+        try:
+            found[parse_int(number)] = digest
+        except NumberError:  # not a row this page sent
+            continue
     return found
 
 
@@ -289,15 +295,31 @@ def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) 
         "kinds": entry_forms(),
         "offered": not entry.editing and not entry.errors and not entry.message,
         "in_loop": open_loops(program.blocks, entry.at - 1) > 0,
+        "feed_offers": _feed_offers(program, kind),
     }
+
+
+def _feed_offers(program: Program, kind: EntryForm | None) -> dict[str, dict[str, str]]:
+    """The feeds offered with each tool (app.cnc.crib), for a form that asks for a feed and
+    a tool in a program that states its material: changing TOOL # offers that tool's feed
+    where the feed was not typed (static/app.js)."""
+    if kind is None or program.material is None:
+        return {}
+    names = {spec.name for spec in kind.fields}
+    if "tool" not in names or not names & {"feed_xy", "feed_z"}:
+        return {}
+    return {str(number): values for number, values in feed_offers(program).by_tool.items()}
 
 
 def _common(stored: StoredProgram) -> dict[str, Any]:
     return {"stored": stored, "program": stored.program, "program_id": stored.info.id}
 
 
-def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple[str, int]:
-    """The whole editor page."""
+def render_page(
+    stored: StoredProgram, entry: Entry, status: int = 200, crib_notes: list[str] | None = None
+) -> tuple[str, int]:
+    """The whole editor page (`crib_notes`: where Data Block 0's tools differ from the
+    crib's, said above the editor)."""
     shown = shown_of(stored.program)
     drawing = shown.drawing()
     return render_template(
@@ -306,6 +328,7 @@ def render_page(stored: StoredProgram, entry: Entry, status: int = 200) -> tuple
         **list_context(stored, shown, entry, entry.at),
         **entry_context(stored, entry, shown.problems),
         svg=drawing.svg,
+        crib_notes=crib_notes or [],
     ), status
 
 

@@ -7,7 +7,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 from urllib.parse import urlencode
 
-from flask import Blueprint, Response, render_template, request
+from flask import Blueprint, Response, abort, render_template, request
 from jinja2_fragments.flask import render_block
 
 from app.cnc.emit.target import (
@@ -23,7 +23,7 @@ from app.cnc.emit.target import (
 from app.cnc.machine import MachineError, MachineModel, read_machine
 from app.cnc.options import Option
 from app.storage.library import LibraryError
-from app.web.downloads import attachment
+from app.web.downloads import attachment, file_name
 from app.web.editor import is_htmx, load
 from app.web.extensions import get_library
 
@@ -54,14 +54,19 @@ def options_from(args: Any, target_name: str) -> dict[str, str]:
 
 
 def _machine_options(name: str) -> tuple[str | None, dict[str, str], MachineModel | None]:
-    """A library machine's target, options and (when it has limits) the machine model."""
+    """A library machine's target, options and (when it has limits) the machine model.
+    Limits that cannot be read (stored before a rule existed) are a 422 naming them: the
+    program is never exported as if the machine had no limits."""
     if not name:
         return None, {}, None
     try:
         machine = get_library().machine(name)
-        model = read_machine(machine.limits) if machine.limits else None
-    except (LibraryError, MachineError):
+    except LibraryError:
         return None, {}, None
+    try:
+        model = read_machine(machine.limits) if machine.limits else None
+    except MachineError as exc:
+        abort(422, f"machine {name!r}, limits: {exc}; correct them on the machines page")
     return machine.target, dict(machine.options), model
 
 
@@ -215,8 +220,7 @@ def download(program_id: int) -> Response | tuple[str, int]:
         result = export(stored.program, target_name, raw, model)
     except (OptionError, ExportError) as exc:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
-    stem = "".join(c if c.isalnum() or c in "-_" else "-" for c in stored.program.name) or "program"
-    filename = f"{stem}.{result.extension}"
+    filename = file_name(stored.program.name, result.extension, "program")
     # The export was spooled as it was made; it goes out a piece at a time.
     response = Response(result.chunks(), mimetype=result.media_type.split(";")[0])
     response.headers["Content-Length"] = str(result.size)

@@ -18,6 +18,7 @@ from typing import Any
 
 from app.cnc import limits
 from app.cnc.blocks import Block, Mode, Program, Rep, open_loops
+from app.cnc.crib import feed_offers
 from app.cnc.kinds import REGISTRY, Field, Role, SubKind, Value
 from app.cnc.mirror import length_of, table_position
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
@@ -262,17 +263,28 @@ def defaults_for(program: Program, at: int, kind: str, loop: bool = False) -> di
     cls, sub = REGISTRY.sub_kinds()[kind]
     mode = entry_mode(program.blocks, at, loop)
     values = {"units": units.value, "mode": mode.value}
-    order = _search_order(blocks, cls)
+    sequence, rest = _search_order(blocks, cls)
+    order = [*sequence, *rest]
+    from_sequence: set[str] = set()
     for f in REGISTRY.prompted(cls, sub):
         if f.prompt.role in (Role.X, Role.Y):
             continue
         found = next(
             (getattr(b, f.name) for b in order if getattr(b, f.name, None) is not None), None
         )
+        if any(getattr(b, f.name, None) is not None for b in sequence):
+            from_sequence.add(f.name)
         values[f.name] = _text(f.default if found is None else found)
     if "tool" in values and values["tool"] == "":
         block0 = program.block0
         values["tool"] = str(block0.current_tool or (block0.tools[0].number if block0.tools else 1))
+    if "tool" in values and program.material is not None:
+        # The feeds of the stated material for the block's tool (app.cnc.cutting), where
+        # the sequence being cut does not give them (a contour keeps its feed).
+        offered = feed_offers(program).for_tool(_whole_or_zero(values["tool"]))
+        for name, value in offered.items():
+            if name in values and name not in from_sequence:
+                values[name] = value
     if "placement" in values and values["placement"] == "":
         values["placement"] = "inside"
     if REGISTRY.kind(cls).positioned:
@@ -280,8 +292,16 @@ def defaults_for(program: Program, at: int, kind: str, loop: bool = False) -> di
     return values
 
 
-def _search_order(blocks: tuple[Block, ...], cls: type[Block]) -> list[Block]:
-    """The blocks a new block of kind `cls` takes its values from, in the order asked."""
+def _whole_or_zero(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        return 0
+
+
+def _search_order(blocks: tuple[Block, ...], cls: type[Block]) -> tuple[list[Block], list[Block]]:
+    """The blocks a new block of kind `cls` takes its values from, in the order asked: the
+    mill sequence it continues, then the others."""
     nearest = blocks[::-1]
     start = len(blocks)
     if REGISTRY.kind(cls).mill is not None:
@@ -289,9 +309,9 @@ def _search_order(blocks: tuple[Block, ...], cls: type[Block]) -> list[Block]:
             start -= 1
         if start < len(blocks) and start and starts_mill_sequence(blocks, start - 1):
             start -= 1
-    sequence = blocks[start:][::-1]
+    sequence = list(blocks[start:][::-1])
     same = [b for b in nearest if isinstance(b, cls)]
-    return [*sequence, *same, *nearest]
+    return sequence, [*same, *nearest]
 
 
 def _position(blocks: tuple[Block, ...], mode: Mode, units: Units) -> dict[str, str]:

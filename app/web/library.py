@@ -9,21 +9,25 @@ from werkzeug.wrappers import Response
 from app.cnc.blocks import DataBlock0, Program, Tool
 from app.cnc.imports import importers
 from app.cnc.sizes import check_import_size
+from app.cnc.text import TextError
 from app.cnc.units import Units
 from app.storage.library import SORTS, LibraryError
 from app.web.editor import current_user, is_htmx
-from app.web.extensions import get_library
+from app.web.extensions import get_library, upload_limits
 
 bp = Blueprint("library", __name__)
 
 
 @bp.get("/")
-def index() -> str:
+def index() -> str | tuple[str, int]:
     query = request.args.get("q", "")
     sort = request.args.get("sort", "name")
     if sort not in SORTS:
         sort = "name"
-    programs = get_library().programs(query, sort)
+    try:
+        programs = get_library().programs(query, sort)
+    except TextError as exc:
+        return _index_with(f"Not searched: {exc}", 422)
     context = {
         "programs": programs,
         "q": query,
@@ -78,7 +82,7 @@ def upload() -> Response | tuple[str, int]:
         )
     data = file.read()
     try:
-        check_import_size(data)  # before detection reads it
+        check_import_size(data, upload_limits())  # before detection reads it
         reading = chosen or detect_format(data)
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)
@@ -89,7 +93,7 @@ def upload() -> Response | tuple[str, int]:
     }
     stem = file.filename.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     try:
-        result = read_program(data, stem, reading, options)
+        result = read_program(data, stem, reading, options, limits=upload_limits())
     except ValueError as exc:
         return _index_with(f"Not imported: {file.filename}: {exc}", 422)
     info = get_library().create(

@@ -40,6 +40,7 @@ SERIAL_DEFAULTS = {
     "trailer": "0",
     "cps": "",
     "hold": "30",
+    "requests": "off",
     "end": "%",
 }
 """The serial settings the form shows, with the defaults a new machine starts from (the

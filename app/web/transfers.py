@@ -18,6 +18,7 @@ from app.cnc.emit.target import targets
 from app.cnc.imports import importers
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.restart import RestartError, restart_from
+from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc import service
 from app.dnc.daemon import service_alive
 from app.dnc.settings import SettingsError, port_of
@@ -111,9 +112,11 @@ def send() -> Response | tuple[str, int]:
     try:
         machine = _machine(request.form.get("machine", ""))
         program_id = request.form.get("program_id", "")
-        if not program_id.isdigit():
-            raise _Refused("choose a program to send")
-        stored = library.get(int(program_id))
+        try:
+            number = parse_int(program_id)
+        except NumberError:
+            raise _Refused("choose a program to send") from None
+        stored = library.get(number)
         start_block = _start_block(request.form.get("from_block", ""))
         if start_block is not None:
             restart_from(stored.program, start_block)  # refused here, before it is queued
@@ -153,7 +156,7 @@ def receive() -> Response | tuple[str, int]:
         port_of(machine.serial),
         form_format or machine.target,
         current_user().username,
-        program_name=request.form.get("name", "").strip(),
+        program_name=check_text(request.form.get("name", "").strip(), "name", NAME_LENGTH),
         queued=True,
     )
     return redirect(url_for("transfers.index"), 303)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import struct
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from typing import Any
 
 import numpy as np
@@ -19,6 +19,7 @@ from markupsafe import escape
 from werkzeug.wrappers import Response as BaseResponse
 
 from app.cnc.blocks import Program, Stock
+from app.cnc.numbers import NumberError, parse_decimal, parse_int
 from app.cnc.problems import has_errors
 from app.cnc.simulate.image import png_bytes, render
 from app.cnc.simulate.mesh import stl_bytes
@@ -28,6 +29,7 @@ from app.cnc.simulate.verify import Verification, run_simulation, verify
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import StaleSave, StoredProgram
+from app.web.downloads import attachment, file_name
 from app.web.editor import _int, current_user, load
 from app.web.extensions import get_library
 
@@ -163,11 +165,9 @@ def parse_stock(form: Any, units: Units) -> tuple[Stock | None, dict[str, str]]:
         if raw == "" and name in ("z", "clear"):
             raw = "0"
         try:
-            value = Decimal(raw)
-        except InvalidOperation:
-            value = Decimal("NaN")
-        if not value.is_finite():
-            errors[name] = f"{label}: {raw!r} is not a number"
+            value = parse_decimal(raw)
+        except NumberError as exc:
+            errors[name] = f"{label}: {exc}"
             continue
         if name in ("xl", "yw", "zh") and value <= 0:
             errors[name] = f"{label}: must be more than 0"
@@ -194,7 +194,14 @@ def _simulated(program_id: int, cells: int = VIEW_CELLS) -> tuple[Program, Simul
     if has_errors(validate(stored.program)):
         return Response("The program has errors.", 422, mimetype="text/plain")
     upto_raw = request.args.get("upto", "")
-    upto = int(upto_raw) if upto_raw.isdigit() else None
+    try:
+        upto = parse_int(upto_raw) if upto_raw.strip() else None
+    except NumberError as exc:
+        return Response(f"upto: {exc}", 422, mimetype="text/plain")
+    if upto is not None and upto < 0:
+        return Response(
+            f"upto: {upto} is below 0; allowed: a block number", 422, mimetype="text/plain"
+        )
     try:
         return stored.program, run_simulation(stored.program, upto=upto, cells=cells)
     except StockError as exc:
@@ -249,9 +256,8 @@ def part_stl(program_id: int) -> Response:
     if isinstance(found, Response):
         return found
     program, sim = found
-    name = "".join(c if c.isalnum() else "-" for c in program.name).strip("-") or "part"
     return Response(
         stl_bytes(sim.grid, sim.heights()),
         mimetype="model/stl",
-        headers={"Content-Disposition": f'attachment; filename="{name}.stl"'},
+        headers={"Content-Disposition": attachment(file_name(program.name, "stl", "part"))},
     )

@@ -1,5 +1,5 @@
-"""What every text target shares: lengths written from integers, and lines written out as
-they are made.
+"""What every text target shares: lengths written from integers, lines written out as
+they are made, and the one way text becomes a comment (`comment_text`).
 
 `Lengths` writes nanometres with fixed decimals in a unit, rounding half-even exactly as
 `units.format_length` does, but from integers: a column of a chunk (numpy) is rounded at
@@ -96,3 +96,31 @@ class Lines:
             text = self.end.join(self.pending) + self.end
             self.out.write(text.encode(self.encoding))
             self.pending = []
+
+
+END_OF_FILE = frozenset("%")
+"""Characters that end a file on the wire: `%` is the end of the record on Fanuc and
+ProtoTRAK controls (seed 003 §2.2.3): a receiver stops there and drops the rest."""
+
+
+def comment_text(text: str, allowed: frozenset[str] | None = None, unknown: str = "?") -> str:
+    """`text` as every target writes it inside a comment: one line, upper case ASCII.
+
+    What would end the comment, the block or the file never reaches it: `(` and `)`
+    become `[` and `]`, `;` (an end of block) `,`, `%` (END_OF_FILE) and control
+    characters (line breaks, NUL, XON/XOFF, ^Z) a space; any other non-ASCII character is
+    `unknown`. A target whose comments hold fewer characters names them in `allowed`
+    (upper case); the rest become `unknown` too.
+    """
+    cleaned = text.replace("(", "[").replace(")", "]").replace(";", ",")
+    cleaned = "".join(
+        " "
+        if ch in END_OF_FILE or ord(ch) < 32 or ord(ch) == 127
+        else ch
+        if ch.isascii()
+        else unknown
+        for ch in cleaned
+    ).upper()
+    if allowed is not None:
+        cleaned = "".join(ch if ch in allowed else unknown for ch in cleaned)
+    return cleaned

@@ -23,10 +23,17 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from app.cnc import cost
 from app.cnc.blocks import Program
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.imports.registry import Importer, detect, get_importer, importers
-from app.cnc.sizes import TooLarge, check_block_count, check_import_size
+from app.cnc.sizes import (
+    IMPORT_LIMITS,
+    ImportLimits,
+    TooLarge,
+    check_block_count,
+    check_import_size,
+)
 
 __all__ = [
     "ImportFailure",
@@ -69,6 +76,7 @@ def read_program(
     options: Mapping[str, str] | None = None,
     *,
     limited: bool = True,
+    limits: ImportLimits = IMPORT_LIMITS,
 ) -> ImportResult:
     """Import `data` as a program. `name` (e.g. the file name) names a program whose file
     gives no name. `options` are the format's reader options (docs/imports.md): for a tape
@@ -78,17 +86,21 @@ def read_program(
 
     Raises ImportFailure for anything it cannot read (and for an unknown `format` or
     option, content that could be either a 1704 tape or G-code when `format` is None, or a
-    file past the limits of app.cnc.sizes, refused before it is parsed). `limited=False`
-    lifts those limits: the command line converting the user's own files (a long CAM
-    program to a tape) takes files of any size; the web and the library keep them.
+    file past `limits` or the block limit of app.cnc.sizes: refused before it is parsed by
+    its bytes and lines, after by its blocks and the moves they expand to, app.cnc.cost).
+    `limited=False` lifts those limits: the command line converting the user's own files
+    (a long CAM program to a tape) takes files of any size (the moves it may make are then
+    validation's and the compile's, `millblocks --max-moves`); the web and the library
+    keep them (a server's `limits` are its settings).
     """
     try:
         if limited:
-            check_import_size(data)
+            check_import_size(data, limits)
         importer = detect(data) if format is None else get_importer(format)
         program, notes = read_as(importer, data, name, options or {})
         if limited:
             check_block_count(len(program.blocks))
+            cost.check(program)
     except TooLarge as exc:
         raise ImportFailure("", str(exc)) from None
     return ImportResult(program, notes, importer.name)

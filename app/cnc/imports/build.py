@@ -16,6 +16,7 @@ import math
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 
+from app.cnc import limits
 from app.cnc.blocks import (
     ArcEnd,
     Block,
@@ -38,7 +39,6 @@ from app.cnc.blocks import (
     Program,
     Rep,
     Tool,
-    tool_name_fault,
 )
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports.common import (
@@ -69,7 +69,13 @@ from app.cnc.imports.ops import (
 )
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
+from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
+from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length
+
+# Values a rounding note lists for one line; past them, a count (a line a loop runs 800
+# times rounds 1 600 values).
+ROUNDED_SHOWN = 8
 
 
 @dataclass
@@ -93,7 +99,9 @@ class Builder:
         self.notes = notes
         self.blocks: list[Block] = []
         self.ref: XY = (0, 0)
-        self.rounding: dict[int, list[str]] = {}
+        # line → the values rounded on it, in order (a dict as an ordered set: a line a
+        # subroutine or loop runs many times can round hundreds)
+        self.rounding: dict[int, dict[str, None]] = {}
 
     # -- numbers --------------------------------------------------------------------------
 
@@ -107,9 +115,7 @@ class Builder:
         return rounded
 
     def log(self, line: int, text: str) -> None:
-        entries = self.rounding.setdefault(line, [])
-        if text not in entries:
-            entries.append(text)
+        self.rounding.setdefault(line, {})[text] = None
 
     def point(self, at: XY, units: Units, line: int) -> XY:
         return (self.length(at[0], units, line, "X"), self.length(at[1], units, line, "Y"))
@@ -141,10 +147,13 @@ class Builder:
 
     def flush_rounding(self) -> None:
         for line in sorted(self.rounding):
+            values = list(self.rounding[line])
+            rest = len(values) - ROUNDED_SHOWN
             self.notes.rounded(
                 line,
                 "to the programming resolution (0.001 in / 0.01 mm, feeds 0.1 ipm / 2 mm/min): "
-                + ", ".join(self.rounding[line]),
+                + ", ".join(values[:ROUNDED_SHOWN])
+                + (f" and {rest} more" if rest > 0 else ""),
             )
 
     # -- operations -------------------------------------------------------------------------
@@ -557,15 +566,18 @@ def block0(setup: SetUp, ops: list[Op], notes: Notes) -> DataBlock0:
                 f"tool {number} has no spindle speed in the file: enter its RPM in Data Block "
                 "0 (the control stops when a tool without RPM is used)",
             )
-        if not 1 <= number <= 24:
-            notes.needs(first_use.get(number), f"tool {number}: the control has tools 1 to 24")
+        if not 1 <= number <= limits.MAX_TOOL:
+            notes.needs(
+                first_use.get(number),
+                f"tool {number}: the control has tools 1 to {limits.MAX_TOOL}",
+            )
     offsets = setup.offsets or (0, 0)
     x_off = decimal_of(quantize_nm(offsets[0], units), units)
     y_off = decimal_of(quantize_nm(offsets[1], units), units)
     z_retract = Decimal("0.1") if units is Units.INCH else Decimal("2.54")
     if setup.z_retract is not None:
         z_retract = decimal_of(quantize_nm(setup.z_retract, units), units)
-    initial = setup.initial_tool if 0 <= setup.initial_tool <= 24 else 0
+    initial = setup.initial_tool if 0 <= setup.initial_tool <= limits.MAX_TOOL else 0
     return DataBlock0(
         x_offset=x_off,
         y_offset=y_off,
@@ -584,12 +596,14 @@ def make_program(
     db0: DataBlock0,
     blocks: list[Block],
 ) -> Program:
-    part = part_number if part_number.isdigit() and len(part_number) <= 8 else ""
+    part = part_number if part_number.isascii() and part_number.isdigit() else ""
+    # A file's title comment may be of any length: the name and notes are cut to what the
+    # library stores (app.cnc.text), so such a file still imports.
     return Program(
-        name=name or "imported",
-        part_number=part,
+        name=name[:NAME_LENGTH] or "imported",
+        part_number=part if len(part) <= 8 else "",
         units=units,
-        notes=notes_text,
+        notes=notes_text[:NOTES_LENGTH],
         block0=db0,
         blocks=tuple(blocks),
     )

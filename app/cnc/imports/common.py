@@ -80,17 +80,20 @@ class ImportFailure(ValueError):
     """A file that cannot be imported. The message names where: `line 3, column 16: …`,
     or for a tape `block 4 (N004), row 57: …`. Nothing is returned when this is raised."""
 
-    def __init__(self, where: str, message: str, line: int | None = None) -> None:
+    def __init__(
+        self, where: str, message: str, line: int | None = None, column: int | None = None
+    ) -> None:
         super().__init__(f"{where}: {message}" if where else message)
         self.where = where
         self.message = message
         self.line = line
+        self.column = column
 
 
 def failure(line: int, column: int | None, message: str) -> ImportFailure:
     """An ImportFailure at a text position (1-based line and column)."""
     where = f"line {line}" if column is None else f"line {line}, column {column}"
-    return ImportFailure(where, message, line)
+    return ImportFailure(where, message, line, column)
 
 
 @mypyc_attr(allow_interpreted_subclasses=True)  # the DXF reader's DxfNotes (not compiled)

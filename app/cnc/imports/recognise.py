@@ -6,6 +6,8 @@ its finest numbers, `Parsed.tolerance`); otherwise the operations stay explicit 
 
 - **Pecks in a mill sequence**: the same cuts at levels that are MillBlocks' even peck
   levels from Z UP, each re-entered at the level just cut → one DRILL with # PECK.
+- **A 2P routine in pecks**: its roughing pass at each such level, the finishing pass after
+  the last → one DRILL with # PECK and the 2P routine, where the routine cuts them exactly.
 - **CIRCLE / FRAME**: for a mill sequence cut with a tool whose diameter the file gives,
   routine blocks are proposed from its arcs and extent (every placement, 2P or not, the
   direction from the cut) and planned by `app.cnc.mill` — the same code the interpreter
@@ -129,7 +131,15 @@ def merge_pecks(ops: list[Op], tolerance: int) -> list[Op]:
     return out
 
 
-def _next_level(a: MillOp, b: MillOp, tol: int) -> bool:
+def _next_level(a: MillOp, b: MillOp, tol: int, finish: bool = False) -> bool:
+    """Whether `b` cuts `a`'s cuts again at the next peck level down, re-entered at the
+    level `a` cut to; `finish`: and goes on cutting after them (a 2P routine's finishing
+    pass after its last roughing level)."""
+    cuts = a.elements
+    if finish and len(b.elements) > len(cuts):
+        b = replace(b, elements=b.elements[: len(cuts)])
+    elif finish:
+        return False
     if not (
         b.spec.has_depth
         and not b.message
@@ -162,6 +172,43 @@ def _close(a: XY | Pt, b: XY | Pt, tol: float) -> bool:
     return abs(a[0] - b[0]) <= tol and abs(a[1] - b[1]) <= tol
 
 
+def _two_pass_levels(ops: list[Op], i: int, tol: int) -> MillOp | None:
+    """The mill sequences from `ops[i]` on that are one 2P routine cut in pecks, as one
+    mill sequence with # PECK (its depth the roughing depth, its cuts the last level's:
+    the roughing pass, then the finishing pass); None where they are not."""
+    first = ops[i]
+    if not isinstance(first, MillOp) or not first.spec.has_depth or first.stop:
+        return None
+    chain = [first]
+    for k in range(i + 1, min(len(ops), i + limits.MAX_PECKS)):
+        nxt = ops[k]
+        if not isinstance(nxt, MillOp):
+            return None
+        if _next_level(chain[-1], nxt, tol, finish=True):
+            chain.append(nxt)
+            break
+        if nxt.stop or not _next_level(chain[-1], nxt, tol):
+            return None
+        chain.append(nxt)
+    else:
+        return None
+    z_up, bottom = first.spec.z_up, chain[-1].spec.z_dn
+    assert z_up is not None and bottom is not None
+    even = peck_levels(z_up, bottom, len(chain))
+    levels = [op.spec.z_dn for op in chain]
+    if any(lv is None or abs(lv - ev) > tol for lv, ev in zip(levels, even, strict=True)):
+        return None
+    return MillOp(
+        sorted({line for op in chain for line in op.lines}),
+        first.at,
+        replace(first.spec, z_dn=bottom, pecks=len(chain)),
+        first.comp,
+        chain[-1].elements,
+        stop=chain[-1].stop,
+        message=first.message,
+    )
+
+
 # -- CIRCLE and FRAME routines --------------------------------------------------------------
 
 
@@ -186,7 +233,27 @@ class RoutineFinder:
     def run(self, ops: list[Op]) -> list[Op]:
         return [self.routine(op) if isinstance(op, MillOp) else op for op in ops]
 
-    def routine(self, op: MillOp) -> Op:
+    def two_pass_with_pecks(self, ops: list[Op]) -> list[Op]:
+        """2P routines cut with pecks (seed 001 PECK): mill sequences at MillBlocks' even
+        peck levels from Z UP down to the roughing depth, each re-entered at the level
+        just cut, each the roughing pass, the last followed by the finishing pass. One
+        DRILL with # PECK and the 2P routine where the routine cuts them exactly; otherwise
+        the sequences stay as they are (each recognised on its own later)."""
+        out: list[Op] = []
+        i = 0
+        while i < len(ops):
+            chain = _two_pass_levels(ops, i, self.tol)
+            if chain is not None:
+                found = self.routine(chain, two_pass_only=True)
+                if isinstance(found, RoutineOp):
+                    out.append(found)
+                    i += chain.spec.pecks
+                    continue
+            out.append(ops[i])
+            i += 1
+        return out
+
+    def routine(self, op: MillOp, two_pass_only: bool = False) -> Op:
         diameter = self.diameters.get(op.spec.tool)
         if diameter is None or op.comp is not Comp.NONE or not op.elements:
             return op
@@ -204,6 +271,8 @@ class RoutineFinder:
             self.cache[key] = found
         conflict: tuple[Circle | Frame, MillingMode] | None = None
         for block, offset, milling in found:
+            if two_pass_only and not block.two_pass:
+                continue
             centre = (op.at[0] + offset[0], op.at[1] + offset[1])
             if self.milling is not None and milling is not self.milling:
                 conflict = (block, milling)
@@ -219,7 +288,7 @@ class RoutineFinder:
             if block.two_pass and spec.z_dn is not None:
                 spec = replace(spec, z_dn=spec.z_dn - rough_depth(spec.units))
             return RoutineOp(op.lines, centre, spec, block, op.stop, op.message)
-        if conflict is not None:
+        if conflict is not None and not two_pass_only:
             block, milling = conflict
             chosen = self.milling.value if self.milling else "-"
             self.notes.ignored(

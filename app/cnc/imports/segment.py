@@ -38,6 +38,7 @@ from app.cnc.imports.common import (
     show,
     show_feed,
 )
+from app.cnc.imports.compensation import Part, Reading
 from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, LoopOp, MillOp, Op, PosOp
 from app.cnc.imports.steps import (
     Arc,
@@ -145,7 +146,7 @@ def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
     # call, which made reading a long file quadratic.
     for k in range(j, len(steps)):
         step = steps[k]
-        if isinstance(step, Feed) and (step.x, step.y) == at:
+        if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
             continue
         return is_cut(step)
     return False
@@ -368,7 +369,7 @@ class _Segmenter:
                 raise ImportFailure(
                     self.notes.where(step.line),
                     "a feed in Z before the file gives any height: where it starts (Z UP) "
-                    "is not known",
+                    "is not known; give the height first with a rapid (G0 Z…)",
                     step.line,
                 )
             if step.z is None or self.z is None or step.z == self.z:
@@ -390,7 +391,8 @@ class _Segmenter:
             raise ImportFailure(
                 self.notes.where(step.line),
                 "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
-                "down, then cuts in XY at one depth",
+                "down, then cuts in XY at one depth; have the CAM plunge (no ramp or helical "
+                "entry)",
                 step.line,
             )
         z = "" if self.z is None else f" at Z{show(self.z, self.units)}"
@@ -420,7 +422,20 @@ class _Segmenter:
             while j < n:
                 s = steps[j]
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
-                    if s.feed != feed_z:
+                    if s.feed != feed_z and not levels:
+                        # Down to a feed height at one rate, into the work at another (a
+                        # CAM's approach; Fusion for Personal Use writes its rapids down so):
+                        # the tool enters the work at the last rate, from where it begins.
+                        # A DRILL rapids to Z UP and feeds from there at its one FEEDR Z.
+                        self.notes.assumed(
+                            lines[-1] if lines else s.line,
+                            f"feed {show_feed(feed_z, s.units)} down to Z"
+                            f"{show(bottom, s.units)} above the plunge: read as the rapid "
+                            f"to Z UP; the plunge from there at {show_feed(s.feed, s.units)} "
+                            f"(line {s.line}) is the FEEDR Z",
+                        )
+                        z_up, feed_z = bottom, s.feed
+                    elif s.feed != feed_z:
                         self.notes.ignored(
                             s.line,
                             f"feed {show_feed(s.feed, s.units)} in Z differs from "
@@ -534,9 +549,15 @@ class _Segmenter:
             how = f"dwell {dwell} s; a MillBlocks DRILL dwells 0.8 s"
         pecks = 1
         if op is HoleOp.DRILL and len(levels) > 1:
-            pecks = len(levels)
+            pecks = min(len(levels), limits.MAX_PECKS)
             even = peck_levels(z_up, bottom, pecks)
-            if any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
+            if len(levels) > pecks:
+                self.notes.assumed(
+                    lines[0],
+                    f"{len(levels)} peck levels: MillBlocks drills at most {pecks}, so {pecks} "
+                    f"even pecks of {show((z_up - bottom) / pecks, spec_units)}",
+                )
+            elif any(abs(a - b) > self.tol for a, b in zip(even, levels, strict=True)):
                 shown = ", ".join(f"Z{show(z, spec_units)}" for z in levels)
                 self.notes.assumed(
                     lines[0],
@@ -572,7 +593,7 @@ class _Segmenter:
         depth = bottom
         new_depth: int | None = None
         elements: list[Element] = []
-        comps: set[str] = set()
+        sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
         while j < n:
             s = steps[j]
@@ -597,11 +618,12 @@ class _Segmenter:
                     raise ImportFailure(
                         self.notes.where(s.line),
                         "X/Y and Z fed together (a ramp): MillBlocks cuts in XY at one "
-                        "depth at a time",
+                        "depth at a time; have the CAM plunge to each depth (no ramp or "
+                        "helical entry)",
                         s.line,
                     )
                 elements.append(Element(s.line, (s.x, s.y), None, False, new_depth, s.feed))
-                comps.add(s.comp)
+                sides.append((s.comp, s.comp_tool))
             elif isinstance(s, Arc):
                 if s.z is not None and s.z != depth:
                     raise ImportFailure(
@@ -612,35 +634,35 @@ class _Segmenter:
                 elements.append(
                     Element(s.line, (s.x, s.y), (s.cx, s.cy), s.clockwise, new_depth, s.feed)
                 )
-                comps.add(s.comp)
+                sides.append((s.comp, s.comp_tool))
+            elif isinstance(s, Coolant):
+                # Coolant on with a cut (`G1 Y40 M8`): the tool's COOLANT, and the cuts go on.
+                self.coolant(s)
+                j += 1
+                continue
             else:
                 break
             new_depth = None
             x, y = s.x, s.y
             j += 1
-        comp = Comp.NONE
-        if comps - {""}:
-            if len(comps) > 1:
-                first = next(e.line for e in elements)
-                raise ImportFailure(
-                    self.notes.where(first),
-                    "cutter compensation changes inside a mill sequence: MillBlocks sets it "
-                    "once, on the DRILL that starts the sequence",
-                    first,
-                )
-            comp = Comp.LEFT if comps == {"left"} else Comp.RIGHT
-            self.notes.assumed(
-                lines[0],
-                f"cutter compensation {comp.value} (G4{1 if comp is Comp.LEFT else 2}): the "
-                f"programmed contour with CUT {'LT' if comp is Comp.LEFT else 'RT'}; "
-                "MillBlocks offsets the tool itself and goes down one tool radius to the side "
-                "of the first cut",
-            )
         self.z = depth
         self.x, self.y = x, y
-        spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
-        all_lines = sorted({*lines, *[e.line for e in elements]})
-        self.add(MillOp(all_lines, at, spec, comp, elements))
+        if any(side for side, _ in sides):
+            diameters = {
+                n: t.diameter for n, t in self.parsed.tools.items() if t.diameter is not None
+            }
+            reading = Reading(self.tool, diameters, units, self.notes)
+            parts = reading.parts(at, bottom, elements, sides)
+        else:
+            parts = [Part(at, Comp.NONE, bottom, elements)]
+        for k, part in enumerate(parts):
+            if k == 0:
+                spec = self.hole_spec(HoleOp.DRILL, z_up, bottom, feed_z, 1, self.tool, units)
+                part_lines = sorted({*lines, *[e.line for e in part.elements]})
+            else:
+                spec = self.hole_spec(HoleOp.DRILL, z_up, part.depth, feed_z, 1, self.tool, units)
+                part_lines = sorted({e.line for e in part.elements})
+            self.add(MillOp(part_lines, part.at, spec, part.comp, part.elements))
         self.awaiting_retract = (lines[0], z_up)
         return j
 
@@ -662,6 +684,14 @@ class _Segmenter:
         j = i
         while j < n:
             s = steps[j]
+            if is_cut(s) and s.comp:
+                raise ImportFailure(
+                    self.notes.where(s.line),
+                    "cutter compensation (G41/G42) in a program whose Z never changes: "
+                    "MillBlocks reads it only where a cut starts with a plunge (a 3-axis mill "
+                    "sequence)",
+                    s.line,
+                )
             if isinstance(s, Feed):
                 if (s.x, s.y) != (x, y):
                     elements.append(Element(s.line, (s.x, s.y), None, False, None, s.feed))
@@ -705,7 +735,12 @@ class _Segmenter:
             depth = step.r - step.bottom
             pecks = max(1, math.ceil(depth / step.peck))
             if pecks > limits.MAX_PECKS:
-                how = f"{pecks} pecks of {show(step.peck, step.units)}: more than 40"
+                how = (
+                    f"{pecks} pecks of Q{show(step.peck, step.units)}: MillBlocks drills at "
+                    f"most {limits.MAX_PECKS}, so {limits.MAX_PECKS} even pecks of "
+                    f"{show(depth / limits.MAX_PECKS, step.units)}"
+                )
+                pecks = limits.MAX_PECKS
             elif depth % step.peck:
                 how = (
                     f"pecks of Q{show(step.peck, step.units)} do not divide the depth "

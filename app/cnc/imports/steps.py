@@ -45,6 +45,7 @@ class Feed:
     feed: int
     units: Units
     comp: str = ""  # "left"/"right" while G41/G42 is on: the contour, not the tool centre
+    comp_tool: int = 0  # the tool whose diameter G41/G42 offsets by (D; 0: the one in use)
 
 
 @dataclass(slots=True)
@@ -62,6 +63,7 @@ class Arc:
     feed: int
     units: Units
     comp: str = ""
+    comp_tool: int = 0
 
 
 @dataclass(slots=True)

@@ -58,10 +58,18 @@ def sniff(content: Content, gcode: bool) -> Sniff | None:
     return Sniff(Strength.POSSIBLE, LOOK_ALIKE)
 
 
+SNIFF_LINES = 5_000
+"""Lines looked at for evidence. A long CAM file shows what it is in its first lines; a
+word past them that contradicts it is the reader's to refuse, naming its line. (Reading a
+10^5-line file's every word here took as long as importing it.)"""
+
+
 def evidence(text: str) -> Evidence:
-    """What in `text` (comments blanked) only G-code or only a 1704 tape can have."""
+    """What in `text` (comments blanked) only G-code or only a 1704 tape can have, in its
+    first SNIFF_LINES lines."""
     gcode = tape = ""
-    for number, raw in enumerate(text.replace("\r", "\n").split("\n"), start=1):
+    lines = text.replace("\r", "\n").split("\n", SNIFF_LINES)[:SNIFF_LINES]
+    for number, raw in enumerate(lines, start=1):
         for block in raw.split(";"):
             stripped = block.strip()
             if not stripped or stripped.startswith("%"):

@@ -99,6 +99,22 @@ class Carrier:
             within |= (along <= turn + slack_angle) | (along >= 2 * math.pi - slack_angle)
         return np.where(within, np.abs(np.hypot(qx, qy) - self.radius), math.inf)
 
+    def box(self, tolerance: float) -> tuple[float, float, float, float]:
+        """A box holding every point within `tolerance` of the carrier's spans (and of their
+        `tolerance` of slack): points outside it are farther (x0, y0, x1, y1)."""
+        reach = 2 * tolerance + 1.0
+        if self.direction is None:
+            r = self.radius + reach
+            return (self.origin[0] - r, self.origin[1] - r, self.origin[0] + r, self.origin[1] + r)
+        ends = [
+            add(self.origin, scale(self.direction, along))
+            for lo, hi in self.spans
+            for along in (lo - tolerance, hi + tolerance)
+        ]
+        xs = [p[0] for p in ends]
+        ys = [p[1] for p in ends]
+        return (min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach)
+
     def element_stub(self) -> tuple[Pt, Element]:
         """A start and element on this carrier's full line/circle (for intersections)."""
         if self.direction is not None:
@@ -258,8 +274,18 @@ def _carriers_at(points: list[Pt], level: Sequence[Carrier], tolerance: float) -
     carrier over all the points: a contour of hundreds of blocks has as many carriers)."""
     at = np.array(points, dtype=np.float64)
     on: list[set[int]] = [set() for _ in points]
+    low, high = at.min(axis=0), at.max(axis=0)
     for k, carrier in enumerate(level):
-        for i in np.flatnonzero(carrier.distances(at, tolerance) <= tolerance).tolist():
+        x0, y0, x1, y1 = carrier.box(tolerance)
+        if x0 > high[0] or x1 < low[0] or y0 > high[1] or y1 < low[1]:
+            continue  # no point of the ring comes within `tolerance` of it
+        near = np.flatnonzero(
+            (at[:, 0] >= x0) & (at[:, 0] <= x1) & (at[:, 1] >= y0) & (at[:, 1] <= y1)
+        )
+        if not len(near):
+            continue
+        close = carrier.distances(at[near], tolerance) <= tolerance
+        for i in near[close].tolist():
             on[i].add(k)
     return on
 

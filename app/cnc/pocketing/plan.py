@@ -30,6 +30,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
+from app.cnc import sizes
 from app.cnc.blocks import MillingMode, Placement
 from app.cnc.mill import (
     Element,
@@ -44,7 +47,7 @@ from app.cnc.mill import (
     signed_area,
     sub,
 )
-from app.cnc.pocketing import regions
+from app.cnc.pocketing import nearest, regions
 from app.cnc.pocketing.checks import contour_problems, island_problems, show, starts_of
 from app.cnc.pocketing.exact import Carrier, carriers, exact_ring, matched_sources
 from app.cnc.pocketing.model import (
@@ -89,7 +92,8 @@ def plan_pocket(
     is the spindle direction; None is clockwise) choose each ring's direction; `block` is
     written on every element made; `units` is for messages.
 
-    Raises nothing for bad geometry: errors come back as findings (and no passes).
+    Raises nothing for bad geometry: errors come back as findings (and no passes); raises
+    app.cnc.sizes.OverBudget when a time budget is in force and runs out.
     """
     r = float(tool_radius)
     t = float(chordal_tolerance)
@@ -186,8 +190,19 @@ class _Planner:
     moves: list[regions.Ring]
     passes: list[Pass] = field(default_factory=list)
     position: Pt | None = None
-    cleared: list[regions.Ring] = field(default_factory=list)
+    cleared: regions.SweptIndex | None = None
     _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
+    _points: dict[Path, list[Pt]] = field(default_factory=dict)
+    _sweeps: dict[Path, list[regions.Ring]] = field(default_factory=dict)
+    _pieces: dict[tuple[int, int], list[regions.Ring]] = field(default_factory=dict)
+    _tables: dict[int, tuple[Path, nearest.Elements]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.cleared = self._index()
+
+    def _index(self) -> regions.SweptIndex:
+        # Cells of two tool diameters: a link's question reads a few of them.
+        return regions.SweptIndex(self.r, self.t, 4 * self.r, self._pieces)
 
     # -- order -------------------------------------------------------------------------------
 
@@ -221,6 +236,7 @@ class _Planner:
             leaf_entry = False
 
     def _add_ring(self, node: _Node, ring: regions.Ring, plunge_deep: bool) -> None:
+        sizes.spend()
         d, _ = self.levels[node.level]
         finish = node.level == 0
         tag = "finish" if finish else "rough"
@@ -237,7 +253,9 @@ class _Planner:
         names = tuple(dict.fromkeys(self.names[c] for c, _ in sources)) if finish else ()
         kind = PassKind.FINISH if finish else PassKind.ROUGH
         self.passes.append(Pass(kind, path, d, is_exact, entry, names))
-        self.cleared = regions.union(self.cleared, self._swept(entry.path), self._swept(path))
+        assert self.cleared is not None
+        self.cleared.add(self._path_points(entry.path))
+        self.cleared.add(self._path_points(path))
         self.position = _end(path)
 
     def _link(self, node: _Node, ring: Path, plunge_deep: bool) -> tuple[Link, Path]:
@@ -259,14 +277,13 @@ class _Planner:
                 return Link(kind, Path(at, (Element(self.block, path.start, tag="link"),))), path
             return Link(kind, Path(path.start, ())), path
         direct = rotate(ring, here)
-        swept = self._swept(direct)
-        step = self._step(here, direct.start, swept)
+        step = self._step(here, direct.start, direct)
         if step is LinkKind.CLEARED:
             return self._feed(step, Path(here, ()), direct), direct
         previous = self.passes[-1].path
         along, closest = _way_round(previous, ring, self.r / 8)
         shifted = rotate(ring, closest)
-        other = self._step(closest, shifted.start, self._swept(shifted))
+        other = self._step(closest, shifted.start, shifted)
         if (
             other is not None
             and along.elements
@@ -277,9 +294,9 @@ class _Planner:
             return self._feed(step, Path(here, ()), direct), direct
         return Link(LinkKind.RETRACT, Path(direct.start, ())), direct
 
-    def _step(self, a: Pt, b: Pt, then: list[regions.Ring]) -> LinkKind | None:
-        """CLEARED or CUTTING for a straight feed from `a` to `b` before a pass that cuts
-        `then`; None when the tool would touch a wall or island or cut farther than its
+    def _step(self, a: Pt, b: Pt, then: Path) -> LinkKind | None:
+        """CLEARED or CUTTING for a straight feed from `a` to `b` before the pass `then`;
+        None when the tool would touch a wall or island or cut farther than its
         diameter."""
         if math.dist(a, b) < 1.0:
             return LinkKind.CLEARED
@@ -304,16 +321,37 @@ class _Planner:
 
     # -- areas -------------------------------------------------------------------------------
 
-    def _swept(self, path: Path) -> list[regions.Ring]:
-        if not path.elements:
-            return regions.sweep_lines([[path.start]], self.r, self.t)
-        return regions.sweep_lines([regions.path_points(path, self.t)], self.r, self.t)
+    def _path_points(self, path: Path) -> list[Pt]:
+        """The polyline of a path (its start alone when it has no elements), kept: a pass
+        is swept and searched several times."""
+        found = self._points.get(path)
+        if found is None:
+            found = regions.path_points(path, self.t) if path.elements else [path.start]
+            self._points[path] = found
+        return found
 
-    def _through_cleared(self, move: Path, then: list[regions.Ring]) -> bool:
+    def _swept(self, path: Path) -> list[regions.Ring]:
+        found = self._sweeps.get(path)
+        if found is None:
+            found = regions.sweep_lines([self._path_points(path)], self.r, self.t)
+            self._sweeps[path] = found
+        return found
+
+    def _through_cleared(self, move: Path, then: Path) -> bool:
         """True when the tool moving along `move` cuts nothing but what is already cut or
-        what `then` (the pass it leads to) cuts."""
-        done = regions.offset(regions.union(self.cleared, then), self.t, self.t)
-        extra = regions.difference(self._swept(move), done)
+        what the pass `then` (the one it leads to) cuts. Only what was cut near the move is
+        read (`SweptIndex`): the answer is the same, at the cost of the place, not of
+        every pass so far."""
+        assert self.cleared is not None
+        swept = self._swept(move)
+        box = regions.box_of(swept)
+        if box is None:
+            return True
+        # Grown by the tolerance straight from the overlapping sweeps: the offset unites
+        # them as it grows them.
+        near = self.cleared.near(box, [self._path_points(then)])
+        done = regions.offset(near, self.t, self.t)
+        extra = regions.difference(swept, done)
         return not regions.thicker_than(extra, RESIDUE_NM, self.t)
 
     def clean_up(self, opening: list[regions.Ring]) -> int:
@@ -323,6 +361,7 @@ class _Planner:
         swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
         unreachable: list[Pt] = []
         for _ in range(MAX_CLEANUPS):
+            sizes.spend()
             residue = regions.difference(opening, swept)
             pieces = [
                 c
@@ -346,29 +385,48 @@ class _Planner:
         return 0
 
     def _reachable(self, p: IPtF) -> Pt:
-        """The point nearest `p` where the tool centre may go (inside `safe`)."""
+        """The point nearest `p` where the tool centre may go (inside `safe`): the first
+        nearest point on the edges of `safe`, measured exactly where `nearest` cannot rule
+        an edge out."""
         point = (float(p[0]), float(p[1]))
         if regions.inside(self.safe, (round(point[0]), round(point[1]))):
             return point
+        edges = [
+            (a, b) for ring in self.safe for a, b in zip(ring, ring[1:] + ring[:1], strict=True)
+        ]
+        if not edges:
+            return point
+        distances = nearest.segment_distances(point, self.safe)
         best, best_d = point, math.inf
-        for ring in self.safe:
-            for a, b in zip(ring, ring[1:] + ring[:1], strict=True):
-                fa, fb = (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
-                q = _closest_on_segment(point, fa, fb)
-                if math.dist(q, point) < best_d:
-                    best, best_d = q, math.dist(q, point)
+        for k in np.flatnonzero(distances <= distances.min() + nearest.MARGIN).tolist():
+            a, b = edges[k]
+            fa, fb = (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
+            q = _closest_on_segment(point, fa, fb)
+            if math.dist(q, point) < best_d:
+                best, best_d = q, math.dist(q, point)
         return best
 
     def _spike(self, target: Pt) -> list[Pt] | None:
         """Insert an out-and-back move to `target` into the nearest pass that can reach it
-        in a straight line; the move's two points, or None."""
+        in a straight line; the move's two points, or None. The twelve nearest places on
+        the passes are tried, nearest first (`nearest` finds the few that can be among
+        them; those are measured exactly)."""
+        tables = [self._table(made.path) for made in self.passes]
+        lower, upper = nearest.bounds(np.array([target], dtype=np.float64), nearest.joined(tables))
+        owners = np.repeat(np.arange(len(tables)), [len(t) for t in tables])
+        firsts = np.cumsum([0] + [len(t) for t in tables])
+        count = len(owners)
+        if not count:
+            return None
+        twelfth = float(np.partition(upper[0], min(11, count - 1))[min(11, count - 1)])
         candidates: list[tuple[float, int, int, Pt]] = []
-        for i, made in enumerate(self.passes):
-            current = made.path.start
-            for j, element in enumerate(made.path.elements):
-                q = _closest_on_element(target, current, element)
-                candidates.append((math.dist(q, target), i, j, q))
-                current = element.end
+        for k in np.flatnonzero(lower[0] <= twelfth + nearest.MARGIN).tolist():
+            i = int(owners[k])
+            j = k - int(firsts[i])
+            path = self.passes[i].path
+            start = path.start if j == 0 else path.elements[j - 1].end
+            q = _closest_on_element(target, start, path.elements[j])
+            candidates.append((math.dist(q, target), i, j, q))
         candidates.sort()
         for _, i, j, q in candidates[:12]:
             if regions.segment_inside(self.moves, q, target):
@@ -377,20 +435,27 @@ class _Planner:
                 return [q, target]
         return None
 
+    def _table(self, path: Path) -> nearest.Elements:
+        """A pass's elements as `nearest` reads them, kept while the pass is unchanged."""
+        found = self._tables.get(id(path))
+        if found is None or found[0] is not path:
+            found = (path, nearest.table(starts_of(path), path.elements))
+            self._tables[id(path)] = found
+        return found[1]
+
     def classify_links(self) -> list[Pass]:
         """The passes with each feed link marked CLEARED or CUTTING by the material cut
         before it (cleanup moves included)."""
-        cleared: list[regions.Ring] = []
+        self.cleared = self._index()
         result: list[Pass] = []
         for made in self.passes:
             link = made.entry
             if link.kind in (LinkKind.CLEARED, LinkKind.CUTTING):
-                self.cleared = cleared
-                then = self._swept(made.path)
-                through = not link.path.elements or self._through_cleared(link.path, then)
+                through = not link.path.elements or self._through_cleared(link.path, made.path)
                 link = replace(link, kind=LinkKind.CLEARED if through else LinkKind.CUTTING)
             result.append(replace(made, entry=link))
-            cleared = regions.union(cleared, self._swept(link.path), self._swept(made.path))
+            self.cleared.add(self._path_points(link.path))
+            self.cleared.add(self._path_points(made.path))
         return result
 
 
@@ -431,10 +496,18 @@ def _closest_on_element(p: Pt, start: Pt, element: Element) -> Pt:
 
 def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     """The shorter way along the closed `previous` path from its start to its point nearest
-    to `ring` (elements tagged "link"), and that point; points `step` apart are tried."""
+    to `ring` (elements tagged "link"), and that point; points `step` apart are tried.
+
+    Which point: the first sample whose distance to the ring (`_closest_on_element`, exact)
+    is smallest. Only the samples `nearest` cannot rule out are measured exactly, in order:
+    the same point as measuring them all."""
     ring_starts = starts_of(ring)
+    samples = sample(previous, step)
+    points = np.array([p for p, _ in samples], dtype=np.float64)
+    lower, best_upper = nearest.nearest_rows(points, nearest.table(ring_starts, ring.elements))
     best: tuple[float, Pt] | None = None
-    for point, _ in sample(previous, step):
+    for i in np.flatnonzero(lower <= best_upper + nearest.MARGIN).tolist():
+        point = samples[i][0]
         for start, element in zip(ring_starts, ring.elements, strict=True):
             d = math.dist(_closest_on_element(point, start, element), point)
             if best is None or d < best[0] - 1e-9:
@@ -549,6 +622,7 @@ def _levels(
     found: list[Level] = []
     d = r
     while len(found) <= MAX_LEVELS:
+        sizes.spend()
         shrunk = regions.offset(region, -d, t)
         if not shrunk:
             return found

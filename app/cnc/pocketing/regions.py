@@ -98,7 +98,9 @@ def polygon(path: Path, tolerance: float) -> Ring:
 
 
 def _rings(result: Any) -> list[Ring]:
-    return [[(int(x), int(y)) for x, y in ring] for ring in result]
+    # pyclipper answers lists of [x, y] lists of Python ints: tuples made in C, not one
+    # Python call per point (this was a tenth of a pocket's planning time).
+    return [list(map(tuple, ring)) for ring in result]
 
 
 def clip(subject: Sequence[Ring], clip_rings: Sequence[Ring], operation: int) -> list[Ring]:
@@ -238,3 +240,105 @@ def deep_point(component: Component, tolerance: float) -> IPt:
     if inside(rings, (cx, cy)):
         return (cx, cy)
     return outer[0]
+
+
+Box = tuple[float, float, float, float]
+"""x0, y0, x1, y1 (nm)."""
+
+
+def box_of(region: Sequence[Ring]) -> Box | None:
+    """The smallest box around a region (None for an empty one)."""
+    if not region:
+        return None
+    xs = [p[0] for ring in region for p in ring]
+    ys = [p[1] for ring in region for p in ring]
+    return (min(xs), min(ys), max(xs), max(ys))
+
+
+class SweptIndex:
+    """Where a round tool of `radius` has moved (polylines, nm), found by place: the area
+    swept near a box comes from the moves there alone, so a question about one place costs
+    what is near it, not everything cut so far (a pocket's links asked it of the union of
+    every pass before, which grew with each pass).
+
+    Each move is cut into pieces of `PIECE` segments (neighbours share a point), filed by
+    box under the grid cells (`cell` nm square) the box meets, and swept the first time a
+    question needs it (`sweeps` keeps the sweeps by (id of the points, piece), for indexes
+    over the same moves). The area near a box is the union of the sweeps of the pieces
+    there: the same area as the sweep of whole moves (a round tool's sweep along a polyline
+    is the union of its sweeps along the pieces), its round ends within `tolerance` as
+    every sweep here."""
+
+    PIECE = 32
+
+    def __init__(
+        self,
+        radius: float,
+        tolerance: float,
+        cell: float,
+        sweeps: dict[tuple[int, int], list[Ring]] | None = None,
+    ) -> None:
+        self.radius = radius
+        self.tolerance = tolerance
+        self.cell = cell
+        self.sweeps: dict[tuple[int, int], list[Ring]] = {} if sweeps is None else sweeps
+        self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
+        self.cells: dict[tuple[int, int], list[int]] = {}
+
+    def add(self, points: Sequence[Pt]) -> None:
+        """Record a move along `points` (one point: the tool went down there). The list
+        must stay alive and unchanged while the index is used (its id names its sweeps)."""
+        reach = self.radius + self.tolerance
+        for k, piece in enumerate(_pieces(points, self.PIECE)):
+            xs = [p[0] for p in piece]
+            ys = [p[1] for p in piece]
+            box = (min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach)
+            number = len(self.pieces)
+            self.pieces.append((points, k, box))
+            for cell in self._cells(box):
+                self.cells.setdefault(cell, []).append(number)
+
+    def near(self, box: Box, also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
+        """The area swept by the recorded moves and by the moves `also` (not recorded)
+        wherever it lies within `box`; beyond the box it may be cut short. The rings of the
+        pieces' sweeps, overlapping: the area is where their winding is positive (as an
+        offset or a union reads them), not yet united."""
+        numbers = sorted({n for cell in self._cells(box) for n in self.cells.get(cell, ())})
+        found: list[Ring] = []
+        for number in numbers:
+            points, k, (a0, b0, a1, b1) = self.pieces[number]
+            if a0 > box[2] or a1 < box[0] or b0 > box[3] or b1 < box[1]:
+                continue
+            key = (id(points), k)
+            swept = self.sweeps.get(key)
+            if swept is None:
+                piece = _pieces(points, self.PIECE)[k]
+                swept = sweep_lines([piece], self.radius, self.tolerance)
+                self.sweeps[key] = swept
+            found += swept
+        reach = self.radius + self.tolerance
+        for points in also:
+            for piece in _pieces(points, self.PIECE):
+                xs = [p[0] for p in piece]
+                ys = [p[1] for p in piece]
+                if (
+                    min(xs) - reach <= box[2]
+                    and max(xs) + reach >= box[0]
+                    and min(ys) - reach <= box[3]
+                    and max(ys) + reach >= box[1]
+                ):
+                    found += sweep_lines([piece], self.radius, self.tolerance)
+        return found
+
+    def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
+        c = self.cell
+        for kx in range(math.floor(box[0] / c), math.floor(box[2] / c) + 1):
+            for ky in range(math.floor(box[1] / c), math.floor(box[3] / c) + 1):
+                yield (kx, ky)
+
+
+def _pieces(points: Sequence[Pt], size: int) -> list[Sequence[Pt]]:
+    """`points` in runs of `size` segments, each run starting where the one before ends."""
+    if len(points) <= size + 1:
+        return [points]
+    return [points[k : k + size + 1] for k in range(0, len(points) - 1, size)]

@@ -215,6 +215,11 @@ def make_grid(stock: Stock, resolution: int) -> Grid:
     resolution is not positive or the grid would be unreasonably large."""
     if resolution <= 0:
         raise StockError("the resolution must be more than 0")
+    if resolution > max(stock.x1 - stock.x0, stock.y1 - stock.y0):
+        # One cell would hold the whole stock, and its size need not fit the grid's integers.
+        raise StockError(
+            "the resolution is larger than the stock; choose a cell smaller than its longer side"
+        )
     nx = max(1, math.ceil((stock.x1 - stock.x0) / resolution))
     ny = max(1, math.ceil((stock.y1 - stock.y0) / resolution))
     if nx * ny > MAX_CELLS:

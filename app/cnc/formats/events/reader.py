@@ -95,7 +95,7 @@ from app.cnc.imports.ops import (
 from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import rough_wall, routine_clockwise
-from app.cnc.numbers import NUMBER_TEXT, NumberError
+from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_int
 from app.cnc.units import Units
 
 # Two-letter codes first, so `XB` is not read as X followed by B.
@@ -341,14 +341,19 @@ class _Reader:
     def dim(self, block: EBlock, word: EWord) -> int:
         """A dimension, radius, conrad or offset in nm (§2.2.4 implied decimals)."""
         units = self.units_or_fail(block)
-        try:
-            value = implied(word.text, 4 if units is Units.INCH else 2)
-        except NumberError as exc:
-            raise failure(block.line, word.column, f"{word.code}{word.text}: {exc}") from None
+        value = self.number(block, word, 4 if units is Units.INCH else 2)
         nm = int((value * units.nm).to_integral_value(rounding=ROUND_HALF_EVEN))
         if abs(nm) > MAX_ABS_NM:
             raise failure(block.line, word.column, f"{word.code}{word.text} is out of range")
         return nm
+
+    def number(self, block: EBlock, word: EWord, places: int) -> Decimal:
+        """A word's number, `places` decimals implied (§2.2.4), read by the one number
+        reader; what it refuses is a failure at the word's line and column."""
+        try:
+            return implied(word.text, places)
+        except NumberError as exc:
+            raise failure(block.line, word.column, f"{word.code}{word.text}: {exc}") from None
 
     def positive(self, block: EBlock, word: EWord) -> int:
         nm = self.dim(block, word)
@@ -370,7 +375,10 @@ class _Reader:
             raise failure(
                 block.line, word.column, f"{code}{word.text}: a whole number, no sign or point"
             )
-        value = int(word.text)
+        try:
+            value = parse_int(word.text)
+        except NumberError as exc:
+            raise failure(block.line, word.column, f"{code}{word.text}: {exc}") from None
         if not low <= value <= high:
             raise failure(block.line, word.column, f"{code}{word.text} is outside {low} to {high}")
         return value
@@ -384,7 +392,7 @@ class _Reader:
                 block.line, f"no F: {default} {units.feed_symbol}, the manual's default"
             )
             return int(default * units.nm)
-        value = implied(word.text, 1 if units is Units.INCH else 0)
+        value = self.number(block, word, 1 if units is Units.INCH else 0)
         if value <= 0:
             raise failure(block.line, word.column, f"F{word.text}: a feed must be more than 0")
         return int((value * units.nm).to_integral_value())
@@ -516,7 +524,7 @@ class _Reader:
             if radius == 0:
                 raise failure(line, r_word.column, "a bolt circle of radius 0")
             a_word = block.words.get("A")
-            angle = Decimal(0) if a_word is None else implied(a_word.text, 3)
+            angle = Decimal(0) if a_word is None else self.number(block, a_word, 3)
             event = Bolthole(line, centre, holes, radius, angle, self.tool(block))
             last = math.radians(float(angle) + (holes - 1) * 360.0 / holes)
             after = (

@@ -23,9 +23,18 @@ stop). Readings where the dialects differ or the seed is vague (docs/imports.md)
 - A **canned cycle left on by a G00/G01** that only moves in X/Y is refused: RS274 ends the
   cycle there (no hole), while a ProtoTRAK post writing its modal code on every line
   (§2.1 rule 1, §2.2.6.2 N6-N9) means a hole — the file cannot say which.
+- **Subroutines, control flow, parameters and expressions** (LinuxCNC's O-words, Fanuc's
+  M98/M99): at the first line that has any (`_FrontEnd`) the file is read again, run by
+  `ngc.py`, which gives this reader each line as it runs, values in place, with the file's
+  line and column of each character (a failure here is moved back to them). Every other
+  file is read straight (the fast path).
+- **M99** that reaches this reader is the main program's: its end (rs274 reads it so).
+- **@ and ^**: LinuxCNC's polar coordinates about program zero (`polar`), each L repeat of
+  an incremental canned cycle turned again.
 - Unknown G and M codes are listed with their line and not imported; codes that change the
-  motion in ways MillBlocks cannot hold (G33, G38, G53, G93, G95, rotary axes,
-  subroutines, parameters) are refused, naming line and column.
+  motion in ways MillBlocks cannot hold (G5-G5.3, G33, G38.x, G93, G95, rotary axes) are
+  refused, naming line and column; G53 G0 is a rapid to a place the file does not give in
+  part coordinates (`machine_move`).
 """
 
 from __future__ import annotations
@@ -36,9 +45,11 @@ from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Final
 
+from app.cnc.formats.gcode import ngc
 from app.cnc.imports.common import (
     MAX_ABS_NM,
     MAX_DIGITS,
+    ImportFailure,
     Notes,
     arc_end_off,
     check_digits,
@@ -114,8 +125,17 @@ GROUP_OF: Final = {code: group for group, codes in MODAL_GROUPS.items() for code
 CYCLES: Final = {"73", "74", "76", "81", "82", "83", "84", "85", "86", "87", "88", "89"}
 # Codes of seed 003's tables that change the motion in ways a data-block program cannot hold.
 REFUSED_G = {
+    # LinuxCNC's other motion codes: ignoring one would move its axis words at G0/G1.
+    "5": "a cubic spline",
+    "5.1": "a quadratic spline",
+    "5.2": "a NURBS curve",
+    "5.3": "a NURBS curve",
     "33": "thread cutting",
+    "33.1": "rigid tapping",
     "38.2": "probing",
+    "38.3": "probing",
+    "38.4": "probing",
+    "38.5": "probing",
     "41.1": "dynamic cutter compensation",
     "42.1": "dynamic cutter compensation",
     "43.1": "dynamic tool length",
@@ -123,7 +143,6 @@ REFUSED_G = {
     "46": "tool offset decrease (the offset value is not in the file)",
     "47": "tool offset double increase (the offset value is not in the file)",
     "48": "tool offset double decrease (the offset value is not in the file)",
-    "53": "a move in machine coordinates (not related to part zero in the file)",
     "93": "inverse time feed",
     "95": "feed per revolution",
     "7": "imaginary axis designation",
@@ -157,13 +176,26 @@ NOTED_G = {
     "96": "constant surface speed: not carried",
     "97": "constant surface speed cancel: not carried",
 }
+# LinuxCNC's comments that write somewhere (MSG is the next block's MESSAGE).
+OUTPUT_COMMENTS: Final = {
+    "DEBUG": "a message on LinuxCNC's screen",
+    "PRINT": "a message on LinuxCNC's terminal",
+    "LOG": "a line of LinuxCNC's log file",
+    "LOGOPEN": "opens LinuxCNC's log file",
+    "LOGAPPEND": "opens LinuxCNC's log file",
+}
 NOTED_M = {
     "48": "feed and speed overrides on: not carried",
     "49": "feed and speed overrides off: not carried",
     "60": "pallet shuttle and stop: not carried",
 }
-REFUSED_M = {"98": "a subprogram call", "99": "a subprogram return"}
+# (M98 beginning its line, and M99 in a subprogram, are the front end's: ngc.py.)
+REFUSED_M = {"98": "a subprogram call not at the beginning of its line"}
 AXES = ("X", "Y", "Z")
+# LinuxCNC's polar coordinates in the XY plane: @ the distance from program zero, ^ the
+# angle (degrees, counter-clockwise from +X).
+POLAR: Final = ("@", "^")
+MOVING: Final = (*AXES, *POLAR)
 ALLOWED = set("XYZIJKRFSTMGNPQLHDO")
 # Blocks `_Reader.plain` executes: these letters and (at most) one of these codes.
 AXES_AND_FEED: Final = frozenset("NXYZF")
@@ -351,8 +383,20 @@ class Block:
 
 
 def parse_gcode(text: str, name: str = "") -> Parsed:
-    """Read G-code text. Raises ImportFailure naming line and column of the first problem."""
-    return _Reader(text, name).run()
+    """Read G-code text. Raises ImportFailure naming line and column of the first problem.
+
+    A file is read straight until a line needs the front end (`_FrontEnd`): then it is read
+    again from the start as `ngc.expand` runs it. So a plain file pays nothing for the
+    front end (not even a search for what it reads), and one that needs it is read once
+    more up to that line."""
+    try:
+        return _Reader(text, name, False).run()
+    except _FrontEnd:
+        return _Reader(text, name, True).run()
+
+
+class _FrontEnd(Exception):
+    """A parameter, expression, O-word or M98 where the file was read straight."""
 
 
 def _cancel_beside(first: Word, second: Word) -> bool:
@@ -362,7 +406,9 @@ def _cancel_beside(first: Word, second: Word) -> bool:
 
 
 class _Reader:
-    def __init__(self, text: str, name: str) -> None:
+    def __init__(self, text: str, name: str, expanding: bool) -> None:
+        self.expanding = expanding  # the lines come from the front end (ngc.py)
+        self.running: ngc.Line | None = None  # the front end's line being read
         self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         self.notes = Notes()
         self.steps: list[Step] = []
@@ -380,6 +426,11 @@ class _Reader:
         self.arc_absolute = False
         self.plane = "17"
         self.comp = ""
+        self.comp_tool = 0  # G41/G42's D (0: the tool in the spindle)
+        self.arc_barred = False  # G40 has just ended compensation: the next move is a line
+        # A `G0 X Y` right after a canned cycle, until the next move says what it meant:
+        # the error if nothing does, and where it went (None: not yet moved).
+        self.undecided: tuple[ImportFailure, tuple[int, int] | None] | None = None
         self.return_initial = True
         self.feed: int | None = None
         self.speed: int | None = None
@@ -411,29 +462,28 @@ class _Reader:
     # -- the file -------------------------------------------------------------------------
 
     def run(self) -> Parsed:
-        for number, raw in enumerate(self.lines, start=1):
-            if self.percent >= 2 or self.ended_at is not None:
-                if raw.strip() and raw.strip() != "%":
-                    where = "the closing %" if self.percent >= 2 else "the program end"
-                    self.notes.ignored(number, f"after {where}: not imported")
-                continue
-            line = raw.rstrip()
-            words = usual_words(line) if SCAN_FIRST and line else None
-            if words is None:
-                usual = USUAL.fullmatch(line) if line else None
-                words = list(usual.groups()) if usual else None
-            if words is not None and self.fast_words(number, words):
-                continue
-            if SIMPLE.fullmatch(line):
-                # Only words (the usual line): one pass of PAIRS reads them all.
-                pairs = PAIRS.findall(line)
-                if self.fast_motion(number, pairs):
-                    continue
-                block = self.simple_line(number, pairs) or self.read_line(number, line)
-            else:
-                block = self.read_line(number, line)
-            if block is not None:
-                self.execute(block)
+        if self.expanding:
+            # Subroutines, control flow, parameters or expressions: the lines as they run,
+            # the front end told after each whether the program has ended.
+            runs = ngc.expand(self.lines, self.notes)
+            run = next(runs, None)
+            while run is not None:
+                self.running = run
+                try:
+                    self.read(run.number, run.text, run.titles)
+                except ImportFailure as exc:
+                    if self.undecided is not None and exc is self.undecided[0]:
+                        raise  # (located when it was made, on its own line)
+                    raise run.moved(exc) from None
+                try:
+                    run = runs.send(self.percent >= 2 or self.ended_at is not None)
+                except StopIteration:
+                    break
+        else:
+            for number, raw in enumerate(self.lines, start=1):
+                self.read(number, raw, True)
+        if self.undecided is not None:
+            raise self.undecided[0]
         units = self.program_units or Units.INCH
         if self.units_assumed:
             self.notes.assumed(None, "no G20/G21 before the first dimension: read in inches")
@@ -456,7 +506,38 @@ class _Reader:
             start_z=self.start_z,
         )
 
-    def read_line(self, number: int, line: str) -> Block | None:
+    def located(self, exc: ImportFailure) -> ImportFailure:
+        """`exc` at the file's line and column now, to be raised later (when another line
+        is read): the front end's line maps them (`ngc.Line.moved`)."""
+        return exc if self.running is None else self.running.moved(exc)
+
+    def read(self, number: int, raw: str, titles: bool) -> None:
+        """Read and execute line `number` (`titles`: a comment alone on it may name the
+        program)."""
+        if self.percent >= 2 or self.ended_at is not None:
+            if raw.strip() and raw.strip() != "%":
+                where = "the closing %" if self.percent >= 2 else "the program end"
+                self.notes.ignored(number, f"after {where}: not imported")
+            return
+        line = raw.rstrip()
+        words = usual_words(line) if SCAN_FIRST and line else None
+        if words is None:
+            usual = USUAL.fullmatch(line) if line else None
+            words = list(usual.groups()) if usual else None
+        if words is not None and self.fast_words(number, words):
+            return
+        if SIMPLE.fullmatch(line):
+            # Only words (the usual line): one pass of PAIRS reads them all.
+            pairs = PAIRS.findall(line)
+            if self.fast_motion(number, pairs):
+                return
+            block = self.simple_line(number, pairs) or self.read_line(number, line, titles)
+        else:
+            block = self.read_line(number, line, titles)
+        if block is not None:
+            self.execute(block)
+
+    def read_line(self, number: int, line: str, titles: bool = True) -> Block | None:
         """Split one line (without trailing blanks) into words and comments, one character
         at a time, saying what is wrong where. Returns None for a line with no words."""
         stripped = line.lstrip()
@@ -465,15 +546,24 @@ class _Reader:
         pos = len(line) - len(stripped)
         if stripped.startswith("%"):
             self.percent += 1
+            if self.percent > 1 and stripped[1:].strip() not in ("", ";"):
+                # Only the opening % may carry a label (the ProtoTRAK dialect's `%:NAME;`);
+                # a later one is the program's end, and text after it is not a program's
+                # end anyone wrote (an MPCNC post's `% vfd enable`; rs274 refuses it).
+                raise failure(
+                    number,
+                    pos + 1,
+                    f"{stripped!r}: a % line starts or ends the program and holds nothing "
+                    "else (LinuxCNC refuses this line too): put the text in a comment "
+                    "( … ) or delete the line",
+                )
             label = stripped[1:].strip().lstrip(":").rstrip(";").strip()
             if label and self.percent == 1:
                 self.name = label
                 self.notes.became(number, f"program label {label!r}: the program name")
             return None
         if stripped.startswith("/"):
-            self.notes.assumed(
-                number, "block delete (/): imported as run (the block-delete switch off)"
-            )
+            self.notes.assumed(number, ngc.BLOCK_DELETE)
             pos += 1
         words: list[Word] = []
         comments: list[str] = []
@@ -494,19 +584,22 @@ class _Reader:
                     comments.append(rest)
                     self.notes.assumed(number, f"text after ';' read as a comment: {rest!r}")
                 break
-            elif ch.isascii() and ch.isalpha():
+            elif (ch.isascii() and ch.isalpha()) or ch in "@^":
                 pos = self.word(number, line, pos, words)
-            elif ch in "#[":
-                raise failure(number, pos + 1, "parameters and expressions are not supported")
+            elif ch in "#[" and not self.expanding:
+                raise _FrontEnd
             else:
                 raise failure(number, pos + 1, f"unexpected character {ch!r}")
         for comment in comments:
+            head = comment.split(",", 1)[0].upper() if "," in comment else ""
             if comment.upper().startswith("MSG,"):
                 self.steps.append(Message(number, comment[4:].strip()))
             elif comment.startswith("SET-UP: "):
                 self.setup_comment(number, comment)
+            elif head in OUTPUT_COMMENTS:
+                self.notes.ignored(number, f"({head}, …): {OUTPUT_COMMENTS[head]}; not carried")
         if not words:
-            if comments and not self.name and not self.moved and not self.steps:
+            if titles and comments and not self.name and not self.moved and not self.steps:
                 self.title(number, comments[0])
             return None
         return self.make_block(number, words, " ".join(comments))
@@ -543,10 +636,10 @@ class _Reader:
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
         units = self.units
-        if units is None or self.incremental:
+        if units is None or self.incremental or self.arc_barred or self.undecided is not None:
             return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
-        if motion is None:
+        if motion is None or (motion == "0" and self.comp):
             return False
         if motion == "80":
             # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
@@ -590,7 +683,7 @@ class _Reader:
         else:
             assert feed is not None
             self.change_pending = None
-            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp))
+            self.steps.append(Feed(number, nx, ny, nz, feed, units, self.comp, self.comp_tool))
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -638,7 +731,9 @@ class _Reader:
         self.feed, self.motion = feed, motion
         self.change_pending = None
         clockwise = motion == "2"
-        self.steps.append(Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(number, nx, ny, nz, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
         self.moves_made = self.moved = True
         self.x, self.y, self.z = nx, ny, nz
         self.cycle_drilled = False
@@ -680,6 +775,8 @@ class _Reader:
         code = self.motion
         r, bottom, start_z = self.cycle_r, self.cycle_z, self.z
         if r is None or bottom is None or start_z is None or feed is None or bottom >= r:
+            return False
+        if self.comp:
             return False
         if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
             return False
@@ -746,17 +843,16 @@ class _Reader:
             )
         match = NUMBER.match(line, pos + 1)
         if letter == "O":
-            rest = line[match.end() :].strip() if match else ""
-            if words or match is None or re.match(r"[A-Za-z]{2,}", rest):
-                raise failure(number, pos + 1, "O-word subroutines are not supported")
-            self.notes.ignored(number, f"program number O{match.group()}: not carried")
-            return match.end()
-        if letter not in ALLOWED:
+            if not self.expanding:
+                raise _FrontEnd
+            # (An O-word beginning its line is the front end's.)
+            raise failure(number, pos + 1, "an O-word (O number or subroutine) must begin its line")
+        if letter not in ALLOWED and letter not in POLAR:
             raise failure(number, pos + 1, f"'{ch}' is not a G-code word letter")
         if match is None:
             after = line[pos + 1 : pos + 4]
-            if after[:1] in ("#", "["):
-                raise failure(number, pos + 2, "parameters and expressions are not supported")
+            if after[:1] in ("#", "[") and not self.expanding:
+                raise _FrontEnd
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
         if not check_digits(digit_text(match.group())):
@@ -816,6 +912,8 @@ class _Reader:
         line = block.line
         other = block.other
         for word, code in m_codes:
+            if code == "98" and not self.expanding:
+                raise _FrontEnd
             if code in REFUSED_M:
                 raise failure(line, word.column, f"M{code}: {REFUSED_M[code]} is not supported")
         if other.keys() <= AXES_AND_FEED and not m_codes and codes.keys() <= LINEAR:
@@ -837,6 +935,14 @@ class _Reader:
         if any(c == "6" for _, c in m_codes):
             if self.selected_tool is None:
                 self.notes.assumed(line, "M6 with no T selected: the same tool stays")
+            elif self.selected_tool == 0:
+                # LinuxCNC's and Haas's way to take the tool out (at the end, or before a
+                # manual change): no tool of the control's 1-24.
+                self.notes.ignored(
+                    line,
+                    "T0 M6 empties the spindle: no tool change in MillBlocks (its tools are "
+                    "1 to 24); the tool before stays in the program",
+                )
             else:
                 if self.tool == 0 and not self.moves_made:
                     # The first tool called before any move (a post's start): the tool in
@@ -868,7 +974,7 @@ class _Reader:
                 self.steps.append(Coolant(line, mode))
             elif code in NOTED_M:
                 self.notes.ignored(line, f"M{code}: {NOTED_M[code]}")
-            elif code not in ("0", "1", "2", "30", "6"):
+            elif code not in ("0", "1", "2", "30", "6", "99"):
                 self.notes.ignored(line, f"M{code}: not a code MillBlocks knows; not imported")
         uses_axes = False  # a code on the line takes the axis words: no move
         if "4" in codes:
@@ -894,7 +1000,15 @@ class _Reader:
         motion_word = next((codes[c] for c in codes if GROUP_OF.get(c) == "motion"), None)
         if motion_word is not None:
             self.set_motion(block, motion_word, uses_axes)
-        if any(block.has(a) for a in AXES) and not uses_axes:
+        if "53" in codes:
+            self.machine_move(block, codes["53"])
+            uses_axes = True
+        polar = block.get("@") or block.get("^")
+        if polar is not None and uses_axes:
+            raise failure(
+                line, polar.column, "polar coordinates (@ ^) with G4, G10, G28, G30, G53 or G92"
+            )
+        if any(block.has(a) for a in MOVING) and not uses_axes:
             self.move(block)
         self.unused(block, codes)
         for _, code in m_codes:
@@ -904,6 +1018,14 @@ class _Reader:
                 self.steps.append(End(line))
                 self.ended_at = line
                 self.notes.became(line, f"M{code}: the end of the program")
+            elif code == "99":
+                self.steps.append(End(line))
+                self.ended_at = line
+                self.notes.assumed(
+                    line,
+                    "M99 in the main program: its end, as LinuxCNC's preview reads it (a "
+                    "control starts the program again)",
+                )
 
     def plain(self, block: Block, codes: dict[str, Word]) -> None:
         """`execute` for a block of axis words, F and N, with G0 or G1 or no G code: what
@@ -953,10 +1075,16 @@ class _Reader:
                         f"{self.units.value} blocks",
                     )
         if "40" in codes:
-            self.comp = ""
+            # As rs274: the move that ends compensation goes straight from the compensated
+            # point (an arc there is refused).
+            last = next(
+                (s for s in reversed(self.steps) if isinstance(s, Rapid | Feed | Arc)), None
+            )
+            self.arc_barred = isinstance(last, Feed | Arc) and last.comp != ""
+            self.comp, self.comp_tool = "", 0
         for code, side in (("41", "left"), ("42", "right")):
             if code in codes:
-                self.comp = side
+                self.compensation(block, codes[code], side)
         for code in ("43", "45"):
             if code in codes:
                 self.length_offset(block, code)
@@ -986,6 +1114,25 @@ class _Reader:
             if NOTED_G.get(code):
                 self.notes.ignored(line, f"G{code}: {NOTED_G[code]}")
 
+    def compensation(self, block: Block, word: Word, side: str) -> None:
+        """G41/G42 [D]: cutter compensation to that side with D's diameter (the tool in the
+        spindle without D; D0 has no radius, so nothing is offset, as rs274 reads it)."""
+        if self.comp:
+            raise failure(
+                block.line,
+                word.column,
+                f"G{word.code} while cutter compensation is on: G40 must end it first (as "
+                "rs274 reads it)",
+            )
+        d = block.get("D")
+        number = 0 if d is None else self.integer(d, block, 0, 999)
+        if d is not None and number == 0:
+            self.notes.assumed(
+                block.line, f"G{word.code} D0: a radius of 0, so the path is the tool centre"
+            )
+            return
+        self.comp, self.comp_tool = side, number
+
     def set_motion(self, block: Block, word: Word, uses_axes: bool) -> None:
         new = word.code
         if (
@@ -995,14 +1142,22 @@ class _Reader:
             and not block.has("Z")
             and (block.has("X") or block.has("Y"))
         ):
-            raise failure(
-                block.line,
-                word.column,
-                f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it ends "
-                "the cycle, so no hole is drilled here; a ProtoTRAK post that writes its G "
-                "code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is meant "
-                "cannot be told: remove the G code to drill here, or put G80 before the line "
-                "to only move",
+            # Decided by what comes next: a canned cycle at that very point means the line
+            # only moved there (FreeCAD's post writes `G0 X Y` before each cycle line; a
+            # hole there would be drilled twice); anything else leaves it undecided.
+            self.undecided = (
+                self.located(
+                    failure(
+                        block.line,
+                        word.column,
+                        f"G{new} right after a canned cycle moves to X/Y with no Z: in RS274 it "
+                        "ends the cycle, so no hole is drilled here; a ProtoTRAK post that writes "
+                        "its G code on every line (seed 003 §2.1, §2.2.6.2) means a hole. Which is "
+                        "meant cannot be told: remove the G code to drill here, or put G80 before "
+                        "the line to only move",
+                    )
+                ),
+                None,
             )
         self.motion = new
         if new not in CYCLES:
@@ -1044,7 +1199,7 @@ class _Reader:
         return codes
 
     def unused(self, block: Block, codes: dict[str, Word]) -> None:
-        used = {"N", "F", "S", "T", "X", "Y", "Z"}
+        used = {"N", "F", "S", "T", "X", "Y", "Z", "@", "^"}
         if self.motion in ("2", "3") or self.motion in CYCLES:
             used |= {"I", "J", "R", "Q", "P", "L"}
         if "4" in codes:
@@ -1056,6 +1211,16 @@ class _Reader:
         if "41" in codes or "42" in codes:
             used.add("D")
         for letter, word in block.other.items():
+            if letter in "IJK" and letter not in used and self.motion in ("0", "1"):
+                # An arc's centre on a straight move: an arc written as G0/G1, cut straight
+                # (rs274 refuses it too).
+                what = "a rapid" if self.motion == "0" else "a straight feed"
+                raise failure(
+                    block.line,
+                    word.column,
+                    f"{letter} with G{self.motion}: {what} has no arc centre (LinuxCNC refuses "
+                    "it too); is G2 or G3 meant?",
+                )
             if letter not in used:
                 self.notes.ignored(block.line, f"{letter}{word.text}: no code on the line uses it")
 
@@ -1214,6 +1379,37 @@ class _Reader:
             "machine's home (not in the file) is not",
         )
 
+    def machine_move(self, block: Block, word: Word) -> None:
+        """G53: a rapid to a place in machine coordinates (a post's `G53 G0 Z0` retract, a
+        tool change position). The file does not say where that is in part coordinates:
+        the axes it names are not known until the file moves them again (as after `G28`).
+        """
+        line = block.line
+        named = [a for a in AXES if block.has(a)]
+        if not named:
+            self.notes.ignored(line, "G53 with no axis words: nothing moves")
+            return
+        if self.motion != "0":
+            raise failure(
+                line,
+                word.column,
+                f"G53 G{self.motion}: a {'feed' if self.motion != '80' else 'move'} in "
+                "machine coordinates; where it goes in part coordinates is not in the file "
+                "(G53 is read with G0, a rapid to a machine position)",
+            )
+        for a in named:
+            setattr(self, a.lower(), None)
+        self.moved = True
+        self.cycle_drilled = False
+        words = " ".join(f"{a}{block.other[a].text}" for a in named)
+        one = len(named) == 1
+        self.notes.assumed(
+            line,
+            f"G53 G0 {words}: the machine's {words}, which the file does not give in part "
+            f"coordinates: the tool's {' and '.join(named)} {'is' if one else 'are'} not "
+            f"known until the file gives {'it' if one else 'them'} again",
+        )
+
     # -- motion -------------------------------------------------------------------------------
 
     def rate(self, word: Word) -> int:
@@ -1225,7 +1421,9 @@ class _Reader:
         other = block.other
         x_word, y_word, z_word = other.get("X"), other.get("Y"), other.get("Z")
         x, y = self.x, self.y
-        if x_word is None:
+        if "@" in other or "^" in other:
+            x, y = self.polar(block, x, y)
+        elif x_word is None:
             if x is None:
                 x = 0
                 if y_word is not None or self.motion != "0":
@@ -1242,6 +1440,45 @@ class _Reader:
         z = self.z if z_word is None else self.axis_target(block, z_word, self.z, 2)
         assert x is not None and y is not None
         return x, y, z
+
+    def polar(self, block: Block, x: int | None, y: int | None) -> tuple[int, int]:
+        """Where @ (distance) and ^ (angle, degrees) go from (`x`, `y`), in part
+        coordinates, as LinuxCNC's find_ends has them: about program zero (G92 included),
+        G17 only, no X or Y beside them. G90: the point's distance and angle, a missing one
+        the tool's; G91: added to the tool's. A missing word needs the tool's direction,
+        which it does not have at program zero: refused there, as LinuxCNC refuses it."""
+        line = block.line
+        at, angle = block.get("@"), block.get("^")
+        first = at or angle
+        assert first is not None
+        for letter in ("X", "Y"):
+            word = block.get(letter)
+            if word is not None:
+                raise failure(line, word.column, f"{letter} beside polar coordinates (@ ^)")
+        if self.plane != "17":
+            raise failure(line, first.column, f"polar coordinates (@ ^) in the G{self.plane} plane")
+        for axis, now in (("X", x), ("Y", y)):
+            if now is None:
+                self.note_zero(line, axis)
+        px, py = (x or 0) - self.shift[0], (y or 0) - self.shift[1]
+        distance, direction = math.hypot(px, py), math.atan2(py, px)
+        if (self.incremental or angle is None) and px == 0 and py == 0:
+            raise failure(
+                line,
+                first.column,
+                "a polar coordinate from program zero with no angle to go at: give ^ (and "
+                "@) in G90",
+            )
+        if at is not None:
+            value = self.length(at, block)
+            distance = distance + value if self.incremental else value
+        if angle is not None:
+            turn = math.radians(float(angle.value))
+            direction = direction + turn if self.incremental else turn
+        return (
+            round(distance * math.cos(direction)) + self.shift[0],
+            round(distance * math.sin(direction)) + self.shift[1],
+        )
 
     def axis_target(self, block: Block, word: Word, current: int | None, k: int) -> int:
         """Where one axis word goes (`k`: 0 X, 1 Y, 2 Z; `current`: where it is)."""
@@ -1271,9 +1508,29 @@ class _Reader:
         if motion == "80":
             raise failure(line, block.words[0].column, "axis words after G80 with no motion code")
         if motion in CYCLES:
+            if self.undecided is not None:
+                self.decide(self.target(block)[:2], True)
             self.cycle(block)
             return
         x, y, z = self.target(block)
+        if self.undecided is not None:
+            self.decide((x, y), False)
+        if self.comp and motion == "0" and (x, y) != (self.x, self.y):
+            raise failure(
+                line,
+                block.words[0].column,
+                "a rapid move in X/Y with cutter compensation on: the control offsets it too, "
+                "and MillBlocks offsets cuts only — turn compensation on (G41/G42) with the "
+                "first cut, or off (G40) before the rapid",
+            )
+        if self.arc_barred and motion in ("2", "3"):
+            raise failure(
+                line,
+                next((w.column for w in block.gs if w.code == motion), block.words[0].column),
+                "an arc right after G40: the control refuses it (the move that ends cutter "
+                "compensation goes straight from the compensated point)",
+            )
+        self.arc_barred = False
         if motion != "0":
             self.change_pending = None
         if motion == "0":
@@ -1288,7 +1545,7 @@ class _Reader:
             self.moves_made = True
         elif motion == "1":
             feed = self.need_feed(block)
-            self.steps.append(Feed(line, x, y, z, feed, units, self.comp))
+            self.steps.append(Feed(line, x, y, z, feed, units, self.comp, self.comp_tool))
             self.moves_made = True
         else:
             self.arc(block, x, y, z, motion == "2")
@@ -1296,6 +1553,18 @@ class _Reader:
         self.x, self.y, self.z = x, y, z
         self.moved = True
         self.cycle_drilled = False
+
+    def decide(self, to: tuple[int, int], hole: bool) -> None:
+        """The move after a `G0 X Y` right after a canned cycle (`undecided`): a hole at
+        that point says the line only moved; a move elsewhere leaves it ambiguous."""
+        assert self.undecided is not None
+        error, at = self.undecided
+        if at is None:
+            self.undecided = (error, to)  # the line itself: where it goes
+        elif to == at and hole:
+            self.undecided = None
+        elif to != at:
+            raise error
 
     def need_feed(self, block: Block) -> int:
         if self.feed is None:
@@ -1308,7 +1577,11 @@ class _Reader:
         first = block.words[0].column
         if self.plane != "17":
             raise failure(
-                line, first, f"an arc in the G{self.plane} plane: MillBlocks cuts arcs in XY"
+                line,
+                first,
+                f"an arc in the G{self.plane} ({'XZ' if self.plane == '18' else 'YZ'}) plane: "
+                "MillBlocks cuts arcs in XY only; if it is a CAM's vertical lead-in or "
+                "lead-out, turn those off (a lead in XY, or none)",
             )
         if z is not None and self.z is not None and z != self.z:
             raise failure(
@@ -1338,7 +1611,9 @@ class _Reader:
             where = i_word or j_word
             assert where is not None
             check_arc(line, where.column, (sx, sy), (x, y), (cx, cy), units)
-        self.steps.append(Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp))
+        self.steps.append(
+            Arc(line, x, y, z, cx, cy, clockwise, feed, units, self.comp, self.comp_tool)
+        )
 
     def centre_from_radius(
         self,
@@ -1388,6 +1663,12 @@ class _Reader:
         assert code is not None
         units = self.current_units()
         first = block.words[0].column
+        if self.comp:
+            raise failure(
+                line,
+                first,
+                f"G{code} with cutter compensation on: rs274 refuses a canned cycle then",
+            )
         self.change_pending = None
         x0, y0 = self.x or 0, self.y or 0
         x, y, _ = self.target(block)
@@ -1426,12 +1707,18 @@ class _Reader:
         dx, dy = (x - x0, y - y0) if self.incremental else (0, 0)
         if len(self.steps) + repeats > MAX_STEPS:
             raise failure(line, first, f"more than {MAX_STEPS} moves: not a program to import")
+        hx, hy = x, y
         for k in range(repeats):
-            hx, hy = x + k * dx, y + k * dy
+            if k and self.incremental:
+                # Each repeat moves on from the last hole (polar: turned and stepped out).
+                if block.has("@") or block.has("^"):
+                    hx, hy = self.polar(block, hx, hy)
+                else:
+                    hx, hy = hx + dx, hy + dy
             self.steps.append(
                 Cycle(line, int(code), hx, hy, r, bottom, clear, feed, peck, self.cycle_p, units)
             )
-        self.x, self.y, self.z = x + (repeats - 1) * dx, y + (repeats - 1) * dy, clear
+        self.x, self.y, self.z = hx, hy, clear
         self.moved = True
         self.cycle_drilled = True
 

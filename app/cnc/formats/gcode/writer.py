@@ -40,7 +40,7 @@ import numpy.typing as npt
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import peck_levels
 from app.cnc.emit.target import Out, Remedy, Report, Target, register
-from app.cnc.emit.text import Lengths, Lines
+from app.cnc.emit.text import Lengths, Lines, comment_text
 from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
 from app.cnc.limits import HOLE_DWELL_SECONDS
 from app.cnc.motions import is_motion
@@ -781,15 +781,6 @@ def _even_pecks(span: HoleSpan) -> bool:
     G83's Q spaces them (the last level is the bottom)."""
     levels = peck_levels(span.r, span.bottom, span.pecks)
     return all(levels[j] == span.r - span.step * (j + 1) for j in range(len(levels) - 1))
-
-
-def comment_text(text: str) -> str:
-    """Comment text the controls accept: no parentheses, upper case ASCII, one line.
-    Line breaks and other control characters become spaces: in a name or message they
-    would otherwise end the comment's block and put the rest on the tape as code."""
-    cleaned = text.replace("(", "[").replace(")", "]").replace(";", ",")
-    cleaned = "".join(" " if ord(ch) < 32 or ord(ch) == 127 else ch for ch in cleaned)
-    return cleaned.encode("ascii", "replace").decode("ascii").upper()
 
 
 __all__ = ["TAGS", "GcodeTarget", "Writer", "comment_text", "is_motion"]

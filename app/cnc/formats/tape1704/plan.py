@@ -32,6 +32,7 @@ from typing import Any
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.emit.target import Report
+from app.cnc.emit.text import comment_text
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.profile import Profile
 from app.cnc.geometry import arc_sweep
@@ -106,11 +107,14 @@ class Aux:
 Item = Motion | Aux
 
 
+COMMENT_CHARACTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 .,-+/:=*#")
+"""What the 1704's ASCII table punches in a comment."""
+
+
 def sanitize_comment(text: str) -> str:
-    """Comment text the ASCII table can punch: upper case, no parentheses, no `%`."""
-    allowed = set("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 .,-+/:=*#")
-    cleaned = "".join(ch if ch in allowed else " " for ch in text.upper())
-    return " ".join(cleaned.split())
+    """Comment text the ASCII table can punch (the one comment rule, `comment_text`, with
+    the table's characters; any other is a space), spaces run together."""
+    return " ".join(comment_text(text.upper(), COMMENT_CHARACTERS, unknown=" ").split())
 
 
 class Planner:
@@ -476,7 +480,7 @@ class Planner:
             report.rewritten(
                 block, f"operator stop M00; EIA has no comments, so tell the operator: {text}"
             )
-        return [Aux(block, [("M", "00")], sanitize_comment(text) if self.comments else "")]
+        return [Aux(block, [("M", "00")], text if self.comments else "")]
 
     def chords(self, arc: ArcFeed, start: tuple[int, int], mz: int | None, tool: int) -> list[Item]:
         """The chord method (seed 000 §3, Fig. 3-2): end points on the circle, equal steps.

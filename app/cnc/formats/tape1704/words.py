@@ -24,7 +24,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from app.cnc.emit.target import Report
-from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion
+from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion, sanitize_comment
 from app.cnc.formats.tape1704.profile import Profile, TapeFormat
 from app.cnc.geometry import arc_sweep
 from app.cnc.units import half_even
@@ -349,8 +349,8 @@ class Words:
             self.number += profile.sequence_increment
         joiner = "\t" if profile.tabs else ""
         text = joiner.join([letter + value for letter, value in words])
-        if comment:
-            text += f" ({comment})"
+        if comment:  # every comment of the tape's blocks, through the one comment rule
+            text += f" ({sanitize_comment(comment)})"
         line = Line(text, block, leader_after=leader_after)
         if motion is not None and start is not None and motion.gcode in ("01", "02", "03"):
             line.continuous = True

@@ -1,0 +1,147 @@
+"""Distances from many points to many lines and arcs at once (numpy), as bounds.
+
+The planner chooses points by exact Python arithmetic (`plan._closest_on_element`), and
+its choices must stay the same to the last bit: a golden G-code file depends on them. Doing
+that arithmetic for every pair of (point, element) is what made a large pocket plan for
+minutes (a ring sampled every eighth of the tool radius against every element of the next
+ring; a cleanup target against every element of every pass).
+
+Here numpy gives, for all pairs at once, a lower and an upper bound on the distance the
+exact function returns. They are the same number (to numpy's rounding) except for an arc
+seen from a point whose nearest place on the circle is at one of the arc's ends, within the
+exact function's tolerance: then the exact answer is either the distance to the circle or
+to the nearer end, and the bounds are those two. A caller evaluates exactly only the pairs
+whose lower bound is within `MARGIN` of the best upper bound — the only ones that can win
+— in the order it always did, and so chooses what it chose before. Lengths are nm.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from app.cnc.mill import Element, Pt, sweep
+
+Array = npt.NDArray[np.float64]
+
+MARGIN = 1.0
+"""nm: a pair whose lower bound is farther than this beyond the best upper bound cannot
+win. numpy and math differ by about 1e-6 nm at 100 in; the exact function's own tolerance
+at an arc's end is in the bounds."""
+
+_INSIDE = 1e-9  # rad: an angle this far inside an arc's sweep is on the arc, exactly too
+_OUTSIDE = 1e-5  # rad: this far outside, the exact function takes the nearer end
+_PAIRS = 1 << 20  # (point, element) pairs per numpy pass: about 100 MB of temporaries
+
+
+@dataclass(frozen=True)
+class Elements:
+    """Lines and arcs as columns: start, end, centre (arcs), radius, start angle and turn
+    (radians, > 0 in the travel direction; a full circle is 2π)."""
+
+    sx: Array
+    sy: Array
+    ex: Array
+    ey: Array
+    cx: Array
+    cy: Array
+    arc: npt.NDArray[np.bool_]
+    clockwise: npt.NDArray[np.bool_]
+    radius: Array
+    a0: Array
+    turn: Array
+
+    def __len__(self) -> int:
+        return len(self.sx)
+
+
+def table(starts: Sequence[Pt], elements: Sequence[Element]) -> Elements:
+    """The columns of `elements`, each starting at the point of `starts` beside it."""
+    n = len(elements)
+    sx, sy, ex, ey, cx, cy = (np.zeros(n) for _ in range(6))
+    radius, a0, turn = np.zeros(n), np.zeros(n), np.zeros(n)
+    arc = np.zeros(n, dtype=bool)
+    clockwise = np.zeros(n, dtype=bool)
+    for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
+        sx[k], sy[k] = start
+        ex[k], ey[k] = element.end
+        if element.centre is not None:
+            c = element.centre
+            arc[k], clockwise[k] = True, element.clockwise
+            cx[k], cy[k] = c
+            radius[k] = math.dist(start, c)
+            a0[k] = math.atan2(start[1] - c[1], start[0] - c[0])
+            turn[k] = sweep(start, element)
+    return Elements(sx, sy, ex, ey, cx, cy, arc, clockwise, radius, a0, turn)
+
+
+def bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
+    """(lower, upper): for each point (a row x, y) and element, bounds on the distance from
+    the point to the element's nearest point as the planner finds it (P × E arrays)."""
+    px = points[:, 0:1]
+    py = points[:, 1:2]
+    # Lines: the nearest point of the segment.
+    dx, dy = elements.ex - elements.sx, elements.ey - elements.sy
+    denom = dx * dx + dy * dy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(denom > 0, ((px - elements.sx) * dx + (py - elements.sy) * dy) / denom, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    line = np.hypot(px - (elements.sx + t * dx), py - (elements.sy + t * dy))
+    if not elements.arc.any():
+        return line, line
+    # Arcs: the circle, or the nearer end, by where the point is seen from the centre.
+    qx, qy = px - elements.cx, py - elements.cy
+    circle = np.abs(np.hypot(qx, qy) - elements.radius)
+    ends = np.minimum(
+        np.hypot(px - elements.sx, py - elements.sy), np.hypot(px - elements.ex, py - elements.ey)
+    )
+    angle = np.arctan2(qy, qx)
+    turned = np.where(elements.clockwise, elements.a0 - angle, angle - elements.a0)
+    along = np.mod(turned, 2 * np.pi)
+    inside = along <= elements.turn - _INSIDE
+    outside = (along > elements.turn + _OUTSIDE) & (along < 2 * np.pi - _OUTSIDE)
+    lower = np.where(elements.arc, np.where(outside, ends, circle), line)
+    upper = np.where(elements.arc, np.where(inside, circle, ends), line)
+    return lower, upper
+
+
+def nearest_rows(points: Array, elements: Elements) -> tuple[Array, float]:
+    """For each point, a lower bound on its distance to the nearest element; and an upper
+    bound on the smallest distance of any point to any element. Works through the points
+    in batches, so memory stays bounded whatever their number."""
+    lower = np.empty(len(points))
+    best = math.inf
+    per = max(1, _PAIRS // max(1, len(elements)))
+    for k in range(0, len(points), per):
+        low, high = bounds(points[k : k + per], elements)
+        lower[k : k + per] = low.min(axis=1)
+        best = min(best, float(high.min()))
+    return lower, best
+
+
+def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> Array:
+    """The distance from `point` to every segment of closed `rings` (each ring's segments
+    in order, from its first point, the rings one after another)."""
+    starts = np.concatenate([np.asarray(r, dtype=np.float64).reshape(-1, 2) for r in rings])
+    ends = np.concatenate(
+        [np.roll(np.asarray(r, dtype=np.float64).reshape(-1, 2), -1, axis=0) for r in rings]
+    )
+    d = ends - starts
+    denom = (d * d).sum(axis=1)
+    q = np.array(point) - starts
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(denom > 0, (q * d).sum(axis=1) / denom, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    foot = starts + d * t[:, None]
+    found: Array = np.hypot(point[0] - foot[:, 0], point[1] - foot[:, 1])
+    return found
+
+
+def joined(tables: Sequence[Elements]) -> Elements:
+    """Several tables as one, in order."""
+    names = ("sx", "sy", "ex", "ey", "cx", "cy", "arc", "clockwise", "radius", "a0", "turn")
+    return Elements(*(np.concatenate([getattr(t, name) for t in tables]) for name in names))

@@ -1,0 +1,16 @@
+"""gunicorn's settings for MillBlocks: `millblocks serve` passes them (`-c
+python:app.gunicorn_conf`), and the checkout's gunicorn.conf.py, which gunicorn reads from
+the folder it starts in (`make run`, the README's shop command, the benchmarks' server),
+is these. The command line's --bind and --workers still choose where and how many.
+
+Threads (gthread workers): a request that works for seconds (a large pocket planned for
+the first time, Verify of a large program) holds one thread, not a whole worker, so the
+other requests of the shop — a login, a library page — are answered meanwhile
+(tests/test_server_load.py). Every request's work is bounded in size (app/cnc/sizes.py,
+app/cnc/cost.py) and in time (MILLBLOCKS_REQUEST_SECONDS, 20 s: a clear refusal), well
+inside `timeout`, so no worker is killed for a slow request.
+"""
+
+worker_class = "gthread"
+threads = 4
+timeout = 30

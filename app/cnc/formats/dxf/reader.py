@@ -417,10 +417,14 @@ def said(exc: BaseException) -> str:
 
     text = str(exc)
     if not isinstance(exc, DXFError):
-        frames = traceback.extract_tb(exc.__traceback__)
-        module = frames[-1].filename.rsplit("site-packages/", 1)[-1] if frames else ""
-        module = module.removesuffix(".py").replace("/", ".")
-        origin = f"{type(exc).__name__} in {module}" if module else type(exc).__name__
+        # The innermost ezdxf module it came through (never a path of this server).
+        files = [f.filename.replace("\\", "/") for f in traceback.extract_tb(exc.__traceback__)]
+        inside = [name.rsplit("/ezdxf/", 1)[1] for name in files if "/ezdxf/" in name]
+        module = "ezdxf." + inside[-1].removesuffix(".py").replace("/", ".") if inside else ""
+        kind = type(exc)
+        name = kind.__qualname__
+        name = name if kind.__module__ == "builtins" else f"{kind.__module__}.{name}"
+        origin = f"{name} in {module}" if module else name
         text = f"{text} ({origin})" if text else origin
     return printable(text, 300)
 

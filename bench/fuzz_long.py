@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import logging
 import multiprocessing
 import random
 import signal
@@ -79,6 +80,8 @@ def corpus(kind: str) -> list[bytes]:
         return [b"1", b"-1.25", b"0.001", b"+.5", b"12", b"1e3", b"99.999", b"2539.99"]
     if kind == "backup":
         return [_backup_archive()]
+    if kind == "dxf":
+        return dxf_corpus()
     raise ValueError(kind)
 
 
@@ -135,6 +138,8 @@ def soup(rng: random.Random, kind: str) -> bytes:
 
 def generate(rng: random.Random, kind: str, files: list[bytes]) -> bytes:
     roll = rng.random()
+    if kind == "dxf":
+        return mutate_dxf(rng, rng.choice(files)) if roll < 0.95 else rng.randbytes(300)
     if kind == "backup":
         return _mutate_archive(rng, files[0]) if roll < 0.9 else mutate(rng, files[0], True)
     if roll < 0.7:
@@ -159,6 +164,163 @@ def _mutate_archive(rng: random.Random, archive: bytes) -> bytes:
         for name, data in members.items():
             target.writestr(name, data)
     return out.getvalue()
+
+
+# -- DXF drawings (issue 30) ----------------------------------------------------------------
+
+# Values a damaged or hostile drawing puts where a number, a name or a structure word goes.
+DXF_VALUES = [
+    b"", b"0", b"-1", b"1e308", b"-1e308", b"nan", b"inf", b"-inf", b"1E+999999999", b"1e-320",
+    b"32768", b"-32769", b"4294967296", b"9" * 40, b"\xff\xfe", b"\xed\xa0\x80", b"\xc3",
+    b"x" * 300, b"SECTION", b"ENDSEC", b"EOF", b"HEADER", b"CLASSES", b"TABLES", b"BLOCKS",
+    b"ENTITIES", b"OBJECTS", b"TABLE", b"ENDTAB", b"LAYER", b"BLOCK_RECORD", b"BLOCK", b"ENDBLK",
+    b"*Model_Space", b"*Paper_Space", b"LINE", b"ARC", b"CIRCLE", b"LWPOLYLINE", b"POLYLINE",
+    b"VERTEX", b"SEQEND", b"INSERT", b"LAYOUT", b"DICTIONARY", b"ACAD_GROUP", b"$ACADVER",
+    b"AC1009", b"AC1015", b"AC1032", b"AC9999", b"$INSUNITS", b"$DWGCODEPAGE", b"ANSI_1252",
+    b"ANSI_9999", b"FFFF", b"0", b"1F", b"\\U+D800", b"\\M+5D800", b"%%u", b"{\\fArial|b1;",
+]  # fmt: skip
+DXF_CODES = [
+    0, 1, 2, 3, 5, 6, 8, 9, 10, 11, 20, 21, 30, 31, 39, 40, 42, 43, 50, 51, 62, 66, 70, 71, 72,
+    90, 100, 102, 105, 210, 220, 230, 290, 310, 330, 340, 360, 370, 999, 1000, 1001, 1002, 1004,
+    1010, 1020, 1040, 1071, -1, -2, 4, 255, 256, 1072, 5000,
+]  # fmt: skip
+
+
+def dxf_corpus() -> list[bytes]:
+    """The DXF test drawings (text, as ezdxf writes them) and small hand-written ones that
+    reach the entities quickly: every kind the reader takes, and some it leaves out."""
+    from tests.test_drawings_side import outline_and_slot
+    from tests.test_import_dxf import CASES
+
+    drawings = [make() for make, _options in CASES.values()] + [outline_and_slot()]
+    return drawings + [
+        _small_dxf(units, version) for units in (1, 4, 0) for version in ("", "AC1015")
+    ]
+
+
+def _small_dxf(units: int, version: str) -> bytes:
+    """A drawing of a few hundred bytes: a header, then one entity of each kind (R12 when
+    `version` is empty)."""
+    header = f"9\n$INSUNITS\n70\n{units}\n"
+    if version:
+        header = f"9\n$ACADVER\n1\n{version}\n" + header
+    entities = (
+        "0\nLINE\n5\n2A\n8\n0\n10\n0\n20\n0\n30\n0\n11\n1\n21\n0\n31\n0\n"
+        "0\nARC\n5\n2B\n8\nA\n10\n1\n20\n1\n40\n1\n50\n270\n51\n90\n"
+        "0\nARC\n8\nA\n10\n3\n20\n1\n40\n0.5\n50\n0\n51\n180\n230\n-1\n"
+        "0\nCIRCLE\n8\n0\n10\n0.5\n20\n0.5\n40\n0.125\n"
+        "0\nPOLYLINE\n8\n0\n66\n1\n70\n1\n10\n0\n20\n0\n30\n0\n"
+        "0\nVERTEX\n8\n0\n10\n5\n20\n5\n0\nVERTEX\n8\n0\n10\n6\n20\n5\n42\n1\n"
+        "0\nVERTEX\n8\n0\n10\n6\n20\n6\n0\nSEQEND\n8\n0\n"
+        "0\nTEXT\n8\nNOTES\n10\n0\n20\n-1\n40\n0.2\n1\nPART\n"
+        "0\nINSERT\n8\n0\n2\nB\n10\n0\n20\n0\n"
+    )
+    if version:  # a light polyline is not an R12 entity
+        entities += (
+            "0\nLWPOLYLINE\n100\nAcDbEntity\n8\n0\n100\nAcDbPolyline\n90\n4\n70\n1\n"
+            "10\n2\n20\n2\n42\n0.4142\n10\n3\n20\n2\n10\n3\n20\n3\n42\n-1\n10\n2\n20\n3\n"
+        )
+    text = f"0\nSECTION\n2\nHEADER\n{header}0\nENDSEC\n0\nSECTION\n2\nENTITIES\n{entities}"
+    return (text + "0\nENDSEC\n0\nEOF\n").encode()
+
+
+def dxf_tags(data: bytes) -> list[tuple[bytes, bytes]]:
+    """A text DXF as (group code, value) line pairs (an odd last line kept as a code)."""
+    lines = data.split(b"\n")
+    if lines and not lines[-1]:
+        lines.pop()
+    if len(lines) % 2:
+        lines.append(b"")
+    return [(lines[k].strip(), lines[k + 1].rstrip(b"\r")) for k in range(0, len(lines), 2)]
+
+
+def dxf_text(tags: list[tuple[bytes, bytes]]) -> bytes:
+    return b"".join(code + b"\n" + value + b"\n" for code, value in tags)
+
+
+def dxf_binary(rng: random.Random, tags: list[tuple[bytes, bytes]]) -> bytes:
+    """The tags as a binary DXF: group codes of one byte (R12, no $ACADVER after AC1009) or
+    two, each value in its code's type; a value that is not one is random bytes of the
+    type's size (what a damaged file holds)."""
+    import struct
+
+    from ezdxf.lldxf.types import BINARY_DATA, BYTES, DOUBLE, INT16, INT32, INT64
+
+    versions = [v for c, v in tags[:40] if c == b"1" and v.startswith(b"AC")]
+    r12 = not versions or versions[0] <= b"AC1009"
+    out = bytearray(b"AutoCAD Binary DXF\r\n\x1a\x00")
+    for text_code, value in tags:
+        try:
+            code = int(text_code)
+        except ValueError:
+            code = rng.randrange(1100)
+        code &= 0xFFFF
+        if r12:
+            out += bytes([code]) if code < 255 else bytes([255]) + struct.pack("<H", code)
+        else:
+            out += struct.pack("<H", code)
+        formats = ((INT16, "<h"), (INT32, "<i"), (INT64, "<q"), (DOUBLE, "<d"), (BYTES, "<B"))
+        fmt = next((f for kinds, f in formats if code in kinds), None)
+        if code in BINARY_DATA:
+            try:
+                chunk = bytes.fromhex(value.decode("ascii"))[:255]
+            except ValueError:
+                chunk = value[:255]
+            out += bytes([len(chunk)]) + chunk
+        elif fmt is None:
+            out += value.replace(b"\x00", b"") + b"\x00"
+        else:
+            try:
+                number = float(value)
+                out += struct.pack(fmt, number if fmt == "<d" else int(number))
+            except (ValueError, OverflowError, struct.error):
+                out += rng.randbytes(struct.calcsize(fmt))
+    return bytes(out)
+
+
+def mutate_dxf(rng: random.Random, data: bytes) -> bytes:
+    """A DXF drawing damaged as files are: its tags changed (a group code or a value
+    replaced, codes swapped, tags deleted, copied, moved, the list cut short), written as
+    text or as binary DXF, then sometimes bytes flipped, inserted or cut off."""
+    tags = dxf_tags(data)
+    for _ in range(rng.randint(1, 5)):
+        if not tags:
+            break
+        at = rng.randrange(len(tags))
+        action = rng.randrange(9)
+        code, value = tags[at]
+        if action == 0:
+            tags[at] = (str(rng.choice(DXF_CODES)).encode(), value)
+        elif action == 1:
+            tags[at] = (code, rng.choice(DXF_VALUES))
+        elif action == 2:
+            number = rng.choice([-1.0, 0.0, 1e-9, 2.0, 1e9, -1e15, 3.14159])
+            tags[at] = (code, repr(number).encode())
+        elif action == 3:
+            other = rng.randrange(len(tags))
+            tags[at], tags[other] = (tags[other][0], value), (code, tags[other][1])
+        elif action == 4:
+            del tags[at : at + rng.randint(1, 12)]
+        elif action == 5:
+            start = rng.randrange(len(tags))
+            tags[at:at] = tags[start : start + rng.randint(1, 12)]
+        elif action == 6:
+            other = rng.randrange(len(tags))
+            tags[at], tags[other] = tags[other], tags[at]
+        elif action == 7:
+            del tags[rng.randrange(len(tags) + 1) :]
+        else:
+            run = tags[at : at + rng.randint(1, 20)]
+            del tags[at : at + len(run)]
+            where = rng.randrange(len(tags) + 1)
+            tags[where:where] = run
+    out = dxf_binary(rng, tags) if rng.random() < 0.4 else dxf_text(tags)
+    roll = rng.random()
+    if roll < 0.2:
+        out = mutate(rng, out, out.startswith(b"AutoCAD Binary"))
+    elif roll < 0.3:
+        out = out[: rng.randrange(len(out) + 1)]
+    return out
 
 
 # -- the parsers ----------------------------------------------------------------------------
@@ -196,10 +358,50 @@ def _parser(kind: str) -> tuple[Callable[[bytes], object], tuple[type[BaseExcept
         from app.storage.backup import BackupError, read_backup
 
         return (lambda data: read_backup(io.BytesIO(data))), (BackupError,)
+    if kind == "dxf":
+        # ezdxf warns of each repair it makes; a damaged file makes many (not crashes).
+        logging.getLogger("ezdxf").setLevel(logging.ERROR)
+        return read_dxf, (ImportFailure,)
     raise ValueError(kind)
 
 
-PARSERS = ("gcode", "events", "tape", "punch", "json", "detect", "document", "numbers", "backup")
+def read_dxf(data: bytes) -> object:
+    """A drawing as `millblocks import` and the choosing page read it: imported (detected,
+    or as a DXF), then shown, its sides found and every contour and hole chosen. A third of
+    the inputs are read as unitless drawings in inches, so that more reach the entities."""
+    from app.cnc.formats.dxf.blocks import cut_sides
+    from app.cnc.formats.dxf.choice import ContourChoice, HoleChoice, chosen_blocks, drawing_svg
+    from app.cnc.formats.dxf.reader import parse_options, read_drawing
+    from app.cnc.imports import ImportFailure, read_program
+
+    options = {"drawing-units": "inch", "hole-diameter": "0.3"} if len(data) % 3 else {}
+    try:
+        result = read_program(data, "fuzz", "dxf" if len(data) % 2 else None, options)
+    except ImportFailure as exc:
+        # A refusal the page and the terminal can show: no lone surrogates.
+        str(exc).encode("utf-8")
+        raise
+    result.text().encode("utf-8")  # the report too
+    drawing = read_drawing(data, "fuzz", parse_options(options))
+    drawing_svg(drawing).encode("utf-8")
+    cut_sides(drawing)
+    choices = [ContourChoice(k) for k in range(len(drawing.contours))]
+    chosen_blocks(drawing, [*choices, HoleChoice(tuple(range(len(drawing.holes))))])
+    return result
+
+
+PARSERS = (
+    "gcode",
+    "events",
+    "tape",
+    "punch",
+    "json",
+    "detect",
+    "document",
+    "numbers",
+    "backup",
+    "dxf",
+)
 
 
 @dataclass
@@ -248,6 +450,8 @@ def run_chunk(job: tuple[str, int, int, int, float, str]) -> Tally:
 
 
 def _keep(out: str, kind: str, index: int, data: bytes, why: str) -> str:
+    # A crash's message may hold lone surrogates (text ezdxf decoded with surrogateescape).
+    why = why.encode("utf-8", "backslashreplace").decode("utf-8")
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / f"{kind}-{index}.bin").write_bytes(data)

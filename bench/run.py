@@ -22,7 +22,17 @@ from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 
-from bench import cli, editor, exports, gcode_import, interpreter, pocket, preview, simulate
+from bench import (
+    cli,
+    drawings,
+    editor,
+    exports,
+    gcode_import,
+    interpreter,
+    pocket,
+    preview,
+    simulate,
+)
 from bench.common import (
     BUDGET,
     ROOT,
@@ -53,6 +63,7 @@ def sections(quick: bool) -> dict[str, Callable[[], Section]]:
         "cli": lambda: cli.run(
             (10_000, 100_000) if quick else cli.IMPORT_SIZES, 100_000 if quick else cli.EXPORT_MOVES
         ),
+        "drawings": lambda: drawings.run(),
     }
 
 

@@ -19,6 +19,7 @@ The tables below are the corpus; `cases(surface)` expands them:
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass, field
 from decimal import Decimal
 from pathlib import Path
@@ -233,6 +234,141 @@ DOCUMENT_VALUES: list[tuple[str, str, str]] = (
     ]
 )  # fmt: skip
 
+
+def minimal_dxf(entities: list[str], units: int = 1, version: str = "") -> bytes:
+    """A text DXF of a header ($ACADVER when `version` is given, else R12; $INSUNITS) and
+    the ENTITIES section of `entities`, each the text of its tags ("0\\nLINE\\n8\\n0\\n…")."""
+    header = f"9\n$ACADVER\n1\n{version}\n" if version else ""
+    header += f"9\n$INSUNITS\n70\n{units}\n"
+    text = f"0\nSECTION\n2\nHEADER\n{header}0\nENDSEC\n0\nSECTION\n2\nENTITIES\n"
+    return (text + "".join(entities) + "0\nENDSEC\n0\nEOF\n").encode()
+
+
+def zigzag(lines: int, gap: float = 0.0) -> list[str]:
+    """`lines` LINE entities end to end, as a minimal DXF's entities (0.01 in steps), each
+    starting `gap` in after the last one ends."""
+    return [
+        f"0\nLINE\n8\n0\n10\n{k / 100 + gap}\n20\n{k % 2 / 200}\n11\n{(k + 1) / 100}\n"
+        f"21\n{(k + 1) % 2 / 200}\n"
+        for k in range(lines)
+    ]
+
+
+def squares(count: int) -> list[str]:
+    """`count` concentric squares about the origin, each of four LINE entities."""
+    found = []
+    for k in range(1, count + 1):
+        a = k / 100
+        corners = [(-a, -a), (a, -a), (a, a), (-a, a)]
+        for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
+            found.append(f"0\nLINE\n8\n0\n10\n{x0}\n20\n{y0}\n11\n{x1}\n21\n{y1}\n")
+    return found
+
+
+def binary_lines(count: int) -> bytes:
+    """A binary DXF (R12: one-byte group codes) of `count` LINE entities, six tags each,
+    0.01 in long end to end."""
+    out = [b"AutoCAD Binary DXF\r\n\x1a\x00", b"\x00SECTION\x00\x02ENTITIES\x00"]
+    for k in range(count):
+        ends = ((10, k / 100), (20, 0.0), (11, (k + 1) / 100), (21, 0.0))
+        out.append(b"\x00LINE\x00\x080\x00")
+        out += [bytes([code]) + struct.pack("<d", value) for code, value in ends]
+    out.append(b"\x00ENDSEC\x00\x00EOF\x00")
+    return b"".join(out)
+
+
+# Drawings that crashed the DXF importer (issue 30: 500s on the pages, tracebacks from the
+# command line), found by the fuzzer (bench/fuzz_long.py, parser dxf) and cut down to what
+# still crashed: (file name, bytes, expected message part). Each is refused, with a place.
+DXF_UPLOADS: list[tuple[str, bytes, str]] = [
+    # struct.error: a binary DXF that ends inside a tag's value.
+    ("cut-short.dxf", b"AutoCAD Binary DXF\r\n\x1a\x00\t\x00$", "binary tag 2: not a DXF"),
+    ("cut-short-int.dxf", b"AutoCAD Binary DXF\r\n\x1a\x00B", "binary tag 1: not a DXF"),
+    # AssertionError inside ezdxf's layouts (an OBJECTS section of broken layouts).
+    (
+        "layouts.dxf",
+        b"0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1027\n9\n$\n7\n\n9\n$\n1\n\n0\nSECTION\n"
+        b"2\nOBJECTS\n0\nDICTIONARY\n0\n\n1\n\n0\nLAYOUT\n5\n\n330\nD\n0\n\n0\nENDSEC",
+        "not a DXF drawing ezdxf can read: <class 'type'> (AssertionError in ezdxf.layouts",
+    ),
+    # KeyError 'MODEL': layouts without a model space.
+    (
+        "no-model-space.dxf",
+        b"AutoCAD Binary DXF\r\n\x1a\x00\x00\x00SECTION\x00\x02\x00HEADER\x00\t\x00$ACADVER"
+        b"\x00\x00AC7\x00\t\x00$\x002\x00\t\x00$\x01\x00xf\x00\x00\x00\x00\x14\x00\x00\x00"
+        b"\x00\x00\x00\x00\xf8?*\x00\x00\x00\x00\x00\x00\x00\xf0\xbf\n\x00\x00\x00\x00\x00\x00"
+        b"\x00\x04@\x14\x00\x00\x00\x00\x00\x00\x00\xf0?\n\x00\x00\x00\x00\x00\x00\x00\xf8?\x14"
+        b"\x00\x00\x00\x00\x00\x00\x00\xf0?*\x00\x00\x00\x00\x00\x00\x00\xf0\xbf\x00\x00ENDSEC"
+        b"\x00\x00\x00SECTION\x00\x02\x00OBJECTS\x00\x00\x00DICTIONARY\x00\x03\x00ACAD_LAYOUT\x00"
+        b"^\x01D\x00\x00\x00DICTIONARY\x00\x05\x00D\x00\x03\x000\x00^\x011A\x00\x03\x001\x00^\x01"
+        b"1E\x00\x01\x01\x00\x00\x00LAYOUT\x00\x05\x001A\x00\x01D\x00d\x00\x00\x06\x00\x00(\x00"
+        b"\x00\x00\x00\x00\x00\x00\x1e@)\x00\x00\x00\x00\x00\x00\x004@*\x00\x00\x00\x00\x00\x00"
+        b"\x00\x1e@+\x00\x00\x00\x00\x00\x00\x004@,\x00\x00\x00\x00\x00\x00@z@-\x00\x00\x00\x00"
+        b"\x00\x00\x90r@.\x00\x00\x00\x00\x00\x00\x00\x00\x00/\x00\x00\x00\x00\x00\x00\x00\x00"
+        b"\x000\x00\x00\x00\x00\x00\x00\x00\x00\x001\x00\x00\x00\x00\x00\x00\x00\x00J\x00\x05\x00"
+        b"\x00\x10\x00L\x00\x00M\x00\x02\x00N\x00,\x01\x93\x00\x00\x00\x00\x00\x00\x00\xf0?\x94"
+        b"\x00\x00\x00\x00\x00\x00\x00\x00\x00\x95\x00\x00\x00\x00\x00\x00\x00\x00\x00d\x00\x00"
+        b"\x01\x00Model\x0017\x00\x00\x00LAYOUT\x00\x05\x001E\x0000\x00\x00\x00ENDSEC\x00\x00\x00"
+        b"EOF\x00",
+        "model space: ezdxf cannot read the drawing's model space: 'MODEL' (KeyError",
+    ),
+    # StopIteration: a table that ends before its first entry.
+    (
+        "empty-table.dxf",
+        b"AutoCAD Binary DXF\r\n\x1a\x00\x00\x00SECTION\x00\x02\x00$ACADVERASE[\x00\x00\x00\x00"
+        b"\x01\x00\x00\x01\x00\x00\x00\x00ENDSEC\x00\x00\x00SECTION\x00\x02\x00TABLES\x00\x00\x00"
+        b"TABLE\x00\x02\x00VPORT\x00le\x00\x00\x00\x00\x00\x00ENDTAB\x00Te\x00F\x00\x00\x00\x00"
+        b"\x00ENDTAB\x0000\x00\x00\x00ENDSEC\x00\x00\x00EOF\x00",
+        "not a DXF drawing ezdxf can read: ",
+    ),
+    # AttributeError: a code page that is a number.
+    (
+        "codepage.dxf",
+        b"0\nSECTION\n2\nHEADER\n9\n$DWGCODEPAGE\n72\n5\n9\n$\n7\n\n0\nENDSEC",
+        "not a DXF drawing ezdxf can read: ",
+    ),
+    (
+        "codepage-binary.dxf",
+        b"AutoCAD Binary DXF\r\n\x1a\x00\x00\x00SECTION\x00\x02\x00HEADER\x00\t\x00$ACADVER"
+        b"\x01\x00AC7\x00\t\x00$\x00\x00i\x00\t\x00$DWGCODEPAGE\x00\x18\x018\xd8\t\x00$\x00\xa0"
+        b"\x00\x00\x00\x00\x00\x00\x00\x00\x00\t\x00$\x00\n\x00\x00\x00\x00\x00\x00\x00\x00\x00"
+        b"\x14\x00\x01\x00\x00\t\x00$\x00\x01\x00\x00\x00\x00\x00ENDSEC\x00\x00\x00EOF\x00",
+        "not a DXF drawing ezdxf can read: ",
+    ),
+    # A lone surrogate in ezdxf's message (a header variable named by an undecodable byte).
+    (
+        "surrogate.dxf",
+        b"0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nC\n9\n$\n7\n\n9\n$DWGCODEPAGE\n3\n\n9\n$\n2\n\n"
+        b"9\n$\n2\n\n9\n\xfe\n0\n\n0\nENDSEC",
+        'Invalid header variable name "\\xfe"',
+    ),
+    # TypeError, ValueError: units that are not a whole number.
+    (
+        "units-point.dxf",
+        b"0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n11\n1\n21\n0\n0\nSECTION",
+        "header $INSUNITS: units code (1.0, 0.0) is not a whole number",
+    ),
+    (
+        "units-word.dxf",
+        b"0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n1\ninch\n0\nENDSEC\n0\nEOF\n",
+        "header $INSUNITS: units code 'inch' is not a whole number",
+    ),
+]
+
+# A binary DXF past the line limit (issue 30: its tags were not counted).
+LINES_DXF = ("lines.dxf", binary_lines(1_700), f"at most {MAX_IMPORT_LINES:,} lines")
+
+# Drawings whose entities ezdxf half understands (it could not give their layer): read, each
+# such entity named and left out. (file name, bytes, expected note part)
+DXF_READ: list[tuple[str, bytes, str]] = [
+    (
+        "no-layer.dxf",
+        b"AutoCAD Binary DXF\r\n\x1a\x00\x00SECTION\x00\x02ENTITIES\x00NE\x00\x14\x00\x00\x00"
+        b"\x00\x00\x00\xf0\xbf\x00\x00\x00ENDSEC\x00\x00EOF\x00",
+        "is not read",
+    ),
+]
+
 # Uploads to the import form: (file name, bytes, expected message part); a part of None
 # means the file is a program after all (201).
 UPLOADS: list[tuple[str, bytes, str | None]] = [
@@ -268,6 +404,9 @@ UPLOADS: list[tuple[str, bytes, str | None]] = [
     # POCKET is legal and is taken (it planned for minutes).
     ("grid-of-grids.json", GRID_OF_GRIDS, "block 2: the program would make about 1,300,130,007"),
     ("eight-islands.json", EIGHT_ISLANDS, None),  # a document: it opens in the editor (302)
+    # Issue 30: drawings past the line limit as binary, and those ezdxf crashed on.
+    LINES_DXF,
+    *DXF_UPLOADS,
 ]
 
 # Uploads the command line reads (a program document) and then refuses to work on (exit 1,
@@ -284,8 +423,11 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["export", "@golden", "--to", "gcode-linuxcnc", "-O", "no-equals"], "NAME=VALUE"),
     *[(["time", "@golden", "--tool-change-seconds", v], "--tool-change-seconds")
       for v in ("nan", "inf", "-1", "١", "1_0")],
+    # (Not lines.dxf either: the command line reads the user's own files whole, without the
+    # line limit, and this drawing is one long open contour.)
     *[(["check", f"@{name}"], "") for name, _data, part in UPLOADS
-      if part is not None and name not in READ_BUT_REFUSED],
+      if part is not None and name not in READ_BUT_REFUSED and name != LINES_DXF[0]],
+    *[(["import", f"@{name}"], part) for name, _data, part in DXF_UPLOADS],
     (["check", "/nonexistent/file.json"], "/nonexistent/file.json"),
     (["diff", "1", "²", "1"], "²"),
     (["restore-version", "1", "--5"], "--5"),

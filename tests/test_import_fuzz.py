@@ -11,12 +11,18 @@ The long run (docs/imports.md), at least 100 000 inputs per reader:
 
 (or `.venv/bin/python bench/fuzz_imports.py 100000`). The examples are derandomized — the
 same inputs every run — unless MILLBLOCKS_FUZZ_RANDOM=1.
+
+DXF drawings (issue 30) are read by ezdxf, slower than our own readers: 300 of them
+(`MILLBLOCKS_FUZZ_DXF_EXAMPLES`), the DXF test drawings damaged as `bench/fuzz_long.py`
+damages them (tags changed, group codes swapped, cut short, written as binary DXF, bytes
+flipped); its long run is `python -m bench.fuzz_long N --parsers dxf`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import random
 from functools import cache
 
 from hypothesis import HealthCheck, given, settings
@@ -25,6 +31,8 @@ from hypothesis import strategies as st
 from app.cnc import document
 from app.cnc.emit.target import ExportError, export
 from app.cnc.imports import ImportFailure, read_program
+from bench.fuzz_long import corpus as long_corpus
+from bench.fuzz_long import generate, read_dxf
 from tests.imports.support import GOLDEN, HERE, load
 
 EXAMPLES = int(os.environ.get("MILLBLOCKS_FUZZ_EXAMPLES", "1000"))
@@ -174,3 +182,20 @@ def test_json_reader_raises_only_import_failures(data: bytes) -> None:
 @given(st.one_of(inputs("gcode"), inputs("events"), inputs("tape"), mutants("punch")))
 def test_detection_raises_only_import_failures(data: bytes) -> None:
     survives(data, None)
+
+
+DXF_FUZZ = settings(FUZZ, max_examples=int(os.environ.get("MILLBLOCKS_FUZZ_DXF_EXAMPLES", "300")))
+
+
+@cache
+def dxf_drawings() -> list[bytes]:
+    return long_corpus("dxf")
+
+
+@DXF_FUZZ
+@given(st.randoms(use_true_random=False))
+def test_dxf_reader_and_choosing_page_raise_only_import_failures(rng: random.Random) -> None:
+    """Import, then the choosing page's work (shown, sides, every contour and hole chosen);
+    a refusal's message and the report hold no lone surrogate."""
+    with contextlib.suppress(ImportFailure):
+        read_dxf(generate(rng, "dxf", dxf_drawings()))

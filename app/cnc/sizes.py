@@ -25,7 +25,14 @@ MAX_IMPORT_BYTES = 2 * 1024 * 1024
 """Bytes of one imported file (the web upload limit too)."""
 
 MAX_IMPORT_LINES = 20_000
-"""Lines (or tape blocks) of one imported file."""
+"""Lines (or tape blocks) of one imported file; a binary DXF counts two lines a tag, as its
+text form has them."""
+
+MAX_DRAWING_ENTITIES = 5_000
+"""Entities in a DXF drawing's model space (each line, arc, circle, text…, a polyline's
+vertices one each): as many as a program has blocks. The drawings page checks them as
+ezdxf gives them, before any is read, at every reading of a stored drawing; the line limit
+keeps an uploaded file under it."""
 
 
 MAX_EXPANDED_LINES = 50_000
@@ -53,11 +60,24 @@ IMPORT_LIMITS = ImportLimits()
 
 
 def check_import_size(data: bytes, limits: ImportLimits = IMPORT_LIMITS) -> None:
-    """Refuse `data` larger than `limits` (before any parsing)."""
+    """Refuse `data` larger than `limits` (before any parsing). Raises TooLarge naming the
+    limit."""
     if len(data) > limits.bytes:
         raise TooLarge(
             f"the file has {len(data):,} bytes; an import is at most {limits.bytes:,} bytes"
         )
+    from app.cnc.formats.dxf.reader import binary_dxf_tags, is_binary_dxf
+
+    if is_binary_dxf(data):
+        # Its tags are not lines: counted (up to past the limit) as its text form's lines.
+        tags = binary_dxf_tags(data, limits.lines // 2 + 1)
+        if 2 * tags > limits.lines:
+            raise TooLarge(
+                f"the file has more than {limits.lines:,} lines (binary DXF: two lines a "
+                f"tag, as in its text form); an import is at most {limits.lines:,} lines "
+                f"and {MAX_BLOCKS:,} blocks"
+            )
+        return
     lines = data.count(b"\n") + 1
     # A tape's blocks end in CR (ASCII) or EOB (EIA: 0x80); count those too.
     lines = max(lines, data.count(b"\r"), data.count(b"\x80"))

@@ -26,7 +26,7 @@ from werkzeug.wrappers import Response
 
 from app.cnc.blocks import MillingMode
 from app.cnc.emit.svg import draw
-from app.cnc.formats.dxf.blocks import cut_sides, holds
+from app.cnc.formats.dxf.blocks import cut_sides
 from app.cnc.formats.dxf.choice import (
     CUTTING_FIELDS,
     DIRECTIONS,
@@ -42,6 +42,7 @@ from app.cnc.formats.dxf.choice import (
     cutting_defaults,
     drawing_svg,
     insert_blocks,
+    pocket_islands,
     read_cutting,
 )
 from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
@@ -215,12 +216,13 @@ def read_choices(form: Any, drawing: Drawing, tool: int = 1) -> list[Choice]:
     Raises ChoiceError naming the field for an order that is not a whole number from 1,
     an order given twice, a segment that is not in its contour, or a tool outside 1-24."""
     items: list[_Item] = []
-    islands = [k for k in range(len(drawing.contours)) if form.get(f"c{k}_pocket") == "island"]
-    pockets = [k for k in range(len(drawing.contours)) if form.get(f"c{k}_pocket") == "pocket"]
+    kinds = {k: form.get(f"c{k}_pocket") for k in range(len(drawing.contours))}
+    islands = [k for k, kind in kinds.items() if kind == "island"]
+    pockets = [k for k, kind in kinds.items() if kind == "pocket"]
     for what, count in (("contour", len(drawing.contours)), ("hole", len(drawing.holes))):
         for index in range(count):
             text = form.get(f"{what[0]}{index}_order", "").strip()
-            if what == "contour" and index in islands:
+            if what == "contour" and kinds[index] == "island":
                 if text:
                     raise ChoiceError(
                         f"contour {index + 1} is an island: it has no order of its own (its "
@@ -228,7 +230,7 @@ def read_choices(form: Any, drawing: Drawing, tool: int = 1) -> list[Choice]:
                     )
                 continue
             if not text:
-                if what == "contour" and index in pockets:
+                if what == "contour" and kinds[index] == "pocket":
                     raise ChoiceError(
                         f"contour {index + 1} is a POCKET: give it an order number (or click "
                         "it on the drawing)"
@@ -248,6 +250,7 @@ def read_choices(form: Any, drawing: Drawing, tool: int = 1) -> list[Choice]:
             )
         seen[item.order] = item
     items.sort(key=lambda i: i.order)
+    held = pocket_islands(drawing, pockets, islands)
     hole_tool = _tool(form.get("holes_tool", "1"), "holes tool")
     bolt = bool(form.get("bolt_circles"))
     choices: list[Choice] = []
@@ -261,20 +264,9 @@ def read_choices(form: Any, drawing: Drawing, tool: int = 1) -> list[Choice]:
             group = []
         k = item.index
         start = _whole(form.get(f"c{k}_start", "1") or "1", f"contour {k + 1} start") - 1
-        if k in pockets:
-            held = tuple(
-                j
-                for j in islands
-                if holds(drawing.contours[k], drawing.contours[j])
-                and not any(
-                    holds(drawing.contours[k], drawing.contours[p])
-                    and holds(drawing.contours[p], drawing.contours[j])
-                    for p in pockets
-                    if p != k
-                )
-            )
+        if kinds[k] == "pocket":
             pocket_tool = _tool(form.get(f"c{k}_tool", ""), f"contour {k + 1} tool", tool)
-            choices.append(PocketChoice(k, held, start, pocket_tool))
+            choices.append(PocketChoice(k, held[k], start, pocket_tool))
             continue
         direction = form.get(f"c{k}_dir", "") or None
         if direction is not None and direction not in DIRECTIONS:

@@ -31,5 +31,8 @@ class DxfImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
-        drawing = read_drawing(data, name, parse_options(options))
+        # The import's limits are its caller's (`read_program`: the file's lines, a binary
+        # DXF's tags counted as lines, and the blocks; the command line lifts them for the
+        # user's own files). The choosing page reads with the entity limit.
+        drawing = read_drawing(data, name, parse_options(options), limit=None)
         return program_from_drawing(drawing), drawing.notes.report()

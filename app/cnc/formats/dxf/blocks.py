@@ -14,12 +14,13 @@ the programming grid). Holes become DRILL blocks, and BOLT CIR where three or mo
 diameter are equally spaced on a circle.
 
 Which side the cutter goes is one rule, `cut_sides`, used by the whole-drawing conversion
-(`millblocks import`) and the choosing page alike: an outer contour (held by no other
-closed contour, or by an even number) is cut from outside, an inner one (a hole or slot
-inside another contour) from inside; climb milling with a clockwise spindle (Data Block
-0's default): outer contours clockwise and inner ones counter-clockwise, both with the tool
-on the left (CUT LT); conventional milling the reverse, with the tool on the right (CUT
-RT); open contours are tool-centre paths (no compensation), cut as drawn.
+(`millblocks import`) and the choosing page alike: an outer contour (no closed contour
+round it, or an even number nested round it: `enclosing`, `nesting`) is cut from outside,
+an inner one (a hole or slot inside another contour) from inside; climb milling with a
+clockwise spindle (Data Block 0's default): outer contours clockwise and inner ones
+counter-clockwise, both with the tool on the left (CUT LT); conventional milling the
+reverse, with the tool on the right (CUT RT); open contours are tool-centre paths (no
+compensation), cut as drawn.
 
 The whole-drawing conversion chooses: holes first, then inner contours, then outer ones
 (the outside profile last), each on the side `cut_sides` gives. Each starts at its
@@ -31,6 +32,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from app.cnc.blocks import (
     Block,
@@ -179,12 +182,95 @@ def pocket_ops(
     )
 
 
-def holds(outer: Contour, inner: Contour) -> bool:
-    """True when the closed contour `outer` holds `inner` (its first point inside)."""
-    if not outer.closed:
-        return False
-    ring = regions.polygon(as_path(outer), CHORD_NM)
-    return bool(regions.inside([ring], inner.segments[0].start))
+def holds(drawing: Drawing, outer: int, inner: int) -> bool:
+    """True when contour `outer` of the drawing is round contour `inner`: one of the closed
+    contours `enclosing` finds round it, out to the outermost."""
+    parents = enclosing(drawing)
+    around = parents[inner]
+    while around is not None:
+        if around == outer:
+            return True
+        around = parents[around]
+    return False
+
+
+def enclosing(drawing: Drawing) -> list[int | None]:
+    """For each contour of the drawing, the nearest closed contour round it (None: none),
+    found once and kept with the drawing.
+
+    A contour is inside a closed contour when its first point is (or lies on its edge);
+    the nearest such is the smallest, and only a larger one (or as large and later in the
+    drawing) may be round a closed contour, so each contour has one and no contour is round
+    itself. Nested contours are then a tree whose depth is the number of contours round
+    each (the rule of `cut_sides`). The work: each closed contour's ring is made once;
+    each first point is tried against the rings whose boxes hold it, smallest first, until
+    one holds it (nested contours: the first tried).
+    """
+    if drawing.enclosing is not None:
+        return drawing.enclosing
+    contours = drawing.contours
+    closed = [k for k, c in enumerate(contours) if c.closed]
+    rings = {k: _ring(contours[k]) for k in closed}
+    # The closed contours smallest first (ties: in drawing order), with their boxes.
+    order = sorted(closed, key=lambda k: (abs(_area(rings[k])), k))
+    rank = {k: at for at, k in enumerate(order)}
+    boxes = np.array([_box(rings[k]) for k in order], dtype=np.float64).reshape(len(order), 4)
+    found: list[int | None] = []
+    for k, contour in enumerate(contours):
+        x, y = contour.segments[0].start
+        first = rank[k] + 1 if contour.closed else 0
+        held = (
+            (boxes[first:, 0] <= x)
+            & (boxes[first:, 1] <= y)
+            & (x <= boxes[first:, 2])
+            & (y <= boxes[first:, 3])
+        )
+        found.append(
+            next(
+                (
+                    order[first + at]
+                    for at in np.flatnonzero(held).tolist()
+                    if regions.inside([rings[order[first + at]]], (x, y))
+                ),
+                None,
+            )
+        )
+    drawing.enclosing = found
+    return found
+
+
+def _ring(contour: Contour) -> regions.Ring:
+    """A closed contour as a ring for telling inside from outside: lines as they are, arcs
+    as chords within CHORD_NM of them, or within a ten-thousandth of the radius for an arc
+    of more than 5 mm (at most 222 chords to a whole circle, whatever its size)."""
+    path = as_path(contour)
+    points = [path.start]
+    current = path.start
+    for element in path.elements:
+        tolerance = float(CHORD_NM)
+        if element.centre is not None:
+            tolerance = max(tolerance, math.dist(current, element.centre) / 10_000)
+        points += regions.element_points(current, element, tolerance)
+        current = element.end
+    return regions.to_ring(points)
+
+
+def _box(ring: regions.Ring) -> tuple[int, int, int, int]:
+    """The ring's bounding box: (x low, y low, x high, y high)."""
+    xs = [x for x, _ in ring]
+    ys = [y for _, y in ring]
+    return (min(xs), min(ys), max(xs), max(ys))
+
+
+def _area(ring: regions.Ring) -> float:
+    """The ring's signed area (shoelace), nm²."""
+    return (
+        sum(
+            x0 * y1 - x1 * y0
+            for (x0, y0), (x1, y1) in zip(ring, [*ring[1:], *ring[:1]], strict=True)
+        )
+        / 2
+    )
 
 
 def contour_blocks(
@@ -298,28 +384,31 @@ def _frame(contour: Contour) -> tuple[int, int, int, int, int] | None:
     return x0, y0, x1 - x0, y1 - y0, corner
 
 
-def nesting(contours: list[Contour]) -> list[int]:
-    """How many other closed contours hold each contour (0: an outer one)."""
-    rings = [regions.polygon(as_path(c), CHORD_NM) if c.closed else [] for c in contours]
-    depths = []
-    for k, contour in enumerate(contours):
-        probe = contour.segments[0].start
-        depths.append(
-            sum(
-                1
-                for j, ring in enumerate(rings)
-                if j != k and ring and regions.inside([ring], probe)
-            )
-        )
-    return depths
+def nesting(drawing: Drawing) -> list[int]:
+    """How many closed contours are round each contour (0: an outer one), by `enclosing`."""
+    parents = enclosing(drawing)
+    depths: dict[int, int] = {}
+    for k in range(len(parents)):
+        # Up to a contour whose depth is known, then down again (no recursion: a drawing
+        # may nest thousands deep).
+        path = []
+        at: int | None = k
+        while at is not None and at not in depths:
+            path.append(at)
+            at = parents[at]
+        depth = -1 if at is None else depths[at]
+        for j in reversed(path):
+            depth += 1
+            depths[j] = depth
+    return [depths[k] for k in range(len(parents))]
 
 
 @dataclass(frozen=True)
 class CutSide:
     """Which side of a contour the cutter goes, and which way round it cuts.
 
-    `inner`: the contour lies inside another closed contour (held by an odd number of
-    them): a hole or slot, cut from inside (a CIRCLE/FRAME routine INSIDE). `clockwise`:
+    `inner`: the contour lies inside another closed contour (an odd number nested round
+    it): a hole or slot, cut from inside (a CIRCLE/FRAME routine INSIDE). `clockwise`:
     the way round (None: an open contour, cut as drawn). `comp`: the compensation side that
     puts the tool on the waste side going that way (NONE for an open contour)."""
 
@@ -343,7 +432,7 @@ def cut_sides(drawing: Drawing, milling: MillingMode = MillingMode.CLIMB) -> lis
     climb = milling is MillingMode.CLIMB
     comp = Comp.LEFT if climb else Comp.RIGHT
     sides = []
-    for contour, depth in zip(drawing.contours, nesting(drawing.contours), strict=True):
+    for contour, depth in zip(drawing.contours, nesting(drawing), strict=True):
         inner = depth % 2 == 1
         if not contour.closed:
             sides.append(CutSide(inner, None, Comp.NONE))

@@ -38,6 +38,7 @@ from app.cnc.formats.dxf.blocks import (
     contour_ops,
     cut_sides,
     drawing_block0,
+    enclosing,
     holds,
     hole_spec,
     pocket_ops,
@@ -225,7 +226,7 @@ def _pocket(drawing: Drawing, choice: PocketChoice, cutting: Cutting) -> PocketO
             raise ChoiceError(f"contour {k + 1} is chosen twice in one pocket")
         if not island.closed:
             raise ChoiceError(f"contour {k + 1} is open: an island is closed")
-        if not holds(boundary, island):
+        if not holds(drawing, choice.contour, k):
             raise ChoiceError(
                 f"contour {k + 1} is not inside contour {choice.contour + 1}: an island "
                 "lies inside its pocket's boundary"
@@ -233,6 +234,36 @@ def _pocket(drawing: Drawing, choice: PocketChoice, cutting: Cutting) -> PocketO
         islands.append(island)
     start = _start(boundary, choice.start)
     return pocket_ops(drawing, boundary, islands, start, choice.tool, cutting)
+
+
+def pocket_islands(
+    drawing: Drawing, pockets: Sequence[int], islands: Sequence[int]
+) -> dict[int, tuple[int, ...]]:
+    """The islands (contour indices, in the order given) each of `pockets` clears round:
+    an island is its nearest pocket's (`blocks.enclosing`: of pockets one inside another,
+    the inner one); an island no pocket is round is in none. Work in proportion to the
+    contours: each contour's nearest pocket is found once."""
+    parents = enclosing(drawing)
+    chosen = set(pockets)
+    nearest: dict[int, int | None] = {}  # a contour → the nearest pocket round it
+
+    def pocket_round(k: int) -> int | None:
+        path = []
+        at = parents[k]
+        while at is not None and at not in chosen and at not in nearest:
+            path.append(at)
+            at = parents[at]
+        found = at if at is None or at in chosen else nearest[at]
+        for j in path:
+            nearest[j] = found
+        return found
+
+    held: dict[int, list[int]] = {k: [] for k in pockets}
+    for j in islands:
+        pocket = pocket_round(j)
+        if pocket is not None:
+            held[pocket].append(j)
+    return {k: tuple(found) for k, found in held.items()}
 
 
 # -- what the drawing cannot give: depths, feeds, the tool ---------------------------------

@@ -16,23 +16,40 @@ Chaining: ends closer than `options.tolerance` (default 0.0001 in, or 0.002 mm) 
 into one point (the first one's; the gap is reported). A contour is closed when it comes
 back to its start, open otherwise (its two unjoined ends are reported). Where more than two
 ends meet, the chain takes the first entity in drawing order and the others start contours
-of their own (reported). Circles at or under `options.hole_diameter` become holes.
+of their own (reported). Circles at or under `options.hole_diameter` become holes. The work
+is in proportion to the ends: each is compared only with those in its cell of a grid as
+wide as the tolerance and the eight cells round it.
 
-Raises ImportFailure naming the entity (handle, type, layer) or the header variable.
+Bounds (app/cnc/sizes.py): `read_drawing` refuses a model space of more than
+MAX_DRAWING_ENTITIES entities before any is read (the choosing page reads every stored
+drawing so); an import is bounded by its file's lines, a binary DXF's tags counted as
+lines before ezdxf reads it (`check_import_size`).
+
+Raises ImportFailure naming the entity (handle, type, layer), the header variable, the
+line or binary tag where ezdxf stopped, or the limit. ezdxf reads untrusted bytes with many
+exceptions besides its own DXFError (struct.error, KeyError, AssertionError, StopIteration…,
+tests/hostile_corpus.py DXF_UPLOADS): whatever it raises while reading the file or an
+entity is the importer's error, and no message holds a lone surrogate (ezdxf decodes
+undecodable bytes as those: they are shown as `\xff`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
 import itertools
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass
+import re
+import traceback
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any
 
 from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
+from app.cnc.numbers import NumberError, parse_int
 from app.cnc.options import Option, OptionKind
+from app.cnc.sizes import MAX_DRAWING_ENTITIES
 from app.cnc.units import Units
 
 BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
@@ -155,6 +172,9 @@ class Drawing:
     notes: Notes
     tolerance: int
     feed: int
+    enclosing: list[int | None] | None = field(default=None, repr=False, compare=False)
+    """Each contour's nearest closed contour round it: `blocks.enclosing` finds them on first
+    use and keeps them here (the choosing page asks several times a request)."""
 
 
 class DxfNotes(Notes):
@@ -231,31 +251,49 @@ def _length_option(options: Mapping[str, str], key: str) -> Decimal | None:
 
 def is_dxf(data: bytes) -> bool:
     """True for a binary DXF, or text whose first group is `0` / `SECTION`."""
-    if data.startswith(BINARY_SENTINEL):
+    if is_binary_dxf(data):
         return True
     head = data[:64].lstrip(b"\xef\xbb\xbf").split(None, 2)
     return len(head) >= 2 and head[0] == b"0" and head[1] == b"SECTION"
 
 
-def read_drawing(data: bytes, name: str = "", options: DxfOptions | None = None) -> Drawing:
-    """The drawing's contours and holes in nm, with the report so far. Raises
-    ImportFailure for a file ezdxf cannot read, a unitless drawing without
-    `drawing_units`, or units MillBlocks has no program units for."""
-    # ezdxf is imported here, when a drawing is read: detecting a file's format and every
-    # command that reads no drawing start without it (it is a third of the CLI's start-up).
-    from ezdxf import recover
-    from ezdxf.document import Drawing as EzDrawing
-    from ezdxf.lldxf.const import DXFError
-    from ezdxf.lldxf.tagger import binary_tags_loader
+def is_binary_dxf(data: bytes) -> bool:
+    return data.startswith(BINARY_SENTINEL)
 
-    opts = options or DxfOptions()
+
+def binary_dxf_tags(data: bytes, at_most: int) -> int:
+    """How many tags the binary DXF `data` holds, counted up to `at_most` (cheap: no more
+    is read). A file damaged before then counts the tags before the damage: reading it
+    names the damage (`read_drawing`)."""
+    tags = _BinaryTags(data)
     try:
-        if data.startswith(BINARY_SENTINEL):
-            doc = EzDrawing.load(binary_tags_loader(data))
-        else:
-            doc, _auditor = recover.read(io.BytesIO(data))
-    except (DXFError, UnicodeDecodeError, ValueError, IndexError, KeyError, TypeError) as exc:
-        raise ImportFailure("", f"not a DXF drawing ezdxf can read: {exc}") from None
+        for _ in itertools.islice(tags, at_most):
+            pass
+    except Exception:  # counted so far: read_drawing says what is wrong
+        pass
+    return tags.count
+
+
+def read_drawing(
+    data: bytes,
+    name: str = "",
+    options: DxfOptions | None = None,
+    limit: int | None = MAX_DRAWING_ENTITIES,
+) -> Drawing:
+    """The drawing's contours and holes in nm, with the report so far. Raises
+    ImportFailure for a file ezdxf cannot read (naming where), a model space of more than
+    `limit` entities (a polyline's vertices count one each; None: no limit, for the
+    importer, whose callers set their own, and the benchmarks), a unitless drawing without
+    `drawing_units`, or units MillBlocks has no program units for."""
+    opts = options or DxfOptions()
+    doc, entities = _load(data)
+    size = sum(_size(entity, number) for number, entity in enumerate(entities, 1))
+    if limit is not None and size > limit:
+        raise ImportFailure(
+            "model space",
+            f"the drawing has {size:,} entities (a polyline's vertices count one each); "
+            f"a drawing is read with at most {limit:,}",
+        )
     notes = DxfNotes()
     scale, drawing_units = _drawing_units(doc, opts, notes)
     units = opts.units or drawing_units
@@ -272,8 +310,8 @@ def read_drawing(data: bytes, name: str = "", options: DxfOptions | None = None)
             "give feed=…)".replace(f" {units.symbol}/min", f" {units.feed_symbol}"),
         )
     reader = _Reader(notes, scale, set(opts.layers))
-    for entity in doc.modelspace():
-        reader.entity(entity)
+    for number, entity in enumerate(entities, 1):
+        reader.entity(entity, number)
     if opts.layers:
         missing = sorted(set(opts.layers) - reader.layers_seen)
         for layer in missing:
@@ -294,8 +332,257 @@ def _default_feed(units: Units) -> int:
     return 25_400_000 if units is Units.INCH else 24_000_000
 
 
+# -- where ezdxf's reading ends and ours begins ----------------------------------------------
+
+
+class _BinaryTags(Iterator[Any]):
+    """ezdxf's tags of a binary DXF, counted, so that a failure names the tag it was in."""
+
+    def __init__(self, data: bytes) -> None:
+        from ezdxf.lldxf.tagger import binary_tags_loader
+
+        self._tags = binary_tags_loader(data)
+        self.count = 0  # tags read whole
+        self.broken = False  # the loader failed inside tag count + 1
+
+    def __next__(self) -> Any:
+        try:
+            tag = next(self._tags)
+        except StopIteration:
+            raise
+        except Exception:
+            self.broken = True
+            raise
+        self.count += 1
+        return tag
+
+
+def _load(data: bytes) -> tuple[Any, list[Any]]:
+    """The document ezdxf reads from `data` (text through its recover mode, binary as is)
+    and the entities of its model space. Raises ImportFailure naming where ezdxf stopped:
+    the line (its message says which), the binary tag, the model space, or the file."""
+    # ezdxf is imported here, when a drawing is read: detecting a file's format and every
+    # command that reads no drawing start without it (it is a third of the CLI's start-up).
+    from ezdxf import recover
+    from ezdxf.document import Drawing as EzDrawing
+
+    tags = _BinaryTags(data) if is_binary_dxf(data) else None
+    try:
+        if tags is not None:
+            doc = EzDrawing.load(tags)
+        else:
+            doc, _auditor = recover.read(io.BytesIO(data))
+    except Exception as exc:  # ezdxf's, whatever the kind: see the module's note
+        if tags is not None and tags.broken:
+            raise ImportFailure(
+                f"binary tag {tags.count + 1}",
+                "not a DXF drawing ezdxf can read: the file ends, or is damaged, inside "
+                f"this tag ({said(exc)})",
+            ) from None
+        line = re.search(r"\bline:? (\d+)", str(exc)) if tags is None else None
+        raise ImportFailure(
+            f"line {line.group(1)}" if line else "",
+            f"not a DXF drawing ezdxf can read: {said(exc)}",
+            int(line.group(1)) if line else None,
+        ) from None
+    try:
+        return doc, list(doc.modelspace())
+    except Exception as exc:  # ezdxf's: a layout table it could not make sense of
+        raise ImportFailure(
+            "model space", f"ezdxf cannot read the drawing's model space: {said(exc)}"
+        ) from None
+
+
+def _size(entity: Any, number: int) -> int:
+    """What an entity counts against the limit: its vertices for a polyline, else 1."""
+    try:
+        kind = entity.dxftype()
+        if kind == "LWPOLYLINE":
+            return max(1, len(entity))
+        if kind == "POLYLINE":
+            return max(1, len(entity.vertices))
+    except Exception as exc:  # ezdxf's, reading a damaged entity
+        raise ImportFailure(
+            _unnamed(entity, number), f"ezdxf cannot read it: {said(exc)}"
+        ) from None
+    return 1
+
+
+def said(exc: BaseException) -> str:
+    """What an exception raised inside ezdxf says, fit for a message: ezdxf's own errors
+    as they are, any other with its kind and the ezdxf module it came from (an
+    AssertionError says nothing else); printable (see `printable`) and at most 300
+    characters."""
+    from ezdxf.lldxf.const import DXFError
+
+    text = str(exc)
+    if not isinstance(exc, DXFError):
+        # The innermost ezdxf module it came through (never a path of this server).
+        files = [f.filename.replace("\\", "/") for f in traceback.extract_tb(exc.__traceback__)]
+        inside = [name.rsplit("/ezdxf/", 1)[1] for name in files if "/ezdxf/" in name]
+        module = "ezdxf." + inside[-1].removesuffix(".py").replace("/", ".") if inside else ""
+        kind = type(exc)
+        name = kind.__qualname__
+        name = name if kind.__module__ == "builtins" else f"{kind.__module__}.{name}"
+        origin = f"{name} in {module}" if module else name
+        text = f"{text} ({origin})" if text else origin
+    return printable(text, 300)
+
+
+def printable(text: str, at_most: int = 200) -> str:
+    """`text` (a name or message from the drawing) as the report, a page and a terminal can
+    show it: a byte ezdxf could not decode (a lone surrogate U+DC80-U+DCFF) as `\\xff`, any
+    other lone surrogate as `\\ud800`, control characters as `\\x07`; cut to `at_most`
+    characters (…)."""
+    out = []
+    for char in text:
+        code = ord(char)
+        if 0xDC80 <= code <= 0xDCFF:
+            out.append(f"\\x{code - 0xDC00:02x}")
+        elif 0xD800 <= code <= 0xDFFF:
+            out.append(f"\\u{code:04x}")
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\x{code:02x}")
+        else:
+            out.append(char)
+    shown = "".join(out)
+    return shown if len(shown) <= at_most else shown[: at_most - 1] + "…"
+
+
+def _unnamed(entity: Any, number: int) -> str:
+    """The place of an entity whose handle or layer could not be read."""
+    try:
+        kind = printable(str(entity.dxftype()), 40)
+    except Exception:  # the number alone names it then
+        kind = "entity"
+    return f"entity {number} of model space ({kind})"
+
+
+def _attribute(entity: Any, key: str, default: str) -> str:
+    """A name attribute (handle, layer) of any entity ezdxf yields, `default` for a kind
+    that has none (an unknown one in the ENTITIES section)."""
+    value = entity.dxf.get(key, default) if entity.dxf.is_supported(key) else default
+    return str(value)
+
+
+@dataclass(frozen=True)
+class _Line:
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class _Arc:
+    """In world coordinates; `flat` False: not in the XY plane (nothing else is read)."""
+
+    flat: bool
+    start: tuple[float, float] = (0.0, 0.0)
+    end: tuple[float, float] = (0.0, 0.0)
+    centre: tuple[float, float] = (0.0, 0.0)
+    radius: float = 0.0
+    mirrored: bool = False  # extrusion -Z: counter-clockwise seen from below
+
+
+@dataclass(frozen=True)
+class _Circle:
+    flat: bool
+    centre: tuple[float, float] = (0.0, 0.0)
+    radius: float = 0.0
+
+
+@dataclass(frozen=True)
+class _Polyline:
+    """Vertices (x, y, bulge); `problem`: why none is read (3D, a mesh, off the XY plane)."""
+
+    problem: str
+    points: tuple[tuple[float, float, float], ...] = ()
+    closed: bool = False
+
+
+def _flat(entity: Any) -> bool:
+    x, y, _ = entity.dxf.get("extrusion", (0.0, 0.0, 1.0))
+    return abs(float(x)) < 1e-12 and abs(float(y)) < 1e-12
+
+
+def _xy(point: Any) -> tuple[float, float]:
+    return (float(point[0]), float(point[1]))
+
+
+def _line_of(entity: Any) -> _Line:
+    s, e = entity.dxf.start, entity.dxf.end
+    return _Line((float(s[0]), float(s[1]), float(s[2])), (float(e[0]), float(e[1]), float(e[2])))
+
+
+def _arc_of(entity: Any) -> _Arc:
+    if not _flat(entity):
+        return _Arc(False)
+    centre = entity.ocs().to_wcs(entity.dxf.center)
+    return _Arc(
+        True,
+        _xy(entity.start_point),
+        _xy(entity.end_point),
+        _xy(centre),
+        float(entity.dxf.radius),
+        float(entity.dxf.extrusion[2]) < 0,
+    )
+
+
+def _circle_of(entity: Any) -> _Circle:
+    if not _flat(entity):
+        return _Circle(False)
+    radius = float(entity.dxf.radius)
+    if radius <= 0:
+        return _Circle(True, radius=radius)
+    return _Circle(True, _xy(entity.ocs().to_wcs(entity.dxf.center)), radius)
+
+
+def _lwpolyline_of(entity: Any) -> _Polyline:
+    if not _flat(entity):
+        return _Polyline("a polyline not in the XY plane: left out")
+    points = tuple((float(x), float(y), float(b)) for x, y, b in entity.get_points("xyb"))
+    return _Polyline("", points, bool(entity.closed))
+
+
+def _polyline_of(entity: Any) -> _Polyline:
+    if not entity.is_2d_polyline or not _flat(entity):
+        return _Polyline("a 3D polyline or mesh: left out")
+    points = tuple(
+        (float(v.dxf.location[0]), float(v.dxf.location[1]), float(v.dxf.get("bulge", 0)))
+        for v in entity.vertices
+    )
+    return _Polyline("", points, bool(entity.is_closed))
+
+
+Geometry = _Line | _Arc | _Circle | _Polyline
+
+# What is read of each kind (ezdxf's objects in, plain numbers out).
+GEOMETRY: dict[str, Any] = {
+    "LINE": _line_of,
+    "ARC": _arc_of,
+    "CIRCLE": _circle_of,
+    "LWPOLYLINE": _lwpolyline_of,
+    "POLYLINE": _polyline_of,
+}
+
+
+# -- units ---------------------------------------------------------------------------------
+
+
 def _drawing_units(doc: Any, opts: DxfOptions, notes: Notes) -> tuple[int, Units]:
-    code = int(doc.header.get("$INSUNITS", 0) or 0)
+    try:
+        value = doc.header.get("$INSUNITS", 0) or 0
+    except Exception as exc:  # ezdxf's, reading a damaged header
+        raise ImportFailure("header $INSUNITS", f"ezdxf cannot read it: {said(exc)}") from None
+    known = ", ".join(f"{k} ({v[2]})" for k, v in INSUNITS.items())
+    code = value if isinstance(value, int) and not isinstance(value, bool) else None
+    if isinstance(value, str):
+        with contextlib.suppress(NumberError):
+            code = parse_int(value)
+    if code is None:
+        raise ImportFailure(
+            "header $INSUNITS",
+            f"units code {printable(repr(value), 60)} is not a whole number; allowed {known}",
+        )
     if code == 0:
         if opts.drawing_units is None:
             raise ImportFailure(
@@ -310,9 +597,9 @@ def _drawing_units(doc: Any, opts: DxfOptions, notes: Notes) -> tuple[int, Units
         )
         return opts.drawing_units.nm, opts.drawing_units
     if code not in INSUNITS:
-        known = ", ".join(f"{k} ({v[2]})" for k, v in INSUNITS.items())
         raise ImportFailure(
-            "header $INSUNITS", f"units code {code} is not one MillBlocks reads; allowed {known}"
+            "header $INSUNITS",
+            f"units code {printable(str(code), 40)} is not one MillBlocks reads; allowed {known}",
         )
     scale, units, label = INSUNITS[code]
     notes.became(None, f"drawing units: {label} ($INSUNITS {code})")
@@ -342,40 +629,53 @@ class _Reader:
     def xy(self, x: float, y: float) -> XY:
         return (self.nm(x), self.nm(y))
 
-    def entity(self, entity: Any) -> None:
-        kind = entity.dxftype()
-        layer = str(entity.dxf.get("layer", "0"))
+    def entity(self, entity: Any, number: int) -> None:
+        """Read the `number`th entity of model space (ezdxf's object)."""
+        try:
+            kind = str(entity.dxftype())
+            handle = _attribute(entity, "handle", "?")
+            layer = _attribute(entity, "layer", "0")
+        except Exception as exc:  # ezdxf's, reading a damaged entity
+            raise ImportFailure(
+                _unnamed(entity, number), f"ezdxf cannot read it: {said(exc)}"
+            ) from None
         self.layers_seen.add(layer)
-        self.notes.entities.append(Entity(str(entity.dxf.get("handle", "?")), kind, layer))
+        named = Entity(printable(handle, 40), printable(kind, 40), printable(layer, 80))
+        self.notes.entities.append(named)
         index = len(self.notes.entities)
         if self.layers and layer not in self.layers:
             self.notes.ignored(index, "on a layer not chosen")
             return
-        reader = {
-            "LINE": self.line,
-            "ARC": self.arc,
-            "CIRCLE": self.circle,
-            "LWPOLYLINE": self.lwpolyline,
-            "POLYLINE": self.polyline,
-        }.get(kind)
-        if reader is None:
+        read = GEOMETRY.get(kind)
+        if read is None:
             self.notes.ignored(
-                index, f"a {kind} is not read (lines, arcs, circles and polylines are)"
+                index, f"a {named.type} is not read (lines, arcs, circles and polylines are)"
             )
             return
         try:
-            problem = reader(entity, index)
-        except (ValueError, TypeError, ArithmeticError, IndexError) as exc:
-            raise ImportFailure(f"entity {self.notes.entities[-1]}", str(exc)) from None
+            geometry = read(entity)
+        except Exception as exc:  # ezdxf's, reading a damaged entity
+            raise ImportFailure(f"entity {named}", f"ezdxf cannot read it: {said(exc)}") from None
+        try:
+            problem = self.make(geometry, index)
+        except (ValueError, ArithmeticError) as exc:
+            raise ImportFailure(f"entity {named}", str(exc)) from None
         if problem:
             self.notes.ignored(index, problem)
 
-    def _flat(self, entity: Any) -> bool:
-        x, y, _ = entity.dxf.get("extrusion", (0.0, 0.0, 1.0))
-        return abs(float(x)) < 1e-12 and abs(float(y)) < 1e-12
+    def make(self, geometry: Geometry, index: int) -> str:
+        """The segments of one entity's geometry (or a circle); what is wrong with it, if
+        anything: "" when read."""
+        if isinstance(geometry, _Line):
+            return self.line(geometry, index)
+        if isinstance(geometry, _Arc):
+            return self.arc(geometry, index)
+        if isinstance(geometry, _Circle):
+            return self.circle(geometry, index)
+        return self.polyline(geometry, index)
 
-    def line(self, entity: Any, index: int) -> str:
-        s, e = entity.dxf.start, entity.dxf.end
+    def line(self, line: _Line, index: int) -> str:
+        s, e = line.start, line.end
         if abs(s[2] - e[2]) > 1e-9:
             return "a 3D line (its Z changes): left out"
         a, b = self.xy(s[0], s[1]), self.xy(e[0], e[1])
@@ -384,43 +684,27 @@ class _Reader:
         self._add([Segment(a, b, None, False, index)], False)
         return ""
 
-    def arc(self, entity: Any, index: int) -> str:
-        if not self._flat(entity):
+    def arc(self, arc: _Arc, index: int) -> str:
+        if not arc.flat:
             return "an arc not in the XY plane: left out"
-        start, end = entity.start_point, entity.end_point  # world coordinates
-        centre = entity.dxf.center
-        ocs = entity.ocs()
-        c = ocs.to_wcs(centre)
-        clockwise = entity.dxf.extrusion[2] < 0  # mirrored: counter-clockwise seen from below
-        a, b = self.xy(start[0], start[1]), self.xy(end[0], end[1])
-        if entity.dxf.radius <= 0:
+        a, b = self.xy(*arc.start), self.xy(*arc.end)
+        if arc.radius <= 0:
             return "an arc of radius 0: left out"
-        self._add([Segment(a, b, self.xy(c[0], c[1]), clockwise, index)], False)
+        self._add([Segment(a, b, self.xy(*arc.centre), arc.mirrored, index)], False)
         return ""
 
-    def circle(self, entity: Any, index: int) -> str:
-        if not self._flat(entity):
+    def circle(self, circle: _Circle, index: int) -> str:
+        if not circle.flat:
             return "a circle not in the XY plane: left out"
-        if entity.dxf.radius <= 0:
+        if circle.radius <= 0:
             return "a circle of radius 0: left out"
-        c = entity.ocs().to_wcs(entity.dxf.center)
-        self.circles.append((self.xy(c[0], c[1]), self.nm(entity.dxf.radius), index))
+        self.circles.append((self.xy(*circle.centre), self.nm(circle.radius), index))
         return ""
 
-    def lwpolyline(self, entity: Any, index: int) -> str:
-        if not self._flat(entity):
-            return "a polyline not in the XY plane: left out"
-        points = [(float(x), float(y), float(b)) for x, y, b in entity.get_points("xyb")]
-        return self._vertices(points, bool(entity.closed), index)
-
-    def polyline(self, entity: Any, index: int) -> str:
-        if not entity.is_2d_polyline or not self._flat(entity):
-            return "a 3D polyline or mesh: left out"
-        points = [
-            (float(v.dxf.location[0]), float(v.dxf.location[1]), float(v.dxf.get("bulge", 0)))
-            for v in entity.vertices
-        ]
-        return self._vertices(points, bool(entity.is_closed), index)
+    def polyline(self, polyline: _Polyline, index: int) -> str:
+        if polyline.problem:
+            return polyline.problem
+        return self._vertices(list(polyline.points), polyline.closed, index)
 
     def _vertices(self, points: list[tuple[float, float, float]], closed: bool, index: int) -> str:
         if closed and len(points) > 1:
@@ -484,21 +768,18 @@ def _chain(
     pieces: list[list[Segment]], tolerance: int, units: Units, notes: DxfNotes
 ) -> list[Contour]:
     """Open pieces joined end to end where their ends are within `tolerance`."""
-    # Snap every end to the first end seen near it.
-    points: list[XY] = []
+    ends_seen = _Ends(tolerance)
 
     def snap(p: XY, source: int) -> XY:
-        for q in points:
-            if p == q:
-                return q
+        # Every end goes to the first end seen near it.
+        q = ends_seen.near(p)
+        if q is None:
+            ends_seen.add(p)
+            return p
+        if q != p:
             gap = math.dist(p, q)
-            if gap <= tolerance:
-                notes.rounded(
-                    source + 0, f"an end {show(gap, units, 6)} from another is joined to it"
-                )
-                return q
-        points.append(p)
-        return p
+            notes.rounded(source, f"an end {show(gap, units, 6)} from another is joined to it")
+        return q
 
     snapped: list[list[Segment]] = []
     for piece in pieces:
@@ -526,6 +807,18 @@ def _chain(
                 f"({names}): the chain takes them in drawing order",
             )
     used = [False] * len(snapped)
+    # Where to look next among each point's pieces: those before it are used (a star of
+    # many lines at one point is then walked once, not once a line).
+    first_free: dict[XY, int] = {}
+
+    def free_at(point: XY) -> int | None:
+        users = ends.get(point, [])
+        at = first_free.get(point, 0)
+        while at < len(users) and used[users[at]]:
+            at += 1
+        first_free[point] = at
+        return users[at] if at < len(users) else None
+
     contours: list[Contour] = []
     # Open chains first (from an end only one piece uses), then the closed ones.
     order = sorted(
@@ -543,7 +836,7 @@ def _chain(
             here = chain[-1].end
             if here == chain[0].start and len(chain) > 0 and _closes(chain):
                 break
-            nxt = next((j for j in ends.get(here, []) if not used[j]), None)
+            nxt = free_at(here)
             if nxt is None:
                 break
             used[nxt] = True
@@ -563,6 +856,36 @@ def _chain(
             )
         contours.append(contour)
     return contours
+
+
+class _Ends:
+    """The ends seen so far in a grid of cells `tolerance` wide (at least 1 nm): an end
+    within `tolerance` of another lies in the other's cell or one of the eight round it,
+    so finding it takes the few ends there, not every end."""
+
+    def __init__(self, tolerance: int) -> None:
+        self.tolerance = tolerance
+        self.cell = max(tolerance, 1)
+        self.cells: dict[tuple[int, int], list[tuple[int, XY]]] = {}
+        self.count = 0
+
+    def near(self, p: XY) -> XY | None:
+        """The first end added that is `p` or within `tolerance` of it (None: none is)."""
+        cx, cy = p[0] // self.cell, p[1] // self.cell
+        best: tuple[int, XY] | None = None
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for order, q in self.cells.get((cx + dx, cy + dy), ()):
+                    if best is not None and order > best[0]:
+                        break  # each cell's ends are in the order they were added
+                    if q == p or math.dist(p, q) <= self.tolerance:
+                        best = (order, q)
+                        break
+        return None if best is None else best[1]
+
+    def add(self, p: XY) -> None:
+        self.cells.setdefault((p[0] // self.cell, p[1] // self.cell), []).append((self.count, p))
+        self.count += 1
 
 
 def _shape(piece: list[Segment]) -> tuple[tuple[XY, XY, XY | None, bool], ...]:

@@ -501,7 +501,7 @@ def pending_copies(draw: st.DrawFn, blocks: tuple[Block, ...], tools: tuple[int,
     )
 
 
-STORABLE = st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00")
+STORABLE = st.characters(exclude_categories=["Cs"], exclude_characters="\x00")
 """Any character the one text rule lets be stored (app.cnc.text: no NUL, no lone
 surrogate); what it refuses is the hostile corpus's to try."""
 

@@ -501,9 +501,14 @@ def pending_copies(draw: st.DrawFn, blocks: tuple[Block, ...], tools: tuple[int,
     )
 
 
+STORABLE = st.characters(exclude_categories=["Cs"], exclude_characters="\x00")
+"""Any character the one text rule lets be stored (app.cnc.text: no NUL, no lone
+surrogate); what it refuses is the hostile corpus's to try."""
+
+
 def names() -> st.SearchStrategy[str]:
-    """A program name: any text that is not blank."""
-    return st.text(min_size=1, max_size=20).filter(lambda s: bool(s.strip()))
+    """A program name: any storable text that is not blank."""
+    return st.text(STORABLE, min_size=1, max_size=20).filter(lambda s: bool(s.strip()))
 
 
 @st.composite
@@ -526,7 +531,7 @@ def programs(draw: st.DrawFn, max_nodes: int = MAX_TOP_NODES) -> Program:
         name=draw(names()),
         part_number=draw(st.text(alphabet="0123456789", max_size=8)),
         units=units,
-        notes=draw(st.text(max_size=40)),
+        notes=draw(st.text(STORABLE, max_size=40)),
         block0=block0,
         blocks=blocks,
     )

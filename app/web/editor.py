@@ -9,6 +9,7 @@ posts and redirects the same way.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from decimal import Decimal
 from typing import Any
 
@@ -656,6 +657,28 @@ def _db0_field(label: str | None) -> str:
     )
 
 
+def _form_value(
+    form: Any,
+    errors: dict[str, str],
+    name: str,
+    label: str,
+    reader: Callable[[str], tuple[Any, str]],
+    required: bool = False,
+) -> Any:
+    """Form field `name` read by `reader` (the one number reader's `read_number` or
+    `read_whole`); None when empty. A bad value, or an empty `required` one, is put in
+    `errors` under `name`, labelled `label`."""
+    raw = form.get(name, "").strip()
+    if raw == "":
+        if required:
+            errors[name] = f"{label}: missing; enter a value"
+        return None
+    value, error = reader(raw)
+    if error:
+        errors[name] = f"{label}: {error}"
+    return value
+
+
 def read_tool_row(
     form: Any,
     n: int,
@@ -671,22 +694,10 @@ def read_tool_row(
     RPM as typed, else the offered one); else the row's fields are the program's own."""
 
     def number(name: str, label: str) -> Decimal | None:
-        raw = form.get(name, "").strip()
-        if raw == "":
-            return None
-        value, error = read_number(raw)
-        if error:
-            errors[name] = f"{label}: {error}"
-        return value
+        return _form_value(form, errors, name, label, read_number)  # type: ignore[no-any-return]
 
     def whole(name: str, label: str) -> int | None:
-        raw = form.get(name, "").strip()
-        if raw == "":
-            return None
-        value, error = read_whole(raw)
-        if error:
-            errors[name] = f"{label}: {error}"
-        return value
+        return _form_value(form, errors, name, label, read_whole)  # type: ignore[no-any-return]
 
     def choice(name: str, cls: Any, default: Any = None) -> Any:
         raw = form.get(name, "")
@@ -755,24 +766,12 @@ def parse_block0(
     repick = _int(form.get("repick"), 0)
 
     def number(name: str, label: str, required: bool = True) -> Decimal | None:
-        raw = form.get(name, "").strip()
-        if raw == "":
-            if required:
-                errors[name] = f"{label}: missing; enter a value"
-            return None
-        value, error = read_number(raw)
-        if error:
-            errors[name] = f"{label}: {error}"
-        return value
+        return _form_value(  # type: ignore[no-any-return]
+            form, errors, name, label, read_number, required
+        )
 
     def whole(name: str, label: str) -> int | None:
-        raw = form.get(name, "").strip()
-        if raw == "":
-            return None
-        value, error = read_whole(raw)
-        if error:
-            errors[name] = f"{label}: {error}"
-        return value
+        return _form_value(form, errors, name, label, read_whole)  # type: ignore[no-any-return]
 
     tools = []
     for n in range(1, MAX_TOOLS + 1):

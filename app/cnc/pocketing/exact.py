@@ -38,9 +38,7 @@ from app.cnc.mill import (
     tangent,
     unit,
 )
-from app.cnc.pocketing.regions import Ring
-
-TURN_EPS = 1e-9  # a turn (sine of the angle) smaller than this is a tangent joint
+from app.cnc.pocketing.regions import TURN_EPS, Ring
 
 
 @dataclass(frozen=True)

@@ -461,12 +461,17 @@ class _Planner:
 
     def classify_links(self) -> list[Pass]:
         """The passes with each feed link marked CLEARED or CUTTING by the material cut
-        before it (cleanup moves included)."""
+        before it (cleanup moves included).
+
+        A link found CLEARED when it was planned stays so, unasked: what was cut before it
+        then is cut before it now (the cleanup moves only add), and the part of a link
+        that runs along the previous pass is inside that pass's cut. Only a CUTTING link
+        is asked again (a cleanup move may have cleared its way)."""
         self.cleared = self._index()
         result: list[Pass] = []
         for made in self.passes:
             link = made.entry
-            if link.kind in (LinkKind.CLEARED, LinkKind.CUTTING):
+            if link.kind is LinkKind.CUTTING:
                 through = not link.path.elements or self._through_cleared(link.path, made.path)
                 link = replace(link, kind=LinkKind.CLEARED if through else LinkKind.CUTTING)
             result.append(replace(made, entry=link))

@@ -311,7 +311,9 @@ def thicker_than(region: Sequence[Ring], width: float, tolerance: float) -> bool
     box = box_of(region)
     if box is None or box[2] - box[0] < width or box[3] - box[1] < width:
         return False
-    return bool(offset(region, -width / 2, tolerance))
+    offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
+    offsetter.AddPaths(region, pyclipper.JT_ROUND, pyclipper.ET_CLOSEDPOLYGON)
+    return bool(offsetter.Execute(-width / 2))  # (whether, not what: not read into tuples)
 
 
 def deep_point(component: Component, tolerance: float) -> IPt:
@@ -419,13 +421,7 @@ class SweptIndex:
             points, k, piece_box = self.pieces[number]
             if not any(_meet(piece_box, box) for box in boxes):
                 continue
-            key = (id(points), k)
-            swept = self.sweeps.get(key)
-            if swept is None:
-                piece = _pieces(points, self.PIECE)[k]
-                swept = sweep_lines([piece], self.radius, self.tolerance)
-                self.sweeps[key] = swept
-            found += swept
+            found += self._sweep(points, k)
         for points in also:
             for piece, piece_box in zip(
                 _pieces(points, self.PIECE), self.boxes(points), strict=True
@@ -433,6 +429,14 @@ class SweptIndex:
                 if any(_meet(piece_box, box) for box in boxes):
                     found += sweep_lines([piece], self.radius, self.tolerance)
         return found
+
+    def _sweep(self, points: Sequence[Pt], k: int) -> list[Ring]:
+        key = (id(points), k)
+        swept = self.sweeps.get(key)
+        if swept is None:
+            swept = sweep_lines([_pieces(points, self.PIECE)[k]], self.radius, self.tolerance)
+            self.sweeps[key] = swept
+        return swept
 
     def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
         c = self.cell

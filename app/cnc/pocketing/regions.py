@@ -404,8 +404,8 @@ class SweptIndex:
         return found
 
     def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
-        """The area swept by the recorded moves and by the moves `also` (not recorded)
-        wherever it lies within `boxes`; beyond them it may be cut short. The rings of the
+        """The area swept by the recorded moves and by the moves `also` (not recorded; the
+        same rule as `add` for their lists) wherever it lies within `boxes`; beyond them it may be cut short. The rings of the
         pieces' sweeps, overlapping: the area is where their winding is positive (as a
         union reads them), not yet united.
 
@@ -423,11 +423,11 @@ class SweptIndex:
                 continue
             found += self._sweep(points, k)
         for points in also:
-            for piece, piece_box in zip(
-                _pieces(points, self.PIECE), self.boxes(points), strict=True
-            ):
+            for k, piece_box in enumerate(self.boxes(points)):
                 if any(_meet(piece_box, box) for box in boxes):
-                    found += sweep_lines([piece], self.radius, self.tolerance)
+                    # Kept by the same key: the move asked about is recorded next, as a
+                    # rule, and its pieces' sweeps are then made already.
+                    found += self._sweep(points, k)
         return found
 
     def _sweep(self, points: Sequence[Pt], k: int) -> list[Ring]:

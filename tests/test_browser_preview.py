@@ -531,3 +531,60 @@ def test_a_page_showing_another_drawing_gets_the_whole_new_one(
     with page.expect_request(lambda r: "/drawing?v=" in r.url):
         page.locator("#entry button[data-submit]").click()
     assert_drawing_is_fresh(page, 2)
+
+
+def row_shown_whole(page: Page, number: int) -> bool:
+    """Whether block `number`'s row is wholly inside the block list's visible part."""
+    return bool(
+        page.evaluate(
+            """(number) => {
+              const list = document.querySelector('#editor .block-list');
+              const row = list.querySelector(`.block-row[data-block="${number}"]`);
+              if (!row) return false;
+              const l = list.getBoundingClientRect(), r = row.getBoundingClientRect();
+              return r.top >= l.top - 1 && r.bottom <= l.bottom + 1;
+            }""",
+            number,
+        )
+    )
+
+
+def last_row_shown_whole(page: Page) -> int:
+    return int(
+        page.evaluate(
+            """() => {
+              const list = document.querySelector('#editor .block-list');
+              const l = list.getBoundingClientRect();
+              let last = 0;
+              for (const row of list.querySelectorAll('.block-row[data-block]')) {
+                const r = row.getBoundingClientRect();
+                if (r.top >= l.top - 1 && r.bottom <= l.bottom + 1) last = Number(row.dataset.block);
+              }
+              return last;
+            }"""
+        )
+    )
+
+
+def test_a_block_moved_down_out_of_sight_is_brought_into_it(page: Page, library: Library) -> None:
+    """The last row in sight moved down: the list keeps its place, and the moved block, now
+    one row lower, is scrolled into sight. Two mechanisms kept the list's place and undid
+    each other: app.js scrolled the moved block into sight, then blocklist.js scrolled the
+    list back to where it was, the moved block just under the list's bottom edge."""
+    blocks = [drill(str(1 + n % 10), str(1 + n // 10)) for n in range(80)]
+    url = library.add(program("80 holes", *blocks))
+    page.goto(url)
+    scroll_list_to(page, 11)
+    last = last_row_shown_whole(page)
+    assert 11 < last < 80 and not row_shown_whole(page, last + 1)
+    open_block(page, last)
+    assert_list_at(page, 11)
+    page.locator('#entry button[value="down"]').click()
+    expect(page.locator("#version")).to_have_text("v2")
+    expect(page.locator(f'.block-row[data-block="{last + 1}"] .summary')).to_contain_text(
+        f"X {1 + (last - 1) % 10}"
+    )
+    assert row_shown_whole(page, last + 1)
+    # The list moved no more than it had to: the row that was first in sight is close by.
+    block, _ = first_row_in_view(page)
+    assert 11 <= block <= 13, block

@@ -558,7 +558,8 @@ def last_row_shown_whole(page: Page) -> int:
               let last = 0;
               for (const row of list.querySelectorAll('.block-row[data-block]')) {
                 const r = row.getBoundingClientRect();
-                if (r.top >= l.top - 1 && r.bottom <= l.bottom + 1) last = Number(row.dataset.block);
+                const whole = r.top >= l.top - 1 && r.bottom <= l.bottom + 1;
+                if (whole) last = Number(row.dataset.block);
               }
               return last;
             }"""

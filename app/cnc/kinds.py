@@ -35,6 +35,7 @@ from decimal import Decimal
 from typing import TYPE_CHECKING, Any
 
 from app.cnc.limits import FeedLimits
+from app.cnc.problems import Rule
 from app.cnc.units import Units
 
 if TYPE_CHECKING:
@@ -134,8 +135,39 @@ class SubKind:
 
 
 @dataclass(frozen=True)
+class Follows:
+    """A kind's order rule: what the block right before it must be. Validation checks it,
+    structure groups by it (a block joins the node of the block it follows) and the editor
+    greys the kind's menu lines where it fails; nothing else knows it.
+
+    `after` names what may stand right before: JSON `type` names (`"DRILL"`: a DRILL of any
+    cutter compensation) and mill families (`Mill.CONTOUR`: any of its kinds, those declared
+    later too). `same`: fields the block before must have equal (a BOLT CIR's operation).
+    `what` is what must come before, as messages say it after "must follow" (validation)
+    and "follows" (the editor), formatted with the block's values (`{op.value}`);
+    `message` validation's whole message, formatted with `{type_name}`, `{what}` and
+    `{before}` ("block 1 is POS" or "it is first"); `rule` its code. `in_menu` False: the
+    editor offers the kind anywhere and only validation says it is out of place (MILL,
+    CIRCLE and FRAME, whose menus have always offered them so).
+    """
+
+    after: tuple[str | Mill, ...]
+    what: str
+    rule: Rule
+    same: tuple[str, ...] = ()
+    message: str = "{type_name} must follow {what}; {before}"
+    in_menu: bool = True
+
+
+@dataclass(frozen=True)
 class Kind:
-    """What a block kind is, beyond its fields (see the module docstring)."""
+    """What a block kind is, beyond its fields (see the module docstring).
+
+    `follows`: its order rule (None: it may stand anywhere). `findings`: the rules the
+    compile finds in a block of this kind (its geometry, as its planner judges it): the
+    preview compiles a block whose only errors are these as it stands and shows where its
+    cut is left out; a block with any other error is left out of the drawing.
+    """
 
     documents: tuple[Document, ...]
     editor: tuple[SubKind, ...] = ()
@@ -147,6 +179,8 @@ class Kind:
     mill: Mill | None = None
     planner: str = ""  # "module:function" planning a mill routine
     geometry: bool = False  # a routine whose contour blocks (Mill.GEOMETRY) follow it
+    follows: Follows | None = None
+    findings: frozenset[Rule] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -191,6 +225,7 @@ class Registry:
         self._documents: dict[str, tuple[type[Block], dict[str, Any]]] | None = None
         self._sub_kinds: dict[str, tuple[type[Block], SubKind]] | None = None
         self._planners: dict[type, Callable[..., Any]] = {}
+        self._geometry_rules: frozenset[Rule] | None = None
         self.version = 0  # counts changes, for tables read from the registry elsewhere
 
     def add(self, cls: type[Block]) -> None:
@@ -207,6 +242,7 @@ class Registry:
         self.version += 1
         self._documents = None
         self._sub_kinds = None
+        self._geometry_rules = None
 
     @property
     def classes(self) -> tuple[type[Block], ...]:
@@ -294,6 +330,56 @@ class Registry:
             for f in self.fields(cls)
             if f.prompt.prompted and f.name not in fixed and self.applies(cls, f, values)
         )
+
+    # -- order ---------------------------------------------------------------------------
+
+    def joins(self, previous: Block | None, block: Block) -> bool:
+        """True when `block` has an order rule and meets it right after `previous` (None:
+        it is first): it belongs with that block (a BOLT CIR with its centre, a mill block
+        with its sequence). False for a kind that may stand anywhere."""
+        follows = self.of(block).follows
+        return follows is not None and self._accepts(follows, previous, block.__dict__)
+
+    def out_of_order(self, previous: Block | None, block: Block, number: int) -> str:
+        """Validation's message when block `number` (1-based) breaks its kind's order rule
+        right after `previous` (None: it is first), or "" when it does not."""
+        follows = self.of(block).follows
+        if follows is None or self._accepts(follows, previous, block.__dict__):
+            return ""
+        before = f"block {number - 1} is {previous.title}" if previous else "it is first"
+        what = follows.what.format_map(block.__dict__)
+        return follows.message.format(type_name=block.type_name, what=what, before=before)
+
+    def refusal(self, cls: type[Block], sub: SubKind, blocks: tuple[Block, ...], at: int) -> str:
+        """Why the editor cannot enter sub-kind `sub` as block `at` (1-based), or "": its
+        kind's order rule (where `Follows.in_menu`), then the sub-kind's own `offered`."""
+        follows = self.kind(cls).follows
+        previous = blocks[at - 2] if at >= 2 else None
+        fixed = dict(sub.fixed)
+        if follows is not None and follows.in_menu and not self._accepts(follows, previous, fixed):
+            return "follows " + follows.what.format_map(fixed)
+        return sub.offered(blocks, at) if sub.offered else ""
+
+    def _accepts(self, follows: Follows, previous: Block | None, values: Mapping[str, Any]) -> bool:
+        if previous is None:
+            return False
+        named = (
+            self.document_of(previous).name in follows.after
+            or self.of(previous).mill in follows.after
+        )
+        return named and all(
+            getattr(previous, name, None) == values.get(name) for name in follows.same
+        )
+
+    # -- findings --------------------------------------------------------------------------
+
+    def geometry_rules(self) -> frozenset[Rule]:
+        """Every rule some kind's compile finds (`Kind.findings`)."""
+        if self._geometry_rules is None:
+            self._geometry_rules = frozenset().union(
+                *(self.kind(cls).findings for cls in self._classes)
+            )
+        return self._geometry_rules
 
     # -- planners ------------------------------------------------------------------------
 

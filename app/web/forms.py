@@ -148,8 +148,8 @@ def kind_of(block: Block) -> str:
 
 def refusal(program: Program, at: int, key: str) -> str:
     """Why sub-kind `key` cannot be entered as block `at` ("" when it can)."""
-    _, sub = REGISTRY.sub_kinds()[key]
-    return sub.offered(program.blocks, at) if sub.offered else ""
+    cls, sub = REGISTRY.sub_kinds()[key]
+    return REGISTRY.refusal(cls, sub, program.blocks, at)
 
 
 @dataclass(frozen=True)

@@ -73,12 +73,14 @@ def declared(follows: Follows, previous: Block | None, block: Block) -> bool:
 def lead_in(key: str) -> tuple[Block, ...]:
     """The shortest run of sample blocks ending in `key`'s sample in which each block meets
     its declared rule (a PKT LINE: DRILL, POCKET, PKT LINE)."""
-    runs = [(block,) for block in SAMPLES.values() if REGISTRY.of(block).follows is None]
+    runs: list[tuple[Block, ...]] = [
+        (block,) for block in SAMPLES.values() if REGISTRY.of(block).follows is None
+    ]
     for _ in range(len(SAMPLES)):
         for run in runs:
             if run[-1] is SAMPLES[key]:
                 return run
-        longer = []
+        longer: list[tuple[Block, ...]] = []
         for run in runs:
             for block in SAMPLES.values():
                 follows = REGISTRY.of(block).follows

@@ -352,7 +352,7 @@ class MillQcir(Block):
         follows=AFTER_MILL,
         findings=COMPENSATED | {Rule.QCIR_CENTRE_LINES},
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
@@ -409,7 +409,7 @@ class MillArc(Block):
         follows=AFTER_MILL,
         findings=COMPENSATED | {Rule.ARC_RADIUS},
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
@@ -605,7 +605,7 @@ class PocketArc(Block):
         mill=Mill.GEOMETRY,
         follows=IN_POCKET,
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
 

@@ -56,7 +56,7 @@ class Value(enum.Enum):
 
 
 class Role(enum.Enum):
-    """What a length means geometrically, for COPY and mirror."""
+    """What a value means geometrically, for COPY and mirror."""
 
     X = "x"  # the X of the point the block goes to (its centre if `Kind.xy_is_centre`),
     Y = "y"  # absolute or incremental by the block's ABS/INC
@@ -65,6 +65,9 @@ class Role(enum.Enum):
     SIZE_X = "size_x"  # an extent from the point of the block before (FRAME XL, YW)
     SIZE_Y = "size_y"
     ANGLE = "angle"  # a direction, degrees clockwise from the lower vertical centre line
+    # CW or CCW seen from above. Mirror reverses it in a shape reflected as it stands
+    # (Mill.GEOMETRY); a cut (Mill.CONTOUR) is run backwards instead and keeps it.
+    TURN = "turn"
 
 
 class Mill(enum.Enum):

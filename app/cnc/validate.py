@@ -19,15 +19,11 @@ from typing import Any
 from app.cnc import cost, limits, sizes, spindle
 from app.cnc.blocks import (
     ARC_PAIRS,
-    MILL_ROUTINE_CLASSES,
-    POCKET_GEOMETRY_CLASSES,
     Block,
-    Circle,
     Comp,
     Copy,
     CopyAction,
     DataBlock0,
-    Frame,
     Hole,
     HoleOp,
     Island,
@@ -659,7 +655,8 @@ class _Checker:
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            needs_diameter = isinstance(block, Circle | Frame | Pocket) or (
+            # A routine keeps the tool off its contour by itself: it needs the diameter.
+            needs_diameter = REGISTRY.of(block).mill is Mill.ROUTINE or (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(self.blocks, number - 1)
@@ -803,7 +800,7 @@ class _Checker:
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(blocks, index)
-                and isinstance(blocks[index + 1], MILL_ROUTINE_CLASSES)
+                and REGISTRY.of(blocks[index + 1]).mill is Mill.ROUTINE
             ):
                 self.add(
                     index + 1,
@@ -912,7 +909,7 @@ def _feed(value: Fraction, units: Units) -> str:
 
 def _in_sequence(block: Block) -> bool:
     """True for the blocks of a mill sequence after its DRILL (a POCKET's contour too)."""
-    return is_mill(block) or isinstance(block, POCKET_GEOMETRY_CLASSES)
+    return REGISTRY.of(block).mill is not None
 
 
 def _has_position(block: Block) -> bool:

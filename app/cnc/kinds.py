@@ -374,6 +374,26 @@ class Registry:
             getattr(previous, name, None) == values.get(name) for name in follows.same
         )
 
+    # -- qualifiers ------------------------------------------------------------------------
+
+    def loop_groups(self) -> tuple[str, ...]:
+        """The editor's first-menu choices whose blocks may carry LOOP (`Kind.loopable`), in
+        declaration order: POS, DRILL, BORE, TAP."""
+        groups = dict.fromkeys(
+            sub.group
+            for cls in self._classes
+            if self.kind(cls).loopable
+            for sub in self.kind(cls).editor
+        )
+        return tuple(groups)
+
+    def loop_refusal(self) -> str:
+        """Why a block of a kind that is not `loopable` cannot carry LOOP, as validation
+        and the editor say it: "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"."""
+        *most, last = self.loop_groups()
+        names = f"{', '.join(most)} or {last}" if most else last
+        return f"cannot carry LOOP; a LOOP is a {names} block"
+
     # -- findings --------------------------------------------------------------------------
 
     def geometry_rules(self) -> frozenset[Rule]:

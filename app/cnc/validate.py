@@ -422,8 +422,7 @@ class _Checker:
                 "LOOP",
                 ERROR,
                 Rule.LOOP_QUALIFIER,
-                f"a {block.type_name} block cannot carry LOOP; "
-                "a LOOP is a POS, DRILL, BORE or TAP block",
+                f"a {block.type_name} block {REGISTRY.loop_refusal()}",
             )
         if block.stop and not kind.stoppable:
             self.add(

@@ -163,9 +163,6 @@ class Choice:
     reason: str = ""
 
 
-LOOP_KINDS = ("POS", "DRILL", "BORE", "TAP")
-
-
 def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False) -> list[Choice]:
     """The first menu for block `at`: every choice, numbered as always (the control's order),
     those that do not fit here (given the LOOP and STOP already chosen) with the reason."""
@@ -181,8 +178,8 @@ def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False
             reason = "is chosen already" if stop else ""
         elif (loop or stop) and group in ("REP", "COPY"):
             reason = "takes no LOOP or STOP qualifier"
-        elif loop and group not in LOOP_KINDS:
-            reason = "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+        elif loop and group not in REGISTRY.loop_groups():
+            reason = REGISTRY.loop_refusal()
         else:
             reasons = [refusal(program, at, key) for key in group_kinds().get(group, ())]
             if reasons and all(reasons):

@@ -6,20 +6,25 @@ its limits, the editor's help, and what the value means to COPY and mirror (`Rol
 class's `KIND` says the rest: the JSON document's `type` names, the editor's sub-types
 (title, menu group and number, the field values each fixes, where it is offered), whether
 X/Y is a position (ABS/INC), LOOP and STOP, the mill family and the planner of a mill
-routine. The document, the editor's forms, validation's field checks, COPY and mirror read
-these declarations through `REGISTRY`; none of them lists the kinds.
+routine, its order rule (`Follows`: what may stand right before it) and which of its
+findings are the compile's (`findings`). The document, the editor's forms and menus,
+validation, structure, the preview, COPY and mirror read these declarations through
+`REGISTRY`; none of them lists the kinds.
 
-Adding a block kind:
+Adding a block kind (docs/adding-a-kind.md has the whole recipe, with what it touches):
 
 1. In blocks.py, a frozen `kw_only` dataclass subclassing `Block` with `KIND = Kind(...)`
    and each field declared with `prompt(...)`; `type_name` if its title says more than
-   its editor title. Declaring it registers it.
+   its editor title. Declaring it registers it. Its order rule is `follows=Follows(...)`
+   (the block before it: JSON types and mill families), which validation reports, structure
+   groups by and the editor's menus grey: no other file changes for it.
 2. What it cuts. A mill routine names its planner: `Kind(mill=Mill.ROUTINE,
    planner="module:function")`, a function `(block, mill.RoutineStart) -> SequencePlan`;
    with `geometry=True` the `Mill.GEOMETRY` blocks after it are its contours
-   (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND.
-   Other motion is a node in structure.py and compiler.py.
-3. Its own rules, if any, in validate.py, each with a case in tests/bad/.
+   (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND. The rules its
+   planner finds go in `findings` (the preview compiles a block with only those as it is).
+   Other motion is a node in compiler.py.
+3. Its own rules beyond its order, if any, in validate.py, each with a case in tests/bad/.
 4. A golden case (tests/golden/<name>/program.json, `make regen-golden`); its JSON `type`
    in docs/program-format.md.
 """
@@ -229,6 +234,7 @@ class Registry:
         self._sub_kinds: dict[str, tuple[type[Block], SubKind]] | None = None
         self._planners: dict[type, Callable[..., Any]] = {}
         self._geometry_rules: frozenset[Rule] | None = None
+        self._named: dict[int, dict[type, bool | None]] = {}
         self.version = 0  # counts changes, for tables read from the registry elsewhere
 
     def add(self, cls: type[Block]) -> None:
@@ -246,6 +252,7 @@ class Registry:
         self._documents = None
         self._sub_kinds = None
         self._geometry_rules = None
+        self._named = {}
 
     @property
     def classes(self) -> tuple[type[Block], ...]:
@@ -256,7 +263,8 @@ class Registry:
         return declared
 
     def of(self, block: Block) -> Kind:
-        return self.kind(type(block))
+        declared: Kind = block.KIND
+        return declared
 
     # -- fields --------------------------------------------------------------------------
 
@@ -340,7 +348,7 @@ class Registry:
         """True when `block` has an order rule and meets it right after `previous` (None:
         it is first): it belongs with that block (a BOLT CIR with its centre, a mill block
         with its sequence). False for a kind that may stand anywhere."""
-        follows = self.of(block).follows
+        follows = block.KIND.follows
         return follows is not None and self._accepts(follows, previous, block.__dict__)
 
     def out_of_order(self, previous: Block | None, block: Block, number: int) -> str:
@@ -366,12 +374,29 @@ class Registry:
     def _accepts(self, follows: Follows, previous: Block | None, values: Mapping[str, Any]) -> bool:
         if previous is None:
             return False
-        named = (
-            self.document_of(previous).name in follows.after
-            or self.of(previous).mill in follows.after
-        )
-        return named and all(
-            getattr(previous, name, None) == values.get(name) for name in follows.same
+        # Whether the kind before is one `follows` names, once per pair of kinds (structure
+        # asks for every block of a program); a kind with several JSON types (DRILL, BORE,
+        # TAP) is asked block by block.
+        table = self._named.get(id(follows))
+        if table is None:
+            table = self._named[id(follows)] = {}
+        cls = type(previous)
+        if cls in table:
+            named = table[cls]
+        else:
+            kind = previous.KIND
+            if kind.mill in follows.after or all(d.name in follows.after for d in kind.documents):
+                named = True
+            elif not any(d.name in follows.after for d in kind.documents):
+                named = False
+            else:
+                named = None
+            table[cls] = named
+        if named is None:
+            named = self.document_of(previous).name in follows.after
+        return named and (
+            not follows.same
+            or all(getattr(previous, name, None) == values.get(name) for name in follows.same)
         )
 
     # -- qualifiers ------------------------------------------------------------------------

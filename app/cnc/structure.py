@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from app.cnc.blocks import ARC_PAIRS, Block, Copy, Rep
+from app.cnc.blocks import Block, Copy, Rep
 from app.cnc.kinds import REGISTRY, Mill
 
 
@@ -51,7 +51,7 @@ Node = Single | BoltPattern | MillSequence | LoopPattern
 
 def is_mill(block: Block) -> bool:
     """True for a MILL line, quarter circle, arc (either block), circle, frame or pocket."""
-    return REGISTRY.of(block).mill in CUTS
+    return block.KIND.mill in CUTS
 
 
 CUTS = (Mill.CONTOUR, Mill.ROUTINE)
@@ -60,12 +60,10 @@ CUTS = (Mill.CONTOUR, Mill.ROUTINE)
 def starts_mill_sequence(blocks: tuple[Block, ...], index: int) -> bool:
     """True when block `index` is followed by a mill block whose order rule it meets (a
     DRILL, which stays at Z DN) and is not itself one of a sequence's blocks."""
-    return (
-        index + 1 < len(blocks)
-        and REGISTRY.of(blocks[index]).mill is None
-        and is_mill(blocks[index + 1])
-        and REGISTRY.joins(blocks[index], blocks[index + 1])
-    )
+    if index + 1 >= len(blocks) or blocks[index].KIND.mill is not None:
+        return False
+    nxt = blocks[index + 1]
+    return nxt.KIND.mill in CUTS and REGISTRY.joins(blocks[index], nxt)
 
 
 def mill_sequence_end(blocks: tuple[Block, ...], drill: int) -> int:
@@ -137,14 +135,11 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
         end = mill_sequence_end(blocks, index)
         mills = tuple(range(index + 1, end))
         if tolerant:
-            # An arc without its XY-END: the blocks before it run.
+            # An arc without its XY-END (the block its editor sub-kind enters with it):
+            # the blocks before it run.
             for k, i in enumerate(mills):
-                dangling = any(
-                    isinstance(blocks[i], centre)
-                    and (i + 1 >= end or not isinstance(blocks[i + 1], end_kind))
-                    for centre, end_kind, _, _ in ARC_PAIRS
-                )
-                if dangling:
+                then = REGISTRY.sub_kind_of(blocks[i]).then
+                if then is not None and (i + 1 >= end or not isinstance(blocks[i + 1], then)):
                     mills = mills[:k]
                     break
             if not mills:

@@ -92,3 +92,18 @@ def test_the_export_shows_the_last_preview_asked_for(page: Page, server: str) ->
     page.wait_for_timeout(500)
     expect(download).to_have_attribute("href", re.compile("opt_end-code=M02"))
     expect(page.locator(".listing")).to_contain_text("M02")
+
+
+def test_a_machine_shows_the_options_of_the_last_target_chosen(page: Page, server: str) -> None:  # noqa: F811
+    page.goto(server + "/machines")
+    held = hold_first(page, "**/machines/options*")
+    target = page.locator('select[name="target"]')
+    target.select_option(label="Tektronix 1704 tape (EIA)")
+    wait_for(page, held)
+    target.select_option(label="Fanuc 6M G-code")
+    legend = page.locator("#machine-options legend")
+    expect(legend).to_have_text("Options of Fanuc 6M G-code")
+    let_through(held[0])
+    page.wait_for_timeout(500)
+    expect(legend).to_have_text("Options of Fanuc 6M G-code")
+    expect(page.locator('input[name="options_for"]')).to_have_value("gcode-fanuc")

@@ -224,8 +224,9 @@ class _Body:
     blocks: set[int]
     holes: list[tuple[int, int, int]]  # (x, y, radius) in cutting order (when labelled)
     entry: _Entry | None = None  # drawn apart, when the node is a piece placed by a run
-    # The <defs> patterns the text places (digest, its <g>), in the order first made.
-    shapes: list[tuple[str, str]] = field(default_factory=list)
+    # The <defs> patterns the text places, in the order first made: (digest, extent, text),
+    # the <g> written once per pattern by the document.
+    shapes: list[tuple[str, str, str]] = field(default_factory=list)
 
 
 # The drawings of top-level nodes kept between renders (render(keep=True)): (the node, the
@@ -465,8 +466,7 @@ class _Painter:
             # paint it once and place the picture (static/preview.js).
             b = inner.box
             extent = f"{self.n(b.x0)} {self.n(b.y0)} {self.n(b.x1)} {self.n(b.y1)}"
-            made = f'<g id="<<{digest}>>" class="pattern" data-box="{extent}">{inner.text}</g>'
-            body.shapes.append((digest, made))
+            body.shapes.append((digest, extent, inner.text))
             texts += [
                 f'<use xlink:href="#<<{digest}>>" x="{self.n(dx)}" y="{self.n(dy)}"/>'
                 if (dx, dy) != (0, 0)
@@ -754,10 +754,10 @@ class _Painter:
         # The patterns in the order a fresh drawing makes them first, numbered so.
         numbers: dict[str, str] = {}
         defs: list[str] = []
-        for digest, made in body.shapes:
+        for digest, extent, text in body.shapes:
             if digest not in numbers:
                 numbers[digest] = f"p{len(numbers) + 1}"
-                defs.append(made)
+                defs.append(f'<g id="<<{digest}>>" class="pattern" data-box="{extent}">{text}</g>')
         if embedded_style:
             style = STYLE.format(
                 w=self.n(w),

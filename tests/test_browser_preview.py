@@ -411,7 +411,8 @@ SAME_AS_FRESH = """async () => {
     svg.querySelectorAll('.selected').forEach(e => e.classList.remove('selected'));
   }
   const close = boxes[0].every((v, k) => Math.abs(v - boxes[1][k]) < 1e-9);
-  return {same: shown.isEqualNode(fresh), box: close, boxes: boxes,
+  const left = [document, t.content].map(d => d.querySelector('#not-drawn').textContent.trim());
+  return {same: shown.isEqualNode(fresh), box: close, boxes: boxes, left: left,
           freshVersion: t.content.querySelector('#preview').dataset.version,
           shown: shown.outerHTML, fresh: fresh.outerHTML};
 }"""
@@ -431,6 +432,7 @@ def assert_drawing_is_fresh(page: Page, version: int) -> None:
             f"v{version} differs at {k}:\n{a[k - 200 : k + 300]}\n{b[k - 200 : k + 300]}"
         )
     assert found["box"], found["boxes"]
+    assert found["left"][0] == found["left"][1], found["left"]
 
 
 def open_block(page: Page, number: int) -> None:
@@ -443,8 +445,10 @@ def test_an_edit_redraws_only_what_changed(page: Page, library: Library) -> None
     """An edit's reply carries what changed in the drawing (the edited block's drawing, the
     ones after it that its end point moves, the patterns of a LOOP, the hole numbers, the
     extent) and the page applies it: after edits, a LOOP's pattern changed, a reorder, a
-    delete, an insert, and an edit undone, the drawing is each time the one a fresh page
-    shows, and the whole drawing was never fetched again (it was after every edit)."""
+    delete, an insert, an edit undone, a block made red and put right, the drawing is each
+    time the one a fresh page shows, and the whole drawing was never fetched again (it was
+    after every edit); zoomed in, an edit keeps the zoom. An edit that leaves nothing to
+    draw, and the one that puts it right, get the whole drawing, as a fresh page."""
     from bench.programs import editor_program
 
     url = library.add(editor_program(30))
@@ -501,6 +505,19 @@ def test_an_edit_redraws_only_what_changed(page: Page, library: Library) -> None
     page.locator("#f-y").fill("0.5")
     page.locator("#entry button[data-submit]").click()
     saved()
+    # A CIRCLE too small for its tool: drawn in red with its message, then put right.
+    open_block(page, 6)
+    page.locator("#f-radius").fill("0.1")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator('#preview g.block.problem[data-block="6"] title')).to_contain_text(
+        "not larger than the 0.5000 in tool"
+    )
+    open_block(page, 6)
+    page.locator("#f-radius").fill("0.4")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator("#preview g.block.problem")).to_have_count(0)
     assert fetched == [], fetched
     # Zoomed in, an edit keeps the zoom (the drawing is not replaced).
     page.locator('[data-zoom="in"]').click()
@@ -512,6 +529,19 @@ def test_an_edit_redraws_only_what_changed(page: Page, library: Library) -> None
     until(page, f"document.getElementById('preview').dataset.version === '{version + 1}'")
     assert page.locator("#preview > svg").get_attribute("viewBox") == zoomed
     saved()
+    # A tool Data Block 0 does not have: nothing can be drawn (the page is sent no changes
+    # and asks for the drawing, which says why); put right, the drawing comes back whole.
+    open_block(page, 1)
+    page.locator("#f-tool").fill("9")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#not-drawn")).to_contain_text("tool 9 is used in block 1")
+    expect(page.locator("#preview > svg")).to_have_count(0)
+    version += 1
+    open_block(page, 1)
+    page.locator("#f-tool").fill("1")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator("#not-drawn")).to_have_text("")
 
 
 def test_a_page_showing_another_drawing_gets_the_whole_new_one(

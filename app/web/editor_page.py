@@ -4,7 +4,8 @@ The page is three parts: the block list (one page of rows, the cycle time), the 
 and the preview. htmx requests get only the part that changes: a choice in the entry panel
 answers with the panel; an edit answers with the panel and, out of band, the rows whose
 title, values, problems or time changed (the whole list page when blocks moved or came or
-went), the cycle time, the version the row buttons post, and the new drawing.
+went), the cycle time, the version the row buttons post, and what changed in the drawing
+(`drawing_patch`; a request for the whole new drawing when the page shows another version's).
 
 What a version of a program shows (its problems, its preview and times) is worked out once
 and kept for the last few versions (`shown_of`): the GET after an edit, and the rows of the

@@ -9,6 +9,10 @@ with an error never hides the blocks after it. A block whose values the compile 
 take (out of range, missing) is left out in its place. Blocks with errors are drawn as
 problems (red, with their messages); those with nothing to draw are listed beside the
 drawing.
+
+An edit draws only the top-level nodes it changed (the others' drawings are kept, svg.py
+`render(keep=True)`), and its reply sends only what changed in the drawing (`parts`,
+`patch`, below).
 """
 
 from __future__ import annotations

@@ -449,12 +449,12 @@ def run(timeout: float = 300.0) -> Section:
     for s, label in (
         (r["static"], "floor: GET /static/app.css"),
         (r["page"], "GET the editor page (no save)"),
-        (whole["edits"], "before: POST an edit → the reply (asks for the whole drawing)"),
-        (whole["drawings"], "before: GET the whole drawing the reply asks for"),
-        (whole["redrawn"], "**before: edit → redrawn preview** (the reply + the GET)"),
-        (now["edits"], "now: POST an edit → the reply, with what changed in the drawing"),
-        (now["drawings"], "now: GET the whole drawing (replies that ask for it)"),
-        (now["redrawn"], "**now: edit → redrawn preview** (the reply alone)"),
+        (whole["edits"], "the old way: POST an edit → the reply (asks for the whole drawing)"),
+        (whole["drawings"], "the old way: GET the whole drawing the reply asks for"),
+        (whole["redrawn"], "**the old way: edit → redrawn preview** (the reply + the GET)"),
+        (now["edits"], "the new way: POST an edit → the reply, with what changed in the drawing"),
+        (now["drawings"], "the new way: GET the whole drawing (replies that ask for it)"),
+        (now["redrawn"], "**the new way: edit → redrawn preview** (the reply alone)"),
     ):
         rows.append(
             [
@@ -469,11 +469,11 @@ def run(timeout: float = 300.0) -> Section:
     section.lines += [
         f"gunicorn, {WORKERS} sync workers, SQLite (WAL, synchronous FULL), one client in a",
         f"loop; the program has {BLOCKS} blocks. {r['revisions']} revisions stored at the end;",
-        f"answers: {r['statuses']}. *Before*: the edits as the page made them before issue 32",
-        "(every reply asks for the whole drawing, which the client then GETs, as the page did:",
-        f"reply {whole['fragment_bytes'] / 1000:.1f} kB, drawing "
-        f"{whole['drawing_bytes'] / 1000:.1f} kB at p95). *Now*: the edit says which version",
-        "the page's drawing is, and the reply carries what changed in it "
+        f"answers: {r['statuses']}. *The old way*: the edits as the page made them before",
+        "issue 32 (every reply asks for the whole drawing, which the client then GETs, as the",
+        f"page did: reply {whole['fragment_bytes'] / 1000:.1f} kB, drawing",
+        f"{whole['drawing_bytes'] / 1000:.1f} kB at p95). *The new way*: the edit says which",
+        "version the page's drawing is, and the reply carries what changed in it",
         f"({now['patched']} of {now['edits']['n'] + 2 * WORKERS} replies did; reply",
         f"{now['fragment_bytes'] / 1000:.1f} kB at p95). Same server, same run, one after the",
         "other. *× floor* is the p50 over the static file's p50 on the same server.",
@@ -490,10 +490,10 @@ def run(timeout: float = 300.0) -> Section:
                 fmt_seconds(browser[mode][key]["max"]),
             ]
             for mode, key, label in (
-                ("whole", "in_page", "before: the whole drawing fetched and swapped in"),
-                ("whole", "painted", "before: ...and the frame after it painted"),
-                ("changes", "in_page", "now: the reply's changes applied"),
-                ("changes", "painted", "now: ...and the frame after it painted"),
+                ("whole", "in_page", "the old way: the whole drawing fetched and swapped in"),
+                ("whole", "painted", "the old way: ...and the frame after it painted"),
+                ("changes", "in_page", "the new way: the reply's changes applied"),
+                ("changes", "painted", "the new way: ...and the frame after it painted"),
             )
         ]
         section.lines += [

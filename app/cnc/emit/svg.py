@@ -399,8 +399,10 @@ class _Painter:
             return found[3]
         body = self.paint(node.node, state, node.base)
         blocks = tuple(sorted(body.blocks))
-        # The node is kept with its drawing, so no other node can take its id meanwhile.
-        self.kept.keep(key, (node.node, blocks, self.said(blocks), body), len(body.text) + 1)
+        # The node is kept with its drawing, so no other node can take its id meanwhile;
+        # weighed by its text and its patterns' (a LOOP's text is mostly <use>s).
+        weight = len(body.text) + sum(len(text) for _, _, text in body.shapes) + 1
+        self.kept.keep(key, (node.node, blocks, self.said(blocks), body), weight)
         return body
 
     def said(self, blocks: tuple[int, ...]) -> tuple[object, ...]:

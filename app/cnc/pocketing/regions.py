@@ -405,9 +405,9 @@ class SweptIndex:
 
     def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
         """The area swept by the recorded moves and by the moves `also` (not recorded; the
-        same rule as `add` for their lists) wherever it lies within `boxes`; beyond them it may be cut short. The rings of the
-        pieces' sweeps, overlapping: the area is where their winding is positive (as a
-        union reads them), not yet united.
+        same rule as `add` for their lists) wherever it lies within `boxes`; beyond them
+        it may be cut short. The rings of the pieces' sweeps, overlapping: the area is
+        where their winding is positive (as a union reads them), not yet united.
 
         Only the pieces whose own box meets one of `boxes` are read: a piece's sweep lies
         in its box, so the others cannot reach into `boxes`. Asked with the boxes of a

@@ -372,10 +372,10 @@ class _Planner:
         material are left that no move could reach (0 normally)."""
         swept = regions.union(*(self._swept(p.path) for p in self.passes))
         swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
+        residue = regions.difference(opening, swept)
         unreachable: list[Pt] = []
         for _ in range(MAX_CLEANUPS):
             sizes.spend()
-            residue = regions.difference(opening, swept)
             pieces = [
                 c
                 for c in regions.components(residue)
@@ -396,9 +396,11 @@ class _Planner:
                     unreachable.append(target)
                 else:
                     spikes.append(spike)
-            # United once per round: a union per spike re-read the whole swept area each
-            # time (the cusps of a many-island pocket are hundreds).
-            swept = regions.union(swept, regions.sweep_lines(spikes, self.r, self.t))
+            # What is left: the pieces wide enough to chase less what this round's moves
+            # sweep, not the whole pocket less everything swept again (a narrow piece stays
+            # narrow; the cusps of a many-island pocket are hundreds).
+            kept = [ring for piece in pieces for ring in piece.rings]
+            residue = regions.difference(kept, regions.sweep_lines(spikes, self.r, self.t))
         return 0
 
     def _reachable(self, p: IPtF) -> Pt:

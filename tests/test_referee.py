@@ -304,7 +304,8 @@ def events_carry(program: Program) -> bool:
             if z_dn is not None and z_dn != depth:
                 return False
             ten = 10 * after.units.resolution
-            if after.mode is Mode.INC and 0 < max(abs(after.x), abs(after.y)) < ten:
+            x, y = after.x or Decimal(0), after.y or Decimal(0)  # (generated: both given)
+            if after.mode is Mode.INC and 0 < max(abs(x), abs(y)) < ten:
                 return False
     return True
 

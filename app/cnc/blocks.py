@@ -273,6 +273,9 @@ class BoltCircle(Block):
 
 
 MILL_Z_HELP = "empty keeps the depth"
+# Calculated geometry (issue 33, app/cnc/solve.py): a MILL block's X or Y the print does not
+# give is left empty (null) and the compile calculates it.
+CALCULATED_HELP = "empty: calculated from the blocks around it"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -286,11 +289,14 @@ class MillLine(Block):
         positioned=True,
         mill=Mill.CONTOUR,
     )
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -312,11 +318,14 @@ class MillQcir(Block):
         mill=Mill.CONTOUR,
     )
     direction: Direction = prompt("DIRECTION", CHOICE)
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -335,8 +344,10 @@ class ArcEnd(Block):
         part="XY-END",
         mill=Mill.CONTOUR,
     )
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -365,11 +376,13 @@ class MillArc(Block):
         mill=Mill.CONTOUR,
     )
     direction: Direction = prompt("DIRECTION", CHOICE)
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    radius: Decimal | None = prompt("RAD", LENGTH, None, positive=True, prompted=False)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
 
     @property
     def type_name(self) -> str:

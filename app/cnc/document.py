@@ -191,7 +191,15 @@ def _block_out(block: Block) -> dict[str, Any]:
     data.update(_fields_out(block))
     for name, _ in kind.fixed:
         del data[name]
+    # Calculated geometry's fields (issue 33) only when set: documents without them read
+    # and write as before.
+    for name in _BLOCK_WHEN_SET:
+        if name in data and data[name] in (False, None):
+            del data[name]
     return data
+
+
+_BLOCK_WHEN_SET = ("radius", "tangent", "conrad", "chamfer")
 
 
 # A tool's fields written only when set (its name, and the copy of the crib tool it was

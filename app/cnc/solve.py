@@ -565,15 +565,17 @@ class _Solver:
         field = "X"
         what = "the end"
         if locus is None or nxt is None:
+            given = "X and Y are empty" if locus is None else "the end is only partly given"
             raise self.under(
                 seg,
                 field,
-                f"{what} of the segment is not given and cannot be calculated"
+                f"{given} and nothing calculates the end"
                 + (
-                    "; it is the last of the sequence, so the print must give its X and Y"
+                    "; this is the last block of the sequence, so the print must give its end"
                     if nxt is None
                     else "; the print must give X and Y, or one of them with the block "
-                    "TANGENT to the segment before"
+                    "TANGENT to the segment before it, or end it where an arc with a given "
+                    "centre starts"
                 ),
                 end_block=True,
             )
@@ -812,10 +814,16 @@ def corners(
             k += 1
             continue
         nxt = elements[k + 1]
-        made = _corner(start, element, nxt, kind, float(to_nm(size, units)))
+        made = make_corner(start, element, nxt, kind, float(to_nm(size, units)))
         if isinstance(made, str):
             findings.append(
-                Finding(holder, Rule.CORNER, Severity.ERROR, f"{label} {size}: {made}", label)
+                Finding(
+                    holder,
+                    Rule.CORNER,
+                    Severity.ERROR,
+                    f"{label} {_shown(to_nm(size, units), units)}: {made}",
+                    label,
+                )
             )
             out.append(element)
             out_numbers.append(numbers[k])
@@ -847,7 +855,7 @@ def _corner_value(blocks: tuple[Block, ...], number: int) -> tuple[str, Decimal,
     return None
 
 
-def _corner(
+def make_corner(
     start: Pt, a: Element, b: Element, kind: str, size: float
 ) -> tuple[Pt, Element, Pt] | str:
     """The corner at `a.end` between `a` (from `start`) and `b`: (where `a` now ends, the

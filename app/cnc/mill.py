@@ -871,6 +871,8 @@ class SequencePlan:
     findings: list[Finding]
     finished: Path | None = None  # a contour's programmed path (None for a routine)
     pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
+    # Values calculated from the print (app.cnc.solve): (block number, field) → value.
+    calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
 
 
 def plan_sequence(
@@ -902,13 +904,18 @@ def plan_sequence(
         return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
-    path, numbers, end = programmed_contour(blocks, mills, start, findings, depth)
+    calculated: dict[tuple[int, str], Decimal] = {}
+    path, numbers, end = programmed_contour(
+        blocks, mills, start, findings, depth, calculated=calculated
+    )
     if any(f.severity is Severity.ERROR for f in findings):
-        return SequencePlan([], 0, end, findings, path)
+        return SequencePlan([], 0, end, findings, path, calculated=calculated)
     if drill.comp is Comp.NONE or diameter is None:
-        return SequencePlan([path], 0, end, findings, path)
+        return SequencePlan([path], 0, end, findings, path, calculated=calculated)
     geometry = compensate(path, drill.comp, float(radius), numbers, drill.units)
-    return SequencePlan([geometry.path], 0, end, findings + geometry.findings, path)
+    return SequencePlan(
+        [geometry.path], 0, end, findings + geometry.findings, path, calculated=calculated
+    )
 
 
 INSIDE_PLACEMENTS = (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
@@ -998,11 +1005,13 @@ def programmed_contour(
     depth: int | None = None,
     *,
     with_corners: bool = True,
+    calculated: dict[tuple[int, str], Decimal] | None = None,
 ) -> tuple[Path, list[int], tuple[int, int]]:
     """The finished contour of line, quarter-circle and arc blocks from `start` (nm).
 
-    Empty coordinates, tangencies and radii are solved first (app.cnc.solve); conrads and
-    chamfers are inserted last (`with_corners`), tagged with the block of their corner.
+    Empty coordinates, tangencies and radii are solved first (app.cnc.solve: the values
+    it calculates go into `calculated`); conrads and chamfers are inserted last
+    (`with_corners`), tagged with the block of their corner.
 
     Returns the path, the block number of each element, and the end point. What is wrong
     with the geometry is appended to `findings`: a quarter circle whose moves are not equal
@@ -1020,6 +1029,8 @@ def programmed_contour(
         # contour gets it; what cannot be solved leaves the contour uncut.
         solution = solve.solve_contour(blocks, mills, start)
         found += solution.findings
+        if calculated is not None:
+            calculated.update(solution.calculated)
         if solution.failed:
             return Path(_f(start), ()), [], start
     reference = start

@@ -289,8 +289,8 @@ class MillLine(Block):
         positioned=True,
         mill=Mill.CONTOUR,
     )
-    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
-    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
@@ -318,8 +318,8 @@ class MillQcir(Block):
         mill=Mill.CONTOUR,
     )
     direction: Direction = prompt("DIRECTION", CHOICE)
-    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
-    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
@@ -344,8 +344,8 @@ class ArcEnd(Block):
         part="XY-END",
         mill=Mill.CONTOUR,
     )
-    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
-    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
     chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
@@ -376,8 +376,8 @@ class MillArc(Block):
         mill=Mill.CONTOUR,
     )
     direction: Direction = prompt("DIRECTION", CHOICE)
-    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP)
-    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)

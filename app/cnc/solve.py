@@ -679,15 +679,8 @@ class _Solver:
             )
         found = _meet(locus, _Circle(c, radius, c, clockwise))
         if isinstance(locus, _Line) and not locus.ray:
-            # A line given one coordinate: of the two, the one from which the next arc turns
-            # less, in its stated direction, to its end (the arc the print draws).
-            if end.x is not None and end.y is not None and end.mode is Mode.ABS:
-                e = (float(to_nm(end.x, end.units)), float(to_nm(end.y, end.units)))
-                chosen = min(
-                    found, key=lambda p: _turn(p, e, _Circle(c, radius, p, clockwise)), default=None
-                )
-            else:
-                chosen = min(found, key=lambda p: math.dist(p, self.start), default=None)
+            # A line given only X or Y: the first point it meets, the one nearer its start.
+            chosen = min(found, key=lambda p: math.dist(p, self.start), default=None)
         else:
             chosen = _first(locus, found)
         if chosen is None:

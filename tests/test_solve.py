@@ -28,6 +28,7 @@ from app.cnc.blocks import (
     HoleOp,
     MillArc,
     MillLine,
+    MillQcir,
     Program,
     Tool,
 )
@@ -363,3 +364,42 @@ def test_random_tangent_chains_solve_to_the_path_of_their_points(program: Progra
         )
         if k >= 2:
             assert turn < 0.1, (k, turn)
+
+
+def _solve(*blocks: Block) -> tuple[dict[int, tuple[float, float]], list[str]]:
+    """Solve a contour after a DRILL at X0 Y0 (inch): each segment's end, and the errors."""
+    all_blocks = (Hole(op=HoleOp.DRILL, x=D(0), y=D(0), tool=1), *blocks)
+    solution = solve_contour(all_blocks, tuple(range(1, len(all_blocks))), (0, 0))
+    ends = {i + 1: (x / INCH, y / INCH) for i, (x, y) in solution.ends.items()}
+    return ends, [f"block {f.block}, {f.field}: {f.message}" for f in solution.findings]
+
+
+def test_tangent_line_and_quarter_circle_from_one_coordinate() -> None:
+    """A line X0 Y0 → X1 Y1, then a MILL STD TANGENT given only Y3: along the 45° line, X3.
+    A line X0 Y0 → X2 Y0, then a QCIR CC TANGENT given only X3: it starts along +X and turns
+    left, so its centre is at X2 Y R and its end at X2 + R, Y R: R = 1, Y1."""
+    feed = D(10)
+    ends, errors = _solve(
+        MillLine(x=D(1), y=D(1), feed_xy=feed, tool=1),
+        MillLine(x=None, y=D(3), tangent=True, feed_xy=feed, tool=1),
+    )
+    assert errors == [] and near(ends[3], (3.0, 3.0), 0.0001)
+    ends, errors = _solve(
+        MillLine(x=D(2), y=D(0), feed_xy=feed, tool=1),
+        MillQcir(direction=Direction.CCW, x=D(3), y=None, tangent=True, feed_xy=feed, tool=1),
+    )
+    assert errors == [] and near(ends[3], (3.0, 1.0), 0.0001)
+
+
+def test_a_typed_quarter_circle_that_is_not_tangent_is_an_error() -> None:
+    """From X2 Y0 travelling +X, a QCIR CC to X3 Y-1 turns about X3 Y0 and starts going
+    −Y: not tangent."""
+    feed = D(10)
+    _, errors = _solve(
+        MillLine(x=D(2), y=D(0), feed_xy=feed, tool=1),
+        MillQcir(direction=Direction.CCW, x=D(3), y=D(-1), tangent=True, feed_xy=feed, tool=1),
+    )
+    assert errors == [
+        "block 3, TANGENT: the QCIR to X 3.000 in Y -1.000 in starts 90.00° off the segment "
+        "before it, so it is not tangent; leave X or Y empty to have its end calculated"
+    ]

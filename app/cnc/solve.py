@@ -282,7 +282,7 @@ class _Solver:
 
     # -- values as typed --------------------------------------------------------------------
 
-    def given(self, block: Block, seg: _Seg, name: str) -> float | None:
+    def given(self, block: Block, name: str) -> float | None:
         """A typed coordinate as an absolute nm value (INC: from the segment's start)."""
         value: Decimal | None = getattr(block, name)
         if value is None:
@@ -292,8 +292,8 @@ class _Solver:
             nm += self.start[0 if name == "x" else 1]
         return nm
 
-    def point(self, block: Block, seg: _Seg) -> tuple[float | None, float | None]:
-        return self.given(block, seg, "x"), self.given(block, seg, "y")
+    def point(self, block: Block) -> tuple[float | None, float | None]:
+        return self.given(block, "x"), self.given(block, "y")
 
     def keep(self, block_index: int, block: Block, p: Pt) -> Pt:
         """Round a solved point once to the nanometre and record the empty values it fills."""
@@ -334,7 +334,7 @@ class _Solver:
 
     def line(self, seg: _Seg, block: MillLine, nxt: _Seg | None) -> tuple[Pt, Pt | None]:
         s = self.start
-        x, y = self.point(block, seg)
+        x, y = self.point(block)
         direction = self.along if block.tangent else None
         if x is not None and y is not None:
             end = (x, y)
@@ -380,8 +380,8 @@ class _Solver:
     def arc(self, seg: _Seg, block: MillArc, nxt: _Seg | None) -> tuple[Pt, Pt | None]:
         s = self.start
         clockwise = block.direction is Direction.CW
-        cx, cy = self.point(block, seg)
-        ex, ey = self.point(seg.end_block, seg)
+        cx, cy = self.point(block)
+        ex, ey = self.point(seg.end_block)
         radius = None if block.radius is None else float(to_nm(block.radius, block.units))
         along = self.along if block.tangent else None
         centre = self.arc_centre(seg, block, s, (cx, cy), (ex, ey), radius, along, clockwise)
@@ -515,7 +515,7 @@ class _Solver:
 
     def qcir(self, seg: _Seg, block: MillQcir) -> tuple[Pt, Pt | None]:
         s = self.start
-        x, y = self.point(block, seg)
+        x, y = self.point(block)
         clockwise = block.direction is Direction.CW
         if x is not None and y is not None:
             end: Pt = (x, y)
@@ -553,10 +553,21 @@ class _Solver:
         if math.dist(s, end) < EPS:
             return end, None
         try:
-            centre = qcir_centre(_nm(s), _nm(end), block.direction)
+            corner = qcir_centre(_nm(s), _nm(end), block.direction)
         except ValueError:
             return end, None  # not a quarter circle: programmed_contour names it
-        return end, _travel((float(centre[0]), float(centre[1])), end, clockwise)
+        centre = (float(corner[0]), float(corner[1]))
+        if block.tangent and self.along is not None:
+            leaves = _travel(centre, s, clockwise)
+            if abs(cross(leaves, self.along)) > 1e-6 or dot(leaves, self.along) <= 0:
+                raise self.impossible(
+                    seg,
+                    "TANGENT",
+                    f"the QCIR to X {_shown(end[0], seg.units)} Y {_shown(end[1], seg.units)} "
+                    f"starts {_angle(self.along, leaves)} off the segment before it, so it is "
+                    "not tangent; leave X or Y empty to have its end calculated",
+                )
+        return end, _travel(centre, end, clockwise)
 
     # -- a point the next block fixes -------------------------------------------------------
 

@@ -99,6 +99,7 @@ _PRINT_CASES = (
     "print-intersections",
     "print-conrad-chamfer",
     "print-conrad-chamfer-mm",
+    "print-line-line-mm",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,

@@ -131,6 +131,7 @@ for name in (
     "print-intersections",
     "print-conrad-chamfer",
     "print-conrad-chamfer-mm",
+    "print-line-line-mm",
 ):
     NOT_THE_SAME_BLOCKS[name] = CALCULATED
 # A POCKET comes back as the MILL sequences of its passes (no format has a pocket with

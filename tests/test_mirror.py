@@ -39,6 +39,7 @@ CASES = [
     "print-arc-tangent-arc-mm",
     "print-conrad-chamfer",
     "print-conrad-chamfer-mm",
+    "print-line-line-mm",
 ]
 SIGN = {Axis.X: (-1, 1), Axis.Y: (1, -1), Axis.XY: (-1, -1)}
 

@@ -135,6 +135,29 @@ def test_intersections() -> None:
     assert near(elements[2][1], (4.5, 3.5), tol)
 
 
+def test_line_line_intersection_with_a_conrad() -> None:
+    """print-line-line-mm: MILL STD at ANGLE 30 (end empty, CONRAD 10) to where the line at
+    ANGLE 300 through X100 Y0 comes from.
+
+    The triangle X0 Y0, apex, X100 Y0 has 30° at the origin and 60° at X100 Y0 (the second
+    line arrives travelling −60°), so 90° at the apex, 100·cos 30° = 86.60254 from the
+    origin: X75 Y43.30127. The conrad at that right angle: tangent points 10 back along the
+    first line, X66.339746 Y38.30127, and 10 on along the second, X80 Y34.641016; centre
+    10 right of both, X71.339746 Y29.641016 (a right turn: clockwise)."""
+    elements = contour(golden("print-line-line-mm"))
+    tol = 0.001
+    assert [tag for tag, _, _ in elements] == ["", "conrad", "", ""]
+    assert near(elements[0][1], (66.339746, 38.30127), tol)
+    assert near(elements[1][1], (80.0, 34.641016), tol)
+    assert near(elements[1][2], (71.339746, 29.641016), tol)
+    assert near(elements[2][1], (100.0, 0.0), tol)
+    values = {
+        (n, name): float(v)
+        for n, name, v in compile_program(golden("print-line-line-mm")).calculated
+    }
+    assert abs(values[(2, "x")] - 75.0) <= tol and abs(values[(2, "y")] - 43.30127) <= tol
+
+
 def test_conrads_and_chamfer() -> None:
     """print-conrad-chamfer: X0 Y0 → X3 Y0 CONRAD 0.25 → X3 Y2 CHAMFER 0.2 → X1 Y2
     CONRAD 0.3 → ARC C about X0 Y2 to X0 Y1 CONRAD 0.2 → X0 Y0.

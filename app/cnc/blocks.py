@@ -276,6 +276,7 @@ MILL_Z_HELP = "empty keeps the depth"
 # Calculated geometry (issue 33, app/cnc/solve.py): a MILL block's X or Y the print does not
 # give is left empty (null) and the compile calculates it.
 CALCULATED_HELP = "empty: calculated from the blocks around it"
+LINE_ANGLE_HELP = "the direction it travels, degrees counter-clockwise from +X (3 o'clock)"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -294,6 +295,7 @@ class MillLine(Block):
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    angle: Decimal | None = prompt("ANGLE", ANGLE, None, prompted=False, help=LINE_ANGLE_HELP)
     tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
     conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
     chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)

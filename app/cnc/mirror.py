@@ -335,6 +335,8 @@ def _as_typed(block: Block, corner: tuple[Decimal | None, Decimal | None]) -> Bl
     changes: dict[str, Any] = {}
     if isinstance(block, MillLine | MillQcir | MillArc):
         changes["tangent"] = False
+    if isinstance(block, MillLine):
+        changes["angle"] = None
     if isinstance(block, MillArc):
         changes["radius"] = None
     if isinstance(block, MillLine | MillQcir | ArcEnd):

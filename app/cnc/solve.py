@@ -133,6 +133,7 @@ def needs_solving(blocks: tuple[Block, ...], mills: tuple[int, ...]) -> bool:
             or block.y is None
             or getattr(block, "tangent", False)
             or getattr(block, "radius", None) is not None
+            or getattr(block, "angle", None) is not None
         ):
             return True
     return False
@@ -336,10 +337,20 @@ class _Solver:
         s = self.start
         x, y = self.point(block)
         direction = self.along if block.tangent else None
+        if block.angle is not None:
+            stated = _heading(block.angle)
+            if direction is not None and abs(cross(direction, stated)) > 1e-6:
+                raise self.impossible(
+                    seg,
+                    "ANGLE",
+                    f"ANGLE {block.angle}° is {_angle(direction, stated)} off the tangent of "
+                    "the segment before it; give one or the other",
+                )
+            direction = stated
         if x is not None and y is not None:
             end = (x, y)
             if direction is not None:
-                self.check_line_tangent(seg, s, end, direction)
+                self.check_line_direction(seg, block, s, end, direction)
         elif direction is not None and (x is not None or y is not None):
             axis, value = (0, x) if x is not None else (1, y)
             assert value is not None
@@ -366,15 +377,23 @@ class _Solver:
             return end, None
         return end, unit(sub(end, s))
 
-    def check_line_tangent(self, seg: _Seg, s: Pt, end: Pt, direction: Pt) -> None:
+    def check_line_direction(
+        self, seg: _Seg, block: MillLine, s: Pt, end: Pt, direction: Pt
+    ) -> None:
+        """A line given both coordinates and a direction (TANGENT or ANGLE): they agree."""
         off = cross(direction, sub(end, s))
         if abs(off) > half_step(seg.units) or dot(direction, sub(end, s)) <= 0:
+            said = (
+                f"not at ANGLE {block.angle}°"
+                if block.angle is not None
+                else "not tangent to the segment before it"
+            )
             raise self.impossible(
                 seg,
-                "TANGENT",
+                "ANGLE" if block.angle is not None else "TANGENT",
                 f"the line to X {_shown(end[0], seg.units)} Y {_shown(end[1], seg.units)} is "
-                f"not tangent to the segment before it (it turns {_angle(direction, sub(end, s))} "
-                "from it); leave X or Y empty to have the end calculated along the tangent",
+                f"{said} (it turns {_angle(direction, sub(end, s))} from it); leave X or Y "
+                "empty to have the end calculated along that direction",
             )
 
     def arc(self, seg: _Seg, block: MillArc, nxt: _Seg | None) -> tuple[Pt, Pt | None]:
@@ -603,6 +622,8 @@ class _Solver:
             return self.from_next_arc(seg, locus, nxt, block)
         if isinstance(block, MillLine) and block.tangent and isinstance(locus, _Circle):
             return self.tangent_point(seg, locus, nxt, block)
+        if isinstance(block, MillLine) and block.angle is not None:
+            return self.from_next_line(seg, locus, nxt, block)
         raise self.under(
             seg,
             field,
@@ -705,6 +726,36 @@ class _Solver:
             )
         return self.keep(seg.end_index, seg.end_block, chosen)
 
+    def from_next_line(self, seg: _Seg, locus: _Line | _Circle, nxt: _Seg, block: MillLine) -> Pt:
+        """The next line is given its ANGLE and end: this end is where the line through
+        that end at that angle meets this segment (line–line or line–arc)."""
+        if block.x is None or block.y is None:
+            raise self.under(
+                seg,
+                "X",
+                f"the line of block {nxt.number} is given its ANGLE but not its end; the print "
+                "must give that end's X and Y, or this end",
+                end_block=True,
+            )
+        q = (float(to_nm(block.x, block.units)), float(to_nm(block.y, block.units)))
+        assert block.angle is not None
+        found = _meet(locus, _Line(q, _heading(block.angle), ray=False))
+        if isinstance(locus, _Line) and not locus.ray:
+            chosen = min(found, key=lambda p: math.dist(p, self.start), default=None)
+        else:
+            chosen = _first(locus, found)
+        if chosen is None:
+            raise self.impossible(
+                seg,
+                "X",
+                f"this segment never meets the line of block {nxt.number} (through X "
+                f"{_shown(q[0], seg.units)} Y {_shown(q[1], seg.units)} at "
+                f"{block.angle}°): they are parallel, or it is behind; the print's dimensions "
+                "do not close",
+                end_block=True,
+            )
+        return self.keep(seg.end_index, seg.end_block, chosen)
+
     def tangent_point(self, seg: _Seg, circle: _Circle, nxt: _Seg, block: MillLine) -> Pt:
         if block.x is None or block.y is None:
             raise self.under(
@@ -758,6 +809,12 @@ def _decimal(nm: int, units: Units) -> Decimal:
 
 def _shown(nm: float, units: Units) -> str:
     return message_length(round(nm), units)
+
+
+def _heading(degrees: Decimal) -> Pt:
+    """The direction of a line's ANGLE: degrees counter-clockwise from +X."""
+    theta = math.radians(float(degrees))
+    return (math.cos(theta), math.sin(theta))
 
 
 def _angle(a: Pt, b: Pt) -> str:

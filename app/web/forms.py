@@ -117,7 +117,7 @@ def extra_fields(cls: type[Block], sub: SubKind) -> tuple[Field, ...]:
         if not f.prompt.prompted
         and f.name not in COMMON
         and f.name not in fixed
-        and f.prompt.value in (Value.LENGTH, Value.FLAG)
+        and f.prompt.value in (Value.LENGTH, Value.ANGLE, Value.FLAG)
     )
 
 

@@ -361,20 +361,28 @@ def tangent_chains(draw: st.DrawFn) -> Program:
             radius = float(draw(thousandths))
             clockwise = draw(st.booleans())
             side = -1.0 if clockwise else 1.0
-            cx = D(round(ex - side * radius * math.sin(heading), 3)).quantize(D("0.001"))
-            cy = D(round(ey + side * radius * math.cos(heading), 3)).quantize(D("0.001"))
+            centre_x = D(round(ex - side * radius * math.sin(heading), 3)).quantize(D("0.001"))
+            centre_y = D(round(ey + side * radius * math.cos(heading), 3)).quantize(D("0.001"))
             blocks.append(MillLine(x=None, y=None, tangent=True, feed_xy=D(10), tool=1))
             direction = Direction.CW if clockwise else Direction.CCW
             blocks.append(
-                MillArc(direction=direction, x=cx, y=cy, tangent=True, feed_xy=D(10), tool=1)
+                MillArc(
+                    direction=direction,
+                    x=centre_x,
+                    y=centre_y,
+                    tangent=True,
+                    feed_xy=D(10),
+                    tool=1,
+                )
             )
             # Its end a quarter turn on, given by the coordinate across the turn.
-            t = (float(cx) - x) * math.cos(heading) + (float(cy) - y) * math.sin(heading)
+            cx, cy = float(centre_x), float(centre_y)
+            t = (cx - x) * math.cos(heading) + (cy - y) * math.sin(heading)
             fx, fy = x + t * math.cos(heading), y + t * math.sin(heading)
-            r = math.hypot(float(cx) - fx, float(cy) - fy)
+            r = math.hypot(cx - fx, cy - fy)
             heading += -math.pi / 2 if clockwise else math.pi / 2
-            ex = float(cx) + r * math.cos(heading - side * math.pi / 2)
-            ey = float(cy) + r * math.sin(heading - side * math.pi / 2)
+            ex = cx + r * math.cos(heading - side * math.pi / 2)
+            ey = cy + r * math.sin(heading - side * math.pi / 2)
             along_x = abs(math.cos(heading)) >= abs(math.sin(heading))
             value = D(round(ex if along_x else ey, 3)).quantize(D("0.001"))
             blocks.append(ArcEnd(x=value if along_x else None, y=None if along_x else value))

@@ -49,6 +49,7 @@ from dataclasses import dataclass, field, replace
 from decimal import Decimal
 
 from app.cnc.blocks import ArcEnd, Block, Direction, MillArc, MillLine, MillQcir, Mode
+from app.cnc.memo import Recent
 from app.cnc.mill import (
     EPS,
     Element,
@@ -146,7 +147,13 @@ def solve_contour(
 
     Never raises: a segment that cannot be solved is a finding (error) naming its block and
     field, and the segments after it are left unsolved (their points are not in `ends`).
+    Solved once: the compile's solution is what the events writer (which reads contours
+    itself) gets again. Shared: read it, do not change it.
     """
+    key = (tuple(blocks[i] for i in mills), mills, start)
+    found = _SOLVED.get(key)
+    if found is not None:
+        return found
     segs = _segments(blocks, mills)
     solution = Solution()
     solver = _Solver(segs, solution, (float(start[0]), float(start[1])))
@@ -154,7 +161,12 @@ def solve_contour(
         solver.run()
     except _Unsolved as problem:
         solution.findings.append(problem.finding)
+    _SOLVED.keep(key, solution)
     return solution
+
+
+# Recent solutions by (the contour's blocks, their places, the start).
+_SOLVED: Recent[Solution] = Recent(256)
 
 
 def _segments(blocks: tuple[Block, ...], mills: tuple[int, ...]) -> list[_Seg]:

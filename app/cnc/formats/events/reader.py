@@ -751,7 +751,17 @@ class _Reader:
                 )
                 out.append(element)
                 continue
-            out.append(replace(element, conrad=radius))
+            out.append(
+                Element(
+                    element.line,
+                    element.end,
+                    element.centre,
+                    element.clockwise,
+                    element.z_dn,
+                    element.feed,
+                    radius,
+                )
+            )
             self.notes.became(
                 event.source,
                 f"CR{show(radius, units)}: the corner X{show(element.end[0], units)} "

@@ -459,3 +459,31 @@ def test_a_typed_quarter_circle_that_is_not_tangent_is_an_error() -> None:
         "block 3, TANGENT: the QCIR to X 3.000 in Y -1.000 in starts 90.00° off the segment "
         "before it, so it is not tangent; leave X or Y empty to have its end calculated"
     ]
+
+
+def test_the_document_keeps_zero_angles_and_leaves_out_what_is_not_set() -> None:
+    """The print's fields are written only when set — but a line's ANGLE 0 and a BOLT CIR's
+    angle 0 are values (0 == False in Python: the first writer dropped both, and a line's
+    direction with it)."""
+    from app.cnc.blocks import BoltCircle
+
+    program = Program(
+        name="ZERO",
+        block0=_tools(),
+        blocks=(
+            Hole(
+                op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.2"), feed_z=D(5), tool=1
+            ),
+            BoltCircle(op=HoleOp.DRILL, holes=4, angle=D(0), radius=D(1)),
+            Hole(
+                op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.2"), feed_z=D(5), tool=1
+            ),
+            MillLine(x=None, y=D(0), angle=D(0), feed_xy=D(10), tool=1),
+            MillLine(x=D(2), y=D(1), feed_xy=D(10), tool=1),
+        ),
+    )
+    text = document.dumps(program)
+    assert document.loads(text) == program
+    blocks = document.to_dict(program)["blocks"]
+    assert blocks[1]["angle"] == 0 and blocks[3]["angle"] == 0 and blocks[3]["x"] is None
+    assert "tangent" not in blocks[4] and "conrad" not in blocks[4] and "angle" not in blocks[4]

@@ -186,8 +186,9 @@ def _block_out(block: Block) -> dict[str, Any]:
         del data[name]
     # Calculated geometry's fields (issue 33) only when set: documents without them read
     # and write as before.
+    # (`is`: a BOLT CIR's angle 0 or a line's ANGLE 0 is a value, though 0 == False.)
     for name in _BLOCK_WHEN_SET:
-        if name in data and data[name] in (False, None):
+        if name in data and (data[name] is None or data[name] is False):
             del data[name]
     return data
 

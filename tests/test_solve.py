@@ -487,3 +487,26 @@ def test_the_document_keeps_zero_angles_and_leaves_out_what_is_not_set() -> None
     blocks = document.to_dict(program)["blocks"]
     assert blocks[1]["angle"] == 0 and blocks[3]["angle"] == 0 and blocks[3]["x"] is None
     assert "tangent" not in blocks[4] and "conrad" not in blocks[4] and "angle" not in blocks[4]
+
+
+def test_a_conrad_before_a_depth_change_is_its_own_arc_event() -> None:
+    """The Plus rounds a corner only between connected events, and an event before a Z DN
+    change ends not connected (CR-): there the conrad is written as the arc itself, from
+    X1.75 Y0 about X1.75 Y0.25 to X2 Y0.25 (radius 0.25 at the right angle X2 Y0)."""
+    program = Program(
+        name="Z",
+        block0=_tools(),
+        blocks=(
+            Hole(
+                op=HoleOp.DRILL, x=D(0), y=D(0), z_up=D("0.1"), z_dn=D("-0.2"), feed_z=D(5), tool=1
+            ),
+            MillLine(x=D(2), y=D(0), conrad=D("0.25"), feed_xy=D(10), tool=1),
+            MillLine(x=D(2), y=D(2), z_dn=D("-0.3"), feed_xy=D(10), tool=1),
+        ),
+    )
+    lines = export(program, "events").data.decode().splitlines()
+    assert lines[2:5] == [
+        "N001 G101 XB0A YB0A XE1.75A YE0A TC0 F10.0 D0.25 CR0 T01;",
+        "N002 G103 XB1.75A YB0A XE2.0A YE0.25A XC1.75A YC0.25A F10.0 TC0 D0.25 CR- T01;",
+        "N003 G101 XB2.0A YB0.25A XE2.0A YE2.0A TC0 F10.0 D0.25 CR- T01;",
+    ]

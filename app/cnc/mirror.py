@@ -24,16 +24,12 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import (
-    ArcEnd,
     Block,
     BoltCircle,
     Direction,
     Hole,
-    MillArc,
-    MillLine,
     MillQcir,
     Mode,
-    PocketArc,
     Program,
     Rep,
 )
@@ -92,11 +88,6 @@ def mirror(program: Program, axis: Axis) -> Mirrored:
                 )
             index = end
             continue
-        if isinstance(block, PocketArc) and reverse:
-            # A POCKET's contour is a shape, not a cut: it is reflected as it stands, so its
-            # arcs turn the other way (the passes keep climb or conventional by themselves).
-            turned = Direction.CCW if block.direction is Direction.CW else Direction.CW
-            block = dataclasses.replace(block, direction=turned)
         plan.append(_single(block, index, targets, m, sx, sy, blocks))
         index += 1
     new_blocks = _encode(plan, program.units)
@@ -124,18 +115,24 @@ def _single(
     blocks: list[Block],
 ) -> tuple[Block, XY | None]:
     """One block outside a contour, mirrored as its declaration says: its point (X/Y) moved,
-    its steps (REP X/Y, COPY XOF/YOF) and directions (BOLT CIR ANGLE) reflected; a block
+    its steps (REP X/Y, COPY XOF/YOF) and directions (BOLT CIR ANGLE) reflected, and a
+    shape's turns (a POCKET's arcs, Role.TURN in Mill.GEOMETRY: reflected as it stands, the
+    passes keep climb or conventional by themselves) reversed by a one-axis mirror; a block
     whose size (FRAME XL/YW) is measured from the point before keeps its values, and that
     point moves by the size on a flipped axis (the mirrored frame's lower-left corner)."""
     target, _ = targets[index]
     following = blocks[index + 1] if index + 1 < len(blocks) else None
     sizes = {} if following is None else _roles(following, Role.SIZE_X, Role.SIZE_Y)
     changes: dict[str, Any] = {}
-    for name, role in _roles(block, Role.STEP_X, Role.STEP_Y, Role.ANGLE).items():
+    shape = REGISTRY.of(block).mill is Mill.GEOMETRY
+    for name, role in _roles(block, Role.STEP_X, Role.STEP_Y, Role.ANGLE, Role.TURN).items():
         value = getattr(block, name)
         if value is None:
             continue
-        if role is Role.ANGLE:
+        if role is Role.TURN:
+            if shape and sx * sy < 0:
+                changes[name] = Direction.CCW if value is Direction.CW else Direction.CW
+        elif role is Role.ANGLE:
             changes[name] = _mirrored_angle(value, sx, sy)
         else:
             changes[name] = (sx if role is Role.STEP_X else sy) * value
@@ -192,14 +189,13 @@ def _contour(
     start, _ = targets[drill]
     assert start is not None
     # Segments: (kind block, its end point, its centre, the XY-END block if an arc).
-    segments: list[tuple[Block, XY, XY | None, ArcEnd | None]] = []
+    segments: list[tuple[Block, XY, XY | None, Block | None]] = []
     k = drill + 1
     while k < end:
         block = blocks[k]
         point, centre = targets[k]
-        if isinstance(block, MillArc):
+        if REGISTRY.sub_kind_of(block).then is not None:  # an XY-CENT and its XY-END
             end_block = blocks[k + 1]
-            assert isinstance(end_block, ArcEnd)
             arc_point, _ = targets[k + 1]
             assert arc_point is not None
             segments.append((block, arc_point, point, end_block))
@@ -214,15 +210,15 @@ def _contour(
     corners = [_corner_of(b, e) for b, _, _, e in segments]
     if reverse:
         corners = [(None, None), *corners[:-1]]
-    typed: list[tuple[Block, XY, XY | None, ArcEnd | None]] = []
-    for i, (piece, point, centre, arc_end) in enumerate(segments):
-        if arc_end is None:
-            typed.append((_as_typed(piece, corners[i]), point, centre, None))
-        else:
-            end_block = _as_typed(arc_end, corners[i])
-            assert isinstance(end_block, ArcEnd)
-            typed.append((_as_typed(piece, (None, None)), point, centre, end_block))
-    segments = typed
+    segments = [
+        (
+            _as_typed(piece, corners[i] if arc_end is None else (None, None)),
+            point,
+            centre,
+            None if arc_end is None else _as_typed(arc_end, corners[i]),
+        )
+        for i, (piece, point, centre, arc_end) in enumerate(segments)
+    ]
     if not reverse:
         plan: list[tuple[Block, XY | None]] = [(blocks[drill], m(start))]
         for piece, point, centre, arc_end in segments:
@@ -248,10 +244,10 @@ def _contour(
     for i in range(len(segments) - 1, -1, -1):
         piece, _, centre, arc_end = segments[i]
         back_to = m(points[i])
-        if isinstance(piece, MillArc):
-            assert centre is not None and arc_end is not None
+        if arc_end is not None:
+            assert centre is not None
             plan += [(piece, m(centre)), (arc_end, back_to)]
-        elif isinstance(piece, MillQcir | MillLine):
+        else:
             plan.append((piece, back_to))
     last_block, last_point = plan[-1]
     plan[-1] = (dataclasses.replace(last_block, stop=stop), last_point)
@@ -321,7 +317,7 @@ def _solved_points(
     arc's centre (its XY-CENT block) and end (its XY-END block)."""
     points: dict[int, XY] = {}
     for index, end in ends.items():
-        if isinstance(blocks[index], MillArc):
+        if REGISTRY.of(blocks[index]).xy_is_centre:
             points[index] = centres[index]
             points[index + 1] = end
         else:
@@ -332,14 +328,13 @@ def _solved_points(
 def _as_typed(block: Block, corner: tuple[Decimal | None, Decimal | None]) -> Block:
     """A contour block with every point typed (the mirror writes them all): no tangency or
     radius left to solve, and the conrad or chamfer of the corner at its end."""
-    changes: dict[str, Any] = {}
-    if isinstance(block, MillLine | MillQcir | MillArc):
-        changes["tangent"] = False
-    if isinstance(block, MillLine):
-        changes["angle"] = None
-    if isinstance(block, MillArc):
-        changes["radius"] = None
-    if isinstance(block, MillLine | MillQcir | ArcEnd):
+    names = {f.name for f in REGISTRY.fields(type(block))}
+    changes: dict[str, Any] = {
+        name: value
+        for name, value in (("tangent", False), ("angle", None), ("radius", None))
+        if name in names
+    }
+    if "conrad" in names:
         changes["conrad"], changes["chamfer"] = corner
     return dataclasses.replace(block, **changes) if changes else block
 

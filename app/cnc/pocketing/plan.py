@@ -523,21 +523,20 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     to `ring` (elements tagged "link"), and that point; points `step` apart are tried.
 
     Which point: the first sample whose distance to the ring (`_closest_on_element`, exact)
-    is smallest. Only the samples `nearest` cannot rule out are measured exactly, in order,
-    and of those only against the elements it cannot rule out (the others are more than
-    `MARGIN` farther than the nearest pair, so could never be the smallest): the same
-    point as measuring them all."""
+    is smallest. Only the (sample, element) pairs `nearest.nearest_pairs` cannot rule out
+    are measured exactly, in order (the others are more than `MARGIN` farther than the
+    nearest pair, so could never be the smallest): the same point as measuring them all,
+    at the cost of the samples and elements near each other."""
     ring_starts = starts_of(ring)
     samples = sample(previous, step)
     points = np.array([p for p, _ in samples], dtype=np.float64)
+    # Some sample is within its distance to the ring's start (a point of the ring).
+    reach = float(np.hypot(points[:, 0] - ring.start[0], points[:, 1] - ring.start[1]).min())
     table = nearest.table(ring_starts, ring.elements)
-    lower, best_upper = nearest.nearest_rows(points, table)
-    near = np.flatnonzero(lower <= best_upper + nearest.MARGIN)
-    pairs, _ = nearest.bounds(points[near], table)
     best: tuple[float, Pt] | None = None
-    for row, i in enumerate(near.tolist()):
+    for i, near in nearest.nearest_pairs(points, table, reach):
         point = samples[i][0]
-        for k in np.flatnonzero(pairs[row] <= best_upper + nearest.MARGIN).tolist():
+        for k in near:
             d = math.dist(_closest_on_element(point, ring_starts[k], ring.elements[k]), point)
             if best is None or d < best[0] - 1e-9:
                 best = (d, point)

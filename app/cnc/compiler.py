@@ -937,6 +937,22 @@ class _Compiler:
         )
         self.x, self.y = end
 
+    def helix_to(
+        self,
+        number: int,
+        end: tuple[int, int, int],
+        centre: tuple[int, int],
+        clockwise: bool,
+        feed: int,
+        tag: str = "",
+    ) -> None:
+        """An arc from where the tool is to `end` (x, y, z, nm) about `centre`: helical when
+        Z changes on the way. One row turns at most once around; a row that ends at its
+        start's X/Y (and another Z) is one whole turn (path.py)."""
+        op = Op.ARC_CW if clockwise else Op.ARC_CCW
+        self.buffer.rows.append((op, TAG[tag], number - self.base, *end, *centre, feed, 0))
+        self.x, self.y, self.z = end
+
 
 def _too_large(over: cost.Cost, limit: int) -> Finding:
     """The error of a program past the moves it may make, on the block `over` names."""

@@ -33,6 +33,10 @@ MAX_REPEAT = 999
 MIN_RPM = 60
 GEAR_CHANGE_RPM = 500
 MAX_RPM = 4000
+# Our reading: where a target cannot write a helical arc (an arc whose Z changes: HELIX,
+# THREAD MILL), it writes straight moves whose chords stay this close to the helix on the
+# tool's path: the 0.001 in of seed 002's TOL, which the 1704 tape's chords default to.
+HELIX_CHORD_INCH = Decimal("0.001")
 # Our reading: the allowance for one manual tool change in the cycle time (the operator
 # stops, changes the tool, touches off), when the machine profile gives none.
 DEFAULT_TOOL_CHANGE_SECONDS = 30.0

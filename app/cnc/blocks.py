@@ -585,6 +585,42 @@ class Island(Block):
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
 
 
+# -- operations of a modern conversational control (issue 33) -------------------------------
+
+MILLING_HELP = "empty: Data Block 0's 0 CONV 1 CLIMB"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Helix(Block):
+    """HELIX: helical interpolation about X, Y (helical entry, helical boring).
+
+    `diameter` is the finished bore (as BORE and CIRCLE take the part's size): the tool's
+    centre goes round at (DIA − the tool's DIA) / 2, the tool's DIA from Data Block 0. The
+    tool comes down at rapid to Z UP on the circle (at 3 o'clock), goes down `pitch` per
+    turn to Z DN, makes a whole turn at Z DN to finish the bottom and the wall, leaves the
+    wall towards the centre (to the centre when the tool covers it; no core is left), and
+    rapids up. Round counter-clockwise for climb with a clockwise spindle, as CIRCLE
+    INSIDE; `milling` None takes Data Block 0's choice. Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "HELIX"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("HELIX"),),
+        editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
+        positioned=True,
+        loopable=True,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    diameter: Decimal = prompt("DIA", LENGTH, positive=True, help="the finished diameter")
+    z_up: Decimal = prompt("Z UP", LENGTH)
+    z_dn: Decimal = prompt("Z DN", LENGTH)
+    pitch: Decimal = prompt("PITCH", LENGTH, positive=True, help="depth per turn")
+    milling: MillingMode | None = prompt("0 CONV 1 CLIMB", CHOICE, None, blank=MILLING_HELP)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+
 # Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
 # (NX + 1) × (NY + 1) patterns.
 REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"

@@ -52,16 +52,19 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     DataBlock0,
+    Helix,
     Hole,
     HoleOp,
     Mode,
+    Placement,
     Pos,
     Program,
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import Finding, Path, length, plan_sequence
+from app.cnc.helix import helix_ends
+from app.cnc.mill import Finding, Path, length, plan_sequence, routine_clockwise
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
@@ -502,6 +505,10 @@ class _Compiler:
             target = self.resolve(block)
             self.hole(number, block, target)
             self.reference = target
+        elif isinstance(block, Helix):
+            target = self.resolve(block)
+            self.helix(number, block, target)
+            self.reference = target
         else:
             raise CompileError(number, f"a {block.title} block cannot stand on its own here")
 
@@ -807,6 +814,48 @@ class _Compiler:
                 canned,
             ).row()
         )
+
+    def helix(self, number: int, block: Helix, centre: tuple[int, int]) -> None:
+        """HELIX about `centre` (blocks.Helix says the motion). A block whose tool cannot
+        cut the diameter (no DIA, or not smaller than the bore's) makes no moves:
+        validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        if tool_diameter is None:
+            return
+        radius = (to_nm(block.diameter, units) - tool_diameter) // 2
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if radius <= 0 or z_dn >= z_up:
+            return
+        self.use_tool(number, block.tool)
+        milling = block.milling or self.program.block0.milling
+        clockwise = routine_clockwise(Placement.INSIDE, milling, self.spindle_rpm(block.tool))
+        feed = to_nm(block.feed_xy, units)
+        start = (centre[0] + radius, centre[1])
+        self.retract = retract_height(z_up, self.z_retract)
+        self.position(number, start, self.retract)
+        self.rapid_z(number, z_up)
+        pitch = to_nm(block.pitch, units)
+        for end in helix_ends((*start, z_up), centre, z_dn, pitch, clockwise):
+            self.helix_to(number, end, centre, clockwise, feed)
+        # The whole turn at Z DN: the bottom flat and the wall to size all round.
+        self.helix_to(number, (self.x, self.y, z_dn), centre, clockwise, feed)
+        if 2 * radius <= tool_diameter:
+            # The tool covers the centre (no core is left): off the wall to it.
+            self.feed_to(number, (*centre, z_dn), feed, "lead-out")
+        self.retract_up(number)
+
+    def tool_diameter(self, tool: int) -> int | None:
+        """A tool's DIA in nm (None: not given, or not positive)."""
+        info = self.tools.get(tool)
+        if info is None or info.diameter is None or info.diameter <= 0:
+            return None
+        return info.diameter
+
+    def spindle_rpm(self, tool: int) -> int | None:
+        """A tool's signed RPM (None: none given)."""
+        info = self.tools.get(tool)
+        return None if info is None else info.rpm
 
     def tap_out(self, number: int, block: Hole, z_up: int, feed: int) -> None:
         """Reverse the spindle, feed up to 0.3 in above Z UP, restore the direction."""

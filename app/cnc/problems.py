@@ -98,6 +98,7 @@ class Rule(enum.Enum):
     TAP_FEED = "tap-feed"
     TAP_HAND = "tap-hand"
     TOO_LARGE = "too-large"
+    HELIX_TOOL = "helix-tool"
 
 
 @dataclass(frozen=True, slots=True)

@@ -20,6 +20,7 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     Copy,
+    Helix,
     Hole,
     HoleOp,
     Pos,
@@ -182,6 +183,6 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
             return None, index + 1
         what = block.type_name
         raise ValueError(f"block {index + 1}: {what} without its POCKET (validate first)")
-    if tolerant and not isinstance(block, Pos | Hole):
+    if tolerant and not isinstance(block, Pos | Hole | Helix):
         return None, index + 1  # a mill block or a BOLT CIR that does not follow its block
     return Single(index=index), index + 1

@@ -31,6 +31,7 @@ from app.cnc.blocks import (
     CopyAction,
     DataBlock0,
     Frame,
+    Helix,
     Hole,
     HoleOp,
     Island,
@@ -61,7 +62,7 @@ from app.cnc.tools import (
     thread_faults,
     tool_name_fault,
 )
-from app.cnc.units import Units, format_decimal
+from app.cnc.units import Units, format_decimal, message_length, to_nm
 
 ERROR = Severity.ERROR
 WARNING = Severity.WARNING
@@ -451,6 +452,21 @@ class _Checker:
             )
         if isinstance(block, Hole):
             self.check_hole(number, block)
+        if isinstance(block, Helix):
+            self.check_helix(number, block)
+
+    def check_helix(self, number: int, helix: Helix) -> None:
+        """Z DN below Z UP (the tool's size is `check_helix_tool`'s)."""
+        u = helix.units.symbol
+        if helix.z_dn >= helix.z_up:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(helix.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(helix.z_up)} {u}; the helix goes down from Z UP to Z DN",
+            )
 
     def check_hole(self, number: int, hole: Hole) -> None:
         op = hole.op.value
@@ -705,6 +721,24 @@ class _Checker:
                 "come first, then each island",
             )
 
+    def check_helix_tool(self, number: int, helix: Helix, tool: Tool) -> None:
+        """A HELIX's tool smaller than its diameter."""
+        if tool.diameter is None:
+            return
+        u = helix.units.symbol
+        tool_diameter = to_nm(tool.diameter, self.program.units)
+        if tool_diameter >= to_nm(helix.diameter, helix.units):
+            self.add(
+                number,
+                "DIA",
+                ERROR,
+                Rule.HELIX_TOOL,
+                f"{format_decimal(helix.diameter)} {u} is not larger than tool "
+                f"{helix.tool}'s DIA {message_length(tool_diameter, helix.units)}; the "
+                "tool's centre goes round at half their difference: give a larger DIA or a "
+                "smaller tool",
+            )
+
     def inside_mill_sequence(self, index: int) -> bool:
         """True when block `index` is a DRILL starting a sequence or one of its mill blocks."""
         return index + 1 < len(self.blocks) and (
@@ -722,11 +756,13 @@ class _Checker:
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            needs_diameter = isinstance(block, Circle | Frame | Pocket) or (
+            needs_diameter = isinstance(block, Circle | Frame | Pocket | Helix) or (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(self.blocks, number - 1)
             )
+            if isinstance(block, Helix) and tool is not None:
+                self.check_helix_tool(number, block, tool)
             if needs_diameter and (tool is None or tool.diameter is None):
                 self.add(
                     number,
@@ -738,6 +774,8 @@ class _Checker:
                         "a POCKET needs the cutter's measured diameter to keep off its wall "
                         "and islands"
                         if isinstance(block, Pocket)
+                        else "a HELIX goes round at the finished DIA less the cutter's"
+                        if isinstance(block, Helix)
                         else "cutter-compensated milling needs the cutter's measured diameter"
                     ),
                 )

@@ -68,6 +68,7 @@ from app.cnc.blocks import (
     Comp,
     DataBlock0,
     Frame,
+    Helix,
     Hole,
     MillArc,
     MillLine,
@@ -212,6 +213,16 @@ class _Builder:
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
         number = index + 1
+        if isinstance(block, Helix):
+            # The Plus has no Z (seed 003 §2.1) and no event for X, Y and Z moving together.
+            self.report.error(
+                number,
+                f"{block.title} is not written: a helix moves Z with X and Y, and the Plus is "
+                "a 2-axis control whose events have no Z (seed 003 §2.1); "
+                "use a G-code target",
+            )
+            self.reference = self.resolve(block)
+            return
         assert isinstance(block, Pos | Hole)
         target = self.resolve(block)
         self.add(Position(number, target, block.tool), [(number, self.point(target))])

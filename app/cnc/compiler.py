@@ -62,8 +62,8 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.memo import ByObject, Memo
 from app.cnc.helix import helix_ends
+from app.cnc.memo import ByObject, Memo
 from app.cnc.mill import Finding, Path, length, plan_sequence, routine_clockwise
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (

@@ -13,7 +13,7 @@ from app.cnc import limits
 from app.cnc.blocks import Program
 from app.cnc.imports.build import Builder, SetUp, block0, make_program
 from app.cnc.imports.common import show
-from app.cnc.imports.ops import LoopOp, Op, PosOp
+from app.cnc.imports.ops import HelixOp, LoopOp, Op, PosOp
 from app.cnc.imports.recognise import (
     RoutineFinder,
     find_bolt_circles,
@@ -117,6 +117,8 @@ def _z_ups(ops: list[Op]) -> dict[int, int]:
     for op in ops:
         if isinstance(op, LoopOp):
             found |= _z_ups(op.body)
+        elif isinstance(op, HelixOp):
+            found |= dict.fromkeys(op.lines, op.z_up)
         elif not isinstance(op, PosOp) and op.spec.z_up is not None:
             found |= dict.fromkeys(op.lines, op.spec.z_up)
     return found

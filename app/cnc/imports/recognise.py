@@ -63,13 +63,13 @@ from app.cnc.imports.ops import (
     LoopOp,
     MillOp,
     Op,
-    PocketOp,
     RoutineOp,
     Signature,
     anchor,
     close_numbers,
     signature,
     tools_of,
+    units_of,
 )
 from app.cnc.mill import INSIDE_PLACEMENTS, Path, plan_sequence, rough_depth, rough_wall
 from app.cnc.units import Units
@@ -810,8 +810,4 @@ class _Kinds:
 
 
 def _units(op: Op) -> Units:
-    if isinstance(op, LoopOp):
-        return _units(op.body[0])
-    if isinstance(op, HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp):
-        return op.spec.units
-    return op.units
+    return units_of(op)

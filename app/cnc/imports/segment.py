@@ -29,17 +29,32 @@ from itertools import islice
 from typing import Final, TypeGuard
 
 from app.cnc import limits
-from app.cnc.blocks import Comp, HoleOp
+from app.cnc.blocks import Comp, Helix, HoleOp, MillingMode, Placement
 from app.cnc.compiler import peck_levels
+from app.cnc.geometry import arc_sweep
+from app.cnc.helix import helix_ends
 from app.cnc.imports.common import (
     XY,
     ImportFailure,
     Notes,
+    decimal_of,
+    feed_decimal,
+    quantize_nm,
+    resolution_nm,
     show,
     show_feed,
 )
 from app.cnc.imports.compensation import Part, Reading
-from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, LoopOp, MillOp, Op, PosOp
+from app.cnc.imports.ops import (
+    Element,
+    HelixOp,
+    HoleOpR,
+    HoleSpec,
+    LoopOp,
+    MillOp,
+    Op,
+    PosOp,
+)
 from app.cnc.imports.steps import (
     Arc,
     Coolant,
@@ -57,6 +72,7 @@ from app.cnc.imports.steps import (
     Stop,
     ToolChange,
 )
+from app.cnc.mill import routine_clockwise
 from app.cnc.units import Units, to_nm
 
 DWELL: Final = limits.HOLE_DWELL_SECONDS
@@ -387,6 +403,8 @@ class _Segmenter:
             return i + 1
         if self.two_axis:
             return self.two_axis_sequence(i)
+        if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z < self.z:
+            return self.helix(i)
         if isinstance(step, Feed) and step.z is not None and self.z is not None and step.z < self.z:
             raise ImportFailure(
                 self.notes.where(step.line),
@@ -403,6 +421,108 @@ class _Segmenter:
             "move down) missing?",
             step.line,
         )
+
+    def helix(self, i: int) -> int:
+        """Arcs going down about one centre, from where the tool came down at rapid: a
+        HELIX (blocks.Helix) when they are one — the same centre, direction and feed, the
+        same depth a turn, then a whole turn at the bottom and, where the tool covers the
+        centre, a feed to it. The helix's blocks must cut the file's arcs within its
+        rounding. Raises ImportFailure naming the line otherwise."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Arc) and first.z is not None and self.z is not None
+        line = first.line
+        where = self.notes.where(line)
+        centre = (first.cx, first.cy)
+        start = (self.x, self.y, self.z)
+        units = first.units
+
+        def refuse(why: str) -> ImportFailure:
+            return ImportFailure(
+                where,
+                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX: {why}",
+                line,
+            )
+
+        down: list[Arc] = []
+        j = i
+        x, y, z = start
+        turned = 0.0
+        while j < len(steps):
+            s = steps[j]
+            if not (
+                isinstance(s, Arc)
+                and s.z is not None
+                and s.z < z
+                and (s.cx, s.cy) == centre
+                and s.clockwise == first.clockwise
+                and s.feed == first.feed
+            ):
+                break
+            turned += arc_sweep((x, y), (s.x, s.y), centre, s.clockwise)
+            down.append(s)
+            x, y, z = s.x, s.y, s.z
+            j += 1
+        finish = steps[j] if j < len(steps) else None
+        if not (
+            isinstance(finish, Arc)
+            and (finish.x, finish.y) == (x, y)
+            and finish.z in (None, z)
+            and (finish.cx, finish.cy) == centre
+            and finish.clockwise == first.clockwise
+        ):
+            raise refuse("a HELIX ends with a whole turn at its bottom, and this one does not")
+        j += 1
+        radius = math.dist(start[:2], centre)
+        pitch = quantize_nm(round((start[2] - z) * 2 * math.pi / turned), units)
+        if pitch <= 0:
+            raise refuse("it goes down less than the programming resolution a turn")
+        made = helix_ends(start, centre, z, pitch, first.clockwise)
+        if len(made) != len(down) or any(
+            math.dist(end, (s.x, s.y, s.z or 0)) > 2 * self.tol + resolution_nm(units)
+            for end, s in zip(made, down, strict=False)
+        ):
+            raise refuse(
+                f"its turns do not go down the same {show(pitch, units)} each, as a HELIX's do"
+            )
+        tool = self.tool or self.next_tool()
+        data = self.parsed.tools.get(tool)
+        if data is None or not data.diameter:
+            raise ImportFailure(
+                where,
+                f"a helix cut with tool {tool}, whose diameter the file does not give: a "
+                "HELIX is its finished diameter, the tool's DIA added to the path's; give "
+                "the tool's diameter in a set-up comment",
+                line,
+            )
+        lines = [*self.take_pending(start[:2]), line]
+        leave = steps[j] if j < len(steps) else None
+        if isinstance(leave, Feed) and (leave.x, leave.y) == centre and leave.z in (None, z):
+            lines.append(leave.line)
+            x, y = centre
+            j += 1
+        diameter = quantize_nm(round(2 * radius) + data.diameter, units)
+        inside_climb = routine_clockwise(
+            Placement.INSIDE, MillingMode.CLIMB, None if self.spindle_cw is not False else -1
+        )
+        block = Helix(
+            x=Decimal(0),
+            y=Decimal(0),
+            diameter=decimal_of(diameter, units),
+            z_up=decimal_of(quantize_nm(start[2], units), units),
+            z_dn=decimal_of(quantize_nm(z, units), units),
+            pitch=decimal_of(pitch, units),
+            milling=(
+                MillingMode.CLIMB if first.clockwise == inside_climb else MillingMode.CONVENTIONAL
+            ),
+            feed_xy=feed_decimal(first.feed, units),
+            tool=tool,
+            units=units,
+        )
+        self.add(HelixOp(lines, centre, block, start[2]))
+        self.awaiting_retract = (line, start[2])
+        self.x, self.y, self.z = x, y, z
+        return j
 
     def plunge(self, i: int) -> int:
         """A feed straight down at (x, y): a hole, or the DRILL of a mill sequence."""

@@ -50,8 +50,9 @@ class Feed:
 
 @dataclass(slots=True)
 class Arc:
-    """A circular move in the XY plane at constant Z about (cx, cy); `clockwise` seen from
-    above. An arc that ends where it starts is a full circle."""
+    """A circular move about (cx, cy) in the XY plane to (x, y, z); `clockwise` seen from
+    above. An arc that ends where it starts in X/Y is a full circle; one whose `z` differs
+    from where it starts is helical (Z in proportion to the angle turned)."""
 
     line: int
     x: int

@@ -1583,10 +1583,8 @@ class _Reader:
                 "MillBlocks cuts arcs in XY only; if it is a CAM's vertical lead-in or "
                 "lead-out, turn those off (a lead in XY, or none)",
             )
-        if z is not None and self.z is not None and z != self.z:
-            raise failure(
-                line, first, "a helix (an arc with a Z move): MillBlocks cuts arcs at one depth"
-            )
+        # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
+        # block, or a refusal naming the line) is the segmenter's (app.cnc.imports.segment).
         k = block.get("K")
         if k is not None:
             raise failure(line, k.column, "K in an XY arc")

@@ -90,7 +90,9 @@ def test_a_helix_that_leaves_a_core_rises_where_it_is() -> None:
     """A 0.375 tool in a 1.25 bore leaves a core 0.5 across: the tool goes up at the wall."""
     program = bore()
     tools = (Tool(number=1, diameter=Decimal("0.375"), rpm=3000, tcal=Decimal(0)),)
-    helix = dataclasses.replace(program.blocks[0], diameter=Decimal("1.25"))
+    helix = program.blocks[0]
+    assert isinstance(helix, Helix)
+    helix = dataclasses.replace(helix, diameter=Decimal("1.25"))
     program = dataclasses.replace(
         program, blocks=(helix,), block0=dataclasses.replace(program.block0, tools=tools)
     )

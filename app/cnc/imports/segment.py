@@ -748,7 +748,9 @@ class _Segmenter:
                 if s.z is not None and s.z != depth:
                     raise ImportFailure(
                         self.notes.where(s.line),
-                        "an arc at another depth (a helix): MillBlocks cuts arcs at one depth",
+                        "an arc at another depth (a helix) in a mill sequence: MillBlocks cuts "
+                        "a sequence's arcs at one depth, and reads a helix as a HELIX block "
+                        "where the tool comes down to its start at rapid",
                         s.line,
                     )
                 elements.append(

@@ -27,6 +27,7 @@ from app.cnc.interpret import interpret
 from app.cnc.machine import _enters_zone
 from app.cnc.path import MOVE, Op
 from app.cnc.simulate.segments import Entry, ToolShapes, piece_segments
+from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
 from app.cnc.units import Units
 
@@ -231,3 +232,19 @@ def test_a_helix_read_from_gcode_is_a_helix_block() -> None:
         ),
     )
     assert parse_gcode(text, "helix").steps  # the parser keeps the helical arcs as steps
+
+
+def test_verify_takes_a_helix_for_the_bore_it_makes() -> None:
+    """Verify's intended part: a HELIX removes its finished DIA to Z DN, so the helical
+    entry (its 16 mm tool covers the centre) gouges nothing and leaves nothing; a HELIX
+    whose tool leaves a core is named for it, at the centre."""
+    entry = document.loads((GOLDEN / "helix-entry-mm" / "program.json").read_text())
+    assert verify(entry).findings == []
+    program = document.loads((GOLDEN / "helix-bore" / "program.json").read_text())
+    assert [(f.block, f.kind, f.message) for f in verify(program).findings] == [
+        (
+            2,
+            "hole depth",
+            "the HELIX hole at X 3.5000 Y 1.2500 is 0.3000 in shallower than Z DN -0.3000",
+        )
+    ]

@@ -2,8 +2,8 @@
 
 `programmed_geometry` is the one place that reads the blocks for verify: the finished
 contours of compensated MILL sequences and of POCKETs (walls and islands), the CIRCLE/FRAME
-routines, and every hole with
-its programmed depth. All of it is the compiled path's: its hole and mill spans carry where
+routines, and every hole with its programmed depth (a HELIX is the bore of its finished
+DIA). All of it is the compiled path's: its hole and mill spans carry where
 each was cut and the contour it was planned from (LOOP patterns, bolt circles and
 incremental positions are the compiler's, not re-derived here). Lengths in nm, part
 coordinates.
@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from app.cnc.blocks import Circle, Comp, Frame, HoleOp, Placement, Pocket, Program
+from app.cnc.blocks import Circle, Comp, Frame, Helix, HoleOp, Placement, Pocket, Program
 from app.cnc.compiler import compile_program
 from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
 from app.cnc.path import MillSpan, Op, Rows
@@ -65,7 +65,8 @@ class Routine:
 @dataclass(frozen=True)
 class HoleSpec:
     """A DRILL, BORE or TAP hole at (x, y), programmed to `depth` (Z DN) by `block`, with a
-    tool of `radius` (0: Data Block 0 gives no diameter)."""
+    tool of `radius` (0: Data Block 0 gives no diameter); a HELIX's bore of its finished
+    radius, flat like a BORE's."""
 
     block: int
     op: HoleOp
@@ -73,6 +74,12 @@ class HoleSpec:
     y: int
     depth: int
     radius: int = 0
+    kind: str = ""  # what made it, where not its operation ("HELIX": a helical bore)
+
+    @property
+    def name(self) -> str:
+        """What the hole is called in a finding (DRILL, BORE, TAP, HELIX)."""
+        return self.kind or self.op.value
 
 
 @dataclass(frozen=True)
@@ -141,7 +148,12 @@ def programmed_geometry(program: Program) -> Programmed:
             found.holes.append(
                 HoleSpec(placed.block, placed.op, placed.x, placed.y, placed.bottom, radius)
             )
+    helices = {
+        number: block for number, block in enumerate(program.blocks, 1) if isinstance(block, Helix)
+    }
     for chunk in compiled.chunks():
+        if helices:
+            found.holes += _helix_bores(chunk.rows, helices, seen)
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -194,6 +206,26 @@ def programmed_geometry(program: Program) -> Programmed:
                 )
             )
     return found
+
+
+def _helix_bores(
+    rows: Rows, helices: dict[int, Helix], seen: set[tuple[int, int, int]]
+) -> list[HoleSpec]:
+    """Each HELIX where the compiled path cuts it (the centre of its arcs, wherever a LOOP
+    or an INC block put it) as the bore it makes: its finished DIA down to Z DN, flat."""
+    bores = []
+    arcs = rows[(rows["op"] == Op.ARC_CW) | (rows["op"] == Op.ARC_CCW)]
+    for block, cx, cy in zip(
+        arcs["block"].tolist(), arcs["cx"].tolist(), arcs["cy"].tolist(), strict=True
+    ):
+        helix = helices.get(block)
+        if helix is None or (block, cx, cy) in seen:
+            continue
+        seen.add((block, cx, cy))
+        depth = to_nm(helix.z_dn, helix.units)
+        radius = to_nm(helix.diameter, helix.units) // 2
+        bores.append(HoleSpec(block, HoleOp.BORE, cx, cy, depth, radius, "HELIX"))
+    return bores
 
 
 def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:

@@ -35,6 +35,7 @@ from app.cnc.blocks import (
     Pos,
     Program,
     Rep,
+    ThreadMill,
     Tool,
 )
 from app.cnc.compiler import compile_program
@@ -646,7 +647,7 @@ def golden(name: str) -> Program:
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_every_golden_program_passes_the_self_check(case: Path) -> None:
     program = golden(case.name)
-    if any(isinstance(b, Helix) for b in program.blocks):
+    if any(isinstance(b, Helix | ThreadMill) for b in program.blocks):
         # A helix moves Z with X and Y: the Plus (no Z) refuses it, saying so.
         with pytest.raises(ExportError) as refused:
             export(program, "events")

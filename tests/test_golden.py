@@ -92,7 +92,12 @@ _GCODE_CASES = (
 # POCKET (issue 22) goes to every target as explicit moves: a golden file for each.
 _POCKET_CASES = ("pocket-islands", "pocket-mm", "pocket-loop")
 # The operations of issue 33 (helical arcs: G2/G3 with Z, or chords where a target has none).
-_OPERATION_CASES = ("helix-bore", "helix-entry-mm")
+_OPERATION_CASES = (
+    "helix-bore",
+    "helix-entry-mm",
+    "thread-mill-internal",
+    "thread-mill-external-mm",
+)
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _OPERATION_CASES,
     "gcode-fanuc": _GCODE_CASES + _POCKET_CASES + _OPERATION_CASES,
@@ -137,5 +142,5 @@ def test_corpus_covers_every_block_type() -> None:
     expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
     expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
     expected |= {"POCKET", "PKT_LINE", "PKT_ARC", "PKT_ARC_END", "ISLAND"}
-    expected |= {"HELIX"}
+    expected |= {"HELIX", "THREAD_MILL"}
     assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

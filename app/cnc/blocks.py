@@ -667,6 +667,71 @@ class Helix(Block):
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
 
 
+class ThreadPlace(enum.Enum):
+    """Where a THREAD MILL cuts: a nut's thread inside a bore, or a bolt's outside a boss."""
+
+    INTERNAL = "internal"
+    EXTERNAL = "external"
+
+
+PITCH_HELP = "threads per inch in an inch block, mm per thread in a mm block"
+
+
+@dataclass(frozen=True, kw_only=True)
+class ThreadMill(Block):
+    """THREAD MILL: a 60° thread of major diameter `diameter` about X, Y, from Z UP down to
+    Z DN, cut with a single-point thread mill whose DIA (Data Block 0) is its cutting
+    diameter (app/cnc/thread.py has the motion).
+
+    `pitch` is threads per inch in an inch block and mm per thread in a mm block. The thread
+    is cut in `passes` radial passes evenly spaced to the full depth of an ISO/UN basic
+    profile (internal 5/8 H, external 17/24 H, H = 0.866 × pitch); each pass enters and
+    leaves along half-circle arcs tangent to the thread, a quarter of a pitch along Z each.
+    Climb unless the block says conventional (`milling`); the direction of travel and the
+    hand of the thread decide whether it goes up or down (a right-hand internal thread cut
+    climb is cut bottom-up with G3). Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "THREAD_MILL"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("THREAD_MILL"),),
+        editor=(
+            SubKind(
+                "THREAD_MILL_INT",
+                "THREAD MILL INT",
+                "TAP",
+                3,
+                (("place", ThreadPlace.INTERNAL),),
+            ),
+            SubKind(
+                "THREAD_MILL_EXT",
+                "THREAD MILL EXT",
+                "TAP",
+                4,
+                (("place", ThreadPlace.EXTERNAL),),
+            ),
+        ),
+        positioned=True,
+        loopable=True,
+    )
+    place: ThreadPlace = prompt("INT/EXT", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    diameter: Decimal = prompt("MAJOR DIA", LENGTH, positive=True, help="the thread's size")
+    pitch: Decimal = prompt("PITCH", LENGTH, positive=True, help=PITCH_HELP)
+    hand: Hand = prompt("HAND", CHOICE, Hand.RIGHT)
+    z_up: Decimal = prompt("Z UP", LENGTH, help="the top of the thread")
+    z_dn: Decimal = prompt("Z DN", LENGTH, help="the bottom of the thread")
+    passes: int = prompt("# PASS", COUNT, 1, low=1, high=limits.MAX_THREAD_PASSES)
+    milling: MillingMode = prompt("0 CONV 1 CLIMB", CHOICE, MillingMode.CLIMB)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "THREAD MILL " + ("INT" if self.place is ThreadPlace.INTERNAL else "EXT")
+
+
 # Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
 # (NX + 1) × (NY + 1) patterns.
 REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"

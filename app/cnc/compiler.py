@@ -60,6 +60,8 @@ from app.cnc.blocks import (
     Pos,
     Program,
     Rep,
+    ThreadMill,
+    ThreadPlace,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.helix import helix_ends
@@ -83,7 +85,9 @@ from app.cnc.path import (
 from app.cnc.pocketing.model import LinkKind, PocketPlan
 from app.cnc.problems import Rule, Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
+from app.cnc.thread import thread_passes
 from app.cnc.toolpath import ToolInfo
+from app.cnc.tools import Hand, PitchUnit, lead_per_rev
 from app.cnc.units import Units, to_nm
 
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
@@ -509,6 +513,10 @@ class _Compiler:
             target = self.resolve(block)
             self.helix(number, block, target)
             self.reference = target
+        elif isinstance(block, ThreadMill):
+            target = self.resolve(block)
+            self.thread_mill(number, block, target)
+            self.reference = target
         else:
             raise CompileError(number, f"a {block.title} block cannot stand on its own here")
 
@@ -845,6 +853,46 @@ class _Compiler:
             self.feed_to(number, (*centre, z_dn), feed, "lead-out")
         self.retract_up(number)
 
+    def thread_mill(self, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
+        """THREAD MILL about `centre` (app/cnc/thread.py says the motion). A block whose
+        tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
+        validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        lead = thread_lead(block)
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if tool_diameter is None or z_up - z_dn <= lead // 2:
+            return
+        internal = block.place is ThreadPlace.INTERNAL
+        placement = Placement.INSIDE if internal else Placement.OUTSIDE
+        clockwise = routine_clockwise(placement, block.milling, self.spindle_rpm(block.tool))
+        passes = thread_passes(
+            centre,
+            to_nm(block.diameter, units),
+            tool_diameter,
+            lead,
+            z_up,
+            z_dn,
+            block.passes,
+            internal,
+            clockwise,
+            block.hand is Hand.RIGHT,
+            to_nm(limits.THREAD_CLEAR_INCH, Units.INCH),
+        )
+        self.use_tool(number, block.tool)
+        feed = to_nm(block.feed_xy, units)
+        self.retract = retract_height(z_up, self.z_retract)
+        for cut in passes:
+            self.position(number, cut.approach, self.retract)
+            self.rapid_z(number, cut.z_start)
+            lead_in = cut.lead_in
+            self.helix_to(number, lead_in.end, lead_in.centre, lead_in.clockwise, feed, "lead-in")
+            for turn in cut.turns:
+                self.helix_to(number, turn.end, turn.centre, turn.clockwise, feed)
+            out = cut.lead_out
+            self.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
+        self.retract_up(number)
+
     def tool_diameter(self, tool: int) -> int | None:
         """A tool's DIA in nm (None: not given, or not positive)."""
         info = self.tools.get(tool)
@@ -1008,6 +1056,12 @@ def _too_large(over: cost.Cost, limit: int) -> Finding:
     assert over.over is not None
     field = "LOOP" if over.rep is not None else "STEP" if over.levels else None
     return Finding(over.over, Rule.TOO_LARGE, Severity.ERROR, over.message(limit), field)
+
+
+def thread_lead(block: ThreadMill) -> int:
+    """A THREAD MILL's lead in nm: 1/PITCH in in an inch block, PITCH mm in a mm block."""
+    unit = PitchUnit.TPI if block.units is Units.INCH else PitchUnit.MM
+    return round(lead_per_rev(block.pitch, unit, block.units) * block.units.nm)
 
 
 def _depths(block: Hole) -> tuple[int, int, int]:

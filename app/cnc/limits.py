@@ -29,6 +29,10 @@ MAX_TOOL = 24  # tools 1-24
 MAX_BOLT_HOLES = 250
 MAX_ISLANDS = 8  # islands in one POCKET (Hurco's conversational pockets take several)
 MAX_LOOP_DEPTH = 4
+MAX_THREAD_PASSES = 20  # our reading: radial passes of a THREAD MILL
+# Our reading: how far beyond the major diameter an external THREAD MILL's tool comes down
+# and leaves to (its edge), as the CIRCLE routines' 0.050 in.
+THREAD_CLEAR_INCH = Decimal("0.05")
 MAX_REPEAT = 999
 MIN_RPM = 60
 GEAR_CHANGE_RPM = 500

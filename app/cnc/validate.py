@@ -34,16 +34,19 @@ from app.cnc.blocks import (
     PocketLine,
     Program,
     Rep,
+    ThreadMill,
+    ThreadPlace,
     Tool,
     field_label,
 )
-from app.cnc.compiler import compile_program
+from app.cnc.compiler import compile_program, thread_lead
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
+from app.cnc.thread import thread_depth
 from app.cnc.tools import (
     MAX_FLUTES,
     MAX_NUMBER,
@@ -445,6 +448,25 @@ class _Checker:
             self.check_hole(number, block)
         if isinstance(block, Helix):
             self.check_helix(number, block)
+        if isinstance(block, ThreadMill):
+            self.check_thread_mill(number, block)
+
+    def check_thread_mill(self, number: int, thread: ThreadMill) -> None:
+        """Z DN below Z UP by more than half a lead: the lead-in and lead-out take a
+        quarter each (the tool's size is `check_thread_tool`'s)."""
+        u = thread.units.symbol
+        lead = thread_lead(thread)
+        if to_nm(thread.z_up, thread.units) - to_nm(thread.z_dn, thread.units) <= lead // 2:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(thread.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(thread.z_up)} {u} by more than half the thread's "
+                f"{message_length(lead, thread.units)} lead: the thread runs from Z UP down "
+                "to Z DN, and its lead-in and lead-out take a quarter of the lead each",
+            )
 
     def check_helix(self, number: int, helix: Helix) -> None:
         """Z DN below Z UP (the tool's size is `check_helix_tool`'s)."""
@@ -671,6 +693,26 @@ class _Checker:
                 "smaller tool",
             )
 
+    def check_thread_tool(self, number: int, thread: ThreadMill, tool: Tool) -> None:
+        """An internal thread's tool goes down the bore's centre: smaller than the minor
+        diameter."""
+        if tool.diameter is None or thread.place is not ThreadPlace.INTERNAL:
+            return
+        tool_diameter = to_nm(tool.diameter, self.program.units)
+        lead = thread_lead(thread)
+        minor = to_nm(thread.diameter, thread.units) - round(2 * thread_depth(lead, True))
+        if tool_diameter >= minor:
+            self.add(
+                number,
+                "TOOL #",
+                ERROR,
+                Rule.HELIX_TOOL,
+                f"tool {thread.tool}'s DIA {message_length(tool_diameter, thread.units)} is not "
+                f"smaller than the thread's minor diameter "
+                f"{message_length(minor, thread.units)}: the tool goes down the bore's "
+                "centre and out to the thread; give a smaller thread mill",
+            )
+
     def inside_mill_sequence(self, index: int) -> bool:
         """True when block `index` is a DRILL starting a sequence or one of its mill blocks."""
         return index + 1 < len(self.blocks) and (
@@ -692,7 +734,7 @@ class _Checker:
             # at its DIA less the tool's: they need the diameter.
             needs_diameter = (
                 REGISTRY.of(block).mill is Mill.ROUTINE
-                or isinstance(block, Helix)
+                or isinstance(block, Helix | ThreadMill)
                 or (
                     isinstance(block, Hole)
                     and block.comp is not Comp.NONE
@@ -701,6 +743,8 @@ class _Checker:
             )
             if isinstance(block, Helix) and tool is not None:
                 self.check_helix_tool(number, block, tool)
+            if isinstance(block, ThreadMill) and tool is not None:
+                self.check_thread_tool(number, block, tool)
             if needs_diameter and (tool is None or tool.diameter is None):
                 self.add(
                     number,
@@ -714,6 +758,8 @@ class _Checker:
                         if isinstance(block, Pocket)
                         else "a HELIX goes round at the finished DIA less the cutter's"
                         if isinstance(block, Helix)
+                        else "a THREAD MILL cuts the thread to size with the cutter's diameter"
+                        if isinstance(block, ThreadMill)
                         else "cutter-compensated milling needs the cutter's measured diameter"
                     ),
                 )

@@ -405,10 +405,24 @@ class _Segmenter:
             return self.two_axis_sequence(i)
         if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z < self.z:
             return self.helix(i)
-        if isinstance(step, Feed) and step.z is not None and self.z is not None and step.z < self.z:
+        if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z > self.z:
             raise ImportFailure(
                 self.notes.where(step.line),
-                "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
+                "an arc going up in Z (a helix cut upwards, as a thread is milled from the "
+                "bottom): MillBlocks reads a helix going down as a HELIX, and reads no "
+                "THREAD MILL back",
+                step.line,
+            )
+        if (
+            isinstance(step, Feed)
+            and step.z is not None
+            and self.z is not None
+            and step.z != self.z
+        ):
+            into = "into the work" if step.z < self.z else "up from where the tool came down"
+            raise ImportFailure(
+                self.notes.where(step.line),
+                f"X/Y and Z fed together {into} (a ramp): MillBlocks plunges straight "
                 "down, then cuts in XY at one depth; have the CAM plunge (no ramp or helical "
                 "entry)",
                 step.line,
@@ -440,7 +454,8 @@ class _Segmenter:
         def refuse(why: str) -> ImportFailure:
             return ImportFailure(
                 where,
-                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX: {why}",
+                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX (MillBlocks "
+                f"reads no THREAD MILL back): {why}",
                 line,
             )
 

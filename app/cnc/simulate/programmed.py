@@ -14,13 +14,26 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from app.cnc.blocks import Circle, Comp, Frame, Helix, HoleOp, Placement, Pocket, Program
-from app.cnc.compiler import compile_program
+from app.cnc.blocks import (
+    Circle,
+    Comp,
+    Frame,
+    Helix,
+    HoleOp,
+    Placement,
+    Pocket,
+    Program,
+    ThreadMill,
+    ThreadPlace,
+)
+from app.cnc.compiler import compile_program, thread_lead
 from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
 from app.cnc.path import MillSpan, Op, Rows
 from app.cnc.pocketing.regions import element_points
 from app.cnc.pocketing.routine import contours_at
 from app.cnc.process import placed_hole_list
+from app.cnc.thread import thread_depth
+from app.cnc.toolpath import ToolInfo
 from app.cnc.units import to_nm
 
 
@@ -148,12 +161,14 @@ def programmed_geometry(program: Program) -> Programmed:
             found.holes.append(
                 HoleSpec(placed.block, placed.op, placed.x, placed.y, placed.bottom, radius)
             )
-    helices = {
-        number: block for number, block in enumerate(program.blocks, 1) if isinstance(block, Helix)
+    helical = {
+        number: block
+        for number, block in enumerate(program.blocks, 1)
+        if isinstance(block, Helix | ThreadMill)
     }
     for chunk in compiled.chunks():
-        if helices:
-            found.holes += _helix_bores(chunk.rows, helices, seen)
+        if helical:
+            _helical_cuts(chunk.rows, helical, seen, compiled.tools, found)
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -208,24 +223,53 @@ def programmed_geometry(program: Program) -> Programmed:
     return found
 
 
-def _helix_bores(
-    rows: Rows, helices: dict[int, Helix], seen: set[tuple[int, int, int]]
-) -> list[HoleSpec]:
-    """Each HELIX where the compiled path cuts it (the centre of its arcs, wherever a LOOP
-    or an INC block put it) as the bore it makes: its finished DIA down to Z DN, flat."""
-    bores = []
-    arcs = rows[(rows["op"] == Op.ARC_CW) | (rows["op"] == Op.ARC_CCW)]
-    for block, cx, cy in zip(
-        arcs["block"].tolist(), arcs["cx"].tolist(), arcs["cy"].tolist(), strict=True
+def _helical_cuts(
+    rows: Rows,
+    blocks: dict[int, Helix | ThreadMill],
+    seen: set[tuple[int, int, int]],
+    tools: dict[int, ToolInfo],
+    found: Programmed,
+) -> None:
+    """Each HELIX and THREAD MILL where the compiled path cuts it (the centre of its turns,
+    wherever a LOOP or an INC block put it; the lead arcs are tagged and have their own
+    centres) as what it removes: a HELIX the bore of its finished DIA to Z DN, flat; an
+    internal thread the bore of its major diameter to Z DN (the thread's form is not
+    simulated: the tool is a cylinder of its DIA); an external thread all round outside
+    its minor diameter, as a CIRCLE OUTSIDE."""
+    turns = rows[((rows["op"] == Op.ARC_CW) | (rows["op"] == Op.ARC_CCW)) & (rows["tag"] == 0)]
+    for number, cx, cy in zip(
+        turns["block"].tolist(), turns["cx"].tolist(), turns["cy"].tolist(), strict=True
     ):
-        helix = helices.get(block)
-        if helix is None or (block, cx, cy) in seen:
+        block = blocks.get(number)
+        if block is None or (number, cx, cy) in seen:
             continue
-        seen.add((block, cx, cy))
-        depth = to_nm(helix.z_dn, helix.units)
-        radius = to_nm(helix.diameter, helix.units) // 2
-        bores.append(HoleSpec(block, HoleOp.BORE, cx, cy, depth, radius, "HELIX"))
-    return bores
+        seen.add((number, cx, cy))
+        units = block.units
+        depth = to_nm(block.z_dn, units)
+        size = to_nm(block.diameter, units)
+        if isinstance(block, Helix):
+            found.holes.append(HoleSpec(number, HoleOp.BORE, cx, cy, depth, size // 2, "HELIX"))
+        elif block.place is ThreadPlace.INTERNAL:
+            found.holes.append(
+                HoleSpec(number, HoleOp.BORE, cx, cy, depth, size // 2, block.type_name)
+            )
+        else:
+            info = tools.get(block.tool)
+            radius = 0 if info is None or info.diameter is None else info.diameter // 2
+            minor = size - round(2 * thread_depth(thread_lead(block), False))
+            found.routines.append(
+                Routine(
+                    block=number,
+                    is_frame=False,
+                    inside=False,
+                    pocket=False,
+                    tool_radius=radius,
+                    depth=depth,
+                    centre=(float(cx), float(cy)),
+                    radius=minor // 2,
+                    drill=number,
+                )
+            )
 
 
 def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:

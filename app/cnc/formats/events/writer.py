@@ -78,6 +78,7 @@ from app.cnc.blocks import (
     Pos,
     Program,
     Rep,
+    ThreadMill,
 )
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.formats.events.model import (
@@ -213,7 +214,7 @@ class _Builder:
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
         number = index + 1
-        if isinstance(block, Helix):
+        if isinstance(block, Helix | ThreadMill):
             # The Plus has no Z (seed 003 §2.1) and no event for X, Y and Z moving together.
             self.report.error(
                 number,

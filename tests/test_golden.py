@@ -97,6 +97,8 @@ _OPERATION_CASES = (
     "helix-entry-mm",
     "thread-mill-internal",
     "thread-mill-external-mm",
+    "face-zigzag",
+    "face-one-way-mm",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _OPERATION_CASES,
@@ -142,5 +144,5 @@ def test_corpus_covers_every_block_type() -> None:
     expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
     expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
     expected |= {"POCKET", "PKT_LINE", "PKT_ARC", "PKT_ARC_END", "ISLAND"}
-    expected |= {"HELIX", "THREAD_MILL"}
+    expected |= {"HELIX", "THREAD_MILL", "FACE"}
     assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

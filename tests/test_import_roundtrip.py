@@ -152,6 +152,11 @@ NOT_READ_BACK["gcode-linuxcnc"] = {
     "thread-mill-internal": THREADS,
     "thread-mill-external-mm": THREADS,
 }
+# A FACE comes down at rapid beside the part and cuts at that depth: no DRILL feeds down
+# first, so no file reads back as a FACE (refused, naming the line).
+FACES = ("a FACE is not read back: refused, naming the line", "has not fed down to it")
+for target in (*CHORD_TARGETS, "gcode-linuxcnc"):
+    NOT_READ_BACK[target] |= {"face-zigzag": FACES, "face-one-way-mm": FACES}
 
 
 def refused_as_chords(case: Path, target: str, data: bytes, options: dict[str, str] | None) -> None:

@@ -732,6 +732,60 @@ class ThreadMill(Block):
         return "THREAD MILL " + ("INT" if self.place is ThreadPlace.INTERNAL else "EXT")
 
 
+class FacePattern(enum.Enum):
+    """How FACE's passes go: back and forth, or each the same way (up and back between)."""
+
+    ZIGZAG = "zigzag"
+    ONE_WAY = "one_way"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Face(Block):
+    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/face.py).
+
+    Passes along X, `step` percent of the tool's DIA (Data Block 0) apart in Y, the tool
+    running off both ends of each pass by `clear` beyond its edge (None: 0.050 in / 1.27 mm)
+    and past both long edges; `passes` levels evenly spaced from Z UP (the stock's top) to
+    Z DN, coming down at rapid beside the part. Zig-zag goes back and forth; one-way cuts
+    each pass in +X and goes up and back between. Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "FACE"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("FACE"),),
+        editor=(
+            SubKind("FACE", "FACE", POCKET_GROUP, 6, (("pattern", FacePattern.ZIGZAG),)),
+            SubKind(
+                "FACE_ONE_WAY",
+                "FACE ONE WAY",
+                POCKET_GROUP,
+                7,
+                (("pattern", FacePattern.ONE_WAY),),
+            ),
+        ),
+        positioned=True,
+        loopable=True,
+    )
+    pattern: FacePattern = prompt("PATTERN", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X, help="the rectangle's centre")
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y, help="the rectangle's centre")
+    xl: Decimal = prompt("XL", LENGTH, positive=True)
+    yw: Decimal = prompt("YW", LENGTH, positive=True)
+    z_up: Decimal = prompt("Z UP", LENGTH, help="the stock's top")
+    z_dn: Decimal = prompt("Z DN", LENGTH, help="the faced height")
+    passes: int = prompt("# PASS", COUNT, 1, low=1, high=limits.MAX_PECKS)
+    step: int = prompt("STEP %", COUNT, 70, low=1, high=100, help="percent of the tool's DIA")
+    clear: Decimal | None = prompt(
+        "CLEAR", LENGTH, None, low=Decimal(0), help="empty: 0.050 in past each edge"
+    )
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "FACE" if self.pattern is FacePattern.ZIGZAG else "FACE ONE WAY"
+
+
 # Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
 # (NX + 1) × (NY + 1) patterns.
 REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"

@@ -52,6 +52,8 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     DataBlock0,
+    Face,
+    FacePattern,
     Helix,
     Hole,
     HoleOp,
@@ -63,6 +65,7 @@ from app.cnc.blocks import (
     ThreadMill,
     ThreadPlace,
 )
+from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
@@ -513,6 +516,9 @@ class _Compiler:
             target = self.resolve(block)
             self.helix(number, block, target)
             self.reference = target
+        elif isinstance(block, Face):
+            self.face(number, block, self.resolve(block))
+            self.reference = self.resolve(block)
         elif isinstance(block, ThreadMill):
             target = self.resolve(block)
             self.thread_mill(number, block, target)
@@ -892,6 +898,49 @@ class _Compiler:
             out = cut.lead_out
             self.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
         self.retract_up(number)
+
+    def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
+        """FACE about `centre` (app/cnc/face.py says the rows): at each of # PASS levels from
+        Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
+        feeds off the part's end) or one-way (up to the retract height and back between).
+        A block whose tool has no DIA makes no moves: validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if tool_diameter is None or z_dn >= z_up:
+            return
+        clear = to_nm(
+            block.clear if block.clear is not None else limits.FACE_CLEAR_INCH,
+            units if block.clear is not None else Units.INCH,
+        )
+        rows = face_rows(
+            centre,
+            to_nm(block.xl, units),
+            to_nm(block.yw, units),
+            tool_diameter // 2,
+            tool_diameter * block.step // 100,
+            clear,
+        )
+        zigzag = block.pattern is FacePattern.ZIGZAG
+        feed = to_nm(block.feed_xy, units)
+        self.use_tool(number, block.tool)
+        self.retract = retract_height(z_up, self.z_retract)
+        first = (rows[0][1], rows[0][0])
+        for level in peck_levels(z_up, z_dn, block.passes):
+            self.position(number, first, self.retract)
+            self.rapid_z(number, level)
+            for k, (y, x_from, x_to) in enumerate(rows):
+                forward = not zigzag or k % 2 == 0
+                start, end = (x_from, x_to) if forward else (x_to, x_from)
+                if (self.x, self.y) != (start, y):
+                    if zigzag:
+                        self.feed_to(number, (start, y, level), feed, "step-over")
+                    else:
+                        self.retract_up(number)
+                        self.rapid_xy(number, (start, y))
+                        self.rapid_z(number, level)
+                self.feed_to(number, (end, y, level), feed)
+            self.retract_up(number)
 
     def tool_diameter(self, tool: int) -> int | None:
         """A tool's DIA in nm (None: not given, or not positive)."""

@@ -33,6 +33,8 @@ MAX_THREAD_PASSES = 20  # our reading: radial passes of a THREAD MILL
 # Our reading: how far beyond the major diameter an external THREAD MILL's tool comes down
 # and leaves to (its edge), as the CIRCLE routines' 0.050 in.
 THREAD_CLEAR_INCH = Decimal("0.05")
+# Our reading: how far a FACE's tool runs off the part's edges when the block gives no CLEAR.
+FACE_CLEAR_INCH = Decimal("0.05")
 MAX_REPEAT = 999
 MIN_RPM = 60
 GEAR_CHANGE_RPM = 500

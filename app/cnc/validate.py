@@ -24,6 +24,7 @@ from app.cnc.blocks import (
     Copy,
     CopyAction,
     DataBlock0,
+    Face,
     Helix,
     Hole,
     HoleOp,
@@ -450,6 +451,16 @@ class _Checker:
             self.check_helix(number, block)
         if isinstance(block, ThreadMill):
             self.check_thread_mill(number, block)
+        if isinstance(block, Face) and block.z_dn >= block.z_up:
+            u = block.units.symbol
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(block.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(block.z_up)} {u}; FACE takes the stock from Z UP down to Z DN",
+            )
 
     def check_thread_mill(self, number: int, thread: ThreadMill) -> None:
         """Z DN below Z UP by more than half a lead: the lead-in and lead-out take a
@@ -734,7 +745,7 @@ class _Checker:
             # at its DIA less the tool's: they need the diameter.
             needs_diameter = (
                 REGISTRY.of(block).mill is Mill.ROUTINE
-                or isinstance(block, Helix | ThreadMill)
+                or isinstance(block, Helix | ThreadMill | Face)
                 or (
                     isinstance(block, Hole)
                     and block.comp is not Comp.NONE
@@ -760,6 +771,8 @@ class _Checker:
                         if isinstance(block, Helix)
                         else "a THREAD MILL cuts the thread to size with the cutter's diameter"
                         if isinstance(block, ThreadMill)
+                        else "a FACE spaces its passes by a share of the cutter's diameter"
+                        if isinstance(block, Face)
                         else "cutter-compensated milling needs the cutter's measured diameter"
                     ),
                 )

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from app.cnc.blocks import (
     Circle,
     Comp,
+    Face,
     Frame,
     Helix,
     HoleOp,
@@ -166,9 +167,12 @@ def programmed_geometry(program: Program) -> Programmed:
         for number, block in enumerate(program.blocks, 1)
         if isinstance(block, Helix | ThreadMill)
     }
+    faces = {n: b for n, b in enumerate(program.blocks, 1) if isinstance(b, Face)}
     for chunk in compiled.chunks():
         if helical:
             _helical_cuts(chunk.rows, helical, seen, compiled.tools, found)
+        if faces:
+            _face_strips(chunk.rows, faces, seen, compiled.tools, found)
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -270,6 +274,48 @@ def _helical_cuts(
                     drill=number,
                 )
             )
+
+
+def _face_strips(
+    rows: Rows,
+    faces: dict[int, Face],
+    seen: set[tuple[int, int, int]],
+    tools: dict[int, ToolInfo],
+    found: Programmed,
+) -> None:
+    """Each pass of a FACE where the compiled path cuts it, as what it removes: the swath
+    its tool sweeps along the pass, to Z DN (as a slot's). The swaths overlap by the
+    step-over; together they are the rectangle and the run-off round it."""
+    x, y = 0, 0
+    for op, tag, number, ex, ey in zip(
+        rows["op"].tolist(),
+        rows["tag"].tolist(),
+        rows["block"].tolist(),
+        rows["x"].tolist(),
+        rows["y"].tolist(),
+        strict=True,
+    ):
+        block = faces.get(number)
+        if block is not None and op == Op.FEED and tag == 0 and ey == y and ex != x:
+            low, high = min(x, ex), max(x, ex)
+            if (number, low, ey) not in seen:
+                seen.add((number, low, ey))
+                info = tools.get(block.tool)
+                r = 0 if info is None or info.diameter is None else info.diameter // 2
+                line = ((float(low), float(ey)), (float(high), float(ey)))
+                found.slots.append(
+                    Contour(
+                        drill=number,
+                        start=line[0],
+                        elements=(Element(number, line[1], None, False),),
+                        part_left=False,
+                        tool_radius=r,
+                        depth=to_nm(block.z_dn, block.units),
+                        swept=(line,),
+                    )
+                )
+        if op <= Op.ARC_CCW:
+            x, y = ex, ey
 
 
 def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:

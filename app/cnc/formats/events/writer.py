@@ -67,6 +67,7 @@ from app.cnc.blocks import (
     Circle,
     Comp,
     DataBlock0,
+    Face,
     Frame,
     Helix,
     Hole,
@@ -214,13 +215,17 @@ class _Builder:
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
         number = index + 1
-        if isinstance(block, Helix | ThreadMill):
+        if isinstance(block, Helix | ThreadMill | Face):
             # The Plus has no Z (seed 003 §2.1) and no event for X, Y and Z moving together.
+            why = (
+                "its passes go down level by level"
+                if isinstance(block, Face)
+                else "a helix moves Z with X and Y"
+            )
             self.report.error(
                 number,
-                f"{block.title} is not written: a helix moves Z with X and Y, and the Plus is "
-                "a 2-axis control whose events have no Z (seed 003 §2.1); "
-                "use a G-code target",
+                f"{block.title} is not written: {why}, and the Plus is a 2-axis control whose "
+                "events have no Z (seed 003 §2.1); use a G-code target",
             )
             self.reference = self.resolve(block)
             return

@@ -23,6 +23,7 @@ from app.cnc.blocks import (
     Comp,
     DataBlock0,
     Direction,
+    Engrave,
     Face,
     Frame,
     Helix,
@@ -648,7 +649,7 @@ def golden(name: str) -> Program:
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_every_golden_program_passes_the_self_check(case: Path) -> None:
     program = golden(case.name)
-    if any(isinstance(b, Helix | ThreadMill | Face) for b in program.blocks):
+    if any(isinstance(b, Helix | ThreadMill | Face | Engrave) for b in program.blocks):
         # A helix moves Z with X and Y, a FACE goes down level by level: the Plus (no Z)
         # refuses them, saying so.
         with pytest.raises(ExportError) as refused:

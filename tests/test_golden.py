@@ -99,6 +99,8 @@ _OPERATION_CASES = (
     "thread-mill-external-mm",
     "face-zigzag",
     "face-one-way-mm",
+    "engrave-line",
+    "engrave-arc-mm",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _OPERATION_CASES,
@@ -144,5 +146,5 @@ def test_corpus_covers_every_block_type() -> None:
     expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
     expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
     expected |= {"POCKET", "PKT_LINE", "PKT_ARC", "PKT_ARC_END", "ISLAND"}
-    expected |= {"HELIX", "THREAD_MILL", "FACE"}
+    expected |= {"HELIX", "THREAD_MILL", "FACE", "ENGRAVE"}
     assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

@@ -129,6 +129,14 @@ POCKET_PASSES = "a POCKET comes back as the MILL sequences of its passes, rounde
 for name in ("pocket-islands", "pocket-mm", "pocket-loop"):
     NOT_THE_SAME_BLOCKS[name] = POCKET_PASSES
 CLIMB_STATED = "Data Block 0's climb comes back stated on the HELIX"
+STROKES = "an ENGRAVE comes back as the DRILL and MILL STD blocks of its strokes"
+NOT_THE_SAME_BLOCKS["engrave-line"] = STROKES
+NOT_THE_SAME_BLOCKS["engrave-arc-mm"] = STROKES
+# Its strokes' points are computed (a font's, turned and bent): the MILL STD blocks read
+# back hold them at the programming resolution.
+ENGRAVED = "ENGRAVE's computed stroke points come back at the programming resolution"
+for target in ("gcode-linuxcnc", "tape-ascii", "punch-eia", "tape-boss"):
+    ROUNDED[target] |= {"engrave-line": ENGRAVED, "engrave-arc-mm": ENGRAVED}
 NOT_THE_SAME_BLOCKS["helix-bore"] = f"an INC HELIX comes back ABS; {CLIMB_STATED}"
 NOT_THE_SAME_BLOCKS["helix-entry-mm"] = CLIMB_STATED
 

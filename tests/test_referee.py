@@ -165,6 +165,7 @@ HELICAL = "a HELIX or THREAD MILL moves Z with X and Y; the Plus has no Z"
 EVENTS_REFUSED = dict.fromkeys(
     ("helix-bore", "helix-entry-mm", "thread-mill-internal", "thread-mill-external-mm"), HELICAL
 ) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
+EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

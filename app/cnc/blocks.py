@@ -786,6 +786,59 @@ class Face(Block):
         return "FACE" if self.pattern is FacePattern.ZIGZAG else "FACE ONE WAY"
 
 
+class EngraveLayout(enum.Enum):
+    """What ENGRAVE's text follows: a line from X, Y, or an arc about X, Y."""
+
+    LINE = "line"
+    ARC = "arc"
+
+
+ON_ARC = (("layout", EngraveLayout.ARC),)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Engrave(Block):
+    """ENGRAVE: `text` in a single-stroke font (app/cnc/engrave.py) along a line from X, Y
+    at ANGLE, or along an arc of RAD about X, Y from ANGLE (degrees counter-clockwise from
+    +X), clockwise (letters standing outward) or counter-clockwise (inward); capitals
+    `height` high, cut from Z UP down to Z DN. Each stroke is a plunge at FEEDR Z and cuts
+    at FEEDR XY, the tool up to the retract height between strokes (as a DRILL and its MILL
+    STD blocks would cut it). Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "ENGRAVE"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("ENGRAVE"),),
+        editor=(
+            SubKind(
+                "ENGRAVE_LINE", "ENGRAVE LINE", POCKET_GROUP, 8, (("layout", EngraveLayout.LINE),)
+            ),
+            SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
+        ),
+        positioned=True,
+        loopable=True,
+    )
+    layout: EngraveLayout = prompt("LINE/ARC", CHOICE)
+    text: str = prompt("TEXT", TEXT, help="letters, digits and ASCII signs")
+    x: Decimal = prompt("X", LENGTH, role=Role.X, help="the line's start, or the arc's centre")
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    angle: Decimal = prompt(
+        "ANGLE", ANGLE, Decimal(0), help="degrees counter-clockwise from +X where the text starts"
+    )
+    radius: Decimal | None = prompt("RAD", LENGTH, None, positive=True, only_when=ON_ARC)
+    direction: Direction = prompt("DIRECTION", CHOICE, Direction.CW, only_when=ON_ARC)
+    height: Decimal = prompt("HEIGHT", LENGTH, positive=True, help="the capitals' height")
+    z_up: Decimal = prompt("Z UP", LENGTH)
+    z_dn: Decimal = prompt("Z DN", LENGTH)
+    feed_z: Decimal = prompt("FEEDR Z", FEED, feed=limits.FEED_Z)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "ENGRAVE " + self.layout.name
+
+
 # Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
 # (NX + 1) × (NY + 1) patterns.
 REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"

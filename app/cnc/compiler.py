@@ -52,6 +52,9 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     DataBlock0,
+    Direction,
+    Engrave,
+    EngraveLayout,
     Face,
     FacePattern,
     Helix,
@@ -65,6 +68,7 @@ from app.cnc.blocks import (
     ThreadMill,
     ThreadPlace,
 )
+from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
 from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.helix import helix_ends
@@ -516,6 +520,10 @@ class _Compiler:
             target = self.resolve(block)
             self.helix(number, block, target)
             self.reference = target
+        elif isinstance(block, Engrave):
+            target = self.resolve(block)
+            self.engrave(number, block, target)
+            self.reference = target
         elif isinstance(block, Face):
             self.face(number, block, self.resolve(block))
             self.reference = self.resolve(block)
@@ -898,6 +906,41 @@ class _Compiler:
             out = cut.lead_out
             self.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
         self.retract_up(number)
+
+    def engrave(self, number: int, block: Engrave, at: tuple[int, int]) -> None:
+        """ENGRAVE (app/cnc/engrave.py lays the strokes out): each stroke as a DRILL and its
+        MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
+        fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
+        block whose text the font cannot write makes no moves: validation reports it."""
+        units = block.units
+        if not block.text or missing(block.text) is not None:
+            return
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if z_dn >= z_up or (block.layout is EngraveLayout.ARC and block.radius is None):
+            return
+        height = float(to_nm(block.height, units))
+        strokes = glyph_strokes(block.text, height)
+        if block.layout is EngraveLayout.LINE:
+            placed = along_line(strokes, at, float(block.angle))
+        else:
+            assert block.radius is not None
+            radius = float(to_nm(block.radius, units))
+            placed = along_arc(
+                strokes, at, radius, float(block.angle), block.direction is Direction.CW
+            )
+        self.use_tool(number, block.tool)
+        feed_z, feed = to_nm(block.feed_z, units), to_nm(block.feed_xy, units)
+        self.retract = retract_height(z_up, self.z_retract)
+        for stroke in placed:
+            points = [_round(p) for p in stroke]
+            if len(points) < 2:
+                continue
+            self.position(number, points[0], self.retract)
+            self.rapid_z(number, z_up)
+            self.feed_to(number, (*points[0], z_dn), feed_z)
+            for point in points[1:]:
+                self.feed_to(number, (*point, z_dn), feed)
+            self.retract_up(number)
 
     def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
         """FACE about `centre` (app/cnc/face.py says the rows): at each of # PASS levels from

@@ -99,6 +99,7 @@ class Rule(enum.Enum):
     TAP_HAND = "tap-hand"
     TOO_LARGE = "too-large"
     HELIX_TOOL = "helix-tool"
+    ENGRAVE_TEXT = "engrave-text"
 
 
 @dataclass(frozen=True, slots=True)

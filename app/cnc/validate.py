@@ -24,6 +24,8 @@ from app.cnc.blocks import (
     Copy,
     CopyAction,
     DataBlock0,
+    Engrave,
+    EngraveLayout,
     Face,
     Helix,
     Hole,
@@ -42,6 +44,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program, thread_lead
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
+from app.cnc.engrave import missing
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
@@ -451,6 +454,8 @@ class _Checker:
             self.check_helix(number, block)
         if isinstance(block, ThreadMill):
             self.check_thread_mill(number, block)
+        if isinstance(block, Engrave):
+            self.check_engrave(number, block)
         if isinstance(block, Face) and block.z_dn >= block.z_up:
             u = block.units.symbol
             self.add(
@@ -460,6 +465,36 @@ class _Checker:
                 Rule.DEPTH_ORDER,
                 f"{format_decimal(block.z_dn)} {u} is not below Z UP "
                 f"{format_decimal(block.z_up)} {u}; FACE takes the stock from Z UP down to Z DN",
+            )
+
+    def check_engrave(self, number: int, engrave: Engrave) -> None:
+        """Text the font has, Z DN below Z UP, and an arc's radius."""
+        u = engrave.units.symbol
+        if not engrave.text:
+            self.add(number, "TEXT", ERROR, Rule.ENGRAVE_TEXT, "missing; ENGRAVE needs a text")
+        bad = missing(engrave.text)
+        if bad is not None:
+            self.add(
+                number,
+                "TEXT",
+                ERROR,
+                Rule.ENGRAVE_TEXT,
+                f"{bad!r} is not in the engraving font; allowed: letters, digits, space and "
+                "the ASCII signs ! \" # $ % & ' ( ) * + , - . / : ; < = > ? @ [ \\ ] ^ _ ` "
+                "{ | } ~",
+            )
+        if engrave.z_dn >= engrave.z_up:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(engrave.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(engrave.z_up)} {u}; each stroke feeds down from Z UP to Z DN",
+            )
+        if engrave.layout is EngraveLayout.ARC and engrave.radius is None:
+            self.add(
+                number, "RAD", ERROR, Rule.MISSING, "missing; ENGRAVE ARC needs the arc's radius"
             )
 
     def check_thread_mill(self, number: int, thread: ThreadMill) -> None:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from app.cnc.blocks import (
     Circle,
     Comp,
+    Engrave,
     Face,
     Frame,
     Helix,
@@ -167,12 +168,12 @@ def programmed_geometry(program: Program) -> Programmed:
         for number, block in enumerate(program.blocks, 1)
         if isinstance(block, Helix | ThreadMill)
     }
-    faces = {n: b for n, b in enumerate(program.blocks, 1) if isinstance(b, Face)}
+    faces = {n: b for n, b in enumerate(program.blocks, 1) if isinstance(b, Face | Engrave)}
     for chunk in compiled.chunks():
         if helical:
             _helical_cuts(chunk.rows, helical, seen, compiled.tools, found)
         if faces:
-            _face_strips(chunk.rows, faces, seen, compiled.tools, found)
+            _swaths(chunk.rows, faces, compiled.tools, found)
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -276,46 +277,48 @@ def _helical_cuts(
             )
 
 
-def _face_strips(
+def _swaths(
     rows: Rows,
-    faces: dict[int, Face],
-    seen: set[tuple[int, int, int]],
+    faces: dict[int, Face | Engrave],
     tools: dict[int, ToolInfo],
     found: Programmed,
 ) -> None:
-    """Each pass of a FACE where the compiled path cuts it, as what it removes: the swath
-    its tool sweeps along the pass, to Z DN (as a slot's). The swaths overlap by the
-    step-over; together they are the rectangle and the run-off round it."""
-    x, y = 0, 0
-    for op, tag, number, ex, ey in zip(
+    """Each pass of a FACE, and each stroke of an ENGRAVE, where the compiled path cuts it,
+    as what it removes: the swath its tool sweeps along each cut, to Z DN (as a slot's). A
+    FACE's swaths overlap by the step-over; together they are the rectangle and the run-off
+    round it."""
+    x, y, z = 0, 0, 0
+    strokes: set[tuple[int, int, int, int, int]] = set()
+    for op, tag, number, ex, ey, ez in zip(
         rows["op"].tolist(),
         rows["tag"].tolist(),
         rows["block"].tolist(),
         rows["x"].tolist(),
         rows["y"].tolist(),
+        rows["z"].tolist(),
         strict=True,
     ):
         block = faces.get(number)
-        if block is not None and op == Op.FEED and tag == 0 and ey == y and ex != x:
-            low, high = min(x, ex), max(x, ex)
-            if (number, low, ey) not in seen:
-                seen.add((number, low, ey))
-                info = tools.get(block.tool)
-                r = 0 if info is None or info.diameter is None else info.diameter // 2
-                line = ((float(low), float(ey)), (float(high), float(ey)))
-                found.slots.append(
-                    Contour(
-                        drill=number,
-                        start=line[0],
-                        elements=(Element(number, line[1], None, False),),
-                        part_left=False,
-                        tool_radius=r,
-                        depth=to_nm(block.z_dn, block.units),
-                        swept=(line,),
-                    )
+        key = (number, x, y, ex, ey)
+        cut = op == Op.FEED and tag == 0 and z == ez and (ex, ey) != (x, y)
+        if block is not None and cut and key not in strokes:
+            strokes.add(key)
+            info = tools.get(block.tool)
+            r = 0 if info is None or info.diameter is None else info.diameter // 2
+            line = ((float(x), float(y)), (float(ex), float(ey)))
+            found.slots.append(
+                Contour(
+                    drill=number,
+                    start=line[0],
+                    elements=(Element(number, line[1], None, False),),
+                    part_left=False,
+                    tool_radius=r,
+                    depth=to_nm(block.z_dn, block.units),
+                    swept=(line,),
                 )
+            )
         if op <= Op.ARC_CCW:
-            x, y = ex, ey
+            x, y, z = ex, ey, ez
 
 
 def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:

@@ -67,6 +67,7 @@ from app.cnc.blocks import (
     Circle,
     Comp,
     DataBlock0,
+    Engrave,
     Face,
     Frame,
     Helix,
@@ -215,11 +216,13 @@ class _Builder:
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
         number = index + 1
-        if isinstance(block, Helix | ThreadMill | Face):
+        if isinstance(block, Helix | ThreadMill | Face | Engrave):
             # The Plus has no Z (seed 003 §2.1) and no event for X, Y and Z moving together.
             why = (
                 "its passes go down level by level"
                 if isinstance(block, Face)
+                else "its strokes go down one by one"
+                if isinstance(block, Engrave)
                 else "a helix moves Z with X and Y"
             )
             self.report.error(

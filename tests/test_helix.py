@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.cnc import document
+from app.cnc import cost, document
 from app.cnc.blocks import Helix, MillingMode, Program, Tool
 from app.cnc.emit.target import export
 from app.cnc.estimate import estimate
@@ -248,3 +248,15 @@ def test_verify_takes_a_helix_for_the_bore_it_makes() -> None:
             "the HELIX hole at X 3.5000 Y 1.2500 is 0.3000 in shallower than Z DN -0.3000",
         )
     ]
+
+
+def test_a_helix_of_many_turns_is_counted_before_it_is_compiled() -> None:
+    """The bounded work (app.cnc.cost): a HELIX going down 2 in at 0.001 in a turn makes
+    about 2 000 moves, so under a 1 000-move limit it is refused from its numbers, naming
+    the block, before its turns are worked out."""
+    program = bore()
+    helix = program.blocks[0]
+    assert isinstance(helix, Helix)
+    deep = dataclasses.replace(helix, pitch=Decimal("0.001"), z_dn=Decimal("-1.95"))
+    over = cost.estimate(dataclasses.replace(program, blocks=(deep,)), 1000)
+    assert over.over == 1 and over.moves > 1000

@@ -764,7 +764,8 @@ class Face(Block):
             ),
         ),
         positioned=True,
-        loopable=True,
+        # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
+        loopable=False,
     )
     pattern: FacePattern = prompt("PATTERN", CHOICE)
     x: Decimal = prompt("X", LENGTH, role=Role.X, help="the rectangle's centre")
@@ -816,7 +817,7 @@ class Engrave(Block):
             SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
         ),
         positioned=True,
-        loopable=True,
+        loopable=False,  # as FACE: in POCKET's menu
     )
     layout: EngraveLayout = prompt("LINE/ARC", CHOICE)
     text: str = prompt("TEXT", TEXT, help="letters, digits and ASCII signs")

@@ -92,9 +92,9 @@ from app.cnc.path import (
 from app.cnc.pocketing.model import LinkKind, PocketPlan
 from app.cnc.problems import Rule, Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
-from app.cnc.thread import thread_passes
+from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
-from app.cnc.tools import Hand, PitchUnit, lead_per_rev
+from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
 
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
@@ -1148,12 +1148,6 @@ def _too_large(over: cost.Cost, limit: int) -> Finding:
     assert over.over is not None
     field = "LOOP" if over.rep is not None else "STEP" if over.levels else None
     return Finding(over.over, Rule.TOO_LARGE, Severity.ERROR, over.message(limit), field)
-
-
-def thread_lead(block: ThreadMill) -> int:
-    """A THREAD MILL's lead in nm: 1/PITCH in in an inch block, PITCH mm in a mm block."""
-    unit = PitchUnit.TPI if block.units is Units.INCH else PitchUnit.MM
-    return round(lead_per_rev(block.pitch, unit, block.units) * block.units.nm)
 
 
 def _depths(block: Hole) -> tuple[int, int, int]:

@@ -30,7 +30,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from app.cnc.blocks import ThreadMill
 from app.cnc.helix import Point, helix_ends
+from app.cnc.tools import PitchUnit, lead_per_rev
+from app.cnc.units import Units
 
 INTERNAL_DEPTH = 5 / 8  # of H: the basic internal thread's depth (ISO 68-1, UN)
 EXTERNAL_DEPTH = 17 / 24  # of H: the basic external thread's
@@ -55,6 +58,12 @@ class ThreadPass:
     lead_in: Arc
     turns: tuple[Arc, ...]
     lead_out: Arc
+
+
+def thread_lead(block: ThreadMill) -> int:
+    """A THREAD MILL's lead in nm: 1/PITCH in in an inch block, PITCH mm in a mm block."""
+    unit = PitchUnit.TPI if block.units is Units.INCH else PitchUnit.MM
+    return round(lead_per_rev(block.pitch, unit, block.units) * block.units.nm)
 
 
 def thread_depth(lead: int, internal: bool) -> float:

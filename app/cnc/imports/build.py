@@ -254,9 +254,21 @@ class Builder:
             kept = self.arc_kept(start, here, e, end, centre, u)
             if kept == "drop":
                 continue
+            conrad = (
+                None if not e.conrad else decimal_of(self.length(e.conrad, u, e.line, "CONRAD"), u)
+            )
             if centre is None or kept == "line":
                 self.blocks.append(
-                    MillLine(x=x, y=y, z_dn=z_dn, feed_xy=feed, tool=tool, mode=mode, units=u)
+                    MillLine(
+                        x=x,
+                        y=y,
+                        z_dn=z_dn,
+                        feed_xy=feed,
+                        tool=tool,
+                        mode=mode,
+                        units=u,
+                        conrad=conrad,
+                    )
                 )
             else:
                 direction = Direction.CW if e.clockwise else Direction.CCW
@@ -272,6 +284,7 @@ class Builder:
                             tool=tool,
                             mode=mode,
                             units=u,
+                            conrad=conrad,
                         )
                     )
                     here = end
@@ -289,7 +302,7 @@ class Builder:
                         units=u,
                     )
                 )
-                self.blocks.append(ArcEnd(x=x, y=y, mode=mode, units=u))
+                self.blocks.append(ArcEnd(x=x, y=y, mode=mode, units=u, conrad=conrad))
             here = end
         if op.stop:
             self.blocks[-1] = replace(self.blocks[-1], stop=True)

@@ -341,3 +341,16 @@ def test_a_target_missing_from_the_table_is_refused() -> None:
     with pytest.raises(ValueError, match=r"target unlisted is defined in tests\.test_cli"):
         register(Unlisted)
     assert "unlisted" not in targets()
+
+
+def test_the_benchmark_files_stay_inside_the_travel_at_any_size() -> None:
+    """Before: bench/cli.py's 10^6-line G-code file ran to Y 890 in (its grid of cells only
+    grew), past the ±99.999 in an import allows, so that row timed a refusal. Its grid now
+    repeats: every X and Y, with the file's G54 offset (X1 Y1), stays inside."""
+    from bench.gcode_import import gcode_text
+
+    text = gcode_text(1_000_000)
+    assert len(text.splitlines()) == 1_000_000
+    assert "G10 L2 P1 X1.0000 Y1.0000 Z0" in text
+    largest = max(float(value) for value in re.findall(r"[XY](-?\d+\.\d+)", text))
+    assert 1.0 + largest <= 99.999

@@ -21,7 +21,7 @@ from datetime import UTC, datetime, timedelta, tzinfo
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from sqlalchemy import Engine, delete, func, or_, select, update
+from sqlalchemy import Engine, delete, func, or_, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -40,9 +40,9 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
-from app.settings import shown
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
+from app.storage.revisions import RevisionInfo, Versioned, stale_message
 
 SORTS = ("name", "part_number", "updated", "created")
 DRAWING_KEEP = timedelta(days=1)
@@ -54,6 +54,10 @@ DRAWING_BYTES_IN_ALL = 64 * 1024 * 1024
 drawing's day is over (one user alone holds at most 10 × 2 MB)."""
 DRAWING_KEY = re.compile(r"[0-9a-f]{64}")
 BACKUP_FORMAT = "millblocks-backup"
+
+
+PROGRAMS = Versioned(ProgramRow, RevisionRow, "program_id")
+"""Programs and their revisions."""
 
 
 class LibraryError(ValueError):
@@ -101,14 +105,6 @@ class StoredProgram:
 
     info: ProgramInfo
     program: Program
-
-
-@dataclass(frozen=True)
-class RevisionInfo:
-    version: int
-    created_at: datetime
-    author: str
-    summary: str
 
 
 @dataclass(frozen=True)
@@ -223,18 +219,7 @@ class Library:
                 updated_at=now,
                 updated_by=author,
             )
-            s.add(row)
-            s.flush()
-            s.add(
-                RevisionRow(
-                    program_id=row.id,
-                    version=1,
-                    document=row.document,
-                    created_at=now,
-                    author=author,
-                    summary=summary_text or summary(None, program),
-                )
-            )
+            PROGRAMS.add_first(s, row, now, author, summary_text or summary(None, program))
             return _info(row)
 
     def get(self, program_id: int, include_trash: bool = False) -> StoredProgram:
@@ -309,49 +294,25 @@ class Library:
                 raise self._stale(s, row, based_on, program)
             old = _parse(row.document)
             columns = _columns(program)
-            result = s.execute(
-                update(ProgramRow)
-                .where(ProgramRow.id == program_id, ProgramRow.version == based_on)
-                .values(**columns, version=based_on + 1, updated_at=now, updated_by=author)
-            )
-            if result.rowcount != 1:  # type: ignore[attr-defined]
+            if not PROGRAMS.write(
+                s, program_id, based_on, columns, now, author, summary(old, program)
+            ):
                 s.rollback()
                 with self.session() as again:
                     fresh = again.get(ProgramRow, program_id)
                     assert fresh is not None
                     raise self._stale(again, fresh, based_on, program)
-            s.add(
-                RevisionRow(
-                    program_id=program_id,
-                    version=based_on + 1,
-                    document=columns["document"],
-                    created_at=now,
-                    author=author,
-                    summary=summary(old, program),
-                )
-            )
-            s.flush()
             s.refresh(row)
             # The next read of this version (the editor's, right after) needs no parse.
             _remember(columns["document"], document.as_stored(program))
             return _info(row)
 
     def _stale(self, s: Session, row: ProgramRow, based_on: int, mine: Program) -> StaleSave:
-        base = s.scalar(
-            select(RevisionRow).where(
-                RevisionRow.program_id == row.id, RevisionRow.version == based_on
-            )
-        )
+        base = PROGRAMS.revision(s, row.id, based_on)
         changes = diff(document.loads(base.document), document.loads(row.document)) if base else []
-        who = row.updated_by or "someone"
-        listed = "; ".join(changes[:6]) or "no change to the program itself"
-        message = (
-            f"not saved: {who} saved program {row.id} at {shown(row.updated_at, self.zone)} "
-            f"(version {row.version}) after the version {based_on} you started from. "
-            f"Changed meanwhile: {listed}. Reload it and make your change again; "
-            "nothing was overwritten."
-        )
+        listed = changes[:6] or ["no change to the program itself"]
         del mine
+        message = stale_message(f"program {row.id}", row, based_on, listed, self.zone)
         return StaleSave(message, row.version, changes)
 
     def rename(self, program_id: int, name: str, based_on: int, author: str = "") -> ProgramInfo:
@@ -393,22 +354,14 @@ class Library:
 
     def revisions(self, program_id: int) -> list[RevisionInfo]:
         with self.session() as s:
-            rows = s.scalars(
-                select(RevisionRow)
-                .where(RevisionRow.program_id == program_id)
-                .order_by(RevisionRow.version)
-            ).all()
-            if not rows:
+            found = PROGRAMS.history(s, program_id)
+            if not found:
                 raise NotFound(f"no program {program_id} in the library")
-            return [RevisionInfo(r.version, r.created_at, r.author, r.summary) for r in rows]
+            return found
 
     def revision(self, program_id: int, version: int) -> Program:
         with self.session() as s:
-            row = s.scalar(
-                select(RevisionRow).where(
-                    RevisionRow.program_id == program_id, RevisionRow.version == version
-                )
-            )
+            row = PROGRAMS.revision(s, program_id, version)
             if row is None:
                 raise NotFound(f"program {program_id} has no version {version}")
             return document.loads(row.document)
@@ -585,19 +538,7 @@ class Library:
                         updated_by=last.author,
                         deleted_at=now if entry.deleted else None,
                     )
-                    s.add(row)
-                    s.flush()
-                    for rev in entry.revisions:
-                        s.add(
-                            RevisionRow(
-                                program_id=row.id,
-                                version=rev.version,
-                                document=rev.text,
-                                created_at=rev.created_at,
-                                author=rev.author,
-                                summary=rev.summary,
-                            )
-                        )
+                    PROGRAMS.add_restored(s, row, entry.revisions)
                 for machine in backup.machines:
                     _store_machine(s, machine, now)
                 from app.storage.crib import restore_tools

@@ -293,7 +293,8 @@ def test_a_small_export_loads_its_own_format_alone(tmp_path: Path) -> None:
     """Before: the export of one small program imported every format's reader and writer
     (and svgwrite), 0.35 s of CPU before the first byte, 561 ms over a bare Python start as
     an installed command (issue 31). Now a program file read as JSON and written as
-    LinuxCNC G-code loads that one writer; detection still asks every format's sniff."""
+    LinuxCNC G-code loads that one writer; detection still asks every format's sniff. Its
+    FRAME pocket is no irregular POCKET: the pocket engine and pyclipper stay unloaded."""
     out = tmp_path / "out.ngc"
     program = ROOT / "app" / "demo" / "03-frame-pocket.json"
     loaded = _modules_after(
@@ -302,6 +303,7 @@ def test_a_small_export_loads_its_own_format_alone(tmp_path: Path) -> None:
     assert out.read_text().startswith("%")
     assert FORMAT_MODULES & loaded == {"app.cnc.formats.gcode.writer"}
     assert not FORMAT_LIBRARIES & {name.split(".")[0] for name in loaded}
+    assert "pyclipper" not in loaded and "app.cnc.pocketing.plan" not in loaded
 
 
 def test_converting_gcode_to_a_tape_loads_the_two_formats_alone(tmp_path: Path) -> None:

@@ -11,9 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-import threading
 import zipfile
-from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -29,7 +27,7 @@ from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.machine import MachineError, read_machine
-from app.cnc.memo import ByObject
+from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
 from app.cnc.text import (
@@ -562,28 +560,20 @@ def _load(row: ProgramRow) -> Program:
 # same text is the same Program: an edit reads the stored version (to edit it, and again for
 # the revision summary) and then the version it saved, and parses none of them twice.
 PARSED_DOCUMENTS = 16
-_PARSED: OrderedDict[str, Program] = OrderedDict()
-_PARSED_LOCK = threading.Lock()
+_PARSED: Recent[Program] = Recent(PARSED_DOCUMENTS)
 
 
 def _parse(text: str) -> Program:
     """`document.loads(text)`, from the recent documents when it was read or written."""
-    with _PARSED_LOCK:
-        found = _PARSED.get(text)
-        if found is not None:
-            _PARSED.move_to_end(text)
-            return found
-    program = document.loads(text)
-    _remember(text, program)
-    return program
+    found = _PARSED.get(text)
+    if found is None:
+        found = document.loads(text)
+        _PARSED.keep(text, found)
+    return found
 
 
 def _remember(text: str, program: Program) -> None:
-    with _PARSED_LOCK:
-        _PARSED[text] = program
-        _PARSED.move_to_end(text)
-        while len(_PARSED) > PARSED_DOCUMENTS:
-            _PARSED.popitem(last=False)
+    _PARSED.keep(text, program)
 
 
 def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:

@@ -93,7 +93,7 @@ _FORMAT_KEY = "millblocks.file_format"
 
 class LazyChoice(click.Choice[str]):
     """A choice whose names are looked up when the option is used or its help shown (the
-    import formats' registry loads every format: not at start-up)."""
+    import formats' registry imports every format's declaration: not at start-up)."""
 
     def __init__(self, names: Callable[[], list[str]]) -> None:
         # click.Choice's own __init__ would store the names now; they are a property here.

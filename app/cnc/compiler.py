@@ -43,7 +43,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -89,13 +89,17 @@ from app.cnc.path import (
     Seq,
     size,
 )
-from app.cnc.pocketing.model import LinkKind, PocketPlan
 from app.cnc.problems import Rule, Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
 from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
+
+if TYPE_CHECKING:
+    # The pocket engine (and pyclipper) is loaded when a POCKET is cut, not for every
+    # compile: a command on a program without one does not wait for it.
+    from app.cnc.pocketing.model import PocketPlan
 
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
 
@@ -664,6 +668,8 @@ class _Compiler:
         cleared there) and feeds on down, as the DRILL's pecks do. Between levels it
         retracts and returns to the first plunge point.
         """
+        from app.cnc.pocketing.model import LinkKind
+
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
         first = _round(pocket.passes[0].entry.path.start)
@@ -693,6 +699,8 @@ class _Compiler:
         """A 2-axis POCKET: the passes at the one depth the operator sets, stopping for the
         quill to go down at each place the plan plunges and to come up before the table
         moves on (as a 2-axis mill sequence does)."""
+        from app.cnc.pocketing.model import LinkKind
+
         down = False
         for cut in pocket.passes:
             link = cut.entry

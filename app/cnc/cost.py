@@ -43,9 +43,6 @@ from app.cnc.blocks import (
 )
 from app.cnc.engrave import glyph_strokes
 from app.cnc.mill import Path, pocket_overlap, sweep
-from app.cnc.pocketing.plan import DEFAULT_CHORDAL_TOLERANCE, MAX_LEVELS
-from app.cnc.pocketing.regions import arc_steps
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm
@@ -323,6 +320,10 @@ def _pocket(
     elements (corner arcs and trims) and its link. Its planning shrinks the region (the
     contours drawn with `points` points, each arc in chords within the planner's
     tolerance) once per level: levels x points is what it multiplies."""
+    # The pocket engine (and pyclipper) is loaded for a POCKET, not for every cost.
+    from app.cnc.pocketing.plan import MAX_LEVELS
+    from app.cnc.pocketing.routine import contours_at
+
     pocket = blocks[node.mills[0]]
     drill = blocks[node.drill]
     assert isinstance(pocket, Pocket) and isinstance(drill, Hole)
@@ -347,6 +348,9 @@ def _pocket(
 
 def _points(path: Path) -> int:
     """The points a contour is drawn with for planning (regions.polygon)."""
+    from app.cnc.pocketing.plan import DEFAULT_CHORDAL_TOLERANCE
+    from app.cnc.pocketing.regions import arc_steps
+
     count = 0
     at = path.start
     for element in path.elements:

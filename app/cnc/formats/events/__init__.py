@@ -2,7 +2,8 @@
 
 model.py declares the events once (their fields, words and numbers); reader.py reads a
 file into events and then into a 2-axis program; writer.py makes events from a program's
-blocks, checks them against its tool path and writes the file.
+blocks, checks them against its tool path and writes the file (the `events` target). Here:
+the importer's declaration; the reader is imported when a file is read.
 """
 
 from __future__ import annotations
@@ -11,12 +12,8 @@ import re
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.formats.events import writer
-from app.cnc.formats.events.reader import read_events
 from app.cnc.imports.common import ImportNote, decode_text
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
-
-__all__ = ["EventsImporter", "writer"]
 
 # A G100-G109 word (seed 003 §2.2.1): no G-code or tape has those.
 _EVENT = re.compile(r"(?<![A-Z0-9.])G10[0-9](?![0-9.])", re.IGNORECASE)
@@ -36,5 +33,7 @@ class EventsImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.events.reader import read_events
+
         program, notes = read_events(decode_text(data), name)
         return program, notes.report()

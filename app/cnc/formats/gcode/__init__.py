@@ -4,7 +4,9 @@ the Bridgeport BOSS tape.
 dialects.py says what each dialect does differently (and the options they share);
 writer.py writes any dialect from a compiled program, boss.py the BOSS's segmented tape;
 reader.py reads RS274/NGC, Fanuc and BOSS words into motion, which app.cnc.imports recognises
-as data blocks; bossread.py joins a BOSS tape's segments for it.
+as data blocks; bossread.py joins a BOSS tape's segments for it. Here: the two importers'
+declarations (their sniffs are light); the reader is imported when a file is read, the
+writers when their target is used (app.cnc.formats.TARGET_MODULES).
 """
 
 from __future__ import annotations
@@ -12,15 +14,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.formats.gcode import boss, writer
-from app.cnc.formats.gcode.bossread import join_segments, looks_segmented
-from app.cnc.formats.gcode.reader import parse_gcode
+from app.cnc.formats.gcode.bossread import looks_segmented
 from app.cnc.imports import wordaddress
 from app.cnc.imports.common import ImportNote, collector_paused, decode_text
-from app.cnc.imports.motion import program_from_motion
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
-
-__all__ = ["BossImporter", "GcodeImporter", "boss", "writer"]
 
 
 @register_importer
@@ -36,6 +33,9 @@ class GcodeImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.gcode.reader import parse_gcode
+        from app.cnc.imports.motion import program_from_motion
+
         with collector_paused():
             parsed = parse_gcode(decode_text(data), name)
             return program_from_motion(parsed), parsed.notes.report()
@@ -60,6 +60,10 @@ class BossImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.gcode.bossread import join_segments
+        from app.cnc.formats.gcode.reader import parse_gcode
+        from app.cnc.imports.motion import program_from_motion
+
         with collector_paused():
             tape = join_segments(decode_text(data))
             parsed = parse_gcode(tape.text, name)

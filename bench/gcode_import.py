@@ -107,7 +107,9 @@ def gcode_text(lines: int = LINES) -> str:
     room = lines - len(HEADER) - len(FOOTER)
     k = 0
     while True:
-        cell = _cell(2.0 + 1.8 * (k % 50), 2.0 + 1.6 * (k // 50))
+        # 50 x 50 cells, then the grid again (a sheet of parts): inside the control's
+        # +-99.999 in at any length, so the 10^6-line file is a program it can run.
+        cell = _cell(2.0 + 1.8 * (k % 50), 2.0 + 1.6 * (k // 50 % 50))
         if len(body) + len(cell) > room:
             break
         body += cell

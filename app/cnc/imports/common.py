@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import enum
 import gc
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -220,14 +221,40 @@ def show_feed(nm_per_min: int, units: Units) -> str:
     return f"{text.rstrip('.') or '0'} {units.feed_symbol}"
 
 
+# The control characters a text file does not have (all below 32 but tab, LF, FF and CR).
+_CONTROL: Final = re.compile("[\x00-\x08\x0b\x0e-\x1f]")
+
+
 def is_text(data: bytes) -> bool:
-    """True when `data` is UTF-8 text without NULs or control characters (but tab/CR/LF):
+    """True when `data` is UTF-8 text without NULs or control characters (but tab/CR/LF/FF):
     a file to read as text, not a punch image."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         return False
-    return not any(ord(ch) < 32 and ch not in "\t\r\n\f" for ch in text)
+    # One search in C: testing each character in Python took 0.4 s for 10^5 lines.
+    return _CONTROL.search(text) is None
+
+
+def split_lines(text: str) -> list[str]:
+    """The lines of `text` (CR LF, CR or LF ending each; after a last line break, an
+    empty line)."""
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def text_lines(text: str) -> Iterator[str]:
+    """`split_lines(text)` one at a time, without a list of them all (a list of a million
+    lines is 70 MB)."""
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    start = 0
+    while True:
+        end = text.find("\n", start)
+        if end < 0:
+            yield text[start:]
+            return
+        yield text[start:end]
+        start = end + 1
 
 
 def check_digits(digits: str) -> bool:

@@ -14,10 +14,10 @@ from collections.abc import Mapping
 from app.cnc.blocks import Program
 from app.cnc.formats.gcode import boss, writer
 from app.cnc.formats.gcode.bossread import join_segments, looks_segmented
-from app.cnc.formats.gcode.reader import parse_gcode
+from app.cnc.formats.gcode.reader import FrontEnd, GcodeStream, parse_gcode
 from app.cnc.imports import wordaddress
 from app.cnc.imports.common import ImportNote, collector_paused, decode_text
-from app.cnc.imports.motion import program_from_motion
+from app.cnc.imports.motion import Unstreamable, program_from_motion, program_from_stream
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
 
 __all__ = ["BossImporter", "GcodeImporter", "boss", "writer"]
@@ -37,7 +37,16 @@ class GcodeImporter(Importer):
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
         with collector_paused():
-            parsed = parse_gcode(decode_text(data), name)
+            text = decode_text(data)
+            try:
+                # Read as it streams (docs/imports.md, "Streaming"): a long file in flat
+                # memory. What needs the whole program reads it whole: subroutines and
+                # parameters (the front end), and whatever streaming would read otherwise.
+                program, notes = program_from_stream(GcodeStream(text, name))
+                return program, notes.report()
+            except (FrontEnd, Unstreamable):
+                pass
+            parsed = parse_gcode(text, name)
             return program_from_motion(parsed), parsed.notes.report()
 
 

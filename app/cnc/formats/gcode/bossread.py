@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from app.cnc.imports.common import failure
+from app.cnc.imports.common import failure, split_lines, text_lines
 
 _SUBROUTINE = re.compile(r"T(\d+)\s*/")
 _MARK = re.compile(r"#(\d*)")
@@ -39,7 +39,7 @@ def join_segments(text: str) -> Segments:
     """The program text of a BOSS tape: each `#0` and `$` line blanked (a `%#0` line becomes
     `%`), so the G-code reader reads the segments as one program. Raises ImportFailure
     naming line and column for what seed 004 §8.1.1 does not allow (see the module)."""
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    lines = split_lines(text)
     out: list[str] = []
     opened: list[int] = []
     inside: int | None = None  # the line the open segment began on
@@ -151,7 +151,7 @@ def _outside_comments(line: str, char: str) -> int | None:
 def looks_segmented(text: str) -> str:
     """The first line that only a BOSS real-time tape has (`%#0`, a `#0` or a `$` line),
     as `line N: …`, or ''."""
-    for number, raw in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), 1):
+    for number, raw in enumerate(text_lines(text), 1):
         stripped = raw.strip()
         if stripped.startswith("%") and stripped[1:].strip() == "#0":
             return f"line {number}: %#0, a BOSS tape's first segment"

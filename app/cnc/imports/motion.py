@@ -68,10 +68,10 @@ def program_from_stream(stream: StreamSource) -> tuple[Program, Notes]:
     Unstreamable and the caller reads the file whole (which then gives its error)."""
     notes = Notes()
     window = StepWindow(stream)
-    is_two_axis(window)  # (reads on until it knows: the set-up is then as the file starts)
-    start = stream.so_far(notes)
-    recognition = Recognition(start, {})
     try:
+        is_two_axis(window)  # (reads on until it knows: the set-up is as the file starts)
+        start = stream.so_far(notes)
+        recognition = Recognition(start, {})
         found = segment(start, window, recognition.batch)
         whole = stream.read_all()
         if stream.renumbers():

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Final
@@ -398,11 +399,11 @@ class GcodeStream(StreamSource):
     until a cut or a G43 H says which tool it is. Raises FrontEnd where the file needs
     the front end (subroutines, parameters: the whole program, `parse_gcode`)."""
 
-    def __init__(self, text: str, name: str) -> None:
-        self.reader = _Reader(text, name, False)
+    def __init__(self, lines: Iterator[str], name: str) -> None:
+        self.reader = _Reader("", name, False)  # (never the front end's: no text needed)
         super().__init__(self.reader.steps)
         self.reader.out = self
-        self.lines = text_lines(text)
+        self.lines = lines
         self.number = 0
         self.parsed: Parsed | None = None  # once read to the end
         self.outside = False  # a dropped step names a tool past the control's

@@ -107,21 +107,29 @@ def test_every_file_imports_as_the_whole_file_reads(path: Path) -> None:
         assert _imported(variant.encode()) == _whole(variant)
 
 
+# Holes enough that the segmenter starts long before the file's end (the stream reads
+# STREAM_LINES ahead): what comes after them is what the start could not say.
+HOLES = "G0 X1 Y1\nG1 Z-0.1\nG0 Z0.1\nG0 X2 Y1\nG1 Z-0.1\nG0 Z0.1\n" * 100
+
+
 @pytest.mark.parametrize(
     "text",
     [
         # The finest number comes late: the tolerance the start gave changes.
         "G20 G90\nT1 M6\nS1000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\nG0 Z0.1\n"
-        "G0 X1 Y1\nG1 Z-0.1\nG0 Z0.1\nG0 X1.00001 Y2\nG1 Z-0.1\nG0 Z0.1\nM30\n",
-        # A tool past the control's 24, and a unit the start did not give.
-        "G0 X0 Y0 Z0.1\nT32 M6\nS900 M3\nG1 Z-0.2 F4\nG0 Z0.1\nG21\nM30\n",
-        # A tool's diameter given after it cut (compensation reads it).
+        + HOLES
+        + "G0 X1.00001 Y2\nG1 Z-0.1\nG0 Z0.1\nM30\n",
+        # A tool past the control's 24.
+        "G20\nG0 X0 Y0 Z0.1\nT32 M6\nS900 M3\nG1 Z-0.2 F4\nG0 Z0.1\n" + HOLES + "M30\n",
+        # The unit comes after the first moves (inches assumed until then).
+        "G0 X0 Y0 Z0.1\nT1 M6\nS900 M3\nG1 Z-0.2 F4\nG0 Z0.1\n" + HOLES + "G21\nM30\n",
+        # A tool's diameter given after a compensated cut used it.
         "G20\nT1 M6\nS1000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\nG41 D1 G1 X1 Y0 F10\nX1 Y1\n"
-        "G40 G0 Z0.1\nG10 L1 P1 R0.125\nM30\n",
+        "G40 G0 Z0.1\n" + HOLES + "G10 L1 P1 R0.125\nM30\n",
         # Refused late, after a segmenting error early: the reader's refusal is the one.
-        "G20\nT1 M6\nG0 X0 Y0 Z0.1\nG1 X1 Y1 F5\nG0 Z1\nG1 X2 Y2 Z-1 Q\n",
+        "G20\nT1 M6\nG0 X0 Y0 Z0.1\nG1 X1 Y1 F5\nG0 Z1\n" + HOLES + "G1 X2 Y2 Z-1 Q\n",
     ],
-    ids=["late-decimals", "tool-32", "late-diameter", "late-refusal"],
+    ids=["late-decimals", "tool-32", "late-unit", "late-diameter", "late-refusal"],
 )
 def test_what_the_start_of_a_file_cannot_say_is_read_from_the_whole_file(text: str) -> None:
     """Streaming starts with the set-up as the file's start gives it; where the rest of the

@@ -119,6 +119,10 @@ HOLES = "G0 X1 Y1\nG1 Z-0.1\nG0 Z0.1\nG0 X2 Y1\nG1 Z-0.1\nG0 Z0.1\n" * 100
         "G20 G90\nT1 M6\nS1000 M3\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\nG0 Z0.1\n"
         + HOLES
         + "G0 X1.00001 Y2\nG1 Z-0.1\nG0 Z0.1\nM30\n",
+        # No tool named until a G43 H late in the file: that tool was in the spindle.
+        "G20\nG0 X0 Y0 Z0.1\nS1000 M3\nG1 Z-0.1 F5\nG0 Z0.1\n"
+        + HOLES
+        + "G43 H2\nG0 X3 Y3\nG1 Z-0.1\nG0 Z0.1\nM30\n",
         # A tool past the control's 24.
         "G20\nG0 X0 Y0 Z0.1\nT32 M6\nS900 M3\nG1 Z-0.2 F4\nG0 Z0.1\n" + HOLES + "M30\n",
         # The unit comes after the first moves (inches assumed until then).
@@ -129,7 +133,14 @@ HOLES = "G0 X1 Y1\nG1 Z-0.1\nG0 Z0.1\nG0 X2 Y1\nG1 Z-0.1\nG0 Z0.1\n" * 100
         # Refused late, after a segmenting error early: the reader's refusal is the one.
         "G20\nT1 M6\nG0 X0 Y0 Z0.1\nG1 X1 Y1 F5\nG0 Z1\n" + HOLES + "G1 X2 Y2 Z-1 Q\n",
     ],
-    ids=["late-decimals", "tool-32", "late-unit", "late-diameter", "late-refusal"],
+    ids=[
+        "late-decimals",
+        "late-first-tool",
+        "tool-32",
+        "late-unit",
+        "late-diameter",
+        "late-refusal",
+    ],
 )
 def test_what_the_start_of_a_file_cannot_say_is_read_from_the_whole_file(text: str) -> None:
     """Streaming starts with the set-up as the file's start gives it; where the rest of the

@@ -153,7 +153,8 @@ def read_file(
         result = read_program(data, path.stem, chosen, options or {}, limited=False)
     except ValueError as exc:
         raise ProgramFileError(f"{path}: {exc}") from None
-    click.echo(result.text(), nl=False, err=True)
+    for line in result.lines():
+        click.echo(line, nl=False, err=True)
     return result.program, chosen
 
 

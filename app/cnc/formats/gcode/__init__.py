@@ -70,8 +70,8 @@ class BossImporter(Importer):
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
         from app.cnc.formats.gcode.bossread import join_segments
-        from app.cnc.formats.gcode.reader import FrontEnd, GcodeStream, parse_gcode
-        from app.cnc.imports.motion import Unstreamable, program_from_motion, program_from_stream
+        from app.cnc.formats.gcode.reader import parse_gcode
+        from app.cnc.imports.motion import program_from_motion
 
         with collector_paused():
             tape = join_segments(decode_text(data))

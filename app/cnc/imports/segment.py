@@ -532,7 +532,7 @@ class _Segmenter:
         j = i
         x, y, z = start
         turned = 0.0
-        while j < len(steps):
+        while steps.has(j):
             s = steps[j]
             if not (
                 isinstance(s, Arc)
@@ -547,7 +547,7 @@ class _Segmenter:
             down.append(s)
             x, y, z = s.x, s.y, s.z
             j += 1
-        finish = steps[j] if j < len(steps) else None
+        finish = steps.at(j)
         if not (
             isinstance(finish, Arc)
             and (finish.x, finish.y) == (x, y)
@@ -580,7 +580,7 @@ class _Segmenter:
                 line,
             )
         lines = [*self.take_pending(start[:2]), line]
-        leave = steps[j] if j < len(steps) else None
+        leave = steps.at(j)
         if isinstance(leave, Feed) and (leave.x, leave.y) == centre and leave.z in (None, z):
             lines.append(leave.line)
             x, y = centre

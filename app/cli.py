@@ -93,7 +93,7 @@ _FORMAT_KEY = "millblocks.file_format"
 
 class LazyChoice(click.Choice[str]):
     """A choice whose names are looked up when the option is used or its help shown (the
-    import formats' registry loads every format: not at start-up)."""
+    import formats' registry imports every format's declaration: not at start-up)."""
 
     def __init__(self, names: Callable[[], list[str]]) -> None:
         # click.Choice's own __init__ would store the names now; they are a property here.
@@ -153,7 +153,8 @@ def read_file(
         result = read_program(data, path.stem, chosen, options or {}, limited=False)
     except ValueError as exc:
         raise ProgramFileError(f"{path}: {exc}") from None
-    click.echo(result.text(), nl=False, err=True)
+    for line in result.lines():
+        click.echo(line, nl=False, err=True)
     return result.program, chosen
 
 

@@ -47,8 +47,6 @@ from app.cnc.path import (
     lowest_by_block,
     placed_holes,
 )
-from app.cnc.pocketing.regions import path_points
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units, format_length, to_nm
 
@@ -120,6 +118,10 @@ def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
 def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
     """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
     irregular POCKETs; a sequence whose plan has errors clears nothing)."""
+    # The pocket engine (and pyclipper) is loaded here, not by every validation.
+    from app.cnc.pocketing.regions import path_points
+    from app.cnc.pocketing.routine import contours_at
+
     found: list[Cleared] = []
     for routine_number, x, y, cut, depth in _mill_spans(path.root):
         if not routine_number or not cut or depth is None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import tracemalloc
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from decimal import Decimal as D
@@ -32,11 +33,13 @@ from app.cnc.blocks import (
     Program,
     Tool,
 )
+from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, ExportError, OptionError, export
+from app.cnc.emit.target import Export, ExportError, OptionError, Report, export, get_target
 from app.cnc.formats.tape1704 import codes as tapecode
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.units import Units
+from bench.programs import sized
 
 GOLDEN = Path(__file__).parent / "golden"
 SAMPLES = ["contour-cut-right", "stop-and-tool-changes", "tap-metric", "two-axis", "frame-in-tan"]
@@ -846,3 +849,41 @@ def test_tape_search_restates_position_spindle_and_coolant_at_every_block() -> N
     index = blocks.index(next(b for b in blocks if "X30000Y10000" in b))
     assert re.search(r"G50X0Y0Z5750F50M04$", blocks[index - 1]), blocks[index - 1]
     assert all(re.match(r"N\d+", line) for line in blocks)
+
+
+def _writer_peak(moves: int) -> tuple[int, int]:
+    """The bytes of the tape-eia listing of a LOOP/REP drilling grid of about `moves` moves
+    and the peak bytes Python allocated while the writer made it (tracemalloc; the program
+    is compiled before, so the peak is the writer's alone)."""
+
+    class Counted:
+        size = 0
+
+        def write(self, data: bytes) -> int:
+            self.size += len(data)
+            return len(data)
+
+    program = resolve_copies(sized("grid", moves))
+    path = compile_program(program).path
+    target = get_target("tape-eia")
+    options = target.parse_options({})
+    out, report = Counted(), Report("tape-eia")
+    tracemalloc.start()
+    try:
+        target.write(program, path, options, report, out)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert not report.has_errors
+    return out.size, peak
+
+
+def test_the_tape_writer_memory_does_not_grow_with_the_program() -> None:
+    # Issue 31: a 10^6-line file converts to a tape in flat memory. The planner turned each
+    # chunk of the compiled path into Python lists whole, and a LOOP's chunk grows with its
+    # repeats: 4.1x the peak for 10x the moves (5.3 MB at 2x10^5). It now takes a slice of
+    # a chunk at a time.
+    small_size, small = _writer_peak(20_000)
+    large_size, large = _writer_peak(200_000)
+    assert large_size > 9 * small_size  # the tape did grow tenfold
+    assert large < 2 * small, f"writer peak {small / 1e6:.1f} MB → {large / 1e6:.1f} MB"

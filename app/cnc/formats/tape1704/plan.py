@@ -107,6 +107,11 @@ class Aux:
 Item = Motion | Aux
 
 
+_SLICE_ROWS = 1024
+"""Rows of a chunk `Planner.planned` turns into Python lists at a time (memory, not speed)."""
+_CYCLE_ROWS = 4
+"""The most rows a fixed cycle stands for (`Planner.cycle`'s window: down, feed, dwell, out)."""
+
 COMMENT_CHARACTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 .,-+/:=*#")
 """What the 1704's ASCII table punches in a comment."""
 
@@ -185,14 +190,22 @@ class Planner:
         items: list[Item] = []
         for chunk in path.chunks():
             cycles = self.cycles(chunk)
-            table = chunk.rows.tolist()
-            strings = chunk.strings
-            index = 0
-            while index < len(table):
+            rows, strings = chunk.rows, chunk.strings
+            count = len(rows)
+            # The chunk's rows as Python lists a slice at a time: a LOOP's chunk grows with
+            # its repeats (11 250 rows at 2x10^5 moves), and the whole of it as lists was the
+            # writer's memory growing with the program. A slice holds _CYCLE_ROWS more rows
+            # than it starts, so a fixed cycle's rows (`cycle`) are always in it.
+            index, base, limit = 0, 0, 0
+            table: list[Any] = []
+            while index < count:
                 if len(items) > 1:
                     yield from items[:-1]
                     del items[:-1]
-                row = table[index]
+                if index >= limit:
+                    base, limit = index, min(count, index + _SLICE_ROWS)
+                    table = rows[base : limit + _CYCLE_ROWS].tolist()
+                row = table[index - base]
                 index += 1
                 op = row[0]
                 if op <= Op.ARC_CCW:
@@ -218,7 +231,7 @@ class Planner:
                             )
                     if rapid:
                         span = cycles.get(index - 1)
-                        cycle = self.cycle(span, table, index - 1, (x, y, z), tool)
+                        cycle = self.cycle(span, table, index - 1 - base, (x, y, z), tool)
                         if cycle is not None:
                             motion, used, end_z = cycle
                             items.append(motion)

@@ -42,6 +42,7 @@ from app.cnc.blocks import (
     ThreadMill,
 )
 from app.cnc.engrave import glyph_strokes
+from app.cnc.memo import Recent
 from app.cnc.mill import Path, pocket_overlap, sweep
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.thread import thread_lead
@@ -115,10 +116,29 @@ class _Size:
     pocket: tuple[int, int, int] | None = None  # the heaviest POCKET: block, levels, points
 
 
+# The last programs' costs, by the objects the cost is read from: one edit asks for the same
+# version's cost up to four times (validation, its compile, the library's check before the
+# save, the preview's compile of a copy with the same blocks), each a walk of every block.
+_COSTS: Recent[tuple[tuple[Block, ...], object, Cost]] = Recent(8)
+
+
 def estimate(program: Program, limit: int | None = None) -> Cost:
     """The cost of `program` (COPY blocks are not motion). `limit` (default
     `sizes.move_limit()`) only decides which block `Cost.over` names."""
     cap = sizes.move_limit() if limit is None else limit
+    blocks = program.blocks
+    # The entry keeps its blocks and Data Block 0 alive, so their ids are not reused.
+    key = (id(blocks), id(program.block0), program.units, cap)
+    kept = _COSTS.get(key)
+    if kept is not None and kept[0] is blocks and kept[1] is program.block0:
+        return kept[2]
+    found = _estimate(program, cap)
+    _COSTS.keep(key, (blocks, program.block0, found))
+    return found
+
+
+def _estimate(program: Program, cap: int) -> Cost:
+    """The cost of `program`, its moves held to `cap` (estimate, worked out)."""
     blocks = program.blocks
     moves = holes = passes = 0
     tool = program.block0.current_tool

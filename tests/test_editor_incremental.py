@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterator
+from dataclasses import replace
+from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
@@ -19,9 +21,11 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app import create_app
-from app.cnc import cost
-from app.web import preview
-from app.web import get_library
+from app.cnc import cost, path
+from app.cnc.blocks import BoltCircle
+from app.cnc.problems import Rule
+from app.cnc.validate import validate
+from app.web import get_library, preview
 from bench.editor import HTMX, edit_form
 from bench.programs import editor_program
 
@@ -93,3 +97,34 @@ def test_an_edit_times_its_version_once(app: Flask, monkeypatch: pytest.MonkeyPa
     timings = count_calls(monkeypatch, preview, "estimate")
     editing.edit(1)
     assert len(timings) == 1
+
+
+def test_an_edit_places_the_holes_of_the_node_it_changed(
+    app: Flask, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The pilot rule (app/cnc/process.py) reads every hole of the program; the holes of
+    the compiled nodes an edit left alone are kept, so one edit places the pieces of the
+    node it changed (and the program's end), not the 300 pieces with holes."""
+    editing = Editing(app)
+    editing.edit(0)
+    placed = count_calls(monkeypatch, path, "_placed_holes")
+    editing.edit(1)
+    assert len(placed) <= 5, len(placed)
+
+
+def test_the_pilot_rule_sees_an_edit_among_kept_holes() -> None:
+    """With every other node's holes kept from the version before, turning block 3's bolt
+    circle (the BORE of block 4 is bored into its first hole) still warns at block 4, and
+    turning it back clears the warning."""
+    program = editor_program(500)
+    assert not [p for p in validate(program) if p.rule is Rule.PILOT]
+    bolt = program.blocks[2]
+    assert isinstance(bolt, BoltCircle)
+    turned = replace(
+        program, blocks=(*program.blocks[:2], replace(bolt, angle=Decimal(45)), *program.blocks[3:])
+    )
+    warned = [p for p in validate(turned) if p.rule is Rule.PILOT]
+    assert [p.block for p in warned] == [4]
+    assert "boring bar goes into solid material" in warned[0].message
+    back = replace(turned, blocks=(*turned.blocks[:2], bolt, *turned.blocks[3:]))
+    assert not [p for p in validate(back) if p.rule is Rule.PILOT]

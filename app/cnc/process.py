@@ -20,7 +20,7 @@ set-up), but the programmer must look. Lengths in nm inside, printed in the prog
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from app.cnc.blocks import (
@@ -35,6 +35,7 @@ from app.cnc.blocks import (
     Program,
 )
 from app.cnc.compiler import Compiled
+from app.cnc.memo import Memo
 from app.cnc.mill import Element
 from app.cnc.mill import Path as MillPath
 from app.cnc.path import (
@@ -46,6 +47,7 @@ from app.cnc.path import (
     Seq,
     lowest_by_block,
     placed_holes,
+    size,
 )
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units, format_length, to_nm
@@ -98,21 +100,55 @@ def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
     placed), each with its tool's diameter."""
     found: list[PlacedHole] = []
     tools: dict[int, int] = {}
-    for blocks, holes in placed_holes(path.root):
-        for block, op, x, y, bottom in zip(
+    for block, op, x, y, bottom in _holes_placed(path.root):
+        if block not in tools:
+            tools[block] = hole_tool(program.blocks, block)
+        info = path.tools.get(tools[block])
+        diameter = None if info is None else info.diameter
+        found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
+    return found
+
+
+Hole5 = tuple[int, int, int, int, int]
+# Each compiled top-level node's holes as it was compiled (blocks relative to it, not
+# placed), by node: the compile keeps the nodes of the blocks an edit left alone (its
+# per-node memo), so an edit reads the holes of the node it changed, not every piece's
+# arrays again. Weighed by the node's moves, so the nodes it keeps alive stay bounded.
+_NODE_HOLES: Memo[tuple[Node, list[Hole5]]] = Memo()
+
+
+def _holes_placed(root: Node) -> Iterator[Hole5]:
+    """(block, op, x, y, bottom) of every hole under `root`, placed, in cutting order."""
+    tops = root.nodes if isinstance(root, Seq) else [root]
+    for top in tops:
+        if not (isinstance(top, Run) and len(top.offsets) == 1):
+            yield from _hole_rows(top)
+            continue
+        dx, dy = top.offsets[0].tolist()
+        base = top.base
+        for block, op, x, y, bottom in _node_holes(top.node):
+            yield block + base, op, x + dx, y + dy, bottom
+
+
+def _node_holes(node: Node) -> list[Hole5]:
+    kept = _NODE_HOLES.get(id(node))
+    if kept is not None and kept[0] is node:
+        return kept[1]
+    found = list(_hole_rows(node))
+    _NODE_HOLES.keep(id(node), (node, found), size(node) + 1)
+    return found
+
+
+def _hole_rows(node: Node) -> Iterator[Hole5]:
+    for blocks, holes in placed_holes(node):
+        yield from zip(
             blocks.tolist(),
             holes["op"].tolist(),
             holes["x"].tolist(),
             holes["y"].tolist(),
             holes["bottom"].tolist(),
             strict=True,
-        ):
-            if block not in tools:
-                tools[block] = hole_tool(program.blocks, block)
-            info = path.tools.get(tools[block])
-            diameter = None if info is None else info.diameter
-            found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
-    return found
+        )
 
 
 def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
@@ -268,8 +304,8 @@ def _no_pilot(hole: PlacedHole, before: list[PlacedHole], units: Units) -> tuple
     """Why the holes `before` (earlier, at the same point) are no pilot for `hole`, and the
     field to change; ("", None) when one of them is."""
     tool = "tap" if hole.op is HoleOp.TAP else "boring bar"
-    depth = format_length(hole.bottom, units)
     if not before:
+        depth = format_length(hole.bottom, units)
         return (
             f"nothing is drilled there before it, so the {tool} goes into solid material; "
             f"drill a smaller hole there first, at least to Z DN {depth}",
@@ -291,6 +327,7 @@ def _no_pilot(hole: PlacedHole, before: list[PlacedHole], units: Units) -> tuple
         )
     deepest = min(smaller, key=lambda h: h.bottom)
     if deepest.bottom > hole.bottom:
+        depth = format_length(hole.bottom, units)
         return (
             f"goes to Z DN {depth}, {_length(deepest.bottom - hole.bottom, units)} below the "
             f"bottom of the hole of block {deepest.block} there (Z DN "

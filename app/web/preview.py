@@ -25,8 +25,8 @@ from app.cnc.blocks import Copy, Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.svg import render
 from app.cnc.estimate import estimate
-from app.cnc.path import CompiledPath
 from app.cnc.kinds import REGISTRY
+from app.cnc.path import CompiledPath
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.validate import validate
 

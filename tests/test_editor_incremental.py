@@ -21,7 +21,7 @@ from flask import Flask
 from flask.testing import FlaskClient
 
 from app import create_app
-from app.cnc import cost, path
+from app.cnc import cost, path, structure
 from app.cnc.blocks import BoltCircle
 from app.cnc.problems import Rule
 from app.cnc.validate import validate
@@ -128,3 +128,23 @@ def test_the_pilot_rule_sees_an_edit_among_kept_holes() -> None:
     assert "boring bar goes into solid material" in warned[0].message
     back = replace(turned, blocks=(*turned.blocks[:2], bolt, *turned.blocks[3:]))
     assert not [p for p in validate(back) if p.rule is Rule.PILOT]
+
+
+def test_an_edit_groups_its_blocks_into_nodes_once(
+    app: Flask, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The cost and the compile both read the new version's nodes (structure.build_nodes):
+    its 500 blocks are grouped once."""
+    editing = Editing(app)
+    editing.edit(0)
+    real = structure._sequence
+    groupings: list[int] = []
+
+    def counted(*args: Any, inside_loop: bool, tolerant: bool) -> Any:
+        if not inside_loop:  # a whole program's grouping, not a LOOP's body
+            groupings.append(1)
+        return real(*args, inside_loop=inside_loop, tolerant=tolerant)
+
+    monkeypatch.setattr(structure, "_sequence", counted)
+    editing.edit(1)
+    assert len(groupings) == 1

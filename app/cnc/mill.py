@@ -1014,8 +1014,8 @@ def _entry_problems(routine: Routine, block: Circle | Frame) -> list[Finding]:
                 routine.block,
                 Rule.RAMP_ENTRY,
                 Severity.ERROR,
-                f"ENTRY {block.entry.name} applies only to a POCKET; a "
-                f"{routine.placement.name.replace('_', '/')} routine enters on its lead-in: "
+                f"ENTRY {block.entry.name} applies only to a POCKET routine; "
+                f"{block.type_name} goes down beside the wall and enters on its lead-in: "
                 "leave ENTRY empty (PLUNGE)",
                 "ENTRY",
             )

@@ -23,9 +23,9 @@ together). What is not carried (coolant, stray dwells, spindle stops) is reporte
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from decimal import Decimal
-from itertools import islice
 from typing import Final, TypeGuard
 
 from app.cnc import limits
@@ -69,6 +69,8 @@ from app.cnc.imports.steps import (
     SpindleOff,
     SpindleOn,
     Step,
+    StepSource,
+    StepWindow,
     Stop,
     ToolChange,
 )
@@ -95,6 +97,9 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
     89: (HoleOp.BORE, ""),
 }
 
+# An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
+Retract = tuple[int, int, int]
+
 # `Segmenter.hole_spec`'s key: the HoleSpec's fields, its enums by identity.
 SpecKey = tuple[int, int | None, int | None, int | None, int, int, int]
 
@@ -117,13 +122,33 @@ class Segmented:
     ops: list[Op]
     tools: dict[int, ToolUse]
     initial_tool: int
-    retracts: list[tuple[int, int, int]]  # (line, Z UP, height the tool rapids up to)
+    retracts: list[Retract]
     two_axis: bool
+    diameters_used: list[dict[int, int]] = field(default_factory=list)
 
 
-def segment(parsed: Parsed) -> Segmented:
-    """The operations of a parsed file. Raises ImportFailure naming the line at fault."""
-    return _Segmenter(parsed).run()
+def segment(
+    parsed: Parsed,
+    steps: StepWindow | None = None,
+    batch: Batch | None = None,
+) -> Segmented:
+    """The operations of a parsed file. Raises ImportFailure naming the line at fault.
+
+    `steps` (default: `parsed.steps`, whole) is where the steps come from: a window onto a
+    reader still reading, when the file streams (docs/imports.md). With `batch`, every
+    BATCH_OPS operations (from an operation on, nothing changes those before it) are
+    handed to it with the retracts recorded since the last batch and the tools' use so
+    far, and the result holds
+    only the last batch's."""
+    return _Segmenter(parsed, steps, batch).run()
+
+
+# What takes each batch of operations (with their retracts, and the tools' use so far).
+Batch = Callable[[list[Op], list[Retract], dict[int, ToolUse]], None]
+
+# Operations the segmenter hands on at a time when the file streams: the window that
+# recognition (pecks, routines, bolt circles, LOOPs) looks across.
+BATCH_OPS: Final = 8192
 
 
 # The kinds of step, as functions with the classes written out: a tuple of classes held in a
@@ -144,25 +169,34 @@ def is_quiet(step: Step) -> bool:
     return isinstance(step, (SpindleOff, Stop, ToolChange, End, Coolant, Message))
 
 
-def is_two_axis(steps: list[Step]) -> bool:
-    """True when Z never changes and there are no canned cycles: the quill is by hand."""
+def is_two_axis(steps: StepWindow) -> bool:
+    """True when Z never changes and there are no canned cycles: the quill is by hand.
+    Reads on only until it knows: the first cycle or second height says no (a 3-axis
+    file shows it in its first moves); a 2-axis file is read to its end."""
     heights: set[int] = set()
-    for step in steps:
+    i = steps.start()
+    while steps.has(i):
+        step = steps[i]
         if isinstance(step, Cycle):
             return False
         if is_motion(step) and step.z is not None:
             heights.add(step.z)
-    return len(heights) <= 1
+            if len(heights) > 1:
+                return False
+        i += 1
+    return True
 
 
-def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
+def _cut_follows(steps: StepWindow, j: int, at: XY) -> bool:
     """True when steps[j:] go on cutting in XY from `at` (after more feeds in Z there): a
     feed in Z before it is a depth change, not the end of the sequence."""
     # Indexing, not `steps[j:]`: a slice copies the rest of the file's steps on every
     # call, which made reading a long file quadratic.
-    for k in range(j, len(steps)):
+    k = j
+    while steps.has(k):
         step = steps[k]
         if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
+            k += 1
             continue
         return is_cut(step)
     return False
@@ -180,9 +214,19 @@ class _Pending:
 
 
 class _Segmenter:
-    def __init__(self, parsed: Parsed) -> None:
+    def __init__(
+        self,
+        parsed: Parsed,
+        steps: StepWindow | None,
+        batch: Batch | None,
+    ) -> None:
         self.parsed = parsed
-        self.steps = parsed.steps
+        self.steps = StepWindow(StepSource(parsed.steps)) if steps is None else steps
+        self.batch = batch
+        self.first_tool: int | None = None  # the tool of the first change walked past
+        # The tools' diameters as compensation read them (a file that streams checks at the
+        # end that they were the file's).
+        self.diameters_used: list[dict[int, int]] = []
         self.notes: Notes = parsed.notes
         self.units = parsed.units
         self.tol = parsed.tolerance
@@ -193,7 +237,7 @@ class _Segmenter:
         self.tools: dict[int, ToolUse] = {}
         self.ops: list[Op] = []
         self.pending: _Pending | None = None
-        self.retracts: list[tuple[int, int, int]] = []
+        self.retracts: list[Retract] = []
         self.awaiting_retract: tuple[int, int] | None = None  # (line, Z UP) of the last op
         self.spindle_off_line: int | None = None
         self.quill_cycle = False
@@ -206,16 +250,17 @@ class _Segmenter:
     # -- the walk --------------------------------------------------------------------------
 
     def run(self) -> Segmented:
-        if self.two_axis and any(isinstance(s, Feed | Arc) for s in self.steps):
+        if self.two_axis and self.any_cut():
             self.notes.assumed(
                 None,
                 "Z never changes: a 2-axis program, the quill moved by hand (a position where "
                 "the program stops is a hole; cuts in XY are mill sequences)",
             )
         i = 0
-        n = len(self.steps)
-        while i < n:
-            step = self.steps[i]
+        steps = self.steps
+        while steps.has(i):
+            steps.release(i)
+            step = steps[i]
             if self.ended:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
@@ -268,8 +313,22 @@ class _Segmenter:
                 self.message[0], f"message {self.message[1]!r} with no block after it"
             )
         return Segmented(
-            self.ops, self.tools, self.parsed.initial_tool, self.retracts, self.two_axis
+            self.ops,
+            self.tools,
+            self.parsed.initial_tool,
+            self.retracts,
+            self.two_axis,
+            self.diameters_used,
         )
+
+    def any_cut(self) -> bool:
+        steps = self.steps
+        i = steps.start()
+        while steps.has(i):
+            if is_cut(steps[i]):
+                return True
+            i += 1
+        return False
 
     def note_spindle_off(self) -> None:
         if self.spindle_off_line is not None:
@@ -340,9 +399,15 @@ class _Segmenter:
 
     def next_tool(self) -> int:
         """The first tool the program uses, for a position before any tool is named."""
-        for step in self.steps:
+        if self.first_tool is not None:
+            return self.first_tool  # (the steps before the window's start are gone)
+        steps = self.steps
+        i = steps.start()
+        while steps.has(i):
+            step = steps[i]
             if isinstance(step, ToolChange):
                 return step.tool
+            i += 1
         return 1
 
     def hole_spec(
@@ -371,6 +436,10 @@ class _Segmenter:
                 self.message[0], f"message {op.message!r}: the MESSAGE of the next block"
             )
             self.message = None
+        if self.batch is not None and len(self.ops) >= BATCH_OPS:
+            # Nothing changes an operation once another follows it (a STOP marks the last).
+            self.batch(self.ops, self.retracts, self.tools)
+            self.ops, self.retracts = [], []
         self.ops.append(op)
         self.spindle_off_line = None
 
@@ -463,7 +532,7 @@ class _Segmenter:
         j = i
         x, y, z = start
         turned = 0.0
-        while j < len(steps):
+        while steps.has(j):
             s = steps[j]
             if not (
                 isinstance(s, Arc)
@@ -478,7 +547,7 @@ class _Segmenter:
             down.append(s)
             x, y, z = s.x, s.y, s.z
             j += 1
-        finish = steps[j] if j < len(steps) else None
+        finish = steps.at(j)
         if not (
             isinstance(finish, Arc)
             and (finish.x, finish.y) == (x, y)
@@ -511,7 +580,7 @@ class _Segmenter:
                 line,
             )
         lines = [*self.take_pending(start[:2]), line]
-        leave = steps[j] if j < len(steps) else None
+        leave = steps.at(j)
         if isinstance(leave, Feed) and (leave.x, leave.y) == centre and leave.z in (None, z):
             lines.append(leave.line)
             x, y = centre
@@ -550,11 +619,10 @@ class _Segmenter:
         feed_z = first.feed
         levels: list[int] = []
         j = i
-        n = len(steps)
         while True:
             # Feed down (perhaps in several moves) to the next level.
             bottom = self.z
-            while j < n:
+            while steps.has(j):
                 s = steps[j]
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
                     if s.feed != feed_z and not levels:
@@ -584,9 +652,9 @@ class _Segmenter:
             levels.append(bottom)
             self.z = bottom
             # A peck: rapid back up to where feeding began, down to the level, feed on.
-            up = steps[j] if j < n else None
-            down = steps[j + 1] if j + 1 < n else None
-            deeper = steps[j + 2] if j + 2 < n else None
+            up = steps.at(j)
+            down = steps.at(j + 1)
+            deeper = steps.at(j + 2)
             if (
                 isinstance(up, Rapid)
                 and (up.x, up.y) == at
@@ -615,12 +683,12 @@ class _Segmenter:
             break
         spec_units = first.units
         dwell: Decimal | None = None
-        nxt = steps[j] if j < n else None
+        nxt = steps.at(j)
         if isinstance(nxt, Dwell):
             dwell = nxt.seconds
             lines.append(nxt.line)
             j += 1
-            nxt = steps[j] if j < n else None
+            nxt = steps.at(j)
         bottom = levels[-1]
         # A mill sequence: cuts in XY at this depth (perhaps after a depth change).
         if _cut_follows(steps, j, at):
@@ -637,7 +705,7 @@ class _Segmenter:
             and self.spindle_cw is not None
             and nxt.clockwise != self.spindle_cw
         ):
-            out = steps[j + 1] if j + 1 < n else None
+            out = steps.at(j + 1)
             if isinstance(out, Feed) and (out.x, out.y) == at and out.z is not None:
                 op = HoleOp.TAP
                 lines += [nxt.line, out.line]
@@ -649,7 +717,7 @@ class _Segmenter:
                     )
                 self.z = out.z
                 j += 2
-                restore = steps[j] if j < n else None
+                restore = steps.at(j)
                 if isinstance(restore, SpindleOn) and restore.clockwise == self.spindle_cw:
                     lines.append(restore.line)
                     j += 1
@@ -717,7 +785,6 @@ class _Segmenter:
         units: Units,
     ) -> int:
         steps = self.steps
-        n = len(steps)
         bottom = levels[-1]
         if len(levels) > 1:
             self.notes.assumed(
@@ -730,7 +797,7 @@ class _Segmenter:
         elements: list[Element] = []
         sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
-        while j < n:
+        while steps.has(j):
             s = steps[j]
             if isinstance(s, Feed):
                 if (s.x, s.y) == (x, y):
@@ -788,6 +855,8 @@ class _Segmenter:
             diameters = {
                 n: t.diameter for n, t in self.parsed.tools.items() if t.diameter is not None
             }
+            if diameters not in self.diameters_used:
+                self.diameters_used.append(diameters)
             reading = Reading(self.tool, diameters, units, self.notes)
             parts = reading.parts(at, bottom, elements, sides)
         else:
@@ -806,7 +875,6 @@ class _Segmenter:
     def two_axis_sequence(self, i: int) -> int:
         """Cuts in XY in a 2-axis program: a DRILL without depths and its mill blocks."""
         steps = self.steps
-        n = len(steps)
         at = (self.x, self.y)
         lines = self.take_pending(at)
         first = steps[i]
@@ -819,7 +887,7 @@ class _Segmenter:
         elements: list[Element] = []
         x, y = at
         j = i
-        while j < n:
+        while steps.has(j):
             s = steps[j]
             if is_cut(s) and s.comp:
                 raise ImportFailure(
@@ -840,7 +908,7 @@ class _Segmenter:
                 break
             x, y = s.x, s.y
             j += 1
-        nxt = steps[j] if j < n else None
+        nxt = steps.at(j)
         if isinstance(nxt, Stop) and not nxt.optional:
             lines.append(nxt.line)
             stops += 1
@@ -930,6 +998,8 @@ class _Segmenter:
             )
 
     def change_tool(self, step: ToolChange) -> None:
+        if self.first_tool is None:
+            self.first_tool = step.tool
         self.tool = step.tool
         self.tools.setdefault(step.tool, ToolUse())
         self.spindle_cw = None
@@ -941,9 +1011,10 @@ class _Segmenter:
         self.spindle_off_line = None
         if self.two_axis and self.pending is not None and not after_spindle_stop:
             # The quill: a hole by hand here, or the quill lowered for the cuts that follow.
-            nxt = next(
-                (s for s in islice(self.steps, i + 1, None) if not isinstance(s, Dwell)), None
-            )
+            j = i + 1
+            while isinstance(self.steps.at(j), Dwell):
+                j += 1
+            nxt = self.steps.at(j)
             if isinstance(nxt, Feed | Arc) and (nxt.x, nxt.y) != self.pending.at:
                 self.quill_stop = step.line
                 return i + 1

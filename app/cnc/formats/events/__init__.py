@@ -27,8 +27,12 @@ class EventsImporter(Importer):
     rank = 20
 
     def sniff(self, content: Content) -> Sniff | None:
-        found = _EVENT.search(content.plain)
-        return None if found is None else Sniff(Strength.CONTENT, f"the event {found.group()}")
+        # (Part by part: an event word is within a line, and a part ends at a line break.)
+        for part in content.plain():
+            found = _EVENT.search(part)
+            if found is not None:
+                return Sniff(Strength.CONTENT, f"the event {found.group()}")
+        return None
 
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]

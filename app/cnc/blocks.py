@@ -172,6 +172,8 @@ ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL, Rule.RAM
 ENTRY_HELP = "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across"
 RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
 RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
+POCKET_ONLY = (("placement", Placement.POCKET),)
+RAMPED = (*POCKET_ONLY, ("entry", Entry.HELIX))
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -476,10 +478,10 @@ class Circle(Block):
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
     entry: Entry | None = prompt(
-        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, prompted=False
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
     )
     ramp_angle: Decimal | None = prompt(
-        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, prompted=False
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
     )
 
     @property
@@ -512,10 +514,10 @@ class Frame(Block):
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
     entry: Entry | None = prompt(
-        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, prompted=False
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
     )
     ramp_angle: Decimal | None = prompt(
-        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, prompted=False
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
     )
 
     @property

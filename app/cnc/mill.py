@@ -1044,11 +1044,11 @@ def _helix_entry(
     assert lead_in.centre is not None  # a POCKET routine enters on a lead-in arc
     r = float(routine.tool_radius)
     wall = r + allowance
-
-    centre = lead_in.centre
+    # Into the pocket: from where the lead-in meets the wall pass towards its centre.
+    inward = unit(sub(lead_in.centre, lead_in.end))
 
     def ramp(radius: float) -> Ramp:
-        return helix_ramp(first.start, centre, lead_in.clockwise, radius, angle)
+        return helix_ramp(first.start, inward, routine.clockwise, radius, angle)
 
     def fits(radius: float) -> bool:
         return _room_inside(routine, wall, ramp(radius).centre) >= radius - EPS

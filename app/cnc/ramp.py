@@ -3,8 +3,8 @@ helical ramp at a stated angle instead of plunging.
 
 The ramp replaces the feed straight down at the entry point of the first pass (the point
 a plunge would go down at). A HELIX ramp goes round a circle whose path is half the tool's
-DIA across (docs/readings.md, "Ramp entry"), tangent inside the lead-in arc at the entry
-point and in the same direction, so it runs on into the lead-in without a corner; it goes
+DIA across (docs/readings.md, "Ramp entry"), on the pocket's side of the entry point (its
+centre straight in from it, away from the wall), round the way the routine goes; it goes
 down `tan(angle)` per unit of its length and ends at depth at the entry point. It starts
 where that length, measured back along the circle from the entry point, puts it.
 
@@ -79,12 +79,9 @@ def helix_radius(tool_radius: float) -> float:
     return tool_radius / 2
 
 
-def helix_ramp(
-    entry: Pt, lead_centre: Pt, lead_clockwise: bool, radius: float, angle: Decimal
-) -> Ramp:
-    """The helical ramp of `radius` (nm; `helix_radius`) ending at `entry`, tangent to the
-    lead-in arc about `lead_centre` (travelled `lead_clockwise`) there, `angle` degrees."""
-    dx, dy = lead_centre[0] - entry[0], lead_centre[1] - entry[1]
-    span = math.hypot(dx, dy)
-    centre = (entry[0] + dx / span * radius, entry[1] + dy / span * radius)
-    return Ramp(entry, centre, radius, lead_clockwise, math.radians(float(angle)))
+def helix_ramp(entry: Pt, inward: Pt, clockwise: bool, radius: float, angle: Decimal) -> Ramp:
+    """The helical ramp of `radius` (nm; `helix_radius`) ending at `entry`, its centre
+    `radius` from it along the unit vector `inward` (into the pocket, away from the wall),
+    round `clockwise` as the routine goes, `angle` degrees."""
+    centre = (entry[0] + inward[0] * radius, entry[1] + inward[1] * radius)
+    return Ramp(entry, centre, radius, clockwise, math.radians(float(angle)))

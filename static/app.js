@@ -338,8 +338,8 @@
 
   // A prompt that applies only while others have some values (a pocket's ENTRY, its RAMP
   // ANGLE: the declaration's only_when, app/web/forms.py FieldSpec.shown_when) is shown
-  // and entered only then; hidden, it is disabled, so Enter skips it and the form sends
-  // nothing for it (the block keeps its default).
+  // only then, beside the Enter sequence (data-beside: Tab or the pointer reach it);
+  // hidden, it is disabled, so the form sends nothing for it (the block keeps its default).
   function applyShownWhen(form) {
     form.querySelectorAll("[data-shown-when]").forEach(function (field) {
       var shown = field.getAttribute("data-shown-when").split(" ").every(function (pair) {
@@ -348,7 +348,7 @@
         return other !== null && !other.disabled && other.value === pair.slice(at + 1);
       });
       field.hidden = !shown;
-      field.querySelectorAll("[data-field]").forEach(function (el) { el.disabled = !shown; });
+      field.querySelectorAll("[data-beside]").forEach(function (el) { el.disabled = !shown; });
     });
   }
   function shownWhenAll() {

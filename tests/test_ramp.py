@@ -142,3 +142,28 @@ def test_the_default_angle_is_three_degrees() -> None:
     )
     assert [e for e in validate(empty) if e.severity is Severity.ERROR] == []
     assert interpret(empty).moves == interpret(stated).moves
+
+
+def test_the_bounded_work_estimate_counts_the_ramps_turns() -> None:
+    """A 0.062 in tool ramping at 0.5° down 2 in turns 2π × 0.0155 × tan 0.5° = 0.000850 in
+    a turn: about 2 353 rows, which the estimate (app/cnc/cost.py) must not count fewer
+    of than the compile makes, so such a ramp is weighed before it is compiled."""
+    from app.cnc import cost
+    from app.cnc.compiler import Cache, compile_program
+
+    golden = load("circle-pocket-helix-ramp")
+    drill, circle = golden.blocks
+    assert isinstance(circle, Circle)
+    tool = dataclasses.replace(golden.block0.tools[0], diameter=Decimal("0.062"))
+    program = dataclasses.replace(
+        golden,
+        block0=dataclasses.replace(golden.block0, tools=(tool, *golden.block0.tools[1:])),
+        blocks=(
+            dataclasses.replace(drill, z_up=Decimal("0.1"), z_dn=Decimal("-1.9")),
+            dataclasses.replace(circle, radius=Decimal("0.2"), ramp_angle=Decimal("0.5")),
+        ),
+    )
+    assert [e for e in validate(program) if e.severity is Severity.ERROR] == []
+    rows = len(compile_program(program, Cache()).path)
+    assert rows > 2_353
+    assert rows <= cost.estimate(program).moves

@@ -110,6 +110,8 @@ def test_the_circle_ramp_stays_inside_the_pocket_and_verify_finds_nothing() -> N
             far = math.dist(centre, (2 * IN, 2 * IN)) + math.dist((arc.x, arc.y), centre)
             assert far <= (1.25 - 0.25) * IN + 2
     assert verify(program).findings == []
+    # The 2P frame in mm too: its ramps stay inside the roughing pass.
+    assert verify(load("frame-2p-pocket-helix-ramp-mm")).findings == []
 
 
 def test_a_plunging_pocket_is_unchanged_by_the_new_fields() -> None:

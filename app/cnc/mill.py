@@ -904,6 +904,14 @@ def plan_sequence(
         contours = tuple((i + 1, blocks[i]) for i in mills[1:])
         at = RoutineStart(mills[0] + 1, block0, rpm, radius, start, contours)
         plan: SequencePlan = planner(first, at)
+        if plan.ramp is not None and not drill.has_depth:
+            # A 2-axis sequence's depth is the operator's quill: no ramp, and no silent plunge.
+            message = (
+                "a ramp entry goes down along X and Y, and this sequence's depth is the "
+                "quill's (its DRILL has no Z UP/Z DN): leave ENTRY empty (PLUNGE)"
+            )
+            finding = Finding(mills[0] + 1, Rule.RAMP_ENTRY, Severity.ERROR, message, "ENTRY")
+            return SequencePlan([], 0, start, [*plan.findings, finding])
         return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)

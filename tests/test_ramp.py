@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from app.cnc import document
-from app.cnc.blocks import Circle, Entry, Program
+from app.cnc.blocks import Circle, Entry, Hole, Program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.simulate.verify import verify
@@ -155,7 +155,7 @@ def test_the_bounded_work_estimate_counts_the_ramps_turns() -> None:
 
     golden = load("circle-pocket-helix-ramp")
     drill, circle = golden.blocks
-    assert isinstance(circle, Circle)
+    assert isinstance(drill, Hole) and isinstance(circle, Circle)
     tool = dataclasses.replace(golden.block0.tools[0], diameter=Decimal("0.062"))
     program = dataclasses.replace(
         golden,

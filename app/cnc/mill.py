@@ -33,6 +33,7 @@ and 0.13 mm.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from typing import TYPE_CHECKING, Any
@@ -235,21 +236,31 @@ def sample(path: Path, step: float) -> list[tuple[Pt, Element]]:
     current = path.start
     for element in path.elements:
         n = max(1, math.ceil(length(current, element) / step))
-        for i in range(n + 1):
-            points.append((point_at(current, element, i / n), element))
+        along = points_along(current, element, [i / n for i in range(n + 1)])
+        points += [(p, element) for p in along]
         current = element.end
     return points
 
 
 def point_at(start: Pt, element: Element, fraction: float) -> Pt:
     """The point a `fraction` (0…1) of the way along an element."""
+    return points_along(start, element, (fraction,))[0]
+
+
+def points_along(start: Pt, element: Element, fractions: Sequence[float]) -> list[Pt]:
+    """The points `fractions` (each 0…1) of the way along an element. An arc's centre,
+    radius and turn are found once for all of them (a pocket samples thousands)."""
     if element.centre is None:
-        return add(start, scale(sub(element.end, start), fraction))
+        d = sub(element.end, start)
+        return [(start[0] + d[0] * f, start[1] + d[1] * f) for f in fractions]
     c = element.centre
     radius = math.dist(start, c)
     a0 = math.atan2(start[1] - c[1], start[0] - c[0])
-    a = a0 + (-1 if element.clockwise else 1) * sweep(start, element) * fraction
-    return (c[0] + radius * math.cos(a), c[1] + radius * math.sin(a))
+    turn = (-1 if element.clockwise else 1) * sweep(start, element)
+    return [
+        (c[0] + radius * math.cos(a0 + turn * f), c[1] + radius * math.sin(a0 + turn * f))
+        for f in fractions
+    ]
 
 
 def distance_to_element(p: Pt, start: Pt, element: Element) -> float:

@@ -61,7 +61,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import Finding, Path, length, plan_sequence
+from app.cnc.mill import Finding, Path, SequencePlan, length, plan_sequence
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
@@ -69,6 +69,7 @@ from app.cnc.path import (
     TAG,
     CompiledPath,
     HoleSpan,
+    MillPlan,
     MillSpan,
     Node,
     Op,
@@ -568,7 +569,7 @@ class _Compiler:
         if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
             # Not cut: a span without rows says where it would be (with the programmed
             # contour), so a drawing can show what is left out.
-            self.record_mill(node, drill, start, len(self.buffer.rows), plan.finished)
+            self.record_mill(node, drill, start, len(self.buffer.rows), plan)
             self.reference = plan.end
             return
         self.use_tool(number, drill.tool)
@@ -578,7 +579,7 @@ class _Compiler:
                 self.cut_pocket(number, last, drill, plan.pocket)
             else:
                 self.cut_pocket_by_hand(number, last, plan.pocket)
-            self.record_mill(node, drill, start, first_row, None)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         plunge = _round(plan.passes[0].start)
@@ -588,7 +589,7 @@ class _Compiler:
             for path in plan.passes:
                 self.cut(path, depth_cap=None, feed_z=0, follow_depth=False)
             self.stop_for(last, "quill: raise the quill by hand")
-            self.record_mill(node, drill, start, first_row, plan.finished)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         z_up, z_dn, feed_z = _depths(drill)
@@ -614,7 +615,7 @@ class _Compiler:
             self.feed_to(number, (self.x, self.y, z_dn), feed_z)
             self.cut(path, depth_cap=None, feed_z=feed_z)
         self.retract_up(last)
-        self.record_mill(node, drill, start, first_row, plan.finished)
+        self.record_mill(node, drill, start, first_row, plan)
         self.reference = plan.end
 
     def cut_pocket(self, number: int, last: int, drill: Hole, pocket: PocketPlan) -> None:
@@ -697,10 +698,16 @@ class _Compiler:
         drill: Hole,
         start: tuple[int, int],
         first_row: int,
-        finished: Path | None,
+        plan: SequencePlan,
     ) -> None:
+        """The span of a mill sequence just compiled, with its plan: what it is programmed
+        to make, so no consumer plans it again."""
+        finished = plan.finished
         routine = 0 if finished is not None else node.mills[0] + 1 - self.base
         depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
+        kept = MillPlan(
+            plan.end, plan.routine, plan.outlines, plan.pocket, tuple(plan.findings)
+        )
         self.buffer.mills.append(
             MillSpan(
                 first_row,
@@ -714,6 +721,7 @@ class _Compiler:
                 drill.tool,
                 drill.comp.value,
                 shift=-self.base,
+                plan=kept,
             )
         )
 

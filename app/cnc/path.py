@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
 
 import numpy as np
@@ -47,7 +47,8 @@ import numpy.typing as npt
 
 from app.cnc import sizes
 from app.cnc.blocks import HoleOp
-from app.cnc.mill import Path, translated
+from app.cnc.mill import Finding, Path, Routine, translated
+from app.cnc.pocketing.model import PocketPlan
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -197,12 +198,15 @@ class MillSpan:
     """One mill sequence in a piece: rows [start, end) cut it (none when its plan has
     errors: it is not cut, the span only says where it would be).
 
-    `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME block (0 for a
-    contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point (nm);
-    `depth` the DRILL's Z DN (None in a 2-axis program); `tool` and `comp` the DRILL's.
+    `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME/POCKET block
+    (0 for a contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point
+    (nm), where the sequence is entered; `depth` the DRILL's Z DN (None in a 2-axis
+    program); `tool` and `comp` the DRILL's.
     `finished` is the programmed contour (float nm) as it was planned, or None for a
     routine; `contour()` gives it where this span is — moved by (`dx`, `dy`), its blocks
-    renumbered by `shift`.
+    renumbered by `shift`. `plan` is the rest of what was planned (`MillPlan`), read where
+    this span is through `end()`, `shape()`, `outlines()`, `pocket()` and `findings()`:
+    what every consumer reads instead of planning the sequence again.
     """
 
     start: int
@@ -218,6 +222,9 @@ class MillSpan:
     dx: int = 0
     dy: int = 0
     shift: int = 0
+    # Not in the repr nor compared: it is made from what the other fields hold (a drawing
+    # keys on the repr) and a pocket's plan is large.
+    plan: MillPlan = field(default_factory=lambda: MillPlan((0, 0)), repr=False, compare=False)
 
     def moved(self, rows: int, dx: int, dy: int, blocks: int = 0) -> MillSpan:
         """This span `rows` later, (dx, dy) over and `blocks` block numbers on."""
@@ -235,15 +242,91 @@ class MillSpan:
             self.dx + dx,
             self.dy + dy,
             self.shift + blocks,
+            self.plan,
         )
+
+    @property
+    def _here(self) -> bool:
+        """True when the plan is where this span is (nothing to move or renumber)."""
+        return not (self.dx or self.dy or self.shift)
 
     def contour(self) -> Path | None:
         """The programmed contour where this span cuts it (None for a routine)."""
         if self.finished is None:
             return None
-        if not (self.dx or self.dy or self.shift):
+        if self._here:
             return self.finished
         return translated(self.finished, self.dx, self.dy, self.shift)
+
+    def exit(self) -> tuple[int, int]:
+        """The programmed end point (nm): the reference for a following INC block (the
+        DRILL's point after a routine)."""
+        x, y = self.plan.end
+        return x + self.dx, y + self.dy
+
+    def shape(self) -> Routine | None:
+        """A CIRCLE/FRAME routine's circle or frame where this span cuts it (None for a
+        contour or a POCKET)."""
+        routine = self.plan.routine
+        if routine is None or self._here:
+            return routine
+        return replace(
+            routine,
+            block=routine.block + self.shift,
+            centre=(routine.centre[0] + self.dx, routine.centre[1] + self.dy),
+            corner=(routine.corner[0] + self.dx, routine.corner[1] + self.dy),
+        )
+
+    def outlines(self) -> tuple[tuple[str, Path], ...]:
+        """A POCKET's wall ("boundary") and islands where this span cuts it (empty for
+        anything else)."""
+        if self._here:
+            return self.plan.outlines
+        return tuple(
+            (name, translated(path, self.dx, self.dy, self.shift))
+            for name, path in self.plan.outlines
+        )
+
+    def pocket(self) -> PocketPlan | None:
+        """A POCKET's passes and links where this span cuts it (None for anything else,
+        and for a POCKET whose plan has errors)."""
+        plan = self.plan.pocket
+        if plan is None or self._here:
+            return plan
+
+        def move(path: Path) -> Path:
+            return translated(path, self.dx, self.dy, self.shift)
+
+        passes = tuple(
+            replace(p, path=move(p.path), entry=replace(p.entry, path=move(p.entry.path)))
+            for p in plan.passes
+        )
+        return replace(plan, passes=passes)
+
+    def findings(self) -> tuple[Finding, ...]:
+        """What planning the sequence found (compensation limits, routine sizes, a
+        pocket's narrow places), numbered where this span is."""
+        if not self.shift:
+            return self.plan.findings
+        return tuple(replace(f, block=f.block + self.shift) for f in self.plan.findings)
+
+
+@dataclass(frozen=True, slots=True)
+class MillPlan:
+    """What a mill sequence was planned as, where it was compiled (nm, block numbers as
+    compiled; a MillSpan moves it to where it is cut).
+
+    `end` the programmed end point; `routine` a CIRCLE/FRAME's circle or frame and the way
+    it goes round; `outlines` a POCKET's wall and islands; `pocket` a POCKET's passes with
+    their links (None when its plan has errors); `findings` what planning found. The
+    programmed contour of a line/arc sequence is `MillSpan.finished`.
+    """
+
+    end: tuple[int, int]
+    routine: Routine | None = None
+    outlines: tuple[tuple[str, Path], ...] = ()
+    pocket: PocketPlan | None = None
+    findings: tuple[Finding, ...] = ()
 
 
 @dataclass(slots=True)
@@ -468,6 +551,38 @@ def placed_holes(
     else:
         for ox, oy in node.offsets.tolist():
             yield from placed_holes(node.node, dx + ox, dy + oy, base + node.base)
+
+
+def placed_mills(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[MillSpan]:
+    """Every mill sequence of `node` in cutting order, where it is cut (blocks absolute,
+    rows counted from the node's first), without placing the moves: for the consumers that
+    read the plans (events, Verify's intended part, cleared areas), a LOOP of holes costs
+    nothing here."""
+    yield from _placed_mills(node, dx, dy, base, 0)
+
+
+def _placed_mills(node: Node, dx: int, dy: int, base: int, row: int) -> Iterator[MillSpan]:
+    if isinstance(node, Piece):
+        shift = node.base + base
+        for mill in node.mills:
+            yield mill.moved(row, dx, dy, shift)
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            yield from _placed_mills(child, dx, dy, base, row)
+            row += size(child)
+    elif _has_mills(node.node):
+        per = size(node.node)
+        for ox, oy in node.offsets.tolist():
+            yield from _placed_mills(node.node, dx + ox, dy + oy, base + node.base, row)
+            row += per
+
+
+def _has_mills(node: Node) -> bool:
+    if isinstance(node, Piece):
+        return bool(node.mills)
+    if isinstance(node, Seq):
+        return any(_has_mills(child) for child in node.nodes)
+    return _has_mills(node.node)
 
 
 def lowest_by_block(node: Node, base: int = 0, out: dict[int, int] | None = None) -> dict[int, int]:

@@ -705,9 +705,7 @@ class _Compiler:
         finished = plan.finished
         routine = 0 if finished is not None else node.mills[0] + 1 - self.base
         depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
-        kept = MillPlan(
-            plan.end, plan.routine, plan.outlines, plan.pocket, tuple(plan.findings)
-        )
+        kept = MillPlan(plan.end, plan.routine, plan.outlines, plan.pocket, tuple(plan.findings))
         self.buffer.mills.append(
             MillSpan(
                 first_row,

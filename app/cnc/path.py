@@ -270,12 +270,11 @@ class MillSpan:
         routine = self.plan.routine
         if routine is None or self._here:
             return routine
-        return replace(
-            routine,
-            block=routine.block + self.shift,
-            centre=(routine.centre[0] + self.dx, routine.centre[1] + self.dy),
-            corner=(routine.corner[0] + self.dx, routine.corner[1] + self.dy),
-        )
+        if routine.is_frame:
+            corner = (routine.corner[0] + self.dx, routine.corner[1] + self.dy)
+            return replace(routine, block=routine.block + self.shift, corner=corner)
+        centre = (routine.centre[0] + self.dx, routine.centre[1] + self.dy)
+        return replace(routine, block=routine.block + self.shift, centre=centre)
 
     def outlines(self) -> tuple[tuple[str, Path], ...]:
         """A POCKET's wall ("boundary") and islands where this span cuts it (empty for

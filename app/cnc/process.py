@@ -26,29 +26,21 @@ from dataclasses import dataclass
 from app.cnc.blocks import (
     Block,
     BoltCircle,
-    Circle,
-    Frame,
     Hole,
     HoleOp,
     Placement,
-    Pocket,
     Program,
 )
 from app.cnc.compiler import Compiled
-from app.cnc.mill import Element
-from app.cnc.mill import Path as MillPath
+from app.cnc.mill import routine_outline
 from app.cnc.path import (
     HOLE_OPS,
     CompiledPath,
-    Node,
-    Piece,
-    Run,
-    Seq,
     lowest_by_block,
     placed_holes,
+    placed_mills,
 )
 from app.cnc.pocketing.regions import path_points
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.units import Units, format_length, to_nm
 
@@ -119,70 +111,22 @@ def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
 
 def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
     """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
-    irregular POCKETs; a sequence whose plan has errors clears nothing)."""
+    irregular POCKETs; a sequence whose plan has errors clears nothing), from the outlines
+    the compile planned."""
     found: list[Cleared] = []
-    for routine_number, x, y, cut, depth in _mill_spans(path.root):
-        if not routine_number or not cut or depth is None:
+    for mill in placed_mills(path.root):
+        if not mill.routine or mill.start == mill.end or mill.depth is None:
             continue
-        routine = program.blocks[routine_number - 1]
-        if isinstance(routine, Pocket):
-            drawn = contours_at(program.blocks, routine_number, (x, y))
-            outline = next(c.path for c in drawn if c.name == "boundary")
-        elif isinstance(routine, Circle | Frame) and routine.placement is Placement.POCKET:
-            outline = _routine_outline(routine, (x, y))
+        shape = mill.shape()
+        outlines = dict(mill.outlines())
+        if "boundary" in outlines:
+            outline = outlines["boundary"]
+        elif shape is not None and shape.placement is Placement.POCKET:
+            outline = routine_outline(shape)
         else:
             continue
-        found.append(Cleared(routine_number, tuple(path_points(outline, 2_000)), depth))
+        found.append(Cleared(mill.routine, tuple(path_points(outline, 2_000)), mill.depth))
     return found
-
-
-def _mill_spans(
-    node: Node, dx: int = 0, dy: int = 0
-) -> list[tuple[int, int, int, bool, int | None]]:
-    """(routine block, x, y, cut, depth) of every mill span of `node`, placed, in order."""
-    out: list[tuple[int, int, int, bool, int | None]] = []
-    if isinstance(node, Piece):
-        for m in node.mills:
-            routine = m.routine + node.base if m.routine else 0
-            out.append((routine, m.x + dx, m.y + dy, m.start != m.end, m.depth))
-    elif isinstance(node, Seq):
-        for child in node.nodes:
-            out += _mill_spans(child, dx, dy)
-    elif isinstance(node, Run):
-        inner = _mill_spans(node.node)
-        if inner:
-            for ox, oy in node.offsets.tolist():
-                out += [
-                    (r + node.base if r else 0, x + dx + ox, y + dy + oy, c, d)
-                    for r, x, y, c, d in inner
-                ]
-    return out
-
-
-def _routine_outline(routine: Circle | Frame, origin: tuple[int, int]) -> MillPath:
-    """A CIRCLE's or FRAME's finished contour as a path (origin: the centre, or the
-    frame's lower-left corner)."""
-    units = routine.units
-    ox, oy = float(origin[0]), float(origin[1])
-    if isinstance(routine, Circle):
-        r = float(to_nm(routine.radius, units))
-        top = (ox, oy + r)
-        bottom = (ox, oy - r)
-        return MillPath(top, (Element(0, bottom, (ox, oy), True), Element(0, top, (ox, oy), True)))
-    w, h = float(to_nm(routine.xl, units)), float(to_nm(routine.yw, units))
-    c = min(float(to_nm(routine.corner_radius, units)), w / 2, h / 2)
-    corners = [
-        ((ox + w - c, oy), (ox + w, oy + c), (ox + w - c, oy + c)),
-        ((ox + w, oy + h - c), (ox + w - c, oy + h), (ox + w - c, oy + h - c)),
-        ((ox + c, oy + h), (ox, oy + h - c), (ox + c, oy + h - c)),
-        ((ox, oy + c), (ox + c, oy), (ox + c, oy + c)),
-    ]
-    elements = []
-    for line_end, arc_end, centre in corners:
-        elements.append(Element(0, line_end))
-        if c > 0:
-            elements.append(Element(0, arc_end, centre, False))
-    return MillPath((ox + c, oy), tuple(elements))
 
 
 def in_ring(outline: Sequence[tuple[float, float]], x: float, y: float) -> bool:

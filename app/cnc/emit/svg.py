@@ -37,12 +37,11 @@ from typing import Any
 
 import numpy as np
 
-from app.cnc.blocks import Circle, Frame, Pocket, Program
+from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.simulate.stock import MARGIN, ROUND_TO
 from app.cnc.units import Units, to_nm
 
@@ -584,24 +583,24 @@ class _Painter:
         if contour is not None:
             self.contour(groups, box, contour)
             return
-        if not mill.routine or mill.routine > len(self.program.blocks):
+        # A routine's outline as the compile planned it (never the blocks again).
+        for _, outline in mill.outlines():
+            self.contour(groups, box, outline)
+        shape = mill.shape()
+        if shape is None:
             return
-        block = self.program.blocks[mill.routine - 1]
         group = groups.setdefault(mill.routine, _Group())
-        if isinstance(block, Circle):
-            r = to_nm(block.radius, block.units)
+        if not shape.is_frame:
+            r = shape.radius
             if r > 0:
                 group.outlines.append(
                     f'<circle class="contour" cx="{self.n(mill.x)}" cy="{self.n(mill.y)}" '
                     f'r="{self.n(r)}"/>'
                 )
                 box.point(mill.x, mill.y, r)
-        elif isinstance(block, Pocket):
-            for drawn in contours_at(self.program.blocks, mill.routine, (mill.x, mill.y)):
-                self.contour(groups, box, drawn.path)
-        elif isinstance(block, Frame):
-            w, h = to_nm(block.xl, block.units), to_nm(block.yw, block.units)
-            corner = max(0, min(to_nm(block.corner_radius, block.units), w // 2, h // 2))
+        else:
+            w, h = shape.width, shape.height
+            corner = max(0, min(shape.corner_radius, w // 2, h // 2))
             if w > 0 and h > 0:
                 rounded = f' rx="{self.n(corner)}"' if corner else ""
                 group.outlines.append(

@@ -26,7 +26,7 @@ from app.cnc.copy import resolve_copies
 from app.cnc.emit.svg import render
 from app.cnc.emit.target import export
 from app.cnc.estimate import estimate
-from app.cnc.path import placed_mills
+from app.cnc.path import PLAN_ELEMENT_ROWS, placed_mills
 from app.cnc.pocketing import plan as pocket_plan
 from app.cnc.pocketing import routine as pocket_routine
 from app.cnc.process import cleared_areas
@@ -134,3 +134,13 @@ def test_a_loops_placements_carry_the_plan_where_each_pattern_is_cut() -> None:
         assert {e.block for _, p in span.outlines() for e in p.elements} == {
             e.block for _, p in first.outlines() for e in p.elements
         }
+
+
+def test_the_compile_cache_counts_the_plans_it_keeps() -> None:
+    # A POCKET's kept plan outweighs its moves (pocket-islands: 172 elements, about 65 kB,
+    # against 378 rows, 23 kB): the cache's budget must count it, or it bounds nothing.
+    program = load("pocket-islands")
+    cache = Cache()
+    moves = len(compile_program(program, cache=cache).path)
+    # Before: the moves of each node kept, and one for the entry (a few nodes here).
+    assert cache.held > moves + 100 * PLAN_ELEMENT_ROWS

@@ -76,6 +76,7 @@ from app.cnc.path import (
     Piece,
     Run,
     Seq,
+    plan_rows,
     size,
 )
 from app.cnc.pocketing.model import LinkKind, PocketPlan
@@ -144,13 +145,14 @@ class Cache(Memo[NodeResult]):
     """Compiled top-level nodes by (blocks, entry state, Data Block 0 and units): an edit
     recompiles only what changed.
 
-    Bounded by moves held (`rows`, at 62 bytes a move): least recently used entries go
-    first, and a node larger than a tenth of the budget is not kept. Safe to share between
+    Bounded by moves held (`rows`, at 62 bytes a move; the plans kept on its mill spans
+    counted as the rows their memory would hold): least recently used entries go first,
+    and a node larger than a tenth of the budget is not kept. Safe to share between
     threads (a web server's requests).
     """
 
     def put(self, key: object, value: NodeResult) -> None:
-        self.keep(key, value, size(value.node) + 1)
+        self.keep(key, value, size(value.node) + plan_rows(value.node) + 1)
 
 
 # A top-level node's one placement: where it was compiled (read only; shared by every Run).

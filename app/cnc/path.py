@@ -552,6 +552,32 @@ def placed_holes(
             yield from placed_holes(node.node, dx + ox, dy + oy, base + node.base)
 
 
+# What one element of a kept plan costs in memory, in rows (62 bytes each): an element
+# with its points and its share of the passes and links holding it, about 380 bytes
+# (tracemalloc over the pocket-islands plan).
+PLAN_ELEMENT_ROWS = 6
+
+
+def plan_rows(node: Node) -> int:
+    """The memory the plans kept on `node`'s mill spans take, in rows: for a cache that
+    bounds what it holds by rows (a POCKET's plan can outweigh its moves). A node placed
+    several times holds its plans once."""
+    if isinstance(node, Piece):
+        elements = 0
+        for mill in node.mills:
+            plan = mill.plan
+            paths = [path for _, path in plan.outlines]
+            if plan.pocket is not None:
+                for cut in plan.pocket.passes:
+                    paths += [cut.path, cut.entry.path]
+            elements += sum(len(path.elements) for path in paths)
+            elements += 0 if mill.finished is None else len(mill.finished.elements)
+        return elements * PLAN_ELEMENT_ROWS
+    if isinstance(node, Seq):
+        return sum(plan_rows(child) for child in node.nodes)
+    return plan_rows(node.node)
+
+
 def placed_mills(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[MillSpan]:
     """Every mill sequence of `node` in cutting order, where it is cut (blocks absolute,
     rows counted from the node's first), without placing the moves: for the consumers that

@@ -77,7 +77,7 @@ SEGMENTS: Memo[tuple[Piece, Segments, Entry, frozenset[int]]] = Memo()
 
 def place(program: Program, path: CompiledPath) -> Placed:
     """The motions of `path` (compiled from `program`) as placed groups."""
-    shapes = ToolShapes.of(program, path.tools)
+    shapes = ToolShapes.of(path)
     # The stock's top (nm): the program's stock, or part Z0 for one sized from the extent
     # (stock.py). A move above it cuts nothing and hits nothing.
     top = 0 if program.stock is None else to_nm(program.stock.z, program.units)

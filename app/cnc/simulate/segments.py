@@ -124,6 +124,12 @@ class Segments:
 _FIELDS = tuple(Segments.__dataclass_fields__)
 
 
+def default_diameter(units: Units) -> int:
+    """The diameter (nm) the simulation gives a tool Data Block 0 gives none:
+    DEFAULT_DIAMETER, stated in Verify's report."""
+    return to_nm(DEFAULT_DIAMETER[units], units)
+
+
 def drill_point_blocks(path: CompiledPath) -> set[int]:
     """Numbers of the blocks whose holes are cut with a drill point: the compiled holes a
     DRILL makes (a bolt circle's on its BOLT CIR block; a DRILL that starts a mill sequence
@@ -153,7 +159,7 @@ class ToolShapes:
 
     @property
     def default_diameter(self) -> int:
-        return to_nm(DEFAULT_DIAMETER[self.units], self.units)
+        return default_diameter(self.units)
 
     def radius(self, tool: int) -> float:
         """The radius the simulation gives `tool`, nm."""

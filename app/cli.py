@@ -330,12 +330,6 @@ def time(file: str, tool_change_seconds: float | None, machine_name: str | None)
     click.echo(report(result), nl=False)
 
 
-def _target_names() -> list[str]:
-    from app.cnc.emit.target import targets
-
-    return list(targets())
-
-
 @main.command()
 @click.argument("file", metavar="PROGRAM")
 @file_format_option

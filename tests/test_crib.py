@@ -11,13 +11,16 @@ import json
 import re
 from collections.abc import Iterator
 from dataclasses import replace
+from datetime import datetime
 from decimal import Decimal as D
 from pathlib import Path
+from zoneinfo import ZoneInfo
 
 import pytest
 from click.testing import CliRunner
 from flask import Flask
 from flask.testing import FlaskClient
+from sqlalchemy import update
 
 from app.cli import main
 from app.cnc import document
@@ -31,6 +34,7 @@ from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.crib import Crib, CribError
 from app.storage.library import Library, NotFound, StaleSave, open_library
+from app.storage.models import CribToolRow, ProgramRow
 from app.web.extensions import get_library
 from tests.web_support import PASSWORD, accounts_app, csrf, dispose, local_app, log_in
 
@@ -235,6 +239,36 @@ def test_crib_tools_keep_revisions_and_refuse_a_stale_save(library: Library) -> 
     assert crib.get(stored.id).tool.diameter == D("0.25")
     back = crib.restore_revision(stored.id, 1, based_on=2, author="ana")
     assert back.version == 3 and back.tool == TAP
+
+
+def test_a_stale_tool_save_reads_as_a_stale_program_save(database_url: str) -> None:
+    """One rule for both: the refusal names who saved which version when, in the shop's time
+    zone with its label (a crib tool's said "UTC" whatever the shop's zone was)."""
+    lib = open_library(database_url, seed_demo=False, zone=ZoneInfo("America/Chicago"))
+    try:
+        noon = datetime(2024, 7, 1, 12, 0)
+        crib = Crib(lib)
+        tool = crib.create(TAP, "ana")
+        crib.save(tool.id, replace(TAP, flutes=3), 1, "ben")
+        program = lib.create(Program(name="bracket", units=Units.INCH), "ana")
+        lib.save(program.id, Program(name="bracket 2", units=Units.INCH), 1, "ben")
+        with lib.session() as s:
+            s.execute(update(CribToolRow).values(updated_at=noon))
+            s.execute(update(ProgramRow).values(updated_at=noon))
+        with pytest.raises(StaleSave) as stale_tool:
+            crib.save(tool.id, replace(TAP, flutes=2), 1, "cy")
+        with pytest.raises(StaleSave) as stale_program:
+            lib.save(program.id, Program(name="bracket 3", units=Units.INCH), 1, "cy")
+        assert str(stale_tool.value).startswith(
+            "not saved: ben saved crib tool T12 at 2024-07-01 07:00 CDT (version 2) after the "
+            "version 1 you started from. Changed meanwhile: FLUTES 4 → 3. Reload it"
+        )
+        assert str(stale_program.value).startswith(
+            f"not saved: ben saved program {program.id} at 2024-07-01 07:00 CDT (version 2) "
+            "after the version 1 you started from. Changed meanwhile: "
+        )
+    finally:
+        lib.engine.dispose()
 
 
 def test_each_number_and_name_in_use_is_one_tool(library: Library) -> None:

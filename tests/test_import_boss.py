@@ -19,9 +19,9 @@ from app.cli import main
 from app.cnc import document
 from app.cnc.blocks import Hole, HoleOp, Program
 from app.cnc.emit.target import export
+from app.cnc.formats.tape1704.reader import parse_tape
 from app.cnc.imports import ImportFailure, ImportResult, detect_format, read_program
 from app.cnc.imports.steps import Arc
-from app.cnc.imports.tape import parse_tape
 from app.cnc.interpret import interpret
 from app.cnc.units import Units
 from tests.imports.support import speeds, with_rpms

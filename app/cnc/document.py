@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import functools
 import json
-import threading
 import typing
 from dataclasses import dataclass, replace
 from decimal import Decimal
@@ -23,6 +23,7 @@ from typing import Any
 from app.cnc.blocks import Block, DataBlock0, Program, Stock, Tool, field_label
 from app.cnc.cutting import Workpiece
 from app.cnc.kinds import REGISTRY
+from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, check_decimal, check_int, decimal_of
 from app.cnc.sizes import MAX_BLOCKS
 from app.cnc.text import NAME_LENGTH, NOTES_LENGTH, text_fault
@@ -119,19 +120,14 @@ def _without_blocks(program: Program) -> Program:
 # Each block's text as it stands in the document (indented for its place), by the block
 # object; the entry keeps the block alive, so its id is not reused while it is here.
 BLOCK_MEMO = 1 << 16
-_BLOCK_TEXT: dict[int, tuple[Block, str]] = {}
-_MEMO_LOCK = threading.Lock()
+_BLOCK_TEXT: ByObject[str] = ByObject(BLOCK_MEMO)
 
 
 def _block_text(block: Block) -> str:
-    found = _BLOCK_TEXT.get(id(block))
-    if found is not None and found[0] is block:
-        return found[1]
-    text = _json(_block_out(block)).replace("\n", "\n    ")
-    with _MEMO_LOCK:
-        if len(_BLOCK_TEXT) >= BLOCK_MEMO:
-            _BLOCK_TEXT.clear()
-        _BLOCK_TEXT[id(block)] = (block, text)
+    text = _BLOCK_TEXT.get(block)
+    if text is None:
+        text = _json(_block_out(block)).replace("\n", "\n    ")
+        _BLOCK_TEXT.keep(block, text)
     return text
 
 
@@ -143,9 +139,9 @@ def as_stored(program: Program) -> Program:
     blocks = tuple(_stored_block(block, n) for n, block in enumerate(program.blocks, 1))
     stock, material = program.stock, program.material
     if (
-        program.block0 is not _READ.get(id(program.block0))
-        or (stock is not None and stock is not _READ.get(id(stock)))
-        or (material is not None and material is not _READ.get(id(material)))
+        not _READ.get(program.block0)
+        or (stock is not None and not _READ.get(stock))
+        or (material is not None and not _READ.get(material))
     ):
         rest = loads(dumps(_without_blocks(program)))
         if (
@@ -164,7 +160,7 @@ def as_stored(program: Program) -> Program:
 
 
 def _stored_block(block: Block, number: int) -> Block:
-    if _READ.get(id(block)) is block:
+    if _READ.get(block):
         return block
     data = json.loads(_json(_block_out(block)), parse_float=decimal_of, parse_int=_whole)
     again = _block_in(data, number)
@@ -172,15 +168,12 @@ def _stored_block(block: Block, number: int) -> Block:
     return _was_read(block if repr(again) == repr(block) else again)
 
 
-# Blocks and Data Blocks 0 made by reading a document (by id; kept alive while here).
-_READ: dict[int, object] = {}
+# Blocks and Data Blocks 0 made by reading a document (by identity; kept alive while here).
+_READ: ByObject[bool] = ByObject(BLOCK_MEMO)
 
 
 def _was_read(value: _T) -> _T:
-    with _MEMO_LOCK:
-        if len(_READ) >= BLOCK_MEMO:
-            _READ.clear()
-        _READ[id(value)] = value
+    _READ.keep(value, True)
     return value
 
 
@@ -353,7 +346,7 @@ def _tool_in(item: Any, number: int) -> Tool:
 
 # Blocks already read, by their JSON fields exactly as written: the next version of a
 # program is the same document but for the edited block, and reads it from here.
-_BLOCKS_READ: dict[tuple[Any, ...], Block] = {}
+_BLOCKS_READ: Recent[Block] = Recent(BLOCK_MEMO)
 
 
 def _block_in(item: Any, number: int) -> Block:
@@ -362,17 +355,14 @@ def _block_in(item: Any, number: int) -> Block:
         raise DocumentError(where, "expected an object")
     try:
         key: tuple[Any, ...] | None = tuple((k, _written(v)) for k, v in item.items())
-        known = _BLOCKS_READ.get(key)  # type: ignore[arg-type]
+        known = _BLOCKS_READ.get(key)
     except TypeError:  # a list or an object where a value belongs: read it for its error
         key = known = None
     if known is not None:
         return known
     block = _read_block(item, where)
     if key is not None:
-        with _MEMO_LOCK:
-            if len(_BLOCKS_READ) >= BLOCK_MEMO:
-                _BLOCKS_READ.clear()
-            _BLOCKS_READ[key] = block
+        _BLOCKS_READ.keep(key, block)
     return block
 
 
@@ -406,28 +396,23 @@ class _Shape:
     required: tuple[str, ...]
 
 
-_SHAPES: dict[type, _Shape] = {}
-
-
+@functools.cache
 def _shape(cls: type) -> _Shape:
-    found = _SHAPES.get(cls)
-    if found is None:
-        fields = dataclasses.fields(cls)
-        found = _SHAPES[cls] = _Shape(
-            typing.get_type_hints(cls),
-            frozenset(f.name for f in fields),
-            tuple(
-                f.name
-                for f in fields
-                if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-            ),
-        )
-    return found
+    fields = dataclasses.fields(cls)
+    return _Shape(
+        typing.get_type_hints(cls),
+        frozenset(f.name for f in fields),
+        tuple(
+            f.name
+            for f in fields
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        ),
+    )
 
 
 def _build(cls: type[_T], data: dict[str, Any], where: str, **fixed: Any) -> _T:
     """Construct dataclass `cls` from JSON fields, converting and checking each one."""
-    shape = _shape(cls)
+    shape = _shape(typing.cast(type, cls))  # (mypy: a type[_T] is hashable too)
     _no_unknown(where, data, set(shape.names - set(fixed)))
     values: dict[str, Any] = dict(fixed)
     for name, raw in data.items():

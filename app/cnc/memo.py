@@ -1,9 +1,16 @@
-"""A bounded, thread-safe memo of per-node results (the compile's, the cycle time's).
+"""The one way MillBlocks remembers what it worked out: bounded, thread-safe memos.
 
-Results are kept by key, least recently used first out, within a budget of rows (moves):
-what a result holds grows with its node's moves, so the budget bounds memory, and a result
-larger than a tenth of the budget is not kept (one huge LOOP would push out everything
-else and is cheap to redo per move anyway).
+- `Memo`: results by key within a budget of rows (moves), least recently used first out —
+  the compile's and the cycle time's per-node results: what a result holds grows with its
+  node's moves, so the budget bounds memory, and a result larger than a tenth of the budget
+  is not kept (one huge LOOP would push out everything else and is cheap to redo per move
+  anyway);
+- `Recent`: the last few values by key (parsed documents, blocks read from a document);
+- `ByObject`: a value per object by identity (what was worked out for a block object that
+  comes back edit after edit).
+
+Facts about a class (its resolved type hints) are worked out once with `functools.cache`:
+there are as many as there are classes, so they need no bound.
 """
 
 from __future__ import annotations
@@ -51,6 +58,26 @@ class Memo(Generic[V]):
             while self.held > self.budget:
                 _, (_, dropped) = self.entries.popitem(last=False)
                 self.held -= dropped
+
+
+class Recent(Generic[V]):
+    """The last `limit` values kept, by key: the oldest kept goes first. Reads take no lock
+    (a dict read is atomic); safe to share between threads."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.entries: dict[object, V] = {}
+        self.lock = threading.Lock()
+
+    def get(self, key: object) -> V | None:
+        return self.entries.get(key)
+
+    def keep(self, key: object, value: V) -> None:
+        with self.lock:
+            self.entries.pop(key, None)
+            self.entries[key] = value
+            while len(self.entries) > self.limit:
+                del self.entries[next(iter(self.entries))]
 
 
 class ByObject(Generic[V]):

@@ -126,11 +126,6 @@ def gear(rpm: int | None, spindle: Spindle = CONTROL) -> str:
     return f"{named}, {direction}" if named else direction
 
 
-def first_cuts(path: CompiledPath) -> dict[int, int]:
-    """The first block each tool feeds in (cuts), by tool number."""
-    return _walk(path, Units.INCH, {})[0]
-
-
 def operation(op: HoleOp, pecks: int) -> str:
     """How a hole is made, as the machinist says it: `drill, 3 pecks`, `bore`, `tap`."""
     text = op.value.lower()

@@ -84,11 +84,6 @@ def round_nm(value: float | Fraction) -> int:
     return round(value)
 
 
-def from_nm(nm: int, units: Units) -> Fraction:
-    """A length in nanometres as an exact fraction of `units`."""
-    return Fraction(nm, units.nm)
-
-
 def format_length(nm: int, units: Units, places: int | None = None) -> str:
     """Format nanometres in `units` with fixed decimals, rounding half-even.
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import ColumnElement, func, or_, select, update
+from sqlalchemy import ColumnElement, func, or_, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -29,8 +29,12 @@ from app.cnc.text import search_terms
 from app.cnc.tools import CribTool, tool_changes, tool_faults
 from app.cnc.tooltable import TableError, converted, read_table
 from app.cnc.units import Units
-from app.storage.library import Library, LibraryError, NotFound, RevisionInfo, StaleSave, _now
+from app.storage.library import Library, LibraryError, NotFound, StaleSave, _now
 from app.storage.models import CribRevisionRow, CribToolRow
+from app.storage.revisions import RevisionInfo, Versioned, stale_message
+
+TOOLS = Versioned(CribToolRow, CribRevisionRow, "tool_id")
+"""Crib tools and their revisions."""
 
 _REFERENCE = re.compile(r"[Tt#]?([0-9]{1,9})")
 
@@ -170,22 +174,14 @@ class Crib:
 
     def revisions(self, tool_id: int) -> list[RevisionInfo]:
         with self.library.session() as s:
-            rows = s.scalars(
-                select(CribRevisionRow)
-                .where(CribRevisionRow.tool_id == tool_id)
-                .order_by(CribRevisionRow.version)
-            ).all()
-            if not rows:
+            found = TOOLS.history(s, tool_id)
+            if not found:
                 raise NotFound(f"no tool {tool_id} in the crib")
-            return [RevisionInfo(r.version, r.created_at, r.author, r.summary) for r in rows]
+            return found
 
     def revision(self, tool_id: int, version: int) -> CribTool:
         with self.library.session() as s:
-            row = s.scalar(
-                select(CribRevisionRow).where(
-                    CribRevisionRow.tool_id == tool_id, CribRevisionRow.version == version
-                )
-            )
+            row = TOOLS.revision(s, tool_id, version)
             if row is None:
                 raise NotFound(f"crib tool {tool_id} has no version {version}")
             return tool_from_document(row.document)
@@ -303,19 +299,7 @@ class Crib:
             updated_at=now,
             updated_by=author,
         )
-        s.add(row)
-        s.flush()
-        s.add(
-            CribRevisionRow(
-                tool_id=row.id,
-                version=1,
-                document=row.document,
-                created_at=now,
-                author=author,
-                summary=summary or f"added: {tool.describe()}",
-            )
-        )
-        return row
+        return TOOLS.add_first(s, row, now, author, summary or f"added: {tool.describe()}")
 
     def _write(
         self,
@@ -327,39 +311,20 @@ class Crib:
         author: str,
         now: datetime,
     ) -> None:
-        document = tool_document(tool)
-        done = s.execute(
-            update(CribToolRow)
-            .where(CribToolRow.id == row.id, CribToolRow.version == based_on)
-            .values(
-                number=tool.number,
-                name=tool.name,
-                kind=tool.kind.value,
-                document=document,
-                version=based_on + 1,
-                updated_at=now,
-                updated_by=author,
-            )
-        )
-        if done.rowcount != 1:  # type: ignore[attr-defined]
+        values = {
+            "number": tool.number,
+            "name": tool.name,
+            "kind": tool.kind.value,
+            "document": tool_document(tool),
+        }
+        changes = "; ".join(tool_changes(old, tool)) or "saved without changes"
+        if not TOOLS.write(s, row.id, based_on, values, now, author, changes):
             raise StaleSave(
                 f"not saved: crib tool T{old.number} was saved by someone else meanwhile; "
                 "reload it and make your change again; nothing was overwritten",
                 row.version,
                 [],
             )
-        changes = tool_changes(old, tool)
-        s.add(
-            CribRevisionRow(
-                tool_id=row.id,
-                version=based_on + 1,
-                document=document,
-                created_at=now,
-                author=author,
-                summary="; ".join(changes) or "saved without changes",
-            )
-        )
-        s.flush()
         s.refresh(row)
 
     def _unique(self, s: Session, tool: CribTool, own: int | None, in_use: bool) -> None:
@@ -383,19 +348,11 @@ class Crib:
             )
 
     def _stale(self, s: Session, row: CribToolRow, based_on: int) -> StaleSave:
-        base = s.scalar(
-            select(CribRevisionRow).where(
-                CribRevisionRow.tool_id == row.id, CribRevisionRow.version == based_on
-            )
-        )
+        base = TOOLS.revision(s, row.id, based_on)
         changes = tool_changes(tool_from_document(base.document), _stored(row).tool) if base else []
-        who = row.updated_by or "someone"
-        listed = "; ".join(changes) or "nothing of the tool itself"
+        listed = changes or ["nothing of the tool itself"]
         return StaleSave(
-            f"not saved: {who} saved crib tool T{row.number} at {row.updated_at:%Y-%m-%d %H:%M} "
-            f"UTC (version {row.version}) after the version {based_on} you started from. "
-            f"Changed meanwhile: {listed}. Reload it and make your change again; nothing was "
-            "overwritten.",
+            stale_message(f"crib tool T{row.number}", row, based_on, listed, self.library.zone),
             row.version,
             changes,
         )
@@ -467,17 +424,4 @@ def restore_tools(s: Session, entries: Iterable[Any], now: datetime) -> None:
             updated_by=last.author,
             deleted_at=now if entry.retired or taken is not None else None,
         )
-        s.add(row)
-        s.flush()
-        for rev in entry.revisions:
-            s.add(
-                CribRevisionRow(
-                    tool_id=row.id,
-                    version=rev.version,
-                    document=rev.text,
-                    created_at=rev.created_at,
-                    author=rev.author,
-                    summary=rev.summary,
-                )
-            )
-        s.flush()
+        TOOLS.add_restored(s, row, entry.revisions)

@@ -11,9 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-import threading
 import zipfile
-from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -21,7 +19,7 @@ from datetime import UTC, datetime, timedelta, tzinfo
 from pathlib import Path
 from typing import Any, BinaryIO
 
-from sqlalchemy import Engine, delete, func, or_, select, update
+from sqlalchemy import Engine, delete, func, or_, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -29,7 +27,7 @@ from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
 from app.cnc.machine import MachineError, read_machine
-from app.cnc.memo import ByObject
+from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
 from app.cnc.text import (
@@ -40,9 +38,9 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
-from app.settings import shown
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
+from app.storage.revisions import RevisionInfo, Versioned, stale_message
 
 SORTS = ("name", "part_number", "updated", "created")
 DRAWING_KEEP = timedelta(days=1)
@@ -54,6 +52,10 @@ DRAWING_BYTES_IN_ALL = 64 * 1024 * 1024
 drawing's day is over (one user alone holds at most 10 × 2 MB)."""
 DRAWING_KEY = re.compile(r"[0-9a-f]{64}")
 BACKUP_FORMAT = "millblocks-backup"
+
+
+PROGRAMS = Versioned(ProgramRow, RevisionRow, "program_id")
+"""Programs and their revisions."""
 
 
 class LibraryError(ValueError):
@@ -101,14 +103,6 @@ class StoredProgram:
 
     info: ProgramInfo
     program: Program
-
-
-@dataclass(frozen=True)
-class RevisionInfo:
-    version: int
-    created_at: datetime
-    author: str
-    summary: str
 
 
 @dataclass(frozen=True)
@@ -223,18 +217,7 @@ class Library:
                 updated_at=now,
                 updated_by=author,
             )
-            s.add(row)
-            s.flush()
-            s.add(
-                RevisionRow(
-                    program_id=row.id,
-                    version=1,
-                    document=row.document,
-                    created_at=now,
-                    author=author,
-                    summary=summary_text or summary(None, program),
-                )
-            )
+            PROGRAMS.add_first(s, row, now, author, summary_text or summary(None, program))
             return _info(row)
 
     def get(self, program_id: int, include_trash: bool = False) -> StoredProgram:
@@ -309,49 +292,25 @@ class Library:
                 raise self._stale(s, row, based_on, program)
             old = _parse(row.document)
             columns = _columns(program)
-            result = s.execute(
-                update(ProgramRow)
-                .where(ProgramRow.id == program_id, ProgramRow.version == based_on)
-                .values(**columns, version=based_on + 1, updated_at=now, updated_by=author)
-            )
-            if result.rowcount != 1:  # type: ignore[attr-defined]
+            if not PROGRAMS.write(
+                s, program_id, based_on, columns, now, author, summary(old, program)
+            ):
                 s.rollback()
                 with self.session() as again:
                     fresh = again.get(ProgramRow, program_id)
                     assert fresh is not None
                     raise self._stale(again, fresh, based_on, program)
-            s.add(
-                RevisionRow(
-                    program_id=program_id,
-                    version=based_on + 1,
-                    document=columns["document"],
-                    created_at=now,
-                    author=author,
-                    summary=summary(old, program),
-                )
-            )
-            s.flush()
             s.refresh(row)
             # The next read of this version (the editor's, right after) needs no parse.
             _remember(columns["document"], document.as_stored(program))
             return _info(row)
 
     def _stale(self, s: Session, row: ProgramRow, based_on: int, mine: Program) -> StaleSave:
-        base = s.scalar(
-            select(RevisionRow).where(
-                RevisionRow.program_id == row.id, RevisionRow.version == based_on
-            )
-        )
+        base = PROGRAMS.revision(s, row.id, based_on)
         changes = diff(document.loads(base.document), document.loads(row.document)) if base else []
-        who = row.updated_by or "someone"
-        listed = "; ".join(changes[:6]) or "no change to the program itself"
-        message = (
-            f"not saved: {who} saved program {row.id} at {shown(row.updated_at, self.zone)} "
-            f"(version {row.version}) after the version {based_on} you started from. "
-            f"Changed meanwhile: {listed}. Reload it and make your change again; "
-            "nothing was overwritten."
-        )
+        listed = changes[:6] or ["no change to the program itself"]
         del mine
+        message = stale_message(f"program {row.id}", row, based_on, listed, self.zone)
         return StaleSave(message, row.version, changes)
 
     def rename(self, program_id: int, name: str, based_on: int, author: str = "") -> ProgramInfo:
@@ -393,22 +352,14 @@ class Library:
 
     def revisions(self, program_id: int) -> list[RevisionInfo]:
         with self.session() as s:
-            rows = s.scalars(
-                select(RevisionRow)
-                .where(RevisionRow.program_id == program_id)
-                .order_by(RevisionRow.version)
-            ).all()
-            if not rows:
+            found = PROGRAMS.history(s, program_id)
+            if not found:
                 raise NotFound(f"no program {program_id} in the library")
-            return [RevisionInfo(r.version, r.created_at, r.author, r.summary) for r in rows]
+            return found
 
     def revision(self, program_id: int, version: int) -> Program:
         with self.session() as s:
-            row = s.scalar(
-                select(RevisionRow).where(
-                    RevisionRow.program_id == program_id, RevisionRow.version == version
-                )
-            )
+            row = PROGRAMS.revision(s, program_id, version)
             if row is None:
                 raise NotFound(f"program {program_id} has no version {version}")
             return document.loads(row.document)
@@ -585,19 +536,7 @@ class Library:
                         updated_by=last.author,
                         deleted_at=now if entry.deleted else None,
                     )
-                    s.add(row)
-                    s.flush()
-                    for rev in entry.revisions:
-                        s.add(
-                            RevisionRow(
-                                program_id=row.id,
-                                version=rev.version,
-                                document=rev.text,
-                                created_at=rev.created_at,
-                                author=rev.author,
-                                summary=rev.summary,
-                            )
-                        )
+                    PROGRAMS.add_restored(s, row, entry.revisions)
                 for machine in backup.machines:
                     _store_machine(s, machine, now)
                 from app.storage.crib import restore_tools
@@ -621,28 +560,20 @@ def _load(row: ProgramRow) -> Program:
 # same text is the same Program: an edit reads the stored version (to edit it, and again for
 # the revision summary) and then the version it saved, and parses none of them twice.
 PARSED_DOCUMENTS = 16
-_PARSED: OrderedDict[str, Program] = OrderedDict()
-_PARSED_LOCK = threading.Lock()
+_PARSED: Recent[Program] = Recent(PARSED_DOCUMENTS)
 
 
 def _parse(text: str) -> Program:
     """`document.loads(text)`, from the recent documents when it was read or written."""
-    with _PARSED_LOCK:
-        found = _PARSED.get(text)
-        if found is not None:
-            _PARSED.move_to_end(text)
-            return found
-    program = document.loads(text)
-    _remember(text, program)
-    return program
+    found = _PARSED.get(text)
+    if found is None:
+        found = document.loads(text)
+        _PARSED.keep(text, found)
+    return found
 
 
 def _remember(text: str, program: Program) -> None:
-    with _PARSED_LOCK:
-        _PARSED[text] = program
-        _PARSED.move_to_end(text)
-        while len(_PARSED) > PARSED_DOCUMENTS:
-            _PARSED.popitem(last=False)
+    _PARSED.keep(text, program)
 
 
 def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:

@@ -10,6 +10,7 @@ never raises: it returns the block, or the message for each field that could not
 from __future__ import annotations
 
 import enum
+import functools
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -63,13 +64,9 @@ def _enum_of(cls: type, name: str) -> type[enum.Enum] | None:
     return next((o for o in options if isinstance(o, type) and issubclass(o, enum.Enum)), None)
 
 
-_HINTS: dict[type, dict[str, Any]] = {}
-
-
+@functools.cache
 def _hints(cls: type) -> dict[str, Any]:
-    if cls not in _HINTS:
-        _HINTS[cls] = typing.get_type_hints(cls)
-    return _HINTS[cls]
+    return typing.get_type_hints(cls)
 
 
 def _spec(cls: type[Block], f: Field, name: str, label: str) -> FieldSpec:

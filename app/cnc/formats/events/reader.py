@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from decimal import ROUND_HALF_EVEN, Decimal
 
 from app.cnc.blocks import (
@@ -154,11 +154,6 @@ class EBlock:
 def read_events(text: str, name: str = "") -> tuple[Program, Notes]:
     """Read an events file. Raises ImportFailure naming line and column."""
     return _Reader(text, name).run()
-
-
-@dataclass
-class _Chain:
-    events: list[Mill] = field(default_factory=list)
 
 
 class _Reader:

@@ -30,6 +30,7 @@ from app.cnc.path import PLAN_ELEMENT_ROWS, placed_mills
 from app.cnc.pocketing import plan as pocket_plan
 from app.cnc.pocketing import routine as pocket_routine
 from app.cnc.process import cleared_areas
+from app.cnc.setup import setup_sheet
 from app.cnc.simulate.programmed import programmed_geometry
 
 GOLDEN = Path(__file__).parent / "golden"
@@ -57,7 +58,7 @@ CONSUMERS: dict[str, Callable[[Program], object]] = {
     "svg export": lambda p: export(p, "svg"),
     "preview drawing": lambda p: render(p),
     "verify's programmed geometry": programmed_geometry,
-    "cleared areas (pilot rule)": lambda p: cleared_areas(p, compile_program(p).path),
+    "cleared areas (pilot rule)": lambda p: cleared_areas(compile_program(p).path),
     "cycle time": lambda p: estimate(compile_program(p).path),
 }
 
@@ -144,3 +145,15 @@ def test_the_compile_cache_counts_the_plans_it_keeps() -> None:
     moves = len(compile_program(program, cache=cache).path)
     # Before: the moves of each node kept, and one for the entry (a few nodes here).
     assert cache.held > moves + 100 * PLAN_ELEMENT_ROWS
+
+
+def test_each_compiled_hole_carries_its_tool() -> None:
+    # A bolt circle's holes are cut by the tool of the block that gives their parameters
+    # (BORE with tool 2, then TAP with tool 3): the pilot rule, Verify, the set-up sheet's
+    # hole table and the drawing read it from the hole, not from the blocks.
+    program = load("bolt-circle-bore-tap")
+    path = compile_program(program).path
+    tools = [span.tool for chunk in path.chunks() for span in chunk.hole_spans()]
+    assert set(tools) == {2, 3} and tools == sorted(tools)  # the bores, then the taps
+    sheet = setup_sheet(program)
+    assert {line.tool for line in sheet.holes} == {2, 3}

@@ -813,6 +813,7 @@ class _Compiler:
                 step,
                 DWELL_MS if block.op is not HoleOp.TAP else 0,
                 canned,
+                block.tool,
             ).row()
         )
 

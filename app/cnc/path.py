@@ -134,6 +134,7 @@ HOLE = np.dtype(
         ("pecks", np.int32),
         ("step", np.int64),
         ("dwell_ms", np.int32),
+        ("tool", np.int32),
     ]
 )
 HOLE_OPS = (HoleOp.DRILL, HoleOp.BORE, HoleOp.TAP)
@@ -150,6 +151,7 @@ class HoleSpan:
     is True when the rows are exactly a canned cycle's from `z0` with a return to `z0`
     (G98): an optional rapid across at `z0`, a rapid down to `r`, the feeds (and pecks) to
     `bottom`, a dwell of `dwell_ms`, a rapid up to `z0` — an emitter may write the cycle.
+    `tool` is the tool that makes it (the hole block's, a bolt circle's centre block's).
     """
 
     start: int
@@ -165,13 +167,27 @@ class HoleSpan:
     step: int
     dwell_ms: int
     canned: bool
+    tool: int
 
     @staticmethod
     def of(row: Sequence[int]) -> HoleSpan:
         """The hole a HOLE row (as a tuple) holds."""
-        start, end, op, canned, x, y, z0, r, bottom, feed, pecks, step, dwell = row
+        start, end, op, canned, x, y, z0, r, bottom, feed, pecks, step, dwell, tool = row
         return HoleSpan(
-            start, end, HOLE_OPS[op], x, y, z0, r, bottom, feed, pecks, step, dwell, bool(canned)
+            start,
+            end,
+            HOLE_OPS[op],
+            x,
+            y,
+            z0,
+            r,
+            bottom,
+            feed,
+            pecks,
+            step,
+            dwell,
+            bool(canned),
+            tool,
         )
 
     def row(self) -> tuple[int | bool, ...]:
@@ -190,6 +206,7 @@ class HoleSpan:
             self.pecks,
             self.step,
             self.dwell_ms,
+            self.tool,
         )
 
 

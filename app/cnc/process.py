@@ -24,9 +24,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from app.cnc.blocks import (
-    Block,
-    BoltCircle,
-    Hole,
     HoleOp,
     Placement,
     Program,
@@ -73,43 +70,27 @@ class Cleared:
     depth: int
 
 
-def hole_tool(blocks: tuple[Block, ...], number: int) -> int:
-    """The tool number of the hole block `number` (1-based): its own, or for a BOLT CIR the
-    tool of the standard block before it that gives its hole parameters (0: none)."""
-    index = number - 1
-    while index >= 0:
-        block = blocks[index]
-        if isinstance(block, Hole):
-            return block.tool
-        if not isinstance(block, BoltCircle):
-            return 0
-        index -= 1
-    return 0
-
-
-def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
+def placed_hole_list(path: CompiledPath) -> list[PlacedHole]:
     """Every hole of the compiled program in cutting order (LOOP patterns and bolt circles
-    placed), each with its tool's diameter."""
+    placed), each with its tool's diameter (the compiled hole's own tool)."""
     found: list[PlacedHole] = []
-    tools: dict[int, int] = {}
     for blocks, holes in placed_holes(path.root):
-        for block, op, x, y, bottom in zip(
+        for block, op, x, y, bottom, tool in zip(
             blocks.tolist(),
             holes["op"].tolist(),
             holes["x"].tolist(),
             holes["y"].tolist(),
             holes["bottom"].tolist(),
+            holes["tool"].tolist(),
             strict=True,
         ):
-            if block not in tools:
-                tools[block] = hole_tool(program.blocks, block)
-            info = path.tools.get(tools[block])
+            info = path.tools.get(tool)
             diameter = None if info is None else info.diameter
             found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
     return found
 
 
-def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
+def cleared_areas(path: CompiledPath) -> list[Cleared]:
     """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
     irregular POCKETs; a sequence whose plan has errors clears nothing), from the outlines
     the compile planned."""
@@ -151,7 +132,7 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
     point: one warning per block (a bolt circle's holes counted), naming the first."""
     path = compiled.path
     units = program.units
-    holes = placed_hole_list(program, path)
+    holes = placed_hole_list(path)
     if not any(h.op is not HoleOp.DRILL for h in holes):
         return []
     # The pockets are drawn only for a hole that no earlier hole pilots (the usual
@@ -180,7 +161,7 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
         if not why:
             continue
         if cleared is None:
-            cleared = cleared_areas(program, path)
+            cleared = cleared_areas(path)
         if any(
             area.block < hole.block
             and area.depth <= hole.bottom

@@ -435,11 +435,7 @@ class _Painter:
         np.add.at(depth, piece.holes["start"], 1)
         np.add.at(depth, piece.holes["end"], -1)
         in_hole = (np.cumsum(depth) > 0).tolist()
-        hole_tools: dict[int, int] = {}
-        starts = set(piece.holes["start"].tolist())
         for k, (op, _tag, block, nx, ny, nz, cx, cy, _feed, value) in enumerate(rows):
-            if k in starts:
-                hole_tools[k] = tool
             if op > Op.ARC_CCW:
                 if op == Op.TOOL:
                     tool, z = value, nz
@@ -484,9 +480,8 @@ class _Painter:
             x, y, z = nx, ny, nz
         box, cut = _Box(x0, y0, x1, y1), _Box(cx0, cy0, cx1, cy1)
         holes: list[tuple[int, int, int]] = []
-        for hole in piece.holes.tolist():
-            start, hx, hy = hole[0], hole[4], hole[5]
-            hr = self.radius(hole_tools.get(start, tool))
+        for start, hx, hy, hole_tool in piece.holes[["start", "x", "y", "tool"]].tolist():
+            hr = self.radius(hole_tool)
             self.hole(groups, rows[start][2] + shift, hx, hy, max(hr, self.unit // 100))
             box.point(hx, hy, hr)
             if self.labelled:

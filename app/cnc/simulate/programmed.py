@@ -122,7 +122,7 @@ def programmed_geometry(program: Program) -> Programmed:
     compiled = compile_program(program).path
     found = Programmed()
     seen: set[tuple[int, int, int]] = set()
-    for placed in placed_hole_list(program, compiled):
+    for placed in placed_hole_list(compiled):
         if (placed.block, placed.x, placed.y) not in seen:
             seen.add((placed.block, placed.x, placed.y))
             radius = 0 if placed.diameter is None else placed.diameter // 2

@@ -222,7 +222,7 @@ class MillSpan:
     `finished` is the programmed contour (float nm) as it was planned, or None for a
     routine; `contour()` gives it where this span is — moved by (`dx`, `dy`), its blocks
     renumbered by `shift`. `plan` is the rest of what was planned (`MillPlan`), read where
-    this span is through `end()`, `shape()`, `outlines()`, `pocket()` and `findings()`:
+    this span is through `exit()`, `shape()`, `outlines()`, `pocket()` and `findings()`:
     what every consumer reads instead of planning the sequence again.
     """
 

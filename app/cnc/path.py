@@ -7,9 +7,10 @@ once and placed by translation.
 
 A compiled path is a tree of nodes:
 
-- `Piece` — rows for consecutive moves, with their spans (holes), block numbers relative
-  to `Piece.base` (the first data block it was compiled for, so a cached piece serves
-  wherever its blocks land after an edit);
+- `Piece` — rows for consecutive moves, with their spans (holes with their intent, mill
+  sequences with their plans: what consumers read instead of the blocks, see `MillSpan`),
+  block numbers relative to `Piece.base` (the first data block it was compiled for, so a
+  cached piece serves wherever its blocks land after an edit);
 - `Run` — one node placed at several XY offsets in order (the patterns of a LOOP/REP that
   begin in the same state), each placement translated: X, Y and arc centres move, Z and
   everything else stays;
@@ -17,7 +18,8 @@ A compiled path is a tree of nodes:
 
 `walk(node)` yields `Chunk`s: arrays of absolute moves (translated, block numbers made
 absolute) with their hole spans, a bounded number of rows at a time, so a consumer's memory
-does not grow with the program.
+does not grow with the program. `placed_holes` and `placed_mills` give the spans alone,
+placed, without the moves.
 
 Row fields (lengths integer nm, part coordinates; feeds nm/min):
 

@@ -39,7 +39,8 @@ from app.cnc.path import (
 )
 from app.cnc.pocketing.regions import path_points
 from app.cnc.problems import Problem, Rule, Severity
-from app.cnc.units import Units, format_length, to_nm
+from app.cnc.simulate.stock import stock_box
+from app.cnc.units import Units, format_length
 
 # Two holes this close (nm) are at the same point: half the finest step a program can type
 # (0.001 mm), far below any drill's wander.
@@ -233,8 +234,8 @@ def below_stock_problems(program: Program, compiled: Compiled) -> list[Problem]:
     if stock is None:
         return []
     units = program.units
-    bottom = to_nm(stock.z - stock.zh, units)
-    room = to_nm(stock.clear, units)
+    box = stock_box(stock, units)
+    bottom, room = box.bottom, box.clear
     floor = bottom - room
     problems = []
     for block, low in sorted(lowest_by_block(compiled.path.root).items()):

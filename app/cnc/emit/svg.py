@@ -42,7 +42,7 @@ from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
-from app.cnc.simulate.stock import MARGIN, ROUND_TO
+from app.cnc.simulate.stock import MARGIN, ROUND_TO, stock_box
 from app.cnc.units import Units, to_nm
 
 # Holes are numbered in the order they are cut when a program has at most this many.
@@ -719,9 +719,8 @@ class _Painter:
         (rounded outward), or None when nothing cuts below Z0."""
         given = self.program.stock
         if given is not None:
-            units = self.program.units
-            x, y = to_nm(given.x, units), to_nm(given.y, units)
-            return (x, y, x + to_nm(given.xl, units), y + to_nm(given.yw, units))
+            box = stock_box(given, self.program.units)
+            return (box.x0, box.y0, box.x1, box.y1)
         if cut.empty:
             return None
         margin = to_nm(MARGIN[self.units], self.units)

@@ -102,6 +102,12 @@ def program_stock(stock: StockBlock, units: Units) -> Stock:
             f"got {stock.z - stock.zh}",
             "zh",
         )
+    return stock_box(stock, units)
+
+
+def stock_box(stock: StockBlock, units: Units) -> Stock:
+    """The program's own stock in nm as typed, unchecked: `program_stock` checks it first
+    for the simulation; the drawing and the below-the-stock rule take it as it is."""
     x0, y0, top = (to_nm(v, units) for v in (stock.x, stock.y, stock.z))
     return Stock(
         x0=x0,

@@ -42,8 +42,8 @@ from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
-from app.cnc.simulate.stock import MARGIN, ROUND_TO, stock_box
-from app.cnc.units import Units, to_nm
+from app.cnc.simulate.stock import rounded_out, stock_box
+from app.cnc.units import Units
 
 # Holes are numbered in the order they are cut when a program has at most this many.
 HOLE_LABELS = 500
@@ -723,14 +723,7 @@ class _Painter:
             return (box.x0, box.y0, box.x1, box.y1)
         if cut.empty:
             return None
-        margin = to_nm(MARGIN[self.units], self.units)
-        step = to_nm(ROUND_TO[self.units], self.units)
-        return (
-            math.floor((cut.x0 - margin) / step) * step,
-            math.floor((cut.y0 - margin) / step) * step,
-            math.ceil((cut.x1 + margin) / step) * step,
-            math.ceil((cut.y1 + margin) / step) * step,
-        )
+        return rounded_out(cut.x0, cut.y0, cut.x1, cut.y1, self.units)
 
     def order(self, holes: list[tuple[int, int, int]], size: float) -> str:
         """Each hole's number in cutting order, beside it (outside the flipped page, so

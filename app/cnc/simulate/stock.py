@@ -125,7 +125,6 @@ def extent_stock(placed: Placed, units: Units) -> Stock:
     """A stock that holds every cut: the feed moves' reach (tool radius included) plus a
     margin, rounded outward; its top is part Z0 and its bottom a little below the deepest
     cut. With no cut below Z0, the reach of every move, 0.25 in (6 mm) deep."""
-    margin = to_nm(MARGIN[units], units)
     step = to_nm(ROUND_TO[units], units)
 
     def cutting(s: Segments) -> BOOL:
@@ -162,17 +161,28 @@ def extent_stock(placed: Placed, units: Units) -> Stock:
         size = to_nm(BELOW[units], units)
         return Stock(-size, -size, size, size, -size, 0)
 
+    below = to_nm(BELOW[units], units)
+    bottom = math.floor((deepest - below) / step) * step if any_cut else -below
+    x0, y0 = min(lows[0::2]), min(lows[1::2])
+    x1, y1 = max(highs[0::2]), max(highs[1::2])
+    return Stock(*rounded_out(x0, y0, x1, y1, units), bottom, 0)
+
+
+def rounded_out(
+    x0: float, y0: float, x1: float, y1: float, units: Units
+) -> tuple[int, int, int, int]:
+    """The box (nm) grown by MARGIN on every side and rounded outward to ROUND_TO: a stock
+    sized from the reach of the cuts, in XY (the simulation's, and the drawing's outline)."""
+    margin = to_nm(MARGIN[units], units)
+    step = to_nm(ROUND_TO[units], units)
+
     def down(v: float) -> int:
         return math.floor((v - margin) / step) * step
 
     def up(v: float) -> int:
         return math.ceil((v + margin) / step) * step
 
-    below = to_nm(BELOW[units], units)
-    bottom = math.floor((deepest - below) / step) * step if any_cut else -below
-    x0, y0 = min(lows[0::2]), min(lows[1::2])
-    x1, y1 = max(highs[0::2]), max(highs[1::2])
-    return Stock(down(x0), down(y0), up(x1), up(y1), bottom, 0)
+    return down(x0), down(y0), up(x1), up(y1)
 
 
 @dataclass(frozen=True)

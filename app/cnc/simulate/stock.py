@@ -17,13 +17,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from app.cnc.blocks import Stock as StockBlock
-from app.cnc.simulate.placements import Placed
 from app.cnc.simulate.segments import BOOL, Segments
 from app.cnc.units import Units, format_length, to_nm
+
+if TYPE_CHECKING:  # placements reads the stock's top from here
+    from app.cnc.simulate.placements import Placed
 
 
 class StockError(ValueError):

@@ -174,3 +174,41 @@ def test_stop_on_an_arc_lands_on_its_xy_end() -> None:
     form = {"x": "1", "y": "0", "feed_xy": "10", "tool": "1", "end_x": "2", "end_y": "0"}
     parsed = parse_block("ARC_C", {**form, "stop": "on"})
     assert [block.stop for block in parsed.blocks] == [False, True]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Mark(Block):
+    """MARK (a kind for this test only): a loopable kind in a first-menu choice of its own."""
+
+    kind: ClassVar[str] = "MARK"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("MARK"),),
+        editor=(SubKind("MARK", "MARK", "MARK", 1),),
+        positioned=True,
+        loopable=True,
+    )
+    x: Decimal = prompt("X", Value.LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", Value.LENGTH, role=Role.Y)
+    tool: int = prompt("TOOL #", Value.TOOL, low=1, high=MAX_TOOLS)
+
+
+REGISTRY.remove(Mark)
+
+
+def test_which_blocks_carry_loop_is_read_from_the_declarations() -> None:
+    """Validation and the editor name the blocks a LOOP may be from `Kind.loopable`: a
+    loopable kind declared in a choice of its own is named too, without a line elsewhere."""
+    line = Pocket(feed_xy=Decimal(10), tool=1, loop=True)
+    message = "a POCKET block cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+    assert message in [p.message for p in validate(spotted(line))]
+    REGISTRY.add(Mark)
+    try:
+        assert REGISTRY.loop_groups() == ("POS", "DRILL", "BORE", "TAP", "MARK")
+        message = (
+            "a POCKET block cannot carry LOOP; a LOOP is a POS, DRILL, BORE, TAP or MARK block"
+        )
+        # Another block: validation keeps what it found in each block it has seen.
+        other = dataclasses.replace(line, feed_xy=Decimal(11))
+        assert message in [p.message for p in validate(spotted(other))]
+    finally:
+        REGISTRY.remove(Mark)

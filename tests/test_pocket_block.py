@@ -560,6 +560,19 @@ def test_blocks_after_a_closed_boundary_without_an_island_are_named() -> None:
     ]
 
 
+def test_a_block_after_a_closed_boundary_is_drawn_where_it_is_with_its_error() -> None:
+    """The compile's own finding (the boundary closed, so the PKT LINE after it starts
+    nothing) is geometry, declared on the POCKET kind: the block is drawn in its place, red
+    with the message. Failed before: the preview's hand list of geometry rules missed
+    POCKET_ORDER, so the block was left out of the drawing (listed as not drawn) and the
+    pocket drawn as if the block were not there."""
+    program = _review_program(*_rectangle("2", "1.5"), PocketLine(x=D(1), y=D(1)))
+    shown = preview(program)
+    assert 'class="block problem" data-block="7"' in shown.svg
+    assert "so PKT LINE starts nothing" in shown.svg
+    assert shown.shown.not_drawn == ()
+
+
 def test_an_arc_about_its_own_start_says_so() -> None:
     program = _review_program(
         PocketLine(x=D(2), y=D(0)),

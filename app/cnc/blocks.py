@@ -14,14 +14,14 @@ app.cnc.kinds.REGISTRY, whose docstring has the checklist for adding a kind.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Any, ClassVar
 
 from app.cnc import limits
 from app.cnc.cutting import Workpiece
-from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
+from app.cnc.kinds import REGISTRY, Document, Follows, Kind, Mill, Role, SubKind, Value, prompt
+from app.cnc.problems import Rule
 from app.cnc.tools import Hand, PitchUnit, ToolMaterial, ToolType
 from app.cnc.units import Units
 
@@ -104,18 +104,6 @@ def open_loops(blocks: tuple[Block, ...], before: int) -> int:
     return depth
 
 
-def _after_hole(op: HoleOp) -> Callable[[tuple[Block, ...], int], str]:
-    """BOLT CIR is offered only right after a standard block of the same operation."""
-
-    def offered(blocks: tuple[Block, ...], at: int) -> str:
-        previous = blocks[at - 2] if at >= 2 else None
-        if isinstance(previous, Hole) and previous.op is op:
-            return ""
-        return f"follows a standard {op.value} block, which gives the centre"
-
-    return offered
-
-
 def _loop_open(blocks: tuple[Block, ...], at: int) -> str:
     return "" if open_loops(blocks, at - 1) else "closes an open LOOP; no LOOP is open here"
 
@@ -125,6 +113,50 @@ def _at_end(blocks: tuple[Block, ...], at: int) -> str:
         return ""
     return "is entered only as a new block at the end, not inserted (ERROR: COPY 4)"
 
+
+# -- what may follow what (Kind.follows) and what the compile finds (Kind.findings) ---------
+
+# A contour: its first block follows the DRILL that sets the depth, the others each other.
+# The MILL menu has always offered them anywhere: validation alone says one is out of place.
+AFTER_MILL = Follows(
+    ("DRILL", Mill.CONTOUR),
+    "a DRILL block (which sets the depth) or another mill block",
+    Rule.MILL_ORDER,
+    in_menu=False,
+)
+
+
+def _after_drill(gives: str, *, in_menu: bool) -> Follows:
+    """A routine follows the DRILL that gives its depths and its reference point."""
+    return Follows(
+        ("DRILL",),
+        f"the DRILL block that gives its {gives}",
+        Rule.MILL_ORDER,
+        message="{type_name} must follow {what}",
+        in_menu=in_menu,
+    )
+
+
+def _arc_end(message: str, centre: str) -> Follows:
+    """An arc's XY-END follows its own XY-CENT block (the editor enters the two together)."""
+    return Follows((centre,), "its XY-CENT block", Rule.ARC_END_ORDER, message=message)
+
+
+# A POCKET's contour blocks follow it or each other.
+IN_POCKET = Follows(
+    ("POCKET", Mill.GEOMETRY), "a POCKET block or another of its contour blocks", Rule.POCKET_ORDER
+)
+# What the compile of a contour finds: cutter compensation and the moves themselves.
+COMPENSATED = frozenset(
+    {
+        Rule.ZERO_LENGTH,
+        Rule.INSIDE_ANGLE,
+        Rule.COMP_DIVOT,
+        Rule.COMP_GOUGE,
+        Rule.COMP_ARC_TOO_SMALL,
+    }
+)
+ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL})
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -255,9 +287,14 @@ class BoltCircle(Block):
                 op.value,
                 2,
                 (("op", op),),
-                offered=_after_hole(op),
             )
             for op in HoleOp
+        ),
+        follows=Follows(
+            tuple(op.value for op in HoleOp),
+            "a standard {op.value} block, which gives the centre",
+            Rule.BOLT_CIR_ORDER,
+            same=("op",),
         ),
     )
     op: HoleOp = prompt("OPERATION", CHOICE)
@@ -285,6 +322,8 @@ class MillLine(Block):
         editor=(SubKind("MILL_STD", "MILL STD", "MILL", 1),),
         positioned=True,
         mill=Mill.CONTOUR,
+        follows=AFTER_MILL,
+        findings=COMPENSATED,
     )
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
@@ -310,8 +349,10 @@ class MillQcir(Block):
         ),
         positioned=True,
         mill=Mill.CONTOUR,
+        follows=AFTER_MILL,
+        findings=COMPENSATED | {Rule.QCIR_CENTRE_LINES},
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
@@ -334,6 +375,8 @@ class ArcEnd(Block):
         positioned=True,
         part="XY-END",
         mill=Mill.CONTOUR,
+        follows=_arc_end("XY-END without its XY-CENT block just before it", "MILL_ARC"),
+        findings=COMPENSATED | {Rule.ARC_RADIUS},
     )
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
@@ -363,8 +406,10 @@ class MillArc(Block):
         xy_is_centre=True,
         part="XY-CENT",
         mill=Mill.CONTOUR,
+        follows=AFTER_MILL,
+        findings=COMPENSATED | {Rule.ARC_RADIUS},
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
@@ -392,6 +437,8 @@ class Circle(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.mill:plan_circle",
+        follows=_after_drill("centre", in_menu=False),
+        findings=ROUTINE_FINDINGS,
     )
     placement: Placement = prompt("PLACEMENT", CHOICE)
     two_pass: bool = prompt("2P", FLAG, False)
@@ -418,6 +465,8 @@ class Frame(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.mill:plan_frame",
+        follows=_after_drill("lower left corner", in_menu=False),
+        findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )
     placement: Placement = prompt("PLACEMENT", CHOICE)
     two_pass: bool = prompt("2P", FLAG, False)
@@ -434,23 +483,6 @@ class Frame(Block):
 
 
 # -- irregular pockets (issue 22) -----------------------------------------------------------
-
-
-def _in_pocket(blocks: tuple[Block, ...], at: int) -> str:
-    """A pocket's contour block follows its POCKET or another of its contour blocks."""
-    previous = blocks[at - 2] if at >= 2 else None
-    if previous is not None and (
-        isinstance(previous, Pocket) or REGISTRY.of(previous).mill is Mill.GEOMETRY
-    ):
-        return ""
-    return "follows a POCKET block or another of its contour blocks"
-
-
-def _after_drill(blocks: tuple[Block, ...], at: int) -> str:
-    previous = blocks[at - 2] if at >= 2 else None
-    if isinstance(previous, Hole) and previous.op is HoleOp.DRILL:
-        return ""
-    return "follows the DRILL block that gives its depths and the boundary's start point"
 
 
 POCKET_GROUP = "POCKET"
@@ -471,11 +503,23 @@ class Pocket(Block):
     kind: ClassVar[str] = "POCKET"
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POCKET"),),
-        editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1, offered=_after_drill),),
+        editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1),),
         stoppable=False,
         mill=Mill.ROUTINE,
         planner="app.cnc.pocketing.routine:plan_pocket_routine",
         geometry=True,
+        follows=_after_drill("depths and the boundary's start point", in_menu=True),
+        # What its planner finds in the boundary and islands (app.cnc.pocketing.routine).
+        findings=frozenset(
+            {
+                Rule.POCKET_TOOL,
+                Rule.POCKET_CONTOUR,
+                Rule.POCKET_ISLAND,
+                Rule.POCKET_ORDER,
+                Rule.POCKET_NARROW,
+                Rule.POCKET_STEP,
+            }
+        ),
     )
     step_over: Decimal | None = prompt(
         "STEP", LENGTH, None, positive=True, help="empty: the tool's DIA less 0.050 in"
@@ -494,9 +538,10 @@ class PocketLine(Block):
     kind: ClassVar[str] = "PKT_LINE"
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("PKT_LINE"),),
-        editor=(SubKind("PKT_LINE", "PKT LINE", POCKET_GROUP, 2, offered=_in_pocket),),
+        editor=(SubKind("PKT_LINE", "PKT LINE", POCKET_GROUP, 2),),
         positioned=True,
         mill=Mill.GEOMETRY,
+        follows=IN_POCKET,
     )
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
@@ -517,6 +562,7 @@ class PocketArcEnd(Block):
         positioned=True,
         part="XY-END",
         mill=Mill.GEOMETRY,
+        follows=_arc_end("PKT ARC XY-END without its XY-CENT block just before it", "PKT_ARC"),
     )
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
@@ -542,7 +588,6 @@ class PocketArc(Block):
                 3,
                 (("direction", Direction.CW),),
                 PocketArcEnd,
-                _in_pocket,
             ),
             SubKind(
                 "PKT_ARC_CC",
@@ -551,7 +596,6 @@ class PocketArc(Block):
                 4,
                 (("direction", Direction.CCW),),
                 PocketArcEnd,
-                _in_pocket,
             ),
         ),
         positioned=True,
@@ -559,8 +603,9 @@ class PocketArc(Block):
         xy_is_centre=True,
         part="XY-CENT",
         mill=Mill.GEOMETRY,
+        follows=IN_POCKET,
     )
-    direction: Direction = prompt("DIRECTION", CHOICE)
+    direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
 
@@ -577,9 +622,10 @@ class Island(Block):
     kind: ClassVar[str] = "ISLAND"
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("ISLAND"),),
-        editor=(SubKind("ISLAND", "ISLAND", POCKET_GROUP, 5, offered=_in_pocket),),
+        editor=(SubKind("ISLAND", "ISLAND", POCKET_GROUP, 5),),
         positioned=True,
         mill=Mill.GEOMETRY,
+        follows=IN_POCKET,
     )
     x: Decimal = prompt("X", LENGTH, role=Role.X)
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)

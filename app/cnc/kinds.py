@@ -6,20 +6,25 @@ its limits, the editor's help, and what the value means to COPY and mirror (`Rol
 class's `KIND` says the rest: the JSON document's `type` names, the editor's sub-types
 (title, menu group and number, the field values each fixes, where it is offered), whether
 X/Y is a position (ABS/INC), LOOP and STOP, the mill family and the planner of a mill
-routine. The document, the editor's forms, validation's field checks, COPY and mirror read
-these declarations through `REGISTRY`; none of them lists the kinds.
+routine, its order rule (`Follows`: what may stand right before it) and which of its
+findings are the compile's (`findings`). The document, the editor's forms and menus,
+validation, structure, the preview, COPY and mirror read these declarations through
+`REGISTRY`; none of them lists the kinds.
 
-Adding a block kind:
+Adding a block kind (docs/adding-a-kind.md has the whole recipe, with what it touches):
 
 1. In blocks.py, a frozen `kw_only` dataclass subclassing `Block` with `KIND = Kind(...)`
    and each field declared with `prompt(...)`; `type_name` if its title says more than
-   its editor title. Declaring it registers it.
+   its editor title. Declaring it registers it. Its order rule is `follows=Follows(...)`
+   (the block before it: JSON types and mill families), which validation reports, structure
+   groups by and the editor's menus grey: no other file changes for it.
 2. What it cuts. A mill routine names its planner: `Kind(mill=Mill.ROUTINE,
    planner="module:function")`, a function `(block, mill.RoutineStart) -> SequencePlan`;
    with `geometry=True` the `Mill.GEOMETRY` blocks after it are its contours
-   (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND.
-   Other motion is a node in structure.py and compiler.py.
-3. Its own rules, if any, in validate.py, each with a case in tests/bad/.
+   (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND. The rules its
+   planner finds go in `findings` (the preview compiles a block with only those as it is).
+   Other motion is a node in compiler.py.
+3. Its own rules beyond its order, if any, in validate.py, each with a case in tests/bad/.
 4. A golden case (tests/golden/<name>/program.json, `make regen-golden`); its JSON `type`
    in docs/program-format.md.
 """
@@ -35,6 +40,7 @@ from decimal import Decimal
 from typing import TYPE_CHECKING, Any
 
 from app.cnc.limits import FeedLimits
+from app.cnc.problems import Rule
 from app.cnc.units import Units
 
 if TYPE_CHECKING:
@@ -55,7 +61,7 @@ class Value(enum.Enum):
 
 
 class Role(enum.Enum):
-    """What a length means geometrically, for COPY and mirror."""
+    """What a value means geometrically, for COPY and mirror."""
 
     X = "x"  # the X of the point the block goes to (its centre if `Kind.xy_is_centre`),
     Y = "y"  # absolute or incremental by the block's ABS/INC
@@ -64,6 +70,9 @@ class Role(enum.Enum):
     SIZE_X = "size_x"  # an extent from the point of the block before (FRAME XL, YW)
     SIZE_Y = "size_y"
     ANGLE = "angle"  # a direction, degrees clockwise from the lower vertical centre line
+    # CW or CCW seen from above. Mirror reverses it in a shape reflected as it stands
+    # (Mill.GEOMETRY); a cut (Mill.CONTOUR) is run backwards instead and keeps it.
+    TURN = "turn"
 
 
 class Mill(enum.Enum):
@@ -134,8 +143,39 @@ class SubKind:
 
 
 @dataclass(frozen=True)
+class Follows:
+    """A kind's order rule: what the block right before it must be. Validation checks it,
+    structure groups by it (a block joins the node of the block it follows) and the editor
+    greys the kind's menu lines where it fails; nothing else knows it.
+
+    `after` names what may stand right before: JSON `type` names (`"DRILL"`: a DRILL of any
+    cutter compensation) and mill families (`Mill.CONTOUR`: any of its kinds, those declared
+    later too). `same`: fields the block before must have equal (a BOLT CIR's operation).
+    `what` is what must come before, as messages say it after "must follow" (validation)
+    and "follows" (the editor), formatted with the block's values (`{op.value}`);
+    `message` validation's whole message, formatted with `{type_name}`, `{what}` and
+    `{before}` ("block 1 is POS" or "it is first"); `rule` its code. `in_menu` False: the
+    editor offers the kind anywhere and only validation says it is out of place (MILL,
+    CIRCLE and FRAME, whose menus have always offered them so).
+    """
+
+    after: tuple[str | Mill, ...]
+    what: str
+    rule: Rule
+    same: tuple[str, ...] = ()
+    message: str = "{type_name} must follow {what}; {before}"
+    in_menu: bool = True
+
+
+@dataclass(frozen=True)
 class Kind:
-    """What a block kind is, beyond its fields (see the module docstring)."""
+    """What a block kind is, beyond its fields (see the module docstring).
+
+    `follows`: its order rule (None: it may stand anywhere). `findings`: the rules the
+    compile finds in a block of this kind (its geometry, as its planner judges it): the
+    preview compiles a block whose only errors are these as it stands and shows where its
+    cut is left out; a block with any other error is left out of the drawing.
+    """
 
     documents: tuple[Document, ...]
     editor: tuple[SubKind, ...] = ()
@@ -147,6 +187,8 @@ class Kind:
     mill: Mill | None = None
     planner: str = ""  # "module:function" planning a mill routine
     geometry: bool = False  # a routine whose contour blocks (Mill.GEOMETRY) follow it
+    follows: Follows | None = None
+    findings: frozenset[Rule] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -191,6 +233,8 @@ class Registry:
         self._documents: dict[str, tuple[type[Block], dict[str, Any]]] | None = None
         self._sub_kinds: dict[str, tuple[type[Block], SubKind]] | None = None
         self._planners: dict[type, Callable[..., Any]] = {}
+        self._geometry_rules: frozenset[Rule] | None = None
+        self._named: dict[int, dict[type, bool | None]] = {}
         self.version = 0  # counts changes, for tables read from the registry elsewhere
 
     def add(self, cls: type[Block]) -> None:
@@ -207,6 +251,8 @@ class Registry:
         self.version += 1
         self._documents = None
         self._sub_kinds = None
+        self._geometry_rules = None
+        self._named = {}
 
     @property
     def classes(self) -> tuple[type[Block], ...]:
@@ -217,7 +263,8 @@ class Registry:
         return declared
 
     def of(self, block: Block) -> Kind:
-        return self.kind(type(block))
+        declared: Kind = block.KIND
+        return declared
 
     # -- fields --------------------------------------------------------------------------
 
@@ -294,6 +341,93 @@ class Registry:
             for f in self.fields(cls)
             if f.prompt.prompted and f.name not in fixed and self.applies(cls, f, values)
         )
+
+    # -- order ---------------------------------------------------------------------------
+
+    def joins(self, previous: Block | None, block: Block) -> bool:
+        """True when `block` has an order rule and meets it right after `previous` (None:
+        it is first): it belongs with that block (a BOLT CIR with its centre, a mill block
+        with its sequence). False for a kind that may stand anywhere."""
+        follows = block.KIND.follows
+        return follows is not None and self._accepts(follows, previous, block.__dict__)
+
+    def out_of_order(self, previous: Block | None, block: Block, number: int) -> str:
+        """Validation's message when block `number` (1-based) breaks its kind's order rule
+        right after `previous` (None: it is first), or "" when it does not."""
+        follows = self.of(block).follows
+        if follows is None or self._accepts(follows, previous, block.__dict__):
+            return ""
+        before = f"block {number - 1} is {previous.title}" if previous else "it is first"
+        what = follows.what.format_map(block.__dict__)
+        return follows.message.format(type_name=block.type_name, what=what, before=before)
+
+    def refusal(self, cls: type[Block], sub: SubKind, blocks: tuple[Block, ...], at: int) -> str:
+        """Why the editor cannot enter sub-kind `sub` as block `at` (1-based), or "": its
+        kind's order rule (where `Follows.in_menu`), then the sub-kind's own `offered`."""
+        follows = self.kind(cls).follows
+        previous = blocks[at - 2] if at >= 2 else None
+        fixed = dict(sub.fixed)
+        if follows is not None and follows.in_menu and not self._accepts(follows, previous, fixed):
+            return "follows " + follows.what.format_map(fixed)
+        return sub.offered(blocks, at) if sub.offered else ""
+
+    def _accepts(self, follows: Follows, previous: Block | None, values: Mapping[str, Any]) -> bool:
+        if previous is None:
+            return False
+        # Whether the kind before is one `follows` names, once per pair of kinds (structure
+        # asks for every block of a program); a kind with several JSON types (DRILL, BORE,
+        # TAP) is asked block by block.
+        table = self._named.get(id(follows))
+        if table is None:
+            table = self._named[id(follows)] = {}
+        cls = type(previous)
+        if cls in table:
+            named = table[cls]
+        else:
+            kind = previous.KIND
+            if kind.mill in follows.after or all(d.name in follows.after for d in kind.documents):
+                named = True
+            elif not any(d.name in follows.after for d in kind.documents):
+                named = False
+            else:
+                named = None
+            table[cls] = named
+        if named is None:
+            named = self.document_of(previous).name in follows.after
+        return named and (
+            not follows.same
+            or all(getattr(previous, name, None) == values.get(name) for name in follows.same)
+        )
+
+    # -- qualifiers ------------------------------------------------------------------------
+
+    def loop_groups(self) -> tuple[str, ...]:
+        """The editor's first-menu choices whose blocks may carry LOOP (`Kind.loopable`), in
+        declaration order: POS, DRILL, BORE, TAP."""
+        groups = dict.fromkeys(
+            sub.group
+            for cls in self._classes
+            if self.kind(cls).loopable
+            for sub in self.kind(cls).editor
+        )
+        return tuple(groups)
+
+    def loop_refusal(self) -> str:
+        """Why a block of a kind that is not `loopable` cannot carry LOOP, as validation
+        and the editor say it: "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"."""
+        *most, last = self.loop_groups()
+        names = f"{', '.join(most)} or {last}" if most else last
+        return f"cannot carry LOOP; a LOOP is a {names} block"
+
+    # -- findings --------------------------------------------------------------------------
+
+    def geometry_rules(self) -> frozenset[Rule]:
+        """Every rule some kind's compile finds (`Kind.findings`)."""
+        if self._geometry_rules is None:
+            self._geometry_rules = frozenset().union(
+                *(self.kind(cls).findings for cls in self._classes)
+            )
+        return self._geometry_rules
 
     # -- planners ------------------------------------------------------------------------
 

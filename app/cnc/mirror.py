@@ -24,16 +24,12 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import (
-    ArcEnd,
     Block,
     BoltCircle,
     Direction,
     Hole,
-    MillArc,
-    MillLine,
     MillQcir,
     Mode,
-    PocketArc,
     Program,
     Rep,
 )
@@ -92,11 +88,6 @@ def mirror(program: Program, axis: Axis) -> Mirrored:
                 )
             index = end
             continue
-        if isinstance(block, PocketArc) and reverse:
-            # A POCKET's contour is a shape, not a cut: it is reflected as it stands, so its
-            # arcs turn the other way (the passes keep climb or conventional by themselves).
-            turned = Direction.CCW if block.direction is Direction.CW else Direction.CW
-            block = dataclasses.replace(block, direction=turned)
         plan.append(_single(block, index, targets, m, sx, sy, blocks))
         index += 1
     new_blocks = _encode(plan, program.units)
@@ -124,18 +115,24 @@ def _single(
     blocks: list[Block],
 ) -> tuple[Block, XY | None]:
     """One block outside a contour, mirrored as its declaration says: its point (X/Y) moved,
-    its steps (REP X/Y, COPY XOF/YOF) and directions (BOLT CIR ANGLE) reflected; a block
+    its steps (REP X/Y, COPY XOF/YOF) and directions (BOLT CIR ANGLE) reflected, and a
+    shape's turns (a POCKET's arcs, Role.TURN in Mill.GEOMETRY: reflected as it stands, the
+    passes keep climb or conventional by themselves) reversed by a one-axis mirror; a block
     whose size (FRAME XL/YW) is measured from the point before keeps its values, and that
     point moves by the size on a flipped axis (the mirrored frame's lower-left corner)."""
     target, _ = targets[index]
     following = blocks[index + 1] if index + 1 < len(blocks) else None
     sizes = {} if following is None else _roles(following, Role.SIZE_X, Role.SIZE_Y)
     changes: dict[str, Any] = {}
-    for name, role in _roles(block, Role.STEP_X, Role.STEP_Y, Role.ANGLE).items():
+    shape = REGISTRY.of(block).mill is Mill.GEOMETRY
+    for name, role in _roles(block, Role.STEP_X, Role.STEP_Y, Role.ANGLE, Role.TURN).items():
         value = getattr(block, name)
         if value is None:
             continue
-        if role is Role.ANGLE:
+        if role is Role.TURN:
+            if shape and sx * sy < 0:
+                changes[name] = Direction.CCW if value is Direction.CW else Direction.CW
+        elif role is Role.ANGLE:
             changes[name] = _mirrored_angle(value, sx, sy)
         else:
             changes[name] = (sx if role is Role.STEP_X else sy) * value
@@ -192,14 +189,13 @@ def _contour(
     start, _ = targets[drill]
     assert start is not None
     # Segments: (kind block, its end point, its centre, the XY-END block if an arc).
-    segments: list[tuple[Block, XY, XY | None, ArcEnd | None]] = []
+    segments: list[tuple[Block, XY, XY | None, Block | None]] = []
     k = drill + 1
     while k < end:
         block = blocks[k]
         point, centre = targets[k]
-        if isinstance(block, MillArc):
+        if REGISTRY.sub_kind_of(block).then is not None:  # an XY-CENT and its XY-END
             end_block = blocks[k + 1]
-            assert isinstance(end_block, ArcEnd)
             arc_point, _ = targets[k + 1]
             assert arc_point is not None
             segments.append((block, arc_point, point, end_block))
@@ -233,10 +229,10 @@ def _contour(
     for i in range(len(segments) - 1, -1, -1):
         piece, _, centre, arc_end = segments[i]
         back_to = m(points[i])
-        if isinstance(piece, MillArc):
-            assert centre is not None and arc_end is not None
+        if arc_end is not None:
+            assert centre is not None
             plan += [(piece, m(centre)), (arc_end, back_to)]
-        elif isinstance(piece, MillQcir | MillLine):
+        else:
             plan.append((piece, back_to))
     last_block, last_point = plan[-1]
     plan[-1] = (dataclasses.replace(last_block, stop=stop), last_point)

@@ -11,21 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from app.cnc.blocks import (
-    ARC_PAIRS,
-    MILL_CONTOUR_CLASSES,
-    MILL_ROUTINE_CLASSES,
-    POCKET_GEOMETRY_CLASSES,
-    ArcEnd,
-    Block,
-    BoltCircle,
-    Copy,
-    Hole,
-    HoleOp,
-    Pos,
-    Rep,
-)
-from app.cnc.kinds import REGISTRY
+from app.cnc.blocks import Block, Copy, Rep
+from app.cnc.kinds import REGISTRY, Mill
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,36 +50,30 @@ Node = Single | BoltPattern | MillSequence | LoopPattern
 
 
 def is_mill(block: Block) -> bool:
-    """True for a MILL line, quarter circle, arc (either block), circle or frame."""
-    return isinstance(block, MILL_CONTOUR_CLASSES + MILL_ROUTINE_CLASSES)
+    """True for a MILL line, quarter circle, arc (either block), circle, frame or pocket."""
+    return block.KIND.mill in CUTS
+
+
+CUTS = (Mill.CONTOUR, Mill.ROUTINE)
 
 
 def starts_mill_sequence(blocks: tuple[Block, ...], index: int) -> bool:
-    """True when block `index` is a DRILL followed by a mill block (it stays at Z DN)."""
-    block = blocks[index]
-    return (
-        isinstance(block, Hole)
-        and block.op is HoleOp.DRILL
-        and index + 1 < len(blocks)
-        and is_mill(blocks[index + 1])
-    )
+    """True when block `index` is followed by a mill block whose order rule it meets (a
+    DRILL, which stays at Z DN) and is not itself one of a sequence's blocks."""
+    if index + 1 >= len(blocks) or blocks[index].KIND.mill is not None:
+        return False
+    nxt = blocks[index + 1]
+    return nxt.KIND.mill in CUTS and REGISTRY.joins(blocks[index], nxt)
 
 
 def mill_sequence_end(blocks: tuple[Block, ...], drill: int) -> int:
-    """The index after the last mill block of the sequence started at `drill`.
-
-    A sequence is either one CIRCLE/FRAME routine, a POCKET and its contour blocks, or a
-    run of line, quarter-circle and arc blocks; the head retracts at its end.
+    """The index after the last mill block of the sequence started at `drill`: each block
+    after the first that meets its order rule after the one before (Kind.follows) is one
+    of the sequence. That makes one CIRCLE/FRAME routine, a POCKET and its contour blocks,
+    or a run of line, quarter-circle and arc blocks; the head retracts at its end.
     """
-    first = drill + 1
-    if isinstance(blocks[first], MILL_ROUTINE_CLASSES):
-        end = first + 1
-        if REGISTRY.of(blocks[first]).geometry:
-            while end < len(blocks) and isinstance(blocks[end], POCKET_GEOMETRY_CLASSES):
-                end += 1
-        return end
-    end = first
-    while end < len(blocks) and isinstance(blocks[end], MILL_CONTOUR_CLASSES):
+    end = drill + 2
+    while end < len(blocks) and REGISTRY.joins(blocks[end - 1], blocks[end]):
         end += 1
     return end
 
@@ -150,38 +131,35 @@ def _node(blocks: tuple[Block, ...], index: int, tolerant: bool = False) -> tupl
     None (tolerant) for a block that cannot run where it is."""
     block = blocks[index]
     nxt = blocks[index + 1] if index + 1 < len(blocks) else None
-    if isinstance(block, Hole) and isinstance(nxt, BoltCircle) and not nxt.loop:
-        return BoltPattern(centre=index, bolt=index + 1), index + 2
     if starts_mill_sequence(blocks, index):
         end = mill_sequence_end(blocks, index)
         mills = tuple(range(index + 1, end))
         if tolerant:
-            # An arc without its XY-END (or an XY-END without its arc): the blocks before
-            # it run.
+            # An arc without its XY-END (the block its editor sub-kind enters with it):
+            # the blocks before it run.
             for k, i in enumerate(mills):
-                dangling = any(
-                    (
-                        isinstance(blocks[i], centre)
-                        and (i + 1 >= end or not isinstance(blocks[i + 1], end_kind))
-                    )
-                    or (isinstance(blocks[i], end_kind) and not isinstance(blocks[i - 1], centre))
-                    for centre, end_kind, _, _ in ARC_PAIRS
-                )
-                if dangling:
+                then = REGISTRY.sub_kind_of(blocks[i]).then
+                if then is not None and (i + 1 >= end or not isinstance(blocks[i + 1], then)):
                     mills = mills[:k]
                     break
             if not mills:
                 return Single(index=index), end
         return MillSequence(drill=index, mills=mills), end
-    if isinstance(block, ArcEnd):
+    if (
+        nxt is not None
+        and not nxt.loop
+        and REGISTRY.of(block).follows is None
+        and REGISTRY.of(nxt).mill is None
+        and REGISTRY.joins(block, nxt)
+    ):
+        # A block that stands by itself and the one that follows it: a BOLT CIR's centre.
+        return BoltPattern(centre=index, bolt=index + 1), index + 2
+    if REGISTRY.of(block).follows is not None:
+        # A block that follows another (a mill block, an XY-END, a BOLT CIR) where that
+        # other is not: validation says so; what can run still runs (`tolerant`).
         if tolerant:
             return None, index + 1
-        raise ValueError(f"block {index + 1}: XY-END without its XY-CENT (validate first)")
-    if isinstance(block, POCKET_GEOMETRY_CLASSES):
-        if tolerant:
-            return None, index + 1
-        what = block.type_name
-        raise ValueError(f"block {index + 1}: {what} without its POCKET (validate first)")
-    if tolerant and not isinstance(block, Pos | Hole):
-        return None, index + 1  # a mill block or a BOLT CIR that does not follow its block
+        raise ValueError(
+            f"block {index + 1}: {block.type_name} where it cannot stand (validate first)"
+        )
     return Single(index=index), index + 1

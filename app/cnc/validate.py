@@ -19,25 +19,17 @@ from typing import Any
 from app.cnc import cost, limits, sizes, spindle
 from app.cnc.blocks import (
     ARC_PAIRS,
-    MILL_CONTOUR_CLASSES,
-    MILL_ROUTINE_CLASSES,
-    POCKET_GEOMETRY_CLASSES,
-    ArcEnd,
     Block,
-    BoltCircle,
-    Circle,
     Comp,
     Copy,
     CopyAction,
     DataBlock0,
-    Frame,
     Hole,
     HoleOp,
     Island,
     Mode,
     Pocket,
     PocketArc,
-    PocketArcEnd,
     PocketLine,
     Program,
     Rep,
@@ -46,7 +38,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
-from app.cnc.kinds import REGISTRY, Value
+from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
@@ -430,8 +422,7 @@ class _Checker:
                 "LOOP",
                 ERROR,
                 Rule.LOOP_QUALIFIER,
-                f"a {block.type_name} block cannot carry LOOP; "
-                "a LOOP is a POS, DRILL, BORE or TAP block",
+                f"a {block.type_name} block {REGISTRY.loop_refusal()}",
             )
         if block.stop and not kind.stoppable:
             self.add(
@@ -551,28 +542,13 @@ class _Checker:
         for index, block in enumerate(blocks):
             number = index + 1
             previous = blocks[index - 1] if index else None
-            if isinstance(block, BoltCircle):
-                ok = (
-                    isinstance(previous, Hole)
-                    and previous.op is block.op
-                    and not starts_mill_sequence(blocks, index - 1)
-                )
-                if not ok:
-                    before = f"block {index} is {previous.title}" if previous else "it is first"
-                    self.add(
-                        number,
-                        None,
-                        ERROR,
-                        Rule.BOLT_CIR_ORDER,
-                        f"BOLT CIR {block.op.value} must follow a standard {block.op.value} "
-                        f"block, which gives the centre; {before}",
-                    )
-            else:
-                self.check_arc_pair(index, block, previous)
-            if is_mill(block) and not isinstance(block, ArcEnd):
-                self.check_mill_order(index, block, previous)
-            if isinstance(block, (Pocket, *POCKET_GEOMETRY_CLASSES)):
-                self.check_pocket_order(index, block, previous)
+            self.check_arc_pair(index, block)
+            # What may follow what is each kind's declaration (Kind.follows).
+            message = REGISTRY.out_of_order(previous, block, number)
+            follows = REGISTRY.of(block).follows
+            if message and follows is not None:
+                self.add(number, None, ERROR, follows.rule, message)
+            self.check_pocket_order(index, block, previous, in_order=not message)
             if (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
@@ -601,55 +577,21 @@ class _Checker:
                     "the sequence's last block",
                 )
 
-    def check_mill_order(self, index: int, block: Block, previous: Block | None) -> None:
-        number = index + 1
-        if isinstance(block, MILL_ROUTINE_CLASSES):
-            if not (isinstance(previous, Hole) and previous.op is HoleOp.DRILL):
-                self.add(
-                    number,
-                    None,
-                    ERROR,
-                    Rule.MILL_ORDER,
-                    f"{block.type_name} must follow the DRILL block that gives its "
-                    + (
-                        "centre"
-                        if isinstance(block, Circle)
-                        else "lower left corner"
-                        if isinstance(block, Frame)
-                        else "depths and the boundary's start point"
-                    ),
-                )
-            return
-        ok = (isinstance(previous, Hole) and previous.op is HoleOp.DRILL) or isinstance(
-            previous, MILL_CONTOUR_CLASSES
-        )
-        if not ok:
-            before = f"block {index} is {previous.title}" if previous else "it is first"
-            self.add(
-                number,
-                None,
-                ERROR,
-                Rule.MILL_ORDER,
-                f"{block.type_name} must follow a DRILL block (which sets the depth) or "
-                f"another mill block; {before}",
-            )
-
-    def check_arc_pair(self, index: int, block: Block, previous: Block | None) -> None:
-        """An arc's XY-CENT block has its XY-END right after it, and an XY-END its XY-CENT
-        right before it (MILL ARC and PKT ARC alike, ARC_PAIRS)."""
+    def check_arc_pair(self, index: int, block: Block) -> None:
+        """An arc's XY-CENT block has its XY-END right after it (MILL ARC and PKT ARC alike,
+        ARC_PAIRS); that an XY-END follows its XY-CENT is the XY-END's order rule."""
         nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
-        for centre, end, centre_name, end_name in ARC_PAIRS:
-            if isinstance(block, end) and not isinstance(previous, centre):
-                message = f"{end_name} without its XY-CENT block just before it"
-            elif isinstance(block, centre) and not isinstance(nxt, end):
+        for centre, end, centre_name, _ in ARC_PAIRS:
+            if isinstance(block, centre) and not isinstance(nxt, end):
                 message = f"{centre_name} without its XY-END block just after it"
-            else:
-                continue
-            self.add(index + 1, None, ERROR, Rule.ARC_END_ORDER, message)
+                self.add(index + 1, None, ERROR, Rule.ARC_END_ORDER, message)
 
-    def check_pocket_order(self, index: int, block: Block, previous: Block | None) -> None:
-        """A POCKET's contour blocks follow it (or each other); an arc's XY-CENT and XY-END
-        go together; a POCKET needs depths (it retracts between passes)."""
+    def check_pocket_order(
+        self, index: int, block: Block, previous: Block | None, *, in_order: bool
+    ) -> None:
+        """Beyond the order rules of the kinds: a POCKET's boundary follows it and an
+        ISLAND's contour the ISLAND, islands after the boundary; a POCKET needs depths (it
+        retracts between passes). `in_order`: the block meets its kind's order rule."""
         number = index + 1
         nxt = self.blocks[index + 1] if index + 1 < len(self.blocks) else None
         if isinstance(block, Pocket):
@@ -664,7 +606,7 @@ class _Checker:
                     "at each place the tool goes down and raised before the table moves on; "
                     "# PECK is the operator's",
                 )
-            if not isinstance(nxt, POCKET_GEOMETRY_CLASSES):
+            if nxt is None or REGISTRY.of(nxt).mill is not Mill.GEOMETRY:
                 self.add(
                     number,
                     None,
@@ -674,19 +616,9 @@ class _Checker:
                     "draw the boundary from the DRILL's X/Y back to that point",
                 )
             return
-        if isinstance(block, PocketArcEnd):
-            return  # its order is its XY-CENT's (check_arc_pair)
-        if not isinstance(previous, (Pocket, *POCKET_GEOMETRY_CLASSES)):
-            before = f"block {index} is {previous.title}" if previous else "it is first"
-            self.add(
-                number,
-                None,
-                ERROR,
-                Rule.POCKET_ORDER,
-                f"{block.type_name} must follow a POCKET block or another of its contour "
-                f"blocks; {before}",
-            )
-        elif isinstance(block, Island) and not isinstance(nxt, PocketLine | PocketArc):
+        if not isinstance(block, Island):
+            return
+        if in_order and not isinstance(nxt, PocketLine | PocketArc):
             self.add(
                 number,
                 None,
@@ -695,7 +627,7 @@ class _Checker:
                 "ISLAND without its contour: PKT LINE and PKT ARC blocks follow it and draw "
                 "the island back to its start point",
             )
-        if isinstance(block, Island) and isinstance(previous, Pocket):
+        if isinstance(previous, Pocket):
             self.add(
                 number,
                 None,
@@ -722,7 +654,8 @@ class _Checker:
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            needs_diameter = isinstance(block, Circle | Frame | Pocket) or (
+            # A routine keeps the tool off its contour by itself: it needs the diameter.
+            needs_diameter = REGISTRY.of(block).mill is Mill.ROUTINE or (
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(self.blocks, number - 1)
@@ -866,7 +799,7 @@ class _Checker:
                 isinstance(block, Hole)
                 and block.comp is not Comp.NONE
                 and starts_mill_sequence(blocks, index)
-                and isinstance(blocks[index + 1], MILL_ROUTINE_CLASSES)
+                and REGISTRY.of(blocks[index + 1]).mill is Mill.ROUTINE
             ):
                 self.add(
                     index + 1,
@@ -975,7 +908,7 @@ def _feed(value: Fraction, units: Units) -> str:
 
 def _in_sequence(block: Block) -> bool:
     """True for the blocks of a mill sequence after its DRILL (a POCKET's contour too)."""
-    return is_mill(block) or isinstance(block, POCKET_GEOMETRY_CLASSES)
+    return REGISTRY.of(block).mill is not None
 
 
 def _has_position(block: Block) -> bool:

@@ -131,7 +131,7 @@ def entry_from_args(program: Program, args: Any) -> Entry:
         form = forms[kind]
         reason = refusal(program, at, kind)
         if not reason and loop and not form.loopable:
-            reason = "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+            reason = REGISTRY.loop_refusal()
         if reason:
             entry.refused = f"{form.title} {reason}"
             entry.group = form.group if len(group_kinds().get(form.group, ())) > 1 else ""

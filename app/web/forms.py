@@ -145,8 +145,8 @@ def kind_of(block: Block) -> str:
 
 def refusal(program: Program, at: int, key: str) -> str:
     """Why sub-kind `key` cannot be entered as block `at` ("" when it can)."""
-    _, sub = REGISTRY.sub_kinds()[key]
-    return sub.offered(program.blocks, at) if sub.offered else ""
+    cls, sub = REGISTRY.sub_kinds()[key]
+    return REGISTRY.refusal(cls, sub, program.blocks, at)
 
 
 @dataclass(frozen=True)
@@ -158,9 +158,6 @@ class Choice:
     key: str
     title: str
     reason: str = ""
-
-
-LOOP_KINDS = ("POS", "DRILL", "BORE", "TAP")
 
 
 def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False) -> list[Choice]:
@@ -178,8 +175,8 @@ def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False
             reason = "is chosen already" if stop else ""
         elif (loop or stop) and group in ("REP", "COPY"):
             reason = "takes no LOOP or STOP qualifier"
-        elif loop and group not in LOOP_KINDS:
-            reason = "cannot carry LOOP; a LOOP is a POS, DRILL, BORE or TAP block"
+        elif loop and group not in REGISTRY.loop_groups():
+            reason = REGISTRY.loop_refusal()
         else:
             reasons = [refusal(program, at, key) for key in group_kinds().get(group, ())]
             if reasons and all(reasons):

@@ -20,31 +20,10 @@ from app.cnc.blocks import Copy, Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.svg import render
 from app.cnc.estimate import estimate
+from app.cnc.kinds import REGISTRY
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.validate import validate
 
-# The problems the compile itself finds (mill.py's geometry): a block with one of these is
-# compiled as it is (the compiler leaves its node out and the drawing shows where it is).
-# Any other error may mean values the compile cannot take (out of range, missing) or work
-# without bound, so such a block is left out of the drawing and listed.
-GEOMETRY_RULES = frozenset(
-    {
-        Rule.QCIR_CENTRE_LINES,
-        Rule.ARC_RADIUS,
-        Rule.ZERO_LENGTH,
-        Rule.INSIDE_ANGLE,
-        Rule.COMP_DIVOT,
-        Rule.COMP_GOUGE,
-        Rule.COMP_ARC_TOO_SMALL,
-        Rule.ROUTINE_TOO_SMALL,
-        Rule.FRAME_CORNER,
-        Rule.CORNER_UNREACHABLE,
-        Rule.POCKET_TOOL,
-        Rule.POCKET_CONTOUR,
-        Rule.POCKET_ISLAND,
-        Rule.POCKET_STEP,
-    }
-)
 # Errors of the program as a whole that leave its compile as it is (a name is not motion).
 HARMLESS_RULES = frozenset({Rule.NAME, Rule.PART_NUMBER, Rule.MESSAGE})
 # A block in the program's place that makes no motion: a pending COPY (the compiler skips
@@ -157,7 +136,11 @@ def _drawable(program: Program, problems: list[Problem]) -> _Drawable:
             continue
         if p.block:
             errors.setdefault(p.block, []).append(_said(p.field, p.message))
-            if p.rule not in GEOMETRY_RULES:
+            # What the compile itself finds (Kind.findings, the geometry) is compiled as
+            # it is: the compile leaves the cut out and the drawing shows where it is. Any
+            # other error may mean values the compile cannot take (out of range, missing)
+            # or work without bound: such a block is left out of the drawing and listed.
+            if p.rule not in REGISTRY.geometry_rules():
                 unsafe.add(p.block)
         else:
             general.append(str(p))

@@ -293,15 +293,12 @@
 
   // After htmx swaps a part of the editor in, put the cursor on the first prompt (or the
   // first choice), and keep the block list in step with the entry panel.
-  var shownList = null;
   function focusEntry() {
     // On a menu the menu itself has the focus, so a stray Enter chooses nothing.
     var first = document.querySelector("#entry form.block-form .field [data-field]") ||
       document.querySelector("#entry .choices");
     if (first) { first.focus(); if (first.select) { first.select(); } }
     syncList();
-    var blocks = document.getElementById("blocks");
-    if (blocks !== shownList) { shownList = blocks; showFocus(); }
   }
 
   // The row of the block being edited (or "new block…" when entering at the end) is the
@@ -315,19 +312,6 @@
     var current = editing ? document.getElementById("b-" + at) :
       document.querySelector('.block-row.new[data-new="' + at + '"]');
     if (current) { current.classList.add("current"); }
-  }
-
-  // The list shows the block it was asked to stay at (the edited one) after it is drawn
-  // anew: scrolled within the list, not the page.
-  function showFocus() {
-    var blocks = document.getElementById("blocks");
-    var list = blocks && blocks.querySelector(".block-list");
-    var row = blocks && document.getElementById("b-" + blocks.getAttribute("data-focus"));
-    if (!list || !row) { return; }
-    var top = row.getBoundingClientRect().top - list.getBoundingClientRect().top + list.scrollTop;
-    if (top < list.scrollTop || top + row.offsetHeight > list.scrollTop + list.clientHeight) {
-      list.scrollTop = Math.max(0, top - (list.clientHeight - row.offsetHeight) / 2);
-    }
   }
 
   // Typing replaces a prompt's value, as on the control.
@@ -349,8 +333,6 @@
       return;
     }
     syncList();
-    var blocks = document.getElementById("blocks");
-    if (blocks !== shownList) { shownList = blocks; showFocus(); }
   }
   document.addEventListener("htmx:after:swap", swapped);
 

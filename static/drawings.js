@@ -126,7 +126,7 @@
     drawing.appendChild(layer);
   }
 
+  // htmx 4 names the event htmx:after:swap (its htmx 1/2 name, htmx:afterSwap, is never sent).
   document.addEventListener("htmx:after:swap", overlay);
-  document.addEventListener("htmx:afterSwap", overlay);
   document.addEventListener("DOMContentLoaded", function () { mark(); overlay(); });
 })();

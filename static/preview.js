@@ -29,7 +29,7 @@
   var SELECTED = "#f59e0b";
   var PICTURE_MAX = 2048; // a pattern bigger than this on screen is drawn as vectors
 
-  var view = null; // { full, box, canvas, model } — box is the viewBox: x, −part Y, w, h
+  var view = null; // { svg, full, box, canvas, model } — box is the viewBox: x, −part Y, w, h
   var selected = null; // the lit block's number (a string), or null
 
   function host() { return document.getElementById("preview"); }
@@ -43,13 +43,20 @@
 
   function setupPreview() {
     var el = host();
-    view = null;
-    if (!el) { return; }
+    if (!el) { view = null; return; }
     var source = el.querySelector("template.source");
     var svg = source ? source.content.querySelector("svg") : svgOf();
-    if (!svg) { return; }
+    if (!svg) { view = null; return; }
+    if (view && view.svg === svg) {
+      // The same drawing (another part of the page was swapped, or an edit's changes were
+      // applied to it): it keeps its zoom and pan.
+      var lit = document.querySelector(".block-row.current[data-block]");
+      highlight(lit ? lit.getAttribute("data-block") : null, true);
+      apply();
+      return;
+    }
     var box = svg.getAttribute("viewBox").split(/\s+/).map(Number);
-    view = { full: box.slice(), box: box.slice(), canvas: null, model: null };
+    view = { svg: svg, full: box.slice(), box: box.slice(), canvas: null, model: null };
     if (source) {
       view.canvas = new Painter(el, svg);
       view.model = view.canvas.model;
@@ -480,9 +487,114 @@
     }
   };
 
-  // A new drawing arrives with the page and with every htmx swap of the editor (htmx 4 names
-  // the event htmx:after:swap; the htmx 1/2 name htmx:afterSwap is never sent).
-  document.addEventListener("htmx:after:swap", setupPreview);
+  // -- an edit's changes to the drawing -------------------------------------------------
+  //
+  // An edit's reply carries what changed in the drawing (app/web/preview.py `Patch`, in
+  // template#drawing-patch) when the edit said which version the page shows (`drawn`): the
+  // new <svg> open tag, and per container (<defs>, the page's <g>, the hole numbers' <g>) its
+  // new open tag and the stretch of children that changed. Applied to the drawing shown, it
+  // is the new version's drawing; a patch from another version than the one shown (or for
+  // a drawing painted on a canvas) is not applied: the whole drawing is asked for instead.
+
+  var CONTAINERS = ["defs", "page", "order"];
+
+  function containerName(el) {
+    if (el.localName === "defs") { return "defs"; }
+    if (el.localName === "g" && el.classList.contains("page")) { return "page"; }
+    if (el.localName === "g" && el.classList.contains("order")) { return "order"; }
+    return null;
+  }
+
+  function containerIn(svg, name) {
+    for (var k = 0; k < svg.children.length; k++) {
+      if (containerName(svg.children[k]) === name) { return svg.children[k]; }
+    }
+    return null;
+  }
+
+  // `el` takes the attributes of `from`, but those named in `keep` (the view's own).
+  function takeAttributes(el, from, keep) {
+    Array.prototype.slice.call(el.attributes).forEach(function (a) {
+      if (keep.indexOf(a.name) < 0 && !from.hasAttribute(a.name)) { el.removeAttribute(a.name); }
+    });
+    Array.prototype.forEach.call(from.attributes, function (a) {
+      if (keep.indexOf(a.name) < 0 && el.getAttribute(a.name) !== a.value) {
+        el.setAttributeNS(a.namespaceURI, a.name, a.value);
+      }
+    });
+  }
+
+  function askForDrawing(url) {
+    if (window.htmx && url) {
+      window.htmx.ajax("GET", url, { source: "#drawing-refresh", target: "#drawing-area", swap: "outerHTML" });
+    }
+  }
+
+  // Apply the reply's patch, once; true when the drawing shown changed.
+  function applyPatch() {
+    var patch = document.getElementById("drawing-patch");
+    if (!patch || !patch.hasAttribute("data-to")) { return false; }
+    var to = patch.getAttribute("data-to");
+    var fresh = patch.content.querySelector("svg");
+    patch.removeAttribute("data-to");
+    var el = host();
+    var svg = svgOf();
+    if (!el || !svg || !fresh || el.dataset.version !== patch.getAttribute("data-from")) {
+      askForDrawing(patch.getAttribute("data-refresh"));
+      return false;
+    }
+    takeAttributes(svg, fresh, ["viewBox"]);
+    CONTAINERS.forEach(function (name, order) {
+      var part = containerIn(fresh, name);
+      if (!part) { return; }
+      var shown = containerIn(svg, name);
+      if (part.hasAttribute("data-gone")) {
+        if (shown) { shown.remove(); }
+        return;
+      }
+      var at = Number(part.getAttribute("data-at"));
+      var drop = Number(part.getAttribute("data-drop"));
+      part.removeAttribute("data-at");
+      part.removeAttribute("data-drop");
+      if (!shown) {
+        // A container the drawing did not have: in its place among the others.
+        var next = null;
+        for (var k = order + 1; k < CONTAINERS.length && !next; k++) { next = containerIn(svg, CONTAINERS[k]); }
+        svg.insertBefore(document.importNode(part, true), next);
+        return;
+      }
+      takeAttributes(shown, part, []);
+      for (var n = 0; n < drop && shown.children[at]; n++) { shown.children[at].remove(); }
+      var items = document.createDocumentFragment();
+      Array.prototype.forEach.call(part.childNodes, function (node) { items.appendChild(document.importNode(node, true)); });
+      shown.insertBefore(items, shown.children[at] || null);
+    });
+    el.dataset.version = to;
+    if (view && view.svg === svg) {
+      // The extent may have changed: a view that showed it all shows the new one all.
+      var box = fresh.getAttribute("viewBox").split(/\s+/).map(Number);
+      if (view.box.join(" ") === view.full.join(" ")) { view.box = box.slice(); }
+      view.full = box;
+      view.model = null;
+    }
+    return true;
+  }
+
+  // An edit's reply says which version the page's drawing is (`drawn`), so the reply can
+  // carry only what changed in it.
+  document.addEventListener("htmx:config:request", function (event) {
+    var ctx = event.detail && event.detail.ctx;
+    var el = host();
+    var source = ctx && ctx.sourceElement;
+    if (!el || !el.dataset.version || !source || !source.closest || !source.closest("#entry")) { return; }
+    if (!ctx.request || String(ctx.request.method).toUpperCase() !== "POST") { return; }
+    var body = ctx.request.body;
+    if (body && typeof body.set === "function") { body.set("drawn", el.dataset.version); }
+  });
+
+  // A new drawing, or what changed in it, arrives with the page and with htmx swaps (htmx 4
+  // names the event htmx:after:swap; the htmx 1/2 name htmx:afterSwap is never sent).
+  document.addEventListener("htmx:after:swap", function () { applyPatch(); setupPreview(); });
   document.addEventListener("DOMContentLoaded", setupPreview);
   // For tests and benchmarks: where a part point is on the screen.
   window.millblocksPreview = { toScreen: function (x, y) { return view ? toScreen(x, y) : null; } };

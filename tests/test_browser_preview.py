@@ -391,3 +391,231 @@ def test_tool_width_is_the_tools_width(page: Page, library: Library) -> None:
         "p => [parseFloat(getComputedStyle(p).strokeWidth), p.getAttribute('stroke-width')]"
     )
     assert math.isclose(widths[0], float(widths[1])) and float(widths[1]) == 0.5, widths
+
+
+# The drawing the page shows, against the one the server draws afresh for the version stored
+# (GET .../drawing, as a page opened now would show it): equal as DOM trees, but for what the
+# view itself sets (the viewBox while zoomed, the hole numbers' size, the lit block). With
+# "fit" the view's viewBox is the drawing's own, so it is compared too, as numbers.
+SAME_AS_FRESH = """async () => {
+  const host = document.getElementById('preview');
+  const answer = await fetch(location.pathname + '/drawing', {headers: {'HX-Request': 'true'}});
+  const t = document.createElement('template');
+  t.innerHTML = await answer.text();
+  const fresh = t.content.querySelector('#preview > svg');
+  const shown = host.querySelector(':scope > svg').cloneNode(true);
+  const boxes = [shown, fresh].map(s => s.getAttribute('viewBox').split(/\\s+/).map(Number));
+  for (const svg of [fresh, shown]) {
+    svg.removeAttribute('viewBox');
+    svg.querySelectorAll('g.order').forEach(g => g.removeAttribute('font-size'));
+    svg.querySelectorAll('.selected').forEach(e => e.classList.remove('selected'));
+  }
+  const close = boxes[0].every((v, k) => Math.abs(v - boxes[1][k]) < 1e-9);
+  const left = [document, t.content].map(d => d.querySelector('#not-drawn').textContent.trim());
+  return {same: shown.isEqualNode(fresh), box: close, boxes: boxes, left: left,
+          freshVersion: t.content.querySelector('#preview').dataset.version,
+          shown: shown.outerHTML, fresh: fresh.outerHTML};
+}"""
+
+
+def assert_drawing_is_fresh(page: Page, version: int) -> None:
+    """The page shows `version`'s drawing, the same as a fresh one (after "fit")."""
+    expect(page.locator("#version")).to_have_text(f"v{version}")
+    until(page, f"document.getElementById('preview').dataset.version === '{version}'")
+    page.locator('[data-zoom="fit"]').click()
+    found = page.evaluate(SAME_AS_FRESH)
+    assert found["freshVersion"] == str(version)
+    if not found["same"]:
+        a, b = found["shown"], found["fresh"]
+        k = next((i for i in range(min(len(a), len(b))) if a[i] != b[i]), min(len(a), len(b)))
+        raise AssertionError(
+            f"v{version} differs at {k}:\n{a[k - 200 : k + 300]}\n{b[k - 200 : k + 300]}"
+        )
+    assert found["box"], found["boxes"]
+    assert found["left"][0] == found["left"][1], found["left"]
+
+
+def open_block(page: Page, number: int) -> None:
+    page.locator(f'.block-row[data-block="{number}"] .block-link').click()
+    expect(page.locator("#entry h2")).to_contain_text(f"Block {number}:")
+    expect(page.locator("#entry h2")).to_contain_text("editing")
+
+
+def test_an_edit_redraws_only_what_changed(page: Page, library: Library) -> None:
+    """An edit's reply carries what changed in the drawing (the edited block's drawing, the
+    ones after it that its end point moves, the patterns of a LOOP, the hole numbers, the
+    extent) and the page applies it: after edits, a LOOP's pattern changed, a reorder, a
+    delete, an insert, an edit undone, a block made red and put right, the drawing is each
+    time the one a fresh page shows, and the whole drawing was never fetched again (it was
+    after every edit); zoomed in, an edit keeps the zoom. An edit that leaves nothing to
+    draw, and the one that puts it right, get the whole drawing, as a fresh page."""
+    from bench.programs import editor_program
+
+    url = library.add(editor_program(30))
+    fetched: list[str] = []
+    # The whole drawing a reply asks for (`?v=`; the checks' own fetches have none).
+    page.on("request", lambda r: fetched.append(r.url) if "/drawing?v=" in r.url else None)
+    page.on("dialog", lambda dialog: dialog.accept())
+    page.goto(url)
+    expect(page.locator("#preview g.order text")).not_to_have_count(0)
+    zoomed = page.locator("#preview > svg").get_attribute("viewBox")
+    version = 1
+
+    def saved() -> None:
+        nonlocal version
+        version += 1
+        assert_drawing_is_fresh(page, version)
+
+    # DRILL 1 moves: its hole, its number, and the rapid to block 2 that starts there.
+    open_block(page, 1)
+    page.locator("#f-x").fill("0.8")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    # The LOOP's pattern (a <defs> pattern placed by <use>), and the REP placing it.
+    open_block(page, 9)
+    page.locator("#f-x").fill("0.2")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    # Blocks 2 and 3 change places (the cutting order, and the hole numbers, change).
+    open_block(page, 3)
+    page.locator('#entry button[value="up"]').click()
+    saved()
+    # Block 12 goes: the blocks after it are numbered one less.
+    open_block(page, 12)
+    page.locator("#entry button.danger").click()
+    saved()
+    # A new DRILL at the end, far out: the extent (viewBox) grows.
+    page.locator(".block-row.new .block-link, .block-row.new a").first.click()
+    expect(page.locator("#entry h2")).to_contain_text("type")
+    page.keyboard.press("2")
+    expect(page.locator("#entry h2")).to_contain_text("sub-type")
+    page.keyboard.press("1")
+    expect(page.locator("#entry h2")).to_contain_text("DRILL")
+    page.locator("#f-x").fill("6")
+    page.locator("#f-y").fill("3")
+    page.locator("#f-z_up").fill("0.1")
+    page.locator("#f-z_dn").fill("-0.3")
+    page.locator("#f-feed_z").fill("5")
+    page.locator("#f-tool").fill("1")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    # ...and undone, as typed back: the extent shrinks again.
+    open_block(page, 30)
+    page.locator("#f-x").fill("0.5")
+    page.locator("#f-y").fill("0.5")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    # A CIRCLE too small for its tool: drawn in red with its message, then put right.
+    open_block(page, 6)
+    page.locator("#f-radius").fill("0.1")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator('#preview g.block.problem[data-block="6"] title')).to_contain_text(
+        "not larger than the 0.5000 in tool"
+    )
+    open_block(page, 6)
+    page.locator("#f-radius").fill("0.4")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator("#preview g.block.problem")).to_have_count(0)
+    assert fetched == [], fetched
+    # Zoomed in, an edit keeps the zoom (the drawing is not replaced).
+    page.locator('[data-zoom="in"]').click()
+    zoomed = page.locator("#preview > svg").get_attribute("viewBox")
+    open_block(page, 1)
+    page.locator("#f-x").fill("0.7")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#version")).to_have_text(f"v{version + 1}")
+    until(page, f"document.getElementById('preview').dataset.version === '{version + 1}'")
+    assert page.locator("#preview > svg").get_attribute("viewBox") == zoomed
+    saved()
+    # A tool Data Block 0 does not have: nothing can be drawn (the page is sent no changes
+    # and asks for the drawing, which says why); put right, the drawing comes back whole.
+    open_block(page, 1)
+    page.locator("#f-tool").fill("9")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#not-drawn")).to_contain_text("tool 9 is used in block 1")
+    expect(page.locator("#preview > svg")).to_have_count(0)
+    version += 1
+    open_block(page, 1)
+    page.locator("#f-tool").fill("1")
+    page.locator("#entry button[data-submit]").click()
+    saved()
+    expect(page.locator("#not-drawn")).to_have_text("")
+
+
+def test_a_page_showing_another_drawing_gets_the_whole_new_one(
+    page: Page, library: Library
+) -> None:
+    """A reply's changes are from the version the page says it shows: a page whose drawing
+    is of another version (another tab saved meanwhile) is sent no changes, and asks for
+    the whole new drawing, which is the fresh one."""
+    from bench.programs import editor_program
+
+    url = library.add(editor_program(20))
+    page.goto(url)
+    expect(page.locator("#preview g.block").first).to_be_attached()
+    page.evaluate("document.getElementById('preview').dataset.version = '0'")
+    open_block(page, 1)
+    page.locator("#f-x").fill("0.9")
+    with page.expect_request(lambda r: "/drawing?v=" in r.url):
+        page.locator("#entry button[data-submit]").click()
+    assert_drawing_is_fresh(page, 2)
+
+
+def row_shown_whole(page: Page, number: int) -> bool:
+    """Whether block `number`'s row is wholly inside the block list's visible part."""
+    return bool(
+        page.evaluate(
+            """(number) => {
+              const list = document.querySelector('#editor .block-list');
+              const row = list.querySelector(`.block-row[data-block="${number}"]`);
+              if (!row) return false;
+              const l = list.getBoundingClientRect(), r = row.getBoundingClientRect();
+              return r.top >= l.top - 1 && r.bottom <= l.bottom + 1;
+            }""",
+            number,
+        )
+    )
+
+
+def last_row_shown_whole(page: Page) -> int:
+    return int(
+        page.evaluate(
+            """() => {
+              const list = document.querySelector('#editor .block-list');
+              const l = list.getBoundingClientRect();
+              let last = 0;
+              for (const row of list.querySelectorAll('.block-row[data-block]')) {
+                const r = row.getBoundingClientRect();
+                const whole = r.top >= l.top - 1 && r.bottom <= l.bottom + 1;
+                if (whole) last = Number(row.dataset.block);
+              }
+              return last;
+            }"""
+        )
+    )
+
+
+def test_a_block_moved_down_out_of_sight_is_brought_into_it(page: Page, library: Library) -> None:
+    """The last row in sight moved down: the list keeps its place, and the moved block, now
+    one row lower, is scrolled into sight. Two mechanisms kept the list's place and undid
+    each other: app.js scrolled the moved block into sight, then blocklist.js scrolled the
+    list back to where it was, the moved block just under the list's bottom edge."""
+    blocks = [drill(str(1 + n % 10), str(1 + n // 10)) for n in range(80)]
+    url = library.add(program("80 holes", *blocks))
+    page.goto(url)
+    scroll_list_to(page, 11)
+    last = last_row_shown_whole(page)
+    assert 11 < last < 80 and not row_shown_whole(page, last + 1)
+    open_block(page, last)
+    assert_list_at(page, 11)
+    page.locator('#entry button[value="down"]').click()
+    expect(page.locator("#version")).to_have_text("v2")
+    expect(page.locator(f'.block-row[data-block="{last + 1}"] .summary')).to_contain_text(
+        f"X {1 + (last - 1) % 10}"
+    )
+    assert row_shown_whole(page, last + 1)
+    # The list moved no more than it had to: the row that was first in sight is close by.
+    block, _ = first_row_in_view(page)
+    assert 11 <= block <= 13, block

@@ -160,3 +160,38 @@ def shown_now(client: FlaskClient, program_id: int, number: int) -> str:
     page = client.get(f"/programs/{program_id}?edit={number}").get_data(as_text=True)
     digests: dict[str, str] = dict(SHOWN.findall(page))
     return digests[str(number)]
+
+
+PATCH = re.compile(
+    r'<template id="drawing-patch" hx-swap-oob="true" data-from="(\d+)" data-to="(\d+)"'
+)
+PAGE_CHANGE = re.compile(r'<g class="page"[^>]*data-at="(\d+)" data-drop="(\d+)">')
+
+
+def test_an_edit_from_the_drawing_shown_answers_with_what_changed_in_it(app: Flask) -> None:
+    """The page says which version its drawing is (`drawn`): the reply carries what changed
+    in it (DRILL 11's drawing and the rapid into the block after it), not a request for the
+    whole drawing (110 kB on this program), and still under 15 kB; with another version
+    shown, the reply asks for the whole drawing as before."""
+    with app.app_context():
+        program_id = get_library().create(editor_program(500)).id
+    client: FlaskClient = app.test_client()
+    page = client.get(f"/programs/{program_id}?edit=11").get_data(as_text=True)
+    assert 'id="preview" class="drawing" data-units="inch" data-version="1"' in page
+    form = {**edit_form(csrf_of(page), 1, 1, 500), "drawn": "1"}
+    answer = client.post(f"/programs/{program_id}/blocks", data=form, headers=HTMX)
+    text = answer.get_data(as_text=True)
+    found = PATCH.search(text)
+    assert found and found.groups() == ("1", "2"), text[-800:]
+    assert "hx-get" not in text[text.index('id="drawing-refresh"') :]
+    change = PAGE_CHANGE.search(text)
+    assert change is not None and int(change.group(2)) <= 3, change
+    assert 'data-block="11"' in text[found.start() :]
+    assert 'id="not-drawn" hx-swap-oob="true"' in text
+    assert len(text.encode()) < 15_000
+    # A page showing version 1's drawing still, after version 2 was saved: no changes
+    # from version 2 for it; it is asked to fetch the whole drawing.
+    form = {**edit_form(csrf_of(page), 2, 2, 500), "drawn": "1"}
+    text = client.post(f"/programs/{program_id}/blocks", data=form, headers=HTMX).get_data(True)
+    assert PATCH.search(text) is None
+    assert re.search(r'id="drawing-refresh"[^>]*hx-get="[^"]+v=3"', text)

@@ -288,7 +288,7 @@ def save_block(program_id: int) -> Response | tuple[str, int]:
     # The list stays where the machinist was: at the edited block, or where they insert.
     focus = at if editing else next_entry.at
     if is_htmx():
-        return render_reply(program, saved, next_entry, focus, in_place)
+        return render_reply(program, stored.info.version, saved, next_entry, focus, in_place)
     if editing:
         return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
     return redirect(url_for("editor.edit", program_id=program_id, at=next_entry.at))
@@ -359,14 +359,16 @@ def delete_block(program_id: int, number: int) -> Response | tuple[str, int]:
         return saved
     focus = min(number, len(blocks) + 1)
     if is_htmx():
-        return render_reply(stored.program, saved, entry, focus, in_place=False)
+        return render_reply(
+            stored.program, stored.info.version, saved, entry, focus, in_place=False
+        )
     return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
 
 
 @bp.post("/programs/<int:program_id>/blocks/<int:number>/move")
 def move_block(program_id: int, number: int) -> Response | tuple[str, int]:
     stored = load(program_id)
-    before = stored.program
+    before, version = stored.program, stored.info.version
     blocks = list(before.blocks)
     if not 1 <= number <= len(blocks):
         abort(404, f"There is no block {number}.")
@@ -380,7 +382,7 @@ def move_block(program_id: int, number: int) -> Response | tuple[str, int]:
             return saved
         stored, focus = saved, target
     if is_htmx():
-        return render_reply(before, stored, entry, focus, in_place=False)
+        return render_reply(before, version, stored, entry, focus, in_place=False)
     return redirect(url_for("editor.edit", program_id=program_id, page=page_of(focus)))
 
 

@@ -4,7 +4,8 @@ The page is three parts: the block list (one page of rows, the cycle time), the 
 and the preview. htmx requests get only the part that changes: a choice in the entry panel
 answers with the panel; an edit answers with the panel and, out of band, the rows whose
 title, values, problems or time changed (the whole list page when blocks moved or came or
-went), the cycle time, the version the row buttons post, and the new drawing.
+went), the cycle time, the version the row buttons post, and what changed in the drawing
+(`drawing_patch`; a request for the whole new drawing when the page shows another version's).
 
 What a version of a program shows (its problems, its preview and times) is worked out once
 and kept for the last few versions (`shown_of`): the GET after an edit, and the rows of the
@@ -35,7 +36,7 @@ from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
 from app.web.forms import Choice, EntryForm, entry_forms, group_kinds, group_menu, sub_menu
-from app.web.preview import Preview, preview, times
+from app.web.preview import Parts, Patch, Preview, parts, patch, preview, times
 from app.web.preview import Shown as PreviewShown
 
 
@@ -119,12 +120,23 @@ class Shown:
     per_block: dict[int, float]
     total: float
     _drawing: Preview | None = None
+    _parts: Parts | None = None
 
     def drawing(self) -> Preview:
         """The preview: the SVG and what it holds (blocks with errors, not drawn)."""
         if self._drawing is None:
             self._drawing = preview(self.program, self.problems)
         return self._drawing
+
+    def parts(self) -> Parts | None:
+        """The drawing split for comparing with another version's (preview.parts); None
+        when there is none to compare (nothing drawn, or painted on a canvas)."""
+        drawing = self.drawing()
+        if not drawing.svg or drawing.shown.large:
+            return None
+        if self._parts is None:
+            self._parts = parts(drawing.svg)
+        return self._parts
 
     @property
     def drawn(self) -> PreviewShown | None:
@@ -228,6 +240,20 @@ def changed_rows(old: Shown, new: Shown, first: int, last: int) -> list[Row]:
         if fresh != row(old, number):
             changed.append(fresh)
     return changed
+
+
+def drawing_patch(before: Program, before_version: int, after: Shown) -> Patch | None:
+    """What the page's drawing needs to become `after`'s, when the edit's form says the page
+    shows the drawing of the version the edit started from (`drawn`: static/preview.js sends
+    it; it is `before`, version `before_version`); None when it shows another or none, or
+    either drawing is painted on a canvas: the page then asks for the whole drawing."""
+    if request.form.get("drawn") != str(before_version):
+        return None
+    new = after.parts()
+    old = shown_of(before).parts() if new is not None else None
+    if new is None or old is None:
+        return None
+    return patch(old, new)
 
 
 # -- contexts and rendering ---------------------------------------------------------------------
@@ -368,7 +394,12 @@ def render_list(stored: StoredProgram, entry: Entry) -> tuple[str, int]:
 
 
 def render_reply(
-    before: Program, saved: StoredProgram, entry: Entry, focus: int, in_place: bool
+    before: Program,
+    before_version: int,
+    saved: StoredProgram,
+    entry: Entry,
+    focus: int,
+    in_place: bool,
 ) -> tuple[str, int]:
     """The answer to an edit (htmx): the entry panel, and out of band what changed.
 
@@ -377,14 +408,25 @@ def render_reply(
     edit started from; those are the digests the page sent with the edit (`shown_digests`:
     what the browser shows, whichever worker showed it), else that version's rows (worked
     out here when this process did not show it: under gunicorn the other worker may have).
-    When blocks moved, the whole list page is sent."""
+    When blocks moved, the whole list page is sent.
+
+    The drawing: when the page shows `before`'s (version `before_version`), what changed
+    in it (`drawing_patch`, applied by static/preview.js) and the blocks it leaves out;
+    else a request for the whole new drawing, which follows."""
     shown = shown_of(saved.program)
+    redrawn = drawing_patch(before, before_version, shown)
+    drawing = {
+        "redrawn": redrawn,
+        "drawn_from": before_version,
+        "drawn_shown": shown.drawn if redrawn is not None else None,
+    }
     if not in_place:
         return render_template(
             "editor/_reply.html",
             **_common(saved),
             **list_context(saved, shown, entry, focus),
             **entry_context(saved, entry, shown.problems),
+            **drawing,
             changed=None,
         ), 200
     listing = list_context(saved, shown, entry, focus, rows=False)
@@ -400,5 +442,6 @@ def render_reply(
         **_common(saved),
         **listing,
         **entry_context(saved, entry, shown.problems),
+        **drawing,
         changed=changed,
     ), 200

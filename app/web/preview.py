@@ -9,10 +9,15 @@ with an error never hides the blocks after it. A block whose values the compile 
 take (out of range, missing) is left out in its place. Blocks with errors are drawn as
 problems (red, with their messages); those with nothing to draw are listed beside the
 drawing.
+
+An edit draws only the top-level nodes it changed (the others' drawings are kept, svg.py
+`render(keep=True)`), and its reply sends only what changed in the drawing (`parts`,
+`patch`, below).
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
@@ -66,10 +71,13 @@ class Preview(NamedTuple):
     shown: Shown
 
 
-def preview(program: Program, problems: list[Problem] | None = None) -> Preview:
+def preview(program: Program, problems: list[Problem] | None = None, keep: bool = True) -> Preview:
     """Draw and time `program` as far as it compiles (see the module docstring).
 
-    `problems` are the program's own, when the caller has validated it already.
+    `problems` are the program's own, when the caller has validated it already. `keep`:
+    each top-level node's drawing is kept in this process and drawn from there when it
+    comes again (svg.py `render`), so an edit draws what it changed; False draws it all
+    afresh (the same text).
     """
     if problems is None:
         problems = validate(program)
@@ -90,7 +98,13 @@ def preview(program: Program, problems: list[Problem] | None = None) -> Preview:
                 errors.setdefault(finding.block, []).append(message)
     path = compiled.path
     drawing = render(
-        part.program, path, swept=True, grid=True, embedded_style=False, problems=errors
+        part.program,
+        path,
+        swept=True,
+        grid=True,
+        embedded_style=False,
+        problems=errors,
+        keep=keep,
     )
     result = estimate(path)
     shown = Shown(
@@ -159,3 +173,136 @@ def _drawable(program: Program, problems: list[Problem]) -> _Drawable:
 def _said(field: str | None, message: str) -> str:
     """A block's problem as the drawing says it: `FEEDR Z: 900 ipm is …`."""
     return f"{field}: {message}" if field else message
+
+
+# -- an edit's drawing: what changed ------------------------------------------------------------
+#
+# The page keeps the drawing it shows; an edit's reply carries what differs between it and the
+# new version's (static/preview.js applies it). A drawing (app/cnc/emit/svg.py) is an <svg>
+# holding up to three containers, in this order: <defs> (the patterns LOOPs place), the page
+# <g> (grid, stock, part zero, then each block's drawing in cutting order) and the hole
+# numbers' <g>. Each container's children are compared as text: an edit changes a stretch of
+# them (the edited block's drawing, and the ones after it when its end point moved them), so
+# what differs is the stretch between the first and the last child that differ.
+
+# Every tag of a drawing (the SVG writer's text: no comments, `<` and `>` escaped in text and
+# attribute values).
+_TAG = re.compile(r"<(/?)[^>]*>")
+CONTAINERS = ("defs", "page", "order")
+
+
+def _container(open_tag: str) -> str:
+    """Which container an element of the drawing's top level is (ValueError: none)."""
+    if open_tag == "<defs>":
+        return "defs"
+    for name in ("page", "order"):
+        if open_tag.startswith(f'<g class="{name}"'):
+            return name
+    raise ValueError(f"a drawing's top level holds {open_tag[:40]!r}, not a container")
+
+
+@dataclass(frozen=True, slots=True)
+class Parts:
+    """A drawing split for comparing: the <svg> open tag and, by name, each container's open
+    tag and children's texts (in order)."""
+
+    head: str
+    containers: dict[str, tuple[str, tuple[str, ...]]]
+
+
+def parts(svg: str) -> Parts:
+    """Split a drawing's text (ValueError: not a drawing as svg.py writes one)."""
+    tags = _TAG.finditer(svg)
+    root = next(tags, None)
+    if root is None or not root.group(0).startswith("<svg "):
+        raise ValueError("not an <svg> drawing")
+    containers: dict[str, tuple[str, tuple[str, ...]]] = {}
+    depth = 1
+    open_tag = ""
+    children: list[str] = []
+    start = 0
+    for tag in tags:
+        end = tag.end()
+        if tag.group(1):  # a closing tag
+            depth -= 1
+            if depth == 2:
+                children.append(svg[start:end])
+            elif depth == 1:
+                containers[_container(open_tag)] = (open_tag, tuple(children))
+            elif depth == 0:
+                break
+        elif svg[end - 2] == "/":  # an empty element
+            if depth == 2:
+                children.append(tag.group(0))
+            elif depth == 1:
+                raise ValueError(f"an empty element {tag.group(0)!r} at a drawing's top level")
+        else:
+            if depth == 1:
+                open_tag, children = tag.group(0), []
+            elif depth == 2:
+                start = tag.start()
+            depth += 1
+    if depth != 0:
+        raise ValueError("a drawing not closed")
+    return Parts(root.group(0), containers)
+
+
+@dataclass(frozen=True, slots=True)
+class Change:
+    """One container's change: children `at`…`at + drop` (the page's) give way to `items`
+    (the new drawing's), and the container's open tag becomes `open_tag`; `gone` when the
+    new drawing has no such container (a new one is `at` 0, `drop` 0)."""
+
+    name: str
+    open_tag: str
+    at: int = 0
+    drop: int = 0
+    items: tuple[str, ...] = ()
+    gone: bool = False
+
+    @property
+    def tagged(self) -> str:
+        """The open tag with where the change goes (`data-at`, `data-drop`)."""
+        if self.gone:
+            return self.open_tag[:-1] + ' data-gone="1">'
+        return self.open_tag[:-1] + f' data-at="{self.at}" data-drop="{self.drop}">'
+
+    @property
+    def close_tag(self) -> str:
+        return "</defs>" if self.name == "defs" else "</g>"
+
+
+@dataclass(frozen=True, slots=True)
+class Patch:
+    """What turns one drawing into another: the new <svg> open tag (its extent, the
+    viewBox, changes with the program's) and the containers' changes."""
+
+    head: str
+    changes: tuple[Change, ...]
+
+
+def patch(old: Parts, new: Parts) -> Patch:
+    """What turns drawing `old` into `new`: per container, the stretch of children that
+    differs (none for a container that is the same), in container order."""
+    found = []
+    for name in CONTAINERS:
+        was, now = old.containers.get(name), new.containers.get(name)
+        if now is None:
+            if was is not None:
+                found.append(Change(name, was[0], gone=True))
+            continue
+        open_tag, items = now
+        before = was[1] if was is not None else ()
+        if was is not None and was[0] == open_tag and before == items:
+            continue
+        same = min(len(before), len(items))
+        head = 0
+        while head < same and before[head] == items[head]:
+            head += 1
+        tail = 0
+        while tail < same - head and before[-1 - tail] == items[-1 - tail]:
+            tail += 1
+        found.append(
+            Change(name, open_tag, head, len(before) - head - tail, items[head : len(items) - tail])
+        )
+    return Patch(new.head, tuple(found))

@@ -24,12 +24,21 @@ that brings the tool into each pattern is drawn apart (one path for the whole ru
 first pattern and the others share one drawing; identical drawings are kept once.
 
 Deterministic: fixed decimals, ids `p1`, `p2`… in the order drawings are first made.
+
+Kept per top-level node (`render(keep=True)`, the editor's preview): the compiler hands out
+the same node object for the blocks an edit left alone, so each top-level node's drawing is
+kept by (node, where it is entered, its block numbers' base, what is drawn around it) in a
+bounded memo, as the cycle time keeps its figures (estimate.py), and an edit draws only the
+nodes it changed. The drawing is the same text as one drawn afresh: a kept drawing names its
+`<defs>` patterns by their content (`SHAPE_REF`) and the document numbers them `p1`, `p2`… in
+the order a fresh drawing would first make them.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from html import escape
@@ -40,6 +49,7 @@ import numpy as np
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
+from app.cnc.memo import Memo
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
 from app.cnc.simulate.stock import rounded_out, stock_box
@@ -52,6 +62,10 @@ HOLE_LABELS = 500
 # is large: marks as paths too, and the editor paints it on a canvas (static/preview.js).
 MARKS_AS_ELEMENTS = 2_000
 LARGE_MOVES = 50_000
+
+# A pattern's reference in a drawing's text until the document numbers it: `<<` never occurs
+# in SVG text (escaped text has `&lt;`), the digest is of the pattern's own text.
+SHAPE_REF = re.compile(r"<<([0-9a-f]{16})>>")
 
 STYLE = """
 path:not(.swept), circle, line, rect {{ fill: none; stroke-width: {w}; }}
@@ -133,11 +147,16 @@ def render(
     grid: bool = False,
     embedded_style: bool = True,
     problems: Mapping[int, Sequence[str]] | None = None,
+    keep: bool = False,
 ) -> Drawing:
-    """The drawing of `program` (its compiled `path`, compiled here when not given)."""
+    """The drawing of `program` (its compiled `path`, compiled here when not given).
+
+    `keep`: draw each top-level node the compiler kept from the drawings kept in this
+    process (`KEPT`), and keep those drawn now (the same text either way)."""
     if path is None:
         path = compile_program(program).path
-    return _Painter(program, path, swept, problems or {}).document(grid, embedded_style)
+    painter = _Painter(program, path, swept, problems or {}, KEPT if keep else None)
+    return painter.document(grid, embedded_style)
 
 
 # -- boxes and state -------------------------------------------------------------------------
@@ -204,6 +223,16 @@ class _Body:
     blocks: set[int]
     holes: list[tuple[int, int, int]]  # (x, y, radius) in cutting order (when labelled)
     entry: _Entry | None = None  # drawn apart, when the node is a piece placed by a run
+    # The <defs> patterns the text places, in the order first made: (digest, extent, text),
+    # the <g> written once per pattern by the document.
+    shapes: list[tuple[str, str, str]] = field(default_factory=list)
+
+
+# The drawings of top-level nodes kept between renders (render(keep=True)): (the node, the
+# blocks drawn, their problems, the drawing), weighed by the text's length: 32 MB of text in
+# all, none over a tenth of it.
+_Kept = tuple[object, tuple[int, ...], tuple[object, ...], _Body]
+KEPT: Memo[_Kept] = Memo(rows=32 << 20)
 
 
 @dataclass(slots=True)
@@ -230,25 +259,28 @@ class _Painter:
         path: CompiledPath,
         swept: bool,
         problems: Mapping[int, Sequence[str]],
+        kept: Memo[_Kept] | None = None,
     ) -> None:
         self.program = program
+        self.kept = kept
         self.path = path
         self.units = path.units
         self.unit = path.units.nm
         self.places = path.units.dump_places
         self.swept = swept
         self.problems = problems
-        self.defs: list[str] = []
-        self.shapes: dict[str, str] = {}  # a drawing's text → its id in <defs>
+        self.shapes: dict[str, str] = {}  # a pattern's text → its digest (SHAPE_REF)
         self.bodies: dict[tuple[object, ...], _Body] = {}
         self.digests: dict[int, bytes] = {}
         self.numbers: dict[float, str] = {}
-        holes = _hole_count(path.root)
+        holes = self.holes = _hole_count(path.root)
         self.labelled = holes <= HOLE_LABELS
         # Level of detail: a large drawing draws each block's holes and plunge marks as one
         # path, not an element each (a browser lays out every element of every <use>).
         self.large = len(path) > LARGE_MOVES
         self.merged = self.large or holes > MARKS_AS_ELEMENTS
+        # What else a node's drawing depends on: kept drawings are only for the same.
+        self.context = (swept, self.labelled, self.large, self.merged)
 
     # -- numbers ----------------------------------------------------------------------------
 
@@ -331,20 +363,51 @@ class _Painter:
             return None
         return (digest, shift, "entered at", first, state.tool)
 
-    def sequence(self, nodes: Iterable[Node], state: _State, base: int) -> _Body:
+    def sequence(self, nodes: Iterable[Node], state: _State, base: int, top: bool = False) -> _Body:
+        """`nodes` one after the other; `top`: the program's top-level nodes (kept ones
+        drawn from `self.kept`)."""
         texts: list[str] = []
         body = _Body("", state, _Box(), _Box(), set(), [])
         for child in nodes:
-            part = self.paint(child, state, base)
+            part = self.settled(child, state) if top else self.paint(child, state, base)
             texts.append(part.text)
             body.box.join(part.box)
             body.cut.join(part.cut)
             body.blocks |= part.blocks
             body.holes += part.holes
+            body.shapes += part.shapes
             state = part.exit
         body.text = "".join(texts)
         body.exit = state
         return body
+
+    def settled(self, node: Node, state: _State) -> _Body:
+        """A top-level node: one the compiler kept (a Run placing its node once where it
+        stands, as estimate.py's `_top_level` reads them) drawn from `self.kept` when it was
+        drawn entered the same way with the same problems, else drawn and kept."""
+        if (
+            self.kept is None
+            or not isinstance(node, Run)
+            or node.rep
+            or node.offsets.tolist() != [[0, 0]]
+        ):
+            return self.paint(node, state, 0)
+        key = (id(node.node), node.base, state, self.context)
+        found = self.kept.get(key)
+        if found is not None and found[0] is node.node and found[2] == self.said(found[1]):
+            return found[3]
+        body = self.paint(node.node, state, node.base)
+        blocks = tuple(sorted(body.blocks))
+        # The node is kept with its drawing, so no other node can take its id meanwhile;
+        # weighed by its text and its patterns' (a LOOP's text is mostly <use>s).
+        weight = len(body.text) + sum(len(text) for _, _, text in body.shapes) + 1
+        self.kept.keep(key, (node.node, blocks, self.said(blocks), body), weight)
+        return body
+
+    def said(self, blocks: tuple[int, ...]) -> tuple[object, ...]:
+        """What the problems say of `blocks` (their groups' titles)."""
+        problems = self.problems
+        return tuple((b, tuple(problems[b])) for b in blocks if b in problems)
 
     def run(self, run: Run, state: _State, base: int) -> _Body:
         """A node placed at each of the run's offsets: drawn once, then `<use>`d."""
@@ -357,6 +420,7 @@ class _Painter:
         lo = (min(x for x, _ in offsets), min(y for _, y in offsets))
         hi = (max(x for x, _ in offsets), max(y for _, y in offsets))
         body = _Body("", inner.exit.moved(*offsets[-1]), _Box(), _Box(), set(inner.blocks), [])
+        body.shapes = list(inner.shapes)
         body.box.join(inner.box, lo, hi)
         body.cut.join(inner.cut, lo, hi)
         for dx, dy in offsets:
@@ -395,20 +459,19 @@ class _Painter:
                 else f'<g transform="translate({self.xy(dx, dy)})">{inner.text}</g>'
             )
         elif inner.text:
-            shape = self.shapes.get(inner.text)
-            if shape is None:
-                shape = self.shapes[inner.text] = f"p{len(self.shapes) + 1}"
-                # Its extent (drawing units, tool radius included): what a canvas needs to
-                # paint it once and place the picture (static/preview.js).
-                b = inner.box
-                extent = f"{self.n(b.x0)} {self.n(b.y0)} {self.n(b.x1)} {self.n(b.y1)}"
-                self.defs.append(
-                    f'<g id="{shape}" class="pattern" data-box="{extent}">{inner.text}</g>'
-                )
+            digest = self.shapes.get(inner.text)
+            if digest is None:
+                digest = hashlib.blake2b(inner.text.encode(), digest_size=8).hexdigest()
+                self.shapes[inner.text] = digest
+            # Its extent (drawing units, tool radius included): what a canvas needs to
+            # paint it once and place the picture (static/preview.js).
+            b = inner.box
+            extent = f"{self.n(b.x0)} {self.n(b.y0)} {self.n(b.x1)} {self.n(b.y1)}"
+            body.shapes.append((digest, extent, inner.text))
             texts += [
-                f'<use xlink:href="#{shape}" x="{self.n(dx)}" y="{self.n(dy)}"/>'
+                f'<use xlink:href="#<<{digest}>>" x="{self.n(dx)}" y="{self.n(dy)}"/>'
                 if (dx, dy) != (0, 0)
-                else f'<use xlink:href="#{shape}"/>'
+                else f'<use xlink:href="#<<{digest}>>"/>'
                 for dx, dy in offsets
             ]
         body.text = "".join(texts)
@@ -660,7 +723,12 @@ class _Painter:
     def document(self, grid: bool, embedded_style: bool) -> Drawing:
         start = self.path.start
         state = _State(start[0], start[1], start[2], self.path.initial_tool)
-        body = self.paint(self.path.root, state, 0)
+        root = self.path.root
+        body = (
+            self.sequence(root.nodes, state, 0, top=True)
+            if isinstance(root, Seq)
+            else self.paint(root, state, 0)
+        )
         stock = self.stock(body.cut)
         box = _Box()
         box.join(body.box)
@@ -679,7 +747,13 @@ class _Painter:
             'width="100%" height="100%" '
             f'viewBox="{self.n(x0)} {self.n(-y1)} {self.n(width)} {self.n(height)}">'
         ]
-        defs = list(self.defs)
+        # The patterns in the order a fresh drawing makes them first, numbered so.
+        numbers: dict[str, str] = {}
+        defs: list[str] = []
+        for digest, extent, text in body.shapes:
+            if digest not in numbers:
+                numbers[digest] = f"p{len(numbers) + 1}"
+                defs.append(f'<g id="<<{digest}>>" class="pattern" data-box="{extent}">{text}</g>')
         if embedded_style:
             style = STYLE.format(
                 w=self.n(w),
@@ -711,8 +785,10 @@ class _Painter:
         if self.labelled and body.holes:
             out.append(self.order(body.holes, max(width, height)))
         out.append("</svg>\n")
-        holes = _hole_count(self.path.root)
-        return Drawing("".join(out), frozenset(body.blocks), holes, self.large)
+        text = "".join(out)
+        if numbers:
+            text = SHAPE_REF.sub(lambda m: numbers[m.group(1)], text)
+        return Drawing(text, frozenset(body.blocks), self.holes, self.large)
 
     def stock(self, cut: _Box) -> tuple[float, float, float, float] | None:
         """The program's stock, or the reach of its cuts with the simulation's margin

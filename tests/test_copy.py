@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Sequence
 from decimal import Decimal as D
 from pathlib import Path
 
@@ -125,3 +127,25 @@ def test_copy_in_an_inserted_block_is_refused() -> None:
     )
     with pytest.raises(CopyError, match="COPY 4 COPY is being selected in an inserted data block"):
         execute_copy(program, 2)
+
+
+def test_a_copied_contour_keeps_its_calculated_values_calculated() -> None:
+    """Issue 33: COPY XOF 5 of print-line-tangent-arc's sequence (blocks 1-6). An empty X/Y
+    stays empty in the copy (it failed with a TypeError, None + 5), so the copy's points
+    are calculated from its shifted blocks: its tool path is the original's, 5 in along X."""
+    from app.cnc.interpret import interpret
+    from app.cnc.toolpath import ArcFeed, Feed
+
+    original = golden("print-line-tangent-arc")
+    count = len(original.blocks)
+    copy = Copy(from_block=1, to_block=count, xof=D(5), action=CopyAction.EXEC)
+    program = resolve_copies(dataclasses.replace(original, blocks=(*original.blocks, copy)))
+    assert program.blocks[count + 2].x is None  # type: ignore[attr-defined]
+
+    def cuts(moves: Sequence[object], blocks: range) -> list[tuple[int, int]]:
+        return [(m.x, m.y) for m in moves if isinstance(m, Feed | ArcFeed) and m.block in blocks]
+
+    moves = list(interpret(program).moves)
+    first = cuts(moves, range(1, count + 1))
+    second = cuts(moves, range(count + 1, 2 * count + 1))
+    assert second == [(x + 127_000_000, y) for x, y in first]

@@ -91,10 +91,20 @@ _GCODE_CASES = (
 )
 # POCKET (issue 22) goes to every target as explicit moves: a golden file for each.
 _POCKET_CASES = ("pocket-islands", "pocket-mm", "pocket-loop")
+# Calculated geometry, conrads and chamfers (issue 33): the G-code rs274 referees, and
+# the events with their CR.
+_PRINT_CASES = (
+    "print-line-tangent-arc",
+    "print-arc-tangent-arc-mm",
+    "print-intersections",
+    "print-conrad-chamfer",
+    "print-conrad-chamfer-mm",
+    "print-line-line-mm",
+)
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
-    "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES,
-    "gcode-fanuc": _GCODE_CASES + _POCKET_CASES,
-    "gcode-prototrak": _GCODE_CASES + _POCKET_CASES,
+    "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
+    "gcode-fanuc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
+    "gcode-prototrak": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
     "svg": (
         "loop-nested-3-deep",
         "contour-cut-right",
@@ -102,9 +112,9 @@ REGENERATE_FOR: dict[str, tuple[str, ...]] = {
         "bolt-circle-drill",
         *_POCKET_CASES,
     ),
-    "tape-eia": _TAPE_CASES + _POCKET_CASES,
+    "tape-eia": _TAPE_CASES + _POCKET_CASES + ("print-conrad-chamfer",),
     "tape-ascii": _TAPE_CASES + _POCKET_CASES,
-    "events": _POCKET_CASES,
+    "events": _POCKET_CASES + _PRINT_CASES,
     "punch-eia": ("drill-single", "circle-inside-mm", "frame-in-tan", "stop-and-tool-changes"),
     "punch-ascii": ("drill-single", "tap-metric", "contour-cut-right"),
     "tape-svg": ("drill-single", "pos-basic", "tap-metric"),

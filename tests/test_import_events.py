@@ -19,7 +19,7 @@ from app.cnc.geometry import bolt_circle_points
 from app.cnc.imports import ImportFailure, read_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, Severity
-from app.cnc.toolpath import ArcFeed
+from app.cnc.toolpath import ArcFeed, Feed
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture, with_rpms, xy_path
@@ -167,11 +167,11 @@ def test_2_2_5_report() -> None:
 # N004 G103 XB0 YB-2.45 XE0 YE2.45 about X0 Y0, TC1: CUT RT, the arc counter-clockwise.
 # N005 G101 XB0I YB0I (the begin is where N004 ended) to X-3.064 Y0.5045 with CR0.841 into
 #   N006 G101 to X0 Y-2.45: the Plus rounds the corner. Both lines are straight, so the
-#   fillet is an ARC block of radius 0.841 between the tangent points X-2.1613 Y1.0777 and
+#   fillet is the arc of radius 0.841 between the tangent points X-2.1613 Y1.0777 and
 #   X-2.2943 Y-0.2377 about X-1.7105 Y0.3677 (worked out with the corner's half angle:
-#   tangent length 0.841 / tan(½·angle)), rounded to 0.001 in: the line to X-2.161 Y1.078,
-#   the arc about X-1.711 Y0.368 (the grid point keeping its radii closest) to X-2.294
-#   Y-0.238, the line to X0 Y-2.45.
+#   tangent length 0.841 / tan(½·angle)). It is the first line's CONRAD (issue 33): the
+#   block keeps the corner X-3.064 Y0.504 (0.5045 rounded half-even to 0.001 in) and the
+#   compile rounds it, within 0.001 in of those points (the corner moved 0.0005 in).
 EXPECTED_2_2_6_3 = [
     "DRILL X0 Y0 T1",
     "BOLT CIR DRILL 5 x R1.125 from 225",
@@ -182,9 +182,7 @@ EXPECTED_2_2_6_3 = [
     "DRILL CUT RT X0 Y-2.45 T3",
     "MILL ARC CC XY-CENT X0 Y0 F8",
     "MILL ARC XY-END X0 Y2.45",
-    "MILL STD X-2.161 Y1.078 F8",
-    "MILL ARC CC XY-CENT X-1.711 Y0.368 F8",
-    "MILL ARC XY-END X-2.294 Y-0.238",
+    "MILL STD X-3.064 Y0.504 F8 CONRAD0.841",
     "MILL STD X0 Y-2.45 F8",
 ]
 
@@ -208,6 +206,24 @@ def test_2_2_6_3_imports_to_the_sample_part() -> None:
     assert program.block0.milling is MillingMode.CLIMB
     drill = program.blocks[6]
     assert isinstance(drill, Hole) and drill.comp is Comp.RIGHT
+    finished = dataclasses.replace(
+        program,
+        blocks=tuple(
+            dataclasses.replace(b, comp=Comp.NONE) if b is drill else b for b in program.blocks
+        ),
+    )
+    fillets = [
+        m for m in interpret(with_rpms(finished, {})).moves if getattr(m, "tag", "") == "conrad"
+    ]
+    assert len(fillets) == 1 and isinstance(fillets[0], ArcFeed)
+    fillet = fillets[0]
+    for got, wanted in (
+        (fillet.x, -2.2943),
+        (fillet.y, -0.2377),
+        (fillet.cx, -1.7105),
+        (fillet.cy, 0.3677),
+    ):
+        assert abs(got / 25.4e6 - wanted) <= 0.001
     assert [(t.number, t.diameter) for t in program.block0.tools] == [
         (1, None),
         (2, None),
@@ -346,34 +362,52 @@ def test_g105_that_no_rep_can_make_is_written_out() -> None:
     assert any("a REP steps along one axis per count" in n for n in notes(text))
 
 
-def test_conrad_between_two_lines_is_an_arc_block() -> None:
-    """CR0.5 at the corner X2 Y0 of a line along X and one along Y: tangent points 0.5 from
-    the corner (a right angle), a counter-clockwise quarter about X1.5 Y0.5 — a QCIR."""
+def test_conrad_between_two_lines_is_the_blocks_conrad() -> None:
+    """CR0.5 at the corner X2 Y0 of a line along X and one along Y: the first line's CONRAD;
+    the compile cuts the fillet between the tangent points 0.5 from the corner (a right
+    angle), a counter-clockwise quarter about X1.5 Y0.5."""
     text = (
         "PN1 G20;\nN1 G101 XB0A YB0A XE2.0A YE0A TC0 F10.0 CR0.5 T1;\n"
         "N2 G101 XB2.0A YB0A XE2.0A YE2.0A TC0 F10.0 CR- T1;\n"
     )
-    assert describe_all(events(text)) == [
+    program = events(text)
+    assert describe_all(program) == [
         "DRILL X0 Y0 T1",
-        "MILL STD X1.5 Y0 F10",
-        "MILL QCIR CC X2 Y0.5 F10",
+        "MILL STD X2 Y0 F10 CONRAD0.5",
         "MILL STD X2 Y2 F10",
     ]
+    cuts = [m for m in interpret(with_rpms(program, {})).moves if isinstance(m, Feed | ArcFeed)]
+    inch = 25_400_000
+    assert [(m.x, m.y) for m in cuts] == [
+        (int(1.5 * inch), 0),
+        (2 * inch, inch // 2),
+        (2 * inch, 2 * inch),
+    ]
+    assert isinstance(cuts[1], ArcFeed) and (cuts[1].cx, cuts[1].cy) == (int(1.5 * inch), inch // 2)
+    assert not cuts[1].clockwise
 
 
-def test_conrad_next_to_an_arc_is_reported_and_the_corner_kept() -> None:
+def test_conrad_next_to_an_arc_is_the_arcs_conrad() -> None:
+    """CR0.2 after a quarter arc that ends across the next line (not tangent): the QCIR's
+    CONRAD. At a tangent joint there is no corner: reported, the corner left as it is."""
     text = (
+        "PN1 G20;\nN1 G103 XB1.0A YB0A XE0A YE1.0A XC0A YC0A F10.0 CR0.2 T1;\n"
+        "N2 G101 XB0A YB1.0A XE0A YE2.0A F10.0 CR- T1;\n"
+    )
+    assert describe_all(events(text)) == [
+        "DRILL X1 Y0 T1",
+        "MILL QCIR CC X0 Y1 F10 CONRAD0.2",
+        "MILL STD X0 Y2 F10",
+    ]
+    tangent = (
         "PN1 G20;\nN1 G103 XB1.0A YB0A XE0A YE1.0A XC0A YC0A F10.0 CR0.2 T1;\n"
         "N2 G101 XB0A YB1.0A XE-1.0A YE1.0A F10.0 CR- T1;\n"
     )
-    # The quarter arc is a QCIR, the line a MILL STD: the corner between them stays sharp.
-    assert describe_all(events(text)) == [
-        "DRILL X1 Y0 T1",
-        "MILL QCIR CC X0 Y1 F10",
-        "MILL STD X-1 Y1 F10",
-    ]
+    assert describe_all(events(tangent))[1] == "MILL QCIR CC X0 Y1 F10"
     assert any(
-        "line 2: CR0.2 in next to an arc: the fillet is not imported" in n for n in notes(text)
+        "line 2: CR0.2 in: the corner is tangent (the segments blend), so there is nothing to "
+        "round; the corner stays sharp" in n
+        for n in notes(tangent)
     )
 
 

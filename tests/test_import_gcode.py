@@ -151,8 +151,10 @@ def test_2_2_6_1_imports_to_ten_holes_and_the_contours() -> None:
             if isinstance(block, ArcEnd):
                 assert centre is not None
                 radii.append(round(math.dist((x, y), centre), 3))
+            assert block.x is not None and block.y is not None  # an import gives both
             x, y = block.x, block.y
         elif isinstance(block, MillArc):
+            assert block.x is not None and block.y is not None
             centre = (block.x, block.y)
     # (1.092 for the fillet: its points rounded to 0.001 in; the file's is 1.0910.)
     assert radii == [0.115, 0.115, 0.49, 0.49, 0.5, 0.5, 2.7, 0.25, 1.092, 0.25]

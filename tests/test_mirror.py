@@ -19,6 +19,7 @@ from app.cnc.mirror import Axis, mirror
 from app.cnc.problems import Severity
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid, Toolpath
+from app.cnc.units import to_nm
 from app.cnc.validate import validate
 
 GOLDEN = Path(__file__).parent / "golden"
@@ -33,6 +34,12 @@ CASES = [
     "frame-pocket",
     "frame-out-tan",
     "circle-in-tan",
+    "print-line-tangent-arc",
+    "print-intersections",
+    "print-arc-tangent-arc-mm",
+    "print-conrad-chamfer",
+    "print-conrad-chamfer-mm",
+    "print-line-line-mm",
 ]
 SIGN = {Axis.X: (-1, 1), Axis.Y: (1, -1), Axis.XY: (-1, -1)}
 
@@ -163,3 +170,28 @@ def test_notes_say_what_was_done() -> None:
     assert result.program.name == "contour-cut-right (mirror X)"
     assert "climb and conventional cuts stay as they were" in result.notes[0]
     assert any("runs backwards" in note for note in result.notes)
+
+
+@pytest.mark.parametrize("axis", list(Axis))
+@pytest.mark.parametrize("name", ["print-conrad-chamfer", "print-conrad-chamfer-mm"])
+def test_mirrored_conrads_are_the_reflected_fillets(name: str, axis: Axis) -> None:
+    """Issue 33: calculated points are written typed (to the programming resolution), and
+    run backwards each conrad moves to the block that now ends at its corner: the mirrored
+    program cuts the reflected fillets, each about the reflected centre (within the 0.001 in
+    / 0.01 mm the typed points were rounded to) and of the same radius."""
+    original = load(name)
+    sx, sy = SIGN[axis]
+    step = 2 * to_nm(original.units.resolution, original.units)
+
+    def fillets(program: Program) -> list[tuple[int, int, int]]:
+        return sorted(
+            (m.cx, m.cy, round(math.hypot(m.x - m.cx, m.y - m.cy)))
+            for m in interpret(program).moves
+            if isinstance(m, ArcFeed) and m.tag == "conrad"
+        )
+
+    expected = sorted((sx * cx, sy * cy, r) for cx, cy, r in fillets(original))
+    actual = fillets(mirror(original, axis).program)
+    assert len(actual) == len(expected) == 3
+    for got, wanted in zip(actual, expected, strict=True):
+        assert all(abs(a - b) <= step for a, b in zip(got, wanted, strict=True)), (got, wanted)

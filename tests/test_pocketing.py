@@ -10,7 +10,9 @@ wall (≤ 0.0001 in).
 from __future__ import annotations
 
 import math
+import types
 
+import pyclipper
 import pytest
 import shapely
 from hypothesis import HealthCheck, assume, given, settings
@@ -26,6 +28,7 @@ from app.cnc.pocketing import (
     PocketPlan,
     pass_levels,
     plan_pocket,
+    regions,
 )
 from app.cnc.problems import Severity
 
@@ -533,3 +536,79 @@ def test_generated_pockets_are_cleared_and_not_gouged(
         boundary, islands, tool_radius=r, step_over=step, finish_allowance=allowance
     )
     assert again == result
+
+
+# -- the planner's cost grows with the pocket, not faster (issue 30) ------------------------
+
+
+def island_row(n: int) -> tuple[Path, list[Path]]:
+    """A 2 in tall pocket 1.25 n in long with `n` islands in a row, each with a notch and a
+    bump (arcs) like the hostile corpus's 8-island pocket: twice the islands, twice the
+    boundary, the same offset levels."""
+    w, h = round(1.25 * IN * n), 2 * IN
+    islands = []
+    for k in range(n):
+        x0, y0 = round(1.25 * IN * k + 0.4 * IN), round(0.6 * IN)
+        a, c = round(0.5 * IN), round(0.8 * IN)
+        q, m = c // 8, y0 + c // 2
+        islands.append(
+            Path(
+                (x0, y0),
+                (
+                    Element(10, (x0 + a, y0)),
+                    Element(11, (x0 + a, m - q)),
+                    Element(12, (x0 + a, m + q), centre=(x0 + a, m), clockwise=True),
+                    Element(13, (x0 + a, y0 + c)),
+                    Element(14, (x0, y0 + c)),
+                    Element(15, (x0, m + q)),
+                    Element(16, (x0, m - q), centre=(x0, m)),
+                    Element(17, (x0, y0)),
+                ),
+            )
+        )
+    return rect(0, 0, w, h), islands
+
+
+def clipper_points(monkeypatch: pytest.MonkeyPatch, n: int) -> tuple[int, int]:
+    """(points handed to Clipper, passes) planning `island_row(n)`: the real Clipper, its
+    inputs counted (its work grows with them)."""
+    counted = [0]
+
+    class Clipper(pyclipper.Pyclipper):  # type: ignore[misc]
+        def AddPath(self, path: list[object], *rest: object) -> object:
+            counted[0] += len(path)
+            return super().AddPath(path, *rest)
+
+        def AddPaths(self, paths: list[list[object]], *rest: object) -> object:
+            counted[0] += sum(map(len, paths))
+            return super().AddPaths(paths, *rest)
+
+    class Offset(pyclipper.PyclipperOffset):  # type: ignore[misc]
+        def AddPath(self, path: list[object], *rest: object) -> object:
+            counted[0] += len(path)
+            return super().AddPath(path, *rest)
+
+        def AddPaths(self, paths: list[list[object]], *rest: object) -> object:
+            counted[0] += sum(map(len, paths))
+            return super().AddPaths(paths, *rest)
+
+    module = types.SimpleNamespace(**vars(pyclipper))
+    module.Pyclipper, module.PyclipperOffset = Clipper, Offset
+    monkeypatch.setattr(regions, "pyclipper", module)
+    boundary, islands = island_row(n)
+    result = plan_pocket(boundary, islands, tool_radius=IN // 16, step_over=IN // 10)
+    assert not result.has_errors
+    monkeypatch.undo()
+    return counted[0], len(result.passes)
+
+
+def test_planning_work_grows_linearly_with_the_islands(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 30: the planner's work must grow at most as (boundary + islands) x levels. Twice
+    the islands in a pocket twice as long (the same levels) hands Clipper about twice the
+    points: 1.9x here. Before, every straight move's wall check clipped the whole region
+    (every island), the cleanup moves re-united the whole cut area one by one and the
+    islands were checked against each other pairwise: 2.8x, and worse with each doubling."""
+    four, passes_four = clipper_points(monkeypatch, 4)
+    eight, passes_eight = clipper_points(monkeypatch, 8)
+    assert passes_eight <= 2.2 * passes_four  # the same levels round twice the islands
+    assert eight <= 2.2 * four, f"{four:,} -> {eight:,} points: {eight / four:.2f}x"

@@ -234,6 +234,7 @@ def expected_hole_starts(program: Program) -> list[tuple[int, XY]]:
     starts: list[tuple[int, XY]] = []
 
     def place(block: Pos | Hole | MillLine, ref: XY) -> XY:
+        assert block.x is not None and block.y is not None  # generated programs give both
         x, y = nm(block.x, block.units), nm(block.y, block.units)
         return (ref[0] + x, ref[1] + y) if block.mode is Mode.INC else (x, y)
 

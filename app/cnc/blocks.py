@@ -154,6 +154,10 @@ COMPENSATED = frozenset(
         Rule.COMP_DIVOT,
         Rule.COMP_GOUGE,
         Rule.COMP_ARC_TOO_SMALL,
+        # Calculated geometry, conrads and chamfers (issue 33, app/cnc/solve.py).
+        Rule.UNDER_DETERMINED,
+        Rule.TANGENCY,
+        Rule.CORNER,
     }
 )
 ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL})
@@ -310,6 +314,10 @@ class BoltCircle(Block):
 
 
 MILL_Z_HELP = "empty keeps the depth"
+# Calculated geometry (issue 33, app/cnc/solve.py): a MILL block's X or Y the print does not
+# give is left empty (null) and the compile calculates it.
+CALCULATED_HELP = "empty: calculated from the blocks around it"
+LINE_ANGLE_HELP = "the direction it travels, degrees counter-clockwise from +X (3 o'clock)"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -325,11 +333,15 @@ class MillLine(Block):
         follows=AFTER_MILL,
         findings=COMPENSATED,
     )
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    angle: Decimal | None = prompt("ANGLE", ANGLE, None, prompted=False, help=LINE_ANGLE_HELP)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -353,11 +365,14 @@ class MillQcir(Block):
         findings=COMPENSATED | {Rule.QCIR_CENTRE_LINES},
     )
     direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -378,8 +393,10 @@ class ArcEnd(Block):
         follows=_arc_end("XY-END without its XY-CENT block just before it", "MILL_ARC"),
         findings=COMPENSATED | {Rule.ARC_RADIUS},
     )
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
+    conrad: Decimal | None = prompt("CONRAD", LENGTH, None, positive=True, prompted=False)
+    chamfer: Decimal | None = prompt("CHAMFER", LENGTH, None, positive=True, prompted=False)
 
     @property
     def type_name(self) -> str:
@@ -410,11 +427,13 @@ class MillArc(Block):
         findings=COMPENSATED | {Rule.ARC_RADIUS},
     )
     direction: Direction = prompt("DIRECTION", CHOICE, role=Role.TURN)
-    x: Decimal = prompt("X", LENGTH, role=Role.X)
-    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    x: Decimal | None = prompt("X", LENGTH, role=Role.X, help=CALCULATED_HELP, calculated=True)
+    y: Decimal | None = prompt("Y", LENGTH, role=Role.Y, help=CALCULATED_HELP, calculated=True)
     z_dn: Decimal | None = prompt("Z DN", LENGTH, None, help=MILL_Z_HELP)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    radius: Decimal | None = prompt("RAD", LENGTH, None, positive=True, prompted=False)
+    tangent: bool = prompt("TANGENT", FLAG, False, prompted=False)
 
     @property
     def type_name(self) -> str:

@@ -88,6 +88,7 @@ from app.cnc.units import Units, to_nm
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
 
 Row = tuple[int, int, int, int, int, int, int, int, int, int]
+Calculated = tuple[int, str, Decimal]  # (block number, field name, value)
 
 
 class CompileError(ValueError):
@@ -139,6 +140,7 @@ class NodeResult:
     node: Node
     exit: State
     findings: list[Finding]
+    calculated: list[Calculated]
 
 
 class Cache(Memo[NodeResult]):
@@ -216,6 +218,9 @@ class Compiled:
 
     path: CompiledPath
     findings: tuple[Finding, ...] = ()
+    # The values calculated from the print (issue 33, app/cnc/solve.py): (block, field,
+    # value as the block would hold it), for the editor to show beside the typed ones.
+    calculated: tuple[Calculated, ...] = ()
 
 
 # The nodes every compile in this process shares, and the last few programs compiled:
@@ -308,6 +313,7 @@ class _Compiler:
         self.buffer = _Buffer()
         self.nodes: list[Node] = []  # the nodes of the sequence being compiled
         self.findings: list[Finding] = []
+        self.calculated: list[Calculated] = []
 
     # -- state ----------------------------------------------------------------------------
 
@@ -367,6 +373,7 @@ class _Compiler:
             self.restore(found.exit)
             top.append(Run(found.node, _HERE, first + 1))
             self.findings += [_shifted(f, first + 1) for f in found.findings]
+            self.calculated += [(n + first + 1, name, v) for n, name, v in found.calculated]
         self.base = 0
         last = len(self.blocks)
         self.retract_up(last)
@@ -386,17 +393,18 @@ class _Compiler:
             tools=self.tools,
             root=Seq(top),
         )
-        return Compiled(path, _distinct(self.findings))
+        return Compiled(path, _distinct(self.findings), tuple(sorted(set(self.calculated))))
 
     def compile_top(self, node: object, base: int) -> NodeResult:
         """One top-level node from the current state, blocks relative to `base`."""
         self.base = base
-        saved_findings = self.findings
-        self.findings = []
+        saved_findings, saved_calculated = self.findings, self.calculated
+        self.findings, self.calculated = [], []
         self.run_node(node)
         findings = [_shifted(f, -base) for f in self.findings]
-        result = NodeResult(self.collect(), self.state(), findings)
-        self.findings = saved_findings
+        calculated = [(n - base, name, v) for n, name, v in self.calculated]
+        result = NodeResult(self.collect(), self.state(), findings, calculated)
+        self.findings, self.calculated = saved_findings, saved_calculated
         return result
 
     def take(self) -> Piece:
@@ -568,6 +576,7 @@ class _Compiler:
             self.blocks, self.program.block0, self.program.units, node.drill, node.mills, start
         )
         self.findings += plan.findings
+        self.calculated += [(n, name, v) for (n, name), v in plan.calculated.items()]
         if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
             # Not cut: a span without rows says where it would be (with the programmed
             # contour), so a drawing can show what is left out.

@@ -105,8 +105,14 @@ def _copied(block: Block, copy: Copy) -> Block:
         if value is None or name not in target:
             continue
         if change.prompt.role in (Role.STEP_X, Role.STEP_Y):
-            if block.mode is Mode.ABS and target[name].prompt.role in (Role.X, Role.Y):
-                changes[name] = getattr(block, name) + value
+            current = getattr(block, name)
+            # An empty X/Y stays empty: calculated from the shifted blocks around it.
+            if (
+                block.mode is Mode.ABS
+                and target[name].prompt.role in (Role.X, Role.Y)
+                and current is not None
+            ):
+                changes[name] = current + value
         else:
             changes[name] = value
     values = {name: changes.get(name, getattr(block, name)) for name in target}

@@ -184,7 +184,16 @@ def _block_out(block: Block) -> dict[str, Any]:
     data.update(_fields_out(block))
     for name, _ in kind.fixed:
         del data[name]
+    # Calculated geometry's fields (issue 33) only when set: documents without them read
+    # and write as before.
+    # (`is`: a BOLT CIR's angle 0 or a line's ANGLE 0 is a value, though 0 == False.)
+    for name in _BLOCK_WHEN_SET:
+        if name in data and (data[name] is None or data[name] is False):
+            del data[name]
     return data
+
+
+_BLOCK_WHEN_SET = ("angle", "radius", "tangent", "conrad", "chamfer")
 
 
 # A tool's fields written only when set (its name, and the copy of the crib tool it was

@@ -94,6 +94,8 @@ class Prompt:
     it keeps its default (the editor does not ask for it). `changes`: on COPY, the field of
     the copied blocks this value replaces (or, for a STEP, adds to in absolute blocks).
     `prompted`: False for fields the entry form does not ask for one by one.
+    `calculated`: the field may be left empty and the compile calculates it from the blocks
+    around it (a contour's X/Y from the print, app.cnc.solve).
     """
 
     label: str
@@ -108,6 +110,7 @@ class Prompt:
     only_when: tuple[tuple[str, Any], ...] = ()
     changes: str = ""
     prompted: bool = True
+    calculated: bool = False
 
 
 def prompt(label: str, value: Value, default: Any = dataclasses.MISSING, **details: Any) -> Any:
@@ -206,8 +209,11 @@ class Field:
 
     @property
     def required(self) -> bool:
-        """The entry form asks for a value (a field whose default is None may stay empty)."""
-        return not self.optional and self.prompt.value is not Value.FLAG
+        """The entry form asks for a value (a field whose default is None may stay empty,
+        and one the compile calculates)."""
+        return (
+            not self.optional and self.prompt.value is not Value.FLAG and not self.prompt.calculated
+        )
 
 
 def _fields_of(cls: type) -> tuple[Field, ...]:

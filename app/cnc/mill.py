@@ -108,6 +108,8 @@ class Element:
     """One piece of a path: a line to `end`, or an arc to `end` about `centre`.
 
     `z_dn` is the programmed depth of a contour block (None: keep the current depth).
+    `corner` is, for a conrad or chamfer (`tag`) inserted by app.cnc.solve.corners, the
+    sharp corner it rounds (the events writer writes a conrad as CR at that corner).
     """
 
     block: int
@@ -116,6 +118,7 @@ class Element:
     clockwise: bool = False
     tag: str = ""
     z_dn: int | None = None
+    corner: Pt | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -873,6 +876,8 @@ class SequencePlan:
     pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
     routine: Routine | None = None  # a CIRCLE/FRAME routine's size and direction
     outlines: tuple[tuple[str, Path], ...] = ()  # a POCKET's contours, by name
+    # Values calculated from the print (app.cnc.solve): (block number, field) → value.
+    calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
 
 
 def plan_sequence(
@@ -904,13 +909,18 @@ def plan_sequence(
         return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
-    path, numbers, end = programmed_contour(blocks, mills, start, findings, depth)
+    calculated: dict[tuple[int, str], Decimal] = {}
+    path, numbers, end = programmed_contour(
+        blocks, mills, start, findings, depth, calculated=calculated
+    )
     if any(f.severity is Severity.ERROR for f in findings):
-        return SequencePlan([], 0, end, findings, path)
+        return SequencePlan([], 0, end, findings, path, calculated=calculated)
     if drill.comp is Comp.NONE or diameter is None:
-        return SequencePlan([path], 0, end, findings, path)
+        return SequencePlan([path], 0, end, findings, path, calculated=calculated)
     geometry = compensate(path, drill.comp, float(radius), numbers, drill.units)
-    return SequencePlan([geometry.path], 0, end, findings + geometry.findings, path)
+    return SequencePlan(
+        [geometry.path], 0, end, findings + geometry.findings, path, calculated=calculated
+    )
 
 
 INSIDE_PLACEMENTS = (Placement.INSIDE, Placement.IN_TAN, Placement.POCKET)
@@ -1024,8 +1034,15 @@ def programmed_contour(
     start: tuple[int, int],
     findings: list[Finding] | None = None,
     depth: int | None = None,
+    *,
+    with_corners: bool = True,
+    calculated: dict[tuple[int, str], Decimal] | None = None,
 ) -> tuple[Path, list[int], tuple[int, int]]:
     """The finished contour of line, quarter-circle and arc blocks from `start` (nm).
+
+    Empty coordinates, tangencies and radii are solved first (app.cnc.solve: the values
+    it calculates go into `calculated`); conrads and chamfers are inserted last
+    (`with_corners`), tagged with the block of their corner.
 
     Returns the path, the block number of each element, and the end point. What is wrong
     with the geometry is appended to `findings`: a quarter circle whose moves are not equal
@@ -1034,7 +1051,19 @@ def programmed_contour(
     nowhere (warning). `depth` (nm) is the depth the tool is at when the contour starts
     (the DRILL's Z DN): a MILL STD to a new Z DN is a plunge, not a zero-length cut.
     """
+    from app.cnc import solve  # solve builds on this module's geometry
+
     found: list[Finding] = [] if findings is None else findings
+    solution = None
+    if solve.needs_solving(blocks, mills):
+        # Calculated geometry (issue 33): solved once, here, where every reader of a
+        # contour gets it; what cannot be solved leaves the contour uncut.
+        solution = solve.solve_contour(blocks, mills, start)
+        found += solution.findings
+        if calculated is not None:
+            calculated.update(solution.calculated)
+        if solution.failed:
+            return Path(_f(start), ()), [], start
     reference = start
     elements: list[Element] = []
     numbers: list[int] = []
@@ -1046,7 +1075,10 @@ def programmed_contour(
         number = index + 1
         units = block.units
         z_dn = None if block.z_dn is None else to_nm(block.z_dn, units)
-        end = resolve_xy(block.x, block.y, block.mode, units, reference)
+        if solution is not None:
+            end = solution.ends[index]
+        else:
+            end = resolve_xy(*_typed(block), block.mode, units, reference)
         centre: tuple[int, int] | None = None
         clockwise = False
         if isinstance(block, MillQcir):
@@ -1069,8 +1101,11 @@ def programmed_contour(
         elif isinstance(block, MillArc):
             end_block = blocks[index + 1]
             assert isinstance(end_block, ArcEnd)
-            centre = end
-            end = resolve_xy(end_block.x, end_block.y, end_block.mode, end_block.units, reference)
+            if solution is not None:
+                centre = solution.centres[index]
+            else:
+                centre = end
+                end = resolve_xy(*_typed(end_block), end_block.mode, end_block.units, reference)
             clockwise = block.direction is Direction.CW
             if z_dn is not None:
                 depth = z_dn
@@ -1153,7 +1188,18 @@ def programmed_contour(
         )
         numbers.append(number)
         reference = end
-    return Path(_f(start), tuple(elements)), numbers, reference
+    path = Path(_f(start), tuple(elements))
+    if with_corners:
+        path, numbers = solve.corners(path, numbers, blocks, found)
+    return path, numbers, reference
+
+
+def _typed(block: Block) -> tuple[Decimal, Decimal]:
+    """A contour block's X and Y as typed (both given: nothing was left to calculate)."""
+    x: Decimal | None = getattr(block, "x")  # noqa: B009 - every contour block has x and y
+    y: Decimal | None = getattr(block, "y")  # noqa: B009
+    assert x is not None and y is not None, "an empty X/Y is solved first (app.cnc.solve)"
+    return x, y
 
 
 def true_arc(start: Pt, end: Pt, centre: Pt, units: Units) -> tuple[Pt, Pt | None]:

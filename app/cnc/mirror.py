@@ -204,6 +204,21 @@ def _contour(
         assert point is not None
         segments.append((block, point, centre, None))
         k += 1
+    # Every point is written typed (to the block's resolution): tangency and radius have
+    # nothing left to solve. Run backwards, a corner's conrad or chamfer moves to the
+    # segment that now ends there (the one after it).
+    corners = [_corner_of(b, e) for b, _, _, e in segments]
+    if reverse:
+        corners = [(None, None), *corners[:-1]]
+    segments = [
+        (
+            _as_typed(piece, corners[i] if arc_end is None else (None, None)),
+            point,
+            centre,
+            None if arc_end is None else _as_typed(arc_end, corners[i]),
+        )
+        for i, (piece, point, centre, arc_end) in enumerate(segments)
+    ]
     if not reverse:
         plan: list[tuple[Block, XY | None]] = [(blocks[drill], m(start))]
         for piece, point, centre, arc_end in segments:
@@ -253,15 +268,28 @@ def table_position(blocks: tuple[Block, ...]) -> XY:
 
 def _walk(blocks: tuple[Block, ...]) -> tuple[list[tuple[XY | None, XY | None]], XY]:
     from app.cnc.mill import qcir_centre
+    from app.cnc.solve import needs_solving, solve_contour
 
     reference: XY = (0, 0)
     found: list[tuple[XY | None, XY | None]] = []
+    # The points of a contour calculated from the print (app.cnc.solve), by block index.
+    solved: dict[int, XY] = {}
     for index, block in enumerate(blocks):
         kind = REGISTRY.of(block)
         if kind.positioned:
             roles = _roles(block, Role.X, Role.Y)
             x, y = (getattr(block, _name(roles, role)) for role in (Role.X, Role.Y))
-            point = resolve_xy(x, y, block.mode, block.units, reference)
+            if index in solved:
+                point = solved[index]
+            elif x is None or y is None:
+                point = reference  # not solved: its sequence has an error (validation's)
+            else:
+                point = resolve_xy(x, y, block.mode, block.units, reference)
+            if starts_mill_sequence(blocks, index):
+                mills = tuple(range(index + 1, mill_sequence_end(blocks, index)))
+                if needs_solving(blocks, mills):
+                    solution = solve_contour(blocks, mills, point)
+                    solved.update(_solved_points(blocks, solution.ends, solution.centres))
             centre = None
             if isinstance(block, MillQcir):
                 centre = qcir_centre(reference, point, block.direction)
@@ -280,6 +308,41 @@ def _walk(blocks: tuple[Block, ...]) -> tuple[list[tuple[XY | None, XY | None]],
         else:
             found.append((None, None))
     return found, reference
+
+
+def _solved_points(
+    blocks: tuple[Block, ...], ends: dict[int, XY], centres: dict[int, XY]
+) -> dict[int, XY]:
+    """The point each contour block stands for, from a solution: a line's or QCIR's end, an
+    arc's centre (its XY-CENT block) and end (its XY-END block)."""
+    points: dict[int, XY] = {}
+    for index, end in ends.items():
+        if REGISTRY.of(blocks[index]).xy_is_centre:
+            points[index] = centres[index]
+            points[index + 1] = end
+        else:
+            points[index] = end
+    return points
+
+
+def _as_typed(block: Block, corner: tuple[Decimal | None, Decimal | None]) -> Block:
+    """A contour block with every point typed (the mirror writes them all): no tangency or
+    radius left to solve, and the conrad or chamfer of the corner at its end."""
+    names = {f.name for f in REGISTRY.fields(type(block))}
+    changes: dict[str, Any] = {
+        name: value
+        for name, value in (("tangent", False), ("angle", None), ("radius", None))
+        if name in names
+    }
+    if "conrad" in names:
+        changes["conrad"], changes["chamfer"] = corner
+    return dataclasses.replace(block, **changes) if changes else block
+
+
+def _corner_of(block: Block, arc_end: Block | None) -> tuple[Decimal | None, Decimal | None]:
+    """The conrad and chamfer at the end of a segment (an arc's: on its XY-END)."""
+    holder = arc_end if arc_end is not None else block
+    return getattr(holder, "conrad", None), getattr(holder, "chamfer", None)
 
 
 def _encode(plan: list[tuple[Block, XY | None]], units: Units) -> list[Block]:

@@ -102,6 +102,8 @@ TAGS: tuple[str, ...] = (
     "step-over",
     "corner",
     "divot",
+    "conrad",  # a corner radius the program asks for (app.cnc.solve.corners)
+    "chamfer",
 )
 TAG = {name: k for k, name in enumerate(TAGS)}
 

@@ -98,6 +98,9 @@ class Rule(enum.Enum):
     TAP_FEED = "tap-feed"
     TAP_HAND = "tap-hand"
     TOO_LARGE = "too-large"
+    UNDER_DETERMINED = "under-determined"
+    TANGENCY = "tangency"
+    CORNER = "corner"
 
 
 @dataclass(frozen=True, slots=True)

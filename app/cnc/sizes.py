@@ -103,8 +103,9 @@ the user's own files (`--max-moves`)."""
 
 MAX_POCKET_WORK = 200_000
 """Points one POCKET's planning may shrink: the points its contours are drawn with, times
-its levels (one per step-over across it). The planner offsets the whole region once per
-level with Clipper, whose time grows with both (docs/security.md, "Pockets")."""
+its levels (one per step-over across it). The planner offsets the contours once per level
+and asks its questions of what is near each ring, so its time grows with both
+(docs/pocketing.md, "Cost"; docs/security.md, "Pockets")."""
 
 _MOVE_LIMIT: ContextVar[int] = ContextVar("millblocks_move_limit", default=MAX_MOVES)
 

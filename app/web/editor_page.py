@@ -27,6 +27,7 @@ from typing import Any
 from flask import render_template, request
 
 from app.cnc.blocks import Block, Mode, Program, open_loops
+from app.cnc.compiler import compile_program
 from app.cnc.crib import feed_offers
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
@@ -35,7 +36,15 @@ from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
 from app.storage.library import StoredProgram
-from app.web.forms import Choice, EntryForm, entry_forms, group_kinds, group_menu, sub_menu
+from app.web.forms import (
+    Choice,
+    EntryForm,
+    entry_forms,
+    extra_fields,
+    group_kinds,
+    group_menu,
+    sub_menu,
+)
 from app.web.preview import Parts, Patch, Preview, parts, patch, preview, times
 from app.web.preview import Shown as PreviewShown
 
@@ -87,7 +96,8 @@ _SUMMARIES: ByObject[str] = ByObject()
 
 def _summary(block: Block) -> str:
     parts = []
-    for f in REGISTRY.prompted(type(block), REGISTRY.sub_kind_of(block)):
+    sub = REGISTRY.sub_kind_of(block)
+    for f in (*REGISTRY.prompted(type(block), sub), *extra_fields(type(block), sub)):
         value = getattr(block, f.name)
         if value is None or value is False:
             continue
@@ -302,6 +312,7 @@ def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) 
                 p for p in problems if p.block == number and p.field == label
             ]
     groups = group_menu(program, entry.at, entry.loop, entry.stop)
+    calculated = calculated_values(program, entry.at, kind) if entry.editing else {}
     menus: dict[str, list[Choice]] = {}
     if not entry.editing and not entry.kind and not entry.group:
         # The sub-type menus go with the type menu: the page shows them without a request.
@@ -322,7 +333,24 @@ def entry_context(stored: StoredProgram, entry: Entry, problems: list[Problem]) 
         "offered": not entry.editing and not entry.errors and not entry.message,
         "in_loop": open_loops(program.blocks, entry.at - 1) > 0,
         "feed_offers": _feed_offers(program, kind),
+        "calculated": calculated,
     }
+
+
+def calculated_values(program: Program, at: int, kind: EntryForm | None) -> dict[str, str]:
+    """The values of block `at` (and of its XY-END) the compile calculated from the print
+    (app.cnc.solve), by form field, to 0.0001 in / 0.001 mm: the form shows them where
+    nothing is typed."""
+    if kind is None or not 1 <= at <= len(program.blocks):
+        return {}
+    found = {}
+    names = {spec.name for spec in kind.fields}
+    for number, name, value in compile_program(program).calculated:
+        field = name if number == at else "end_" + name if number == at + 1 else ""
+        if field in names:
+            units = program.blocks[number - 1].units
+            found[field] = f"{value.quantize(Decimal(1).scaleb(-units.dump_places)):f}"
+    return found
 
 
 def _feed_offers(program: Program, kind: EntryForm | None) -> dict[str, dict[str, str]]:

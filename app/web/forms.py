@@ -55,6 +55,7 @@ class EntryForm:
     loopable: bool = False
     stoppable: bool = True
     menu: int = 0  # its number in the group's menu (0: not in a menu)
+    extras: tuple[FieldSpec, ...] = ()  # beside the prompts (extra_fields)
 
 
 def _enum_of(cls: type, name: str) -> type[enum.Enum] | None:
@@ -83,12 +84,15 @@ def _form(cls: type[Block], sub: SubKind) -> EntryForm:
     kind = REGISTRY.kind(cls)
     parts = [(cls, "")] + ([(sub.then, "end_")] if sub.then is not None else [])
     specs = []
+    extras = []
     for part, prefix in parts:
         suffix = f" ({REGISTRY.kind(part).part})" if sub.then is not None else ""
         follower = SubKind("", "", "") if prefix else sub
         for f in REGISTRY.prompted(part, follower):
             xy = f.prompt.role in (Role.X, Role.Y)
             specs.append(_spec(part, f, prefix + f.name, f.label + (suffix if xy else "")))
+        for f in extra_fields(part, follower):
+            extras.append(_spec(part, f, prefix + f.name, f.label + (suffix if prefix else "")))
     return EntryForm(
         sub.key,
         sub.title,
@@ -98,6 +102,22 @@ def _form(cls: type[Block], sub: SubKind) -> EntryForm:
         kind.loopable,
         kind.stoppable or sub.then is not None,
         sub.menu,
+        tuple(extras),
+    )
+
+
+def extra_fields(cls: type[Block], sub: SubKind) -> tuple[Field, ...]:
+    """The fields a block may carry beside its prompts (a contour's TANGENT, RAD, CONRAD
+    and CHAMFER from the print, issue 33): shown after the prompts, outside the Enter
+    sequence the control's prompts keep."""
+    fixed = dict(sub.fixed)
+    return tuple(
+        f
+        for f in REGISTRY.fields(cls)
+        if not f.prompt.prompted
+        and f.name not in COMMON
+        and f.name not in fixed
+        and f.prompt.value in (Value.LENGTH, Value.ANGLE, Value.FLAG)
     )
 
 
@@ -203,8 +223,9 @@ def field_values(block: Block, following: Block | None = None) -> dict[str, str]
     values = {f.name: _text(getattr(block, f.name)) for f in REGISTRY.fields(type(block))}
     then = REGISTRY.sub_kind_of(block).then
     if then is not None and isinstance(following, then):
+        extras = {f.name for f in extra_fields(then, SubKind("", "", ""))}
         for f in REGISTRY.fields(then):
-            if f.prompt.prompted:
+            if f.prompt.prompted or f.name in extras:
                 values["end_" + f.name] = _text(getattr(following, f.name))
     return values
 
@@ -355,6 +376,11 @@ def parse_block(kind_key: str, form: Mapping[str, str]) -> Parsed:
         if error:
             errors[spec.name] = f"{spec.label}: {error}"
         values[spec.name] = value
+    for spec in entry.extras:
+        value, error = _read(spec, form.get(spec.name, "").strip())
+        if error:
+            errors[spec.name] = f"{spec.label}: {error}"
+        values[spec.name] = value
     if errors:
         return Parsed([], errors)
     return Parsed(build(kind_key, values, form), {})
@@ -396,11 +422,12 @@ def _own(
     enum; a field the form does not prompt (COPY's EXEC/CANCEL) from its button."""
     own: dict[str, Any] = {}
     prompted = {f.name for f in REGISTRY.prompted(cls, sub)}
+    prompted |= {f.name for f in extra_fields(cls, sub)}
     for f in REGISTRY.fields(cls):
         if f.name in COMMON or f.name in dict(sub.fixed):
             continue
         if f.name in prompted:
-            value = values[prefix + f.name]
+            value = values.get(prefix + f.name)
         elif not f.prompt.prompted and f.prompt.value is Value.CHOICE:
             value = form.get(prefix + f.name, "")
         else:

@@ -187,11 +187,17 @@ def describe(block: Block) -> str:
         return f"{head} {block.holes} x R{n(block.radius)} from {n(block.angle)}"
     if isinstance(block, Pos):
         return f"{head} X{n(block.x)} Y{n(block.y)} T{block.tool}"
+    # Calculated geometry (issue 33), shown only when set.
+    extra = "".join(
+        f" {label}{n(getattr(block, name))}"
+        for name, label in (("radius", "RAD"), ("conrad", "CONRAD"), ("chamfer", "CHAMFER"))
+        if getattr(block, name, None) is not None
+    ) + (" TANGENT" if getattr(block, "tangent", False) else "")
     if isinstance(block, MillLine | MillQcir | MillArc):
         depth = "" if block.z_dn is None else f" Z{n(block.z_dn)}"
-        return f"{head} X{n(block.x)} Y{n(block.y)}{depth} F{n(block.feed_xy)}"
+        return f"{head} X{n(block.x)} Y{n(block.y)}{depth} F{n(block.feed_xy)}{extra}"
     if isinstance(block, ArcEnd):
-        return f"{head} X{n(block.x)} Y{n(block.y)}"
+        return f"{head} X{n(block.x)} Y{n(block.y)}{extra}"
     if isinstance(block, Rep):
         return f"{head} X{n(block.x)} Y{n(block.y)} NX{block.nx} NY{block.ny}"
     if isinstance(block, Circle):

@@ -244,9 +244,21 @@ class Builder:
             kept = self.arc_kept(start, here, e, end, centre, u)
             if kept == "drop":
                 continue
+            conrad = (
+                None if not e.conrad else decimal_of(self.length(e.conrad, u, e.line, "CONRAD"), u)
+            )
             if centre is None or kept == "line":
                 self.blocks.append(
-                    MillLine(x=x, y=y, z_dn=z_dn, feed_xy=feed, tool=tool, mode=mode, units=u)
+                    MillLine(
+                        x=x,
+                        y=y,
+                        z_dn=z_dn,
+                        feed_xy=feed,
+                        tool=tool,
+                        mode=mode,
+                        units=u,
+                        conrad=conrad,
+                    )
                 )
             else:
                 direction = Direction.CW if e.clockwise else Direction.CCW
@@ -262,6 +274,7 @@ class Builder:
                             tool=tool,
                             mode=mode,
                             units=u,
+                            conrad=conrad,
                         )
                     )
                     here = end
@@ -279,7 +292,7 @@ class Builder:
                         units=u,
                     )
                 )
-                self.blocks.append(ArcEnd(x=x, y=y, mode=mode, units=u))
+                self.blocks.append(ArcEnd(x=x, y=y, mode=mode, units=u, conrad=conrad))
             here = end
         if op.stop:
             self.blocks[-1] = replace(self.blocks[-1], stop=True)

@@ -61,7 +61,9 @@ class HoleOpR:
 class Element:
     """A cut of a mill sequence: a line to `end`, or an arc about `centre`.
 
-    `z_dn` is a new depth the head feeds to before this cut (None: keep the depth).
+    `z_dn` is a new depth the head feeds to before this cut (None: keep the depth);
+    `conrad` the corner radius into the next cut (nm; None: a sharp corner), as the events'
+    CR gives it.
     """
 
     line: int
@@ -70,6 +72,7 @@ class Element:
     clockwise: bool
     z_dn: int | None
     feed: int
+    conrad: int | None = None
 
 
 @dataclass

@@ -186,6 +186,9 @@ def island_problems(
                 )
             )
         for j in range(k, len(islands)):
+            a, b = regions.box_of(grown[k - 1]), regions.box_of([islands[j]])
+            if a is None or b is None or a[0] > b[2] or b[0] > a[2] or a[1] > b[3] or b[1] > a[3]:
+                continue  # apart: islands far from each other are not clipped pairwise
             if regions.area(regions.intersection(grown[k - 1], [islands[j]])) > tolerance**2:
                 found.append(
                     _finding(

@@ -14,7 +14,6 @@ carrier), the caller keeps the polyline ring, within the stated chordal toleranc
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -38,9 +37,8 @@ from app.cnc.mill import (
     tangent,
     unit,
 )
-from app.cnc.pocketing.regions import Ring
-
-TURN_EPS = 1e-9  # a turn (sine of the angle) smaller than this is a tangent joint
+from app.cnc.pocketing import nearest
+from app.cnc.pocketing.regions import TURN_EPS, Ring
 
 
 @dataclass(frozen=True)
@@ -337,7 +335,7 @@ def exact_ring(
         window = [points[(first + j) % n] for j in range(length + 1)]
         after = points[(first + length + 1) % n]
         meet = _junction(level[label], level[nxt_label], window[-1], after, tolerance)
-        if meet is None or _polyline_distance(meet, [*window, after]) > 4 * tolerance:
+        if meet is None or nearest.polyline_distance(meet, [*window, after]) > 4 * tolerance:
             return None
         junctions.append(meet)
     elements: list[Element] = []
@@ -375,8 +373,18 @@ def _checked(
     used: list[Carrier],
 ) -> ExactRing | None:
     for group, element, start in zip(groups, elements, starts, strict=True):
-        for p in group:
-            if distance_to_element(p, start, element) > 2 * tolerance:
+        if not group:
+            continue
+        # numpy bounds the exact distance of every point at once; only a point whose
+        # bounds straddle the limit (beside an arc's end) is measured exactly.
+        lower, upper = nearest.bounds(
+            np.asarray(group, dtype=np.float64), nearest.table([start], [element])
+        )
+        if (lower[:, 0] > 2 * tolerance + nearest.MARGIN).any():
+            return None
+        unsure = np.flatnonzero(upper[:, 0] > 2 * tolerance - nearest.MARGIN).tolist()
+        for i in unsure:
+            if distance_to_element(group[i], start, element) > 2 * tolerance:
                 return None
     sources = tuple(sorted({s for c in used for s in c.sources}))
     return ExactRing(path, sources)
@@ -447,15 +455,6 @@ def _junction(a: Carrier, b: Carrier, near: Pt, after: Pt, tolerance: float) -> 
     ):
         return touch
     return None
-
-
-def _polyline_distance(p: Pt, points: list[Pt]) -> float:
-    if len(points) == 1:
-        return math.dist(p, points[0])
-    best = math.inf
-    for a, b in itertools.pairwise(points):
-        best = min(best, distance_to_element(p, a, Element(0, b)))
-    return best
 
 
 def matched_sources(

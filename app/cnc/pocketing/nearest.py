@@ -130,6 +130,19 @@ def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> 
     ends = np.concatenate(
         [np.roll(np.asarray(r, dtype=np.float64).reshape(-1, 2), -1, axis=0) for r in rings]
     )
+    return _to_segments(point, starts, ends)
+
+
+def polyline_distance(point: Pt, points: Sequence[Pt]) -> float:
+    """The distance from `point` to the open polyline through `points` (one point: to it),
+    as `mill.distance_to_element` measures each segment."""
+    at = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    if len(at) == 1:
+        return math.dist(point, points[0])
+    return float(_to_segments(point, at[:-1], at[1:]).min())
+
+
+def _to_segments(point: Pt, starts: Array, ends: Array) -> Array:
     d = ends - starts
     denom = (d * d).sum(axis=1)
     q = np.array(point) - starts

@@ -27,6 +27,7 @@ The readings we chose (docs/pocketing.md):
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -111,7 +112,7 @@ def plan_pocket(
     if _errors(findings):
         return PocketPlan((), tuple(findings), t)
     region = regions.difference([rings[0]], rings[1:])
-    levels = _levels(region, r, float(step_over), float(finish_allowance), t)
+    levels = _levels(contours, r, float(step_over), float(finish_allowance), t)
     if levels is None:
         findings.append(_too_many_levels(step_over, units))
         return PocketPlan((), tuple(findings), t)
@@ -194,11 +195,19 @@ class _Planner:
     _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
     _sweeps: dict[Path, list[regions.Ring]] = field(default_factory=dict)
+    _narrow_sweeps: dict[Path, list[regions.Ring]] = field(default_factory=dict)
     _pieces: dict[tuple[int, int], list[regions.Ring]] = field(default_factory=dict)
     _tables: dict[int, tuple[Path, nearest.Elements]] = field(default_factory=dict)
 
+    _move_boxes: list[regions.Box | None] = field(default_factory=list)
+
     def __post_init__(self) -> None:
         self.cleared = self._index()
+        self._move_boxes = [regions.box_of([ring]) for ring in self.moves]
+
+    def _inside(self, a: Pt, b: Pt) -> bool:
+        """True when the tool may feed straight from `a` to `b` (clear of every wall)."""
+        return regions.segment_inside(self.moves, a, b, self._move_boxes)
 
     def _index(self) -> regions.SweptIndex:
         # Cells of two tool diameters: a link's question reads a few of them.
@@ -273,7 +282,7 @@ class _Planner:
             at = (float(deep[0]), float(deep[1]))
             if here is None:
                 path = rotate(ring, at)
-            if at != path.start and regions.segment_inside(self.moves, at, path.start):
+            if at != path.start and self._inside(at, path.start):
                 return Link(kind, Path(at, (Element(self.block, path.start, tag="link"),))), path
             return Link(kind, Path(path.start, ())), path
         direct = rotate(ring, here)
@@ -300,7 +309,7 @@ class _Planner:
         diameter."""
         if math.dist(a, b) < 1.0:
             return LinkKind.CLEARED
-        if not regions.segment_inside(self.moves, a, b):
+        if not self._inside(a, b):
             return None
         move = Path(a, (Element(self.block, b, tag="link"),))
         if self._through_cleared(move, then):
@@ -343,15 +352,19 @@ class _Planner:
         read (`SweptIndex`): the answer is the same, at the cost of the place, not of
         every pass so far."""
         assert self.cleared is not None
-        swept = self._swept(move)
-        box = regions.box_of(swept)
-        if box is None:
+        # The move swept by a radius a tolerance short of the tool's: the chords of a move
+        # along a pass and of the pass differ by that much. One boolean operation takes
+        # the swept area less everything cut near it (united as it is subtracted).
+        swept = self._narrow_sweeps.get(move)
+        if swept is None:
+            swept = regions.sweep_lines([self._path_points(move)], self.r - self.t, self.t)
+            self._narrow_sweeps[move] = swept
+        if not swept:
             return True
-        # Grown by the tolerance straight from the overlapping sweeps: the offset unites
-        # them as it grows them.
-        near = self.cleared.near(box, [self._path_points(then)])
-        done = regions.offset(near, self.t, self.t)
-        extra = regions.difference(swept, done)
+        near = self.cleared.near(
+            self.cleared.boxes(self._path_points(move)), [self._path_points(then)]
+        )
+        extra = regions.difference(swept, near)
         return not regions.thicker_than(extra, RESIDUE_NM, self.t)
 
     def clean_up(self, opening: list[regions.Ring]) -> int:
@@ -359,10 +372,10 @@ class _Planner:
         material are left that no move could reach (0 normally)."""
         swept = regions.union(*(self._swept(p.path) for p in self.passes))
         swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
+        residue = regions.difference(opening, swept)
         unreachable: list[Pt] = []
         for _ in range(MAX_CLEANUPS):
             sizes.spend()
-            residue = regions.difference(opening, swept)
             pieces = [
                 c
                 for c in regions.components(residue)
@@ -376,12 +389,18 @@ class _Planner:
                     targets.append(target)
             if not targets:
                 return len(pieces)
+            spikes = []
             for target in targets:
                 spike = self._spike(target)
                 if spike is None:
                     unreachable.append(target)
-                    continue
-                swept = regions.union(swept, regions.sweep_lines([spike], self.r, self.t))
+                else:
+                    spikes.append(spike)
+            # What is left: the pieces wide enough to chase less what this round's moves
+            # sweep, not the whole pocket less everything swept again (a narrow piece stays
+            # narrow; the cusps of a many-island pocket are hundreds).
+            kept = [ring for piece in pieces for ring in piece.rings]
+            residue = regions.difference(kept, regions.sweep_lines(spikes, self.r, self.t))
         return 0
 
     def _reachable(self, p: IPtF) -> Pt:
@@ -429,7 +448,7 @@ class _Planner:
             candidates.append((math.dist(q, target), i, j, q))
         candidates.sort()
         for _, i, j, q in candidates[:12]:
-            if regions.segment_inside(self.moves, q, target):
+            if self._inside(q, target):
                 made = self.passes[i]
                 self.passes[i] = replace(made, path=_insert_spike(made.path, j, q, target))
                 return [q, target]
@@ -445,12 +464,17 @@ class _Planner:
 
     def classify_links(self) -> list[Pass]:
         """The passes with each feed link marked CLEARED or CUTTING by the material cut
-        before it (cleanup moves included)."""
+        before it (cleanup moves included).
+
+        A link found CLEARED when it was planned stays so, unasked: what was cut before it
+        then is cut before it now (the cleanup moves only add), and the part of a link
+        that runs along the previous pass is inside that pass's cut. Only a CUTTING link
+        is asked again (a cleanup move may have cleared its way)."""
         self.cleared = self._index()
         result: list[Pass] = []
         for made in self.passes:
             link = made.entry
-            if link.kind in (LinkKind.CLEARED, LinkKind.CUTTING):
+            if link.kind is LinkKind.CUTTING:
                 through = not link.path.elements or self._through_cleared(link.path, made.path)
                 link = replace(link, kind=LinkKind.CLEARED if through else LinkKind.CUTTING)
             result.append(replace(made, entry=link))
@@ -601,8 +625,11 @@ def _key(component: regions.Component) -> tuple[int, int]:
 
 
 def _key_ring(ring: regions.Ring) -> tuple[int, int]:
-    low = min(ring, key=lambda p: (p[1], p[0]))
+    low = min(ring, key=_Y_THEN_X)  # (a key made in C: rings of thousands of points)
     return (low[1], low[0])
+
+
+_Y_THEN_X = operator.itemgetter(1, 0)
 
 
 def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
@@ -615,15 +642,16 @@ def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
 
 
 def _levels(
-    region: list[regions.Ring], r: float, step: float, allowance: float, t: float
+    contours: list[Path], r: float, step: float, allowance: float, t: float
 ) -> list[Level] | None:
     """(offset, region shrunk by it) from the finishing level inward; None when there would
-    be more than MAX_LEVELS."""
+    be more than MAX_LEVELS. Each level is the contours' own offset (`regions.inset`): its
+    cost is the contours' size, whatever the depth."""
     found: list[Level] = []
     d = r
     while len(found) <= MAX_LEVELS:
         sizes.spend()
-        shrunk = regions.offset(region, -d, t)
+        shrunk = regions.inset(contours, d, t)
         if not shrunk:
             return found
         found.append((d, shrunk))
@@ -676,11 +704,25 @@ def _narrow(
 
 def _touched(piece: regions.Component, contours: list[Path], reach: float) -> list[tuple[int, int]]:
     points = [(float(x), float(y)) for ring in piece.rings for x, y in ring]
+    box = regions.box_of(piece.rings)
+    assert box is not None
+    x0, y0, x1, y1 = box[0] - reach, box[1] - reach, box[2] + reach, box[3] + reach
     touched = []
     for ci, contour in enumerate(contours):
         for ei, (start, element) in enumerate(
             zip(starts_of(contour), contour.elements, strict=True)
         ):
+            # An element whose box (its circle's, for an arc) is beyond the piece's grown
+            # box is not within reach of it: not measured point by point.
+            if element.centre is None:
+                ex = (min(start[0], element.end[0]), max(start[0], element.end[0]))
+                ey = (min(start[1], element.end[1]), max(start[1], element.end[1]))
+            else:
+                radius = math.dist(start, element.centre)
+                ex = (element.centre[0] - radius, element.centre[0] + radius)
+                ey = (element.centre[1] - radius, element.centre[1] + radius)
+            if ex[0] > x1 or ex[1] < x0 or ey[0] > y1 or ey[1] < y0:
+                continue
             if any(distance_to_element(p, start, element) <= reach for p in points):
                 touched.append((ci, ei))
     return touched

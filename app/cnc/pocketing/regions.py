@@ -21,12 +21,25 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, cast
 
+import numpy as np
+import numpy.typing as npt
 import pyclipper
 
-from app.cnc.mill import Element, Path, Pt, sweep
+from app.cnc.mill import (
+    Element,
+    Path,
+    Pt,
+    cross,
+    dot,
+    left_normal,
+    offset_element,
+    sweep,
+    tangent,
+)
 
 IPt = tuple[int, int]
 Ring = list[IPt]
+TURN_EPS = 1e-9  # a turn (sine of the angle) smaller than this is a tangent joint
 
 
 @dataclass(frozen=True)
@@ -146,6 +159,74 @@ def offset(region: Sequence[Ring], delta: float, tolerance: float) -> list[Ring]
     return _rings(offsetter.Execute(float(delta)))
 
 
+def inset(contours: Sequence[Path], d: float, tolerance: float) -> list[Ring]:
+    """The region on the left of closed `contours` (nm: a boundary counter-clockwise,
+    islands clockwise) shrunk by `d` nm, its arcs within `tolerance`.
+
+    Made from the exact elements, not from their polygons: each contour's raw offset (every
+    element moved `d` to its left, `mill.offset_element`, an arc drawn with the chords its
+    new radius needs; an arc of `d` about each right-turning corner; the corner itself
+    where the moved elements overlap), and the region where those rings wind positively,
+    as Clipper's own offset does with a polygon's raw offset. An arc whose radius `d`
+    inverts becomes a small loop of negative winding, not the hundreds of crossing chords
+    Clipper makes of its polygon: a level of a large pocket costs what its contours hold
+    (issue 30), and its edges lie on the true offsets within `tolerance`."""
+    rings = [_raw_inset(contour, d, tolerance) for contour in contours]
+    rings = [ring for ring in rings if len(ring) > 2]
+    if not rings:
+        return []
+    clipper = pyclipper.Pyclipper()
+    clipper.AddPaths(rings, pyclipper.PT_SUBJECT, True)
+    return _rings(
+        clipper.Execute(pyclipper.CT_UNION, pyclipper.PFT_POSITIVE, pyclipper.PFT_POSITIVE)
+    )
+
+
+def _raw_inset(contour: Path, d: float, tolerance: float) -> Ring:
+    """One closed contour's raw offset `d` to its left (see `inset`)."""
+    chunks: list[npt.NDArray[np.float64]] = []
+    elements = contour.elements
+    starts = [contour.start] + [e.end for e in elements[:-1]]
+    for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
+        moved_start, moved = offset_element(start, element, 1.0, d)
+        c = element.centre
+        if c is None:
+            chunks.append(np.array([moved_start, moved.end]))
+        elif math.dist(moved_start, c) < 1.0:
+            chunks.append(np.array([c]))  # an arc of radius d: its offset is its centre
+        else:
+            radius = math.dist(moved_start, c)
+            turn = sweep(moved_start, moved)
+            a0 = math.atan2(moved_start[1] - c[1], moved_start[0] - c[0])
+            signed = -turn if element.clockwise else turn
+            chunks.append(_arc(c, radius, a0, signed, arc_steps(radius, turn, tolerance)))
+        following = elements[(k + 1) % len(elements)]
+        t1 = tangent(start, element, at_end=True)
+        t2 = tangent(element.end, following, at_end=False)
+        turn = math.atan2(cross(t1, t2), dot(t1, t2))
+        corner = element.end
+        if turn < -TURN_EPS:  # a right turn: the moved elements part, joined by an arc of d
+            n1 = left_normal(t1)
+            a1 = math.atan2(n1[1], n1[0])
+            chunks.append(_arc(corner, d, a1, turn, arc_steps(d, -turn, tolerance))[1:-1])
+        elif turn > TURN_EPS:  # a left turn: the moved elements overlap; the corner keeps
+            chunks.append(np.array([corner]))  # the winding of their loop (as Clipper does)
+    at = np.rint(np.concatenate(chunks)).astype(np.int64)
+    # Consecutive repeats (and the closing one) dropped, as `to_ring` does.
+    keep = np.ones(len(at), dtype=bool)
+    keep[1:] = (at[1:] != at[:-1]).any(axis=1)
+    at = at[keep]
+    if len(at) > 1 and (at[0] == at[-1]).all():
+        at = at[:-1]
+    return list(map(tuple, at.tolist()))
+
+
+def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np.float64]:
+    """n + 1 points on the circle about `c` from angle `a0` turning `turn` (signed)."""
+    angles = a0 + turn * np.arange(n + 1) / n
+    return np.column_stack((c[0] + radius * np.cos(angles), c[1] + radius * np.sin(angles)))
+
+
 def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) -> list[Ring]:
     """The area a round tool of `radius` covers moving along polylines (round ends)."""
     offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
@@ -196,9 +277,19 @@ def inside(region: Sequence[Ring], point: IPt) -> bool:
     return winding != 0
 
 
-def segment_inside(region: Sequence[Ring], a: Pt, b: Pt) -> bool:
-    """True when the straight move from `a` to `b` stays inside the region (within 2 nm)."""
+def segment_inside(
+    region: Sequence[Ring], a: Pt, b: Pt, boxes: Sequence[Box | None] | None = None
+) -> bool:
+    """True when the straight move from `a` to `b` stays inside the region (within 2 nm).
+
+    `boxes`: each ring's box (`box_of`), when the caller asks often of one region. Only
+    the rings whose box meets the move's are read then: a ring whose box does not cannot
+    cross the move nor hold it, so it changes nothing (a move among a few islands reads
+    those, not every island of the pocket)."""
     ia, ib = (round(a[0]), round(a[1])), (round(b[0]), round(b[1]))
+    if boxes is not None:
+        move = (min(ia[0], ib[0]), min(ia[1], ib[1]), max(ia[0], ib[0]), max(ia[1], ib[1]))
+        region = [ring for ring, box in zip(region, boxes, strict=True) if box and _meet(box, move)]
     if ia == ib:
         return inside(region, ia)
     if not region:
@@ -214,8 +305,15 @@ def segment_inside(region: Sequence[Ring], a: Pt, b: Pt) -> bool:
 
 
 def thicker_than(region: Sequence[Ring], width: float, tolerance: float) -> bool:
-    """True when some part of the region is wider than `width` (survives shrinking by half)."""
-    return bool(offset(region, -width / 2, tolerance))
+    """True when some part of the region is wider than `width` (survives shrinking by half).
+    A region whose box is narrower than `width` is not, without asking Clipper: the
+    slivers between passes are thousands."""
+    box = box_of(region)
+    if box is None or box[2] - box[0] < width or box[3] - box[1] < width:
+        return False
+    offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
+    offsetter.AddPaths(region, pyclipper.JT_ROUND, pyclipper.ET_CLOSEDPOLYGON)
+    return bool(offsetter.Execute(-width / 2))  # (whether, not what: not read into tuples)
 
 
 def deep_point(component: Component, tolerance: float) -> IPt:
@@ -288,53 +386,68 @@ class SweptIndex:
     def add(self, points: Sequence[Pt]) -> None:
         """Record a move along `points` (one point: the tool went down there). The list
         must stay alive and unchanged while the index is used (its id names its sweeps)."""
-        reach = self.radius + self.tolerance
-        for k, piece in enumerate(_pieces(points, self.PIECE)):
-            xs = [p[0] for p in piece]
-            ys = [p[1] for p in piece]
-            box = (min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach)
+        for k, box in enumerate(self.boxes(points)):
             number = len(self.pieces)
             self.pieces.append((points, k, box))
             for cell in self._cells(box):
                 self.cells.setdefault(cell, []).append(number)
 
-    def near(self, box: Box, also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
-        """The area swept by the recorded moves and by the moves `also` (not recorded)
-        wherever it lies within `box`; beyond the box it may be cut short. The rings of the
-        pieces' sweeps, overlapping: the area is where their winding is positive (as an
-        offset or a union reads them), not yet united."""
-        numbers = sorted({n for cell in self._cells(box) for n in self.cells.get(cell, ())})
-        found: list[Ring] = []
-        for number in numbers:
-            points, k, (a0, b0, a1, b1) = self.pieces[number]
-            if a0 > box[2] or a1 < box[0] or b0 > box[3] or b1 < box[1]:
-                continue
-            key = (id(points), k)
-            swept = self.sweeps.get(key)
-            if swept is None:
-                piece = _pieces(points, self.PIECE)[k]
-                swept = sweep_lines([piece], self.radius, self.tolerance)
-                self.sweeps[key] = swept
-            found += swept
+    def boxes(self, points: Sequence[Pt]) -> list[Box]:
+        """The box of each piece of a move along `points`, grown by the tool's reach: the
+        tool's sweep along the piece lies inside it."""
         reach = self.radius + self.tolerance
-        for points in also:
-            for piece in _pieces(points, self.PIECE):
-                xs = [p[0] for p in piece]
-                ys = [p[1] for p in piece]
-                if (
-                    min(xs) - reach <= box[2]
-                    and max(xs) + reach >= box[0]
-                    and min(ys) - reach <= box[3]
-                    and max(ys) + reach >= box[1]
-                ):
-                    found += sweep_lines([piece], self.radius, self.tolerance)
+        found = []
+        for piece in _pieces(points, self.PIECE):
+            xs = [p[0] for p in piece]
+            ys = [p[1] for p in piece]
+            found.append((min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach))
         return found
+
+    def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
+        """The area swept by the recorded moves and by the moves `also` (not recorded; the
+        same rule as `add` for their lists) wherever it lies within `boxes`; beyond them
+        it may be cut short. The rings of the pieces' sweeps, overlapping: the area is
+        where their winding is positive (as a union reads them), not yet united.
+
+        Only the pieces whose own box meets one of `boxes` are read: a piece's sweep lies
+        in its box, so the others cannot reach into `boxes`. Asked with the boxes of a
+        move's pieces (`boxes`), a long move along a ring reads the passes beside it, not
+        every pass within its bounding box."""
+        found: list[Ring] = []
+        numbers = sorted(
+            {n for box in boxes for cell in self._cells(box) for n in self.cells.get(cell, ())}
+        )
+        for number in numbers:
+            points, k, piece_box = self.pieces[number]
+            if not any(_meet(piece_box, box) for box in boxes):
+                continue
+            found += self._sweep(points, k)
+        for points in also:
+            for k, piece_box in enumerate(self.boxes(points)):
+                if any(_meet(piece_box, box) for box in boxes):
+                    # Kept by the same key: the move asked about is recorded next, as a
+                    # rule, and its pieces' sweeps are then made already.
+                    found += self._sweep(points, k)
+        return found
+
+    def _sweep(self, points: Sequence[Pt], k: int) -> list[Ring]:
+        key = (id(points), k)
+        swept = self.sweeps.get(key)
+        if swept is None:
+            swept = sweep_lines([_pieces(points, self.PIECE)[k]], self.radius, self.tolerance)
+            self.sweeps[key] = swept
+        return swept
 
     def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
         c = self.cell
         for kx in range(math.floor(box[0] / c), math.floor(box[2] / c) + 1):
             for ky in range(math.floor(box[1] / c), math.floor(box[3] / c) + 1):
                 yield (kx, ky)
+
+
+def _meet(a: Box, b: Box) -> bool:
+    """True when two boxes overlap or touch."""
+    return a[0] <= b[2] and a[2] >= b[0] and a[1] <= b[3] and a[3] >= b[1]
 
 
 def _pieces(points: Sequence[Pt], size: int) -> list[Sequence[Pt]]:

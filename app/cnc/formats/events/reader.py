@@ -26,8 +26,9 @@ What each event becomes (docs/imports.md has the full table):
 - G100 → POS (the Plus has no hole event: whether a hole is made there is not in the file).
 - G101-G103 connected into a contour (each CR ≥ 0 and the next begins where it ends, one
   tool, one TC) → a DRILL without depths (CUT RT/LT from TC) and MILL STD / ARC blocks. A
-  conrad CR > 0 between two lines becomes an ARC block of that radius between the tangent
-  points (rounded to the resolution); between arcs it is reported and the corner left sharp.
+  conrad CR > 0 into the next event becomes the block's CONRAD (the compile rounds the
+  corner, app/cnc/solve.py), lines and arcs alike; one that does not fit the cuts is
+  reported and the corner left sharp.
 - G104 → DRILL + BOLT CIR, angle θ0 = 270° − A, the holes then drilled clockwise (the Plus
   goes counter-clockwise from A): the same holes, the same first hole, reported.
 - G105 → LOOP/REP when it repeats the whole operations just before it, with one tool, along
@@ -94,8 +95,10 @@ from app.cnc.imports.ops import (
 )
 from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
+from app.cnc.mill import Element as MillElement
 from app.cnc.mill import rough_wall, routine_clockwise
 from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_int
+from app.cnc.solve import CONRAD, make_corner
 from app.cnc.units import Units
 
 # Two-letter codes first, so `XB` is not read as X followed by B.
@@ -728,44 +731,42 @@ class _Reader:
         self.add(op, chain[0][0], chain[-1][0])
 
     def fillets(self, chain: list[tuple[int, Mill]], elements: list[Element]) -> list[Element]:
-        """CR > 0 between two connected lines: an arc of that radius between them."""
+        """CR > 0 into the next connected event: the conrad of the block (app.cnc.solve
+        rounds the corner in the compile), where that arc fits both cuts."""
         units = self.units
         assert units is not None
         out: list[Element] = []
         starts = [chain[0][1].begin] + [e.end for _, e in chain[:-1]]
         for k, element in enumerate(elements):
             event = chain[k][1]
-            out.append(element)
             radius = event.conrad
             if not radius or k + 1 >= len(elements):
+                out.append(element)
                 continue
             nxt = elements[k + 1]
-            if element.centre is not None or nxt.centre is not None:
+            made = make_corner(_pt(starts[k]), _cut(element), _cut(nxt), CONRAD, float(radius))
+            if isinstance(made, str):
                 self.notes.ignored(
-                    event.source,
-                    f"CR{show(radius, units)} next to an arc: the fillet is not imported, the "
-                    "corner stays sharp (MillBlocks rounds a corner only with an ARC block "
-                    "between two lines here)",
+                    event.source, f"CR{show(radius, units)}: {made}; the corner stays sharp"
                 )
+                out.append(element)
                 continue
-            begin = out[-2].end if len(out) > 1 else starts[k]
-            fillet = _fillet(begin, element.end, nxt.end, radius)
-            if fillet is None:
-                self.notes.ignored(
-                    event.source,
-                    f"CR{show(radius, units)}: the lines are too short for that fillet (or in "
-                    "line): the corner stays sharp",
+            out.append(
+                Element(
+                    element.line,
+                    element.end,
+                    element.centre,
+                    element.clockwise,
+                    element.z_dn,
+                    element.feed,
+                    radius,
                 )
-                continue
-            t1, centre, t2, clockwise = fillet
-            out[-1] = replace(element, end=t1)
-            out.append(Element(event.source, t2, centre, clockwise, None, element.feed))
+            )
             self.notes.became(
                 event.source,
                 f"CR{show(radius, units)}: the corner X{show(element.end[0], units)} "
-                f"Y{show(element.end[1], units)} rounded by an ARC block of that radius from "
-                f"X{show(t1[0], units)} Y{show(t1[1], units)} to X{show(t2[0], units)} "
-                f"Y{show(t2[1], units)} (the tangent points)",
+                f"Y{show(element.end[1], units)} keeps its point, with a CONRAD of that radius "
+                "into the next block",
             )
         return out
 
@@ -1030,40 +1031,17 @@ def _has_event(text: str) -> bool:
     return re.search(r"G\s*10[0-9](?![0-9])", text.upper()) is not None
 
 
+def _pt(p: XY) -> tuple[float, float]:
+    return (float(p[0]), float(p[1]))
+
+
+def _cut(element: Element) -> MillElement:
+    """An imported cut as the milling geometry's element (for the corner rule)."""
+    centre = None if element.centre is None else _pt(element.centre)
+    return MillElement(element.line, _pt(element.end), centre, element.clockwise)
+
+
 def _tools(op: Op) -> set[int]:
     if isinstance(op, LoopOp):
         return {t for body in op.body for t in _tools(body)}
     return {tool_of(op)}
-
-
-def _fillet(a: XY, corner: XY, c: XY, radius: int) -> tuple[XY, XY, XY, bool] | None:
-    """The arc of `radius` tangent to lines a→corner and corner→c: (tangent point on the
-    first line, centre, tangent point on the second, clockwise). None when the lines are
-    in line or too short for it."""
-    ux, uy = float(a[0] - corner[0]), float(a[1] - corner[1])
-    vx, vy = float(c[0] - corner[0]), float(c[1] - corner[1])
-    lu, lv = math.hypot(ux, uy), math.hypot(vx, vy)
-    if lu == 0 or lv == 0:
-        return None
-    ux, uy, vx, vy = ux / lu, uy / lu, vx / lv, vy / lv
-    cos = max(-1.0, min(1.0, ux * vx + uy * vy))
-    angle = math.acos(cos)  # the inner angle at the corner
-    if angle < 1e-9 or math.pi - angle < 1e-9:
-        return None
-    distance = radius / math.tan(angle / 2)
-    if distance > lu + 1e-6 or distance > lv + 1e-6:
-        return None
-    t1 = (corner[0] + ux * distance, corner[1] + uy * distance)
-    t2 = (corner[0] + vx * distance, corner[1] + vy * distance)
-    bx, by = ux + vx, uy + vy
-    lb = math.hypot(bx, by)
-    reach = radius / math.sin(angle / 2)
-    centre = (corner[0] + bx / lb * reach, corner[1] + by / lb * reach)
-    # Travelling a→corner→c: a left turn (cross > 0) is rounded counter-clockwise.
-    cross = (corner[0] - a[0]) * (c[1] - corner[1]) - (corner[1] - a[1]) * (c[0] - corner[0])
-    return (
-        (round(t1[0]), round(t1[1])),
-        (round(centre[0]), round(centre[1])),
-        (round(t2[0]), round(t2[1])),
-        cross < 0,
-    )

@@ -108,6 +108,7 @@ from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.mill import (
     INSIDE_PLACEMENTS,
     Element,
+    Path,
     clearance,
     pocket_overlap,
     rough_depth,
@@ -118,6 +119,7 @@ from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, MillSpan, Op, placed_mills
 from app.cnc.pocketing.model import LinkKind
 from app.cnc.problems import Rule
+from app.cnc.solve import CONRAD
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import Units, to_nm
 
@@ -360,9 +362,13 @@ class _Builder:
         events: list[Mill] = []
         checks: list[list[Check]] = []
         current = start
-        for element in path.elements:
+        for k, element in enumerate(path.elements):
             block = self.blocks[element.block - 1]
             assert isinstance(block, MillLine | MillQcir | MillArc)
+            if element.tag == CONRAD and self.conrad_written(path, k, events, checks, depth):
+                assert element.corner is not None
+                current = _round(element.corner)
+                continue
             target = _round(element.end)
             if drill.has_depth and element.z_dn is not None and element.z_dn != depth:
                 depth = element.z_dn
@@ -421,6 +427,42 @@ class _Builder:
         if not checked:
             self.result.unchecked.update([drill_number, *(i + 1 for i in node.mills)])
         self.reference = mill.exit()
+
+    def conrad_written(
+        self,
+        path: Path,
+        k: int,
+        events: list[Mill],
+        checks: list[list[Check]],
+        depth: int | None,
+    ) -> bool:
+        """Write the conrad element `k` of a contour as the CR of the event before it (seed
+        003 §2.2.4: the corner radius into the next event), that event ending at the sharp
+        corner: True when done. The Plus cannot where there is no event before it or the
+        depth changes after it (the event ends not connected): the arc is written as an
+        event then."""
+        element = path.elements[k]
+        nxt = path.elements[k + 1] if k + 1 < len(path.elements) else None
+        if not events or element.corner is None or nxt is None:
+            return False
+        if nxt.z_dn is not None and nxt.z_dn != depth:
+            return False
+        block = self.blocks[element.block - 1]
+        holder = self.blocks[element.block] if isinstance(block, MillArc) else block
+        radius: Decimal | None = getattr(holder, "conrad", None)
+        if radius is None:
+            return False
+        corner = _round(element.corner)
+        conrad = to_nm(radius, holder.units)
+        events[-1] = replace(events[-1], end=corner, conrad=conrad)
+        # The tool path goes round the corner, not through it: no check at the corner.
+        checks[-1] = [c for c in checks[-1] if c[0] != element.block]
+        self.report.rewritten(
+            element.block,
+            f"CONRAD {radius}: written as CR{format_dimension(conrad, self.units)} on the "
+            "event into the corner (the Plus rounds it)",
+        )
+        return True
 
     def pocket(self, node: MillSequence, drill: Hole, block: Pocket, start: XY) -> None:
         """POCKET → its passes as explicit G101/G102/G103 events on the tool centre (TC0):

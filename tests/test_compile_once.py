@@ -10,6 +10,7 @@ move the plan with them.
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -157,3 +158,42 @@ def test_each_compiled_hole_carries_its_tool() -> None:
     assert set(tools) == {2, 3} and tools == sorted(tools)  # the bores, then the taps
     sheet = setup_sheet(program)
     assert {line.tool for line in sheet.holes} == {2, 3}
+
+
+def test_a_conrad_in_a_loop_is_written_where_the_pattern_cuts_it() -> None:
+    # A LOOP's body is compiled once about its pattern's reference and placed: the events
+    # read its contour placed, and the conrad's corner (where the Plus puts the CR) must
+    # move with it. The first pattern starts at X1 Y1: the corner of the 2 in line along X
+    # is X3 Y1, not X2 Y0 (where the body was compiled). A compensated contour is the
+    # Plus's to offset, so no self-check would catch it: the file was simply wrong.
+    def block(kind: str, **values: object) -> dict[str, object]:
+        return {"type": kind, "mode": "inc", "units": "inch", "loop": False, **values}
+
+    cut = {"z_dn": None, "feed_xy": 10, "tool": 2}
+    data = {
+        "format": "millblocks-program",
+        "version": 1,
+        "name": "conrad loop",
+        "units": "inch",
+        "data_block_0": {
+            "current_tool": 2,
+            "z_retract": 0.1,
+            "tools": [{"number": 2, "diameter": 0.25, "rpm": 1500}],
+        },
+        "blocks": [
+            {**block("POS", x=1, y=1, tool=2), "mode": "abs"},
+            {
+                **block("DRILL", x=0, y=0, z_up=0.1, z_dn=-0.1, feed_z=4, pecks=1, tool=2),
+                "loop": True,
+                "comp": "right",
+            },
+            block("MILL_STD", x=2, y=0, conrad=0.25, **cut),
+            block("MILL_STD", x=0, y=1, **cut),
+            block("REP", x=4, y=0, nx=1, ny=0),
+        ],
+    }
+    program = document.loads(json.dumps(data))
+    text = export(program, "events").data.decode()
+    rounded = [line for line in text.splitlines() if " CR0.25" in line]
+    assert len(rounded) == 1, text
+    assert "XE3.0A YE1.0A" in rounded[0], text

@@ -130,7 +130,8 @@ class Path:
 
 
 def translated(path: Path, dx: float, dy: float, blocks: int = 0) -> Path:
-    """`path` moved by (dx, dy), its elements' block numbers `blocks` on."""
+    """`path` moved by (dx, dy), its elements' block numbers `blocks` on: every point an
+    element holds moves (its end, an arc's centre, a conrad's or chamfer's corner)."""
 
     def at(p: Pt) -> Pt:
         return (p[0] + dx, p[1] + dy)
@@ -141,6 +142,7 @@ def translated(path: Path, dx: float, dy: float, blocks: int = 0) -> Path:
             block=e.block + blocks,
             end=at(e.end),
             centre=None if e.centre is None else at(e.centre),
+            corner=None if e.corner is None else at(e.corner),
         )
         for e in path.elements
     )

@@ -93,7 +93,7 @@ _FORMAT_KEY = "millblocks.file_format"
 
 class LazyChoice(click.Choice[str]):
     """A choice whose names are looked up when the option is used or its help shown (the
-    import formats' registry loads every format: not at start-up)."""
+    import formats' registry imports every format's declaration: not at start-up)."""
 
     def __init__(self, names: Callable[[], list[str]]) -> None:
         # click.Choice's own __init__ would store the names now; they are a property here.
@@ -153,7 +153,8 @@ def read_file(
         result = read_program(data, path.stem, chosen, options or {}, limited=False)
     except ValueError as exc:
         raise ProgramFileError(f"{path}: {exc}") from None
-    click.echo(result.text(), nl=False, err=True)
+    for line in result.lines():
+        click.echo(line, nl=False, err=True)
     return result.program, chosen
 
 
@@ -925,10 +926,11 @@ def serve(host: str, port: int, workers: int, dnc: bool) -> None:
     library()  # migrated (and given its demo programs) once, before the workers start
     if dnc:
         # A process of its own, in this process group (Ctrl-C stops both); gunicorn
-        # restarting its workers, or being restarted, does not touch a transfer.
+        # restarting its workers does not touch a transfer. This process becomes gunicorn's
+        # master (exec keeps the PID): the service stops when it is gone, however it ended.
         import subprocess
 
-        subprocess.Popen([sys.executable, "-m", "app.cli", "dnc"])
+        subprocess.Popen([sys.executable, "-m", "app.cli", "dnc", "--stop-with", str(os.getpid())])
     command = [sys.executable, "-m", "gunicorn", "-c", "python:app.gunicorn_conf"]
     command += ["--bind", f"{host}:{port}"]
     # No gunicorn access log: the app writes one line per request with its level
@@ -1417,6 +1419,20 @@ def receive_command(
     print_problems(got.program.name, validate(got.program))
 
 
+def _stop_with_parent(stop: threading.Event, parent: int, poll: float) -> None:
+    """Set `stop` once the process `parent` (the `millblocks serve` that started this
+    service) is gone — stopped by a signal only it received, or killed — so that no transfer
+    service is left holding the machines' ports without its web server."""
+
+    def watch() -> None:
+        while not stop.wait(poll):
+            if os.getppid() != parent:
+                click.echo("the web server this service was started with is gone", err=True)
+                stop.set()
+
+    threading.Thread(target=watch, name="stop-with-serve", daemon=True).start()
+
+
 @main.command("dnc")
 @click.option(
     "--poll",
@@ -1425,7 +1441,14 @@ def receive_command(
     type=Number(minimum=0.05),
     help="Seconds between looks at the queue.",
 )
-def dnc_service(poll: float) -> None:
+@click.option(
+    "--stop-with",
+    type=int,
+    default=None,
+    hidden=True,
+    help="Stop when this process (the `millblocks serve` that started the service) is gone.",
+)
+def dnc_service(poll: float, stop_with: int | None) -> None:
     """Run the transfer service: every transfer queued by the web page, one at a time per
     machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
     transfers running then, naming them). Run one per library, beside the web server."""
@@ -1434,6 +1457,8 @@ def dnc_service(poll: float) -> None:
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
+    if stop_with is not None:
+        _stop_with_parent(stop, stop_with, poll)
     running = TransferService(library(), poll=poll)
     for transfer in running.recover():
         click.echo(

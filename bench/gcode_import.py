@@ -4,9 +4,11 @@
 The file is written here, deterministically, in the style of our gcode-linuxcnc target
 (G20, G54 set by G10 L2, tool lengths by G10 L1 + G43 H): a grid of cells, each a bolt
 circle of G82 drilled holes, a pecked hole written as explicit moves, a circle pocket with
-G3 arcs and a short G1/G2 contour. It is padded with single-axis G1 moves to exactly the
-line count. rs274 must accept it (its exit status is checked), so all three readers see a
-valid program.
+G3 arcs and a short G1/G2 contour. The grid is COLUMNS x ROWS cells (about 120 000
+lines), cut again from its first cell when a file is longer, so every coordinate of a file
+of any size stays inside the ±99.999 in a dimension may have (app.cnc.limits). It is
+padded with single-axis G1 moves to exactly the line count. rs274 must accept it (its exit
+status is checked), so all three readers see a valid program.
 
 - ours: `app.cnc.imports.read_as` with the G-code importer (parse, motion, recognition of
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
@@ -49,6 +51,9 @@ from bench.common import (
 )
 
 LINES = 100_000
+# The grid of cells: centres at X 2 to 90.2 in, Y 2 to 96.4 in (a cell reaches 1 in further
+# in X, 0.5 in in Y; G54 adds 1 in), so no coordinate passes 99.999 in.
+COLUMNS, ROWS = 50, 60
 PYGCODE_LIMIT = 60.0
 
 HEADER = [
@@ -107,7 +112,7 @@ def gcode_text(lines: int = LINES) -> str:
     room = lines - len(HEADER) - len(FOOTER)
     k = 0
     while True:
-        cell = _cell(2.0 + 1.8 * (k % 50), 2.0 + 1.6 * (k // 50))
+        cell = _cell(2.0 + 1.8 * (k % COLUMNS), 2.0 + 1.6 * (k // COLUMNS % ROWS))
         if len(body) + len(cell) > room:
             break
         body += cell

@@ -108,6 +108,7 @@ def trace(
 
     x, y, z = toolpath.start
     mark = (x, y, z + tcal() if with_z else 0)
+    flat = True  # the last arc step stays at one Z
     for move in toolpath.moves:
         if isinstance(move, ToolChange):
             tool = move.tool
@@ -135,12 +136,14 @@ def trace(
                 and prev.clockwise == step.clockwise
                 and prev.feed == step.feed
                 and prev.end[2] == end[2]
+                and flat  # a helical arc stays a step of its own
                 and _near(prev.centre, (move.cx, move.cy), 100)
                 and (prev.end[0], prev.end[1]) == start
             ):
                 steps[-1] = Step("A", end, move.feed, prev.centre, move.clockwise)
             else:
                 steps.append(step)
+                flat = mark[2] == end[2]
             mark = end
             continue
         if max(abs(a - b) for a, b in zip(end, mark, strict=True)) <= shortest:
@@ -158,6 +161,68 @@ def _round(nm: int, step: int) -> int:
 
 def _near(a: tuple[int, int], b: tuple[int, int], tol: int) -> bool:
     return abs(a[0] - b[0]) <= tol and abs(a[1] - b[1]) <= tol
+
+
+def chords_as_arcs(
+    expected: list[Step], actual: list[Step], start: tuple[int, int, int], tol: int
+) -> list[Step]:
+    """`actual` with each run of feeds that a target without helical arcs wrote for a
+    helical arc of `expected` (chords along it) put back as that arc, ending where the run
+    ends. A run stands for the arc only when every chord's end is on the helix within `tol`
+    nm: its distance from the centre is the arc's radius, it has turned the arc's way, and
+    its Z is where the helix is after that much turning; the run's last end is the arc's.
+    Otherwise `actual` is left as it is (and `deviation` names the move that differs)."""
+    out: list[Step] = []
+    k = 0
+    at = start
+    for step in expected:
+        here = at
+        if step.kind != "T":
+            at = step.end
+        if not (
+            step.kind == "A"
+            and step.centre is not None
+            and step.end[2] != here[2]
+            and k < len(actual)
+            and actual[k].kind == "F"
+        ):
+            if k < len(actual):
+                out.append(actual[k])
+            k += 1
+            continue
+        cx, cy = step.centre
+        radius = math.hypot(here[0] - cx, here[1] - cy)
+        a0 = math.atan2(here[1] - cy, here[0] - cx)
+        a1 = math.atan2(step.end[1] - cy, step.end[0] - cx)
+        sweep = ((a0 - a1) if step.clockwise else (a1 - a0)) % (2 * math.pi)
+        if math.hypot(step.end[0] - here[0], step.end[1] - here[1]) <= tol:
+            sweep = 2 * math.pi
+        turned = 0.0
+        previous = a0
+        j = k
+        matched = False
+        while j < len(actual) and actual[j].kind == "F":
+            x, y, z = actual[j].end
+            angle = math.atan2(y - cy, x - cx)
+            delta = ((previous - angle) if step.clockwise else (angle - previous)) % (2 * math.pi)
+            turned += delta
+            previous = angle
+            on_helix = here[2] + (step.end[2] - here[2]) * min(turned, sweep) / sweep
+            if abs(math.hypot(x - cx, y - cy) - radius) > tol or abs(z - on_helix) > tol:
+                break
+            j += 1
+            near_end = max(abs(a - b) for a, b in zip(actual[j - 1].end, step.end, strict=True))
+            if near_end <= tol and abs(turned - sweep) < 0.5:
+                matched = True
+                break
+        if matched:
+            out.append(replace(step, end=actual[j - 1].end, feed=actual[k].feed))
+            k = j
+        else:
+            out.append(actual[k])
+            k += 1
+    out += actual[k:]
+    return out
 
 
 def deviation(expected: list[Step], actual: list[Step], feed_step: int = 0) -> int:
@@ -230,6 +295,7 @@ def file_trace(parsed: Parsed, start: tuple[int, int, int], *, machine: bool = F
     move, only in Z, goes there)."""
     steps: list[Step] = []
     x, y, z = start
+    flat = True  # the last arc step stays at one Z
 
     def add(kind: str, end: tuple[int, int, int], feed: int | None = None) -> None:
         nonlocal x, y, z
@@ -255,11 +321,13 @@ def file_trace(parsed: Parsed, start: tuple[int, int, int], *, machine: bool = F
                 and prev.clockwise == step.clockwise
                 and prev.feed == step.feed
                 and prev.end == (x, y, end[2])
+                and flat  # a helical arc stays a step of its own
                 and _near(prev.centre, (step.cx, step.cy), 100)
             ):
                 steps[-1] = Step("A", end, step.feed, prev.centre, step.clockwise)
             else:
                 steps.append(arc)
+                flat = z == end[2]
             x, y, z = end
         elif isinstance(step, steps_module.Cycle):
             assert step.peck == 0, "pecks are explicit moves unless G83 is asked for"
@@ -451,14 +519,47 @@ def assert_same_motions(actual: list[Motion], expected: list[Motion], tol: float
 
 def referee_gcode(program: Program, target: str, data: bytes, tmp_path: Path) -> None:
     """rs274 accepts `data` and reports our tool path's motions (tool lengths keyed in
-    from the set-up comments, i.e. each tool's TCAL)."""
+    from the set-up comments, i.e. each tool's TCAL). A dialect without helical arcs writes
+    each as chords along it: those are compared with the helix (`chords_as_arcs`)."""
     path = tmp_path / "program.ngc"
     path.write_bytes(data)
     toolpath = interpret(program)
     tol = 0.0001 if toolpath.units is Units.INCH else 0.001
     inch = 25_400_000
     keyed = {n: t.tcal / inch for n, t in toolpath.tools.items() if t.tcal is not None}
-    assert_same_motions(rs274(path, keyed), ours(toolpath), tol + 1e-9)
+    expected = ours(toolpath)
+    assert_same_motions(_motion_chords(expected, rs274(path, keyed), tol), expected, tol + 1e-9)
+
+
+def _motion_chords(expected: list[Motion], actual: list[Motion], tol: float) -> list[Motion]:
+    """`actual` (rs274's motions) with runs of chords along a helical arc of `expected`
+    put back as that arc (`chords_as_arcs`, in units of a millionth of the program's)."""
+    if not any(m.kind == "A" for m in expected):
+        return actual
+
+    def step(m: Motion) -> Step:
+        end = (round(m.end[0] * 1e6), round(m.end[1] * 1e6), round(m.end[2] * 1e6))
+        centre = None if m.centre is None else (round(m.centre[0] * 1e6), round(m.centre[1] * 1e6))
+        kind = {"T": "R", "C": "T"}.get(m.kind, m.kind)
+        return Step(kind, end, None, centre, bool(m.clockwise), m.tool)
+
+    steps = [step(m) for m in expected]
+    joined = chords_as_arcs(steps, [step(m) for m in actual], (0, 0, 0), round(2e6 * tol))
+    if len(joined) == len(actual):
+        return actual
+    # Each joined step is one of `actual`'s, or an arc of `expected`'s put back for the
+    # run of chords that ends where it ends.
+    out: list[Motion] = []
+    k = 0
+    for n, joined_step in enumerate(joined):
+        if joined_step.kind == "A" and actual[k].kind == "F":
+            while step(actual[k]).end != joined_step.end:
+                k += 1
+            out.append(replace(expected[n], feed=actual[k].feed))
+        else:
+            out.append(actual[k])
+        k += 1
+    return out
 
 
 def arc_radii_agree(toolpath: Toolpath, tol: float) -> bool:

@@ -268,3 +268,91 @@ def test_exporting_a_file_loads_no_database_or_drawing_code(tmp_path: Path) -> N
     tops = {name.split(".")[0] for name in loaded}
     assert not {"sqlalchemy", "alembic", "ezdxf", "flask", "serial"} & tops
     assert "app.storage" not in loaded
+
+
+# Every format's reader and writer module, and the libraries only some of them need.
+FORMAT_MODULES = {
+    "app.cnc.emit.canon",
+    "app.cnc.emit.svg",
+    "app.cnc.formats.document.writer",
+    "app.cnc.formats.dxf.blocks",
+    "app.cnc.formats.dxf.reader",
+    "app.cnc.formats.events.reader",
+    "app.cnc.formats.events.writer",
+    "app.cnc.formats.gcode.boss",
+    "app.cnc.formats.gcode.reader",
+    "app.cnc.formats.gcode.writer",
+    "app.cnc.formats.tape1704.picture",
+    "app.cnc.formats.tape1704.reader",
+    "app.cnc.formats.tape1704.targets",
+}
+FORMAT_LIBRARIES = {"ezdxf", "svgwrite", "sqlalchemy", "alembic", "flask", "serial"}
+
+
+def test_a_small_export_loads_its_own_format_alone(tmp_path: Path) -> None:
+    """Before: the export of one small program imported every format's reader and writer
+    (and svgwrite), 0.35 s of CPU before the first byte, 561 ms over a bare Python start as
+    an installed command (issue 31). Now a program file read as JSON and written as
+    LinuxCNC G-code loads that one writer; detection still asks every format's sniff. Its
+    FRAME pocket is no irregular POCKET: the pocket engine and pyclipper stay unloaded."""
+    out = tmp_path / "out.ngc"
+    program = ROOT / "app" / "demo" / "03-frame-pocket.json"
+    loaded = _modules_after(
+        ["export", str(program), "--to", "gcode-linuxcnc", "-o", str(out)], tmp_path
+    )
+    assert out.read_text().startswith("%")
+    assert FORMAT_MODULES & loaded == {"app.cnc.formats.gcode.writer"}
+    assert not FORMAT_LIBRARIES & {name.split(".")[0] for name in loaded}
+    assert "pyclipper" not in loaded and "app.cnc.pocketing.plan" not in loaded
+
+
+def test_converting_gcode_to_a_tape_loads_the_two_formats_alone(tmp_path: Path) -> None:
+    """A G-code file made into a 1704 tape: the G-code reader and the tape writer, not the
+    tape's picture (svgwrite), the DXF, events or other G-code writers."""
+    source = tmp_path / "part.ngc"
+    code, _, err = run(
+        "export",
+        str(ROOT / "app" / "demo" / "03-frame-pocket.json"),
+        "--to",
+        "gcode-linuxcnc",
+        "-o",
+        str(source),
+    )
+    assert code == 0, err
+    tape = tmp_path / "part.tape"
+    loaded = _modules_after(["export", str(source), "--to", "tape-eia", "-o", str(tape)], tmp_path)
+    assert tape.read_bytes().startswith(b"%")
+    assert FORMAT_MODULES & loaded == {
+        "app.cnc.formats.gcode.reader",
+        "app.cnc.formats.tape1704.targets",
+    }
+    assert not FORMAT_LIBRARIES & {name.split(".")[0] for name in loaded}
+
+
+def test_a_target_missing_from_the_table_is_refused() -> None:
+    """`get_target` finds a target through app.cnc.formats.TARGET_MODULES alone, so a
+    target that the table does not name (it would be missing from an export's choices
+    until something imported every format) is refused when it is defined."""
+    from app.cnc.emit.target import Target, register, targets
+
+    class Unlisted(Target):
+        name = "unlisted"
+        description = "a target no table names"
+        extension = "txt"
+
+    with pytest.raises(ValueError, match=r"target unlisted is defined in tests\.test_cli"):
+        register(Unlisted)
+    assert "unlisted" not in targets()
+
+
+def test_the_benchmark_files_stay_inside_the_travel_at_any_size() -> None:
+    """Before: bench/cli.py's 10^6-line G-code file ran to Y 890 in (its grid of cells only
+    grew), past the ±99.999 in an import allows, so that row timed a refusal. Its grid now
+    repeats: every X and Y, with the file's G54 offset (X1 Y1), stays inside."""
+    from bench.gcode_import import gcode_text
+
+    text = gcode_text(1_000_000)
+    assert len(text.splitlines()) == 1_000_000
+    assert "G10 L2 P1 X1.0000 Y1.0000 Z0" in text
+    largest = max(float(value) for value in re.findall(r"[XY](-?\d+\.\d+)", text))
+    assert 1.0 + largest <= 99.999

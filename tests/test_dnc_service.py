@@ -10,6 +10,7 @@ at 9 296 of 224 025 bytes).
 
 from __future__ import annotations
 
+import contextlib
 import http.cookiejar
 import os
 import re
@@ -260,3 +261,65 @@ def test_a_queued_transfer_cancelled_before_it_starts_never_runs(tmp_path: Path)
         "withdrawn before it started",
     )
     assert TransferService(library).step() == []
+
+
+def _children(pid: int) -> list[int]:
+    """The processes `pid` started (Linux's /proc)."""
+    found: list[int] = []
+    for task in Path(f"/proc/{pid}/task").iterdir():
+        found += [int(c) for c in (task / "children").read_text().split()]
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.parametrize("how", [signal.SIGTERM, signal.SIGKILL])
+def test_the_transfer_service_serve_started_stops_with_it(tmp_path: Path, how: int) -> None:
+    """`millblocks serve` starts the transfer service beside gunicorn; stopped by a signal
+    only it receives (a supervisor's TERM, or KILL), it must not leave the service running,
+    holding the machines' ports with no web server (it did: only Ctrl-C, which reaches the
+    whole process group, stopped both)."""
+    port = _free_port()
+    env = {**_env(f"sqlite:///{tmp_path / 'shop.db'}"), "MILLBLOCKS_INSTANCE_PATH": str(tmp_path)}
+    with (tmp_path / "serve.log").open("w") as log:
+        serve = subprocess.Popen(
+            [sys.executable, "-m", "app.cli", "serve", "--port", str(port), "--workers", "1"],
+            env=env,
+            stderr=log,
+            stdout=log,
+            start_new_session=True,
+        )
+    try:
+
+        def service() -> int | None:
+            for child in _children(serve.pid):
+                command = Path(f"/proc/{child}/cmdline").read_bytes().split(b"\0")
+                if b"dnc" in command:
+                    return child
+            return None
+
+        _until("the transfer service", lambda: service() is not None)
+        dnc = service()
+        assert dnc is not None
+        _until("the web server", lambda: _answers(f"http://127.0.0.1:{port}/healthz"))
+        os.kill(serve.pid, how)
+        serve.wait(timeout=WAIT)
+        _until("the transfer service to stop", lambda: not _alive(dnc), 15)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(serve.pid, signal.SIGKILL)
+        serve.wait(timeout=WAIT)
+
+
+def _answers(url: str) -> bool:
+    try:
+        with urllib.request.urlopen(url, timeout=2) as reply:
+            return bool(reply.status == 200)
+    except OSError:
+        return False

@@ -88,9 +88,12 @@ def reference(toolpath: Toolpath, machine: MachineModel | None = None) -> Estima
             radius = math.hypot(x - move.cx, y - move.cy)
             sweep = arc_sweep((x, y), (move.x, move.y), (move.cx, move.cy), move.clockwise)
             rate = move.feed if max_feed is None else min(move.feed, max_feed)
-            seconds = 60.0 * radius * sweep / rate
+            if move.z != z:  # a helix: the hypotenuse of its unrolled length and its drop
+                seconds = 60.0 * math.hypot(radius * sweep, move.z - z) / rate
+            else:
+                seconds = 60.0 * radius * sweep / rate
             result.cutting += seconds
-            x, y = move.x, move.y
+            x, y, z = move.x, move.y, move.z
         elif isinstance(move, Dwell):
             seconds = float(move.seconds)
             result.dwell += seconds

@@ -101,24 +101,42 @@ _PRINT_CASES = (
     "print-conrad-chamfer-mm",
     "print-line-line-mm",
 )
+# The operations of issue 33 (helical arcs: G2/G3 with Z, or chords where a target has none).
+_OPERATION_CASES = (
+    "helix-bore",
+    "helix-entry-mm",
+    "thread-mill-internal",
+    "thread-mill-external-mm",
+    "face-zigzag",
+    "face-one-way-mm",
+    "engrave-line",
+    "engrave-arc-mm",
+)
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
-    "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
-    "gcode-fanuc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
-    "gcode-prototrak": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES,
+    "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,
+    "gcode-fanuc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,
+    "gcode-prototrak": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,
     "svg": (
         "loop-nested-3-deep",
         "contour-cut-right",
         "frame-pocket",
         "bolt-circle-drill",
         *_POCKET_CASES,
+        *_OPERATION_CASES,
     ),
-    "tape-eia": _TAPE_CASES + _POCKET_CASES + ("print-conrad-chamfer",),
-    "tape-ascii": _TAPE_CASES + _POCKET_CASES,
+    "tape-eia": _TAPE_CASES + _POCKET_CASES + ("print-conrad-chamfer",) + _OPERATION_CASES,
+    "tape-ascii": _TAPE_CASES + _POCKET_CASES + _OPERATION_CASES,
     "events": _POCKET_CASES + _PRINT_CASES,
     "punch-eia": ("drill-single", "circle-inside-mm", "frame-in-tan", "stop-and-tool-changes"),
     "punch-ascii": ("drill-single", "tap-metric", "contour-cut-right"),
     "tape-svg": ("drill-single", "pos-basic", "tap-metric"),
-    "tape-boss": ("loop-rep-grid", "contour-cut-right", "tap-metric", "coolant-and-messages"),
+    "tape-boss": (
+        "loop-rep-grid",
+        "contour-cut-right",
+        "tap-metric",
+        "coolant-and-messages",
+        *_OPERATION_CASES,
+    ),
 }
 
 
@@ -138,4 +156,5 @@ def test_corpus_covers_every_block_type() -> None:
     expected = {"POS", "DRILL", "BORE", "TAP", "BOLT_CIR", "MILL_STD", "MILL_QCIR"}
     expected |= {"MILL_ARC", "MILL_ARC_END", "REP", "COPY"}
     expected |= {"POCKET", "PKT_LINE", "PKT_ARC", "PKT_ARC_END", "ISLAND"}
+    expected |= {"HELIX", "THREAD_MILL", "FACE", "ENGRAVE"}
     assert expected <= kinds, f"no golden case for {sorted(expected - kinds)}"

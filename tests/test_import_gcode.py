@@ -387,7 +387,7 @@ def test_block_delete_numbers_and_percent() -> None:
         ("G20\nG0 X1 Y1\nG1 Z-0.2 F5\nX2\nG0 Z1\n", "line 3: a feed in Z before the file gives"),
         (
             "G20\nG0 Z0.1\nG1 Z-0.1 F5\nG2 X1 Y0 Z-0.2 I0.5 J0\n",
-            "line 4, column 1: a helix",
+            "line 4: an arc at another depth (a helix) in a mill sequence",
         ),
         ("G20\nG18\nG0 Z0.1\nG1 Z-0.1 F5\nG2 X1 I0.5\n", "line 5, column 1: an arc in the G18"),
         ("G20\nG0 Z0.1\nG81 X1 Y1 Z-0.5 F5\n", "line 3, column 1: G81 with no R plane"),

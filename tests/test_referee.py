@@ -71,6 +71,7 @@ from tests.referee import (
     FEED_STEP,
     READER,
     RESOLUTION,
+    chords_as_arcs,
     deviation,
     entered,
     file_trace,
@@ -117,6 +118,8 @@ def assert_file_is_the_tool_path(program: Program, target: str, data: bytes) -> 
         toolpath = entered(toolpath, machine_start(toolpath, machine)[2])
     expected = trace(toolpath, machine=machine, written=step)
     actual = file_trace(parsed, machine_start(toolpath, machine), machine=machine)
+    # A target without helical arcs writes each as chords along it (app.cnc.geometry).
+    actual = chords_as_arcs(expected, actual, machine_start(toolpath, machine), 2 * step)
     # Two numbers rounded to the file's step each: their difference is off by up to one.
     assert deviation(expected, actual, FEED_STEP[reader][units]) <= step
 
@@ -158,10 +161,23 @@ def test_linuxcnc_reads_our_gcode(case: Path, target: str, tmp_path: Path) -> No
     referee_gcode(program, target, export(program, target).data, tmp_path)
 
 
+# Programs the Plus's events cannot take, and why (the export's error says so).
+HELICAL = "a HELIX or THREAD MILL moves Z with X and Y; the Plus has no Z"
+EVENTS_REFUSED = dict.fromkeys(
+    ("helix-bore", "helix-entry-mm", "thread-mill-internal", "thread-mill-external-mm"), HELICAL
+) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
+EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_events_read_back_as_the_programs_xy_path(case: Path) -> None:
     program = load(case)
-    back = read_program(export(program, "events").data, case.name, "events").program
+    try:
+        data = export(program, "events").data
+    except ExportError as refused:
+        assert case.name in EVENTS_REFUSED, str(refused)
+        pytest.skip(EVENTS_REFUSED[case.name])
+    back = read_program(data, case.name, "events").program
     expected = trace(interpret(two_axis(program)), with_z=False)
     actual = trace(interpret(with_rpms(back, speeds(program))), with_z=False)
     worst = deviation(expected, actual, FEED_STEP["events"][program.units])

@@ -3,7 +3,8 @@
 The simulation skips what cannot cut, rasterises flat tools by runs of cells, cuts a LOOP's
 repeated pattern once and stamps it at each placement, and reads the compiled path's
 arrays. The reference here does none of that: it takes the moves from `interpret()` (the
-Toolpath's objects), splits arcs into pieces of at most 90°, and evaluates every segment's
+Toolpath's objects), splits arcs into pieces of at most 90° (a helical arc into the
+simulation's chords, going down in proportion), and evaluates every segment's
 tool over every cell of its bounding box in float64, one segment at a time, keeping per cell
 the deepest cut and, at equal depths, the earliest segment. The two must agree: the
 material removed within one cell per segment, no more cells than segments deeper or
@@ -25,7 +26,7 @@ from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import has_errors
-from app.cnc.simulate.segments import DRILL_SLOPE, drill_point_blocks
+from app.cnc.simulate.segments import DRILL_SLOPE, HELIX_CHORD, drill_point_blocks
 from app.cnc.simulate.stock import Grid
 from app.cnc.simulate.verify import run_simulation
 from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange
@@ -71,8 +72,16 @@ def reference_moves(program: Program) -> list[tuple[float, ...]]:
             turn = (a0 - math.atan2(ey - cy, ex - cx)) * (1 if move.clockwise else -1)
             turn %= 2 * math.pi
             turn = turn if turn > 1e-12 else 2 * math.pi
-            n = max(1, math.ceil(turn / (math.pi / 2) - 1e-9))
+            helical = ez != z
             ra = math.hypot(x - cx, y - cy)
+            # A helical arc (its Z changes): the simulation's chords, each within HELIX_CHORD
+            # of the arc and going down (or up) in proportion, in place of flat arc pieces.
+            # The same chords as the sweep's: on a helix, where a cell is first reached (so
+            # how deep) moves with the chord, and the two sweeps are compared, not chords.
+            piece = math.pi / 2
+            if helical:
+                piece = min(piece, 2 * math.acos(1 - min(HELIX_CHORD, ra) / max(ra, 1.0)))
+            n = max(1, math.ceil(turn / piece - 1e-9))
             step = (-turn if move.clockwise else turn) / n
             points = [(x, y)]
             points += [
@@ -80,8 +89,28 @@ def reference_moves(program: Program) -> list[tuple[float, ...]]:
                 for k in range(1, n)
             ]
             points.append((ex, ey))
-            for (px, py), (qx, qy) in itertools.pairwise(points):
+            for k, ((px, py), (qx, qy)) in enumerate(itertools.pairwise(points)):
                 ccw = 0.0 if move.clockwise else 1.0
+                if helical:
+                    pz, qz = z + (ez - z) * k / n, z + (ez - z) * (k + 1) / n
+                    out.append(
+                        (
+                            px,
+                            py,
+                            pz,
+                            qx,
+                            qy,
+                            qz,
+                            0.0,
+                            0.0,
+                            0.0,
+                            0.0,
+                            radius(tool),
+                            slope,
+                            move.block,
+                        )
+                    )
+                    continue
                 out.append(
                     (px, py, ez, qx, qy, ez, cx, cy, 1.0, ccw, radius(tool), slope, move.block)
                 )

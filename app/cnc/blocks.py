@@ -650,6 +650,215 @@ class Island(Block):
     y: Decimal = prompt("Y", LENGTH, role=Role.Y)
 
 
+# -- operations of a modern conversational control (issue 33) -------------------------------
+
+MILLING_HELP = "empty: Data Block 0's 0 CONV 1 CLIMB"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Helix(Block):
+    """HELIX: helical interpolation about X, Y (helical entry, helical boring).
+
+    `diameter` is the finished bore (as BORE and CIRCLE take the part's size): the tool's
+    centre goes round at (DIA − the tool's DIA) / 2, the tool's DIA from Data Block 0. The
+    tool comes down at rapid to Z UP on the circle (at 3 o'clock), goes down `pitch` per
+    turn to Z DN, makes a whole turn at Z DN to finish the bottom and the wall, leaves the
+    wall towards the centre (to the centre when the tool covers it; no core is left), and
+    rapids up. Round counter-clockwise for climb with a clockwise spindle, as CIRCLE
+    INSIDE; `milling` None takes Data Block 0's choice. Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "HELIX"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("HELIX"),),
+        editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
+        positioned=True,
+        loopable=True,
+    )
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    diameter: Decimal = prompt("DIA", LENGTH, positive=True, help="the finished diameter")
+    z_up: Decimal = prompt("Z UP", LENGTH)
+    z_dn: Decimal = prompt("Z DN", LENGTH)
+    pitch: Decimal = prompt("PITCH", LENGTH, positive=True, help="depth per turn")
+    milling: MillingMode | None = prompt("0 CONV 1 CLIMB", CHOICE, None, blank=MILLING_HELP)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+
+class ThreadPlace(enum.Enum):
+    """Where a THREAD MILL cuts: a nut's thread inside a bore, or a bolt's outside a boss."""
+
+    INTERNAL = "internal"
+    EXTERNAL = "external"
+
+
+PITCH_HELP = "threads per inch in an inch block, mm per thread in a mm block"
+
+
+@dataclass(frozen=True, kw_only=True)
+class ThreadMill(Block):
+    """THREAD MILL: a 60° thread of major diameter `diameter` about X, Y, from Z UP down to
+    Z DN, cut with a single-point thread mill whose DIA (Data Block 0) is its cutting
+    diameter (app/cnc/thread.py has the motion).
+
+    `pitch` is threads per inch in an inch block and mm per thread in a mm block. The thread
+    is cut in `passes` radial passes evenly spaced to the full depth of an ISO/UN basic
+    profile (internal 5/8 H, external 17/24 H, H = 0.866 × pitch); each pass enters and
+    leaves along half-circle arcs tangent to the thread, a quarter of a pitch along Z each.
+    Climb unless the block says conventional (`milling`); the direction of travel and the
+    hand of the thread decide whether it goes up or down (a right-hand internal thread cut
+    climb is cut bottom-up with G3). Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "THREAD_MILL"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("THREAD_MILL"),),
+        editor=(
+            SubKind(
+                "THREAD_MILL_INT",
+                "THREAD MILL INT",
+                "TAP",
+                3,
+                (("place", ThreadPlace.INTERNAL),),
+            ),
+            SubKind(
+                "THREAD_MILL_EXT",
+                "THREAD MILL EXT",
+                "TAP",
+                4,
+                (("place", ThreadPlace.EXTERNAL),),
+            ),
+        ),
+        positioned=True,
+        loopable=True,
+    )
+    place: ThreadPlace = prompt("INT/EXT", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    diameter: Decimal = prompt("MAJOR DIA", LENGTH, positive=True, help="the thread's size")
+    pitch: Decimal = prompt("PITCH", LENGTH, positive=True, help=PITCH_HELP)
+    hand: Hand = prompt("HAND", CHOICE, Hand.RIGHT)
+    z_up: Decimal = prompt("Z UP", LENGTH, help="the top of the thread")
+    z_dn: Decimal = prompt("Z DN", LENGTH, help="the bottom of the thread")
+    passes: int = prompt("# PASS", COUNT, 1, low=1, high=limits.MAX_THREAD_PASSES)
+    milling: MillingMode = prompt("0 CONV 1 CLIMB", CHOICE, MillingMode.CLIMB)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "THREAD MILL " + ("INT" if self.place is ThreadPlace.INTERNAL else "EXT")
+
+
+class FacePattern(enum.Enum):
+    """How FACE's passes go: back and forth, or each the same way (up and back between)."""
+
+    ZIGZAG = "zigzag"
+    ONE_WAY = "one_way"
+
+
+@dataclass(frozen=True, kw_only=True)
+class Face(Block):
+    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/face.py).
+
+    Passes along X, `step` percent of the tool's DIA (Data Block 0) apart in Y, the tool
+    running off both ends of each pass by `clear` beyond its edge (None: 0.050 in / 1.27 mm)
+    and past both long edges; `passes` levels evenly spaced from Z UP (the stock's top) to
+    Z DN, coming down at rapid beside the part. Zig-zag goes back and forth; one-way cuts
+    each pass in +X and goes up and back between. Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "FACE"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("FACE"),),
+        editor=(
+            SubKind("FACE", "FACE", POCKET_GROUP, 6, (("pattern", FacePattern.ZIGZAG),)),
+            SubKind(
+                "FACE_ONE_WAY",
+                "FACE ONE WAY",
+                POCKET_GROUP,
+                7,
+                (("pattern", FacePattern.ONE_WAY),),
+            ),
+        ),
+        positioned=True,
+        # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
+        loopable=False,
+    )
+    pattern: FacePattern = prompt("PATTERN", CHOICE)
+    x: Decimal = prompt("X", LENGTH, role=Role.X, help="the rectangle's centre")
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y, help="the rectangle's centre")
+    xl: Decimal = prompt("XL", LENGTH, positive=True)
+    yw: Decimal = prompt("YW", LENGTH, positive=True)
+    z_up: Decimal = prompt("Z UP", LENGTH, help="the stock's top")
+    z_dn: Decimal = prompt("Z DN", LENGTH, help="the faced height")
+    passes: int = prompt("# PASS", COUNT, 1, low=1, high=limits.MAX_PECKS)
+    step: int = prompt("STEP %", COUNT, 70, low=1, high=100, help="percent of the tool's DIA")
+    clear: Decimal | None = prompt(
+        "CLEAR", LENGTH, None, low=Decimal(0), help="empty: 0.050 in past each edge"
+    )
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "FACE" if self.pattern is FacePattern.ZIGZAG else "FACE ONE WAY"
+
+
+class EngraveLayout(enum.Enum):
+    """What ENGRAVE's text follows: a line from X, Y, or an arc about X, Y."""
+
+    LINE = "line"
+    ARC = "arc"
+
+
+ON_ARC = (("layout", EngraveLayout.ARC),)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Engrave(Block):
+    """ENGRAVE: `text` in a single-stroke font (app/cnc/engrave.py) along a line from X, Y
+    at ANGLE, or along an arc of RAD about X, Y from ANGLE (degrees counter-clockwise from
+    +X), clockwise (letters standing outward) or counter-clockwise (inward); capitals
+    `height` high, cut from Z UP down to Z DN. Each stroke is a plunge at FEEDR Z and cuts
+    at FEEDR XY, the tool up to the retract height between strokes (as a DRILL and its MILL
+    STD blocks would cut it). Lengths in the block's units.
+    """
+
+    kind: ClassVar[str] = "ENGRAVE"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("ENGRAVE"),),
+        editor=(
+            SubKind(
+                "ENGRAVE_LINE", "ENGRAVE LINE", POCKET_GROUP, 8, (("layout", EngraveLayout.LINE),)
+            ),
+            SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
+        ),
+        positioned=True,
+        loopable=False,  # as FACE: in POCKET's menu
+    )
+    layout: EngraveLayout = prompt("LINE/ARC", CHOICE)
+    text: str = prompt("TEXT", TEXT, help="letters, digits and ASCII signs")
+    x: Decimal = prompt("X", LENGTH, role=Role.X, help="the line's start, or the arc's centre")
+    y: Decimal = prompt("Y", LENGTH, role=Role.Y)
+    angle: Decimal = prompt(
+        "ANGLE", ANGLE, Decimal(0), help="degrees counter-clockwise from +X where the text starts"
+    )
+    radius: Decimal | None = prompt("RAD", LENGTH, None, positive=True, only_when=ON_ARC)
+    direction: Direction = prompt("DIRECTION", CHOICE, Direction.CW, only_when=ON_ARC)
+    height: Decimal = prompt("HEIGHT", LENGTH, positive=True, help="the capitals' height")
+    z_up: Decimal = prompt("Z UP", LENGTH)
+    z_dn: Decimal = prompt("Z DN", LENGTH)
+    feed_z: Decimal = prompt("FEEDR Z", FEED, feed=limits.FEED_Z)
+    feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
+    tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+
+    @property
+    def type_name(self) -> str:
+        return "ENGRAVE " + self.layout.name
+
+
 # Seed 001 §3.4.5.3: NX and NY count the repeats after the pattern is done once, so a REP makes
 # (NX + 1) × (NY + 1) patterns.
 REPEATS = "repeats in {axis} after the first pattern, not the number of patterns (2: three in all)"

@@ -43,7 +43,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -52,16 +52,35 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     DataBlock0,
+    Direction,
+    Engrave,
+    EngraveLayout,
+    Face,
+    FacePattern,
+    Helix,
     Hole,
     HoleOp,
     Mode,
+    Placement,
     Pos,
     Program,
     Rep,
+    ThreadMill,
+    ThreadPlace,
 )
+from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
+from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import Finding, Path, SequencePlan, length, plan_sequence
+from app.cnc.mill import (
+    Finding,
+    Path,
+    SequencePlan,
+    length,
+    plan_sequence,
+    routine_clockwise,
+)
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
@@ -79,11 +98,17 @@ from app.cnc.path import (
     plan_rows,
     size,
 )
-from app.cnc.pocketing.model import LinkKind, PocketPlan
 from app.cnc.problems import Rule, Severity
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
+from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
+from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
+
+if TYPE_CHECKING:
+    # The pocket engine (and pyclipper) is loaded when a POCKET is cut, not for every
+    # compile: a command on a program without one does not wait for it.
+    from app.cnc.pocketing.model import PocketPlan
 
 DWELL_MS = int(limits.HOLE_DWELL_SECONDS * 1000)
 
@@ -513,6 +538,21 @@ class _Compiler:
             target = self.resolve(block)
             self.hole(number, block, target)
             self.reference = target
+        elif isinstance(block, Helix):
+            target = self.resolve(block)
+            self.helix(number, block, target)
+            self.reference = target
+        elif isinstance(block, Engrave):
+            target = self.resolve(block)
+            self.engrave(number, block, target)
+            self.reference = target
+        elif isinstance(block, Face):
+            self.face(number, block, self.resolve(block))
+            self.reference = self.resolve(block)
+        elif isinstance(block, ThreadMill):
+            target = self.resolve(block)
+            self.thread_mill(number, block, target)
+            self.reference = target
         else:
             raise CompileError(number, f"a {block.title} block cannot stand on its own here")
 
@@ -638,6 +678,8 @@ class _Compiler:
         cleared there) and feeds on down, as the DRILL's pecks do. Between levels it
         retracts and returns to the first plunge point.
         """
+        from app.cnc.pocketing.model import LinkKind
+
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
         first = _round(pocket.passes[0].entry.path.start)
@@ -667,6 +709,8 @@ class _Compiler:
         """A 2-axis POCKET: the passes at the one depth the operator sets, stopping for the
         quill to go down at each place the plan plunges and to come up before the table
         moves on (as a 2-axis mill sequence does)."""
+        from app.cnc.pocketing.model import LinkKind
+
         down = False
         for cut in pocket.passes:
             link = cut.entry
@@ -826,6 +870,166 @@ class _Compiler:
             ).row()
         )
 
+    def helix(self, number: int, block: Helix, centre: tuple[int, int]) -> None:
+        """HELIX about `centre` (blocks.Helix says the motion). A block whose tool cannot
+        cut the diameter (no DIA, or not smaller than the bore's) makes no moves:
+        validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        if tool_diameter is None:
+            return
+        radius = (to_nm(block.diameter, units) - tool_diameter) // 2
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if radius <= 0 or z_dn >= z_up:
+            return
+        self.use_tool(number, block.tool)
+        milling = block.milling or self.program.block0.milling
+        clockwise = routine_clockwise(Placement.INSIDE, milling, self.spindle_rpm(block.tool))
+        feed = to_nm(block.feed_xy, units)
+        start = (centre[0] + radius, centre[1])
+        self.retract = retract_height(z_up, self.z_retract)
+        self.position(number, start, self.retract)
+        self.rapid_z(number, z_up)
+        pitch = to_nm(block.pitch, units)
+        for end in helix_ends((*start, z_up), centre, z_dn, pitch, clockwise):
+            self.helix_to(number, end, centre, clockwise, feed)
+        # The whole turn at Z DN: the bottom flat and the wall to size all round.
+        self.helix_to(number, (self.x, self.y, z_dn), centre, clockwise, feed)
+        if 2 * radius <= tool_diameter:
+            # The tool covers the centre (no core is left): off the wall to it.
+            self.feed_to(number, (*centre, z_dn), feed, "lead-out")
+        self.retract_up(number)
+
+    def thread_mill(self, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
+        """THREAD MILL about `centre` (app/cnc/thread.py says the motion). A block whose
+        tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
+        validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        lead = thread_lead(block)
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if tool_diameter is None or z_up - z_dn <= lead // 2:
+            return
+        internal = block.place is ThreadPlace.INTERNAL
+        placement = Placement.INSIDE if internal else Placement.OUTSIDE
+        clockwise = routine_clockwise(placement, block.milling, self.spindle_rpm(block.tool))
+        passes = thread_passes(
+            centre,
+            to_nm(block.diameter, units),
+            tool_diameter,
+            lead,
+            z_up,
+            z_dn,
+            block.passes,
+            internal,
+            clockwise,
+            block.hand is Hand.RIGHT,
+            to_nm(limits.THREAD_CLEAR_INCH, Units.INCH),
+        )
+        self.use_tool(number, block.tool)
+        feed = to_nm(block.feed_xy, units)
+        self.retract = retract_height(z_up, self.z_retract)
+        for cut in passes:
+            self.position(number, cut.approach, self.retract)
+            self.rapid_z(number, cut.z_start)
+            lead_in = cut.lead_in
+            self.helix_to(number, lead_in.end, lead_in.centre, lead_in.clockwise, feed, "lead-in")
+            for turn in cut.turns:
+                self.helix_to(number, turn.end, turn.centre, turn.clockwise, feed)
+            out = cut.lead_out
+            self.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
+        self.retract_up(number)
+
+    def engrave(self, number: int, block: Engrave, at: tuple[int, int]) -> None:
+        """ENGRAVE (app/cnc/engrave.py lays the strokes out): each stroke as a DRILL and its
+        MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
+        fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
+        block whose text the font cannot write makes no moves: validation reports it."""
+        units = block.units
+        if not block.text or missing(block.text) is not None:
+            return
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if z_dn >= z_up or (block.layout is EngraveLayout.ARC and block.radius is None):
+            return
+        height = float(to_nm(block.height, units))
+        strokes = glyph_strokes(block.text, height)
+        if block.layout is EngraveLayout.LINE:
+            placed = along_line(strokes, at, float(block.angle))
+        else:
+            assert block.radius is not None
+            radius = float(to_nm(block.radius, units))
+            placed = along_arc(
+                strokes, at, radius, float(block.angle), block.direction is Direction.CW
+            )
+        self.use_tool(number, block.tool)
+        feed_z, feed = to_nm(block.feed_z, units), to_nm(block.feed_xy, units)
+        self.retract = retract_height(z_up, self.z_retract)
+        for stroke in placed:
+            points = [_round(p) for p in stroke]
+            if len(points) < 2:
+                continue
+            self.position(number, points[0], self.retract)
+            self.rapid_z(number, z_up)
+            self.feed_to(number, (*points[0], z_dn), feed_z)
+            for point in points[1:]:
+                self.feed_to(number, (*point, z_dn), feed)
+            self.retract_up(number)
+
+    def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
+        """FACE about `centre` (app/cnc/face.py says the rows): at each of # PASS levels from
+        Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
+        feeds off the part's end) or one-way (up to the retract height and back between).
+        A block whose tool has no DIA makes no moves: validation reports it."""
+        units = block.units
+        tool_diameter = self.tool_diameter(block.tool)
+        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+        if tool_diameter is None or z_dn >= z_up:
+            return
+        clear = to_nm(
+            block.clear if block.clear is not None else limits.FACE_CLEAR_INCH,
+            units if block.clear is not None else Units.INCH,
+        )
+        rows = face_rows(
+            centre,
+            to_nm(block.xl, units),
+            to_nm(block.yw, units),
+            tool_diameter // 2,
+            tool_diameter * block.step // 100,
+            clear,
+        )
+        zigzag = block.pattern is FacePattern.ZIGZAG
+        feed = to_nm(block.feed_xy, units)
+        self.use_tool(number, block.tool)
+        self.retract = retract_height(z_up, self.z_retract)
+        first = (rows[0][1], rows[0][0])
+        for level in peck_levels(z_up, z_dn, block.passes):
+            self.position(number, first, self.retract)
+            self.rapid_z(number, level)
+            for k, (y, x_from, x_to) in enumerate(rows):
+                forward = not zigzag or k % 2 == 0
+                start, end = (x_from, x_to) if forward else (x_to, x_from)
+                if (self.x, self.y) != (start, y):
+                    if zigzag:
+                        self.feed_to(number, (start, y, level), feed, "step-over")
+                    else:
+                        self.retract_up(number)
+                        self.rapid_xy(number, (start, y))
+                        self.rapid_z(number, level)
+                self.feed_to(number, (end, y, level), feed)
+            self.retract_up(number)
+
+    def tool_diameter(self, tool: int) -> int | None:
+        """A tool's DIA in nm (None: not given, or not positive)."""
+        info = self.tools.get(tool)
+        if info is None or info.diameter is None or info.diameter <= 0:
+            return None
+        return info.diameter
+
+    def spindle_rpm(self, tool: int) -> int | None:
+        """A tool's signed RPM (None: none given)."""
+        info = self.tools.get(tool)
+        return None if info is None else info.rpm
+
     def tap_out(self, number: int, block: Hole, z_up: int, feed: int) -> None:
         """Reverse the spindle, feed up to 0.3 in above Z UP, restore the direction."""
         clockwise, rpm = self.spindle(block.tool)
@@ -954,6 +1158,22 @@ class _Compiler:
             (op, TAG[tag], number - self.base, end[0], end[1], self.z, *centre, feed, 0)
         )
         self.x, self.y = end
+
+    def helix_to(
+        self,
+        number: int,
+        end: tuple[int, int, int],
+        centre: tuple[int, int],
+        clockwise: bool,
+        feed: int,
+        tag: str = "",
+    ) -> None:
+        """An arc from where the tool is to `end` (x, y, z, nm) about `centre`: helical when
+        Z changes on the way. One row turns at most once around; a row that ends at its
+        start's X/Y (and another Z) is one whole turn (path.py)."""
+        op = Op.ARC_CW if clockwise else Op.ARC_CCW
+        self.buffer.rows.append((op, TAG[tag], number - self.base, *end, *centre, feed, 0))
+        self.x, self.y, self.z = end
 
 
 def _too_large(over: cost.Cost, limit: int) -> Finding:

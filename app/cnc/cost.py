@@ -29,19 +29,22 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     Circle,
+    Engrave,
+    Face,
     Frame,
+    Helix,
     Hole,
     HoleOp,
     Placement,
     Pocket,
     Program,
     Rep,
+    ThreadMill,
 )
+from app.cnc.engrave import glyph_strokes
 from app.cnc.mill import Path, pocket_overlap, sweep
-from app.cnc.pocketing.plan import DEFAULT_CHORDAL_TOLERANCE, MAX_LEVELS
-from app.cnc.pocketing.regions import arc_steps
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
+from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm
 
 # The most rows (moves) the compiler makes for each (compiler.py):
@@ -197,6 +200,8 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
     if isinstance(node, Single):
         if isinstance(block, Hole):
             return _Size(extra + _hole_rows(block), 1, 0), used
+        if isinstance(block, Helix | ThreadMill | Face | Engrave):
+            return _Size(extra + _operation_rows(program, block), 0, 0), used
         return _Size(extra + POS_ROWS, 0, 0), used
     if isinstance(node, BoltPattern):
         bolt = blocks[node.bolt]
@@ -242,6 +247,26 @@ def _heavier(
     if a is None or (b is not None and b[1] * b[2] > a[1] * a[2]):
         return b
     return a
+
+
+def _operation_rows(program: Program, block: Helix | ThreadMill | Face | Engrave) -> int:
+    """About how many moves an operation of issue 33 makes, from its numbers alone (before
+    its compile works them out: a pitch or step of nearly nothing is refused first)."""
+    units = block.units
+    if isinstance(block, Engrave):
+        strokes = list(glyph_strokes(block.text, 1.0))
+        return sum(len(s) + POS_ROWS for s in strokes) + POS_ROWS
+    depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
+    if isinstance(block, Helix):
+        return depth // max(to_nm(block.pitch, units), 1) + HOLE_ROWS
+    if isinstance(block, ThreadMill):
+        turns = depth // max(thread_lead(block), 1) + 2
+        return block.passes * (turns + POS_ROWS + 2) + POS_ROWS
+    tool = program.block0.tool(block.tool)
+    diameter = 0 if tool is None or tool.diameter is None else to_nm(tool.diameter, program.units)
+    step = max(diameter * block.step // 100, 1)
+    rows = to_nm(block.yw, units) // step + 2
+    return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
 
 
 def _hole_rows(block: Hole) -> int:
@@ -295,6 +320,10 @@ def _pocket(
     elements (corner arcs and trims) and its link. Its planning shrinks the region (the
     contours drawn with `points` points, each arc in chords within the planner's
     tolerance) once per level: levels x points is what it multiplies."""
+    # The pocket engine (and pyclipper) is loaded for a POCKET, not for every cost.
+    from app.cnc.pocketing.plan import MAX_LEVELS
+    from app.cnc.pocketing.routine import contours_at
+
     pocket = blocks[node.mills[0]]
     drill = blocks[node.drill]
     assert isinstance(pocket, Pocket) and isinstance(drill, Hole)
@@ -319,6 +348,9 @@ def _pocket(
 
 def _points(path: Path) -> int:
     """The points a contour is drawn with for planning (regions.polygon)."""
+    from app.cnc.pocketing.plan import DEFAULT_CHORDAL_TOLERANCE
+    from app.cnc.pocketing.regions import arc_steps
+
     count = 0
     at = path.start
     for element in path.elements:

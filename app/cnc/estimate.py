@@ -469,7 +469,7 @@ class _Clock:
         self.rapid_rate = rapid_rate
         self.max_feed = max_feed
         self.tool_change_seconds = tool_change_seconds
-        self.arcs: dict[tuple[int, int, int, int, bool], float] = {}
+        self.arcs: dict[tuple[int, int, int, int, bool, int], float] = {}
 
     def entry(self) -> tuple[int, int, int, int]:
         """Where the clock stands: x, y, z, tool."""
@@ -524,7 +524,9 @@ class _Clock:
         seconds[lines] = 60.0 * length / rate[lines]
         arcs = np.flatnonzero(arc)
         if len(arcs):
-            seconds[arcs] = _arc_lengths(rows[arcs], x[arcs], y[arcs], self.arcs) / rate[arcs]
+            seconds[arcs] = (
+                _arc_lengths(rows[arcs], x[arcs], y[arcs], z[arcs], self.arcs) / rate[arcs]
+            )
         dwells = op == Op.DWELL
         seconds[dwells] = rows["value"][dwells] / 1000
         seconds[tool_rows] = self.tool_change_seconds
@@ -568,10 +570,13 @@ def _arc_lengths(
     arcs: npt.NDArray[np.void],
     x: npt.NDArray[np.int64],
     y: npt.NDArray[np.int64],
-    known: dict[tuple[int, int, int, int, bool], float],
+    z: npt.NDArray[np.int64],
+    known: dict[tuple[int, int, int, int, bool, int], float],
 ) -> npt.NDArray[np.float64]:
-    """60 × radius × sweep of each arc from (x, y): its time in seconds times its rate.
+    """60 × the length of each arc from (x, y, z): its time in seconds times its rate.
 
+    A flat arc's length is radius × sweep; a helical one's (its Z changes by dz) is
+    sqrt((radius × sweep)² + dz²), the hypotenuse of the helix unrolled.
     In Python floats, with the math module, as one arc at a time always was (numpy's hypot
     and, on some processors, its arctan2 differ in the last bit). An arc's figure depends
     only on where its ends are from its centre, and a LOOP repeats the same arcs, so each
@@ -584,13 +589,18 @@ def _arc_lengths(
         (arcs["x"] - arcs["cx"]).tolist(),
         (arcs["y"] - arcs["cy"]).tolist(),
         (arcs["op"] == _ARC_CW).tolist(),
+        (arcs["z"] - z).tolist(),
         strict=True,
     ):
         figure = known.get(arc)
         if figure is None:
-            x0, y0, x1, y1, clockwise = arc
+            x0, y0, x1, y1, clockwise, dz = arc
             sweep = arc_sweep((x0, y0), (x1, y1), (0, 0), clockwise)
-            figure = known[arc] = 60.0 * math.hypot(x0, y0) * sweep
+            if dz:
+                figure = 60.0 * math.hypot(math.hypot(x0, y0) * sweep, dz)
+            else:
+                figure = 60.0 * math.hypot(x0, y0) * sweep
+            known[arc] = figure
         figures.append(figure)
     return np.array(figures, dtype=np.float64)
 

@@ -59,3 +59,46 @@ def arc_sweep(
     turn = (a0 - a1) if clockwise else (a1 - a0)
     turn %= 2 * math.pi
     return turn if turn > 1e-12 else 2 * math.pi
+
+
+def chord_step(radius: float, tolerance: float) -> float:
+    """The largest angle (radians, at most 90°) one chord of an arc of `radius` may turn
+    through and stay within `tolerance` of the arc (both in nm)."""
+    if tolerance >= radius:
+        return math.pi / 2
+    return min(math.pi / 2, 2 * math.acos(1 - tolerance / radius))
+
+
+def arc_points(
+    start: tuple[int, int, int],
+    end: tuple[int, int, int],
+    centre: tuple[int, int],
+    clockwise: bool,
+    step: float,
+) -> list[tuple[int, int, int]]:
+    """The ends of equal chords along an arc from `start` to `end` (x, y, z in nm), each
+    turning through at most `step` radians; the last is `end` exactly.
+
+    The arc is helical when the two Zs differ: Z changes in proportion to the angle turned,
+    so each chord's end is on the helix. Each coordinate is rounded once to the nanometre.
+    An arc that ends where it starts in XY is a whole turn (`arc_sweep`).
+    """
+    cx, cy = centre
+    radius = math.hypot(start[0] - cx, start[1] - cy)
+    sweep = arc_sweep((start[0], start[1]), (end[0], end[1]), (cx, cy), clockwise)
+    count = max(1, math.ceil(sweep / step - 1e-9))
+    a0 = math.atan2(start[1] - cy, start[0] - cx)
+    sign = -1.0 if clockwise else 1.0
+    rise = end[2] - start[2]
+    points = []
+    for k in range(1, count):
+        angle = a0 + sign * sweep * k / count
+        points.append(
+            (
+                round(cx + radius * math.cos(angle)),
+                round(cy + radius * math.sin(angle)),
+                start[2] + round(rise * k / count),
+            )
+        )
+    points.append(end)
+    return points

@@ -29,10 +29,20 @@ MAX_TOOL = 24  # tools 1-24
 MAX_BOLT_HOLES = 250
 MAX_ISLANDS = 8  # islands in one POCKET (Hurco's conversational pockets take several)
 MAX_LOOP_DEPTH = 4
+MAX_THREAD_PASSES = 20  # our reading: radial passes of a THREAD MILL
+# Our reading: how far beyond the major diameter an external THREAD MILL's tool comes down
+# and leaves to (its edge), as the CIRCLE routines' 0.050 in.
+THREAD_CLEAR_INCH = Decimal("0.05")
+# Our reading: how far a FACE's tool runs off the part's edges when the block gives no CLEAR.
+FACE_CLEAR_INCH = Decimal("0.05")
 MAX_REPEAT = 999
 MIN_RPM = 60
 GEAR_CHANGE_RPM = 500
 MAX_RPM = 4000
+# Our reading: where a target cannot write a helical arc (an arc whose Z changes: HELIX,
+# THREAD MILL), it writes straight moves whose chords stay this close to the helix on the
+# tool's path: the 0.001 in of seed 002's TOL, which the 1704 tape's chords default to.
+HELIX_CHORD_INCH = Decimal("0.001")
 # Our reading: the allowance for one manual tool change in the cycle time (the operator
 # stops, changes the tool, touches off), when the machine profile gives none.
 DEFAULT_TOOL_CHANGE_SECONDS = 30.0

@@ -346,9 +346,11 @@ def _enters_zone(
 ) -> bool:
     """True when some point of the move has Y below zone[0] and Z below zone[1]."""
     if isinstance(move, ArcFeed):
-        # An arc stays at one Z: it is in the zone if Z is and its lowest Y is.
+        # An arc is in the zone if its lowest Y is and its lowest Z is (a helical arc's Z
+        # changes: taking its lowest may report one that passes under the zone's Y at a
+        # higher Z, never miss one).
         low, _ = _extent(move, start, end, ox, oy)
-        return start[2] < zone[1] and low[1] < zone[0]
+        return low[2] < zone[1] and low[1] < zone[0]
 
     def below(a: float, b: float, limit: float) -> tuple[float, float] | None:
         """The part of t in [0, 1] where a + (b - a) t < limit."""

@@ -26,13 +26,21 @@ Row fields (lengths integer nm, part coordinates; feeds nm/min):
 | op | x y z | cx cy | feed | value |
 |---|---|---|---|---|
 | RAPID, FEED | end point | — | FEED's rate | — |
-| ARC_CW, ARC_CCW | end point (z constant) | centre | rate | — |
+| ARC_CW, ARC_CCW | end point (z: see below) | centre | rate | — |
 | DWELL | — | — | — | milliseconds |
 | SPINDLE | — | — | 1 clockwise, 0 not | RPM, or -1 for none (set by hand) |
 | SPINDLE_OFF, COOLANT_OFF, INDEX, END | — | — | — | — |
 | TOOL | z: the head's Z read with the new tool | — | — | tool number |
 | STOP, MESSAGE | — | — | — | index into the piece's (the chunk's) `strings` |
 | COOLANT | — | — | — | 1 flood (M08), 2 mist (M07) |
+
+An arc starts where the move before it ends; its Z is its end's. When that Z differs from the
+start's, the arc is helical: Z changes in proportion to the angle turned (HELIX, THREAD
+MILL). One row turns at most once around its centre: a row whose end is its start in X/Y is
+a whole turn (a full circle, or one turn of a helix), so a helix of n turns is n rows. One
+row per turn, not per quadrant: a G-code target writes one G2/G3 per row, as a programmer
+writes a helix, and the consumers that need quadrants or chords (the 1704 tape, the
+simulation) split any arc already.
 
 `tag` is the index of the move's purpose in `TAGS` (`retract`, `peck-reentry`, …).
 """
@@ -43,6 +51,7 @@ import enum
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -50,7 +59,6 @@ import numpy.typing as npt
 from app.cnc import sizes
 from app.cnc.blocks import HoleOp
 from app.cnc.mill import Finding, Path, Routine, translated
-from app.cnc.pocketing.model import PocketPlan
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -71,6 +79,10 @@ from app.cnc.toolpath import (
     Toolpath,
 )
 from app.cnc.units import Units
+
+if TYPE_CHECKING:
+    # The pocket engine (and pyclipper) loads when a POCKET is planned, not with the path.
+    from app.cnc.pocketing.model import PocketPlan
 
 
 class Op(enum.IntEnum):

@@ -101,6 +101,8 @@ class Rule(enum.Enum):
     UNDER_DETERMINED = "under-determined"
     TANGENCY = "tangency"
     CORNER = "corner"
+    HELIX_TOOL = "helix-tool"
+    ENGRAVE_TEXT = "engrave-text"
 
 
 @dataclass(frozen=True, slots=True)

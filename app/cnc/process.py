@@ -37,7 +37,6 @@ from app.cnc.path import (
     placed_holes,
     placed_mills,
 )
-from app.cnc.pocketing.regions import path_points
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.simulate.stock import stock_box
 from app.cnc.units import Units, format_length
@@ -95,6 +94,9 @@ def cleared_areas(path: CompiledPath) -> list[Cleared]:
     """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
     irregular POCKETs; a sequence whose plan has errors clears nothing), from the outlines
     the compile planned."""
+    # The pocket engine (and pyclipper) is loaded here, not by every validation.
+    from app.cnc.pocketing.regions import path_points
+
     found: list[Cleared] = []
     for mill in placed_mills(path.root):
         if not mill.routine or mill.start == mill.end or mill.depth is None:

@@ -66,9 +66,11 @@ def check_import_size(data: bytes, limits: ImportLimits = IMPORT_LIMITS) -> None
         raise TooLarge(
             f"the file has {len(data):,} bytes; an import is at most {limits.bytes:,} bytes"
         )
-    from app.cnc.formats.dxf.reader import binary_dxf_tags, is_binary_dxf
+    from app.cnc.formats.dxf import is_binary_dxf
 
     if is_binary_dxf(data):
+        from app.cnc.formats.dxf.reader import binary_dxf_tags
+
         # Its tags are not lines: counted (up to past the limit) as its text form's lines.
         tags = binary_dxf_tags(data, limits.lines // 2 + 1)
         if 2 * tags > limits.lines:

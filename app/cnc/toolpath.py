@@ -50,10 +50,11 @@ class Feed:
 
 @dataclass(frozen=True, slots=True)
 class ArcFeed:
-    """ARC_FEED: a circular move in the XY plane at constant Z to (x, y).
+    """ARC_FEED: a circular move about (cx, cy) in the XY plane to (x, y, z).
 
-    The centre is (cx, cy). `clockwise` is seen from above (+Z looking down). An arc whose
-    end equals its start is a full circle.
+    `clockwise` is seen from above (+Z looking down). An arc whose end equals its start in
+    X/Y is a full circle. When `z` differs from the start's Z the arc is helical: Z changes
+    in proportion to the angle turned; such an arc turns at most once around (app/cnc/path.py).
     """
 
     block: int

@@ -24,6 +24,10 @@ from app.cnc.blocks import (
     Copy,
     CopyAction,
     DataBlock0,
+    Engrave,
+    EngraveLayout,
+    Face,
+    Helix,
     Hole,
     HoleOp,
     Island,
@@ -33,16 +37,20 @@ from app.cnc.blocks import (
     PocketLine,
     Program,
     Rep,
+    ThreadMill,
+    ThreadPlace,
     Tool,
     field_label,
 )
 from app.cnc.compiler import compile_program
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
+from app.cnc.engrave import missing
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
+from app.cnc.thread import thread_depth, thread_lead
 from app.cnc.tools import (
     MAX_FLUTES,
     MAX_NUMBER,
@@ -53,7 +61,7 @@ from app.cnc.tools import (
     thread_faults,
     tool_name_fault,
 )
-from app.cnc.units import Units, format_decimal
+from app.cnc.units import Units, format_decimal, message_length, to_nm
 
 ERROR = Severity.ERROR
 WARNING = Severity.WARNING
@@ -442,6 +450,82 @@ class _Checker:
             )
         if isinstance(block, Hole):
             self.check_hole(number, block)
+        if isinstance(block, Helix):
+            self.check_helix(number, block)
+        if isinstance(block, ThreadMill):
+            self.check_thread_mill(number, block)
+        if isinstance(block, Engrave):
+            self.check_engrave(number, block)
+        if isinstance(block, Face) and block.z_dn >= block.z_up:
+            u = block.units.symbol
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(block.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(block.z_up)} {u}; FACE takes the stock from Z UP down to Z DN",
+            )
+
+    def check_engrave(self, number: int, engrave: Engrave) -> None:
+        """Text the font has, Z DN below Z UP, and an arc's radius."""
+        u = engrave.units.symbol
+        if not engrave.text:
+            self.add(number, "TEXT", ERROR, Rule.ENGRAVE_TEXT, "missing; ENGRAVE needs a text")
+        bad = missing(engrave.text)
+        if bad is not None:
+            self.add(
+                number,
+                "TEXT",
+                ERROR,
+                Rule.ENGRAVE_TEXT,
+                f"{bad!r} is not in the engraving font; allowed: letters, digits, space and "
+                "the ASCII signs ! \" # $ % & ' ( ) * + , - . / : ; < = > ? @ [ \\ ] ^ _ ` "
+                "{ | } ~",
+            )
+        if engrave.z_dn >= engrave.z_up:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(engrave.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(engrave.z_up)} {u}; each stroke feeds down from Z UP to Z DN",
+            )
+        if engrave.layout is EngraveLayout.ARC and engrave.radius is None:
+            self.add(
+                number, "RAD", ERROR, Rule.MISSING, "missing; ENGRAVE ARC needs the arc's radius"
+            )
+
+    def check_thread_mill(self, number: int, thread: ThreadMill) -> None:
+        """Z DN below Z UP by more than half a lead: the lead-in and lead-out take a
+        quarter each (the tool's size is `check_thread_tool`'s)."""
+        u = thread.units.symbol
+        lead = thread_lead(thread)
+        if to_nm(thread.z_up, thread.units) - to_nm(thread.z_dn, thread.units) <= lead // 2:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(thread.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(thread.z_up)} {u} by more than half the thread's "
+                f"{message_length(lead, thread.units)} lead: the thread runs from Z UP down "
+                "to Z DN, and its lead-in and lead-out take a quarter of the lead each",
+            )
+
+    def check_helix(self, number: int, helix: Helix) -> None:
+        """Z DN below Z UP (the tool's size is `check_helix_tool`'s)."""
+        u = helix.units.symbol
+        if helix.z_dn >= helix.z_up:
+            self.add(
+                number,
+                "Z DN",
+                ERROR,
+                Rule.DEPTH_ORDER,
+                f"{format_decimal(helix.z_dn)} {u} is not below Z UP "
+                f"{format_decimal(helix.z_up)} {u}; the helix goes down from Z UP to Z DN",
+            )
 
     def check_hole(self, number: int, hole: Hole) -> None:
         op = hole.op.value
@@ -637,6 +721,44 @@ class _Checker:
                 "come first, then each island",
             )
 
+    def check_helix_tool(self, number: int, helix: Helix, tool: Tool) -> None:
+        """A HELIX's tool smaller than its diameter."""
+        if tool.diameter is None:
+            return
+        u = helix.units.symbol
+        tool_diameter = to_nm(tool.diameter, self.program.units)
+        if tool_diameter >= to_nm(helix.diameter, helix.units):
+            self.add(
+                number,
+                "DIA",
+                ERROR,
+                Rule.HELIX_TOOL,
+                f"{format_decimal(helix.diameter)} {u} is not larger than tool "
+                f"{helix.tool}'s DIA {message_length(tool_diameter, helix.units)}; the "
+                "tool's centre goes round at half their difference: give a larger DIA or a "
+                "smaller tool",
+            )
+
+    def check_thread_tool(self, number: int, thread: ThreadMill, tool: Tool) -> None:
+        """An internal thread's tool goes down the bore's centre: smaller than the minor
+        diameter."""
+        if tool.diameter is None or thread.place is not ThreadPlace.INTERNAL:
+            return
+        tool_diameter = to_nm(tool.diameter, self.program.units)
+        lead = thread_lead(thread)
+        minor = to_nm(thread.diameter, thread.units) - round(2 * thread_depth(lead, True))
+        if tool_diameter >= minor:
+            self.add(
+                number,
+                "TOOL #",
+                ERROR,
+                Rule.HELIX_TOOL,
+                f"tool {thread.tool}'s DIA {message_length(tool_diameter, thread.units)} is not "
+                f"smaller than the thread's minor diameter "
+                f"{message_length(minor, thread.units)}: the tool goes down the bore's "
+                "centre and out to the thread; give a smaller thread mill",
+            )
+
     def inside_mill_sequence(self, index: int) -> bool:
         """True when block `index` is a DRILL starting a sequence or one of its mill blocks."""
         return index + 1 < len(self.blocks) and (
@@ -654,12 +776,21 @@ class _Checker:
             if tool_number is None or not 1 <= tool_number <= 24:
                 continue
             tool = db0.tool(tool_number)
-            # A routine keeps the tool off its contour by itself: it needs the diameter.
-            needs_diameter = REGISTRY.of(block).mill is Mill.ROUTINE or (
-                isinstance(block, Hole)
-                and block.comp is not Comp.NONE
-                and starts_mill_sequence(self.blocks, number - 1)
+            # A routine keeps the tool off its contour by itself, and a HELIX goes round
+            # at its DIA less the tool's: they need the diameter.
+            needs_diameter = (
+                REGISTRY.of(block).mill is Mill.ROUTINE
+                or isinstance(block, Helix | ThreadMill | Face)
+                or (
+                    isinstance(block, Hole)
+                    and block.comp is not Comp.NONE
+                    and starts_mill_sequence(self.blocks, number - 1)
+                )
             )
+            if isinstance(block, Helix) and tool is not None:
+                self.check_helix_tool(number, block, tool)
+            if isinstance(block, ThreadMill) and tool is not None:
+                self.check_thread_tool(number, block, tool)
             if needs_diameter and (tool is None or tool.diameter is None):
                 self.add(
                     number,
@@ -671,6 +802,12 @@ class _Checker:
                         "a POCKET needs the cutter's measured diameter to keep off its wall "
                         "and islands"
                         if isinstance(block, Pocket)
+                        else "a HELIX goes round at the finished DIA less the cutter's"
+                        if isinstance(block, Helix)
+                        else "a THREAD MILL cuts the thread to size with the cutter's diameter"
+                        if isinstance(block, ThreadMill)
+                        else "a FACE spaces its passes by a share of the cutter's diameter"
+                        if isinstance(block, Face)
                         else "cutter-compensated milling needs the cutter's measured diameter"
                     ),
                 )

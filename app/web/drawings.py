@@ -26,6 +26,7 @@ from werkzeug.wrappers import Response
 
 from app.cnc.blocks import MillingMode
 from app.cnc.emit.svg import draw
+from app.cnc.formats.dxf import is_dxf
 from app.cnc.formats.dxf.blocks import cut_sides
 from app.cnc.formats.dxf.choice import (
     CUTTING_FIELDS,
@@ -45,7 +46,7 @@ from app.cnc.formats.dxf.choice import (
     pocket_islands,
     read_cutting,
 )
-from app.cnc.formats.dxf.reader import Drawing, is_dxf, parse_options, read_drawing
+from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
 from app.cnc.imports.common import ImportFailure
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Severity

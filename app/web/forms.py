@@ -450,6 +450,8 @@ def _read(spec: FieldSpec, raw: str) -> tuple[Any, str]:
         if spec.required:
             return None, "missing; enter a value"
         return None, ""
+    if spec.kind == "text":
+        return raw, ""  # what it may hold is validation's (ENGRAVE's font, a MESSAGE's)
     if spec.kind == "choice":
         allowed = [value for value, _ in spec.choices]
         if raw not in allowed:

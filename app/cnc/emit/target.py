@@ -9,16 +9,16 @@ A target writes as it goes (`Target.write` to a binary stream), so an export's m
 not grow with the program: `export()` spools the bytes to a temporary file past 1 MB and
 hands back an `Export` to read them from, whole (`data`) or in pieces (`chunks`).
 
-A target registers itself with `@register` when its module is imported; `targets()` imports
-the modules of this package and every format package (app.cnc.formats) once, so a new
-target is a new module — app/cnc/formats/__init__.py has the checklist.
+A target registers itself with `@register` when its module is imported. Which module that
+is, app.cnc.formats.TARGET_MODULES says: `get_target(name)` imports that module alone (an
+export loads its own target, not every format), `targets()` imports them all —
+app/cnc/formats/__init__.py has the checklist for a new target.
 """
 
 from __future__ import annotations
 
 import enum
 import importlib
-import pkgutil
 import tempfile
 import weakref
 from abc import ABC
@@ -311,37 +311,58 @@ class Target(ABC):
 
 
 _REGISTRY: dict[str, Target] = {}
-_LOADED = False
 
 
 def register(cls: type[Target]) -> type[Target]:
-    """Class decorator: make a target available by its name."""
+    """Class decorator: make a target available by its name. Raises ValueError for a name
+    taken, or one app.cnc.formats.TARGET_MODULES does not give this class's module (the
+    registry would not find it without importing everything)."""
+    from app.cnc.formats import TARGET_MODULES
+
     if cls.name in _REGISTRY:
         raise ValueError(f"two targets named {cls.name}")
+    declared = TARGET_MODULES.get(cls.name)
+    if declared != cls.__module__:
+        raise ValueError(
+            f"target {cls.name} is defined in {cls.__module__}, but app.cnc.formats."
+            f"TARGET_MODULES gives {declared or 'no module'} for it"
+        )
     _REGISTRY[cls.name] = cls()
     return cls
 
 
 def targets() -> dict[str, Target]:
-    """Every target, by name (the modules of this package and the format packages are
-    imported once)."""
-    global _LOADED
-    if not _LOADED:
-        package = importlib.import_module("app.cnc.emit")
-        for module in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):
-            importlib.import_module(f"app.cnc.emit.{module.name}")
-        from app.cnc.formats import load_formats
+    """Every target, by name (their modules are imported once)."""
+    from app.cnc.formats import TARGET_MODULES
 
-        load_formats()
-        _LOADED = True
+    for name in TARGET_MODULES:
+        _load(name)
     return dict(sorted(_REGISTRY.items()))
 
 
 def get_target(name: str) -> Target:
-    """The target called `name`. Raises OptionError naming the targets there are."""
-    found = targets().get(name)
+    """The target called `name` (only its module is imported). Raises OptionError naming
+    the targets there are."""
+    from app.cnc.formats import TARGET_MODULES
+
+    if name not in TARGET_MODULES:
+        raise OptionError(
+            f"no export target {name!r}; targets: {', '.join(sorted(TARGET_MODULES))}"
+        )
+    return _load(name)
+
+
+def _load(name: str) -> Target:
+    """The registered target `name` of app.cnc.formats.TARGET_MODULES, its module imported
+    when it is not yet."""
+    found = _REGISTRY.get(name)
     if found is None:
-        raise OptionError(f"no export target {name!r}; targets: {', '.join(targets())}")
+        from app.cnc.formats import TARGET_MODULES
+
+        importlib.import_module(TARGET_MODULES[name])
+        found = _REGISTRY.get(name)
+        if found is None:
+            raise LookupError(f"{TARGET_MODULES[name]} does not register the target {name}")
     return found
 
 

@@ -8,28 +8,38 @@
     document/   the MillBlocks program document (JSON; app/cnc/document.py is its model)
     dxf/        DXF drawings (import only)
 
-A format package registers what it offers when it is imported: its export targets with
-`app.cnc.emit.target.register` (name, options, abilities: `binary`, `picture`,
-`reads_back`, `needs`) and its importer with `app.cnc.imports.registry.register_importer`
-(name, options, `sniff`, `read`). Everything that lists formats — the command line's
-choices, the web forms, the transfers page, the RS-232 receive path — asks the two
-registries (`targets()`, `importers()`), never a list of names, and a target's abilities
-are its attributes, never read from its name.
+A format is known by a light declaration, and its reader or writer is imported only when it
+is used, so a command that exports one program loads that target alone (issue 31):
+
+- a format package's `__init__` declares its importer (`app.cnc.imports.registry.Importer`:
+  name, label, options, `sniff`) and imports nothing heavy; its `read` imports the
+  package's reader when it runs. `importers()` imports every package's `__init__` (detection
+  asks every sniff), never a reader.
+- `TARGET_MODULES` below says which module defines each export target; `get_target(name)`
+  imports that one module, `targets()` (a list of them all) imports every one. The module
+  registers the target with `app.cnc.emit.target.register`, which refuses a target this
+  table does not name, so the table cannot fall behind.
+
+Everything that lists formats - the command line's choices, the web forms, the transfers
+page, the RS-232 receive path - asks the two registries (`targets()`, `importers()`, or
+`get_target`/`get_importer` for one), never a list of names, and a target's abilities
+(`binary`, `picture`, `reads_back`, `needs`) are its attributes, never read from its name.
 
 Adding a format or a target:
 
 1. A new package here (or a module in an existing one) with the model, the reader and
-   the writer side by side; import them from the package's `__init__`.
-2. A target: subclass `Target` (or an existing family: `GcodeTarget` with a `Dialect`,
-   `TapeTarget`), set `name`, `label`, `description`, `extension`, `options` (and
-   `common`), the abilities, and implement `write(program, path, options, report, out)`:
-   walk `path.chunks()` (arrays of moves with their hole and mill spans), write as you go,
-   report what cannot be expressed through `report.unsupported`; never re-derive holes
-   from moves — read the spans.
-3. An importer: subclass `Importer`, set `name`, `label`, `description`, `rank`,
-   `options`, implement `sniff(content)` (how sure the content is this format) and
-   `read(data, name, options)` (a Program and its report; `ImportFailure` naming line and
-   column for anything unreadable).
+   the writer side by side; its `__init__` holds the importer's declaration only.
+2. A target: add its name and module to `TARGET_MODULES`; subclass `Target` (or an
+   existing family: `GcodeTarget` with a `Dialect`, `TapeTarget`), set `name`, `label`,
+   `description`, `extension`, `options` (and `common`), the abilities, and implement
+   `write(program, path, options, report, out)`: walk `path.chunks()` (arrays of moves
+   with their hole and mill spans), write as you go, report what cannot be expressed
+   through `report.unsupported`; never re-derive holes from moves — read the spans.
+3. An importer: in the package's `__init__`, subclass `Importer`, set `name`, `label`,
+   `description`, `rank`, `options`, implement `sniff(content)` (how sure the content is
+   this format; it runs for every file detected, so it stays light) and
+   `read(data, name, options)` (it imports the reader; a Program and its report,
+   `ImportFailure` naming line and column for anything unreadable).
 4. Tests: a golden file per case (`tests/golden/<case>/expected.<target>`, written by
    `make regen-golden` and reviewed), a round trip through the importer that reads it back
    (tests/test_import_roundtrip.py picks up `reads_back`), and the referee where one exists
@@ -41,11 +51,29 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
+# Each export target's name and the module that defines it (and registers it).
+TARGET_MODULES: dict[str, str] = {
+    "canon": "app.cnc.emit.canon",
+    "events": "app.cnc.formats.events.writer",
+    "gcode-fanuc": "app.cnc.formats.gcode.writer",
+    "gcode-linuxcnc": "app.cnc.formats.gcode.writer",
+    "gcode-prototrak": "app.cnc.formats.gcode.writer",
+    "json": "app.cnc.formats.document.writer",
+    "punch-ascii": "app.cnc.formats.tape1704.targets",
+    "punch-eia": "app.cnc.formats.tape1704.targets",
+    "svg": "app.cnc.emit.svg",
+    "tape-ascii": "app.cnc.formats.tape1704.targets",
+    "tape-boss": "app.cnc.formats.gcode.boss",
+    "tape-eia": "app.cnc.formats.tape1704.targets",
+    "tape-svg": "app.cnc.formats.tape1704.targets",
+}
+
 _LOADED = False
 
 
 def load_formats() -> None:
-    """Import every format package once (each registers its targets and importer)."""
+    """Import every format package's declaration once (each registers its importer; no
+    reader or writer is imported)."""
     global _LOADED
     if _LOADED:
         return

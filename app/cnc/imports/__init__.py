@@ -20,7 +20,7 @@ Pure core: no web, database or serial code. See docs/imports.md.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 
 from app.cnc import cost
@@ -57,10 +57,16 @@ class ImportResult:
 
     def text(self) -> str:
         """The report as lines for a terminal, in file order."""
+        return "".join(self.lines())
+
+    def lines(self) -> Iterator[str]:
+        """`text()` a line at a time (a long file's report is megabytes of text)."""
         notes = sorted(self.report, key=lambda n: -1 if n.line is None else n.line)
-        lines = [f"Import report ({self.format}):"]
-        lines += [f"  {note}" for note in notes] or ["  nothing to report"]
-        return "\n".join(lines) + "\n"
+        yield f"Import report ({self.format}):\n"
+        if not notes:
+            yield "  nothing to report\n"
+        for note in notes:
+            yield f"  {note}\n"
 
 
 def detect_format(data: bytes) -> str:

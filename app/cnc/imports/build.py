@@ -55,6 +55,7 @@ from app.cnc.imports.common import (
 from app.cnc.imports.ops import (
     BoltOp,
     Element,
+    HelixOp,
     HoleOpR,
     HoleSpec,
     LoopOp,
@@ -66,6 +67,7 @@ from app.cnc.imports.ops import (
     all_lines,
     anchor,
     tool_of,
+    units_of,
 )
 from app.cnc.imports.steps import ToolData
 from app.cnc.mill import qcir_centre
@@ -177,6 +179,8 @@ class Builder:
             self.bolt(op, inc, loop)
         elif isinstance(op, PocketOp):
             self.pocket(op, inc, loop)
+        elif isinstance(op, HelixOp):
+            self.helix(op, inc, loop)
         else:
             self.routine(op, inc, loop)
         if op.message:
@@ -186,6 +190,12 @@ class Builder:
             titles = block_titles(self.blocks[first - 1 :])
             where = f"block {first}" if first == last else f"blocks {first}-{last}"
             self.notes.became(op.lines[0], f"{self.notes.span(op.lines)} → {where}: {titles}")
+
+    def helix(self, op: HelixOp, inc: bool, loop: bool) -> None:
+        x, y, at = self.place(op.at, op.block.units, inc, op.lines[0])
+        mode = Mode.INC if inc else Mode.ABS
+        self.blocks.append(replace(op.block, x=x, y=y, mode=mode, loop=loop, stop=op.stop))
+        self.ref = at
 
     def pos(self, op: PosOp, inc: bool, loop: bool) -> None:
         x, y, at = self.place(op.at, op.units, inc, op.lines[0])
@@ -519,11 +529,7 @@ def _quarter(start: XY, end: XY, centre: XY, direction: Direction) -> bool:
 
 
 def _units_of(op: Op) -> Units:
-    if isinstance(op, LoopOp):
-        return _units_of(op.body[0])
-    if isinstance(op, PosOp):
-        return op.units
-    return op.spec.units
+    return units_of(op)
 
 
 def used_tools(ops: list[Op]) -> list[tuple[int, int]]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import enum
 import gc
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -220,14 +221,83 @@ def show_feed(nm_per_min: int, units: Units) -> str:
     return f"{text.rstrip('.') or '0'} {units.feed_symbol}"
 
 
-def is_text(data: bytes) -> bool:
-    """True when `data` is UTF-8 text without NULs or control characters (but tab/CR/LF):
-    a file to read as text, not a punch image."""
+# The control characters a text file does not have (all below 32 but tab, LF, FF and CR).
+_CONTROL: Final = re.compile("[\x00-\x08\x0b\x0e-\x1f]")
+
+
+def text_of(data: bytes) -> str | None:
+    """`data` decoded, when it is UTF-8 text without NULs or control characters (but
+    tab/CR/LF/FF): a file to read as text, not a punch image; else None."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
-        return False
-    return not any(ord(ch) < 32 and ch not in "\t\r\n\f" for ch in text)
+        return None
+    # One search in C: testing each character in Python took 0.4 s for 10^5 lines.
+    return text if _CONTROL.search(text) is None else None
+
+
+def is_text(data: bytes) -> bool:
+    """True when `data` is text (`text_of`)."""
+    return text_of(data) is not None
+
+
+def split_lines(text: str) -> list[str]:
+    """The lines of `text` (CR LF, CR or LF ending each; after a last line break, an
+    empty line)."""
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def byte_lines(data: bytes) -> Iterator[str]:
+    """`split_lines` of `decode_text(data)`, one line at a time, each decoded as it is
+    reached: a long file is never held as text too, nor as a list of lines. (CR and LF
+    are never part of a longer UTF-8 character, so splitting the bytes splits the text.)
+    Raises ImportFailure, as `decode_text` does, when the line reached is not UTF-8."""
+    try:
+        yield from _byte_lines(data)
+    except UnicodeDecodeError:
+        decode_text(data)  # (names the line and column)
+        raise
+
+
+def _byte_lines(data: bytes) -> Iterator[str]:
+    start = 0
+    while data.startswith(_BOM, start):
+        start += len(_BOM)
+    n = len(data)
+    while True:
+        lf = data.find(b"\n", start)
+        cr = data.find(b"\r", start, n if lf < 0 else lf)
+        if cr >= 0:
+            yield data[start:cr].decode("utf-8")
+            start = cr + 2 if cr + 1 == lf else cr + 1  # (CR LF is one line break)
+        elif lf >= 0:
+            yield data[start:lf].decode("utf-8")
+            start = lf + 1
+        else:
+            yield data[start:].decode("utf-8")
+            return
+
+
+_BOM: Final = "\ufeff".encode()
+
+
+def text_lines(text: str) -> Iterator[str]:
+    """`split_lines(text)` one at a time, without a list of them all (a list of a million
+    lines is 70 MB) or a copy of the text."""
+    start = 0
+    n = len(text)
+    while True:
+        lf = text.find("\n", start)
+        cr = text.find("\r", start, n if lf < 0 else lf)
+        if cr >= 0:
+            yield text[start:cr]
+            start = cr + 2 if cr + 1 == lf else cr + 1  # (CR LF is one line break)
+        elif lf >= 0:
+            yield text[start:lf]
+            start = lf + 1
+        else:
+            yield text[start:]
+            return
 
 
 def check_digits(digits: str) -> bool:

@@ -12,7 +12,7 @@ from collections.abc import Hashable
 from dataclasses import dataclass, field
 from decimal import Decimal
 
-from app.cnc.blocks import Circle, Comp, Frame, HoleOp
+from app.cnc.blocks import Circle, Comp, Frame, Helix, HoleOp
 from app.cnc.imports.common import XY
 from app.cnc.units import Units
 
@@ -145,7 +145,20 @@ class PocketOp:
     message: str = ""
 
 
-Op = PosOp | HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp | LoopOp
+@dataclass
+class HelixOp:
+    """A HELIX about `at`: `block` is the HELIX with X/Y 0 (placed when it is written),
+    `z_up` its Z UP in nm."""
+
+    lines: list[int]
+    at: XY
+    block: Helix
+    z_up: int
+    stop: bool = False
+    message: str = ""
+
+
+Op = PosOp | HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp | HelixOp | LoopOp
 
 
 def anchor(op: Op) -> XY:
@@ -157,11 +170,24 @@ def anchor(op: Op) -> XY:
     return op.at
 
 
+def units_of(op: Op) -> Units:
+    """The units an operation's blocks are in."""
+    if isinstance(op, LoopOp):
+        return units_of(op.body[0])
+    if isinstance(op, PosOp):
+        return op.units
+    if isinstance(op, HelixOp):
+        return op.block.units
+    return op.spec.units
+
+
 def tool_of(op: Op) -> int:
     if isinstance(op, PosOp):
         return op.tool
     if isinstance(op, LoopOp):
         return tool_of(op.body[0])
+    if isinstance(op, HelixOp):
+        return op.block.tool
     return op.spec.tool
 
 
@@ -211,6 +237,8 @@ def _sign(op: Op, origin: XY, sig: Signature) -> None:
         sig.labels.append(("bolt", op.spec, op.holes, op.angle, op.radius, op.stop, op.message))
     elif isinstance(op, RoutineOp):
         sig.labels.append(("routine", op.spec, op.block, op.stop, op.message))
+    elif isinstance(op, HelixOp):
+        sig.labels.append(("helix", op.block, op.stop, op.message))
     elif isinstance(op, PocketOp):
         # A pocket is not repeated as a LOOP pattern: its own identity is its signature.
         sig.labels.append(("pocket", id(op)))

@@ -63,13 +63,13 @@ from app.cnc.imports.ops import (
     LoopOp,
     MillOp,
     Op,
-    PocketOp,
     RoutineOp,
     Signature,
     anchor,
     close_numbers,
     signature,
     tools_of,
+    units_of,
 )
 from app.cnc.mill import INSIDE_PLACEMENTS, Path, plan_sequence, rough_depth, rough_wall
 from app.cnc.units import Units
@@ -229,6 +229,9 @@ class RoutineFinder:
         self.milling: MillingMode | None = None
         self.milling_line: int | None = None
         self.cache: dict[tuple[object, ...], list[tuple[Circle | Frame, XY, MillingMode]]] = {}
+        # Each tool's diameter and speed as first asked: a file that streams (its tools'
+        # data still being read) checks at the end that they were the file's.
+        self.asked: dict[int, tuple[int | None, int | None]] = {}
 
     def run(self, ops: list[Op]) -> list[Op]:
         return [self.routine(op) if isinstance(op, MillOp) else op for op in ops]
@@ -254,7 +257,10 @@ class RoutineFinder:
         return out
 
     def routine(self, op: MillOp, two_pass_only: bool = False) -> Op:
-        diameter = self.diameters.get(op.spec.tool)
+        tool = op.spec.tool
+        diameter = self.diameters.get(tool)
+        if tool not in self.asked:
+            self.asked[tool] = (diameter, self.rpms.get(tool))
         if diameter is None or op.comp is not Comp.NONE or not op.elements:
             return op
         cuts = normalise(_f(op.at), _segments(op.elements), self.tol)
@@ -810,8 +816,4 @@ class _Kinds:
 
 
 def _units(op: Op) -> Units:
-    if isinstance(op, LoopOp):
-        return _units(op.body[0])
-    if isinstance(op, HoleOpR | MillOp | BoltOp | RoutineOp | PocketOp):
-        return op.spec.units
-    return op.units
+    return units_of(op)

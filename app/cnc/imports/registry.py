@@ -12,16 +12,23 @@ from __future__ import annotations
 import enum
 import re
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportFailure, ImportNote, is_text
+from app.cnc.imports.common import ImportFailure, ImportNote, text_of
 from app.cnc.options import Option
 
 _COMMENT = re.compile(r"\([^)]*\)?")
+PLAIN_PART = 1 << 18  # characters of text blanked at a time (Content.plain)
+
+
+def _after_break(text: str, start: int) -> int:
+    """The index after the first line feed at or after `start`, or the text's length."""
+    found = text.find("\n", start)
+    return len(text) if found < 0 else found + 1
 
 
 class Strength(enum.IntEnum):
@@ -51,14 +58,39 @@ class Content:
     @cached_property
     def text(self) -> str | None:
         """The content as text, or None when it is not text (NULs, control characters)."""
-        if not is_text(self.data):
-            return None
-        return self.data.decode("utf-8").lstrip("\ufeff")
+        text = text_of(self.data)
+        return None if text is None else text.lstrip("\ufeff")
 
-    @cached_property
-    def plain(self) -> str:
-        """The text with parenthesised comments blanked ("" when not text)."""
-        return "" if self.text is None else _COMMENT.sub(" ", self.text)
+    def plain(self) -> Iterator[str]:
+        """The text with parenthesised comments blanked (nothing when not text), in parts
+        of about PLAIN_PART characters, each ending after a line break outside comments:
+        joined, they are the whole text blanked, without a copy of it all (a sniff looks
+        at one part at a time)."""
+        text = self.text
+        if text is None:
+            return
+        start, n = 0, len(text)
+        while start < n:
+            end = _after_break(text, start + PLAIN_PART)
+            # A comment still open at the part's end goes on to its ")" (or the text's
+            # end), as one blanking of the whole text reads it.
+            while end < n and text.rfind("(", start, end) > text.rfind(")", start, end):
+                close = text.find(")", end)
+                end = n if close < 0 else _after_break(text, close)
+            yield _COMMENT.sub(" ", text[start:end])
+            start = end
+
+    def plain_head(self, breaks: int) -> str:
+        """The blanked text up to its `breaks`-th line break (CR or LF, each counted) or
+        its end."""
+        head: list[str] = []
+        seen = 0
+        for part in self.plain():
+            head.append(part)
+            seen += part.count("\n") + part.count("\r")
+            if seen >= breaks:
+                break
+        return "".join(head)
 
     def memo(self, key: str, make: Callable[[], Any]) -> Any:
         """`make()` once per content (a view several sniffs share)."""

@@ -23,23 +23,38 @@ together). What is not carried (coolant, stray dwells, spindle stops) is reporte
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from decimal import Decimal
-from itertools import islice
 from typing import Final, TypeGuard
 
 from app.cnc import limits
-from app.cnc.blocks import Comp, HoleOp
+from app.cnc.blocks import Comp, Helix, HoleOp, MillingMode, Placement
 from app.cnc.compiler import peck_levels
+from app.cnc.geometry import arc_sweep
+from app.cnc.helix import helix_ends
 from app.cnc.imports.common import (
     XY,
     ImportFailure,
     Notes,
+    decimal_of,
+    feed_decimal,
+    quantize_nm,
+    resolution_nm,
     show,
     show_feed,
 )
 from app.cnc.imports.compensation import Part, Reading
-from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, LoopOp, MillOp, Op, PosOp
+from app.cnc.imports.ops import (
+    Element,
+    HelixOp,
+    HoleOpR,
+    HoleSpec,
+    LoopOp,
+    MillOp,
+    Op,
+    PosOp,
+)
 from app.cnc.imports.steps import (
     Arc,
     Coolant,
@@ -54,9 +69,12 @@ from app.cnc.imports.steps import (
     SpindleOff,
     SpindleOn,
     Step,
+    StepSource,
+    StepWindow,
     Stop,
     ToolChange,
 )
+from app.cnc.mill import routine_clockwise
 from app.cnc.units import Units, to_nm
 
 DWELL: Final = limits.HOLE_DWELL_SECONDS
@@ -78,6 +96,9 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
     88: (HoleOp.BORE, "G88 stops for a manual retract; a MillBlocks BORE feeds out"),
     89: (HoleOp.BORE, ""),
 }
+
+# An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
+Retract = tuple[int, int, int]
 
 # `Segmenter.hole_spec`'s key: the HoleSpec's fields, its enums by identity.
 SpecKey = tuple[int, int | None, int | None, int | None, int, int, int]
@@ -101,13 +122,33 @@ class Segmented:
     ops: list[Op]
     tools: dict[int, ToolUse]
     initial_tool: int
-    retracts: list[tuple[int, int, int]]  # (line, Z UP, height the tool rapids up to)
+    retracts: list[Retract]
     two_axis: bool
+    diameters_used: list[dict[int, int]] = field(default_factory=list)
 
 
-def segment(parsed: Parsed) -> Segmented:
-    """The operations of a parsed file. Raises ImportFailure naming the line at fault."""
-    return _Segmenter(parsed).run()
+def segment(
+    parsed: Parsed,
+    steps: StepWindow | None = None,
+    batch: Batch | None = None,
+) -> Segmented:
+    """The operations of a parsed file. Raises ImportFailure naming the line at fault.
+
+    `steps` (default: `parsed.steps`, whole) is where the steps come from: a window onto a
+    reader still reading, when the file streams (docs/imports.md). With `batch`, every
+    BATCH_OPS operations (from an operation on, nothing changes those before it) are
+    handed to it with the retracts recorded since the last batch and the tools' use so
+    far, and the result holds
+    only the last batch's."""
+    return _Segmenter(parsed, steps, batch).run()
+
+
+# What takes each batch of operations (with their retracts, and the tools' use so far).
+Batch = Callable[[list[Op], list[Retract], dict[int, ToolUse]], None]
+
+# Operations the segmenter hands on at a time when the file streams: the window that
+# recognition (pecks, routines, bolt circles, LOOPs) looks across.
+BATCH_OPS: Final = 8192
 
 
 # The kinds of step, as functions with the classes written out: a tuple of classes held in a
@@ -128,25 +169,34 @@ def is_quiet(step: Step) -> bool:
     return isinstance(step, (SpindleOff, Stop, ToolChange, End, Coolant, Message))
 
 
-def is_two_axis(steps: list[Step]) -> bool:
-    """True when Z never changes and there are no canned cycles: the quill is by hand."""
+def is_two_axis(steps: StepWindow) -> bool:
+    """True when Z never changes and there are no canned cycles: the quill is by hand.
+    Reads on only until it knows: the first cycle or second height says no (a 3-axis
+    file shows it in its first moves); a 2-axis file is read to its end."""
     heights: set[int] = set()
-    for step in steps:
+    i = steps.start()
+    while steps.has(i):
+        step = steps[i]
         if isinstance(step, Cycle):
             return False
         if is_motion(step) and step.z is not None:
             heights.add(step.z)
-    return len(heights) <= 1
+            if len(heights) > 1:
+                return False
+        i += 1
+    return True
 
 
-def _cut_follows(steps: list[Step], j: int, at: XY) -> bool:
+def _cut_follows(steps: StepWindow, j: int, at: XY) -> bool:
     """True when steps[j:] go on cutting in XY from `at` (after more feeds in Z there): a
     feed in Z before it is a depth change, not the end of the sequence."""
     # Indexing, not `steps[j:]`: a slice copies the rest of the file's steps on every
     # call, which made reading a long file quadratic.
-    for k in range(j, len(steps)):
+    k = j
+    while steps.has(k):
         step = steps[k]
         if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
+            k += 1
             continue
         return is_cut(step)
     return False
@@ -164,9 +214,19 @@ class _Pending:
 
 
 class _Segmenter:
-    def __init__(self, parsed: Parsed) -> None:
+    def __init__(
+        self,
+        parsed: Parsed,
+        steps: StepWindow | None,
+        batch: Batch | None,
+    ) -> None:
         self.parsed = parsed
-        self.steps = parsed.steps
+        self.steps = StepWindow(StepSource(parsed.steps)) if steps is None else steps
+        self.batch = batch
+        self.first_tool: int | None = None  # the tool of the first change walked past
+        # The tools' diameters as compensation read them (a file that streams checks at the
+        # end that they were the file's).
+        self.diameters_used: list[dict[int, int]] = []
         self.notes: Notes = parsed.notes
         self.units = parsed.units
         self.tol = parsed.tolerance
@@ -177,7 +237,7 @@ class _Segmenter:
         self.tools: dict[int, ToolUse] = {}
         self.ops: list[Op] = []
         self.pending: _Pending | None = None
-        self.retracts: list[tuple[int, int, int]] = []
+        self.retracts: list[Retract] = []
         self.awaiting_retract: tuple[int, int] | None = None  # (line, Z UP) of the last op
         self.spindle_off_line: int | None = None
         self.quill_cycle = False
@@ -190,16 +250,17 @@ class _Segmenter:
     # -- the walk --------------------------------------------------------------------------
 
     def run(self) -> Segmented:
-        if self.two_axis and any(isinstance(s, Feed | Arc) for s in self.steps):
+        if self.two_axis and self.any_cut():
             self.notes.assumed(
                 None,
                 "Z never changes: a 2-axis program, the quill moved by hand (a position where "
                 "the program stops is a hole; cuts in XY are mill sequences)",
             )
         i = 0
-        n = len(self.steps)
-        while i < n:
-            step = self.steps[i]
+        steps = self.steps
+        while steps.has(i):
+            steps.release(i)
+            step = steps[i]
             if self.ended:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
@@ -252,8 +313,22 @@ class _Segmenter:
                 self.message[0], f"message {self.message[1]!r} with no block after it"
             )
         return Segmented(
-            self.ops, self.tools, self.parsed.initial_tool, self.retracts, self.two_axis
+            self.ops,
+            self.tools,
+            self.parsed.initial_tool,
+            self.retracts,
+            self.two_axis,
+            self.diameters_used,
         )
+
+    def any_cut(self) -> bool:
+        steps = self.steps
+        i = steps.start()
+        while steps.has(i):
+            if is_cut(steps[i]):
+                return True
+            i += 1
+        return False
 
     def note_spindle_off(self) -> None:
         if self.spindle_off_line is not None:
@@ -324,9 +399,15 @@ class _Segmenter:
 
     def next_tool(self) -> int:
         """The first tool the program uses, for a position before any tool is named."""
-        for step in self.steps:
+        if self.first_tool is not None:
+            return self.first_tool  # (the steps before the window's start are gone)
+        steps = self.steps
+        i = steps.start()
+        while steps.has(i):
+            step = steps[i]
             if isinstance(step, ToolChange):
                 return step.tool
+            i += 1
         return 1
 
     def hole_spec(
@@ -355,6 +436,10 @@ class _Segmenter:
                 self.message[0], f"message {op.message!r}: the MESSAGE of the next block"
             )
             self.message = None
+        if self.batch is not None and len(self.ops) >= BATCH_OPS:
+            # Nothing changes an operation once another follows it (a STOP marks the last).
+            self.batch(self.ops, self.retracts, self.tools)
+            self.ops, self.retracts = [], []
         self.ops.append(op)
         self.spindle_off_line = None
 
@@ -387,10 +472,26 @@ class _Segmenter:
             return i + 1
         if self.two_axis:
             return self.two_axis_sequence(i)
-        if isinstance(step, Feed) and step.z is not None and self.z is not None and step.z < self.z:
+        if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z < self.z:
+            return self.helix(i)
+        if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z > self.z:
             raise ImportFailure(
                 self.notes.where(step.line),
-                "X/Y and Z fed together into the work (a ramp): MillBlocks plunges straight "
+                "an arc going up in Z (a helix cut upwards, as a thread is milled from the "
+                "bottom): MillBlocks reads a helix going down as a HELIX, and reads no "
+                "THREAD MILL back",
+                step.line,
+            )
+        if (
+            isinstance(step, Feed)
+            and step.z is not None
+            and self.z is not None
+            and step.z != self.z
+        ):
+            into = "into the work" if step.z < self.z else "up from where the tool came down"
+            raise ImportFailure(
+                self.notes.where(step.line),
+                f"X/Y and Z fed together {into} (a ramp): MillBlocks plunges straight "
                 "down, then cuts in XY at one depth; have the CAM plunge (no ramp or helical "
                 "entry)",
                 step.line,
@@ -404,6 +505,109 @@ class _Segmenter:
             step.line,
         )
 
+    def helix(self, i: int) -> int:
+        """Arcs going down about one centre, from where the tool came down at rapid: a
+        HELIX (blocks.Helix) when they are one — the same centre, direction and feed, the
+        same depth a turn, then a whole turn at the bottom and, where the tool covers the
+        centre, a feed to it. The helix's blocks must cut the file's arcs within its
+        rounding. Raises ImportFailure naming the line otherwise."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Arc) and first.z is not None and self.z is not None
+        line = first.line
+        where = self.notes.where(line)
+        centre = (first.cx, first.cy)
+        start = (self.x, self.y, self.z)
+        units = first.units
+
+        def refuse(why: str) -> ImportFailure:
+            return ImportFailure(
+                where,
+                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX (MillBlocks "
+                f"reads no THREAD MILL back): {why}",
+                line,
+            )
+
+        down: list[Arc] = []
+        j = i
+        x, y, z = start
+        turned = 0.0
+        while steps.has(j):
+            s = steps[j]
+            if not (
+                isinstance(s, Arc)
+                and s.z is not None
+                and s.z < z
+                and (s.cx, s.cy) == centre
+                and s.clockwise == first.clockwise
+                and s.feed == first.feed
+            ):
+                break
+            turned += arc_sweep((x, y), (s.x, s.y), centre, s.clockwise)
+            down.append(s)
+            x, y, z = s.x, s.y, s.z
+            j += 1
+        finish = steps.at(j)
+        if not (
+            isinstance(finish, Arc)
+            and (finish.x, finish.y) == (x, y)
+            and finish.z in (None, z)
+            and (finish.cx, finish.cy) == centre
+            and finish.clockwise == first.clockwise
+        ):
+            raise refuse("a HELIX ends with a whole turn at its bottom, and this one does not")
+        j += 1
+        radius = math.dist(start[:2], centre)
+        pitch = quantize_nm(round((start[2] - z) * 2 * math.pi / turned), units)
+        if pitch <= 0:
+            raise refuse("it goes down less than the programming resolution a turn")
+        made = helix_ends(start, centre, z, pitch, first.clockwise)
+        if len(made) != len(down) or any(
+            math.dist(end, (s.x, s.y, s.z or 0)) > 2 * self.tol + resolution_nm(units)
+            for end, s in zip(made, down, strict=False)
+        ):
+            raise refuse(
+                f"its turns do not go down the same {show(pitch, units)} each, as a HELIX's do"
+            )
+        tool = self.tool or self.next_tool()
+        data = self.parsed.tools.get(tool)
+        if data is None or not data.diameter:
+            raise ImportFailure(
+                where,
+                f"a helix cut with tool {tool}, whose diameter the file does not give: a "
+                "HELIX is its finished diameter, the tool's DIA added to the path's; give "
+                "the tool's diameter in a set-up comment",
+                line,
+            )
+        lines = [*self.take_pending(start[:2]), line]
+        leave = steps.at(j)
+        if isinstance(leave, Feed) and (leave.x, leave.y) == centre and leave.z in (None, z):
+            lines.append(leave.line)
+            x, y = centre
+            j += 1
+        diameter = quantize_nm(round(2 * radius) + data.diameter, units)
+        inside_climb = routine_clockwise(
+            Placement.INSIDE, MillingMode.CLIMB, None if self.spindle_cw is not False else -1
+        )
+        block = Helix(
+            x=Decimal(0),
+            y=Decimal(0),
+            diameter=decimal_of(diameter, units),
+            z_up=decimal_of(quantize_nm(start[2], units), units),
+            z_dn=decimal_of(quantize_nm(z, units), units),
+            pitch=decimal_of(pitch, units),
+            milling=(
+                MillingMode.CLIMB if first.clockwise == inside_climb else MillingMode.CONVENTIONAL
+            ),
+            feed_xy=feed_decimal(first.feed, units),
+            tool=tool,
+            units=units,
+        )
+        self.add(HelixOp(lines, centre, block, start[2]))
+        self.awaiting_retract = (line, start[2])
+        self.x, self.y, self.z = x, y, z
+        return j
+
     def plunge(self, i: int) -> int:
         """A feed straight down at (x, y): a hole, or the DRILL of a mill sequence."""
         steps = self.steps
@@ -415,11 +619,10 @@ class _Segmenter:
         feed_z = first.feed
         levels: list[int] = []
         j = i
-        n = len(steps)
         while True:
             # Feed down (perhaps in several moves) to the next level.
             bottom = self.z
-            while j < n:
+            while steps.has(j):
                 s = steps[j]
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
                     if s.feed != feed_z and not levels:
@@ -449,9 +652,9 @@ class _Segmenter:
             levels.append(bottom)
             self.z = bottom
             # A peck: rapid back up to where feeding began, down to the level, feed on.
-            up = steps[j] if j < n else None
-            down = steps[j + 1] if j + 1 < n else None
-            deeper = steps[j + 2] if j + 2 < n else None
+            up = steps.at(j)
+            down = steps.at(j + 1)
+            deeper = steps.at(j + 2)
             if (
                 isinstance(up, Rapid)
                 and (up.x, up.y) == at
@@ -480,12 +683,12 @@ class _Segmenter:
             break
         spec_units = first.units
         dwell: Decimal | None = None
-        nxt = steps[j] if j < n else None
+        nxt = steps.at(j)
         if isinstance(nxt, Dwell):
             dwell = nxt.seconds
             lines.append(nxt.line)
             j += 1
-            nxt = steps[j] if j < n else None
+            nxt = steps.at(j)
         bottom = levels[-1]
         # A mill sequence: cuts in XY at this depth (perhaps after a depth change).
         if _cut_follows(steps, j, at):
@@ -502,7 +705,7 @@ class _Segmenter:
             and self.spindle_cw is not None
             and nxt.clockwise != self.spindle_cw
         ):
-            out = steps[j + 1] if j + 1 < n else None
+            out = steps.at(j + 1)
             if isinstance(out, Feed) and (out.x, out.y) == at and out.z is not None:
                 op = HoleOp.TAP
                 lines += [nxt.line, out.line]
@@ -514,7 +717,7 @@ class _Segmenter:
                     )
                 self.z = out.z
                 j += 2
-                restore = steps[j] if j < n else None
+                restore = steps.at(j)
                 if isinstance(restore, SpindleOn) and restore.clockwise == self.spindle_cw:
                     lines.append(restore.line)
                     j += 1
@@ -582,7 +785,6 @@ class _Segmenter:
         units: Units,
     ) -> int:
         steps = self.steps
-        n = len(steps)
         bottom = levels[-1]
         if len(levels) > 1:
             self.notes.assumed(
@@ -595,7 +797,7 @@ class _Segmenter:
         elements: list[Element] = []
         sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
-        while j < n:
+        while steps.has(j):
             s = steps[j]
             if isinstance(s, Feed):
                 if (s.x, s.y) == (x, y):
@@ -628,7 +830,9 @@ class _Segmenter:
                 if s.z is not None and s.z != depth:
                     raise ImportFailure(
                         self.notes.where(s.line),
-                        "an arc at another depth (a helix): MillBlocks cuts arcs at one depth",
+                        "an arc at another depth (a helix) in a mill sequence: MillBlocks cuts "
+                        "a sequence's arcs at one depth, and reads a helix as a HELIX block "
+                        "where the tool comes down to its start at rapid",
                         s.line,
                     )
                 elements.append(
@@ -651,6 +855,8 @@ class _Segmenter:
             diameters = {
                 n: t.diameter for n, t in self.parsed.tools.items() if t.diameter is not None
             }
+            if diameters not in self.diameters_used:
+                self.diameters_used.append(diameters)
             reading = Reading(self.tool, diameters, units, self.notes)
             parts = reading.parts(at, bottom, elements, sides)
         else:
@@ -669,7 +875,6 @@ class _Segmenter:
     def two_axis_sequence(self, i: int) -> int:
         """Cuts in XY in a 2-axis program: a DRILL without depths and its mill blocks."""
         steps = self.steps
-        n = len(steps)
         at = (self.x, self.y)
         lines = self.take_pending(at)
         first = steps[i]
@@ -682,7 +887,7 @@ class _Segmenter:
         elements: list[Element] = []
         x, y = at
         j = i
-        while j < n:
+        while steps.has(j):
             s = steps[j]
             if is_cut(s) and s.comp:
                 raise ImportFailure(
@@ -703,7 +908,7 @@ class _Segmenter:
                 break
             x, y = s.x, s.y
             j += 1
-        nxt = steps[j] if j < n else None
+        nxt = steps.at(j)
         if isinstance(nxt, Stop) and not nxt.optional:
             lines.append(nxt.line)
             stops += 1
@@ -793,6 +998,8 @@ class _Segmenter:
             )
 
     def change_tool(self, step: ToolChange) -> None:
+        if self.first_tool is None:
+            self.first_tool = step.tool
         self.tool = step.tool
         self.tools.setdefault(step.tool, ToolUse())
         self.spindle_cw = None
@@ -804,9 +1011,10 @@ class _Segmenter:
         self.spindle_off_line = None
         if self.two_axis and self.pending is not None and not after_spindle_stop:
             # The quill: a hole by hand here, or the quill lowered for the cuts that follow.
-            nxt = next(
-                (s for s in islice(self.steps, i + 1, None) if not isinstance(s, Dwell)), None
-            )
+            j = i + 1
+            while isinstance(self.steps.at(j), Dwell):
+                j += 1
+            nxt = self.steps.at(j)
             if isinstance(nxt, Feed | Arc) and (nxt.x, nxt.y) != self.pending.at:
                 self.quill_stop = step.line
                 return i + 1

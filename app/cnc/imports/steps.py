@@ -50,8 +50,9 @@ class Feed:
 
 @dataclass(slots=True)
 class Arc:
-    """A circular move in the XY plane at constant Z about (cx, cy); `clockwise` seen from
-    above. An arc that ends where it starts is a full circle."""
+    """A circular move about (cx, cy) in the XY plane to (x, y, z); `clockwise` seen from
+    above. An arc that ends where it starts in X/Y is a full circle; one whose `z` differs
+    from where it starts is helical (Z in proportion to the angle turned)."""
 
     line: int
     x: int
@@ -203,3 +204,89 @@ class Parsed:
     tools: dict[int, ToolData] = field(default_factory=dict)
     initial_tool: int = 0
     start_z: int | None = None
+
+
+class StepSource:
+    """Steps as a reader makes them: `steps` holds those not yet dropped (the first
+    `dropped` of the file's steps are gone). This one is a whole list; a reader that is
+    still reading (app.cnc.formats.gcode.reader's stream) reads on in `more`."""
+
+    def __init__(self, steps: list[Step]) -> None:
+        self.steps = steps
+        self.dropped = 0
+
+    def settled(self) -> int:
+        """How many of the file's steps (counted from its first) are made and will not
+        change: all of them here; a reader holds back a tool change it may still correct."""
+        return self.dropped + len(self.steps)
+
+    def more(self) -> bool:
+        """Read on (at least a line); False when there is nothing more to read."""
+        return False
+
+    def drop(self, count: int) -> None:
+        """Forget the first `count` steps still held (the walk has passed them)."""
+        del self.steps[:count]
+        self.dropped += count
+
+
+class StreamSource(StepSource):
+    """A StepSource that is still reading its file (app.cnc.imports.motion's
+    `program_from_stream` walks it): what the file has said so far, and all it says."""
+
+    def so_far(self, notes: Notes) -> Parsed:
+        """The set-up as far as the file has said it, its report going to `notes`."""
+        raise NotImplementedError
+
+    def read_all(self) -> Parsed:
+        """The file read to its end: its set-up, and its own report (the reader's)."""
+        raise NotImplementedError
+
+    def renumbers(self) -> bool:
+        """Whether the file names a tool the control does not have (past 24: renumbering
+        it needs every number the whole file names)."""
+        raise NotImplementedError
+
+
+# Steps passed by the walk are dropped in batches of at least this many: `del list[:k]`
+# moves what is left, so dropping one at a time would be quadratic.
+DROP_BATCH = 4096
+
+
+class StepWindow:
+    """The steps as the segmenter walks them, by their index in the file: `has(i)` reads on
+    until step i is made (or the file ends), `release(i)` lets go of the steps before i.
+    Over a whole list (`StepSource`) it is that list; over a reader that is still reading
+    it holds only the steps from the walk's position to the furthest it has looked ahead
+    (docs/imports.md, "Streaming")."""
+
+    def __init__(self, source: StepSource) -> None:
+        self.source = source
+
+    def has(self, i: int) -> bool:
+        """Whether the file has a step i (reading on as far as that needs)."""
+        source = self.source
+        while i >= source.settled():
+            if not source.more():
+                return i < source.settled()
+        return True
+
+    def __getitem__(self, i: int) -> Step:
+        """Step i; `has(i)` must have said it exists."""
+        source = self.source
+        return source.steps[i - source.dropped]
+
+    def at(self, i: int) -> Step | None:
+        """Step i, or None past the end of the file."""
+        return self[i] if self.has(i) else None
+
+    def start(self) -> int:
+        """The index of the first step still held."""
+        return self.source.dropped
+
+    def release(self, i: int) -> None:
+        """Let go of the steps before step i (the walk will not look back at them)."""
+        source = self.source
+        passed = i - source.dropped
+        if passed >= DROP_BATCH:
+            source.drop(passed)

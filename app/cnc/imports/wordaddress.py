@@ -49,7 +49,9 @@ def sniff(content: Content, gcode: bool) -> Sniff | None:
     only the other's evidence (or is not text)."""
     if content.text is None:
         return None
-    found: Evidence = content.memo("word-address", lambda: evidence(content.plain))
+    found: Evidence = content.memo(
+        "word-address", lambda: evidence(content.plain_head(SNIFF_LINES))
+    )
     mine, other = (found.gcode, found.tape) if gcode else (found.tape, found.gcode)
     if mine:
         return Sniff(Strength.EVIDENCE, mine)

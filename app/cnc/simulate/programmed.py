@@ -2,10 +2,12 @@
 
 `programmed_geometry` gathers it for verify: the finished contours of compensated MILL
 sequences and of POCKETs (walls and islands), the CIRCLE/FRAME routines, and every hole with
-its programmed depth. All of it is the compiled path's: its hole and mill spans carry where
-each was cut and the plan it was cut from (the contour, the routine's circle or frame, the
-POCKET's outlines: LOOP patterns, bolt circles, incremental positions and the plans are the
-compiler's, not re-derived or planned again here). Lengths in nm, part coordinates.
+its programmed depth (a HELIX is the bore of its finished DIA). All of it is the compiled
+path's: its hole and mill spans carry where each was cut and the plan it was cut from (the
+contour, the routine's circle or frame, the POCKET's outlines: LOOP patterns, bolt circles,
+incremental positions and the plans are the compiler's, not re-derived or planned again
+here). HELIX, THREAD MILL, FACE and ENGRAVE blocks are read where the compiled moves cut
+them, their sizes from the blocks. Lengths in nm, part coordinates.
 """
 
 from __future__ import annotations
@@ -13,12 +15,25 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from app.cnc.blocks import Comp, HoleOp, Placement, Program
+from app.cnc.blocks import (
+    Comp,
+    Engrave,
+    Face,
+    Helix,
+    HoleOp,
+    Placement,
+    Program,
+    ThreadMill,
+    ThreadPlace,
+)
 from app.cnc.compiler import compile_program
 from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
 from app.cnc.path import MillSpan, Op, Rows
 from app.cnc.pocketing.regions import element_points
 from app.cnc.process import placed_hole_list
+from app.cnc.thread import thread_depth, thread_lead
+from app.cnc.toolpath import ToolInfo
+from app.cnc.units import to_nm
 
 
 @dataclass(frozen=True)
@@ -62,7 +77,8 @@ class Routine:
 @dataclass(frozen=True)
 class HoleSpec:
     """A DRILL, BORE or TAP hole at (x, y), programmed to `depth` (Z DN) by `block`, with a
-    tool of `radius` (0: Data Block 0 gives no diameter)."""
+    tool of `radius` (0: Data Block 0 gives no diameter); a HELIX's bore of its finished
+    radius, flat like a BORE's."""
 
     block: int
     op: HoleOp
@@ -70,6 +86,12 @@ class HoleSpec:
     y: int
     depth: int
     radius: int = 0
+    kind: str = ""  # what made it, where not its operation ("HELIX": a helical bore)
+
+    @property
+    def name(self) -> str:
+        """What the hole is called in a finding (DRILL, BORE, TAP, HELIX)."""
+        return self.kind or self.op.value
 
 
 @dataclass(frozen=True)
@@ -129,7 +151,17 @@ def programmed_geometry(program: Program) -> Programmed:
             found.holes.append(
                 HoleSpec(placed.block, placed.op, placed.x, placed.y, placed.bottom, radius)
             )
+    helical = {
+        number: block
+        for number, block in enumerate(program.blocks, 1)
+        if isinstance(block, Helix | ThreadMill)
+    }
+    faces = {n: b for n, b in enumerate(program.blocks, 1) if isinstance(b, Face | Engrave)}
     for chunk in compiled.chunks():
+        if helical:
+            _helical_cuts(chunk.rows, helical, seen, compiled.tools, found)
+        if faces:
+            _swaths(chunk.rows, faces, compiled.tools, found)
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
@@ -177,6 +209,99 @@ def programmed_geometry(program: Program) -> Programmed:
                 )
             )
     return found
+
+
+def _helical_cuts(
+    rows: Rows,
+    blocks: dict[int, Helix | ThreadMill],
+    seen: set[tuple[int, int, int]],
+    tools: dict[int, ToolInfo],
+    found: Programmed,
+) -> None:
+    """Each HELIX and THREAD MILL where the compiled path cuts it (the centre of its turns,
+    wherever a LOOP or an INC block put it; the lead arcs are tagged and have their own
+    centres) as what it removes: a HELIX the bore of its finished DIA to Z DN, flat; an
+    internal thread the bore of its major diameter to Z DN (the thread's form is not
+    simulated: the tool is a cylinder of its DIA); an external thread all round outside
+    its minor diameter, as a CIRCLE OUTSIDE."""
+    turns = rows[((rows["op"] == Op.ARC_CW) | (rows["op"] == Op.ARC_CCW)) & (rows["tag"] == 0)]
+    for number, cx, cy in zip(
+        turns["block"].tolist(), turns["cx"].tolist(), turns["cy"].tolist(), strict=True
+    ):
+        block = blocks.get(number)
+        if block is None or (number, cx, cy) in seen:
+            continue
+        seen.add((number, cx, cy))
+        units = block.units
+        depth = to_nm(block.z_dn, units)
+        size = to_nm(block.diameter, units)
+        if isinstance(block, Helix):
+            found.holes.append(HoleSpec(number, HoleOp.BORE, cx, cy, depth, size // 2, "HELIX"))
+        elif block.place is ThreadPlace.INTERNAL:
+            found.holes.append(
+                HoleSpec(number, HoleOp.BORE, cx, cy, depth, size // 2, block.type_name)
+            )
+        else:
+            info = tools.get(block.tool)
+            radius = 0 if info is None or info.diameter is None else info.diameter // 2
+            minor = size - round(2 * thread_depth(thread_lead(block), False))
+            found.routines.append(
+                Routine(
+                    block=number,
+                    is_frame=False,
+                    inside=False,
+                    pocket=False,
+                    tool_radius=radius,
+                    depth=depth,
+                    centre=(float(cx), float(cy)),
+                    radius=minor // 2,
+                    drill=number,
+                )
+            )
+
+
+def _swaths(
+    rows: Rows,
+    faces: dict[int, Face | Engrave],
+    tools: dict[int, ToolInfo],
+    found: Programmed,
+) -> None:
+    """Each pass of a FACE, and each stroke of an ENGRAVE, where the compiled path cuts it,
+    as what it removes: the swath its tool sweeps along each cut, to Z DN (as a slot's). A
+    FACE's swaths overlap by the step-over; together they are the rectangle and the run-off
+    round it."""
+    x, y, z = 0, 0, 0
+    strokes: set[tuple[int, int, int, int, int]] = set()
+    for op, tag, number, ex, ey, ez in zip(
+        rows["op"].tolist(),
+        rows["tag"].tolist(),
+        rows["block"].tolist(),
+        rows["x"].tolist(),
+        rows["y"].tolist(),
+        rows["z"].tolist(),
+        strict=True,
+    ):
+        block = faces.get(number)
+        key = (number, x, y, ex, ey)
+        cut = op == Op.FEED and tag == 0 and z == ez and (ex, ey) != (x, y)
+        if block is not None and cut and key not in strokes:
+            strokes.add(key)
+            info = tools.get(block.tool)
+            r = 0 if info is None or info.diameter is None else info.diameter // 2
+            line = ((float(x), float(y)), (float(ex), float(ey)))
+            found.slots.append(
+                Contour(
+                    drill=number,
+                    start=line[0],
+                    elements=(Element(number, line[1], None, False),),
+                    part_left=False,
+                    tool_radius=r,
+                    depth=to_nm(block.z_dn, block.units),
+                    swept=(line,),
+                )
+            )
+        if op <= Op.ARC_CCW:
+            x, y, z = ex, ey, ez
 
 
 def _swept(rows: Rows, mill: MillSpan) -> tuple[tuple[tuple[float, float], ...], ...]:

@@ -19,7 +19,8 @@ comes from the block that moves it:
   3 mm in a metric program) and named in `ToolShapes.notes()`.
 
 Arcs are split into pieces of at most 90°, so each piece's bounding box is tight and the
-sweep can test "inside the sector" with two cross products.
+sweep can test "inside the sector" with two cross products. A helical arc (its Z changes)
+becomes straight chords within `HELIX_CHORD` of it, each descending in proportion.
 """
 
 from __future__ import annotations
@@ -46,6 +47,9 @@ DRILL_POINT_DEGREES = 118.0
 DRILL_SLOPE = 1.0 / math.tan(math.radians(DRILL_POINT_DEGREES / 2))
 DEFAULT_DIAMETER = {Units.INCH: Decimal("0.125"), Units.MM: Decimal(3)}
 MAX_ARC_PIECE = math.pi / 2
+# How far a helical arc's chords may be from it (nm): a quarter of Verify's inch tolerance
+# (0.001 in), so the chords' error stays well inside what Verify reports.
+HELIX_CHORD = 25_400 / 4
 
 
 @dataclass
@@ -235,16 +239,26 @@ def piece_segments(
     arc = op >= Op.ARC_CW
     ccw = op == Op.ARC_CCW
     block = moves["block"].astype(np.int64) + block_shift
-    # Arcs in pieces of at most 90°: a move repeated once per piece.
+    # Arcs in pieces of at most 90°: a move repeated once per piece. A helical arc (its Z
+    # changes) is cut into chords within HELIX_CHORD of it instead, each a straight move
+    # whose Z changes in proportion: the sweep's arc pieces keep one Z.
+    helical = arc & (sz != ez)
     pieces = np.ones(len(moves), dtype=np.int64)
     if arc.any():
         a0 = np.arctan2(sy - cy, sx - cx)
         a1 = np.arctan2(ey - cy, ex - cx)
         turn = np.where(ccw, a1 - a0, a0 - a1) % (2 * math.pi)
         turn = np.where(turn > 1e-12, turn, 2 * math.pi)
-        pieces = np.where(arc, np.maximum(1, np.ceil(turn / MAX_ARC_PIECE - 1e-9)), 1).astype(
-            np.int64
-        )
+        largest = np.full(len(moves), MAX_ARC_PIECE)
+        if helical.any():
+            r = np.hypot(sx - cx, sy - cy)
+            tolerance = np.minimum(HELIX_CHORD, r)
+            largest = np.where(
+                helical,
+                np.minimum(MAX_ARC_PIECE, 2 * np.arccos(1 - tolerance / np.maximum(r, 1.0))),
+                largest,
+            )
+        pieces = np.where(arc, np.maximum(1, np.ceil(turn / largest - 1e-9)), 1).astype(np.int64)
     take = np.repeat(np.arange(len(moves)), pieces)
     x0, y0, x1, y1 = sx[take], sy[take], ex[take], ey[take]
     if arc.any():
@@ -264,7 +278,17 @@ def piece_segments(
         ang = start_angle[inner_end] + (k[inner_end] + 1) * step[inner_end]
         x1[inner_end] = ccx[inner_end] + radius[inner_end] * np.cos(ang)
         y1[inner_end] = ccy[inner_end] + radius[inner_end] * np.sin(ang)
-    z0 = np.where(arc, ez, sz)[take]
+    z0 = np.where(arc & ~helical, ez, sz)[take]
+    z1 = ez[take]
+    if helical.any():
+        first = np.cumsum(pieces) - pieces
+        k = np.arange(len(take)) - first[take]
+        n = pieces[take]
+        on_helix = helical[take]
+        rise = (ez - sz)[take]
+        z0 = np.where(on_helix, sz[take] + rise * k / n, z0)
+        z1 = np.where(on_helix & (k < n - 1), sz[take] + rise * (k + 1) / n, z1)
+    flat_arc = (arc & ~helical)[take]
     tools = tool[take]
     kinds, which = np.unique(tools, return_inverse=True)
     radius_of = np.array([shapes.radius(t) for t in kinds.tolist()], dtype=np.float64)[which]
@@ -276,10 +300,10 @@ def piece_segments(
         z0=z0,
         x1=x1,
         y1=y1,
-        z1=ez[take],
-        cx=np.where(arc, cx, 0.0)[take],
-        cy=np.where(arc, cy, 0.0)[take],
-        arc=arc[take],
+        z1=z1,
+        cx=np.where(flat_arc, cx[take], 0.0),
+        cy=np.where(flat_arc, cy[take], 0.0),
+        arc=flat_arc,
         ccw=ccw[take],
         rapid=(op == Op.RAPID)[take],
         radius=radius_of,

@@ -693,7 +693,7 @@ def _hole_findings(
                 Finding(
                     hole.block,
                     "hole depth",
-                    f"the {hole.op.value} hole at {at} is {_len(bottom - expected, u)} shallower "
+                    f"the {hole.name} hole at {at} is {_len(bottom - expected, u)} shallower "
                     f"than Z DN {format_length(hole.depth, u)}",
                     hole.x,
                     hole.y,
@@ -706,7 +706,7 @@ def _hole_findings(
                 Finding(
                     culprit or hole.block,
                     "hole depth",
-                    f"the {hole.op.value} hole of block {hole.block} at {at} is "
+                    f"the {hole.name} hole of block {hole.block} at {at} is "
                     f"{_len(deepest[hole.x, hole.y] - bottom, u)} deeper than Z DN "
                     f"{format_length(deepest[hole.x, hole.y], u)}{by}",
                     hole.x,

@@ -2,49 +2,17 @@
 
 Its model, reader and writer are app/cnc/document.py (the library stores programs in it
 and the editor owns it); this package offers it to the two registries: the `json` target
-writes the program itself (not its tool path) - any program, errors and all, its problems
-reported as warnings (a `document` target) - and the `json` importer reads a document back
-with its executed or cancelled COPY blocks carried out.
+(writer.py) writes the program itself, errors and all, and the `json` importer (here)
+reads a document back with its executed or cancelled COPY blocks carried out.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
 
-from app.cnc import document
 from app.cnc.blocks import Program
-from app.cnc.copy import CopyError, resolve_copies
-from app.cnc.emit.target import Out, Report, Target, register
 from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind, decode_text
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
-from app.cnc.path import CompiledPath
-
-
-@register
-class JsonTarget(Target):
-    name = "json"
-    label = "MillBlocks program (JSON)"
-    description = "MillBlocks program document (docs/program-format.md)"
-    extension = "json"
-    media_type = "application/json"
-    reads_back = "json"
-    document = True
-
-    def write_program(
-        self, program: Program, options: Mapping[str, Any], report: Report, out: Out
-    ) -> None:
-        out.write(document.dumps(program).encode("utf-8"))
-
-    def write(
-        self,
-        program: Program,
-        path: CompiledPath,
-        options: Mapping[str, Any],
-        report: Report,
-        out: Out,
-    ) -> None:
-        self.write_program(program, options, report, out)
 
 
 @register_importer
@@ -63,6 +31,9 @@ class JsonImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc import document
+        from app.cnc.copy import CopyError, resolve_copies
+
         text = decode_text(data)
         try:
             program = document.loads(text)

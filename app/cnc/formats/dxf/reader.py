@@ -46,13 +46,11 @@ from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
 from typing import Any
 
+from app.cnc.formats.dxf import OPTIONS, is_binary_dxf
 from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.numbers import NumberError, parse_int
-from app.cnc.options import Option, OptionKind
 from app.cnc.sizes import MAX_DRAWING_ENTITIES
 from app.cnc.units import Units
-
-BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
 
 # $INSUNITS code → (nm per drawing unit, program units it suggests, name)
 INSUNITS: dict[int, tuple[int, Units, str]] = {
@@ -63,31 +61,6 @@ INSUNITS: dict[int, tuple[int, Units, str]] = {
     6: (1_000_000_000, Units.MM, "metres"),
 }
 DEFAULT_TOLERANCE = {Units.INCH: 2_540, Units.MM: 2_000}  # nm: 0.0001 in, 0.002 mm
-OPTIONS: tuple[Option, ...] = (
-    Option("layer", OptionKind.TEXT, "", "only these layers (comma-separated); empty: all"),
-    Option(
-        "hole-diameter",
-        OptionKind.DECIMAL,
-        None,
-        "circles this size or smaller are holes (program units); empty: none",
-    ),
-    Option("tolerance", OptionKind.DECIMAL, None, "ends this close are chained"),
-    Option(
-        "units",
-        OptionKind.CHOICE,
-        "",
-        "the program's units; empty: the drawing's",
-        ("", "inch", "mm"),
-    ),
-    Option(
-        "drawing-units",
-        OptionKind.CHOICE,
-        "",
-        "what a drawing without units is in; empty: refuse it",
-        ("", "inch", "mm"),
-    ),
-    Option("feed", OptionKind.DECIMAL, None, "FEEDR XY of the mill blocks"),
-)
 NAMES = tuple(option.name for option in OPTIONS)
 
 
@@ -247,18 +220,6 @@ def _length_option(options: Mapping[str, str], key: str) -> Decimal | None:
             "", f"option {key}={value!r}: a number from 0 to 1000 (program units) is allowed"
         )
     return number
-
-
-def is_dxf(data: bytes) -> bool:
-    """True for a binary DXF, or text whose first group is `0` / `SECTION`."""
-    if is_binary_dxf(data):
-        return True
-    head = data[:64].lstrip(b"\xef\xbb\xbf").split(None, 2)
-    return len(head) >= 2 and head[0] == b"0" and head[1] == b"SECTION"
-
-
-def is_binary_dxf(data: bytes) -> bool:
-    return data.startswith(BINARY_SENTINEL)
 
 
 def binary_dxf_tags(data: bytes, at_most: int) -> int:

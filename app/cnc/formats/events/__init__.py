@@ -2,7 +2,8 @@
 
 model.py declares the events once (their fields, words and numbers); reader.py reads a
 file into events and then into a 2-axis program; writer.py makes events from a program's
-blocks, checks them against its tool path and writes the file.
+blocks, checks them against its tool path and writes the file (the `events` target). Here:
+the importer's declaration; the reader is imported when a file is read.
 """
 
 from __future__ import annotations
@@ -11,12 +12,8 @@ import re
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.formats.events import writer
-from app.cnc.formats.events.reader import read_events
 from app.cnc.imports.common import ImportNote, decode_text
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
-
-__all__ = ["EventsImporter", "writer"]
 
 # A G100-G109 word (seed 003 §2.2.1): no G-code or tape has those.
 _EVENT = re.compile(r"(?<![A-Z0-9.])G10[0-9](?![0-9.])", re.IGNORECASE)
@@ -30,11 +27,17 @@ class EventsImporter(Importer):
     rank = 20
 
     def sniff(self, content: Content) -> Sniff | None:
-        found = _EVENT.search(content.plain)
-        return None if found is None else Sniff(Strength.CONTENT, f"the event {found.group()}")
+        # (Part by part: an event word is within a line, and a part ends at a line break.)
+        for part in content.plain():
+            found = _EVENT.search(part)
+            if found is not None:
+                return Sniff(Strength.CONTENT, f"the event {found.group()}")
+        return None
 
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.events.reader import read_events
+
         program, notes = read_events(decode_text(data), name)
         return program, notes.report()

@@ -67,7 +67,10 @@ from app.cnc.blocks import (
     Circle,
     Comp,
     DataBlock0,
+    Engrave,
+    Face,
     Frame,
+    Helix,
     Hole,
     MillArc,
     MillLine,
@@ -77,6 +80,7 @@ from app.cnc.blocks import (
     Pos,
     Program,
     Rep,
+    ThreadMill,
 )
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.formats.events.model import (
@@ -221,6 +225,22 @@ class _Builder:
     def run_single(self, index: int) -> None:
         block = self.blocks[index]
         number = index + 1
+        if isinstance(block, Helix | ThreadMill | Face | Engrave):
+            # The Plus has no Z (seed 003 §2.1) and no event for X, Y and Z moving together.
+            why = (
+                "its passes go down level by level"
+                if isinstance(block, Face)
+                else "its strokes go down one by one"
+                if isinstance(block, Engrave)
+                else "a helix moves Z with X and Y"
+            )
+            self.report.error(
+                number,
+                f"{block.title} is not written: {why}, and the Plus is a 2-axis control whose "
+                "events have no Z (seed 003 §2.1); use a G-code target",
+            )
+            self.reference = self.resolve(block)
+            return
         assert isinstance(block, Pos | Hole)
         target = self.resolve(block)
         self.add(Position(number, target, block.tool), [(number, self.point(target))])

@@ -4,7 +4,9 @@ the Bridgeport BOSS tape.
 dialects.py says what each dialect does differently (and the options they share);
 writer.py writes any dialect from a compiled program, boss.py the BOSS's segmented tape;
 reader.py reads RS274/NGC, Fanuc and BOSS words into motion, which app.cnc.imports recognises
-as data blocks; bossread.py joins a BOSS tape's segments for it.
+as data blocks; bossread.py joins a BOSS tape's segments for it. Here: the two importers'
+declarations (their sniffs are light); the reader is imported when a file is read, the
+writers when their target is used (app.cnc.formats.TARGET_MODULES).
 """
 
 from __future__ import annotations
@@ -12,15 +14,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.formats.gcode import boss, writer
-from app.cnc.formats.gcode.bossread import join_segments, looks_segmented
-from app.cnc.formats.gcode.reader import parse_gcode
+from app.cnc.formats.gcode.bossread import looks_segmented
 from app.cnc.imports import wordaddress
-from app.cnc.imports.common import ImportNote, collector_paused, decode_text
-from app.cnc.imports.motion import program_from_motion
+from app.cnc.imports.common import ImportNote, byte_lines, collector_paused, decode_text
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
-
-__all__ = ["BossImporter", "GcodeImporter", "boss", "writer"]
 
 
 @register_importer
@@ -36,7 +33,19 @@ class GcodeImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.gcode.reader import FrontEnd, GcodeStream, parse_gcode
+        from app.cnc.imports.motion import Unstreamable, program_from_motion, program_from_stream
+
         with collector_paused():
+            try:
+                # Read as it streams (docs/imports.md, "Streaming"): a long file in flat
+                # memory. What needs the whole program reads it whole: subroutines and
+                # parameters (the front end), and whatever streaming would read otherwise
+                # (a refusal among them: the whole file's is the first, bytes not text first).
+                program, notes = program_from_stream(GcodeStream(byte_lines(data), name))
+                return program, notes.report()
+            except (FrontEnd, Unstreamable):
+                pass
             parsed = parse_gcode(decode_text(data), name)
             return program_from_motion(parsed), parsed.notes.report()
 
@@ -54,12 +63,16 @@ class BossImporter(Importer):
     def sniff(self, content: Content) -> Sniff | None:
         if content.text is None:
             return None
-        found = looks_segmented(content.plain)
+        found = looks_segmented(content.plain())
         return Sniff(Strength.CONTENT, found) if found else None
 
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.gcode.bossread import join_segments
+        from app.cnc.formats.gcode.reader import parse_gcode
+        from app.cnc.imports.motion import program_from_motion
+
         with collector_paused():
             tape = join_segments(decode_text(data))
             parsed = parse_gcode(tape.text, name)

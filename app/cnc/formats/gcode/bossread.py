@@ -17,9 +17,10 @@ and every message names the line of the tape.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 
-from app.cnc.imports.common import failure
+from app.cnc.imports.common import failure, split_lines
 
 _SUBROUTINE = re.compile(r"T(\d+)\s*/")
 _MARK = re.compile(r"#(\d*)")
@@ -39,7 +40,7 @@ def join_segments(text: str) -> Segments:
     """The program text of a BOSS tape: each `#0` and `$` line blanked (a `%#0` line becomes
     `%`), so the G-code reader reads the segments as one program. Raises ImportFailure
     naming line and column for what seed 004 §8.1.1 does not allow (see the module)."""
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    lines = split_lines(text)
     out: list[str] = []
     opened: list[int] = []
     inside: int | None = None  # the line the open segment began on
@@ -148,13 +149,20 @@ def _outside_comments(line: str, char: str) -> int | None:
     return None
 
 
-def looks_segmented(text: str) -> str:
+def looks_segmented(parts: Iterable[str]) -> str:
     """The first line that only a BOSS real-time tape has (`%#0`, a `#0` or a `$` line),
-    as `line N: …`, or ''."""
-    for number, raw in enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"), 1):
-        stripped = raw.strip()
-        if stripped.startswith("%") and stripped[1:].strip() == "#0":
-            return f"line {number}: %#0, a BOSS tape's first segment"
-        if stripped in ("#0", "$"):
-            return f"line {number}: {stripped}, a BOSS tape's segment mark"
+    as `line N: …`, or ''. `parts`: the text in parts, each but the last ending with a
+    line feed."""
+    number = 0
+    for part in parts:
+        lines = split_lines(part)
+        if part.endswith("\n"):
+            lines.pop()  # (the line after this part's last break begins the next part)
+        for raw in lines:
+            number += 1
+            stripped = raw.strip()
+            if stripped.startswith("%") and stripped[1:].strip() == "#0":
+                return f"line {number}: %#0, a BOSS tape's first segment"
+            if stripped in ("#0", "$"):
+                return f"line {number}: {stripped}, a BOSS tape's segment mark"
     return ""

@@ -29,6 +29,11 @@ class Dialect:
     keep_trailing_zeros: bool  # the default of the trailing_zeros option
     line_numbers: bool  # the default of the sequence-numbers option
     largest_line_number: int  # N numbers restart after this (seed 003 §2.2.4: 0-999)
+    # A helical arc (Z changing with X and Y): "" written as G2/G3 with Z; otherwise why not,
+    # and it is written as straight moves within limits.HELIX_CHORD_INCH of the helix.
+    no_helical: str = ""
+    # Said in the report where a helical arc is written as G2/G3 (what the control needs).
+    helical_note: str = ""
     # The default of the tool-change option: T<n> M6 for the first tool (writer.py, "the
     # start"); None: the dialect has no such option (the BOSS tape writes its own start).
     first_tool_change: bool | None = None
@@ -174,6 +179,10 @@ FANUC = Dialect(
     line_numbers=True,
     largest_line_number=9999,
     first_tool_change=True,
+    helical_note=(
+        "helical arc written as G02/G03 with Z: the 6M needs its helical interpolation "
+        "option for it (without it the control alarms on this line)"
+    ),
 )
 # The ProtoTRAK's "modified Fanuc 6" (seed 003 §2.1): a Fanuc 6 post's output with a G code
 # on every line, spaces between words and `;` ending each block; line numbers 0-999 (§2.2.4).
@@ -195,6 +204,9 @@ PROTOTRAK = Dialect(
     # (`T1 M16`, which we read as the scan's M06: M16 is in no table of the manual, and
     # the sample changes every later tool with M06).
     first_tool_change=True,
+    # Seed 003 §2.1: the Plus is a 2-axis control that turns G codes into its position,
+    # mill and arc events, and its arc events (§2.2.5 G102/G103) have no Z.
+    no_helical="the Plus's arc events have no Z (seed 003 §2.2.5)",
 )
 # The Bridgeport BOSS (seed 004): G70/G71, decimal points, a dwell's X in seconds.
 BOSS = Dialect(
@@ -210,4 +222,6 @@ BOSS = Dialect(
     keep_trailing_zeros=False,
     line_numbers=False,
     largest_line_number=99999,
+    # Seed 004 shows no helical form (its arcs are G02/G03 in a plane).
+    no_helical="seed 004 shows the BOSS no helical arc",
 )

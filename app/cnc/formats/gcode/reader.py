@@ -24,7 +24,7 @@ stop). Readings where the dialects differ or the seed is vague (docs/imports.md)
   cycle there (no hole), while a ProtoTRAK post writing its modal code on every line
   (§2.1 rule 1, §2.2.6.2 N6-N9) means a hole — the file cannot say which.
 - **Subroutines, control flow, parameters and expressions** (LinuxCNC's O-words, Fanuc's
-  M98/M99): at the first line that has any (`_FrontEnd`) the file is read again, run by
+  M98/M99): at the first line that has any (`FrontEnd`) the file is read again, run by
   `ngc.py`, which gives this reader each line as it runs, values in place, with the file's
   line and column of each character (a failure here is moved back to them). Every other
   file is read straight (the fast path).
@@ -41,10 +41,12 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from decimal import Decimal
 from typing import Final
 
+from app.cnc import limits
 from app.cnc.formats.gcode import ngc
 from app.cnc.imports.common import (
     MAX_ABS_NM,
@@ -55,6 +57,8 @@ from app.cnc.imports.common import (
     check_digits,
     failure,
     show,
+    split_lines,
+    text_lines,
 )
 from app.cnc.imports.steps import (
     Arc,
@@ -69,7 +73,9 @@ from app.cnc.imports.steps import (
     SpindleOff,
     SpindleOn,
     Step,
+    StepSource,
     Stop,
+    StreamSource,
     ToolChange,
     ToolData,
 )
@@ -382,20 +388,96 @@ class Block:
         return self.other.get(letter)
 
 
+# Lines a stream reads at a time when the segmenter asks for more.
+STREAM_LINES: Final = 256
+
+
+class GcodeStream(StreamSource):
+    """The steps of G-code text as it is read, for a segmenter walking a StepWindow: read
+    on (`more`) as far as it looks, the steps it has passed dropped, so that a file of any
+    length holds only the lines and steps between them. A tool change waits (`settled`)
+    until a cut or a G43 H says which tool it is. Raises FrontEnd where the file needs
+    the front end (subroutines, parameters: the whole program, `parse_gcode`)."""
+
+    def __init__(self, lines: Iterator[str], name: str) -> None:
+        self.reader = _Reader("", name, False)  # (never the front end's: no text needed)
+        super().__init__(self.reader.steps)
+        self.reader.out = self
+        self.lines = lines
+        self.number = 0
+        self.parsed: Parsed | None = None  # once read to the end
+        self.outside = False  # a dropped step names a tool past the control's
+
+    def so_far(self, notes: Notes) -> Parsed:
+        return self.reader.so_far(notes)
+
+    def renumbers(self) -> bool:
+        reader = self.reader
+        numbers = {reader.initial_tool, *reader.tools}
+        for step in self.steps:
+            if isinstance(step, ToolChange):
+                numbers.add(step.tool)
+            elif isinstance(step, Feed | Arc):
+                numbers.add(step.comp_tool)
+        return self.outside or any(not 0 <= n <= limits.MAX_TOOL for n in numbers)
+
+    def settled(self) -> int:
+        pending = self.reader.change_pending
+        if pending is not None and self.parsed is None:
+            return pending[2]
+        return self.dropped + len(self.steps)
+
+    def more(self) -> bool:
+        if self.parsed is not None:
+            return False
+        reader = self.reader
+        for raw in self.lines:
+            self.number += 1
+            reader.read(self.number, raw, True)
+            if self.number % STREAM_LINES == 0:
+                return True
+        self.parsed = reader.finish()
+        return True
+
+    def drop(self, count: int) -> None:
+        reader = self.reader
+        top = limits.MAX_TOOL
+        for step in self.steps[:count]:
+            if isinstance(step, Rapid):
+                reader.passed_motion = step
+            elif isinstance(step, Feed | Arc):
+                reader.passed_motion = step
+                reader.passed_cut = True
+                if not 0 <= step.comp_tool <= top:
+                    self.outside = True
+            elif isinstance(step, Cycle):
+                reader.passed_cut = True
+            elif isinstance(step, ToolChange) and not 0 <= step.tool <= top:
+                self.outside = True
+        super().drop(count)
+
+    def read_all(self) -> Parsed:
+        """The rest of the file, read (its steps kept)."""
+        while self.more():
+            pass
+        assert self.parsed is not None
+        return self.parsed
+
+
 def parse_gcode(text: str, name: str = "") -> Parsed:
     """Read G-code text. Raises ImportFailure naming line and column of the first problem.
 
-    A file is read straight until a line needs the front end (`_FrontEnd`): then it is read
+    A file is read straight until a line needs the front end (`FrontEnd`): then it is read
     again from the start as `ngc.expand` runs it. So a plain file pays nothing for the
     front end (not even a search for what it reads), and one that needs it is read once
     more up to that line."""
     try:
         return _Reader(text, name, False).run()
-    except _FrontEnd:
+    except FrontEnd:
         return _Reader(text, name, True).run()
 
 
-class _FrontEnd(Exception):
+class FrontEnd(Exception):
     """A parameter, expression, O-word or M98 where the file was read straight."""
 
 
@@ -409,9 +491,14 @@ class _Reader:
     def __init__(self, text: str, name: str, expanding: bool) -> None:
         self.expanding = expanding  # the lines come from the front end (ngc.py)
         self.running: ngc.Line | None = None  # the front end's line being read
-        self.lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        self.text = text
         self.notes = Notes()
         self.steps: list[Step] = []
+        # Where the steps go: the list, of which a stream drops those the segmenter has
+        # passed (`passed_cut` and `passed_motion` keep what this reader asks of them).
+        self.out = StepSource(self.steps)
+        self.passed_cut = False  # a Feed, Arc or Cycle among the dropped steps
+        self.passed_motion: Step | None = None  # the last Rapid, Feed or Arc among them
         self.name = ""
         self.part_number = ""
         self.fallback_name = name
@@ -465,7 +552,7 @@ class _Reader:
         if self.expanding:
             # Subroutines, control flow, parameters or expressions: the lines as they run,
             # the front end told after each whether the program has ended.
-            runs = ngc.expand(self.lines, self.notes)
+            runs = ngc.expand(split_lines(self.text), self.notes)
             run = next(runs, None)
             while run is not None:
                 self.running = run
@@ -480,29 +567,46 @@ class _Reader:
                 except StopIteration:
                     break
         else:
-            for number, raw in enumerate(self.lines, start=1):
+            for number, raw in enumerate(text_lines(self.text), start=1):
                 self.read(number, raw, True)
+        return self.finish()
+
+    def made(self) -> int:
+        """How many steps this reader has made (some perhaps dropped since)."""
+        return self.out.dropped + len(self.steps)
+
+    def finish(self) -> Parsed:
+        """The file read to its end: what it says about the set-up, and the steps held."""
         if self.undecided is not None:
             raise self.undecided[0]
-        units = self.program_units or Units.INCH
         if self.units_assumed:
             self.notes.assumed(None, "no G20/G21 before the first dimension: read in inches")
-        if self.tool == 0 and self.steps:
+        if self.tool == 0 and self.made():
             self.notes.assumed(None, "the file names no tool: tool 1")
             self.initial_tool = 1
+        return self.so_far(self.notes)
+
+    def so_far(self, notes: Notes) -> Parsed:
+        """What the file has said so far about the set-up (at its end: all it says), its
+        report going to `notes`. Its units are those of the first G20/G21 (inches when
+        none), its tolerance half a step of the finest number read."""
+        units = self.program_units or Units.INCH
         places = max(self.decimals, 4 if units is Units.INCH else 3)
         tolerance = max(1, round(Decimal(units.nm) / (2 * 10**places)))
+        initial_tool = self.initial_tool
+        if self.tool == 0 and self.made():
+            initial_tool = 1  # (as `finish` will say, unless a tool is named yet)
         return Parsed(
             format="gcode",
             units=units,
             steps=self.steps,
-            notes=self.notes,
+            notes=notes,
             tolerance=tolerance,
             name=self.name or self.fallback_name,
             part_number=self.part_number,
             offsets=self.offsets,
             tools=self.tools,
-            initial_tool=self.initial_tool,
+            initial_tool=initial_tool,
             start_z=self.start_z,
         )
 
@@ -587,7 +691,7 @@ class _Reader:
             elif (ch.isascii() and ch.isalpha()) or ch in "@^":
                 pos = self.word(number, line, pos, words)
             elif ch in "#[" and not self.expanding:
-                raise _FrontEnd
+                raise FrontEnd
             else:
                 raise failure(number, pos + 1, f"unexpected character {ch!r}")
         for comment in comments:
@@ -599,7 +703,7 @@ class _Reader:
             elif head in OUTPUT_COMMENTS:
                 self.notes.ignored(number, f"({head}, …): {OUTPUT_COMMENTS[head]}; not carried")
         if not words:
-            if titles and comments and not self.name and not self.moved and not self.steps:
+            if titles and comments and not self.name and not self.moved and not self.made():
                 self.title(number, comments[0])
             return None
         return self.make_block(number, words, " ".join(comments))
@@ -778,7 +882,7 @@ class _Reader:
             return False
         if self.comp:
             return False
-        if (code in ("73", "83") and not self.cycle_q) or len(self.steps) + 1 > MAX_STEPS:
+        if (code in ("73", "83") and not self.cycle_q) or self.made() + 1 > MAX_STEPS:
             return False
         axes = self.fast_axes(x, y, None, per)
         if axes is None:
@@ -844,7 +948,7 @@ class _Reader:
         match = NUMBER.match(line, pos + 1)
         if letter == "O":
             if not self.expanding:
-                raise _FrontEnd
+                raise FrontEnd
             # (An O-word beginning its line is the front end's.)
             raise failure(number, pos + 1, "an O-word (O number or subroutine) must begin its line")
         if letter not in ALLOWED and letter not in POLAR:
@@ -852,7 +956,7 @@ class _Reader:
         if match is None:
             after = line[pos + 1 : pos + 4]
             if after[:1] in ("#", "[") and not self.expanding:
-                raise _FrontEnd
+                raise FrontEnd
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
         if not check_digits(digit_text(match.group())):
@@ -913,7 +1017,7 @@ class _Reader:
         other = block.other
         for word, code in m_codes:
             if code == "98" and not self.expanding:
-                raise _FrontEnd
+                raise FrontEnd
             if code in REFUSED_M:
                 raise failure(line, word.column, f"M{code}: {REFUSED_M[code]} is not supported")
         if other.keys() <= AXES_AND_FEED and not m_codes and codes.keys() <= LINEAR:
@@ -960,7 +1064,7 @@ class _Reader:
                             None, "the file does not say which tool it starts with: tool 1"
                         )
                     self.steps.append(ToolChange(line, self.selected_tool))
-                    self.change_pending = (line, self.selected_tool, len(self.steps) - 1)
+                    self.change_pending = (line, self.selected_tool, self.made() - 1)
                     self.tool = self.selected_tool
         for _, code in m_codes:
             if code in ("3", "4"):
@@ -1078,7 +1182,8 @@ class _Reader:
             # As rs274: the move that ends compensation goes straight from the compensated
             # point (an arc there is refused).
             last = next(
-                (s for s in reversed(self.steps) if isinstance(s, Rapid | Feed | Arc)), None
+                (s for s in reversed(self.steps) if isinstance(s, Rapid | Feed | Arc)),
+                self.passed_motion,
             )
             self.arc_barred = isinstance(last, Feed | Arc) and last.comp != ""
             self.comp, self.comp_tool = "", 0
@@ -1248,7 +1353,7 @@ class _Reader:
                     f"M6 (line {change_line}) with T{selected} selected, then H{number}: "
                     f"read as tool {number} (a length offset belongs to its tool)",
                 )
-                self.steps[index] = ToolChange(change_line, number)
+                self.steps[index - self.out.dropped] = ToolChange(change_line, number)
                 self.tool = number
         elif self.tool == 0:
             self.initial_tool = number
@@ -1494,7 +1599,9 @@ class _Reader:
 
     def uncut(self) -> bool:
         """Whether no feed, arc or cycle has been read yet."""
-        return not any(isinstance(s, Feed | Arc | Cycle) for s in self.steps)
+        return not self.passed_cut and not any(
+            isinstance(s, Feed | Arc | Cycle) for s in self.steps
+        )
 
     def note_zero(self, line: int, axis: str) -> None:
         self.notes.assumed(line, f"{axis} not known yet: the tool starts over part zero ({axis}0)")
@@ -1583,10 +1690,8 @@ class _Reader:
                 "MillBlocks cuts arcs in XY only; if it is a CAM's vertical lead-in or "
                 "lead-out, turn those off (a lead in XY, or none)",
             )
-        if z is not None and self.z is not None and z != self.z:
-            raise failure(
-                line, first, "a helix (an arc with a Z move): MillBlocks cuts arcs at one depth"
-            )
+        # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
+        # block, or a refusal naming the line) is the segmenter's (app.cnc.imports.segment).
         k = block.get("K")
         if k is not None:
             raise failure(line, k.column, "K in an XY arc")
@@ -1705,7 +1810,7 @@ class _Reader:
         repeats = 1 if l_word is None else self.integer(l_word, block, 1, 1000)
         clear = self.cycle_clear(start_z, r)
         dx, dy = (x - x0, y - y0) if self.incremental else (0, 0)
-        if len(self.steps) + repeats > MAX_STEPS:
+        if self.made() + repeats > MAX_STEPS:
             raise failure(line, first, f"more than {MAX_STEPS} moves: not a program to import")
         hx, hy = x, y
         for k in range(repeats):

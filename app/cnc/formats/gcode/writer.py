@@ -30,6 +30,7 @@ whole milliseconds (P800) and G04 X in seconds.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from decimal import Decimal
 from typing import Any, ClassVar
@@ -42,11 +43,12 @@ from app.cnc.compiler import peck_levels
 from app.cnc.emit.target import Out, Remedy, Report, Target, register
 from app.cnc.emit.text import Lengths, Lines, comment_text
 from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
-from app.cnc.limits import HOLE_DWELL_SECONDS
+from app.cnc.geometry import arc_points, chord_step
+from app.cnc.limits import HELIX_CHORD_INCH, HOLE_DWELL_SECONDS
 from app.cnc.motions import is_motion
 from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op
 from app.cnc.problems import Need
-from app.cnc.units import Units
+from app.cnc.units import Units, to_nm
 
 # A row of a chunk as a tuple (path.MOVE's fields, in order).
 Row = tuple[int, int, int, int, int, int, int, int, int, int]
@@ -626,10 +628,14 @@ class Writer:
                 else:
                     self.line(self.motion_word("1"), *words, self.feed_word(feed))
             self.at(row, wx, wy, wz, z)
+        elif (op == Op.ARC_CW or op == Op.ARC_CCW) and z != self.z and self.d.no_helical:
+            self.helix_lines(row, wx, wy, wz, z)
         elif op == Op.ARC_CW or op == Op.ARC_CCW:
             words = [f"X{wx}", f"Y{wy}"]
             if z != self.z:
                 words.append(f"Z{wz}")
+                if self.d.helical_note:
+                    self.report.note(block, self.d.helical_note)
             i, j = cx - self.x, cy - self.y
             self.line(
                 self.motion_word("2" if op == Op.ARC_CW else "3"),
@@ -676,6 +682,35 @@ class Writer:
         else:
             assert op == Op.END
             self.line(str(self.o["end-code"]))
+
+    def helix_lines(self, row: Row, wx: str, wy: str, wz: str, z: int) -> None:
+        """A helical arc as G1 moves along its chords, for a dialect without helical arcs:
+        each chord within limits.HELIX_CHORD_INCH of the helix (app.cnc.geometry)."""
+        op, _tag, block, x, y, _z, cx, cy, feed, _value = row
+        tolerance = to_nm(HELIX_CHORD_INCH, Units.INCH)
+        radius = math.hypot(self.x - cx, self.y - cy)
+        points = arc_points(
+            (self.x, self.y, self.z),
+            (x, y, z),
+            (cx, cy),
+            op == Op.ARC_CW,
+            chord_step(radius, tolerance),
+        )
+        for px, py, pz in points[:-1]:
+            words = self.axis_words(self.length(px), self.length(py), self.length(pz))
+            if words:
+                self.line(self.motion_word("1"), *words, self.feed_word(feed))
+            self.x, self.y, self.z = px, py, pz
+            self.wx, self.wy, self.wz = self.length(px), self.length(py), self.length(pz)
+        words = self.axis_words(wx, wy, wz)
+        if words:
+            self.line(self.motion_word("1"), *words, self.feed_word(feed))
+        self.at(row, wx, wy, wz, z)
+        self.report.rewritten(
+            block,
+            f"helical arc written as {len(points)} straight moves within {HELIX_CHORD_INCH} in "
+            f"of the helix: {self.d.no_helical}",
+        )
 
     def tool_change(self, block: int, tool: int, z: int) -> None:
         self.line(f"T{tool}", self.code("M", 6))

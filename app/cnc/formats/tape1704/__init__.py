@@ -6,7 +6,8 @@ targets' options); plan.py turns the compiled path into the blocks to be; words.
 them, chooses their G codes and writes their words; image.py lays the blocks out on tape
 (listing, punch rows); picture.py draws the tape (svgwrite); targets.py makes a tape through
 those stages and offers the five targets; reader.py reads a listing or a punch image into
-motion, which app.cnc.imports recognises as data blocks.
+motion, which app.cnc.imports recognises as data blocks. Here: the importer's declaration
+(its options, its sniff); the reader is imported when a tape is read.
 """
 
 from __future__ import annotations
@@ -14,13 +15,28 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.formats.tape1704 import targets
-from app.cnc.formats.tape1704.reader import READER_OPTIONS, read_tape
 from app.cnc.imports import wordaddress
 from app.cnc.imports.common import ImportNote
 from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.options import Option, OptionKind
 
-__all__ = ["TapeImporter", "targets"]
+# Options the user gives where a tape cannot say (the tape target has the same two).
+READER_OPTIONS: tuple[Option, ...] = (
+    Option(
+        "units",
+        OptionKind.CHOICE,
+        "",
+        "inch (the standard) or metric (the metric option); empty: from the tape's header",
+        ("", "inch", "metric"),
+    ),
+    Option(
+        "resolution",
+        OptionKind.CHOICE,
+        "standard",
+        "standard 0.0001 in; option1 0.0002 in; option2 0.001 in",
+        ("standard", "option1", "option2"),
+    ),
+)
 
 
 @register_importer
@@ -41,5 +57,7 @@ class TapeImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        from app.cnc.formats.tape1704.reader import read_tape
+
         program, notes = read_tape(data, name, options)
         return program, notes.report()

@@ -35,7 +35,7 @@ from app.cnc.emit.target import Report
 from app.cnc.emit.text import comment_text
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.profile import Profile
-from app.cnc.geometry import arc_sweep
+from app.cnc.geometry import arc_points, chord_step
 from app.cnc.needs import blocks_text
 from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move
 from app.cnc.toolpath import (
@@ -228,7 +228,7 @@ class Planner:
                         items.append(Motion(block, Kind.RAPID, (mx, my, mz), tag=TAGS[tag]))
                     elif op == Op.FEED:
                         items.append(Motion(block, Kind.LINE, (mx, my, mz), feed=feed))
-                    elif profile.circular:
+                    elif profile.circular and mz_path == z:
                         items.append(
                             Motion(
                                 block,
@@ -243,7 +243,15 @@ class Planner:
                     else:
                         arc = as_move(row, strings)
                         assert isinstance(arc, ArcFeed)
-                        items.extend(self.chords(arc, (x, y), mz, tool))
+                        if mz_path != z:
+                            report.rewritten(
+                                block,
+                                "helical arc written as chords: the 1704's arcs stay in "
+                                "one plane (seed 000 G20/G30: 'a canted arc or helical "
+                                "motion cannot be generated')",
+                            )
+                        start_z = self.machine_z(z, tool)
+                        items.extend(self.chords(arc, (x, y), start_z, mz, tool))
                     x, y, z = mx, my, mz_path
                     continue
                 move = as_move(row, strings)
@@ -482,8 +490,17 @@ class Planner:
             )
         return [Aux(block, [("M", "00")], text if self.comments else "")]
 
-    def chords(self, arc: ArcFeed, start: tuple[int, int], mz: int | None, tool: int) -> list[Item]:
+    def chords(
+        self,
+        arc: ArcFeed,
+        start: tuple[int, int],
+        start_z: int | None,
+        mz: int | None,
+        tool: int,
+    ) -> list[Item]:
         """The chord method (seed 000 §3, Fig. 3-2): end points on the circle, equal steps.
+        From `start_z` to `mz` (the machine's Z words; None: none written): on a helical
+        arc, Z changes in proportion to the angle turned (app.cnc.geometry.arc_points).
 
         The tolerance is held on the part. The tool path does not say which side the
         material is on, so we take the side that errs more: the manual notes the part error
@@ -505,20 +522,21 @@ class Planner:
                 "the chord tolerance is finer than the tape's resolution can hold on this arc",
             )
             allowed = radius
-        step = math.pi / 2 if allowed >= radius else 2 * math.acos(1 - allowed / radius)
-        step = min(step, math.pi / 2)
-        sweep = arc_sweep((start[0], start[1]), (arc.x, arc.y), (cx, cy), arc.clockwise)
-        count = max(1, math.ceil(sweep / step - 1e-9))
-        a0 = math.atan2(start[1] - cy, start[0] - cx)
-        sign = -1.0 if arc.clockwise else 1.0
-        motions: list[Item] = []
-        for k in range(1, count + 1):
-            if k == count:
-                end = (arc.x, arc.y)
-            else:
-                angle = a0 + sign * sweep * k / count
-                end = (round(cx + radius * math.cos(angle)), round(cy + radius * math.sin(angle)))
-            motions.append(Motion(arc.block, Kind.LINE, (end[0], end[1], mz), feed=arc.feed))
+        step = chord_step(radius, allowed)
+        rise = 0 if mz is None or start_z is None else mz - start_z
+        points = arc_points(
+            (start[0], start[1], 0), (arc.x, arc.y, rise), (cx, cy), arc.clockwise, step
+        )
+        count = len(points)
+        motions: list[Item] = [
+            Motion(
+                arc.block,
+                Kind.LINE,
+                (px, py, None if mz is None else mz - rise + pz),
+                feed=arc.feed,
+            )
+            for px, py, pz in points
+        ]
         self.moves_report.rewritten(
             arc.block,
             f"arc written as {count} chords (no circular interpolation; chord tolerance "

@@ -69,7 +69,6 @@ from app.cnc.imports.steps import (
     ToolChange,
     ToolData,
 )
-from app.cnc.options import Option, OptionKind
 from app.cnc.units import Units
 
 
@@ -96,23 +95,6 @@ FORMATS = {
     ("inch", "option2"): Format("resolution option 2 (3.3, F4)", Units.INCH, 3, 3, 25_400_000, 0),
     ("metric", "standard"): Format("metric option (3.3, F4)", Units.MM, 3, 3, 1_000_000, 0),
 }
-# Options the user gives where a tape cannot say (the tape target has the same two).
-READER_OPTIONS: tuple[Option, ...] = (
-    Option(
-        "units",
-        OptionKind.CHOICE,
-        "",
-        "inch (the standard) or metric (the metric option); empty: from the tape's header",
-        ("", "inch", "metric"),
-    ),
-    Option(
-        "resolution",
-        OptionKind.CHOICE,
-        "standard",
-        "standard 0.0001 in; option1 0.0002 in; option2 0.001 in",
-        ("standard", "option1", "option2"),
-    ),
-)
 LETTERS = set("NGXYZIJKRFSTM")
 DIMENSIONS = set("XYZIJKR")
 WORD_DIGITS = {"N": 3, "G": 2, "M": 2, "S": 2, "T": 2, "F": 4}

@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 from app.cnc.blocks import Program
 from app.cnc.emit.target import Option, Out, Remedy, Report, Target, register
 from app.cnc.emit.text import Lines
-from app.cnc.formats.tape1704 import codes, picture
+from app.cnc.formats.tape1704 import codes
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.image import TapeImage
 from app.cnc.formats.tape1704.plan import Planner, sanitize_comment
@@ -325,11 +325,14 @@ class TapeSvgTarget(TapeTarget):
         report: Report,
         out: Out,
     ) -> None:
+        # The drawing (and svgwrite) is loaded for this target alone, not for every tape.
+        from app.cnc.formats.tape1704.picture import draw
+
         code = TapeCode(options["code"])
         tape = Tape(program, path, options, code, report)
 
         def emit(text: str) -> None:
             out.write(text.encode("utf-8"))
 
-        picture.draw(tape.image.punched(tape.lines()), code, tape.image.title, emit)
+        draw(tape.image.punched(tape.lines()), code, tape.image.title, emit)
         tape.finish()

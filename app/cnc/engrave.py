@@ -1,0 +1,80 @@
+"""ENGRAVE's strokes (blocks.Engrave): text in a single-stroke Hershey font, laid along a line
+or an arc, in nm.
+
+The font is the Hershey Roman simplex ("futural") of the `Hershey-Fonts` package: one
+stroke a line of the letter, no outlines, as an engraving cutter draws it. Its glyphs are
+the printable ASCII characters (space to ~); any other character is refused by validation,
+naming it. HEIGHT is the capital height (cap line to base line, 21 font units); letters are
+spaced by the font's own widths.
+
+Along a line the baseline starts at X, Y and runs at ANGLE (degrees counter-clockwise from
++X), the letters upright to its left. Along an arc the baseline is the circle of RAD about
+X, Y from ANGLE (counter-clockwise from +X, where the text starts), the text reading
+clockwise with its letters standing outward (the top of a circle), or counter-clockwise
+with them standing inward (its bottom). Each point of a stroke is placed on the curve; the
+stroke's segments between points stay straight (small beside the radius).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterator
+
+from HersheyFonts import HersheyFonts
+
+FONT = "futural"
+CAP, BASE = -12, 9  # the font's cap line and base line (its units, y down)
+
+Pt = tuple[float, float]
+
+
+@functools.cache
+def _font() -> HersheyFonts:
+    font = HersheyFonts()
+    font.load_default_font(FONT)
+    return font
+
+
+def missing(text: str) -> str | None:
+    """The first character of `text` the font has no glyph for, or None."""
+    glyphs = _font().all_glyphs
+    return next((c for c in text if c not in glyphs), None)
+
+
+def glyph_strokes(text: str, height: float) -> Iterator[list[Pt]]:
+    """The text's strokes on a baseline from (0, 0) along +X, capitals `height` high (the
+    same unit as `height`), y up."""
+    scale = height / (BASE - CAP)
+    x = 0.0
+    for glyph in _font().glyphs_for_text(text):
+        for stroke in glyph.strokes:
+            yield [(x + (gx - glyph.left_offset) * scale, (BASE - gy) * scale) for gx, gy in stroke]
+        x += glyph.char_width * scale
+
+
+def along_line(strokes: Iterator[list[Pt]], start: Pt, angle: float) -> list[list[Pt]]:
+    """Strokes laid along a line from `start` at `angle` degrees counter-clockwise of +X."""
+    c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+    sx, sy = start
+    return [[(sx + u * c - v * s, sy + u * s + v * c) for u, v in stroke] for stroke in strokes]
+
+
+def along_arc(
+    strokes: Iterator[list[Pt]], centre: Pt, radius: float, angle: float, clockwise: bool
+) -> list[list[Pt]]:
+    """Strokes laid along a circle of `radius` about `centre` from `angle` degrees
+    (counter-clockwise of +X): clockwise, letters standing outward; else standing inward."""
+    cx, cy = centre
+    a0 = math.radians(angle)
+    placed = []
+    for stroke in strokes:
+        points = []
+        for u, v in stroke:
+            if clockwise:
+                theta, r = a0 - u / radius, radius + v
+            else:
+                theta, r = a0 + u / radius, radius - v
+            points.append((cx + r * math.cos(theta), cy + r * math.sin(theta)))
+        placed.append(points)
+    return placed

@@ -1,0 +1,33 @@
+"""FACE's passes (blocks.Face): where the tool goes in one level, in nm.
+
+Passes run along X, the tool's centre from `clear` plus its radius beyond the rectangle's
+left edge to as far beyond its right edge (the tool fully off the part at both ends). The
+rows are evenly spaced in Y, at most `step` apart, from the row whose tool edge runs
+`overhang` below the rectangle's lower edge to the one whose edge runs as far above its
+upper edge (`overhang` is the smaller of the clearance and the tool's radius, so the tool
+always overlaps the part); a rectangle narrower than that is one row through its centre.
+Zig-zag rows alternate +X and −X starting +X; one-way rows all go +X.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+def face_rows(
+    centre: tuple[int, int], xl: int, yw: int, tool_radius: int, step: int, clear: int
+) -> list[tuple[int, int, int]]:
+    """(y, x from, x to) of each pass, bottom row first, every one in +X (the caller turns
+    every other one round for zig-zag). Raises ValueError for a step or tool not above 0."""
+    if step <= 0 or tool_radius <= 0:
+        raise ValueError("a FACE needs a tool with a diameter and a step above 0")
+    cx, cy = centre
+    overhang = min(clear, tool_radius)
+    x_from = cx - xl // 2 - tool_radius - clear
+    x_to = cx + (xl - xl // 2) + tool_radius + clear
+    low = cy - yw // 2 + tool_radius - overhang
+    high = cy + (yw - yw // 2) - tool_radius + overhang
+    if high <= low:
+        return [(cy, x_from, x_to)]
+    count = math.ceil((high - low) / step) + 1
+    return [(low + round((high - low) * k / (count - 1)), x_from, x_to) for k in range(count)]

@@ -1,0 +1,49 @@
+"""Helical motion shared by the operations that cut along a helix (HELIX, THREAD MILL).
+
+Lengths are integer nanometres; a helix is written one row per turn (app/cnc/path.py): the
+end points here are those rows' ends. Depths and pitches are whole nanometres, so how many
+turns a depth takes is exact.
+"""
+
+from __future__ import annotations
+
+import math
+
+Point = tuple[int, int, int]
+# The shortest part of a turn a helix ends with (nm): 0.001 in along the arc, ten steps of
+# the finest file (0.0001 in), so its end is never written onto its start.
+SHORTEST_ARC = 25_400
+
+
+def helix_ends(
+    start: Point, centre: tuple[int, int], z_end: int, pitch: int, clockwise: bool
+) -> list[Point]:
+    """The ends of the rows of a helix from `start` about `centre` to `z_end`, rising or
+    falling `pitch` (nm, > 0) per turn: one row per whole turn (ending over `start`), then
+    one for what is left of a turn (ending where that part of a turn takes it). What is left
+    shorter than `SHORTEST_ARC` along the arc is taken by the last whole turn instead.
+
+    Raises ValueError for a pitch that is not positive."""
+    if pitch <= 0:
+        raise ValueError("a helix's pitch must be more than 0")
+    x, y, z = start
+    cx, cy = centre
+    depth = abs(z_end - z)
+    way = 1 if z_end > z else -1
+    whole, rest = divmod(depth, pitch)
+    radius = math.hypot(x - cx, y - cy)
+    turn = 2 * math.pi * rest / pitch
+    if rest and radius * turn < SHORTEST_ARC:
+        # What is left of a turn is too short to write: an arc whose end a file rounds onto
+        # its start is a whole circle there. The last whole turn (or one turn, when there is
+        # none) goes down to the end instead.
+        whole, rest = max(whole, 1), 0
+        ends = [(x, y, z + way * pitch * k) for k in range(1, whole)]
+        return [*ends, (x, y, z_end)]
+    ends = [(x, y, z + way * pitch * k) for k in range(1, whole + 1)]
+    if rest:
+        angle = math.atan2(y - cy, x - cx) + (-turn if clockwise else turn)
+        ends.append(
+            (round(cx + radius * math.cos(angle)), round(cy + radius * math.sin(angle)), z_end)
+        )
+    return ends

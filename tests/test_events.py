@@ -649,9 +649,10 @@ def golden(name: str) -> Program:
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_every_golden_program_passes_the_self_check(case: Path) -> None:
     program = golden(case.name)
-    if any(isinstance(b, Helix | ThreadMill | Face | Engrave) for b in program.blocks):
-        # A helix moves Z with X and Y, a FACE goes down level by level: the Plus (no Z)
-        # refuses them, saying so.
+    ramped = any(getattr(b, "entry", None) is not None for b in program.blocks)
+    if ramped or any(isinstance(b, Helix | ThreadMill | Face | Engrave) for b in program.blocks):
+        # A helix (or a pocket's ramp entry) moves Z with X and Y, a FACE goes down level
+        # by level: the Plus (no Z) refuses them, saying so.
         with pytest.raises(ExportError) as refused:
             export(program, "events")
         assert refused.value.report is not None

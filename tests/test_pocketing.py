@@ -20,16 +20,18 @@ from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
 
 from app.cnc.blocks import MillingMode
-from app.cnc.mill import Element, Path
+from app.cnc.mill import Element, Path, sample
 from app.cnc.pocketing import (
     LinkKind,
     PassKind,
     PocketIssue,
     PocketPlan,
+    nearest,
     pass_levels,
     plan_pocket,
     regions,
 )
+from app.cnc.pocketing.plan import _closest_on_element, _way_round
 from app.cnc.problems import Severity
 
 IN = 25_400_000
@@ -612,3 +614,54 @@ def test_planning_work_grows_linearly_with_the_islands(monkeypatch: pytest.Monke
     eight, passes_eight = clipper_points(monkeypatch, 8)
     assert passes_eight <= 2.2 * passes_four  # the same levels round twice the islands
     assert eight <= 2.2 * four, f"{four:,} -> {eight:,} points: {eight / four:.2f}x"
+
+
+def comb(n: int, lift: float = 0.0) -> Path:
+    """A ring 1.25 n in long with a notch in its floor every 1.25 in (4 n + 4 lines),
+    raised by `lift` nm."""
+    floor: list[Pt] = [(0.0, lift)]
+    for k in range(n):
+        x = 1.25 * IN * k + 0.5 * IN
+        floor += [(x, lift), (x, lift + IN / 4), (x + IN / 4, lift + IN / 4), (x + IN / 4, lift)]
+    return polygon_path(
+        [*floor, (1.25 * IN * n, lift), (1.25 * IN * n, lift + IN), (0.0, lift + IN)]
+    )
+
+
+def way_round_pairs(monkeypatch: pytest.MonkeyPatch, n: int) -> tuple[int, Pt, Pt]:
+    """(pairs of sample and element bounded with numpy, the point chosen, the point that
+    measuring every pair exactly chooses) for the way round `comb(n)` raised 0.1 in to
+    `comb(n)`, sampled every 1/128 in."""
+    counted = [0]
+    real = nearest.bounds
+
+    def bounds(points: object, elements: nearest.Elements) -> object:
+        counted[0] += len(points) * len(elements)  # type: ignore[arg-type]
+        return real(points, elements)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(nearest, "bounds", bounds)
+    previous, ring, step = comb(n, IN / 10), comb(n), IN / 128
+    _, chosen = _way_round(previous, ring, step)
+    monkeypatch.undo()
+    best: tuple[float, Pt] | None = None
+    starts = [ring.start] + [e.end for e in ring.elements[:-1]]
+    for point, _ in sample(previous, step):
+        for start, element in zip(starts, ring.elements, strict=True):
+            d = math.dist(_closest_on_element(point, start, element), point)
+            if best is None or d < best[0] - 1e-9:
+                best = (d, point)
+    assert best is not None
+    return counted[0], chosen, best[1]
+
+
+def test_way_round_the_previous_ring_grows_with_the_rings_not_their_product(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Issue 30: the link along the previous ring looks for its point nearest the next ring.
+    Every sample against every element grew as the product of the two rings' sizes (4x
+    for twice the islands, per pass); samples against the elements near them grow as
+    their sum. The point is the one measuring every pair exactly finds."""
+    four, chosen_four, exact_four = way_round_pairs(monkeypatch, 4)
+    eight, chosen_eight, exact_eight = way_round_pairs(monkeypatch, 8)
+    assert chosen_four == exact_four and chosen_eight == exact_eight
+    assert eight <= 2.2 * four, f"{four:,} -> {eight:,} pairs: {eight / four:.2f}x"

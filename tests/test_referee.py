@@ -167,6 +167,9 @@ EVENTS_REFUSED = dict.fromkeys(
     ("helix-bore", "helix-entry-mm", "thread-mill-internal", "thread-mill-external-mm"), HELICAL
 ) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
 EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
+EVENTS_REFUSED |= dict.fromkeys(
+    ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm"), "a ramp entry moves Z with XY"
+)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

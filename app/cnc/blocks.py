@@ -68,6 +68,13 @@ class Placement(enum.Enum):
     POCKET = "pocket"
 
 
+class Entry(enum.Enum):
+    """How a pocketing routine goes down to each depth level instead of plunging (issue 33):
+    on a helical ramp (app/cnc/ramp.py). None on the block is the plunge."""
+
+    HELIX = "helix"
+
+
 class MillingMode(enum.Enum):
     """Data Block 0's "0 CONV 1 CLIMB" choice for circle and frame routines."""
 
@@ -160,7 +167,13 @@ COMPENSATED = frozenset(
         Rule.CORNER,
     }
 )
-ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL})
+ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL, Rule.RAMP_ENTRY})
+# A pocketing routine's ramp entry (app/cnc/ramp.py): how it goes down, and how steeply.
+ENTRY_HELP = "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across"
+RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
+RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
+POCKET_ONLY = (("placement", Placement.POCKET),)
+RAMPED = (*POCKET_ONLY, ("entry", Entry.HELIX))
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -464,6 +477,12 @@ class Circle(Block):
     radius: Decimal = prompt("RAD", LENGTH, positive=True)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    entry: Entry | None = prompt(
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
+    )
+    ramp_angle: Decimal | None = prompt(
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
+    )
 
     @property
     def type_name(self) -> str:
@@ -494,6 +513,12 @@ class Frame(Block):
     corner_radius: Decimal = prompt("CORNER RAD", LENGTH, Decimal(0), low=Decimal(0))
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    entry: Entry | None = prompt(
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
+    )
+    ramp_angle: Decimal | None = prompt(
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
+    )
 
     @property
     def type_name(self) -> str:

@@ -99,6 +99,7 @@ from app.cnc.path import (
     size,
 )
 from app.cnc.problems import Rule, Severity
+from app.cnc.ramp import Ramp
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
@@ -645,17 +646,28 @@ class _Compiler:
             return
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
-        self.position(number, plunge, self.retract)
-        self.rapid_z(number, z_up)
         levels = peck_levels(z_up, z_dn + plan.rough_allowance, drill.pecks)
+        # Where each level's way down starts: the plunge point, or its ramp's start.
+        ramps = [
+            None if plan.ramp is None else plan.ramp.rows(above, level)
+            for above, level in zip([z_up, *levels], levels, strict=False)
+        ]
+        self.position(number, plunge if ramps[0] is None else ramps[0][0], self.retract)
+        self.rapid_z(number, z_up)
         first = plan.passes[0]
+        routine = node.mills[0] + 1
         for k, level in enumerate(levels):
             final = k == len(levels) - 1
-            self.feed_to(number, (self.x, self.y, level), feed_z)
+            ramp = ramps[k]
+            if ramp is None:
+                self.feed_to(number, (self.x, self.y, level), feed_z)
+            else:
+                self.ramp_down(routine, ramp[1], plan.ramp)
             self.cut(first, depth_cap=None if final else level, feed_z=feed_z)
             if not final:
                 self.retract_up(number)
-                self.rapid_xy(number, plunge)
+                following = ramps[k + 1]
+                self.rapid_xy(number, plunge if following is None else following[0])
                 self.rapid_z(number, level, tag="peck-reentry")
         for path in plan.passes[1:]:
             # The finishing pass of a 2P routine: over to its plunge point, down to Z DN.
@@ -668,6 +680,15 @@ class _Compiler:
         self.retract_up(last)
         self.record_mill(node, drill, start, first_row, plan)
         self.reference = plan.end
+
+    def ramp_down(self, number: int, ends: list[tuple[int, int, int]], ramp: Ramp | None) -> None:
+        """Down a ramp (app.cnc.ramp) from where the tool is to its rows' `ends`, at block
+        `number`'s XY feed: each row a helical arc about the ramp's centre."""
+        assert ramp is not None
+        feed = self.feed_of(number)
+        centre = _round(ramp.centre)
+        for end in ends:
+            self.helix_to(number, end, centre, ramp.clockwise, feed, "lead-in")
 
     def cut_pocket(self, number: int, last: int, drill: Hole, pocket: PocketPlan) -> None:
         """A POCKET: every pass at each peck level (app.cnc.pocketing).

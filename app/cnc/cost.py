@@ -26,6 +26,8 @@ from decimal import Decimal
 from app.cnc import sizes
 from app.cnc.blocks import (
     MILL_ROUTINE_CLASSES,
+    RAMP_HIGH,
+    RAMP_LOW,
     Block,
     BoltCircle,
     Circle,
@@ -43,6 +45,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.engrave import glyph_strokes
 from app.cnc.mill import Path, pocket_overlap, sweep
+from app.cnc.ramp import angle_of, helix_radius
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm
@@ -220,7 +223,8 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
         rings = _routine_rings(program, mill)
         two_pass = 1 if getattr(mill, "two_pass", False) else 0
         per_level = rings * RING_ELEMENTS + LEVEL_ROWS
-        return _Size(extra + SEQUENCE_ROWS + (levels + two_pass) * per_level, 0, 0), used
+        ramp = _ramp_rows(program, block, mill, levels)
+        return _Size(extra + SEQUENCE_ROWS + (levels + two_pass) * per_level + ramp, 0, 0), used
     per_level = CONTOUR_ELEMENTS * len(node.mills) + LEVEL_ROWS
     return _Size(extra + SEQUENCE_ROWS + levels * per_level, 0, 0), used
 
@@ -267,6 +271,22 @@ def _operation_rows(program: Program, block: Helix | ThreadMill | Face | Engrave
     step = max(diameter * block.step // 100, 1)
     rows = to_nm(block.yw, units) // step + 2
     return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
+
+
+def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> int:
+    """About how many rows a pocket's helical ramp entry makes (app/cnc/ramp.py): a row a
+    turn down the whole depth, and one more a level for what is left of a turn. From the
+    numbers alone: a tiny tool at a shallow angle is refused before it is compiled."""
+    if not isinstance(routine, Circle | Frame) or routine.entry is None or not drill.has_depth:
+        return 0
+    radius = helix_radius(_tool_radius(program, routine.tool))
+    # An angle out of range is refused by validation; here it is only kept from nothing.
+    stated = float(angle_of(routine.ramp_angle))
+    angle = math.radians(min(max(stated, float(RAMP_LOW)), RAMP_HIGH))
+    pitch = max(2 * math.pi * radius * math.tan(angle), 1.0)
+    assert drill.z_up is not None and drill.z_dn is not None
+    depth = max(to_nm(drill.z_up, drill.units) - to_nm(drill.z_dn, drill.units), 0)
+    return int(depth / pitch) + 2 * levels
 
 
 def _hole_rows(block: Hole) -> int:

@@ -33,6 +33,7 @@ and 0.13 mm.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from typing import TYPE_CHECKING, Any
@@ -44,6 +45,7 @@ from app.cnc.blocks import (
     Comp,
     DataBlock0,
     Direction,
+    Entry,
     Frame,
     Hole,
     MillArc,
@@ -55,6 +57,7 @@ from app.cnc.blocks import (
 from app.cnc.geometry import arc_sweep, resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.problems import Rule, Severity
+from app.cnc.ramp import Ramp, angle_of, helix_radius, helix_ramp
 from app.cnc.units import Units, half_even, message_length, to_nm
 
 if TYPE_CHECKING:
@@ -235,21 +238,31 @@ def sample(path: Path, step: float) -> list[tuple[Pt, Element]]:
     current = path.start
     for element in path.elements:
         n = max(1, math.ceil(length(current, element) / step))
-        for i in range(n + 1):
-            points.append((point_at(current, element, i / n), element))
+        along = points_along(current, element, [i / n for i in range(n + 1)])
+        points += [(p, element) for p in along]
         current = element.end
     return points
 
 
 def point_at(start: Pt, element: Element, fraction: float) -> Pt:
     """The point a `fraction` (0…1) of the way along an element."""
+    return points_along(start, element, (fraction,))[0]
+
+
+def points_along(start: Pt, element: Element, fractions: Sequence[float]) -> list[Pt]:
+    """The points `fractions` (each 0…1) of the way along an element. An arc's centre,
+    radius and turn are found once for all of them (a pocket samples thousands)."""
     if element.centre is None:
-        return add(start, scale(sub(element.end, start), fraction))
+        d = sub(element.end, start)
+        return [(start[0] + d[0] * f, start[1] + d[1] * f) for f in fractions]
     c = element.centre
     radius = math.dist(start, c)
     a0 = math.atan2(start[1] - c[1], start[0] - c[0])
-    a = a0 + (-1 if element.clockwise else 1) * sweep(start, element) * fraction
-    return (c[0] + radius * math.cos(a), c[1] + radius * math.sin(a))
+    turn = (-1 if element.clockwise else 1) * sweep(start, element)
+    return [
+        (c[0] + radius * math.cos(a0 + turn * f), c[1] + radius * math.sin(a0 + turn * f))
+        for f in fractions
+    ]
 
 
 def distance_to_element(p: Pt, start: Pt, element: Element) -> float:
@@ -878,6 +891,7 @@ class SequencePlan:
     pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
     routine: Routine | None = None  # a CIRCLE/FRAME routine's size and direction
     outlines: tuple[tuple[str, Path], ...] = ()  # a POCKET's contours, by name
+    ramp: Ramp | None = None  # a pocketing routine's ramp entry (None: it plunges)
     # Values calculated from the print (app.cnc.solve): (block number, field) → value.
     calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
 
@@ -908,6 +922,14 @@ def plan_sequence(
         contours = tuple((i + 1, blocks[i]) for i in mills[1:])
         at = RoutineStart(mills[0] + 1, block0, rpm, radius, start, contours)
         plan: SequencePlan = planner(first, at)
+        if plan.ramp is not None and not drill.has_depth:
+            # A 2-axis sequence's depth is the operator's quill: no ramp, and no silent plunge.
+            message = (
+                "a ramp entry goes down along X and Y, and this sequence's depth is the "
+                "quill's (its DRILL has no Z UP/Z DN): leave ENTRY empty (PLUNGE)"
+            )
+            finding = Finding(mills[0] + 1, Rule.RAMP_ENTRY, Severity.ERROR, message, "ENTRY")
+            return SequencePlan([], 0, start, [*plan.findings, finding])
         return plan
     findings: list[Finding] = []
     depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
@@ -964,7 +986,7 @@ def plan_circle(block: Block, at: RoutineStart) -> SequencePlan:
         centre=(float(at.start[0]), float(at.start[1])),
         radius=to_nm(block.radius, block.units),
     )
-    return _plan_routine(routine, block.two_pass, at.start)
+    return _plan_routine(routine, block, at.start)
 
 
 def plan_frame(block: Block, at: RoutineStart) -> SequencePlan:
@@ -979,7 +1001,7 @@ def plan_frame(block: Block, at: RoutineStart) -> SequencePlan:
         corner_radius=to_nm(block.corner_radius, units),
         is_frame=True,
     )
-    return _plan_routine(routine, block.two_pass, at.start)
+    return _plan_routine(routine, block, at.start)
 
 
 def _routine_common(block: Circle | Frame, at: RoutineStart) -> dict[str, Any]:
@@ -992,16 +1014,22 @@ def _routine_common(block: Circle | Frame, at: RoutineStart) -> dict[str, Any]:
     }
 
 
-def _plan_routine(routine: Routine, two_pass: bool, start: tuple[int, int]) -> SequencePlan:
-    findings = routine_problems(routine)
+def _plan_routine(routine: Routine, block: Circle | Frame, start: tuple[int, int]) -> SequencePlan:
+    findings = routine_problems(routine) + _entry_problems(routine, block)
     if any(f.severity is Severity.ERROR for f in findings) or routine.tool_radius == 0:
         return SequencePlan([], 0, start, findings, routine=routine)
     passes = [routine_path(routine)]
     allowance = 0
-    if two_pass:
-        passes.insert(0, routine_path(routine, wall_allowance=rough_wall(routine.units)))
-        allowance = rough_depth(routine.units)
-    return SequencePlan(passes, allowance, start, findings, routine=routine)
+    if block.two_pass:
+        allowance = rough_wall(routine.units)
+        passes.insert(0, routine_path(routine, wall_allowance=allowance))
+    ramp = None
+    if block.entry is Entry.HELIX:
+        ramp, problem = _helix_entry(routine, passes[0], allowance, angle_of(block.ramp_angle))
+        if problem is not None:
+            return SequencePlan([], 0, start, [*findings, problem], routine=routine)
+    depth = rough_depth(routine.units) if block.two_pass else 0
+    return SequencePlan(passes, depth, start, findings, ramp=ramp, routine=routine)
 
 
 def routine_outline(routine: Routine) -> Path:
@@ -1028,6 +1056,91 @@ def routine_outline(routine: Routine) -> Path:
         if c > 0:
             elements.append(Element(0, arc_end, centre, False))
     return Path((ox + c, oy), tuple(elements))
+
+
+def _entry_problems(routine: Routine, block: Circle | Frame) -> list[Finding]:
+    """ENTRY and RAMP ANGLE where they do not apply: a ramp is a pocket's way down."""
+    if block.entry is not None and routine.placement is not Placement.POCKET:
+        return [
+            Finding(
+                routine.block,
+                Rule.RAMP_ENTRY,
+                Severity.ERROR,
+                f"ENTRY {block.entry.name} applies only to a POCKET routine; "
+                f"{block.type_name} goes down beside the wall and enters on its lead-in: "
+                "leave ENTRY empty (PLUNGE)",
+                "ENTRY",
+            )
+        ]
+    if block.ramp_angle is not None and block.entry is None:
+        return [
+            Finding(
+                routine.block,
+                Rule.RAMP_ENTRY,
+                Severity.ERROR,
+                "a RAMP ANGLE applies only to a ramp entry; with ENTRY empty (PLUNGE) the tool "
+                "goes straight down: choose ENTRY HELIX or leave RAMP ANGLE empty",
+                "RAMP ANGLE",
+            )
+        ]
+    return []
+
+
+def _helix_entry(
+    routine: Routine, first: Path, allowance: int, angle: Decimal
+) -> tuple[Ramp | None, Finding | None]:
+    """The helical ramp at the entry point of the first pass `first` (its lead-in arc's
+    start), or the error when its circle does not fit inside that pass (`allowance`: the
+    stock the pass leaves on the wall)."""
+    lead_in = first.elements[0]
+    assert lead_in.centre is not None  # a POCKET routine enters on a lead-in arc
+    r = float(routine.tool_radius)
+    wall = r + allowance
+    # Into the pocket: from where the lead-in meets the wall pass towards its centre.
+    inward = unit(sub(lead_in.centre, lead_in.end))
+
+    def ramp(radius: float) -> Ramp:
+        return helix_ramp(first.start, inward, routine.clockwise, radius, angle)
+
+    def fits(radius: float) -> bool:
+        return _room_inside(routine, wall, ramp(radius).centre) >= radius - EPS
+
+    wanted = helix_radius(r)
+    if fits(wanted):
+        return ramp(wanted), None
+    low, high = 0.0, wanted
+    for _ in range(60):
+        mid = (low + high) / 2
+        low, high = (mid, high) if fits(mid) else (low, mid)
+    u = routine.units
+    return None, Finding(
+        routine.block,
+        Rule.RAMP_ENTRY,
+        Severity.ERROR,
+        f"a HELIX ramp with a {_len(2 * r, u)} tool goes round a circle "
+        f"{_len(2 * wanted, u)} across (half the tool's DIA), which does not fit inside the "
+        f"first pass at its entry point: a circle at most {_len(2 * low, u)} across fits "
+        "there; a larger pocket, a smaller tool, or ENTRY empty (PLUNGE)",
+        "ENTRY",
+    )
+
+
+def _room_inside(routine: Routine, wall: float, point: Pt) -> float:
+    """How far `point` is inside the region a tool centre may reach in the routine's
+    contour, `wall` (nm) in from it (negative: outside it)."""
+    if not routine.is_frame:
+        return routine.radius - wall - math.dist(point, routine.centre)
+    x0, y0 = routine.corner[0] + wall, routine.corner[1] + wall
+    x1 = routine.corner[0] + routine.width - wall
+    y1 = routine.corner[1] + routine.height - wall
+    rad = max(routine.corner_radius - wall, 0.0)
+    px, py = point
+    # In a corner's square the rounded corner is what is nearest.
+    cx = x0 + rad if px < x0 + rad else x1 - rad if px > x1 - rad else None
+    cy = y0 + rad if py < y0 + rad else y1 - rad if py > y1 - rad else None
+    if cx is not None and cy is not None and rad > 0:
+        return rad - math.dist(point, (cx, cy))
+    return min(px - x0, x1 - px, py - y0, y1 - py)
 
 
 def programmed_contour(

@@ -288,6 +288,34 @@ def _carriers_at(points: list[Pt], level: Sequence[Carrier], tolerance: float) -
     return on
 
 
+def _edge_labels(
+    points: list[Pt], on: list[set[int]], level: Sequence[Carrier], tolerance: float
+) -> list[set[int]]:
+    """For each edge of the ring (point i to point i + 1), the carriers its two ends and its
+    middle lie on within `tolerance` (nm); for an edge across a junction (Clipper kept no
+    point there), where no carrier holds all three, the carriers of either end: either
+    may take it. The middles are measured one numpy pass per carrier (`Carrier.distances`,
+    the numbers `distance` gives), not one Python call per edge and carrier."""
+    n = len(points)
+    at = np.array(points, dtype=np.float64)
+    middles = (at + np.roll(at, -1, axis=0)) / 2
+    edges_of: dict[int, list[int]] = {}
+    for i in range(n):
+        following = on[(i + 1) % n]
+        for k in on[i]:
+            if k in following:
+                edges_of.setdefault(k, []).append(i)
+    labels: list[set[int]] = [set() for _ in range(n)]
+    for k, edges in edges_of.items():
+        close = level[k].distances(middles[edges], tolerance) <= tolerance
+        for i in np.asarray(edges)[close].tolist():
+            labels[i].add(k)
+    for i in range(n):
+        if not labels[i]:
+            labels[i] = on[i] | on[(i + 1) % n]
+    return labels
+
+
 @dataclass(frozen=True)
 class ExactRing:
     """A closed pass of exact lines and arcs and the carriers it runs on."""
@@ -311,16 +339,9 @@ def exact_ring(
     if n < 3:
         return None
     on = _carriers_at(points, level, tolerance)
-    labels: list[set[int]] = []
-    for i in range(n):
-        a, b = points[i], points[(i + 1) % n]
-        middle = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-        common = on[i] & on[(i + 1) % n]
-        edge = {k for k in common if level[k].distance(middle, tolerance) <= tolerance}
-        # An edge across a junction (Clipper kept no point there): either carrier may take it.
-        labels.append(edge or on[i] | on[(i + 1) % n])
     if any(not s for s in on):
         return None
+    labels = _edge_labels(points, on, level, tolerance)
     runs = _runs(labels)
     if len(runs) == 1:
         carrier = level[runs[0][0]]

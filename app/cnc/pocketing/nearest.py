@@ -58,6 +58,22 @@ class Elements:
     def __len__(self) -> int:
         return len(self.sx)
 
+    def take(self, rows: npt.NDArray[np.intp]) -> Elements:
+        """The elements of `rows`, in that order."""
+        return Elements(*(getattr(self, name)[rows] for name in _NAMES))
+
+    def boxes(self, grow: float) -> Array:
+        """Each element's box (x0, y0, x1, y1 rows; an arc's circle's) grown by `grow` and
+        by the slack of its bounds: a point outside it is, by its lower bound too,
+        farther than `grow` from the element."""
+        # An arc seen from just past an end (within _OUTSIDE) is bounded by its circle.
+        slack = 2.0 + np.where(self.arc, 2 * _OUTSIDE * self.radius, 0.0) + grow
+        x0 = np.where(self.arc, self.cx - self.radius, np.minimum(self.sx, self.ex)) - slack
+        y0 = np.where(self.arc, self.cy - self.radius, np.minimum(self.sy, self.ey)) - slack
+        x1 = np.where(self.arc, self.cx + self.radius, np.maximum(self.sx, self.ex)) + slack
+        y1 = np.where(self.arc, self.cy + self.radius, np.maximum(self.sy, self.ey)) + slack
+        return np.column_stack((x0, y0, x1, y1))
+
 
 def table(starts: Sequence[Pt], elements: Sequence[Element]) -> Elements:
     """The columns of `elements`, each starting at the point of `starts` beside it."""
@@ -109,18 +125,57 @@ def bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
     return lower, upper
 
 
-def nearest_rows(points: Array, elements: Elements) -> tuple[Array, float]:
-    """For each point, a lower bound on its distance to the nearest element; and an upper
-    bound on the smallest distance of any point to any element. Works through the points
-    in batches, so memory stays bounded whatever their number."""
-    lower = np.empty(len(points))
+def nearest_pairs(points: Array, elements: Elements, reach: float) -> list[tuple[int, list[int]]]:
+    """The (point, element) pairs that can hold the smallest distance from a point to an
+    element: each point (row index, in order) whose lower bound to some element is within
+    `MARGIN` of the best upper bound over all pairs, with the elements (indexes, in order)
+    whose lower bound is. `reach` (nm): a distance some pair is known to be within.
+
+    The same pairs as bounding every point against every element, at the cost of the
+    pairs near each other: the points are filed in a grid of cells about `reach` square,
+    each element under the cells its box grown by `reach` meets, and a point is bounded
+    against the elements of its cell alone; any other is farther than `reach` and
+    `MARGIN` from it, so can be neither the best pair nor within `MARGIN` of it. A ring
+    sampled every eighth of the tool radius against the next ring's elements costs their
+    sum, not their product (issue 30)."""
+    if not len(points) or not len(elements):
+        return []
+    grow = reach + MARGIN + 2.0
+    boxes = elements.boxes(grow)
+    extent = float(max(np.ptp(points[:, 0]), np.ptp(points[:, 1]), 1.0))
+    cell = max(grow, extent / 128)  # (not thousands of cells under one large element)
+    keys = np.floor(points / cell).astype(np.int64)
+    filed: dict[tuple[int, int], list[int]] = {}
+    for k, key in enumerate(map(tuple, keys.tolist())):
+        filed.setdefault(key, []).append(k)
+    under: dict[tuple[int, int], list[int]] = {}
+    cells_of = np.floor(boxes / cell).astype(np.int64).tolist()
+    for e, (kx0, ky0, kx1, ky1) in enumerate(cells_of):
+        for kx in range(kx0, kx1 + 1):
+            for ky in range(ky0, ky1 + 1):
+                if (kx, ky) in filed:
+                    under.setdefault((kx, ky), []).append(e)
     best = math.inf
-    per = max(1, _PAIRS // max(1, len(elements)))
-    for k in range(0, len(points), per):
-        low, high = bounds(points[k : k + per], elements)
-        lower[k : k + per] = low.min(axis=1)
-        best = min(best, float(high.min()))
-    return lower, best
+    found: list[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], Array]] = []
+    for key, rows in filed.items():
+        near = under.get(key)
+        if not near:
+            continue
+        which = np.array(near, dtype=np.intp)
+        table = elements.take(which)
+        per = max(1, _PAIRS // len(which))  # (memory bounded, however many are near)
+        for k in range(0, len(rows), per):
+            at = np.array(rows[k : k + per], dtype=np.intp)
+            low, high = bounds(points[at], table)
+            best = min(best, float(high.min()))
+            found.append((at, which, low))
+    limit = best + MARGIN
+    pairs: list[tuple[int, list[int]]] = []
+    for at, which, low in found:
+        for row in np.flatnonzero(low.min(axis=1) <= limit).tolist():
+            pairs.append((int(at[row]), which[low[row] <= limit].tolist()))
+    pairs.sort()
+    return pairs
 
 
 def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> Array:
@@ -156,5 +211,7 @@ def _to_segments(point: Pt, starts: Array, ends: Array) -> Array:
 
 def joined(tables: Sequence[Elements]) -> Elements:
     """Several tables as one, in order."""
-    names = ("sx", "sy", "ex", "ey", "cx", "cy", "arc", "clockwise", "radius", "a0", "turn")
-    return Elements(*(np.concatenate([getattr(t, name) for t in tables]) for name in names))
+    return Elements(*(np.concatenate([getattr(t, name) for t in tables]) for name in _NAMES))
+
+
+_NAMES = ("sx", "sy", "ex", "ey", "cx", "cy", "arc", "clockwise", "radius", "a0", "turn")

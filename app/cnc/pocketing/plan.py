@@ -194,9 +194,9 @@ class _Planner:
     cleared: regions.SweptIndex | None = None
     _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
-    _sweeps: dict[Path, list[regions.Ring]] = field(default_factory=dict)
-    _narrow_sweeps: dict[Path, list[regions.Ring]] = field(default_factory=dict)
-    _pieces: dict[tuple[int, int], list[regions.Ring]] = field(default_factory=dict)
+    _sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
+    _narrow_sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
+    _pieces: dict[tuple[int, int], regions.Swept] = field(default_factory=dict)
     _tables: dict[int, tuple[Path, nearest.Elements]] = field(default_factory=dict)
 
     _move_boxes: list[regions.Box | None] = field(default_factory=list)
@@ -339,7 +339,7 @@ class _Planner:
             self._points[path] = found
         return found
 
-    def _swept(self, path: Path) -> list[regions.Ring]:
+    def _swept(self, path: Path) -> regions.Swept:
         found = self._sweeps.get(path)
         if found is None:
             found = regions.sweep_lines([self._path_points(path)], self.r, self.t)
@@ -523,17 +523,21 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     to `ring` (elements tagged "link"), and that point; points `step` apart are tried.
 
     Which point: the first sample whose distance to the ring (`_closest_on_element`, exact)
-    is smallest. Only the samples `nearest` cannot rule out are measured exactly, in order:
-    the same point as measuring them all."""
+    is smallest. Only the (sample, element) pairs `nearest.nearest_pairs` cannot rule out
+    are measured exactly, in order (the others are more than `MARGIN` farther than the
+    nearest pair, so could never be the smallest): the same point as measuring them all,
+    at the cost of the samples and elements near each other."""
     ring_starts = starts_of(ring)
     samples = sample(previous, step)
     points = np.array([p for p, _ in samples], dtype=np.float64)
-    lower, best_upper = nearest.nearest_rows(points, nearest.table(ring_starts, ring.elements))
+    # Some sample is within its distance to the ring's start (a point of the ring).
+    reach = float(np.hypot(points[:, 0] - ring.start[0], points[:, 1] - ring.start[1]).min())
+    table = nearest.table(ring_starts, ring.elements)
     best: tuple[float, Pt] | None = None
-    for i in np.flatnonzero(lower <= best_upper + nearest.MARGIN).tolist():
+    for i, near in nearest.nearest_pairs(points, table, reach):
         point = samples[i][0]
-        for start, element in zip(ring_starts, ring.elements, strict=True):
-            d = math.dist(_closest_on_element(point, start, element), point)
+        for k in near:
+            d = math.dist(_closest_on_element(point, ring_starts[k], ring.elements[k]), point)
             if best is None or d < best[0] - 1e-9:
                 best = (d, point)
     assert best is not None

@@ -40,6 +40,10 @@ from app.cnc.mill import (
 IPt = tuple[int, int]
 Ring = list[IPt]
 TURN_EPS = 1e-9  # a turn (sine of the angle) smaller than this is a tangent joint
+Region = Sequence[Sequence[Sequence[int]]]
+"""A region as Clipper reads it: our rings of tuples, or Clipper's own answer as it gave it."""
+Swept = list[list[list[int]]]
+"""Clipper's answer as it gave it (lists of [x, y] lists): the sweeps, read only by Clipper."""
 
 
 @dataclass(frozen=True)
@@ -116,7 +120,7 @@ def _rings(result: Any) -> list[Ring]:
     return [list(map(tuple, ring)) for ring in result]
 
 
-def clip(subject: Sequence[Ring], clip_rings: Sequence[Ring], operation: int) -> list[Ring]:
+def clip(subject: Region, clip_rings: Region, operation: int) -> list[Ring]:
     """A boolean operation (pyclipper.CT_*) of two regions (non-zero fill)."""
     clipper = pyclipper.Pyclipper()
     if subject:
@@ -132,18 +136,18 @@ def clip(subject: Sequence[Ring], clip_rings: Sequence[Ring], operation: int) ->
     return _rings(result)
 
 
-def union(*regions: Sequence[Ring]) -> list[Ring]:
+def union(*regions: Region) -> list[Ring]:
     rings = [ring for region in regions for ring in region]
     return clip(rings, [], pyclipper.CT_UNION) if rings else []
 
 
-def difference(a: Sequence[Ring], b: Sequence[Ring]) -> list[Ring]:
+def difference(a: Region, b: Region) -> list[Ring]:
     if not a:
         return []
     return clip(a, b, pyclipper.CT_DIFFERENCE) if b else union(a)
 
 
-def intersection(a: Sequence[Ring], b: Sequence[Ring]) -> list[Ring]:
+def intersection(a: Region, b: Region) -> list[Ring]:
     if not a or not b:
         return []
     return clip(a, b, pyclipper.CT_INTERSECTION)
@@ -227,8 +231,10 @@ def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np
     return np.column_stack((c[0] + radius * np.cos(angles), c[1] + radius * np.sin(angles)))
 
 
-def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) -> list[Ring]:
-    """The area a round tool of `radius` covers moving along polylines (round ends)."""
+def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) -> Swept:
+    """The area a round tool of `radius` covers moving along polylines (round ends), as
+    Clipper gave it: a sweep is only handed back to Clipper, and making tuples of its
+    points was a tenth of a large pocket's planning."""
     offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
     added = False
     for points in paths:
@@ -237,7 +243,7 @@ def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) 
             ring = [ring[0], (ring[0][0] + 1, ring[0][1])]
         offsetter.AddPath(ring, pyclipper.JT_ROUND, pyclipper.ET_OPENROUND)
         added = True
-    return _rings(offsetter.Execute(float(radius))) if added else []
+    return cast(Swept, offsetter.Execute(float(radius))) if added else []
 
 
 def components(region: Sequence[Ring]) -> list[Component]:
@@ -304,7 +310,7 @@ def segment_inside(
     return kept >= math.dist(ia, ib) - 2.0
 
 
-def thicker_than(region: Sequence[Ring], width: float, tolerance: float) -> bool:
+def thicker_than(region: Region, width: float, tolerance: float) -> bool:
     """True when some part of the region is wider than `width` (survives shrinking by half).
     A region whose box is narrower than `width` is not, without asking Clipper: the
     slivers between passes are thousands."""
@@ -344,7 +350,7 @@ Box = tuple[float, float, float, float]
 """x0, y0, x1, y1 (nm)."""
 
 
-def box_of(region: Sequence[Ring]) -> Box | None:
+def box_of(region: Region) -> Box | None:
     """The smallest box around a region (None for an empty one)."""
     if not region:
         return None
@@ -374,12 +380,12 @@ class SweptIndex:
         radius: float,
         tolerance: float,
         cell: float,
-        sweeps: dict[tuple[int, int], list[Ring]] | None = None,
+        sweeps: dict[tuple[int, int], Swept] | None = None,
     ) -> None:
         self.radius = radius
         self.tolerance = tolerance
         self.cell = cell
-        self.sweeps: dict[tuple[int, int], list[Ring]] = {} if sweeps is None else sweeps
+        self.sweeps: dict[tuple[int, int], Swept] = {} if sweeps is None else sweeps
         self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
         self.cells: dict[tuple[int, int], list[int]] = {}
 
@@ -403,7 +409,7 @@ class SweptIndex:
             found.append((min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach))
         return found
 
-    def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> list[Ring]:
+    def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> Swept:
         """The area swept by the recorded moves and by the moves `also` (not recorded; the
         same rule as `add` for their lists) wherever it lies within `boxes`; beyond them
         it may be cut short. The rings of the pieces' sweeps, overlapping: the area is
@@ -413,7 +419,7 @@ class SweptIndex:
         in its box, so the others cannot reach into `boxes`. Asked with the boxes of a
         move's pieces (`boxes`), a long move along a ring reads the passes beside it, not
         every pass within its bounding box."""
-        found: list[Ring] = []
+        found: Swept = []
         numbers = sorted(
             {n for box in boxes for cell in self._cells(box) for n in self.cells.get(cell, ())}
         )
@@ -430,7 +436,7 @@ class SweptIndex:
                     found += self._sweep(points, k)
         return found
 
-    def _sweep(self, points: Sequence[Pt], k: int) -> list[Ring]:
+    def _sweep(self, points: Sequence[Pt], k: int) -> Swept:
         key = (id(points), k)
         swept = self.sweeps.get(key)
         if swept is None:

@@ -286,7 +286,16 @@ class _Builder:
         start = self.resolve(drill)
         self.report_hole(node.drill + 1, drill, "the operator lowers the quill to depth by hand")
         first = self.blocks[node.mills[0]]
-        if isinstance(first, Circle | Frame):
+        if isinstance(first, Circle | Frame) and first.entry is not None:
+            # A ramp goes down along X and Y; the operator lowers a Plus's quill by hand.
+            self.report.error(
+                node.mills[0] + 1,
+                f"{first.type_name} with ENTRY {first.entry.name} is not written: a ramp moves "
+                "Z with X and Y, and the Plus is a 2-axis control whose events have no Z "
+                "(seed 003 §2.1); use a G-code target, or ENTRY empty (PLUNGE)",
+            )
+            self.reference = start
+        elif isinstance(first, Circle | Frame):
             self.routine(node, drill, first, start)
             self.reference = start
         elif isinstance(first, Pocket):

@@ -18,6 +18,7 @@ import pytest
 
 from app.cnc import cost, document
 from app.cnc.blocks import Helix, MillingMode, Program, Tool
+from app.cnc.compiler import compile_program
 from app.cnc.emit.target import export
 from app.cnc.estimate import estimate
 from app.cnc.formats.gcode.reader import parse_gcode
@@ -165,7 +166,7 @@ def test_the_simulation_goes_down_along_the_helix() -> None:
     row = (Op.ARC_CCW, 0, 1, 5_000_000, 0, -1_000_000, 0, 0, 100_000_000, 0)
     rows = np.array([row], dtype=MOVE)
     program = Program(name="helix", units=Units.MM)
-    shapes = ToolShapes.of(program, {})
+    shapes = ToolShapes.of(compile_program(program).path)
     segments, leaves = piece_segments(rows, 0, Entry(5_000_000, 0, 0, 0), shapes)
     assert not segments.arc.any()
     assert leaves == Entry(5_000_000, 0, -1_000_000, 0)

@@ -73,7 +73,14 @@ from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import Finding, Path, length, plan_sequence, routine_clockwise
+from app.cnc.mill import (
+    Finding,
+    Path,
+    SequencePlan,
+    length,
+    plan_sequence,
+    routine_clockwise,
+)
 from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
@@ -81,12 +88,14 @@ from app.cnc.path import (
     TAG,
     CompiledPath,
     HoleSpan,
+    MillPlan,
     MillSpan,
     Node,
     Op,
     Piece,
     Run,
     Seq,
+    plan_rows,
     size,
 )
 from app.cnc.problems import Rule, Severity
@@ -164,13 +173,14 @@ class Cache(Memo[NodeResult]):
     """Compiled top-level nodes by (blocks, entry state, Data Block 0 and units): an edit
     recompiles only what changed.
 
-    Bounded by moves held (`rows`, at 62 bytes a move): least recently used entries go
-    first, and a node larger than a tenth of the budget is not kept. Safe to share between
+    Bounded by moves held (`rows`, at 62 bytes a move; the plans kept on its mill spans
+    counted as the rows their memory would hold): least recently used entries go first,
+    and a node larger than a tenth of the budget is not kept. Safe to share between
     threads (a web server's requests).
     """
 
     def put(self, key: object, value: NodeResult) -> None:
-        self.keep(key, value, size(value.node) + 1)
+        self.keep(key, value, size(value.node) + plan_rows(value.node) + 1)
 
 
 # A top-level node's one placement: where it was compiled (read only; shared by every Run).
@@ -611,7 +621,7 @@ class _Compiler:
         if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
             # Not cut: a span without rows says where it would be (with the programmed
             # contour), so a drawing can show what is left out.
-            self.record_mill(node, drill, start, len(self.buffer.rows), plan.finished)
+            self.record_mill(node, drill, start, len(self.buffer.rows), plan)
             self.reference = plan.end
             return
         self.use_tool(number, drill.tool)
@@ -621,7 +631,7 @@ class _Compiler:
                 self.cut_pocket(number, last, drill, plan.pocket)
             else:
                 self.cut_pocket_by_hand(number, last, plan.pocket)
-            self.record_mill(node, drill, start, first_row, None)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         plunge = _round(plan.passes[0].start)
@@ -631,7 +641,7 @@ class _Compiler:
             for path in plan.passes:
                 self.cut(path, depth_cap=None, feed_z=0, follow_depth=False)
             self.stop_for(last, "quill: raise the quill by hand")
-            self.record_mill(node, drill, start, first_row, plan.finished)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         z_up, z_dn, feed_z = _depths(drill)
@@ -668,7 +678,7 @@ class _Compiler:
             self.feed_to(number, (self.x, self.y, z_dn), feed_z)
             self.cut(path, depth_cap=None, feed_z=feed_z)
         self.retract_up(last)
-        self.record_mill(node, drill, start, first_row, plan.finished)
+        self.record_mill(node, drill, start, first_row, plan)
         self.reference = plan.end
 
     def ramp_down(self, number: int, ends: list[tuple[int, int, int]], ramp: Ramp | None) -> None:
@@ -764,10 +774,14 @@ class _Compiler:
         drill: Hole,
         start: tuple[int, int],
         first_row: int,
-        finished: Path | None,
+        plan: SequencePlan,
     ) -> None:
+        """The span of a mill sequence just compiled, with its plan: what it is programmed
+        to make, so no consumer plans it again."""
+        finished = plan.finished
         routine = 0 if finished is not None else node.mills[0] + 1 - self.base
         depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
+        kept = MillPlan(plan.end, plan.routine, plan.outlines, plan.pocket, tuple(plan.findings))
         self.buffer.mills.append(
             MillSpan(
                 first_row,
@@ -781,6 +795,7 @@ class _Compiler:
                 drill.tool,
                 drill.comp.value,
                 shift=-self.base,
+                plan=kept,
             )
         )
 
@@ -872,6 +887,7 @@ class _Compiler:
                 step,
                 DWELL_MS if block.op is not HoleOp.TAP else 0,
                 canned,
+                block.tool,
             ).row()
         )
 

@@ -133,7 +133,8 @@ class Path:
 
 
 def translated(path: Path, dx: float, dy: float, blocks: int = 0) -> Path:
-    """`path` moved by (dx, dy), its elements' block numbers `blocks` on."""
+    """`path` moved by (dx, dy), its elements' block numbers `blocks` on: every point an
+    element holds moves (its end, an arc's centre, a conrad's or chamfer's corner)."""
 
     def at(p: Pt) -> Pt:
         return (p[0] + dx, p[1] + dy)
@@ -144,6 +145,7 @@ def translated(path: Path, dx: float, dy: float, blocks: int = 0) -> Path:
             block=e.block + blocks,
             end=at(e.end),
             centre=None if e.centre is None else at(e.centre),
+            corner=None if e.corner is None else at(e.corner),
         )
         for e in path.elements
     )
@@ -366,7 +368,7 @@ def _circle_circle(c1: Pt, r1: float, c2: Pt, r2: float) -> list[Pt]:
 def half_step(units: Units) -> float:
     """Half the programming resolution (0.0005 in, 0.005 mm) in nm: a difference smaller
     than this can come from rounding typed values alone, so it is no problem to report."""
-    return to_nm(units.resolution, units) / 2
+    return units.resolution_nm / 2
 
 
 def is_zero_length(start: Pt, element: Element) -> bool:
@@ -876,6 +878,9 @@ class SequencePlan:
     `passes` holds the contour's tool path, or a routine's passes (the roughing pass first
     for 2P). `rough_allowance` is how far above Z DN the roughing levels stop (0 without 2P).
     `end` is the programmed end point, the reference for a following INC block.
+    What the sequence is programmed to make, whatever its errors (the compile keeps it, so
+    no consumer plans again): `finished` a contour's path; `routine` a CIRCLE/FRAME's
+    circle or frame; `outlines` a POCKET's wall ("boundary") and islands ("island 1", …).
     """
 
     passes: list[Path]
@@ -884,6 +889,8 @@ class SequencePlan:
     findings: list[Finding]
     finished: Path | None = None  # a contour's programmed path (None for a routine)
     pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
+    routine: Routine | None = None  # a CIRCLE/FRAME routine's size and direction
+    outlines: tuple[tuple[str, Path], ...] = ()  # a POCKET's contours, by name
     ramp: Ramp | None = None  # a pocketing routine's ramp entry (None: it plunges)
     # Values calculated from the print (app.cnc.solve): (block number, field) → value.
     calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
@@ -1010,7 +1017,7 @@ def _routine_common(block: Circle | Frame, at: RoutineStart) -> dict[str, Any]:
 def _plan_routine(routine: Routine, block: Circle | Frame, start: tuple[int, int]) -> SequencePlan:
     findings = routine_problems(routine) + _entry_problems(routine, block)
     if any(f.severity is Severity.ERROR for f in findings) or routine.tool_radius == 0:
-        return SequencePlan([], 0, start, findings)
+        return SequencePlan([], 0, start, findings, routine=routine)
     passes = [routine_path(routine)]
     allowance = 0
     if block.two_pass:
@@ -1020,9 +1027,35 @@ def _plan_routine(routine: Routine, block: Circle | Frame, start: tuple[int, int
     if block.entry is Entry.HELIX:
         ramp, problem = _helix_entry(routine, passes[0], allowance, angle_of(block.ramp_angle))
         if problem is not None:
-            return SequencePlan([], 0, start, [*findings, problem])
+            return SequencePlan([], 0, start, [*findings, problem], routine=routine)
     depth = rough_depth(routine.units) if block.two_pass else 0
-    return SequencePlan(passes, depth, start, findings, ramp=ramp)
+    return SequencePlan(passes, depth, start, findings, ramp=ramp, routine=routine)
+
+
+def routine_outline(routine: Routine) -> Path:
+    """A CIRCLE's or FRAME's finished contour as a path (float nm): a circle clockwise from
+    its top, a frame counter-clockwise from its bottom edge (corner arcs where it has a
+    corner radius, limited to half the shorter side)."""
+    ox, oy = routine.corner if routine.is_frame else routine.centre
+    if not routine.is_frame:
+        r = float(routine.radius)
+        top = (ox, oy + r)
+        bottom = (ox, oy - r)
+        return Path(top, (Element(0, bottom, (ox, oy), True), Element(0, top, (ox, oy), True)))
+    w, h = float(routine.width), float(routine.height)
+    c = min(float(routine.corner_radius), w / 2, h / 2)
+    corners = [
+        ((ox + w - c, oy), (ox + w, oy + c), (ox + w - c, oy + c)),
+        ((ox + w, oy + h - c), (ox + w - c, oy + h), (ox + w - c, oy + h - c)),
+        ((ox + c, oy + h), (ox, oy + h - c), (ox + c, oy + h - c)),
+        ((ox, oy + c), (ox + c, oy), (ox + c, oy + c)),
+    ]
+    elements = []
+    for line_end, arc_end, centre in corners:
+        elements.append(Element(0, line_end))
+        if c > 0:
+            elements.append(Element(0, arc_end, centre, False))
+    return Path((ox + c, oy), tuple(elements))
 
 
 def _entry_problems(routine: Routine, block: Circle | Frame) -> list[Finding]:

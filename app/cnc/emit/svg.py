@@ -46,15 +46,14 @@ from typing import Any
 
 import numpy as np
 
-from app.cnc.blocks import Circle, Frame, Pocket, Program
+from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.memo import Memo
 from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
-from app.cnc.pocketing.routine import contours_at
-from app.cnc.simulate.stock import MARGIN, ROUND_TO
-from app.cnc.units import Units, to_nm
+from app.cnc.simulate.stock import rounded_out, stock_box
+from app.cnc.units import Units
 
 # Holes are numbered in the order they are cut when a program has at most this many.
 HOLE_LABELS = 500
@@ -499,11 +498,7 @@ class _Painter:
         np.add.at(depth, piece.holes["start"], 1)
         np.add.at(depth, piece.holes["end"], -1)
         in_hole = (np.cumsum(depth) > 0).tolist()
-        hole_tools: dict[int, int] = {}
-        starts = set(piece.holes["start"].tolist())
         for k, (op, _tag, block, nx, ny, nz, cx, cy, _feed, value) in enumerate(rows):
-            if k in starts:
-                hole_tools[k] = tool
             if op > Op.ARC_CCW:
                 if op == Op.TOOL:
                     tool, z = value, nz
@@ -548,9 +543,8 @@ class _Painter:
             x, y, z = nx, ny, nz
         box, cut = _Box(x0, y0, x1, y1), _Box(cx0, cy0, cx1, cy1)
         holes: list[tuple[int, int, int]] = []
-        for hole in piece.holes.tolist():
-            start, hx, hy = hole[0], hole[4], hole[5]
-            hr = self.radius(hole_tools.get(start, tool))
+        for start, hx, hy, hole_tool in piece.holes[["start", "x", "y", "tool"]].tolist():
+            hr = self.radius(hole_tool)
             self.hole(groups, rows[start][2] + shift, hx, hy, max(hr, self.unit // 100))
             box.point(hx, hy, hr)
             if self.labelled:
@@ -647,24 +641,24 @@ class _Painter:
         if contour is not None:
             self.contour(groups, box, contour)
             return
-        if not mill.routine or mill.routine > len(self.program.blocks):
+        # A routine's outline as the compile planned it (never the blocks again).
+        for _, outline in mill.outlines():
+            self.contour(groups, box, outline)
+        shape = mill.shape()
+        if shape is None:
             return
-        block = self.program.blocks[mill.routine - 1]
         group = groups.setdefault(mill.routine, _Group())
-        if isinstance(block, Circle):
-            r = to_nm(block.radius, block.units)
+        if not shape.is_frame:
+            r = shape.radius
             if r > 0:
                 group.outlines.append(
                     f'<circle class="contour" cx="{self.n(mill.x)}" cy="{self.n(mill.y)}" '
                     f'r="{self.n(r)}"/>'
                 )
                 box.point(mill.x, mill.y, r)
-        elif isinstance(block, Pocket):
-            for drawn in contours_at(self.program.blocks, mill.routine, (mill.x, mill.y)):
-                self.contour(groups, box, drawn.path)
-        elif isinstance(block, Frame):
-            w, h = to_nm(block.xl, block.units), to_nm(block.yw, block.units)
-            corner = max(0, min(to_nm(block.corner_radius, block.units), w // 2, h // 2))
+        else:
+            w, h = shape.width, shape.height
+            corner = max(0, min(shape.corner_radius, w // 2, h // 2))
             if w > 0 and h > 0:
                 rounded = f' rx="{self.n(corner)}"' if corner else ""
                 group.outlines.append(
@@ -801,19 +795,11 @@ class _Painter:
         (rounded outward), or None when nothing cuts below Z0."""
         given = self.program.stock
         if given is not None:
-            units = self.program.units
-            x, y = to_nm(given.x, units), to_nm(given.y, units)
-            return (x, y, x + to_nm(given.xl, units), y + to_nm(given.yw, units))
+            box = stock_box(given, self.program.units)
+            return (box.x0, box.y0, box.x1, box.y1)
         if cut.empty:
             return None
-        margin = to_nm(MARGIN[self.units], self.units)
-        step = to_nm(ROUND_TO[self.units], self.units)
-        return (
-            math.floor((cut.x0 - margin) / step) * step,
-            math.floor((cut.y0 - margin) / step) * step,
-            math.ceil((cut.x1 + margin) / step) * step,
-            math.ceil((cut.y1 + margin) / step) * step,
-        )
+        return rounded_out(cut.x0, cut.y0, cut.x1, cut.y1, self.units)
 
     def order(self, holes: list[tuple[int, int, int]], size: float) -> str:
         """Each hole's number in cutting order, beside it (outside the flipped page, so

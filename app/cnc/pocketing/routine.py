@@ -185,11 +185,17 @@ def contours_at(blocks: tuple[Block, ...], pocket: int, start: tuple[int, int]) 
 
 def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
     """The passes of a POCKET (one path per pass; `SequencePlan.pocket` holds the plan with
-    its links). Problems are in the plan, not raised; the reference after it is the
-    DRILL's point."""
+    its links, `SequencePlan.outlines` its wall and islands, errors or not). Problems are
+    in the plan, not raised; the reference after it is the DRILL's point."""
+    contours = pocket_contours(at.geometry, at.start, at.number)
+    plan = _planned(block, at, contours)
+    plan.outlines = tuple((c.name, c.path) for c in contours)
+    return plan
+
+
+def _planned(block: Block, at: RoutineStart, contours: list[Contour]) -> SequencePlan:
     assert isinstance(block, Pocket)
     units = block.units
-    contours = pocket_contours(at.geometry, at.start, at.number)
     findings: list[Finding] = []
     if len(contours) - 1 > limits.MAX_ISLANDS:
         findings.append(

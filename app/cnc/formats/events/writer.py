@@ -114,16 +114,13 @@ from app.cnc.mill import (
     Element,
     Path,
     clearance,
-    plan_sequence,
     pocket_overlap,
-    programmed_contour,
     rough_depth,
     rough_wall,
-    routine_clockwise,
     sweep,
 )
 from app.cnc.motions import motions
-from app.cnc.path import CompiledPath, Op
+from app.cnc.path import CompiledPath, MillSpan, Op, placed_mills
 from app.cnc.pocketing.model import LinkKind
 from app.cnc.problems import Rule
 from app.cnc.solve import CONRAD
@@ -163,7 +160,11 @@ def routine_comp(placement: Placement, clockwise: bool) -> int:
 
 
 def build_events(program: Program, path: CompiledPath, report: Report) -> Events:
-    """The events of a validated program (COPY blocks carried out), reporting what is lost."""
+    """The events of a validated program (COPY blocks carried out), reporting what is lost.
+
+    The events mirror the blocks, but every mill sequence is read from the compiled path
+    (its programmed contour, routine, pocket passes and the problems its plan found), as
+    the compile planned it where it is cut: nothing is planned again here."""
     builder = _Builder(program, path, report)
     builder.run_nodes(build_nodes(program.blocks))
     builder.report_program()
@@ -180,6 +181,8 @@ class _Builder:
         self.report = report
         self.result = Events(program.units, program.part_number)
         self.reference: XY = (0, 0)
+        # Every mill sequence as compiled, by its DRILL block and where it is cut.
+        self.mills = {(m.drill, m.x, m.y): m for m in placed_mills(path.root)}
 
     @property
     def events(self) -> list[Event]:
@@ -196,6 +199,10 @@ class _Builder:
     def diameter(self, tool: int) -> int | None:
         info = self.path.tools.get(tool)
         return None if info is None else info.diameter
+
+    def mill(self, node: MillSequence, start: XY) -> MillSpan:
+        """The compiled mill sequence of `node` cut from `start`."""
+        return self.mills[node.drill + 1, start[0], start[1]]
 
     def resolve(self, block: Block) -> XY:
         x: Decimal = getattr(block, "x")  # noqa: B009 - every positioned block has x and y
@@ -372,13 +379,15 @@ class _Builder:
     def contour(self, node: MillSequence, drill: Hole, start: XY) -> None:
         """Line, quarter-circle and arc blocks: one G101/G102/G103 per element."""
         drill_number = node.drill + 1
-        path, _, end = programmed_contour(self.blocks, node.mills, start)
+        mill = self.mill(node, start)
+        path = mill.contour()
+        assert path is not None  # a contour's span has one
         tool = drill.tool
         diameter = self.diameter(tool)
         checked = drill.comp is Comp.NONE
         if not checked:
-            self.report_compensation(node, drill, start, diameter)
-        depth = to_nm(drill.z_dn, drill.units) if drill.z_dn is not None else None
+            self.report_compensation(node, drill, mill, diameter)
+        depth = mill.depth
         events: list[Mill] = []
         checks: list[list[Check]] = []
         current = start
@@ -446,7 +455,7 @@ class _Builder:
             self.add(event, event_checks)
         if not checked:
             self.result.unchecked.update([drill_number, *(i + 1 for i in node.mills)])
-        self.reference = end
+        self.reference = mill.exit()
 
     def conrad_written(
         self,
@@ -489,8 +498,7 @@ class _Builder:
         the Plus has no irregular pocket. A G100 position comes first and wherever the tool
         retracts between passes (the operator raises and lowers the quill there)."""
         number = node.mills[0] + 1
-        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
-        pocket = plan.pocket
+        pocket = self.mill(node, start).pocket()
         blocks = [node.drill + 1, *(i + 1 for i in node.mills)]
         self.result.unchecked.update(blocks)
         if pocket is None:
@@ -506,7 +514,7 @@ class _Builder:
             if current is None or link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
                 if events and isinstance(events[-1], Mill):
                     events[-1] = replace(events[-1], conrad=None)
-                current = _on_grid(link.path.start, to_nm(self.units.resolution, self.units))
+                current = _on_grid(link.path.start, self.units.resolution_nm)
                 events.append(Position(number, current, tool))
                 plunges += 1
             at = link.path.start
@@ -546,7 +554,7 @@ class _Builder:
         next to the true end whose radius matches the start's within half a step, so the
         arc is cut as written, without a divot (`mill.true_arc`).
         """
-        step = to_nm(self.units.resolution, self.units)
+        step = self.units.resolution_nm
         target = _on_grid(element.end, step)
         centre = None if element.centre is None else _on_grid(element.centre, step)
         if target == current and (centre is None or abs(sweep(at, element)) < math.pi):
@@ -572,7 +580,7 @@ class _Builder:
         return current
 
     def report_compensation(
-        self, node: MillSequence, drill: Hole, start: XY, diameter: int | None
+        self, node: MillSequence, drill: Hole, mill: MillSpan, diameter: int | None
     ) -> None:
         number = node.drill + 1
         side = "right" if drill.comp is Comp.RIGHT else "left"
@@ -582,8 +590,7 @@ class _Builder:
             f"cutter compensation {side}: the finished contour is written with "
             f"TC{TC[drill.comp]}{dia}; the Plus computes the tool's offset path itself",
         )
-        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
-        for finding in plan.findings:
+        for finding in mill.findings():
             if finding.rule is Rule.COMP_DIVOT:
                 self.report.warning(
                     finding.block,
@@ -594,9 +601,9 @@ class _Builder:
     def routine(self, node: MillSequence, drill: Hole, block: Circle | Frame, start: XY) -> None:
         """CIRCLE → G108 pocket / G109 frame; FRAME → G106 pocket / G107 frame."""
         number = node.mills[0] + 1
-        tool_entry = self.block0.tool(drill.tool)
-        rpm = None if tool_entry is None else tool_entry.rpm
-        clockwise = routine_clockwise(block.placement, self.block0.milling, rpm)
+        shape = self.mill(node, start).shape()
+        assert shape is not None  # a routine's span has one
+        clockwise = shape.clockwise
         pocket = block.placement is Placement.POCKET
         finish = rough_wall(block.units) if block.two_pass else 0
         common: dict[str, Any] = {
@@ -610,16 +617,12 @@ class _Builder:
             "diameter": self.diameter(drill.tool),
             "tool": drill.tool,
         }
-        if isinstance(block, Circle):
-            radius = to_nm(block.radius, block.units)
-            event = Routine(rectangular=False, diagonal=None, radius=radius, **common)
+        if not shape.is_frame:
+            event = Routine(rectangular=False, diagonal=None, radius=shape.radius, **common)
             name = "G108 circular pocket" if pocket else "G109 circular frame"
         else:
-            diagonal = (
-                start[0] + to_nm(block.xl, block.units),
-                start[1] + to_nm(block.yw, block.units),
-            )
-            radius = to_nm(block.corner_radius, block.units)
+            diagonal = (start[0] + shape.width, start[1] + shape.height)
+            radius = shape.corner_radius
             event = Routine(rectangular=True, diagonal=diagonal, radius=radius, **common)
             name = "G106 rectangular pocket" if pocket else "G107 rectangular frame"
         self.add(event)

@@ -20,7 +20,7 @@ from typing import Any
 
 import pytest
 
-from app.cnc import cost, document, mill
+from app.cnc import cost, document, routines, sequences
 from app.cnc.blocks import Program
 from app.cnc.compiler import Cache, compile_program
 from app.cnc.copy import resolve_copies
@@ -48,9 +48,9 @@ CASES = (
     "pocket-loop",
 )
 PLANNERS: dict[str, Callable[..., Any]] = {
-    "plan_sequence": mill.plan_sequence,
-    "programmed_contour": mill.programmed_contour,
-    "routine_path": mill.routine_path,
+    "plan_sequence": sequences.plan_sequence,
+    "programmed_contour": sequences.programmed_contour,
+    "routine_path": routines.routine_path,
     "pocket_contours": pocket_routine.pocket_contours,
     "plan_pocket": pocket_plan.plan_pocket,
 }

@@ -468,7 +468,7 @@ class Circle(Block):
             SubKind("CIR_2P", "CIR 2P", "MILL", 7, (("two_pass", True),)),
         ),
         mill=Mill.ROUTINE,
-        planner="app.cnc.mill:plan_circle",
+        planner="app.cnc.routines:plan_circle",
         follows=_after_drill("centre", in_menu=False),
         findings=ROUTINE_FINDINGS,
     )
@@ -502,7 +502,7 @@ class Frame(Block):
             SubKind("FRM_2P", "FRM 2P", "MILL", 9, (("two_pass", True),)),
         ),
         mill=Mill.ROUTINE,
-        planner="app.cnc.mill:plan_frame",
+        planner="app.cnc.routines:plan_frame",
         follows=_after_drill("lower left corner", in_menu=False),
         findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )

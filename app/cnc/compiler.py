@@ -30,7 +30,7 @@ What makes it fast and small (issue 18):
   (its blocks are incremental): patterns entered in the same relative state are the same
   piece, compiled once and placed by translation (`path.Run`).
 - Lengths are integer nanometres, converted once where a block's value is read; geometry
-  (mill.py) is computed in floats and rounded once per move.
+  (plane.py and what builds on it) is computed in floats and rounded once per move.
 
 Programs with errors compile as far as they can: a node that cannot be cut (a mill sequence
 whose plan has errors) gives no moves and its problems; the rest compiles. The problems a
@@ -68,20 +68,12 @@ from app.cnc.blocks import (
     ThreadMill,
     ThreadPlace,
 )
+from app.cnc.cutter import Finding
 from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
 from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import (
-    Finding,
-    Path,
-    SequencePlan,
-    length,
-    plan_sequence,
-    routine_clockwise,
-)
-from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.path import (
     HOLE,
     MOVE,
@@ -98,8 +90,12 @@ from app.cnc.path import (
     plan_rows,
     size,
 )
+from app.cnc.plane import Path, length
 from app.cnc.problems import Rule, Severity
 from app.cnc.ramp import Ramp
+from app.cnc.routines import peck_levels as peck_levels  # where it was, for its importers
+from app.cnc.routines import routine_clockwise
+from app.cnc.sequences import SequencePlan, plan_sequence
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo

@@ -45,8 +45,9 @@ from app.cnc.blocks import (
 )
 from app.cnc.engrave import glyph_strokes
 from app.cnc.memo import Recent
-from app.cnc.mill import Path, pocket_overlap, sweep
+from app.cnc.plane import Path, sweep
 from app.cnc.ramp import angle_of, helix_radius
+from app.cnc.routines import pocket_overlap
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm

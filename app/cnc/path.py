@@ -58,7 +58,9 @@ import numpy.typing as npt
 
 from app.cnc import sizes
 from app.cnc.blocks import HoleOp
-from app.cnc.mill import Finding, Path, Routine, translated
+from app.cnc.cutter import Finding
+from app.cnc.plane import Path, translated
+from app.cnc.routines import Routine
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,

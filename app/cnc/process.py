@@ -30,7 +30,6 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import Compiled
 from app.cnc.memo import Memo
-from app.cnc.mill import routine_outline
 from app.cnc.path import (
     HOLE_OPS,
     CompiledPath,
@@ -43,6 +42,7 @@ from app.cnc.path import (
     size,
 )
 from app.cnc.problems import Problem, Rule, Severity
+from app.cnc.routines import routine_outline
 from app.cnc.simulate.stock import stock_box
 from app.cnc.units import Units, format_length
 

@@ -50,8 +50,8 @@ from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.memo import Memo
-from app.cnc.mill import Path
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
+from app.cnc.plane import Path
 from app.cnc.simulate.stock import rounded_out, stock_box
 from app.cnc.units import Units
 

@@ -70,7 +70,7 @@ from app.cnc.imports.ops import (
     units_of,
 )
 from app.cnc.imports.steps import ToolData
-from app.cnc.mill import qcir_centre
+from app.cnc.plane import qcir_centre
 from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
 from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length

@@ -17,7 +17,7 @@ convert_arc_comp1/2), which this module follows so that an import can be held to
   a turn of 0.05 rad or less is no corner: the next cut starts from where the last ended.
 - **Exit**: after G40 the next cut goes from the compensated point to its programmed end.
 
-MillBlocks compensates a contour itself (app/cnc/mill.py `compensate`): it goes down one
+MillBlocks compensates a contour itself (app/cnc/cutter.py `compensate`): it goes down one
 tool radius to the side of the first cut and joins every corner, however small. Where
 the two agree after the control's entry, the contour is read as compensated blocks
 (DRILL … CUT LT/RT); where they do not, as the tool-centre path the control cuts.
@@ -32,11 +32,12 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from app.cnc import mill
 from app.cnc.blocks import Comp, DataBlock0, HoleOp, Tool
 from app.cnc.imports.build import Builder
 from app.cnc.imports.common import XY, ImportFailure, Notes, decimal_of, quantize_nm, show
 from app.cnc.imports.ops import Element, HoleSpec, MillOp
+from app.cnc.plane import Path, close
+from app.cnc.sequences import plan_sequence
 from app.cnc.units import Units
 
 Pt = tuple[float, float]
@@ -393,10 +394,10 @@ def after_entry(pieces: list[Piece]) -> tuple[list[Piece], list[Piece]]:
 
 def millblocks_path(
     start: XY, elements: list[Element], comp: Comp, tool: int, diameter: int, units: Units
-) -> mill.Path | None:
+) -> Path | None:
     """The tool-centre path MillBlocks cuts for a DRILL at `start` with `comp` and these
     cuts: the blocks the importer writes for them (rounded, build.py), planned as the
-    interpreter plans them (app/cnc/mill.py); None where its rules find an error in them."""
+    interpreter plans them (app/cnc/sequences.py); None where its rules find an error in them."""
     level = 0 if elements[0].z_dn is None else elements[0].z_dn
     spec = HoleSpec(HoleOp.DRILL, level + 1, level, 1, 1, tool, units)
     builder = Builder(Notes())
@@ -405,27 +406,27 @@ def millblocks_path(
     block0 = DataBlock0(tools=(Tool(number=tool, diameter=size, rpm=1000),))
     blocks = tuple(builder.blocks)
     at = (quantize_nm(start[0], units), quantize_nm(start[1], units))
-    plan = mill.plan_sequence(blocks, block0, units, 0, tuple(range(1, len(blocks))), at)
+    plan = plan_sequence(blocks, block0, units, 0, tuple(range(1, len(blocks))), at)
     if not plan.passes or any(f.severity.value == "error" for f in plan.findings):
         return None
     return plan.passes[0]
 
 
-def same_path(control: list[Piece], start: Pt, ours: mill.Path, tolerance: float) -> str:
+def same_path(control: list[Piece], start: Pt, ours: Path, tolerance: float) -> str:
     """ "" when MillBlocks' path `ours` cuts the control's `control` (starting at `start`)
     within `tolerance` nm; else how they differ, in words."""
-    if not mill.close(start, ours.start, tolerance):
+    if not close(start, ours.start, tolerance):
         return "it goes down on the offset of the first cut, which the control's entry cuts short"
     differs = "the control joins a corner otherwise (to it, a turn of 0.05 rad or less is none)"
     if len(control) != len(ours.elements):
         return differs
     for p, e in zip(control, ours.elements, strict=True):
-        if (p.centre is None) != (e.centre is None) or not mill.close(p.end, e.end, tolerance):
+        if (p.centre is None) != (e.centre is None) or not close(p.end, e.end, tolerance):
             return differs
         if (
             p.centre is not None
             and e.centre is not None
-            and (p.clockwise != e.clockwise or not mill.close(p.centre, e.centre, tolerance))
+            and (p.clockwise != e.clockwise or not close(p.centre, e.centre, tolerance))
         ):
             return differs
     return ""

@@ -10,7 +10,7 @@ its finest numbers, `Parsed.tolerance`); otherwise the operations stay explicit 
   the last → one DRILL with # PECK and the 2P routine, where the routine cuts them exactly.
 - **CIRCLE / FRAME**: for a mill sequence cut with a tool whose diameter the file gives,
   routine blocks are proposed from its arcs and extent (every placement, 2P or not, the
-  direction from the cut) and planned by `app.cnc.mill` — the same code the interpreter
+  direction from the cut) and planned by `app.cnc.sequences` — the same code the interpreter
   cuts with; one whose passes are the file's cuts is kept. Data Block 0's climb or
   conventional is set by the first routine; a later one that needs the other is kept as
   explicit cuts, and reported.
@@ -71,7 +71,9 @@ from app.cnc.imports.ops import (
     tools_of,
     units_of,
 )
-from app.cnc.mill import INSIDE_PLACEMENTS, Path, plan_sequence, rough_depth, rough_wall
+from app.cnc.plane import Path
+from app.cnc.routines import INSIDE_PLACEMENTS, rough_depth, rough_wall
+from app.cnc.sequences import plan_sequence
 from app.cnc.units import Units
 
 Pt = tuple[float, float]

@@ -74,7 +74,7 @@ from app.cnc.imports.steps import (
     Stop,
     ToolChange,
 )
-from app.cnc.mill import routine_clockwise
+from app.cnc.routines import routine_clockwise
 from app.cnc.units import Units, to_nm
 
 DWELL: Final = limits.HOLE_DWELL_SECONDS

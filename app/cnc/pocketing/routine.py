@@ -16,21 +16,15 @@ from dataclasses import dataclass
 
 from app.cnc import limits
 from app.cnc.blocks import Block, Direction, Island, Pocket, PocketArc, PocketArcEnd, PocketLine
+from app.cnc.cutter import Finding
 from app.cnc.geometry import resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
-from app.cnc.mill import (
-    Element,
-    Finding,
-    Path,
-    RoutineStart,
-    SequencePlan,
-    half_step,
-    pocket_overlap,
-    rough_wall,
-)
+from app.cnc.plane import Element, Path, half_step
 from app.cnc.pocketing.model import PocketFinding, PocketIssue
 from app.cnc.pocketing.plan import plan_pocket
 from app.cnc.problems import Rule, Severity
+from app.cnc.routines import pocket_overlap, rough_wall
+from app.cnc.sequences import RoutineStart, SequencePlan
 from app.cnc.units import Units, message_length, to_nm
 
 RULES = {

@@ -36,7 +36,7 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.mill import Path
+from app.cnc.plane import Path
 from app.cnc.pocketing.regions import offset, path_points
 from app.cnc.problems import Rule
 from app.cnc.process import in_ring

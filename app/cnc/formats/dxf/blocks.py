@@ -60,8 +60,8 @@ from app.cnc.imports.common import (
 from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, PocketOp, RoutineOp
 from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.imports.steps import ToolData
-from app.cnc.mill import Element as MillElement
-from app.cnc.mill import Path, signed_area
+from app.cnc.plane import Element as MillElement
+from app.cnc.plane import Path, signed_area
 from app.cnc.pocketing import regions
 
 CHORD_NM = 500  # chords within 0.5 µm of an arc when deciding which contour holds which

@@ -95,9 +95,9 @@ from app.cnc.imports.ops import (
 )
 from app.cnc.imports.recognise import find_loops
 from app.cnc.imports.steps import ToolData
-from app.cnc.mill import Element as MillElement
-from app.cnc.mill import rough_wall, routine_clockwise
 from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_int
+from app.cnc.plane import Element as MillElement
+from app.cnc.routines import rough_wall, routine_clockwise
 from app.cnc.solve import CONRAD, make_corner
 from app.cnc.units import Units
 

@@ -33,7 +33,7 @@ chose where the manual is vague (docs/readings.md):
 - TC 0/1/2 = tool centre/right/left of the travel (§2.2.4). DR 1 = clockwise, 2 =
   counter-clockwise: §2.2.6.3's circular pocket is `DR2 TC2` and the same part's G-code
   (§2.2.6.1) cuts it with G03. Circle and frame routines get DR from climb/conventional and
-  the spindle direction as app/cnc/mill.py decides, and TC from inside/outside for that
+  the spindle direction as app/cnc/routines.py decides, and TC from inside/outside for that
   direction; FC is the 2P finishing allowance (0.010 in, 0.25 mm) or 0. On G106/G107 CR is
   the frame's corner radius (circles have none, §2.2.5 N009-N010).
 - G104's angle A is measured counter-clockwise from +X and the holes go counter-clockwise
@@ -109,20 +109,12 @@ from app.cnc.formats.events.model import (
     written,
 )
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.mill import (
-    INSIDE_PLACEMENTS,
-    Element,
-    Path,
-    clearance,
-    pocket_overlap,
-    rough_depth,
-    rough_wall,
-    sweep,
-)
 from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, MillSpan, Op, placed_mills
+from app.cnc.plane import Element, Path, sweep
 from app.cnc.pocketing.model import LinkKind
 from app.cnc.problems import Rule
+from app.cnc.routines import INSIDE_PLACEMENTS, clearance, pocket_overlap, rough_depth, rough_wall
 from app.cnc.solve import CONRAD
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import Units, to_nm

@@ -210,8 +210,8 @@ def parts_case(blocks: int) -> Result:
     from app.cnc.blocks import Hole
     from app.cnc.compiler import compile_program
     from app.cnc.diff import summary
-    from app.cnc.emit.svg import draw
     from app.cnc.estimate import estimate
+    from app.cnc.formats.svg import draw
     from app.cnc.interpret import interpret
     from app.cnc.validate import validate
     from app.web.editor_page import shown_of

@@ -45,7 +45,7 @@ MEMORY_GOAL = 100_000_000  # bytes
 def export_case(family: str, moves: int, target: str) -> Result:
     """(child) Export a `family` program of about `moves` moves to `target`, streaming to a
     file; for the refereed target, rs274 then reads that file."""
-    from app.cnc.emit.target import ExportError, export, targets
+    from app.cnc.formats.targets import ExportError, export, targets
     from bench.gcode_import import rs274_case
     from bench.programs import sized
 
@@ -109,7 +109,7 @@ def warm_pair_case(repeats: int = 5) -> Result:
     from app.cnc import document
     from app.cnc.compiler import compile_program
     from app.cnc.copy import resolve_copies
-    from app.cnc.emit.target import export, targets
+    from app.cnc.formats.targets import export, targets
     from bench.common import ROOT
 
     targets()
@@ -163,7 +163,7 @@ def _refused(reason: str) -> str:
 
 
 def run(sizes: tuple[int, ...] = SIZES, timeout: float = 420.0) -> Section:
-    from app.cnc.emit.target import targets
+    from app.cnc.formats.targets import targets
     from bench.programs import FAMILIES
 
     names = tuple(targets())

@@ -24,9 +24,9 @@ from app.cnc import cost, document, routines, sequences
 from app.cnc.blocks import Program
 from app.cnc.compiler import Cache, compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.svg import render
-from app.cnc.emit.target import export
 from app.cnc.estimate import estimate
+from app.cnc.formats.svg import render
+from app.cnc.formats.targets import export
 from app.cnc.path import PLAN_ELEMENT_ROWS, placed_mills
 from app.cnc.pocketing import plan as pocket_plan
 from app.cnc.pocketing import routine as pocket_routine

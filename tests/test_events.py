@@ -42,7 +42,6 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, ExportError, Report, export
 from app.cnc.formats.events.model import (
     Mill,
     Position,
@@ -55,6 +54,7 @@ from app.cnc.formats.events.model import (
     plus_holes,
 )
 from app.cnc.formats.events.writer import build_events, check_events
+from app.cnc.formats.targets import Export, ExportError, Report, export
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid

@@ -17,9 +17,9 @@ import pytest
 from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit import canon
-from app.cnc.emit.target import export, targets
 from app.cnc.estimate import estimate, report
+from app.cnc.formats import canon
+from app.cnc.formats.targets import export, targets
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.setup import render_text, setup_sheet

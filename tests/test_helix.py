@@ -19,14 +19,14 @@ import pytest
 from app.cnc import cost, document
 from app.cnc.blocks import Helix, MillingMode, Program, Tool
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import export
 from app.cnc.estimate import estimate
 from app.cnc.formats.gcode.reader import parse_gcode
-from app.cnc.imports import read_program
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.machine import _enters_zone
 from app.cnc.path import MOVE, Op
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.simulate.segments import Entry, ToolShapes, piece_segments
 from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid

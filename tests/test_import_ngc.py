@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 
 from app.cnc.blocks import BoltCircle, MillLine
 from app.cnc.formats.gcode import ngc
-from app.cnc.imports import ImportFailure, read_program
-from app.cnc.imports.common import Notes
+from app.cnc.formats.reading import ImportFailure, read_program
+from app.cnc.recognition.common import Notes
 from app.cnc.sizes import MAX_EXPANDED_LINES
 from tests.imports.support import fixture_text
 from tests.referee import referee_import, rs274

@@ -36,11 +36,11 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 
 from app.cnc.blocks import BoltCircle, Hole, Program
-from app.cnc.emit.target import ExportError, export
-from app.cnc.imports import NoteKind, read_program
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.reading import NoteKind, read_program
+from app.cnc.formats.targets import ExportError, export
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, Severity
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.sizes import MAX_IMPORT_LINES
 from app.cnc.toolpath import ArcFeed, Feed, Rapid, ToolChange
 from app.cnc.units import Units, to_nm

@@ -40,7 +40,7 @@ from app.cnc.blocks import (
     Rep,
     Tool,
 )
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.mirror import Axis, mirror
 from app.cnc.plane import Element

@@ -34,7 +34,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.cutter import Finding
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.sequences import programmed_contour

@@ -725,7 +725,7 @@ PITCH_HELP = "threads per inch in an inch block, mm per thread in a mm block"
 class ThreadMill(Block):
     """THREAD MILL: a 60° thread of major diameter `diameter` about X, Y, from Z UP down to
     Z DN, cut with a single-point thread mill whose DIA (Data Block 0) is its cutting
-    diameter (app/cnc/thread.py has the motion).
+    diameter (app/cnc/operations/thread.py has the motion).
 
     `pitch` is threads per inch in an inch block and mm per thread in a mm block. The thread
     is cut in `passes` radial passes evenly spaced to the full depth of an ISO/UN basic
@@ -785,7 +785,7 @@ class FacePattern(enum.Enum):
 
 @dataclass(frozen=True, kw_only=True)
 class Face(Block):
-    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/face.py).
+    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/operations/face.py).
 
     Passes along X, `step` percent of the tool's DIA (Data Block 0) apart in Y, the tool
     running off both ends of each pass by `clear` beyond its edge (None: 0.050 in / 1.27 mm)
@@ -843,7 +843,7 @@ ON_ARC = (("layout", EngraveLayout.ARC),)
 
 @dataclass(frozen=True, kw_only=True)
 class Engrave(Block):
-    """ENGRAVE: `text` in a single-stroke font (app/cnc/engrave.py) along a line from X, Y
+    """ENGRAVE: `text` in a single-stroke font (operations/engrave.py) along a line from X, Y
     at ANGLE, or along an arc of RAD about X, Y from ANGLE (degrees counter-clockwise from
     +X), clockwise (letters standing outward) or counter-clockwise (inward); capitals
     `height` high, cut from Z UP down to Z DN. Each stroke is a plunge at FEEDR Z and cuts

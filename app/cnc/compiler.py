@@ -69,11 +69,12 @@ from app.cnc.blocks import (
     ThreadPlace,
 )
 from app.cnc.cutter import Finding
-from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
-from app.cnc.face import face_rows
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
+from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
+from app.cnc.operations.face import face_rows
+from app.cnc.operations.helix import helix_ends
+from app.cnc.operations.thread import thread_lead, thread_passes
 from app.cnc.path import (
     HOLE,
     MOVE,
@@ -97,7 +98,6 @@ from app.cnc.routines import peck_levels as peck_levels  # where it was, for its
 from app.cnc.routines import routine_clockwise
 from app.cnc.sequences import SequencePlan, plan_sequence
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
-from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
 from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
@@ -918,7 +918,7 @@ class _Compiler:
         self.retract_up(number)
 
     def thread_mill(self, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
-        """THREAD MILL about `centre` (app/cnc/thread.py says the motion). A block whose
+        """THREAD MILL about `centre` (app/cnc/operations/thread.py says the motion). A block whose
         tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
         validation reports it."""
         units = block.units
@@ -958,7 +958,7 @@ class _Compiler:
         self.retract_up(number)
 
     def engrave(self, number: int, block: Engrave, at: tuple[int, int]) -> None:
-        """ENGRAVE (app/cnc/engrave.py lays the strokes out): each stroke as a DRILL and its
+        """ENGRAVE (operations/engrave.py lays the strokes out): each stroke as a DRILL and its
         MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
         fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
         block whose text the font cannot write makes no moves: validation reports it."""
@@ -993,7 +993,7 @@ class _Compiler:
             self.retract_up(number)
 
     def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
-        """FACE about `centre` (app/cnc/face.py says the rows): at each of # PASS levels from
+        """FACE about `centre` (operations/face.py says the rows): at each of # PASS levels from
         Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
         feeds off the part's end) or one-way (up to the retract height and back between).
         A block whose tool has no DIA makes no moves: validation reports it."""

@@ -43,13 +43,13 @@ from app.cnc.blocks import (
     Rep,
     ThreadMill,
 )
-from app.cnc.engrave import glyph_strokes
 from app.cnc.memo import Recent
+from app.cnc.operations.engrave import glyph_strokes
+from app.cnc.operations.thread import thread_lead
 from app.cnc.plane import Path, sweep
 from app.cnc.ramp import angle_of, helix_radius
 from app.cnc.routines import pocket_overlap
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
-from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm
 
 # The most rows (moves) the compiler makes for each (compiler.py):

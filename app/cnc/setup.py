@@ -22,8 +22,8 @@ import numpy as np
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import Report
 from app.cnc.estimate import Estimate, estimate, format_seconds
+from app.cnc.formats.targets import Report
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineModel
 from app.cnc.motions import motions

@@ -44,13 +44,13 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
-from app.cnc.engrave import missing
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
+from app.cnc.operations.engrave import missing
+from app.cnc.operations.thread import thread_depth, thread_lead
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
-from app.cnc.thread import thread_depth, thread_lead
 from app.cnc.tools import (
     MAX_FLUTES,
     MAX_NUMBER,

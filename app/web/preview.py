@@ -23,8 +23,8 @@ from typing import NamedTuple
 
 from app.cnc.blocks import Copy, Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.svg import render
 from app.cnc.estimate import estimate
+from app.cnc.formats.svg import render
 from app.cnc.kinds import REGISTRY
 from app.cnc.path import CompiledPath
 from app.cnc.problems import Problem, Rule, Severity
@@ -190,7 +190,7 @@ def _said(field: str | None, message: str) -> str:
 # -- an edit's drawing: what changed ------------------------------------------------------------
 #
 # The page keeps the drawing it shows; an edit's reply carries what differs between it and the
-# new version's (static/preview.js applies it). A drawing (app/cnc/emit/svg.py) is an <svg>
+# new version's (static/preview.js applies it). A drawing (app/cnc/formats/svg.py) is an <svg>
 # holding up to three containers, in this order: <defs> (the patterns LOOPs place), the page
 # <g> (grid, stock, part zero, then each block's drawing in cutting order) and the hole
 # numbers' <g>. Each container's children are compared as text: an edit changes a stretch of

@@ -27,12 +27,12 @@ from app.cnc.blocks import (
     ThreadPlace,
 )
 from app.cnc.compiler import compile_program
+from app.cnc.operations.thread import thread_depth, thread_lead
 from app.cnc.path import MillSpan, Op, Rows
 from app.cnc.plane import Element, signed_area
 from app.cnc.pocketing.regions import element_points
 from app.cnc.process import placed_hole_list
 from app.cnc.routines import INSIDE_PLACEMENTS
-from app.cnc.thread import thread_depth, thread_lead
 from app.cnc.toolpath import ToolInfo
 from app.cnc.units import to_nm
 

@@ -82,7 +82,6 @@ from app.cnc.blocks import (
     Rep,
     ThreadMill,
 )
-from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.formats.events.model import (
     FEED_RANGE_NM,
     MAX_DIMENSION_NM,
@@ -108,6 +107,7 @@ from app.cnc.formats.events.model import (
     plus_holes,
     written,
 )
+from app.cnc.formats.targets import Option, OptionKind, Out, Report, Target, register
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.motions import motions
 from app.cnc.path import CompiledPath, MillSpan, Op, placed_mills

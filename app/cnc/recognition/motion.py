@@ -11,17 +11,17 @@ from dataclasses import replace
 
 from app.cnc import limits
 from app.cnc.blocks import Program
-from app.cnc.imports.build import Builder, SetUp, block0, make_program
-from app.cnc.imports.common import ImportFailure, Notes, show
-from app.cnc.imports.ops import HelixOp, LoopOp, Op, PosOp
-from app.cnc.imports.recognise import (
+from app.cnc.recognition.build import Builder, SetUp, block0, make_program
+from app.cnc.recognition.common import ImportFailure, Notes, show
+from app.cnc.recognition.ops import HelixOp, LoopOp, Op, PosOp
+from app.cnc.recognition.recognise import (
     RoutineFinder,
     find_bolt_circles,
     find_loops,
     merge_pecks,
 )
-from app.cnc.imports.segment import Retract, Segmented, ToolUse, is_two_axis, segment
-from app.cnc.imports.steps import (
+from app.cnc.recognition.segment import Retract, Segmented, ToolUse, is_two_axis, segment
+from app.cnc.recognition.steps import (
     Arc,
     Feed,
     Parsed,

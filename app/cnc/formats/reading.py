@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 
 from app.cnc import cost
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind
-from app.cnc.imports.registry import Importer, detect, get_importer, importers
+from app.cnc.formats.importers import Importer, detect, get_importer, importers
+from app.cnc.recognition.common import ImportFailure, ImportNote, NoteKind
 from app.cnc.sizes import (
     IMPORT_LIMITS,
     ImportLimits,

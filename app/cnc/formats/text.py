@@ -15,7 +15,7 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.emit.target import Out
+from app.cnc.formats.targets import Out
 from app.cnc.units import Units
 
 

@@ -48,7 +48,7 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
+from app.cnc.formats.targets import Option, OptionKind, Out, Report, Target, register
 from app.cnc.memo import Memo
 from app.cnc.path import CompiledPath, MillSpan, Node, Op, Piece, Run, Seq
 from app.cnc.plane import Path

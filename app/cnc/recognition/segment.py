@@ -32,8 +32,8 @@ from app.cnc import limits
 from app.cnc.blocks import Comp, Helix, HoleOp, MillingMode, Placement
 from app.cnc.compiler import peck_levels
 from app.cnc.geometry import arc_sweep
-from app.cnc.helix import helix_ends
-from app.cnc.imports.common import (
+from app.cnc.operations.helix import helix_ends
+from app.cnc.recognition.common import (
     XY,
     ImportFailure,
     Notes,
@@ -44,8 +44,8 @@ from app.cnc.imports.common import (
     show,
     show_feed,
 )
-from app.cnc.imports.compensation import Part, Reading
-from app.cnc.imports.ops import (
+from app.cnc.recognition.compensation import Part, Reading
+from app.cnc.recognition.ops import (
     Element,
     HelixOp,
     HoleOpR,
@@ -55,7 +55,7 @@ from app.cnc.imports.ops import (
     Op,
     PosOp,
 )
-from app.cnc.imports.steps import (
+from app.cnc.recognition.steps import (
     Arc,
     Coolant,
     Cycle,

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from decimal import Decimal
 
 from app.cnc.blocks import Circle, Comp, Frame, Helix, HoleOp
-from app.cnc.imports.common import XY
+from app.cnc.recognition.common import XY
 from app.cnc.units import Units
 
 

@@ -1,4 +1,4 @@
-"""Import formats: one registry, as the export targets have (app.cnc.emit.target).
+"""Import formats: one registry, as the export targets have (app.cnc.formats.targets).
 
 An `Importer` says what it reads (`name`, `label`, `description`, its `options`), how sure
 it is that some content is its format (`sniff`), and reads it (`read`). A format package
@@ -18,8 +18,8 @@ from functools import cached_property
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportFailure, ImportNote, text_of
 from app.cnc.options import Option
+from app.cnc.recognition.common import ImportFailure, ImportNote, text_of
 
 _COMMENT = re.compile(r"\([^)]*\)?")
 PLAIN_PART = 1 << 18  # characters of text blanked at a time (Content.plain)

@@ -9,7 +9,7 @@ Lengths in integer nanometres. The thread's lead comes from app.cnc.tools.lead_p
   external one, the tool's edge `clear` beyond the major diameter;
 - enters along a half circle tangent to the thread at 3 o'clock, a quarter of the lead
   along Z (the lead-in: the cut's depth builds up from nothing, no dwell mark);
-- follows the helix, one row a turn (app/cnc/helix.py), to a quarter of the lead short of
+- follows the helix, one row a turn (app/cnc/operations/helix.py), to a quarter of the lead short of
   the thread's other end;
 - leaves along a half circle tangent to it, a quarter of the lead along Z, back to the
   centre (internal) or out to `clear` beyond the major diameter (external).
@@ -31,7 +31,7 @@ import math
 from dataclasses import dataclass
 
 from app.cnc.blocks import ThreadMill
-from app.cnc.helix import Point, helix_ends
+from app.cnc.operations.helix import Point, helix_ends
 from app.cnc.tools import PitchUnit, lead_per_rev
 from app.cnc.units import Units
 

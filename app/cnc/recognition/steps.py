@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from decimal import Decimal
 
-from app.cnc.imports.common import XY, Notes
+from app.cnc.recognition.common import XY, Notes
 from app.cnc.units import Units
 
 
@@ -231,7 +231,7 @@ class StepSource:
 
 
 class StreamSource(StepSource):
-    """A StepSource that is still reading its file (app.cnc.imports.motion's
+    """A StepSource that is still reading its file (app.cnc.recognition.motion's
     `program_from_stream` walks it): what the file has said so far, and all it says."""
 
     def so_far(self, notes: Notes) -> Parsed:

@@ -21,7 +21,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from app.cnc.imports.registry import Content, Sniff, Strength
+from app.cnc.formats.importers import Content, Sniff, Strength
 from app.cnc.numbers import NumberError, parse_decimal
 
 _WORD = re.compile(r"([A-Za-z])\s*([+-]?[0-9.]*)")

@@ -47,7 +47,8 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import peck_levels
 from app.cnc.geometry import bolt_circle_points
-from app.cnc.imports.common import (
+from app.cnc.plane import Path
+from app.cnc.recognition.common import (
     XY,
     Notes,
     decimal_of,
@@ -56,7 +57,7 @@ from app.cnc.imports.common import (
     resolution_nm,
     show,
 )
-from app.cnc.imports.ops import (
+from app.cnc.recognition.ops import (
     BoltOp,
     Element,
     HoleOpR,
@@ -71,7 +72,6 @@ from app.cnc.imports.ops import (
     tools_of,
     units_of,
 )
-from app.cnc.plane import Path
 from app.cnc.routines import INSIDE_PLACEMENTS, rough_depth, rough_wall
 from app.cnc.sequences import plan_sequence
 from app.cnc.units import Units

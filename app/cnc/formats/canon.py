@@ -13,8 +13,8 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Out, Report, Target, register
-from app.cnc.emit.text import Lengths
+from app.cnc.formats.targets import Out, Report, Target, register
+from app.cnc.formats.text import Lengths
 from app.cnc.path import CompiledPath
 from app.cnc.toolpath import (
     ArcFeed,

@@ -33,10 +33,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from app.cnc.blocks import Comp, DataBlock0, HoleOp, Tool
-from app.cnc.imports.build import Builder
-from app.cnc.imports.common import XY, ImportFailure, Notes, decimal_of, quantize_nm, show
-from app.cnc.imports.ops import Element, HoleSpec, MillOp
 from app.cnc.plane import Path, close
+from app.cnc.recognition.build import Builder
+from app.cnc.recognition.common import XY, ImportFailure, Notes, decimal_of, quantize_nm, show
+from app.cnc.recognition.ops import Element, HoleSpec, MillOp
 from app.cnc.sequences import plan_sequence
 from app.cnc.units import Units
 

@@ -41,7 +41,8 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.geometry import bolt_circle_points
-from app.cnc.imports.common import (
+from app.cnc.plane import qcir_centre
+from app.cnc.recognition.common import (
     XY,
     Notes,
     decimal_of,
@@ -52,7 +53,7 @@ from app.cnc.imports.common import (
     show,
     show_feed,
 )
-from app.cnc.imports.ops import (
+from app.cnc.recognition.ops import (
     BoltOp,
     Element,
     HelixOp,
@@ -69,8 +70,7 @@ from app.cnc.imports.ops import (
     tool_of,
     units_of,
 )
-from app.cnc.imports.steps import ToolData
-from app.cnc.plane import qcir_centre
+from app.cnc.recognition.steps import ToolData
 from app.cnc.text import NAME_LENGTH, NOTES_LENGTH
 from app.cnc.tools import tool_name_fault
 from app.cnc.units import Units, format_decimal, format_length

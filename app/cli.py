@@ -106,7 +106,7 @@ class LazyChoice(click.Choice[str]):
 
 
 def _import_formats() -> list[str]:
-    from app.cnc.imports import importers
+    from app.cnc.formats.reading import importers
 
     return list(importers())
 
@@ -135,7 +135,7 @@ def read_file(
     """A program file of any format and the format read. A MillBlocks document has its
     executed or cancelled COPY blocks carried out; any other format is imported and its
     report printed on stderr. Raises ProgramFileError (exit 2) naming line and column."""
-    from app.cnc.imports import detect_format, read_program
+    from app.cnc.formats.reading import detect_format, read_program
 
     try:
         data = path.read_bytes()
@@ -374,8 +374,8 @@ def export(
     The output goes to standard output unless -o is given; the compatibility report (what
     the target could not express) goes to standard error.
     """
-    from app.cnc.emit.target import ExportError, OptionError
-    from app.cnc.emit.target import export as run_export
+    from app.cnc.formats.targets import ExportError, OptionError
+    from app.cnc.formats.targets import export as run_export
 
     raw: dict[str, str] = {}
     machine = None
@@ -474,7 +474,7 @@ def _profile_options(path: Path) -> dict[str, str]:
 @click.option("--options", "show_options", is_flag=True, help="List each target's options.")
 def list_targets(show_options: bool) -> None:
     """List the export targets (and their options)."""
-    from app.cnc.emit.target import targets
+    from app.cnc.formats.targets import targets
 
     for name, target in targets().items():
         click.echo(f"{name:<16} {target.description}")
@@ -550,8 +550,8 @@ def import_program(
 @click.option("--machine", "machine_name", default=None, help="A library machine (rates, target).")
 def setup_sheet_command(program: str, target: str | None, machine_name: str | None) -> None:
     """Print the set-up sheet of PROGRAM: part zero, tools, times, the export's report."""
-    from app.cnc.emit.target import ExportError, OptionError
-    from app.cnc.emit.target import export as run_export
+    from app.cnc.formats.targets import ExportError, OptionError
+    from app.cnc.formats.targets import export as run_export
     from app.cnc.setup import render_text, setup_sheet
 
     loaded = checked(program)
@@ -1285,7 +1285,7 @@ def _progress_printer(label: str) -> Callable[[int, int | None], None]:
 def _transfer_machine(name: str | None, port: str | None, target: str) -> Machine:
     """The library machine `name`, or else a bare line on `port`: 4800 7E1, no flow
     control, sending `target` (the ProtoTRAK Plus defaults)."""
-    from app.cnc.emit.target import targets
+    from app.cnc.formats.targets import targets
     from app.storage.library import Machine
 
     if name:
@@ -1328,7 +1328,7 @@ def send_command(
     PROGRAM is a library id or name, or a JSON file. The transfer is logged in the library.
     Ctrl-C stops it (the control has a partial program). Exit 1 when it is cancelled.
     """
-    from app.cnc.emit.target import ExportError, OptionError
+    from app.cnc.formats.targets import ExportError, OptionError
     from app.dnc import TransferError, service
     from app.storage.transfers import TransferLog
 

@@ -31,7 +31,7 @@ import tempfile
 import time
 from decimal import Decimal
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from bench.common import (
     Result,
@@ -210,8 +210,8 @@ def parts_case(blocks: int) -> Result:
     from app.cnc.blocks import Hole
     from app.cnc.compiler import compile_program
     from app.cnc.diff import summary
-    from app.cnc.emit.svg import draw
     from app.cnc.estimate import estimate
+    from app.cnc.formats.svg import draw
     from app.cnc.interpret import interpret
     from app.cnc.validate import validate
     from app.web.editor_page import shown_of
@@ -339,6 +339,108 @@ def parts_case(blocks: int) -> Result:
     return result
 
 
+# The phases of one edit's request, as (label, module, function): the function the request
+# calls for the phase, wrapped by `phases_case` to add up its time. Indented labels are part
+# of the phase above them.
+PHASES = (
+    ("parse the form, build the block", "app.web.editor", "parse_block"),
+    ("validate the new version", "app.web.editor", "value_problems"),
+    ("  its cost (moves, before anything compiles)", "app.cnc.validate:_Checker", "check_size"),
+    ("  its geometry (the compile)", "app.cnc.validate:_Checker", "check_geometry"),
+    ("  the process rules (pilot, stock)", "app.cnc.validate:_Checker", "check_process"),
+    ("save (the library's save, the saved version read)", "app.web.editor", "_save"),
+    (
+        "  the row's columns (cost check, document text, search words)",
+        "app.storage.library",
+        "_columns",
+    ),
+    ("  the revision's summary (diff)", "app.storage.library", "summary"),
+    ("  the SQL update and revision insert", "app.storage.revisions:Versioned", "write"),
+    ("the reply", "app.web.editor", "render_reply"),
+    ("  the cycle time (compile + estimate)", "app.web.editor_page", "times"),
+    ("  the drawing's changes (draw, split, compare)", "app.web.editor_page", "drawing_patch"),
+    ("    the drawing (compile + draw)", "app.web.editor_page", "preview"),
+    ("  the templates", "app.web.editor_page", "render_template"),
+)
+
+
+def phases_case(blocks: int, edits: int) -> Result:
+    """(child) One process, the Flask test client: the mean time of each phase of an edit
+    that says which version the page's drawing is (the reply carries the drawing's changes),
+    each phase's function wrapped to add up its time; `request` is the whole request. The
+    first edits warm the per-block memos, as a server's first edits do."""
+    import importlib
+
+    from app import create_app
+    from app.web import get_library
+    from bench.programs import editor_program
+    from bench.server import CSRF, VERSION
+
+    spent: dict[str, float] = {}
+
+    def timed(label: str, call: Any) -> Any:
+        def wrapper(*args: Any, **kwargs: Any) -> Any:
+            started = time.perf_counter()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                spent[label] = spent.get(label, 0.0) + time.perf_counter() - started
+
+        return wrapper
+
+    for label, where, name in PHASES:
+        module_name, _, class_name = where.partition(":")
+        owner: Any = importlib.import_module(module_name)
+        if class_name:
+            owner = getattr(owner, class_name)
+        setattr(owner, name, timed(label, getattr(owner, name)))
+    with tempfile.TemporaryDirectory() as tmp:
+        app = create_app(
+            {"DATABASE_URL": f"sqlite:///{Path(tmp) / 'phases.db'}", "SECRET_KEY": "bench"}
+        )
+        with app.app_context():
+            program_id = get_library().create(editor_program(blocks)).id
+        client = app.test_client()
+        page = client.get(f"/programs/{program_id}?edit=1").get_data(as_text=True)
+        csrf_found, version_found = CSRF.search(page), VERSION.search(page)
+        assert csrf_found and version_found
+        csrf, version = csrf_found.group(1), int(version_found.group(1))
+        shown = ShownRows()
+        shown.read(page)
+        for number in range(2, blocks // 50 + 2):
+            shown.read(
+                client.get(f"/programs/{program_id}/list?page={number}", headers=HTMX).get_data(
+                    as_text=True
+                )
+            )
+        total = 0.0
+        warm = 4
+        for k in range(warm + edits):
+            if k == warm:
+                spent.clear()
+                total = 0.0
+            form = edit_form(csrf, version, k, blocks)
+            sent = {
+                **form,
+                "shown": shown.of_page(int(form["edit"]), blocks),
+                "drawn": str(version),
+            }
+            started = time.perf_counter()
+            answer = client.post(f"/programs/{program_id}/blocks", data=sent, headers=HTMX)
+            total += time.perf_counter() - started
+            assert answer.status_code == 200, answer.status_code
+            body = answer.get_data(as_text=True)
+            shown.read(body)
+            found = VERSION.search(body)
+            version = int(found.group(1)) if found else version + 1
+        with app.app_context():
+            get_library().engine.dispose()
+    result: Result = {"request": total / edits}
+    for label, _, _ in PHASES:
+        result[label] = spent.get(label, 0.0) / edits
+    return result
+
+
 # In the page: when the edit's submit button is clicked, and when the drawing of the version
 # asked for (`window.__want`) is in the page and the frame after it painted.
 WATCH_REDRAWN = """() => {
@@ -434,6 +536,7 @@ def run(timeout: float = 300.0) -> Section:
         timeout,
     )
     parts = run_child("bench.editor:parts_case", {"blocks": BLOCKS}, timeout)
+    phases = run_child("bench.editor:phases_case", {"blocks": BLOCKS, "edits": 30}, timeout)
     browser = run_child(
         "bench.editor:browser_case",
         {"blocks": BLOCKS, "edits": 16, "workers": WORKERS, "time_limit": 60.0},
@@ -522,6 +625,21 @@ def run(timeout: float = 300.0) -> Section:
         ]
     else:
         section.lines += ["", f"(the breakdown failed: {parts['error']})"]
+    if "error" not in phases:
+        request = phases.pop("request")
+        section.lines += [
+            "",
+            "The phases of one edit's request (one process, the Flask test client, 30 edits",
+            "after 4 that warm it; the mean of each phase's function, inside the request's",
+            f"{fmt_seconds(request)}; indented rows are part of the row above):",
+            "",
+            *table(
+                ["phase", "time", "share"],
+                [[n, fmt_seconds(t), f"{100 * t / request:.0f} %"] for n, t in phases.items()],
+            ),
+        ]
+    else:
+        section.lines += ["", f"(the phases failed: {phases['error']})"]
     p95 = now["redrawn"]["p95"]
     section.target(
         f"edit → redrawn preview p95, {BLOCKS} blocks (before: "

@@ -329,7 +329,7 @@ def mutate_dxf(rng: random.Random, data: bytes) -> bytes:
 def _parser(kind: str) -> tuple[Callable[[bytes], object], tuple[type[BaseException], ...]]:
     """The function under test and the errors it may raise."""
     from app.cnc import document
-    from app.cnc.imports import ImportFailure, read_program
+    from app.cnc.formats.reading import ImportFailure, read_program
     from app.cnc.numbers import NumberError, parse_decimal, parse_int
 
     if kind in ("gcode", "events", "json"):
@@ -372,7 +372,7 @@ def read_dxf(data: bytes) -> object:
     from app.cnc.formats.dxf.blocks import cut_sides
     from app.cnc.formats.dxf.choice import ContourChoice, HoleChoice, chosen_blocks, drawing_svg
     from app.cnc.formats.dxf.reader import parse_options, read_drawing
-    from app.cnc.imports import ImportFailure, read_program
+    from app.cnc.formats.reading import ImportFailure, read_program
 
     options = {"drawing-units": "inch", "hole-diameter": "0.3"} if len(data) % 3 else {}
     try:

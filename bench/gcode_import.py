@@ -10,7 +10,7 @@ of any size stays inside the ±99.999 in a dimension may have (app.cnc.limits). 
 padded with single-axis G1 moves to exactly the line count. rs274 must accept it (its exit
 status is checked), so all three readers see a valid program.
 
-- ours: `app.cnc.imports.read_as` with the G-code importer (parse, motion, recognition of
+- ours: `app.cnc.recognition.read_as` with the G-code importer (parse, motion, recognition of
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
   program it returns — as the installed app runs it: the wheel with the importer compiled
   by mypyc (`make wheel-native`, built and installed into a fresh environment by
@@ -141,8 +141,8 @@ def ours_case(path: str) -> Result:
     then the compiler on the program it returns."""
     from app.cnc import native
     from app.cnc.compiler import compile_program
-    from app.cnc.imports import read_as
-    from app.cnc.imports.registry import get_importer
+    from app.cnc.formats.importers import get_importer
+    from app.cnc.formats.reading import read_as
 
     data = Path(path).read_bytes()
     importer = get_importer("gcode")

@@ -65,8 +65,8 @@ def one_path(path: object) -> str:
 def server_case(family: str, moves: int) -> Result:
     """(child) Compile, draw, time and preview a `family` program of about `moves` moves."""
     from app.cnc.compiler import compile_program
-    from app.cnc.emit.svg import render
     from app.cnc.estimate import estimate
+    from app.cnc.formats.svg import render
     from app.cnc.validate import validate
     from app.web.preview import preview
     from bench.programs import sized

@@ -18,7 +18,7 @@ import argparse
 import sys
 import time
 
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.settings import EndOfLine, Flow, PortSettings
 from app.dnc.transfer import send
 from app.storage.demo import demo_programs

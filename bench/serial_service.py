@@ -25,7 +25,7 @@ import time
 from contextlib import ExitStack
 from pathlib import Path
 
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.daemon import TransferService
 from app.dnc.settings import Flow, PortSettings
 from app.dnc.transfer import send

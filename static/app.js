@@ -336,6 +336,31 @@
   }
   document.addEventListener("htmx:after:swap", swapped);
 
+  // A prompt that applies only while others have some values (a pocket's ENTRY, its RAMP
+  // ANGLE: the declaration's only_when, app/web/forms.py FieldSpec.shown_when) is shown
+  // only then, beside the Enter sequence (data-beside: Tab or the pointer reach it);
+  // hidden, it is disabled, so the form sends nothing for it (the block keeps its default).
+  function applyShownWhen(form) {
+    form.querySelectorAll("[data-shown-when]").forEach(function (field) {
+      var shown = field.getAttribute("data-shown-when").split(" ").every(function (pair) {
+        var at = pair.indexOf("=");
+        var other = form.querySelector('[name="' + pair.slice(0, at) + '"]');
+        return other !== null && !other.disabled && other.value === pair.slice(at + 1);
+      });
+      field.hidden = !shown;
+      field.querySelectorAll("[data-beside]").forEach(function (el) { el.disabled = !shown; });
+    });
+  }
+  function shownWhenAll() {
+    document.querySelectorAll("form.block-form").forEach(applyShownWhen);
+  }
+  document.addEventListener("htmx:after:swap", shownWhenAll);
+  document.addEventListener("DOMContentLoaded", shownWhenAll);
+  document.addEventListener("change", function (event) {
+    var form = event.target.form;
+    if (form && form.matches("form.block-form")) { applyShownWhen(form); }
+  });
+
   // A tool picked from the crib in Data Block 0: its row comes back filled, and the cursor
   // goes to its RPM (offered where none was typed) to be taken or typed over.
   document.addEventListener("htmx:after:swap", function () {

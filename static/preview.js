@@ -2,7 +2,7 @@
 // between drawing and blocks (click a drawn block to open its row; a chosen row lights up
 // its drawing). No inline script anywhere (the Content-Security-Policy forbids it).
 //
-// A drawing comes from app/cnc/emit/svg.py in one of two ways:
+// A drawing comes from app/cnc/formats/svg.py in one of two ways:
 // - inline SVG (most programs): the browser draws it; zoom and pan change its viewBox;
 // - a large program's SVG inside an inert <template>: painted here on a canvas. A LOOP's
 //   pattern is one <g> in <defs> placed by many <use>s, so each pattern is painted once

@@ -8,7 +8,7 @@ import tracemalloc
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, export, targets
+from app.cnc.formats.targets import Export, export, targets
 
 
 def traced_export(program: Program, target: str) -> tuple[Export, int]:

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from app.cnc import document, native
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
 
 
 def outcome(data: bytes, name: str) -> dict[str, object]:

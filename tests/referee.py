@@ -25,11 +25,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Export, export
-from app.cnc.imports import ImportResult, read_program
-from app.cnc.imports import steps as steps_module
-from app.cnc.imports.steps import Parsed
+from app.cnc.formats.reading import ImportResult, read_program
+from app.cnc.formats.targets import Export, export
 from app.cnc.interpret import interpret
+from app.cnc.recognition import steps as steps_module
+from app.cnc.recognition.steps import Parsed
 from app.cnc.toolpath import ArcFeed, Feed, Move, Rapid, ToolChange, Toolpath
 from app.cnc.units import Units
 

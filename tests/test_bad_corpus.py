@@ -23,7 +23,7 @@ from click.testing import CliRunner
 from app.cli import main
 from app.cnc.blocks import Program
 from app.cnc.document import DocumentError, loads
-from app.cnc.emit.target import ExportError, export
+from app.cnc.formats.targets import ExportError, export
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.validate import validate
 

@@ -11,7 +11,7 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import DataBlock0, Hole, HoleOp, Pos, Program, Tool
-from app.cnc.emit.target import ExportError, export
+from app.cnc.formats.targets import ExportError, export
 from app.cnc.rotary import Boss, feed_number, y_distance
 from app.cnc.units import Units
 

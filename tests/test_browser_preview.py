@@ -22,6 +22,7 @@ from werkzeug.serving import make_server
 from app import create_app
 from app.cnc.blocks import (
     BoltCircle,
+    Circle,
     Comp,
     DataBlock0,
     Direction,
@@ -619,3 +620,37 @@ def test_a_block_moved_down_out_of_sight_is_brought_into_it(page: Page, library:
     # The list moved no more than it had to: the row that was first in sight is close by.
     block, _ = first_row_in_view(page)
     assert 11 <= block <= 13, block
+
+
+def test_a_pocket_entry_chosen_in_the_editor_is_drawn_as_its_ramp(
+    page: Page, library: Library
+) -> None:
+    """A CIRCLE POCKET 4 in across with the 1 in tool: ENTRY is asked for only while
+    PLACEMENT is POCKET, RAMP ANGLE only while ENTRY is HELIX; choosing HELIX at 3° draws
+    the ramp, a circle of radius 0.25 in (the tool's DIA / 4) that the plunge did not have."""
+    url = library.add(
+        program(
+            "Ramped pocket",
+            drill("2", "2", tool=3),
+            Circle(placement=Placement.POCKET, radius=D(2), feed_xy=D(10), tool=3),
+        )
+    )
+    page.goto(url)
+    cut = page.locator('#preview g.block[data-block="2"] path.feed')
+    ramp = re.compile(r"A0\.25 0\.25 ")
+    expect(cut).to_have_count(1)
+    assert not ramp.search(cut.get_attribute("d") or "")
+    open_block(page, 2)
+    expect(page.locator("#f-entry")).to_be_visible()
+    expect(page.locator("#f-ramp_angle")).to_be_hidden()
+    page.locator("#f-placement").select_option("inside")
+    expect(page.locator("#f-entry")).to_be_hidden()
+    page.locator("#f-placement").select_option("pocket")
+    page.locator("#f-entry").select_option("helix")
+    expect(page.locator("#f-ramp_angle")).to_be_visible()
+    page.locator("#f-ramp_angle").fill("3")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#version")).to_have_text("v2")
+    expect(cut).to_have_attribute("d", ramp)
+    expect(page.locator("#preview g.block.problem")).to_have_count(0)
+    shot(page, "preview-ramp-entry")

@@ -87,7 +87,7 @@ def test_output_identical_across_processes(tmp_path: Path) -> None:
     processes with different hash seeds and time zones."""
     script = (
         "import sys; from pathlib import Path; from app.cnc import document; "
-        "from app.cnc.emit.target import export, targets; "
+        "from app.cnc.formats.targets import export, targets; "
         "p = document.loads(Path(sys.argv[1]).read_text()); out = Path(sys.argv[2]); "
         "[(out / n).write_bytes(export(p, n).data) for n in targets()]"
     )
@@ -218,7 +218,7 @@ def test_an_events_import_with_errors_converts_to_json(tmp_path: Path) -> None:
     """A ProtoTRAK Plus events file whose tools have no RPM and whose frame is too small
     for its tool: refused by G-code, converted to the JSON document to be fixed."""
     from app.cnc import document
-    from app.cnc.imports import read_program
+    from app.cnc.formats.reading import read_program
 
     source = Path(__file__).parent / "imports" / "seed003-2.2.5.cnc"
     out = tmp_path / "part.json"
@@ -272,8 +272,8 @@ def test_exporting_a_file_loads_no_database_or_drawing_code(tmp_path: Path) -> N
 
 # Every format's reader and writer module, and the libraries only some of them need.
 FORMAT_MODULES = {
-    "app.cnc.emit.canon",
-    "app.cnc.emit.svg",
+    "app.cnc.formats.canon",
+    "app.cnc.formats.svg",
     "app.cnc.formats.document.writer",
     "app.cnc.formats.dxf.blocks",
     "app.cnc.formats.dxf.reader",
@@ -333,7 +333,7 @@ def test_a_target_missing_from_the_table_is_refused() -> None:
     """`get_target` finds a target through app.cnc.formats.TARGET_MODULES alone, so a
     target that the table does not name (it would be missing from an export's choices
     until something imported every format) is refused when it is defined."""
-    from app.cnc.emit.target import Target, register, targets
+    from app.cnc.formats.targets import Target, register, targets
 
     class Unlisted(Target):
         name = "unlisted"

@@ -34,8 +34,8 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.compiler import Cache, compile_program
-from app.cnc.emit import canon
-from app.cnc.emit.target import ExportError, export, targets
+from app.cnc.formats import canon
+from app.cnc.formats.targets import ExportError, export, targets
 from app.cnc.interpret import interpret
 from app.cnc.path import Op, Run, walk
 from app.cnc.problems import Severity

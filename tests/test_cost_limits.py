@@ -27,7 +27,7 @@ from app.cli import main
 from app.cnc import cost, document, sizes
 from app.cnc.blocks import Program
 from app.cnc.compiler import Cache, compile_program
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
 from app.cnc.problems import Rule, Severity
 from app.cnc.validate import validate
 from app.storage.library import LibraryError

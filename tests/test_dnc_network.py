@@ -19,7 +19,7 @@ import pytest
 import serial
 import serial.rfc2217
 
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.settings import EndOfLine, Parity, PortSettings
 from app.dnc.transfer import Outcome, SendError, receive, send
 from app.storage.demo import demo_programs

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.daemon import TransferService
 from app.dnc.requests import Request, read_request
 from app.storage.library import Library, Machine, open_library

@@ -24,7 +24,7 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import Program
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc import jobs
 from app.dnc.framing import EndReason, add_parity, outgoing
 from app.dnc.record import Direction, TransferRecord
@@ -372,7 +372,7 @@ def test_receive_program_saves_nothing_that_does_not_import(
 
 
 def test_events_capture_imports_through_the_import_package(events: bytes) -> None:
-    """Through app.cnc.imports.read_program once it exists; until then a clear error."""
+    """Through app.cnc.recognition.read_program once it exists; until then a clear error."""
     now = datetime(2025, 3, 1)
     result = ReceiveResult(
         port="/dev/ttyS0",
@@ -386,7 +386,7 @@ def test_events_capture_imports_through_the_import_package(events: bytes) -> Non
         text=events.decode("ascii"),
     )
     try:
-        available = hasattr(importlib.import_module("app.cnc.imports"), "read_program")
+        available = hasattr(importlib.import_module("app.cnc.recognition"), "read_program")
     except ImportError:
         available = False
     if not available:

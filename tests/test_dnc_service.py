@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.daemon import INTERRUPTED_BY_CRASH, INTERRUPTED_BY_STOP, TransferService
 from app.storage.library import Library, Machine, open_library
 from app.storage.transfers import Transfer, TransferLog

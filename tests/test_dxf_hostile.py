@@ -34,7 +34,7 @@ from ezdxf.filemanagement import new as new_drawing
 from app.cnc.formats.dxf.blocks import cut_sides
 from app.cnc.formats.dxf.choice import PocketChoice, chosen_blocks
 from app.cnc.formats.dxf.reader import parse_options, read_drawing
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
 from app.cnc.pocketing import regions
 from app.cnc.sizes import MAX_DRAWING_ENTITIES, MAX_IMPORT_LINES
 from app.web.drawings import read_choices

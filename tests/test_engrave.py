@@ -13,8 +13,8 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import Engrave, Program
-from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
 from app.cnc.interpret import interpret
+from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
 from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import Feed, Rapid
 

@@ -42,7 +42,6 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, ExportError, Report, export
 from app.cnc.formats.events.model import (
     Mill,
     Position,
@@ -55,6 +54,7 @@ from app.cnc.formats.events.model import (
     plus_holes,
 )
 from app.cnc.formats.events.writer import build_events, check_events
+from app.cnc.formats.targets import Export, ExportError, Report, export
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid
@@ -649,9 +649,10 @@ def golden(name: str) -> Program:
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_every_golden_program_passes_the_self_check(case: Path) -> None:
     program = golden(case.name)
-    if any(isinstance(b, Helix | ThreadMill | Face | Engrave) for b in program.blocks):
-        # A helix moves Z with X and Y, a FACE goes down level by level: the Plus (no Z)
-        # refuses them, saying so.
+    ramped = any(getattr(b, "entry", None) is not None for b in program.blocks)
+    if ramped or any(isinstance(b, Helix | ThreadMill | Face | Engrave) for b in program.blocks):
+        # A helix (or a pocket's ramp entry) moves Z with X and Y, a FACE goes down level
+        # by level: the Plus (no Z) refuses them, saying so.
         with pytest.raises(ExportError) as refused:
             export(program, "events")
         assert refused.value.report is not None

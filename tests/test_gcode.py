@@ -26,8 +26,8 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Report, Severity, export, get_target
 from app.cnc.formats.gcode.writer import Writer
+from app.cnc.formats.targets import Report, Severity, export, get_target
 from app.cnc.problems import has_errors
 from app.cnc.validate import validate
 from tests.strategies import programs

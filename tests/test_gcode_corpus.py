@@ -42,7 +42,7 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from app.cnc.imports import ImportFailure, NoteKind, read_program
+from app.cnc.formats.reading import ImportFailure, NoteKind, read_program
 from app.cnc.problems import Severity
 from app.cnc.validate import validate
 from tests.referee import referee_import, rs274_reads

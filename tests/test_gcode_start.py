@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from app.cnc.emit.target import export, get_target
+from app.cnc.formats.targets import export, get_target
 from app.cnc.units import Units
 from tests.imports.support import CASES, load
 from tests.referee import CALL, RS274, run_rs274

@@ -17,9 +17,9 @@ import pytest
 from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit import canon
-from app.cnc.emit.target import export, targets
 from app.cnc.estimate import estimate, report
+from app.cnc.formats import canon
+from app.cnc.formats.targets import export, targets
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.setup import render_text, setup_sheet
@@ -111,6 +111,9 @@ _OPERATION_CASES = (
     "face-one-way-mm",
     "engrave-line",
     "engrave-arc-mm",
+    # A pocket's ramp entry (issue 33): helical arcs in place of the plunges.
+    "circle-pocket-helix-ramp",
+    "frame-2p-pocket-helix-ramp-mm",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,

@@ -18,14 +18,15 @@ import pytest
 
 from app.cnc import cost, document
 from app.cnc.blocks import Helix, MillingMode, Program, Tool
-from app.cnc.emit.target import export
+from app.cnc.compiler import compile_program
 from app.cnc.estimate import estimate
 from app.cnc.formats.gcode.reader import parse_gcode
-from app.cnc.imports import read_program
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.machine import _enters_zone
 from app.cnc.path import MOVE, Op
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.simulate.segments import Entry, ToolShapes, piece_segments
 from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import ArcFeed, Feed, Rapid
@@ -165,7 +166,7 @@ def test_the_simulation_goes_down_along_the_helix() -> None:
     row = (Op.ARC_CCW, 0, 1, 5_000_000, 0, -1_000_000, 0, 0, 100_000_000, 0)
     rows = np.array([row], dtype=MOVE)
     program = Program(name="helix", units=Units.MM)
-    shapes = ToolShapes.of(program, {})
+    shapes = ToolShapes.of(compile_program(program).path)
     segments, leaves = piece_segments(rows, 0, Entry(5_000_000, 0, 0, 0), shapes)
     assert not segments.arc.any()
     assert leaves == Entry(5_000_000, 0, -1_000_000, 0)

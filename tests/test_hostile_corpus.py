@@ -539,7 +539,7 @@ def test_no_name_ends_a_control_s_file_or_block(target: str, name: str) -> None:
     from dataclasses import replace
 
     from app.cnc import document
-    from app.cnc.emit.target import export
+    from app.cnc.formats.targets import export
 
     program = replace(document.loads(DOCUMENT.read_text()), name=name, notes=name)
     text = export(program, target, {}).data.decode("ascii")
@@ -562,8 +562,8 @@ def test_our_own_receive_of_a_send_with_a_percent_in_the_name_reads_the_whole_pr
     from dataclasses import replace
 
     from app.cnc import document
-    from app.cnc.emit.target import export
-    from app.cnc.imports import read_program
+    from app.cnc.formats.reading import read_program
+    from app.cnc.formats.targets import export
     from app.dnc.framing import Capture, outgoing
     from app.dnc.settings import PortSettings
 

@@ -4,7 +4,7 @@ An arc shorter than the import's rounding step (0.001 in) has its ends rounded o
 point, and an arc from a point to the same point is a full circle: `G0 X3.7999 Y3.135` then
 `G2 X3.8 Y3.135 I0.0001 J-0.135` (0.0001 in long, as rs274 reads it) came back as a 360°
 circle, and our own 1704 tapes make such arcs where they split an arc at a quadrant line.
-Every importer writes blocks through one builder (app/cnc/imports/build.py), which now
+Every importer writes blocks through one builder (app/cnc/recognition/build.py), which now
 keeps an arc only while rounding leaves its sweep within 10° of the file's; a shorter one
 becomes a straight move, or is left out when its ends are one point — each reported.
 """
@@ -17,9 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from app.cnc.blocks import ArcEnd, MillArc, MillQcir, PocketArc
-from app.cnc.imports import read_program
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.reading import read_program
 from app.cnc.interpret import interpret
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.toolpath import ArcFeed
 
 HEADER = "G20 G90 G17\nT1 M6\nG43 H1\nS1000 M3\nG0 X3.5 Y3.0 Z0.1\nG1 Z-0.1 F5\n"

@@ -18,11 +18,11 @@ from click.testing import CliRunner
 from app.cli import main
 from app.cnc import document
 from app.cnc.blocks import Hole, HoleOp, Program
-from app.cnc.emit.target import export
+from app.cnc.formats.reading import ImportFailure, ImportResult, detect_format, read_program
 from app.cnc.formats.tape1704.reader import parse_tape
-from app.cnc.imports import ImportFailure, ImportResult, detect_format, read_program
-from app.cnc.imports.steps import Arc
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
+from app.cnc.recognition.steps import Arc
 from app.cnc.units import Units
 from tests.imports.support import speeds, with_rpms
 from tests.referee import deviation, trace

@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 
 from app.cnc.blocks import Comp, Hole, Program
-from app.cnc.emit.target import export
-from app.cnc.imports import ImportFailure, read_program
-from app.cnc.imports.compensation import CompError, Cut, control_path
+from app.cnc.formats.reading import ImportFailure, read_program
+from app.cnc.formats.targets import export
+from app.cnc.recognition.compensation import CompError, Cut, control_path
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from tests.referee import RS274, assert_same_cuts, cut_path, referee_import, rs274, rs274_reads

@@ -8,8 +8,14 @@ from pathlib import Path
 import pytest
 
 from app.cnc import document
-from app.cnc.emit.target import export
-from app.cnc.imports import ImportFailure, ImportResult, detect_format, importers, read_program
+from app.cnc.formats.reading import (
+    ImportFailure,
+    ImportResult,
+    detect_format,
+    importers,
+    read_program,
+)
+from app.cnc.formats.targets import export
 from tests.imports.support import GOLDEN, fixture, load
 
 

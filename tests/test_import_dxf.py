@@ -33,11 +33,12 @@ from app.cnc.blocks import (
 )
 from app.cnc.formats.dxf.blocks import as_path, contour_blocks
 from app.cnc.formats.dxf.reader import parse_options, read_drawing
+from app.cnc.formats.reading import ImportFailure, detect_format, read_program
 from app.cnc.geometry import bolt_circle_points
-from app.cnc.imports import ImportFailure, detect_format, read_program
-from app.cnc.mill import Element, programmed_contour
-from app.cnc.mill import Path as MillPath
+from app.cnc.plane import Element
+from app.cnc.plane import Path as MillPath
 from app.cnc.problems import Rule, Severity
+from app.cnc.sequences import programmed_contour
 from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
 from tests.golden_support import check_golden

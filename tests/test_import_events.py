@@ -15,8 +15,8 @@ from decimal import Decimal as D
 import pytest
 
 from app.cnc.blocks import Comp, Hole, MillingMode, Program
+from app.cnc.formats.reading import ImportFailure, read_program
 from app.cnc.geometry import bolt_circle_points
-from app.cnc.imports import ImportFailure, read_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, Severity
 from app.cnc.toolpath import ArcFeed, Feed

@@ -16,8 +16,8 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import BoltCircle, Hole, Program
-from app.cnc.emit.target import export
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.toolpath import Feed
 from app.cnc.validate import validate

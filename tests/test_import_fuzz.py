@@ -29,8 +29,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from app.cnc import document
-from app.cnc.emit.target import ExportError, export
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
+from app.cnc.formats.targets import ExportError, export
 from bench.fuzz_long import corpus as long_corpus
 from bench.fuzz_long import generate, read_dxf
 from tests.imports.support import GOLDEN, HERE, load

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
 from app.cnc.formats.gcode.reader import USUAL, text_nm, usual_words
-from app.cnc.imports import ImportFailure, NoteKind, read_program
+from app.cnc.formats.reading import ImportFailure, NoteKind, read_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.toolpath import Feed

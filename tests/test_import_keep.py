@@ -22,8 +22,8 @@ from app import create_app
 from app.cli import main
 from app.cnc import document
 from app.cnc.blocks import Program
-from app.cnc.emit.target import export
-from app.cnc.imports import read_program
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import export
 from app.cnc.validate import validate
 from app.web import get_library
 

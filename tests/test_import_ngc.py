@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 
 from app.cnc.blocks import BoltCircle, MillLine
 from app.cnc.formats.gcode import ngc
-from app.cnc.imports import ImportFailure, read_program
-from app.cnc.imports.common import Notes
+from app.cnc.formats.reading import ImportFailure, read_program
+from app.cnc.recognition.common import Notes
 from app.cnc.sizes import MAX_EXPANDED_LINES
 from tests.imports.support import fixture_text
 from tests.referee import referee_import, rs274
@@ -674,17 +674,18 @@ def test_spiral_is_800_polar_steps(tmp_path: Path) -> None:
 
 def test_useful_subroutines_is_refused_in_the_call_that_reaches_its_first_problem() -> None:
     """useful-subroutines.ngc mills holes with G41 and helical arcs: refused where its
-    subroutine first does what MillBlocks cannot (a rapid across with compensation on, then
-    a helix), at the subroutine's line and column, saying which call reached it."""
+    subroutine first does what MillBlocks cannot (a rapid across with compensation on), at
+    the subroutine's line and column, saying which call reached it. Without that rapid's
+    G41 the hole's helical arcs read as a HELIX (issue 33), and the refusal moves on to the
+    slot subroutine's own rapid with compensation on."""
     text = fixture_text(f"{CORPUS}/useful-subroutines.ngc")
     assert failure(text).startswith(
         "line 24, column 1: a rapid move in X/Y with cutter compensation on"
     ) and failure(text).endswith("(in o100, called at line 79)")
     without_comp = text.replace("g41 g0 x#1", "g0 x#1")
     assert failure(without_comp).startswith(
-        "line 27, column 1: a helix (an arc with a Z move): MillBlocks cuts arcs at one depth "
-        "(in o100, called at line 79)"
-    )
+        "line 51, column 1: a rapid move in X/Y with cutter compensation on"
+    ) and failure(without_comp).endswith("(in o200, called at line 88)")
 
 
 def test_retval_reports_its_calls_and_debug_messages() -> None:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import math
 
-from app.cnc.emit.target import export
-from app.cnc.imports import read_program
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.units import Units
 from tests.imports.support import GOLDEN, describe_all, deviation, load, xy_path

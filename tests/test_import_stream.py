@@ -25,12 +25,12 @@ from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.formats.gcode.bossread import looks_segmented
 from app.cnc.formats.gcode.reader import parse_gcode
-from app.cnc.imports import ImportFailure, detect_format, read_program
-from app.cnc.imports.common import byte_lines, decode_text, split_lines, text_lines
-from app.cnc.imports.motion import program_from_motion
-from app.cnc.imports.registry import _COMMENT, PLAIN_PART, Content
-from app.cnc.imports.segment import BATCH_OPS, segment
+from app.cnc.formats.importers import _COMMENT, PLAIN_PART, Content
+from app.cnc.formats.reading import ImportFailure, detect_format, read_program
 from app.cnc.path import Op
+from app.cnc.recognition.common import byte_lines, decode_text, split_lines, text_lines
+from app.cnc.recognition.motion import program_from_motion
+from app.cnc.recognition.segment import BATCH_OPS, segment
 from bench.gcode_import import gcode_text
 
 ROOT = Path(__file__).resolve().parents[1]

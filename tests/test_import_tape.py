@@ -12,10 +12,10 @@ from decimal import Decimal as D
 
 import pytest
 
-from app.cnc.emit.target import export
+from app.cnc.formats.reading import ImportFailure, read_program
 from app.cnc.formats.tape1704 import codes as tapecode
 from app.cnc.formats.tape1704.codes import TapeCode
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.targets import export
 from app.cnc.units import Units
 from tests.imports.support import GOLDEN, describe_all, fixture_text, load
 

@@ -12,8 +12,8 @@ import pytest
 from app.cnc import document
 from app.cnc.blocks import DataBlock0, Hole, HoleOp, Pos, Program, Tool
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import ExportError, export
 from app.cnc.estimate import estimate, report
+from app.cnc.formats.targets import ExportError, export
 from app.cnc.interpret import interpret
 from app.cnc.machine import PRESETS, MachineError, check_travel, read_machine
 from app.cnc.path import CompiledPath

@@ -2,7 +2,7 @@
 
 The tool path is sampled here from the canonical moves (an independent walk over lines and
 arcs), and the finished contour is built with shapely from the block values, so these tests
-share no geometry code with app/cnc/mill.py.
+share no geometry code with app/cnc/plane.py, cutter.py, routines.py or sequences.py.
 """
 
 from __future__ import annotations

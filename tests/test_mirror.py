@@ -14,9 +14,10 @@ from app.cnc import document
 from app.cnc.blocks import Hole, Program
 from app.cnc.geometry import resolve_xy
 from app.cnc.interpret import interpret
-from app.cnc.mill import programmed_contour, sample
 from app.cnc.mirror import Axis, mirror
+from app.cnc.plane import sample
 from app.cnc.problems import Severity
+from app.cnc.sequences import programmed_contour
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
 from app.cnc.toolpath import ArcFeed, Dwell, Feed, Rapid, Toolpath
 from app.cnc.units import to_nm

@@ -40,11 +40,11 @@ from app.cnc.blocks import (
     Rep,
     Tool,
 )
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
-from app.cnc.mill import Element
-from app.cnc.mill import Path as MillPath
 from app.cnc.mirror import Axis, mirror
+from app.cnc.plane import Element
+from app.cnc.plane import Path as MillPath
 from app.cnc.problems import Severity
 from app.cnc.simulate.programmed import programmed_geometry
 from app.cnc.simulate.sweep import simulate

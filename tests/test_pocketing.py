@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
 
 from app.cnc.blocks import MillingMode
-from app.cnc.mill import Element, Path, sample
+from app.cnc.plane import Element, Path, sample
 from app.cnc.pocketing import (
     LinkKind,
     PassKind,

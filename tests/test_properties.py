@@ -33,7 +33,7 @@ from app.cnc.blocks import (
     Rep,
 )
 from app.cnc.document import as_stored, dumps, loads, to_dict
-from app.cnc.emit import canon
+from app.cnc.formats import canon
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity, has_errors
 from app.cnc.toolpath import (

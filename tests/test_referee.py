@@ -52,13 +52,13 @@ from app.cnc.blocks import (
     Pocket,
     Program,
 )
-from app.cnc.emit.svg import draw
-from app.cnc.emit.target import ExportError, export, targets
 from app.cnc.estimate import estimate
 from app.cnc.formats.gcode.bossread import join_segments
 from app.cnc.formats.gcode.reader import parse_gcode
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.svg import draw
 from app.cnc.formats.tape1704.reader import parse_tape
-from app.cnc.imports import read_program
+from app.cnc.formats.targets import ExportError, export, targets
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, has_errors
 from app.cnc.setup import setup_sheet
@@ -167,6 +167,9 @@ EVENTS_REFUSED = dict.fromkeys(
     ("helix-bore", "helix-entry-mm", "thread-mill-internal", "thread-mill-external-mm"), HELICAL
 ) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
 EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
+EVENTS_REFUSED |= dict.fromkeys(
+    ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm"), "a ramp entry moves Z with XY"
+)
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

@@ -15,7 +15,7 @@ from click.testing import CliRunner
 from app.cli import main
 from app.cnc import document
 from app.cnc.blocks import Program
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.restart import RestartError, restart_from
 from app.cnc.structure import build_nodes

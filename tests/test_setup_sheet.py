@@ -193,8 +193,8 @@ def test_the_cli_set_up_sheet_prints_stock_names_and_holes(tmp_path: Path) -> No
 
 
 def test_gcode_names_the_tool_in_its_set_up_comments_and_reads_back() -> None:
-    from app.cnc.emit.target import export
-    from app.cnc.imports import read_program
+    from app.cnc.formats.reading import read_program
+    from app.cnc.formats.targets import export
 
     program = named(golden("bolt-circle-bore-tap"), 3, "1/4-20 tap")
     text = export(program, "gcode-linuxcnc").data.decode()

@@ -27,8 +27,8 @@ from app.cnc.blocks import (
     Program,
     Tool,
 )
-from app.cnc.emit.target import ExportError, Report, export
 from app.cnc.formats.gcode.boss import segments
+from app.cnc.formats.targets import ExportError, Report, export
 
 GOLDEN = Path(__file__).parent / "golden"
 

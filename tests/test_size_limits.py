@@ -18,7 +18,7 @@ from flask.testing import FlaskClient
 from app.cli import main
 from app.cnc import document
 from app.cnc.blocks import DataBlock0, Mode, Pos, Program, Tool
-from app.cnc.imports import ImportFailure, read_program
+from app.cnc.formats.reading import ImportFailure, read_program
 from app.cnc.sizes import MAX_BLOCKS, MAX_IMPORT_LINES
 from app.web.editor_page import PAGE_SIZE
 from app.web.extensions import get_library

@@ -33,10 +33,11 @@ from app.cnc.blocks import (
     Tool,
 )
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import export
+from app.cnc.cutter import Finding
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
-from app.cnc.mill import Finding, programmed_contour
 from app.cnc.problems import Severity
+from app.cnc.sequences import programmed_contour
 from app.cnc.solve import solve_contour
 from app.cnc.structure import MillSequence, build_nodes
 from app.cnc.toolpath import ArcFeed, Feed
@@ -409,7 +410,7 @@ def test_random_tangent_chains_solve_to_the_path_of_their_points(program: Progra
     assert solved_moves == typed_moves
     # And each joint is tangent, as the print says: the travel turns by less than 0.1°.
     path, _, _ = programmed_contour(program.blocks, node.mills, (0, 0))
-    from app.cnc.mill import tangent
+    from app.cnc.plane import tangent
 
     starts = [path.start] + [e.end for e in path.elements[:-1]]
     for k in range(1, len(path.elements)):

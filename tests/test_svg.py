@@ -26,8 +26,8 @@ from app.cnc import document
 from app.cnc.blocks import DataBlock0, Hole, HoleOp, Mode, Pos, Program, Rep, Stock, Tool
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.svg import HOLE_LABELS, draw, render
-from app.cnc.emit.target import export
+from app.cnc.formats.svg import HOLE_LABELS, draw, render
+from app.cnc.formats.targets import export
 from app.cnc.path import Op
 from bench.programs import editor_program, sized
 from tests.export_support import traced_export

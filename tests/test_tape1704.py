@@ -35,9 +35,16 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.emit.target import Export, ExportError, OptionError, Report, export, get_target
 from app.cnc.formats.tape1704 import codes as tapecode
 from app.cnc.formats.tape1704.codes import TapeCode
+from app.cnc.formats.targets import (
+    Export,
+    ExportError,
+    OptionError,
+    Report,
+    export,
+    get_target,
+)
 from app.cnc.units import Units
 from bench.programs import sized
 
@@ -835,7 +842,7 @@ def test_tape_search_restates_position_spindle_and_coolant_at_every_block() -> N
     in force in the block before it (one M code per block); N is on every block. The full
     rules are in tests/test_shop_floor.py."""
     from app.cnc import document
-    from app.cnc.emit.target import export
+    from app.cnc.formats.targets import export
 
     program = document.loads(
         (Path(__file__).parent / "golden" / "coolant-and-messages" / "program.json").read_text()

@@ -15,10 +15,10 @@ import pytest
 
 from app.cnc import document
 from app.cnc.blocks import Block, MillingMode, Program, ThreadMill
-from app.cnc.emit.target import export
-from app.cnc.imports import read_program
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.toolpath import ArcFeed, Rapid
 from app.cnc.tools import Hand
 

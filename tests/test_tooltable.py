@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from app.cnc import document
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType
 from app.cnc.tooltable import (
     TableError,

@@ -19,7 +19,7 @@ from flask.testing import FlaskClient
 from app import create_app
 from app.cli import main
 from app.cnc import document
-from app.cnc.emit.target import export
+from app.cnc.formats.targets import export
 from app.dnc.daemon import TransferService
 from app.storage.demo import demo_programs
 from app.storage.library import Library, Machine, open_library

@@ -43,9 +43,9 @@ from app.cnc.blocks import (
     Program,
     Tool,
 )
-from app.cnc.emit.target import ExportError, export, targets
 from app.cnc.estimate import estimate
-from app.cnc.imports import read_program
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import ExportError, export, targets
 from app.cnc.interpret import interpret
 from app.cnc.problems import Rule, Severity, has_errors
 from app.cnc.setup import render_text, setup_sheet

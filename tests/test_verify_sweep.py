@@ -23,6 +23,7 @@ import numpy as np
 import pytest
 
 from app.cnc.blocks import Program
+from app.cnc.compiler import compile_program
 from app.cnc.interpret import interpret
 from app.cnc.problems import has_errors
 from app.cnc.simulate.segments import DRILL_SLOPE, HELIX_CHORD, drill_point_blocks
@@ -44,7 +45,7 @@ def reference_moves(program: Program) -> list[tuple[float, ...]]:
     """(x0, y0, z0, x1, y1, z1, cx, cy, arc, ccw, radius, slope, block) per segment, from
     the interpreter's Move objects, arcs in equal pieces of at most 90°."""
     toolpath = interpret(program)
-    pointed = drill_point_blocks(program)
+    pointed = drill_point_blocks(compile_program(program).path)
     default = to_nm(
         Decimal("0.125") if program.units.value == "inch" else Decimal(3), program.units
     )

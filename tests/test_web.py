@@ -251,7 +251,7 @@ def test_export_page_and_downloads(client: FlaskClient) -> None:
 def test_each_target_downloads_under_its_own_file_name(client: FlaskClient) -> None:
     """A shop exporting one part for LinuxCNC and for the Fanuc keeps both files: the
     downloads have different names (part.ngc, part.fanuc.nc), for every target."""
-    from app.cnc.emit.target import targets
+    from app.cnc.formats.targets import targets
 
     names = {}
     for name in targets():
@@ -381,7 +381,7 @@ def test_setup_sheet_page(client: FlaskClient) -> None:
 def test_download_is_what_the_page_shows(client: FlaskClient) -> None:
     """Opened fresh (no Preview pressed), the download link still carries every option as
     shown, so the file equals the default export."""
-    from app.cnc.emit.target import export as make
+    from app.cnc.formats.targets import export as make
 
     page = client.get("/programs/3/export?target=tape-eia").get_data(as_text=True)
     link = re.search(r'id="download" accesskey="d" href="([^"]+)"', page)
@@ -612,7 +612,7 @@ def test_the_upload_takes_a_segmented_boss_tape(client: FlaskClient, app: Flask)
     import io
 
     from app.cnc import document
-    from app.cnc.emit.target import export
+    from app.cnc.formats.targets import export
     from app.cnc.units import Units
 
     bolt = document.loads(

@@ -259,14 +259,14 @@ def test_a_checkout_never_loads_extension_modules(tmp_path: Path) -> None:
     )
     (tmp_path / "templates").mkdir()
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
-    for name in (*native.COMPILED, "app.cnc.imports.build", f"app.cnc.{native.GROUP}__mypyc"):
+    for name in (*native.COMPILED, "app.cnc.recognition.build", f"app.cnc.{native.GROUP}__mypyc"):
         source = native.source_path(name, tmp_path)
         source.with_name(source.stem + suffix).write_bytes(b"")
     script = (
         "from app.cnc import native\n"
-        "from app.cnc.imports import read_program\n"
+        "from app.cnc.recognition import read_program\n"
         "r = read_program(b'G21 G90\\nG0 X0 Y0 Z5\\nG1 Z-1 F100\\nG0 Z5\\nM30\\n', 'x')\n"
-        "import app.cnc.imports.build as b\n"
+        "import app.cnc.recognition.build as b\n"
         "print(len(r.program.blocks), b.__file__.endswith('.py'), native.status())\n"
     )
     env = {k: v for k, v in os.environ.items() if k != native.SWITCH}

@@ -68,6 +68,13 @@ class Placement(enum.Enum):
     POCKET = "pocket"
 
 
+class Entry(enum.Enum):
+    """How a pocketing routine goes down to each depth level instead of plunging (issue 33):
+    on a helical ramp (app/cnc/ramp.py). None on the block is the plunge."""
+
+    HELIX = "helix"
+
+
 class MillingMode(enum.Enum):
     """Data Block 0's "0 CONV 1 CLIMB" choice for circle and frame routines."""
 
@@ -160,7 +167,13 @@ COMPENSATED = frozenset(
         Rule.CORNER,
     }
 )
-ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL})
+ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL, Rule.RAMP_ENTRY})
+# A pocketing routine's ramp entry (app/cnc/ramp.py): how it goes down, and how steeply.
+ENTRY_HELP = "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across"
+RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
+RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
+POCKET_ONLY = (("placement", Placement.POCKET),)
+RAMPED = (*POCKET_ONLY, ("entry", Entry.HELIX))
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -455,7 +468,7 @@ class Circle(Block):
             SubKind("CIR_2P", "CIR 2P", "MILL", 7, (("two_pass", True),)),
         ),
         mill=Mill.ROUTINE,
-        planner="app.cnc.mill:plan_circle",
+        planner="app.cnc.routines:plan_circle",
         follows=_after_drill("centre", in_menu=False),
         findings=ROUTINE_FINDINGS,
     )
@@ -464,6 +477,12 @@ class Circle(Block):
     radius: Decimal = prompt("RAD", LENGTH, positive=True)
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    entry: Entry | None = prompt(
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
+    )
+    ramp_angle: Decimal | None = prompt(
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
+    )
 
     @property
     def type_name(self) -> str:
@@ -483,7 +502,7 @@ class Frame(Block):
             SubKind("FRM_2P", "FRM 2P", "MILL", 9, (("two_pass", True),)),
         ),
         mill=Mill.ROUTINE,
-        planner="app.cnc.mill:plan_frame",
+        planner="app.cnc.routines:plan_frame",
         follows=_after_drill("lower left corner", in_menu=False),
         findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )
@@ -494,6 +513,12 @@ class Frame(Block):
     corner_radius: Decimal = prompt("CORNER RAD", LENGTH, Decimal(0), low=Decimal(0))
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    entry: Entry | None = prompt(
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, only_when=POCKET_ONLY
+    )
+    ramp_angle: Decimal | None = prompt(
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=RAMPED
+    )
 
     @property
     def type_name(self) -> str:
@@ -700,7 +725,7 @@ PITCH_HELP = "threads per inch in an inch block, mm per thread in a mm block"
 class ThreadMill(Block):
     """THREAD MILL: a 60° thread of major diameter `diameter` about X, Y, from Z UP down to
     Z DN, cut with a single-point thread mill whose DIA (Data Block 0) is its cutting
-    diameter (app/cnc/thread.py has the motion).
+    diameter (app/cnc/operations/thread.py has the motion).
 
     `pitch` is threads per inch in an inch block and mm per thread in a mm block. The thread
     is cut in `passes` radial passes evenly spaced to the full depth of an ISO/UN basic
@@ -760,7 +785,7 @@ class FacePattern(enum.Enum):
 
 @dataclass(frozen=True, kw_only=True)
 class Face(Block):
-    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/face.py).
+    """FACE: face the XL × YW rectangle centred on X, Y down to Z DN (app/cnc/operations/face.py).
 
     Passes along X, `step` percent of the tool's DIA (Data Block 0) apart in Y, the tool
     running off both ends of each pass by `clear` beyond its edge (None: 0.050 in / 1.27 mm)
@@ -818,7 +843,7 @@ ON_ARC = (("layout", EngraveLayout.ARC),)
 
 @dataclass(frozen=True, kw_only=True)
 class Engrave(Block):
-    """ENGRAVE: `text` in a single-stroke font (app/cnc/engrave.py) along a line from X, Y
+    """ENGRAVE: `text` in a single-stroke font (operations/engrave.py) along a line from X, Y
     at ANGLE, or along an arc of RAD about X, Y from ANGLE (degrees counter-clockwise from
     +X), clockwise (letters standing outward) or counter-clockwise (inward); capitals
     `height` high, cut from Z UP down to Z DN. Each stroke is a plunge at FEEDR Z and cuts

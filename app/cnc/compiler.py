@@ -30,7 +30,7 @@ What makes it fast and small (issue 18):
   (its blocks are incremental): patterns entered in the same relative state are the same
   piece, compiled once and placed by translation (`path.Run`).
 - Lengths are integer nanometres, converted once where a block's value is read; geometry
-  (mill.py) is computed in floats and rounded once per move.
+  (plane.py and what builds on it) is computed in floats and rounded once per move.
 
 Programs with errors compile as far as they can: a node that cannot be cut (a mill sequence
 whose plan has errors) gives no moves and its problems; the rest compiles. The problems a
@@ -68,30 +68,36 @@ from app.cnc.blocks import (
     ThreadMill,
     ThreadPlace,
 )
-from app.cnc.engrave import along_arc, along_line, glyph_strokes, missing
-from app.cnc.face import face_rows
+from app.cnc.cutter import Finding
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.helix import helix_ends
 from app.cnc.memo import ByObject, Memo
-from app.cnc.mill import Finding, Path, length, plan_sequence, routine_clockwise
-from app.cnc.mill import peck_levels as peck_levels  # where it was, for its importers
+from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
+from app.cnc.operations.face import face_rows
+from app.cnc.operations.helix import helix_ends
+from app.cnc.operations.thread import thread_lead, thread_passes
 from app.cnc.path import (
     HOLE,
     MOVE,
     TAG,
     CompiledPath,
     HoleSpan,
+    MillPlan,
     MillSpan,
     Node,
     Op,
     Piece,
     Run,
     Seq,
+    plan_rows,
     size,
 )
+from app.cnc.plane import Path, length
 from app.cnc.problems import Rule, Severity
+from app.cnc.ramp import Ramp
+from app.cnc.routines import peck_levels as peck_levels  # where it was, for its importers
+from app.cnc.routines import routine_clockwise
+from app.cnc.sequences import SequencePlan, plan_sequence
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
-from app.cnc.thread import thread_lead, thread_passes
 from app.cnc.toolpath import ToolInfo
 from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
@@ -163,13 +169,14 @@ class Cache(Memo[NodeResult]):
     """Compiled top-level nodes by (blocks, entry state, Data Block 0 and units): an edit
     recompiles only what changed.
 
-    Bounded by moves held (`rows`, at 62 bytes a move): least recently used entries go
-    first, and a node larger than a tenth of the budget is not kept. Safe to share between
+    Bounded by moves held (`rows`, at 62 bytes a move; the plans kept on its mill spans
+    counted as the rows their memory would hold): least recently used entries go first,
+    and a node larger than a tenth of the budget is not kept. Safe to share between
     threads (a web server's requests).
     """
 
     def put(self, key: object, value: NodeResult) -> None:
-        self.keep(key, value, size(value.node) + 1)
+        self.keep(key, value, size(value.node) + plan_rows(value.node) + 1)
 
 
 # A top-level node's one placement: where it was compiled (read only; shared by every Run).
@@ -610,7 +617,7 @@ class _Compiler:
         if any(f.severity is Severity.ERROR for f in plan.findings) or not plan.passes:
             # Not cut: a span without rows says where it would be (with the programmed
             # contour), so a drawing can show what is left out.
-            self.record_mill(node, drill, start, len(self.buffer.rows), plan.finished)
+            self.record_mill(node, drill, start, len(self.buffer.rows), plan)
             self.reference = plan.end
             return
         self.use_tool(number, drill.tool)
@@ -620,7 +627,7 @@ class _Compiler:
                 self.cut_pocket(number, last, drill, plan.pocket)
             else:
                 self.cut_pocket_by_hand(number, last, plan.pocket)
-            self.record_mill(node, drill, start, first_row, None)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         plunge = _round(plan.passes[0].start)
@@ -630,22 +637,33 @@ class _Compiler:
             for path in plan.passes:
                 self.cut(path, depth_cap=None, feed_z=0, follow_depth=False)
             self.stop_for(last, "quill: raise the quill by hand")
-            self.record_mill(node, drill, start, first_row, plan.finished)
+            self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
-        self.position(number, plunge, self.retract)
-        self.rapid_z(number, z_up)
         levels = peck_levels(z_up, z_dn + plan.rough_allowance, drill.pecks)
+        # Where each level's way down starts: the plunge point, or its ramp's start.
+        ramps = [
+            None if plan.ramp is None else plan.ramp.rows(above, level)
+            for above, level in zip([z_up, *levels], levels, strict=False)
+        ]
+        self.position(number, plunge if ramps[0] is None else ramps[0][0], self.retract)
+        self.rapid_z(number, z_up)
         first = plan.passes[0]
+        routine = node.mills[0] + 1
         for k, level in enumerate(levels):
             final = k == len(levels) - 1
-            self.feed_to(number, (self.x, self.y, level), feed_z)
+            ramp = ramps[k]
+            if ramp is None:
+                self.feed_to(number, (self.x, self.y, level), feed_z)
+            else:
+                self.ramp_down(routine, ramp[1], plan.ramp)
             self.cut(first, depth_cap=None if final else level, feed_z=feed_z)
             if not final:
                 self.retract_up(number)
-                self.rapid_xy(number, plunge)
+                following = ramps[k + 1]
+                self.rapid_xy(number, plunge if following is None else following[0])
                 self.rapid_z(number, level, tag="peck-reentry")
         for path in plan.passes[1:]:
             # The finishing pass of a 2P routine: over to its plunge point, down to Z DN.
@@ -656,8 +674,17 @@ class _Compiler:
             self.feed_to(number, (self.x, self.y, z_dn), feed_z)
             self.cut(path, depth_cap=None, feed_z=feed_z)
         self.retract_up(last)
-        self.record_mill(node, drill, start, first_row, plan.finished)
+        self.record_mill(node, drill, start, first_row, plan)
         self.reference = plan.end
+
+    def ramp_down(self, number: int, ends: list[tuple[int, int, int]], ramp: Ramp | None) -> None:
+        """Down a ramp (app.cnc.ramp) from where the tool is to its rows' `ends`, at block
+        `number`'s XY feed: each row a helical arc about the ramp's centre."""
+        assert ramp is not None
+        feed = self.feed_of(number)
+        centre = _round(ramp.centre)
+        for end in ends:
+            self.helix_to(number, end, centre, ramp.clockwise, feed, "lead-in")
 
     def cut_pocket(self, number: int, last: int, drill: Hole, pocket: PocketPlan) -> None:
         """A POCKET: every pass at each peck level (app.cnc.pocketing).
@@ -743,10 +770,14 @@ class _Compiler:
         drill: Hole,
         start: tuple[int, int],
         first_row: int,
-        finished: Path | None,
+        plan: SequencePlan,
     ) -> None:
+        """The span of a mill sequence just compiled, with its plan: what it is programmed
+        to make, so no consumer plans it again."""
+        finished = plan.finished
         routine = 0 if finished is not None else node.mills[0] + 1 - self.base
         depth = None if drill.z_dn is None else to_nm(drill.z_dn, drill.units)
+        kept = MillPlan(plan.end, plan.routine, plan.outlines, plan.pocket, tuple(plan.findings))
         self.buffer.mills.append(
             MillSpan(
                 first_row,
@@ -760,6 +791,7 @@ class _Compiler:
                 drill.tool,
                 drill.comp.value,
                 shift=-self.base,
+                plan=kept,
             )
         )
 
@@ -851,6 +883,7 @@ class _Compiler:
                 step,
                 DWELL_MS if block.op is not HoleOp.TAP else 0,
                 canned,
+                block.tool,
             ).row()
         )
 
@@ -885,7 +918,7 @@ class _Compiler:
         self.retract_up(number)
 
     def thread_mill(self, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
-        """THREAD MILL about `centre` (app/cnc/thread.py says the motion). A block whose
+        """THREAD MILL about `centre` (app/cnc/operations/thread.py says the motion). A block whose
         tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
         validation reports it."""
         units = block.units
@@ -925,7 +958,7 @@ class _Compiler:
         self.retract_up(number)
 
     def engrave(self, number: int, block: Engrave, at: tuple[int, int]) -> None:
-        """ENGRAVE (app/cnc/engrave.py lays the strokes out): each stroke as a DRILL and its
+        """ENGRAVE (operations/engrave.py lays the strokes out): each stroke as a DRILL and its
         MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
         fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
         block whose text the font cannot write makes no moves: validation reports it."""
@@ -960,7 +993,7 @@ class _Compiler:
             self.retract_up(number)
 
     def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
-        """FACE about `centre` (app/cnc/face.py says the rows): at each of # PASS levels from
+        """FACE about `centre` (operations/face.py says the rows): at each of # PASS levels from
         Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
         feeds off the part's end) or one-way (up to the retract height and back between).
         A block whose tool has no DIA makes no moves: validation reports it."""

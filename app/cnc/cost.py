@@ -26,6 +26,8 @@ from decimal import Decimal
 from app.cnc import sizes
 from app.cnc.blocks import (
     MILL_ROUTINE_CLASSES,
+    RAMP_HIGH,
+    RAMP_LOW,
     Block,
     BoltCircle,
     Circle,
@@ -41,10 +43,13 @@ from app.cnc.blocks import (
     Rep,
     ThreadMill,
 )
-from app.cnc.engrave import glyph_strokes
-from app.cnc.mill import Path, pocket_overlap, sweep
+from app.cnc.memo import Recent
+from app.cnc.operations.engrave import glyph_strokes
+from app.cnc.operations.thread import thread_lead
+from app.cnc.plane import Path, sweep
+from app.cnc.ramp import angle_of, helix_radius
+from app.cnc.routines import pocket_overlap
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
-from app.cnc.thread import thread_lead
 from app.cnc.units import to_nm
 
 # The most rows (moves) the compiler makes for each (compiler.py):
@@ -115,10 +120,29 @@ class _Size:
     pocket: tuple[int, int, int] | None = None  # the heaviest POCKET: block, levels, points
 
 
+# The last programs' costs, by the objects the cost is read from: one edit asks for the same
+# version's cost up to four times (validation, its compile, the library's check before the
+# save, the preview's compile of a copy with the same blocks), each a walk of every block.
+_COSTS: Recent[tuple[tuple[Block, ...], object, Cost]] = Recent(8)
+
+
 def estimate(program: Program, limit: int | None = None) -> Cost:
     """The cost of `program` (COPY blocks are not motion). `limit` (default
     `sizes.move_limit()`) only decides which block `Cost.over` names."""
     cap = sizes.move_limit() if limit is None else limit
+    blocks = program.blocks
+    # The entry keeps its blocks and Data Block 0 alive, so their ids are not reused.
+    key = (id(blocks), id(program.block0), program.units, cap)
+    kept = _COSTS.get(key)
+    if kept is not None and kept[0] is blocks and kept[1] is program.block0:
+        return kept[2]
+    found = _estimate(program, cap)
+    _COSTS.keep(key, (blocks, program.block0, found))
+    return found
+
+
+def _estimate(program: Program, cap: int) -> Cost:
+    """The cost of `program`, its moves held to `cap` (estimate, worked out)."""
     blocks = program.blocks
     moves = holes = passes = 0
     tool = program.block0.current_tool
@@ -220,7 +244,8 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
         rings = _routine_rings(program, mill)
         two_pass = 1 if getattr(mill, "two_pass", False) else 0
         per_level = rings * RING_ELEMENTS + LEVEL_ROWS
-        return _Size(extra + SEQUENCE_ROWS + (levels + two_pass) * per_level, 0, 0), used
+        ramp = _ramp_rows(program, block, mill, levels)
+        return _Size(extra + SEQUENCE_ROWS + (levels + two_pass) * per_level + ramp, 0, 0), used
     per_level = CONTOUR_ELEMENTS * len(node.mills) + LEVEL_ROWS
     return _Size(extra + SEQUENCE_ROWS + levels * per_level, 0, 0), used
 
@@ -267,6 +292,22 @@ def _operation_rows(program: Program, block: Helix | ThreadMill | Face | Engrave
     step = max(diameter * block.step // 100, 1)
     rows = to_nm(block.yw, units) // step + 2
     return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
+
+
+def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> int:
+    """About how many rows a pocket's helical ramp entry makes (app/cnc/ramp.py): a row a
+    turn down the whole depth, and one more a level for what is left of a turn. From the
+    numbers alone: a tiny tool at a shallow angle is refused before it is compiled."""
+    if not isinstance(routine, Circle | Frame) or routine.entry is None or not drill.has_depth:
+        return 0
+    radius = helix_radius(_tool_radius(program, routine.tool))
+    # An angle out of range is refused by validation; here it is only kept from nothing.
+    stated = float(angle_of(routine.ramp_angle))
+    angle = math.radians(min(max(stated, float(RAMP_LOW)), RAMP_HIGH))
+    pitch = max(2 * math.pi * radius * math.tan(angle), 1.0)
+    assert drill.z_up is not None and drill.z_dn is not None
+    depth = max(to_nm(drill.z_up, drill.units) - to_nm(drill.z_dn, drill.units), 0)
+    return int(depth / pitch) + 2 * levels
 
 
 def _hole_rows(block: Hole) -> int:

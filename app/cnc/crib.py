@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 
 from app.cnc.blocks import Program, Tool
 from app.cnc.cutting import Cutter, Offer, offer
-from app.cnc.imports.common import decimal_of, quantize_nm
 from app.cnc.kinds import REGISTRY
+from app.cnc.recognition.common import decimal_of, quantize_nm
 from app.cnc.spindle import Spindle
 from app.cnc.tools import CribTool, Hand, PitchUnit, ToolMaterial, ToolType
 from app.cnc.units import Units, format_decimal, to_nm

@@ -193,7 +193,7 @@ def _block_out(block: Block) -> dict[str, Any]:
     return data
 
 
-_BLOCK_WHEN_SET = ("angle", "radius", "tangent", "conrad", "chamfer")
+_BLOCK_WHEN_SET = ("angle", "radius", "tangent", "conrad", "chamfer", "entry", "ramp_angle")
 
 
 # A tool's fields written only when set (its name, and the copy of the crib tool it was

@@ -339,14 +339,24 @@ class Registry:
         raise ValueError(f"{type(block).__name__} has no editor sub-kind for {block!r}")
 
     def prompted(self, cls: type[Block], sub: SubKind) -> tuple[Field, ...]:
-        """The fields the entry form of `sub` asks for, in the control's order."""
+        """The fields the entry form of `sub` asks for, in the control's order. A field
+        that applies only while another prompt has some value (`only_when` naming a field
+        `sub` does not fix, as a pocket's ENTRY names PLACEMENT) is asked for, and the form
+        shows it while that prompt has that value (`shown_when`)."""
         fixed = dict(sub.fixed)
-        values = {f.name: fixed.get(f.name, f.default) for f in self.fields(cls)}
         return tuple(
             f
             for f in self.fields(cls)
-            if f.prompt.prompted and f.name not in fixed and self.applies(cls, f, values)
+            if f.prompt.prompted
+            and f.name not in fixed
+            and all(fixed[name] == wanted for name, wanted in f.prompt.only_when if name in fixed)
         )
+
+    def shown_when(self, field: Field, sub: SubKind) -> tuple[tuple[str, Any], ...]:
+        """The conditions of `field` the entry form of `sub` checks as its prompts change:
+        those on fields `sub` does not fix."""
+        fixed = dict(sub.fixed)
+        return tuple((name, v) for name, v in field.prompt.only_when if name not in fixed)
 
     # -- order ---------------------------------------------------------------------------
 

@@ -267,7 +267,7 @@ def table_position(blocks: tuple[Block, ...]) -> XY:
 
 
 def _walk(blocks: tuple[Block, ...]) -> tuple[list[tuple[XY | None, XY | None]], XY]:
-    from app.cnc.mill import qcir_centre
+    from app.cnc.plane import qcir_centre
     from app.cnc.solve import needs_solving, solve_contour
 
     reference: XY = (0, 0)

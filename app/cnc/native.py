@@ -31,13 +31,13 @@ from types import ModuleType
 # bench's `read_as`): each is strictly typed (mypy --strict on app.cnc), which is what
 # mypyc compiles from. Order does not matter; the group is built as one.
 COMPILED = (
-    "app.cnc.imports.common",
-    "app.cnc.imports.steps",
+    "app.cnc.recognition.common",
+    "app.cnc.recognition.steps",
     "app.cnc.formats.gcode.reader",
-    "app.cnc.imports.segment",
-    "app.cnc.imports.ops",
-    "app.cnc.imports.recognise",
-    "app.cnc.imports.motion",
+    "app.cnc.recognition.segment",
+    "app.cnc.recognition.ops",
+    "app.cnc.recognition.recognise",
+    "app.cnc.recognition.motion",
 )
 GROUP = "native_group"  # the group's shared library: app/cnc/native_group__mypyc.*.so
 ROOT = Path(__file__).resolve().parents[2]  # the directory holding `app`

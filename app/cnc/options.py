@@ -1,6 +1,6 @@
 """Typed options of an export target or an import format: name, kind, default, meaning.
 
-Both registries (app.cnc.emit.target for targets, app.cnc.imports.registry for import
+Both registries (app.cnc.formats.targets for targets, app.cnc.formats.importers for import
 formats) declare their options with `Option`, so the command line, the web forms and the
 machine presets list them from one declaration.
 """

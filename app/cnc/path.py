@@ -7,9 +7,10 @@ once and placed by translation.
 
 A compiled path is a tree of nodes:
 
-- `Piece` — rows for consecutive moves, with their spans (holes), block numbers relative
-  to `Piece.base` (the first data block it was compiled for, so a cached piece serves
-  wherever its blocks land after an edit);
+- `Piece` — rows for consecutive moves, with their spans (holes with their intent, mill
+  sequences with their plans: what consumers read instead of the blocks, see `MillSpan`),
+  block numbers relative to `Piece.base` (the first data block it was compiled for, so a
+  cached piece serves wherever its blocks land after an edit);
 - `Run` — one node placed at several XY offsets in order (the patterns of a LOOP/REP that
   begin in the same state), each placement translated: X, Y and arc centres move, Z and
   everything else stays;
@@ -17,7 +18,8 @@ A compiled path is a tree of nodes:
 
 `walk(node)` yields `Chunk`s: arrays of absolute moves (translated, block numbers made
 absolute) with their hole spans, a bounded number of rows at a time, so a consumer's memory
-does not grow with the program.
+does not grow with the program. `placed_holes` and `placed_mills` give the spans alone,
+placed, without the moves.
 
 Row fields (lengths integer nm, part coordinates; feeds nm/min):
 
@@ -47,15 +49,18 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Iterable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
 from app.cnc import sizes
 from app.cnc.blocks import HoleOp
-from app.cnc.mill import Path, translated
+from app.cnc.cutter import Finding
+from app.cnc.plane import Path, translated
+from app.cnc.routines import Routine
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -76,6 +81,10 @@ from app.cnc.toolpath import (
     Toolpath,
 )
 from app.cnc.units import Units
+
+if TYPE_CHECKING:
+    # The pocket engine (and pyclipper) loads when a POCKET is planned, not with the path.
+    from app.cnc.pocketing.model import PocketPlan
 
 
 class Op(enum.IntEnum):
@@ -143,6 +152,7 @@ HOLE = np.dtype(
         ("pecks", np.int32),
         ("step", np.int64),
         ("dwell_ms", np.int32),
+        ("tool", np.int32),
     ]
 )
 HOLE_OPS = (HoleOp.DRILL, HoleOp.BORE, HoleOp.TAP)
@@ -159,6 +169,7 @@ class HoleSpan:
     is True when the rows are exactly a canned cycle's from `z0` with a return to `z0`
     (G98): an optional rapid across at `z0`, a rapid down to `r`, the feeds (and pecks) to
     `bottom`, a dwell of `dwell_ms`, a rapid up to `z0` — an emitter may write the cycle.
+    `tool` is the tool that makes it (the hole block's, a bolt circle's centre block's).
     """
 
     start: int
@@ -174,13 +185,27 @@ class HoleSpan:
     step: int
     dwell_ms: int
     canned: bool
+    tool: int
 
     @staticmethod
     def of(row: Sequence[int]) -> HoleSpan:
         """The hole a HOLE row (as a tuple) holds."""
-        start, end, op, canned, x, y, z0, r, bottom, feed, pecks, step, dwell = row
+        start, end, op, canned, x, y, z0, r, bottom, feed, pecks, step, dwell, tool = row
         return HoleSpan(
-            start, end, HOLE_OPS[op], x, y, z0, r, bottom, feed, pecks, step, dwell, bool(canned)
+            start,
+            end,
+            HOLE_OPS[op],
+            x,
+            y,
+            z0,
+            r,
+            bottom,
+            feed,
+            pecks,
+            step,
+            dwell,
+            bool(canned),
+            tool,
         )
 
     def row(self) -> tuple[int | bool, ...]:
@@ -199,6 +224,7 @@ class HoleSpan:
             self.pecks,
             self.step,
             self.dwell_ms,
+            self.tool,
         )
 
 
@@ -207,12 +233,15 @@ class MillSpan:
     """One mill sequence in a piece: rows [start, end) cut it (none when its plan has
     errors: it is not cut, the span only says where it would be).
 
-    `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME block (0 for a
-    contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point (nm);
-    `depth` the DRILL's Z DN (None in a 2-axis program); `tool` and `comp` the DRILL's.
+    `drill` is the DRILL block that starts it and `routine` its CIRCLE/FRAME/POCKET block
+    (0 for a contour), both numbered like the piece's rows; (`x`, `y`) the DRILL's point
+    (nm), where the sequence is entered; `depth` the DRILL's Z DN (None in a 2-axis
+    program); `tool` and `comp` the DRILL's.
     `finished` is the programmed contour (float nm) as it was planned, or None for a
     routine; `contour()` gives it where this span is — moved by (`dx`, `dy`), its blocks
-    renumbered by `shift`.
+    renumbered by `shift`. `plan` is the rest of what was planned (`MillPlan`), read where
+    this span is through `exit()`, `shape()`, `outlines()`, `pocket()` and `findings()`:
+    what every consumer reads instead of planning the sequence again.
     """
 
     start: int
@@ -228,6 +257,9 @@ class MillSpan:
     dx: int = 0
     dy: int = 0
     shift: int = 0
+    # Not in the repr nor compared: it is made from what the other fields hold (a drawing
+    # keys on the repr) and a pocket's plan is large.
+    plan: MillPlan = field(default_factory=lambda: MillPlan((0, 0)), repr=False, compare=False)
 
     def moved(self, rows: int, dx: int, dy: int, blocks: int = 0) -> MillSpan:
         """This span `rows` later, (dx, dy) over and `blocks` block numbers on."""
@@ -245,15 +277,90 @@ class MillSpan:
             self.dx + dx,
             self.dy + dy,
             self.shift + blocks,
+            self.plan,
         )
+
+    @property
+    def _here(self) -> bool:
+        """True when the plan is where this span is (nothing to move or renumber)."""
+        return not (self.dx or self.dy or self.shift)
 
     def contour(self) -> Path | None:
         """The programmed contour where this span cuts it (None for a routine)."""
         if self.finished is None:
             return None
-        if not (self.dx or self.dy or self.shift):
+        if self._here:
             return self.finished
         return translated(self.finished, self.dx, self.dy, self.shift)
+
+    def exit(self) -> tuple[int, int]:
+        """The programmed end point (nm): the reference for a following INC block (the
+        DRILL's point after a routine)."""
+        x, y = self.plan.end
+        return x + self.dx, y + self.dy
+
+    def shape(self) -> Routine | None:
+        """A CIRCLE/FRAME routine's circle or frame where this span cuts it (None for a
+        contour or a POCKET)."""
+        routine = self.plan.routine
+        if routine is None or self._here:
+            return routine
+        if routine.is_frame:
+            corner = (routine.corner[0] + self.dx, routine.corner[1] + self.dy)
+            return replace(routine, block=routine.block + self.shift, corner=corner)
+        centre = (routine.centre[0] + self.dx, routine.centre[1] + self.dy)
+        return replace(routine, block=routine.block + self.shift, centre=centre)
+
+    def outlines(self) -> tuple[tuple[str, Path], ...]:
+        """A POCKET's wall ("boundary") and islands where this span cuts it (empty for
+        anything else)."""
+        if self._here:
+            return self.plan.outlines
+        return tuple(
+            (name, translated(path, self.dx, self.dy, self.shift))
+            for name, path in self.plan.outlines
+        )
+
+    def pocket(self) -> PocketPlan | None:
+        """A POCKET's passes and links where this span cuts it (None for anything else,
+        and for a POCKET whose plan has errors)."""
+        plan = self.plan.pocket
+        if plan is None or self._here:
+            return plan
+
+        def move(path: Path) -> Path:
+            return translated(path, self.dx, self.dy, self.shift)
+
+        passes = tuple(
+            replace(p, path=move(p.path), entry=replace(p.entry, path=move(p.entry.path)))
+            for p in plan.passes
+        )
+        return replace(plan, passes=passes)
+
+    def findings(self) -> tuple[Finding, ...]:
+        """What planning the sequence found (compensation limits, routine sizes, a
+        pocket's narrow places), numbered where this span is."""
+        if not self.shift:
+            return self.plan.findings
+        return tuple(replace(f, block=f.block + self.shift) for f in self.plan.findings)
+
+
+@dataclass(frozen=True, slots=True)
+class MillPlan:
+    """What a mill sequence was planned as, where it was compiled (nm, block numbers as
+    compiled; a MillSpan moves it to where it is cut).
+
+    `end` the programmed end point; `routine` a CIRCLE/FRAME's circle or frame and the way
+    it goes round; `outlines` a POCKET's wall and islands; `pocket` a POCKET's passes with
+    their links (None when its plan has errors); `findings` what planning found. The
+    programmed contour of a line/arc sequence is `MillSpan.finished`.
+    """
+
+    end: tuple[int, int]
+    routine: Routine | None = None
+    outlines: tuple[tuple[str, Path], ...] = ()
+    pocket: PocketPlan | None = None
+    findings: tuple[Finding, ...] = ()
 
 
 @dataclass(slots=True)
@@ -478,6 +585,64 @@ def placed_holes(
     else:
         for ox, oy in node.offsets.tolist():
             yield from placed_holes(node.node, dx + ox, dy + oy, base + node.base)
+
+
+# What one element of a kept plan costs in memory, in rows (62 bytes each): an element
+# with its points and its share of the passes and links holding it, about 380 bytes
+# (tracemalloc over the pocket-islands plan).
+PLAN_ELEMENT_ROWS = 6
+
+
+def plan_rows(node: Node) -> int:
+    """The memory the plans kept on `node`'s mill spans take, in rows: for a cache that
+    bounds what it holds by rows (a POCKET's plan can outweigh its moves). A node placed
+    several times holds its plans once."""
+    if isinstance(node, Piece):
+        elements = 0
+        for mill in node.mills:
+            plan = mill.plan
+            paths = [path for _, path in plan.outlines]
+            if plan.pocket is not None:
+                for cut in plan.pocket.passes:
+                    paths += [cut.path, cut.entry.path]
+            elements += sum(len(path.elements) for path in paths)
+            elements += 0 if mill.finished is None else len(mill.finished.elements)
+        return elements * PLAN_ELEMENT_ROWS
+    if isinstance(node, Seq):
+        return sum(plan_rows(child) for child in node.nodes)
+    return plan_rows(node.node)
+
+
+def placed_mills(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[MillSpan]:
+    """Every mill sequence of `node` in cutting order, where it is cut (blocks absolute,
+    rows counted from the node's first), without placing the moves: for the consumers that
+    read the plans (events, Verify's intended part, cleared areas), a LOOP of holes costs
+    nothing here."""
+    yield from _placed_mills(node, dx, dy, base, 0)
+
+
+def _placed_mills(node: Node, dx: int, dy: int, base: int, row: int) -> Iterator[MillSpan]:
+    if isinstance(node, Piece):
+        shift = node.base + base
+        for mill in node.mills:
+            yield mill.moved(row, dx, dy, shift)
+    elif isinstance(node, Seq):
+        for child in node.nodes:
+            yield from _placed_mills(child, dx, dy, base, row)
+            row += size(child)
+    elif _has_mills(node.node):
+        per = size(node.node)
+        for ox, oy in node.offsets.tolist():
+            yield from _placed_mills(node.node, dx + ox, dy + oy, base + node.base, row)
+            row += per
+
+
+def _has_mills(node: Node) -> bool:
+    if isinstance(node, Piece):
+        return bool(node.mills)
+    if isinstance(node, Seq):
+        return any(_has_mills(child) for child in node.nodes)
+    return _has_mills(node.node)
 
 
 def lowest_by_block(node: Node, base: int = 0, out: dict[int, int] | None = None) -> dict[int, int]:

@@ -81,6 +81,7 @@ class Rule(enum.Enum):
     COMP_ARC_TOO_SMALL = "comp-arc-too-small"
     ROUTINE_TOO_SMALL = "routine-too-small"
     FRAME_CORNER = "frame-corner"
+    RAMP_ENTRY = "ramp-entry"
     CORNER_UNREACHABLE = "corner-unreachable"
     POCKET_TOOL = "pocket-tool"
     POCKET_ORDER = "pocket-order"

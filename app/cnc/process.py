@@ -20,35 +20,31 @@ set-up), but the programmer must look. Lengths in nm inside, printed in the prog
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from app.cnc.blocks import (
-    Block,
-    BoltCircle,
-    Circle,
-    Frame,
-    Hole,
     HoleOp,
     Placement,
-    Pocket,
     Program,
 )
 from app.cnc.compiler import Compiled
-from app.cnc.mill import Element
-from app.cnc.mill import Path as MillPath
+from app.cnc.memo import Memo
 from app.cnc.path import (
     HOLE_OPS,
     CompiledPath,
     Node,
-    Piece,
     Run,
     Seq,
     lowest_by_block,
     placed_holes,
+    placed_mills,
+    size,
 )
 from app.cnc.problems import Problem, Rule, Severity
-from app.cnc.units import Units, format_length, to_nm
+from app.cnc.routines import routine_outline
+from app.cnc.simulate.stock import stock_box
+from app.cnc.units import Units, format_length
 
 # Two holes this close (nm) are at the same point: half the finest step a program can type
 # (0.001 mm), far below any drill's wander.
@@ -79,112 +75,82 @@ class Cleared:
     depth: int
 
 
-def hole_tool(blocks: tuple[Block, ...], number: int) -> int:
-    """The tool number of the hole block `number` (1-based): its own, or for a BOLT CIR the
-    tool of the standard block before it that gives its hole parameters (0: none)."""
-    index = number - 1
-    while index >= 0:
-        block = blocks[index]
-        if isinstance(block, Hole):
-            return block.tool
-        if not isinstance(block, BoltCircle):
-            return 0
-        index -= 1
-    return 0
-
-
-def placed_hole_list(program: Program, path: CompiledPath) -> list[PlacedHole]:
+def placed_hole_list(path: CompiledPath) -> list[PlacedHole]:
     """Every hole of the compiled program in cutting order (LOOP patterns and bolt circles
-    placed), each with its tool's diameter."""
+    placed), each with its tool's diameter (the compiled hole's own tool)."""
     found: list[PlacedHole] = []
-    tools: dict[int, int] = {}
-    for blocks, holes in placed_holes(path.root):
-        for block, op, x, y, bottom in zip(
+    for block, op, x, y, bottom, tool in _holes_placed(path.root):
+        info = path.tools.get(tool)
+        diameter = None if info is None else info.diameter
+        found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
+    return found
+
+
+Hole = tuple[int, int, int, int, int, int]  # block, op, x, y, bottom, tool
+# Each compiled top-level node's holes as it was compiled (blocks relative to it, not
+# placed), by node: the compile keeps the nodes of the blocks an edit left alone (its
+# per-node memo), so an edit reads the holes of the node it changed, not every piece's
+# arrays again. Weighed by the node's moves, so the nodes it keeps alive stay bounded.
+_NODE_HOLES: Memo[tuple[Node, list[Hole]]] = Memo()
+
+
+def _holes_placed(root: Node) -> Iterator[Hole]:
+    """(block, op, x, y, bottom, tool) of every hole under `root`, placed, in cutting
+    order."""
+    tops = root.nodes if isinstance(root, Seq) else [root]
+    for top in tops:
+        if not (isinstance(top, Run) and len(top.offsets) == 1):
+            yield from _hole_rows(top)
+            continue
+        dx, dy = top.offsets[0].tolist()
+        base = top.base
+        for block, op, x, y, bottom, tool in _node_holes(top.node):
+            yield block + base, op, x + dx, y + dy, bottom, tool
+
+
+def _node_holes(node: Node) -> list[Hole]:
+    kept = _NODE_HOLES.get(id(node))
+    if kept is not None and kept[0] is node:
+        return kept[1]
+    found = list(_hole_rows(node))
+    _NODE_HOLES.keep(id(node), (node, found), size(node) + 1)
+    return found
+
+
+def _hole_rows(node: Node) -> Iterator[Hole]:
+    for blocks, holes in placed_holes(node):
+        yield from zip(
             blocks.tolist(),
             holes["op"].tolist(),
             holes["x"].tolist(),
             holes["y"].tolist(),
             holes["bottom"].tolist(),
+            holes["tool"].tolist(),
             strict=True,
-        ):
-            if block not in tools:
-                tools[block] = hole_tool(program.blocks, block)
-            info = path.tools.get(tools[block])
-            diameter = None if info is None else info.diameter
-            found.append(PlacedHole(block, HOLE_OPS[op], x, y, bottom, diameter))
-    return found
+        )
 
 
-def cleared_areas(program: Program, path: CompiledPath) -> list[Cleared]:
+def cleared_areas(path: CompiledPath) -> list[Cleared]:
     """The pockets the program clears, where each is cut (CIRCLE/FRAME POCKET routines and
-    irregular POCKETs; a sequence whose plan has errors clears nothing)."""
+    irregular POCKETs; a sequence whose plan has errors clears nothing), from the outlines
+    the compile planned."""
     # The pocket engine (and pyclipper) is loaded here, not by every validation.
     from app.cnc.pocketing.regions import path_points
-    from app.cnc.pocketing.routine import contours_at
 
     found: list[Cleared] = []
-    for routine_number, x, y, cut, depth in _mill_spans(path.root):
-        if not routine_number or not cut or depth is None:
+    for mill in placed_mills(path.root):
+        if not mill.routine or mill.start == mill.end or mill.depth is None:
             continue
-        routine = program.blocks[routine_number - 1]
-        if isinstance(routine, Pocket):
-            drawn = contours_at(program.blocks, routine_number, (x, y))
-            outline = next(c.path for c in drawn if c.name == "boundary")
-        elif isinstance(routine, Circle | Frame) and routine.placement is Placement.POCKET:
-            outline = _routine_outline(routine, (x, y))
+        shape = mill.shape()
+        outlines = dict(mill.outlines())
+        if "boundary" in outlines:
+            outline = outlines["boundary"]
+        elif shape is not None and shape.placement is Placement.POCKET:
+            outline = routine_outline(shape)
         else:
             continue
-        found.append(Cleared(routine_number, tuple(path_points(outline, 2_000)), depth))
+        found.append(Cleared(mill.routine, tuple(path_points(outline, 2_000)), mill.depth))
     return found
-
-
-def _mill_spans(
-    node: Node, dx: int = 0, dy: int = 0
-) -> list[tuple[int, int, int, bool, int | None]]:
-    """(routine block, x, y, cut, depth) of every mill span of `node`, placed, in order."""
-    out: list[tuple[int, int, int, bool, int | None]] = []
-    if isinstance(node, Piece):
-        for m in node.mills:
-            routine = m.routine + node.base if m.routine else 0
-            out.append((routine, m.x + dx, m.y + dy, m.start != m.end, m.depth))
-    elif isinstance(node, Seq):
-        for child in node.nodes:
-            out += _mill_spans(child, dx, dy)
-    elif isinstance(node, Run):
-        inner = _mill_spans(node.node)
-        if inner:
-            for ox, oy in node.offsets.tolist():
-                out += [
-                    (r + node.base if r else 0, x + dx + ox, y + dy + oy, c, d)
-                    for r, x, y, c, d in inner
-                ]
-    return out
-
-
-def _routine_outline(routine: Circle | Frame, origin: tuple[int, int]) -> MillPath:
-    """A CIRCLE's or FRAME's finished contour as a path (origin: the centre, or the
-    frame's lower-left corner)."""
-    units = routine.units
-    ox, oy = float(origin[0]), float(origin[1])
-    if isinstance(routine, Circle):
-        r = float(to_nm(routine.radius, units))
-        top = (ox, oy + r)
-        bottom = (ox, oy - r)
-        return MillPath(top, (Element(0, bottom, (ox, oy), True), Element(0, top, (ox, oy), True)))
-    w, h = float(to_nm(routine.xl, units)), float(to_nm(routine.yw, units))
-    c = min(float(to_nm(routine.corner_radius, units)), w / 2, h / 2)
-    corners = [
-        ((ox + w - c, oy), (ox + w, oy + c), (ox + w - c, oy + c)),
-        ((ox + w, oy + h - c), (ox + w - c, oy + h), (ox + w - c, oy + h - c)),
-        ((ox + c, oy + h), (ox, oy + h - c), (ox + c, oy + h - c)),
-        ((ox, oy + c), (ox + c, oy), (ox + c, oy + c)),
-    ]
-    elements = []
-    for line_end, arc_end, centre in corners:
-        elements.append(Element(0, line_end))
-        if c > 0:
-            elements.append(Element(0, arc_end, centre, False))
-    return MillPath((ox + c, oy), tuple(elements))
 
 
 def in_ring(outline: Sequence[tuple[float, float]], x: float, y: float) -> bool:
@@ -209,7 +175,7 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
     point: one warning per block (a bolt circle's holes counted), naming the first."""
     path = compiled.path
     units = program.units
-    holes = placed_hole_list(program, path)
+    holes = placed_hole_list(path)
     if not any(h.op is not HoleOp.DRILL for h in holes):
         return []
     # The pockets are drawn only for a hole that no earlier hole pilots (the usual
@@ -238,7 +204,7 @@ def pilot_problems(program: Program, compiled: Compiled) -> list[Problem]:
         if not why:
             continue
         if cleared is None:
-            cleared = cleared_areas(program, path)
+            cleared = cleared_areas(path)
         if any(
             area.block < hole.block
             and area.depth <= hole.bottom
@@ -268,8 +234,8 @@ def _no_pilot(hole: PlacedHole, before: list[PlacedHole], units: Units) -> tuple
     """Why the holes `before` (earlier, at the same point) are no pilot for `hole`, and the
     field to change; ("", None) when one of them is."""
     tool = "tap" if hole.op is HoleOp.TAP else "boring bar"
-    depth = format_length(hole.bottom, units)
     if not before:
+        depth = format_length(hole.bottom, units)
         return (
             f"nothing is drilled there before it, so the {tool} goes into solid material; "
             f"drill a smaller hole there first, at least to Z DN {depth}",
@@ -291,6 +257,7 @@ def _no_pilot(hole: PlacedHole, before: list[PlacedHole], units: Units) -> tuple
         )
     deepest = min(smaller, key=lambda h: h.bottom)
     if deepest.bottom > hole.bottom:
+        depth = format_length(hole.bottom, units)
         return (
             f"goes to Z DN {depth}, {_length(deepest.bottom - hole.bottom, units)} below the "
             f"bottom of the hole of block {deepest.block} there (Z DN "
@@ -310,8 +277,8 @@ def below_stock_problems(program: Program, compiled: Compiled) -> list[Problem]:
     if stock is None:
         return []
     units = program.units
-    bottom = to_nm(stock.z - stock.zh, units)
-    room = to_nm(stock.clear, units)
+    box = stock_box(stock, units)
+    bottom, room = box.bottom, box.clear
     floor = bottom - room
     problems = []
     for block, low in sorted(lowest_by_block(compiled.path.root).items()):

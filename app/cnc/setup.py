@@ -22,8 +22,8 @@ import numpy as np
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.target import Report
 from app.cnc.estimate import Estimate, estimate, format_seconds
+from app.cnc.formats.targets import Report
 from app.cnc.interpret import interpret
 from app.cnc.machine import MachineModel
 from app.cnc.motions import motions
@@ -155,10 +155,8 @@ def _walk(
             shown = m.chunk.hole_spans()[: max(0, HOLE_ROWS - count)]
         else:
             shown = m.chunk.hole_spans()
-        # A hole's first row is a motion: the tool in the spindle there made it.
-        at = np.searchsorted(m.index, [span.start for span in shown])
-        for span, k in zip(shown, at.tolist(), strict=True):
-            tool = int(m.tool[min(k, len(m.tool) - 1)])
+        for span in shown:
+            tool = span.tool
             count += 1
             holes.append(
                 HoleLine(

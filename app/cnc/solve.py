@@ -49,11 +49,11 @@ from dataclasses import dataclass, field, replace
 from decimal import Decimal
 
 from app.cnc.blocks import ArcEnd, Block, Direction, MillArc, MillLine, MillQcir, Mode
+from app.cnc.cutter import Finding, offset_element
 from app.cnc.memo import Recent
-from app.cnc.mill import (
+from app.cnc.plane import (
     EPS,
     Element,
-    Finding,
     Path,
     Pt,
     add,
@@ -62,7 +62,6 @@ from app.cnc.mill import (
     half_step,
     intersections,
     left_normal,
-    offset_element,
     qcir_centre,
     scale,
     sub,

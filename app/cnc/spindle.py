@@ -5,7 +5,7 @@ rpm in high gear, a negative RPM the same speeds counter-clockwise. That is the 
 program is checked against as it is typed (a warning: it may be cut on another machine) and
 the one an export is checked against when no machine is chosen; a machine profile may give
 its own (`spindle=100-24000`, or gears `spindle=60-500, 500-4000`), and an export to that
-machine is checked against it (app.cnc.emit.target.export).
+machine is checked against it (app.cnc.formats.targets.export).
 
 Whatever the machine, an RPM field takes 1 to 99 999 (five digits, either direction): beyond
 that it is a typing mistake on every machine.

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from app.cnc.blocks import Block, Copy, Rep
 from app.cnc.kinds import REGISTRY, Mill
+from app.cnc.memo import Recent
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,10 +87,20 @@ def build_nodes(blocks: tuple[Block, ...], *, tolerant: bool = False) -> tuple[N
     it is are left out, a LOOP without its REP runs once), so a program with errors still
     shows what it can (the errors are validation's to report).
     """
+    key = (id(blocks), tolerant)
+    kept = _GROUPED.get(key)
+    if kept is not None and kept[0] is blocks:
+        return kept[1]
     nodes, index = _sequence(blocks, 0, inside_loop=False, tolerant=tolerant)
     if index != len(blocks):
         raise ValueError(f"block {index + 1}: REP without LOOP (validate first)")
+    _GROUPED.keep(key, (blocks, nodes))
     return nodes
+
+
+# The last programs' nodes, by their blocks' tuple (the entry keeps it alive, so its id is
+# not reused): an edit's version is grouped by its cost and again by its compile.
+_GROUPED: Recent[tuple[tuple[Block, ...], tuple[Node, ...]]] = Recent(8)
 
 
 def _sequence(

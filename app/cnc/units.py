@@ -38,6 +38,11 @@ class Units(enum.Enum):
         return Decimal("0.001") if self is Units.INCH else Decimal("0.01")
 
     @property
+    def resolution_nm(self) -> int:
+        """`resolution` in nanometres: 25 400 (0.001 in) or 10 000 (0.01 mm)."""
+        return 25_400 if self is Units.INCH else 10_000
+
+    @property
     def symbol(self) -> str:
         """Short name used in messages: `in` or `mm`."""
         return "in" if self is Units.INCH else "mm"

@@ -44,13 +44,13 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
-from app.cnc.engrave import missing
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.needs import unmet
+from app.cnc.operations.engrave import missing
+from app.cnc.operations.thread import thread_depth, thread_lead
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
-from app.cnc.thread import thread_depth, thread_lead
 from app.cnc.tools import (
     MAX_FLUTES,
     MAX_NUMBER,
@@ -310,7 +310,9 @@ class _Checker:
             elif declared.value is Value.FEED and declared.feed is not None:
                 self.check_feed(number, label, value, declared.feed[units], units)
             elif declared.value is Value.ANGLE:
-                self.check_angle(number, label, value)
+                least = Decimal(0) if declared.low is None else Decimal(declared.low)
+                most = limits.MAX_ANGLE if declared.high is None else Decimal(declared.high)
+                self.check_angle(number, label, value, least, most)
             elif declared.value in WHOLE and declared.low is not None and declared.high is not None:
                 low, high = declared.low, declared.high
                 if not low <= value <= high:
@@ -382,14 +384,23 @@ class _Checker:
                 message = f"{shown} has too many decimals; feeds go to 0.1 ipm"
                 self.add(block, label, ERROR, Rule.RESOLUTION, message)
 
-    def check_angle(self, block: int, label: str, value: Decimal) -> None:
-        if not 0 <= value <= limits.MAX_ANGLE:
+    def check_angle(
+        self,
+        block: int,
+        label: str,
+        value: Decimal,
+        low: Decimal = Decimal(0),
+        high: Decimal = limits.MAX_ANGLE,
+    ) -> None:
+        """An angle (degrees) within its declared range, to 0.01°."""
+        if not low <= value <= high:
             self.add(
                 block,
                 label,
                 ERROR,
                 Rule.RANGE,
-                f"{format_decimal(value)}° is outside the allowed range 0 to 359.99°",
+                f"{format_decimal(value)}° is outside the allowed range "
+                f"{format_decimal(low)} to {format_decimal(high)}°",
             )
         if abs(value) <= LARGEST and value != value.quantize(limits.ANGLE_RESOLUTION):
             self.add(

@@ -17,7 +17,7 @@ import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
-from app.cnc.emit.target import get_target
+from app.cnc.formats.targets import get_target
 from app.dnc.settings import DC1, DC2, DC3, DC4, DEL, NUL, Framing, Parity, PortSettings
 
 CR, LF, TAB = 0x0D, 0x0A, 0x09

@@ -19,9 +19,9 @@ from typing import Any, Protocol
 import serial.tools.list_ports
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Export, export, targets
-from app.cnc.imports import read_program
-from app.cnc.imports.registry import importers
+from app.cnc.formats.importers import importers
+from app.cnc.formats.reading import read_program
+from app.cnc.formats.targets import Export, export, targets
 from app.cnc.restart import restart_from
 from app.cnc.text import NAME_LENGTH, check_text
 from app.dnc.record import TransferRecord
@@ -290,7 +290,7 @@ def program_from_capture(result: ReceiveResult, format: str, name: str = "") -> 
 
 def import_capture(result: ReceiveResult, format: str, name: str = "") -> tuple[Program, str]:
     """The program in a capture and its import report (empty for a MillBlocks document),
-    read by app.cnc.imports as `format` (an import format or an export target's name).
+    read by app.cnc.recognition as `format` (an import format or an export target's name).
     Raises CaptureImportError saying why, with the importer's line and column; nothing is
     returned half-read."""
     chosen = import_format(format)

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from app.cnc.emit.target import targets
+from app.cnc.formats.targets import targets
 
 BAUD_RATES = (110, 150, 300, 600, 1200, 2400, 4800, 9600, 19200, 38400, 57600, 115200)
 """The standard rates a UART and the controls of the period offer (bits per second)."""

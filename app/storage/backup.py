@@ -23,7 +23,7 @@ from typing import Any, BinaryIO
 from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.document import DocumentError
-from app.cnc.emit.target import OptionError, targets
+from app.cnc.formats.targets import OptionError, targets
 from app.cnc.machine import MachineError, read_machine
 from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, text_fault
 from app.cnc.tools import CribTool, tool_faults

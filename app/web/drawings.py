@@ -25,7 +25,6 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import MillingMode
-from app.cnc.emit.svg import draw
 from app.cnc.formats.dxf import is_dxf
 from app.cnc.formats.dxf.blocks import cut_sides
 from app.cnc.formats.dxf.choice import (
@@ -47,9 +46,10 @@ from app.cnc.formats.dxf.choice import (
     read_cutting,
 )
 from app.cnc.formats.dxf.reader import Drawing, parse_options, read_drawing
-from app.cnc.imports.common import ImportFailure
+from app.cnc.formats.svg import draw
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Severity
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.sizes import TooLarge, check_import_size
 from app.cnc.units import Units
 from app.cnc.validate import validate

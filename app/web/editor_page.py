@@ -135,7 +135,7 @@ class Shown:
     def drawing(self) -> Preview:
         """The preview: the SVG and what it holds (blocks with errors, not drawn)."""
         if self._drawing is None:
-            self._drawing = preview(self.program, self.problems)
+            self._drawing = preview(self.program, self.problems, timed=(self.per_block, self.total))
         return self._drawing
 
     def parts(self) -> Parts | None:

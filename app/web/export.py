@@ -10,7 +10,7 @@ from urllib.parse import urlencode
 from flask import Blueprint, Response, abort, render_template, request
 from jinja2_fragments.flask import render_block
 
-from app.cnc.emit.target import (
+from app.cnc.formats.targets import (
     Export,
     ExportError,
     OptionError,

@@ -40,6 +40,9 @@ class FieldSpec:
     required: bool = True
     choices: tuple[tuple[str, str], ...] = ()
     help: str = ""
+    # Shown only while these prompts have these values ("placement=pocket entry=helix"):
+    # the declaration's `only_when` on prompts the form asks for (static/app.js).
+    shown_when: str = ""
 
 
 @dataclass(frozen=True)
@@ -70,14 +73,24 @@ def _hints(cls: type) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
 
-def _spec(cls: type[Block], f: Field, name: str, label: str) -> FieldSpec:
+def _spec(
+    cls: type[Block], f: Field, name: str, label: str, sub: SubKind | None = None
+) -> FieldSpec:
+    shown = (
+        ""
+        if sub is None
+        else " ".join(
+            f"{n}={v.value if isinstance(v, enum.Enum) else v}"
+            for n, v in REGISTRY.shown_when(f, sub)
+        )
+    )
     choices: tuple[tuple[str, str], ...] = ()
     if f.prompt.value is Value.CHOICE:
         members = _enum_of(cls, f.name) or enum.Enum
         choices = tuple((m.value, m.name.replace("_", "/")) for m in members)
         if f.optional:
             choices = (("", f.prompt.blank), *choices)
-    return FieldSpec(name, label, f.prompt.value.value, f.required, choices, f.prompt.help)
+    return FieldSpec(name, label, f.prompt.value.value, f.required, choices, f.prompt.help, shown)
 
 
 def _form(cls: type[Block], sub: SubKind) -> EntryForm:
@@ -90,7 +103,8 @@ def _form(cls: type[Block], sub: SubKind) -> EntryForm:
         follower = SubKind("", "", "") if prefix else sub
         for f in REGISTRY.prompted(part, follower):
             xy = f.prompt.role in (Role.X, Role.Y)
-            specs.append(_spec(part, f, prefix + f.name, f.label + (suffix if xy else "")))
+            label = f.label + (suffix if xy else "")
+            specs.append(_spec(part, f, prefix + f.name, label, follower))
         for f in extra_fields(part, follower):
             extras.append(_spec(part, f, prefix + f.name, f.label + (suffix if prefix else "")))
     return EntryForm(

@@ -7,7 +7,7 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.blocks import DataBlock0, Program, Tool
-from app.cnc.imports import importers
+from app.cnc.formats.reading import importers
 from app.cnc.sizes import check_import_size
 from app.cnc.text import TextError
 from app.cnc.units import Units
@@ -69,7 +69,7 @@ def upload() -> Response | tuple[str, int]:
     """Import a file in any import format (detected, or the one chosen) and show the import
     report. A file that cannot be read is refused whole, naming the line and column. The
     format's own options come as `opt_<format>_<name>` fields."""
-    from app.cnc.imports import detect_format, read_program
+    from app.cnc.formats.reading import detect_format, read_program
 
     file = request.files.get("file")
     if file is None or not file.filename:

@@ -12,7 +12,7 @@ from flask import Blueprint, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
-from app.cnc.emit.target import OptionError, get_target, targets
+from app.cnc.formats.targets import OptionError, get_target, targets
 from app.cnc.machine import PRESETS, MachineError, read_machine
 from app.dnc.service import available_ports, settings_of
 from app.dnc.settings import SettingsError

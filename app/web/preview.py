@@ -23,9 +23,10 @@ from typing import NamedTuple
 
 from app.cnc.blocks import Copy, Program
 from app.cnc.compiler import compile_program
-from app.cnc.emit.svg import render
 from app.cnc.estimate import estimate
+from app.cnc.formats.svg import render
 from app.cnc.kinds import REGISTRY
+from app.cnc.path import CompiledPath
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.validate import validate
 
@@ -71,13 +72,19 @@ class Preview(NamedTuple):
     shown: Shown
 
 
-def preview(program: Program, problems: list[Problem] | None = None, keep: bool = True) -> Preview:
+def preview(
+    program: Program,
+    problems: list[Problem] | None = None,
+    keep: bool = True,
+    timed: tuple[dict[int, float], float] | None = None,
+) -> Preview:
     """Draw and time `program` as far as it compiles (see the module docstring).
 
     `problems` are the program's own, when the caller has validated it already. `keep`:
     each top-level node's drawing is kept in this process and drawn from there when it
     comes again (svg.py `render`), so an edit draws what it changed; False draws it all
-    afresh (the same text).
+    afresh (the same text). `timed`: the cycle time `times(program, problems)` gave
+    already (seconds per block, total), not worked out again.
     """
     if problems is None:
         problems = validate(program)
@@ -106,14 +113,14 @@ def preview(program: Program, problems: list[Problem] | None = None, keep: bool 
         problems=errors,
         keep=keep,
     )
-    result = estimate(path)
+    per_block, total = timed if timed is not None else _timed(path)
     shown = Shown(
         problems=part.listed(),
         not_drawn=tuple(b for b in sorted(errors) if b not in drawing.blocks),
         program_errors=part.general,
         large=drawing.large,
     )
-    return Preview(drawing.svg, result.per_block, result.total, shown)
+    return Preview(drawing.svg, per_block, total, shown)
 
 
 def times(program: Program, problems: list[Problem]) -> tuple[dict[int, float], float]:
@@ -122,7 +129,12 @@ def times(program: Program, problems: list[Problem]) -> tuple[dict[int, float], 
     part = _drawable(program, problems)
     if part.program is None:
         return {}, 0.0
-    result = estimate(compile_program(part.program).path)
+    return _timed(compile_program(part.program).path)
+
+
+def _timed(path: CompiledPath) -> tuple[dict[int, float], float]:
+    """The cycle time of a compiled path: seconds per block, total."""
+    result = estimate(path)
     return result.per_block, result.total
 
 
@@ -178,7 +190,7 @@ def _said(field: str | None, message: str) -> str:
 # -- an edit's drawing: what changed ------------------------------------------------------------
 #
 # The page keeps the drawing it shows; an edit's reply carries what differs between it and the
-# new version's (static/preview.js applies it). A drawing (app/cnc/emit/svg.py) is an <svg>
+# new version's (static/preview.js applies it). A drawing (app/cnc/formats/svg.py) is an <svg>
 # holding up to three containers, in this order: <defs> (the patterns LOOPs place), the page
 # <g> (grid, stock, part zero, then each block's drawing in cutting order) and the hole
 # numbers' <g>. Each container's children are compared as text: an edit changes a stretch of

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from flask import Blueprint, render_template, request
 
-from app.cnc.emit.svg import draw
-from app.cnc.emit.target import ExportError, OptionError, Remedy, export, get_target, targets
+from app.cnc.formats.svg import draw
+from app.cnc.formats.targets import ExportError, OptionError, Remedy, export, get_target, targets
 from app.cnc.problems import has_errors
 from app.cnc.setup import setup_sheet
 from app.cnc.validate import validate

@@ -14,8 +14,8 @@ from flask import Blueprint, abort, redirect, render_template, request, url_for
 from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
-from app.cnc.emit.target import targets
-from app.cnc.imports import importers
+from app.cnc.formats.reading import importers
+from app.cnc.formats.targets import targets
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.restart import RestartError, restart_from
 from app.cnc.text import NAME_LENGTH, check_text

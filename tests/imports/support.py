@@ -21,7 +21,7 @@ from app.cnc import document
 from app.cnc.blocks import Block, Circle, Frame, Hole, MillingMode, Placement, Program, Tool
 from app.cnc.copy import resolve_copies
 from app.cnc.interpret import interpret
-from app.cnc.mill import routine_clockwise
+from app.cnc.routines import routine_clockwise
 from app.cnc.toolpath import ArcFeed, Feed, Rapid, Toolpath
 
 HERE = Path(__file__).parent

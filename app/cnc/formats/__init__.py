@@ -11,13 +11,13 @@
 A format is known by a light declaration, and its reader or writer is imported only when it
 is used, so a command that exports one program loads that target alone (issue 31):
 
-- a format package's `__init__` declares its importer (`app.cnc.imports.registry.Importer`:
+- a format package's `__init__` declares its importer (`app.cnc.formats.importers.Importer`:
   name, label, options, `sniff`) and imports nothing heavy; its `read` imports the
   package's reader when it runs. `importers()` imports every package's `__init__` (detection
   asks every sniff), never a reader.
 - `TARGET_MODULES` below says which module defines each export target; `get_target(name)`
   imports that one module, `targets()` (a list of them all) imports every one. The module
-  registers the target with `app.cnc.emit.target.register`, which refuses a target this
+  registers the target with `app.cnc.formats.targets.register`, which refuses a target this
   table does not name, so the table cannot fall behind.
 
 Everything that lists formats - the command line's choices, the web forms, the transfers
@@ -53,7 +53,7 @@ import pkgutil
 
 # Each export target's name and the module that defines it (and registers it).
 TARGET_MODULES: dict[str, str] = {
-    "canon": "app.cnc.emit.canon",
+    "canon": "app.cnc.formats.canon",
     "events": "app.cnc.formats.events.writer",
     "gcode-fanuc": "app.cnc.formats.gcode.writer",
     "gcode-linuxcnc": "app.cnc.formats.gcode.writer",
@@ -61,7 +61,7 @@ TARGET_MODULES: dict[str, str] = {
     "json": "app.cnc.formats.document.writer",
     "punch-ascii": "app.cnc.formats.tape1704.targets",
     "punch-eia": "app.cnc.formats.tape1704.targets",
-    "svg": "app.cnc.emit.svg",
+    "svg": "app.cnc.formats.svg",
     "tape-ascii": "app.cnc.formats.tape1704.targets",
     "tape-boss": "app.cnc.formats.gcode.boss",
     "tape-eia": "app.cnc.formats.tape1704.targets",

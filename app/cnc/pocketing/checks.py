@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.mill import Element, Path, Pt, cross, distance_to_element, intersections, signed_area
+from app.cnc.plane import Element, Path, Pt, cross, distance_to_element, intersections, signed_area
 from app.cnc.pocketing import regions
 from app.cnc.pocketing.model import PocketFinding, PocketIssue
 from app.cnc.problems import Severity

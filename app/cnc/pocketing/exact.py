@@ -21,7 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.mill import (
+from app.cnc.plane import (
     Element,
     Path,
     Pt,

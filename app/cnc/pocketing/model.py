@@ -1,7 +1,7 @@
 """What the pocket planner returns: passes, the links between them, and findings.
 
 Lengths are nanometres (floats of the exact values; the interpreter rounds once when it
-emits moves, as for every other mill path). Paths are `app.cnc.mill.Path`s: a start point
+emits moves, as for every other mill path). Paths are `app.cnc.plane.Path`s: a start point
 and elements (lines, or arcs with centre and direction) — the shape the interpreter cuts.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from app.cnc.mill import Path, Pt
+from app.cnc.plane import Path, Pt
 from app.cnc.problems import Severity
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.mill import Element, Pt, sweep
+from app.cnc.plane import Element, Pt, sweep
 
 Array = npt.NDArray[np.float64]
 

@@ -11,7 +11,7 @@ The readings we chose (docs/pocketing.md):
   the one around it, so every ring has uncut material on the same side and climb or
   conventional milling holds for every pass: with a clockwise spindle, climb milling goes
   round the wall-like rings counter-clockwise and round the island-like rings clockwise
-  (`app.cnc.mill.routine_clockwise`, DESIGN.md §3), conventional the reverse, a negative RPM
+  (`app.cnc.routines.routine_clockwise`, DESIGN.md §3), conventional the reverse, a negative RPM
   flips both. The finishing rings come last in their piece.
 - The tool goes down (plunge) at a deep point of the first innermost piece: a point where the
   whole tool fits, as far from the walls as the region allows. Where the region had split
@@ -35,15 +35,13 @@ import numpy as np
 
 from app.cnc import sizes
 from app.cnc.blocks import MillingMode, Placement
-from app.cnc.mill import (
+from app.cnc.plane import (
     Element,
     Path,
     Pt,
     distance_to_element,
     length,
-    peck_levels,
     reverse,
-    routine_clockwise,
     sample,
     signed_area,
     sub,
@@ -62,6 +60,7 @@ from app.cnc.pocketing.model import (
     PocketPlan,
 )
 from app.cnc.problems import Severity
+from app.cnc.routines import peck_levels, routine_clockwise
 from app.cnc.units import Units
 
 DEFAULT_CHORDAL_TOLERANCE = 500  # nm: arcs become chords no farther than this from the arc

@@ -25,17 +25,8 @@ import numpy as np
 import numpy.typing as npt
 import pyclipper
 
-from app.cnc.mill import (
-    Element,
-    Path,
-    Pt,
-    cross,
-    dot,
-    left_normal,
-    offset_element,
-    sweep,
-    tangent,
-)
+from app.cnc.cutter import offset_element
+from app.cnc.plane import Element, Path, Pt, cross, dot, left_normal, sweep, tangent
 
 IPt = tuple[int, int]
 Ring = list[IPt]

@@ -16,21 +16,15 @@ from dataclasses import dataclass
 
 from app.cnc import limits
 from app.cnc.blocks import Block, Direction, Island, Pocket, PocketArc, PocketArcEnd, PocketLine
+from app.cnc.cutter import Finding
 from app.cnc.geometry import resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
-from app.cnc.mill import (
-    Element,
-    Finding,
-    Path,
-    RoutineStart,
-    SequencePlan,
-    half_step,
-    pocket_overlap,
-    rough_wall,
-)
+from app.cnc.plane import Element, Path, half_step
 from app.cnc.pocketing.model import PocketFinding, PocketIssue
 from app.cnc.pocketing.plan import plan_pocket
 from app.cnc.problems import Rule, Severity
+from app.cnc.routines import pocket_overlap, rough_wall
+from app.cnc.sequences import RoutineStart, SequencePlan
 from app.cnc.units import Units, message_length, to_nm
 
 RULES = {
@@ -185,11 +179,17 @@ def contours_at(blocks: tuple[Block, ...], pocket: int, start: tuple[int, int]) 
 
 def plan_pocket_routine(block: Block, at: RoutineStart) -> SequencePlan:
     """The passes of a POCKET (one path per pass; `SequencePlan.pocket` holds the plan with
-    its links). Problems are in the plan, not raised; the reference after it is the
-    DRILL's point."""
+    its links, `SequencePlan.outlines` its wall and islands, errors or not). Problems are
+    in the plan, not raised; the reference after it is the DRILL's point."""
+    contours = pocket_contours(at.geometry, at.start, at.number)
+    plan = _planned(block, at, contours)
+    plan.outlines = tuple((c.name, c.path) for c in contours)
+    return plan
+
+
+def _planned(block: Block, at: RoutineStart, contours: list[Contour]) -> SequencePlan:
     assert isinstance(block, Pocket)
     units = block.units
-    contours = pocket_contours(at.geometry, at.start, at.number)
     findings: list[Finding] = []
     if len(contours) - 1 > limits.MAX_ISLANDS:
         findings.append(

@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 import pyclipper
 
-from app.cnc.mill import Element, Path, signed_area
+from app.cnc.plane import Element, Path, signed_area
 from app.cnc.pocketing.regions import Ring, offset, path_points, sweep_lines
 from app.cnc.simulate.programmed import Contour, PocketArea, Programmed, Routine
 from app.cnc.simulate.segments import BOOL, F64

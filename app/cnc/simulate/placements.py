@@ -26,7 +26,7 @@ from app.cnc.blocks import Program
 from app.cnc.memo import Memo
 from app.cnc.path import CompiledPath, Node, Piece, Seq
 from app.cnc.simulate.segments import I64, Entry, Segments, ToolShapes, piece_segments
-from app.cnc.units import to_nm
+from app.cnc.simulate.stock import stock_box
 
 
 @dataclass
@@ -77,10 +77,10 @@ SEGMENTS: Memo[tuple[Piece, Segments, Entry, frozenset[int]]] = Memo()
 
 def place(program: Program, path: CompiledPath) -> Placed:
     """The motions of `path` (compiled from `program`) as placed groups."""
-    shapes = ToolShapes.of(program, path.tools)
+    shapes = ToolShapes.of(path)
     # The stock's top (nm): the program's stock, or part Z0 for one sized from the extent
     # (stock.py). A move above it cuts nothing and hits nothing.
-    top = 0 if program.stock is None else to_nm(program.stock.z, program.units)
+    top = 0 if program.stock is None else stock_box(program.stock, program.units).top
     walker = _Walker(shapes, Entry(*path.start, path.initial_tool), top)
     walker.visit(path.root, 0, 0, 0)
     return Placed(walker.groups, shapes)

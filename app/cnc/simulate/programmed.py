@@ -1,12 +1,13 @@
 """What the program asks for, for verify to measure the simulated part against.
 
-`programmed_geometry` is the one place that reads the blocks for verify: the finished
-contours of compensated MILL sequences and of POCKETs (walls and islands), the CIRCLE/FRAME
-routines, and every hole with its programmed depth (a HELIX is the bore of its finished
-DIA). All of it is the compiled path's: its hole and mill spans carry where
-each was cut and the contour it was planned from (LOOP patterns, bolt circles and
-incremental positions are the compiler's, not re-derived here). Lengths in nm, part
-coordinates.
+`programmed_geometry` gathers it for verify: the finished contours of compensated MILL
+sequences and of POCKETs (walls and islands), the CIRCLE/FRAME routines, and every hole with
+its programmed depth (a HELIX is the bore of its finished DIA). All of it is the compiled
+path's: its hole and mill spans carry where each was cut and the plan it was cut from (the
+contour, the routine's circle or frame, the POCKET's outlines: LOOP patterns, bolt circles,
+incremental positions and the plans are the compiler's, not re-derived or planned again
+here). HELIX, THREAD MILL, FACE and ENGRAVE blocks are read where the compiled moves cut
+them, their sizes from the blocks. Lengths in nm, part coordinates.
 """
 
 from __future__ import annotations
@@ -15,26 +16,23 @@ import math
 from dataclasses import dataclass, field
 
 from app.cnc.blocks import (
-    Circle,
     Comp,
     Engrave,
     Face,
-    Frame,
     Helix,
     HoleOp,
     Placement,
-    Pocket,
     Program,
     ThreadMill,
     ThreadPlace,
 )
 from app.cnc.compiler import compile_program
-from app.cnc.mill import INSIDE_PLACEMENTS, Element, signed_area
+from app.cnc.operations.thread import thread_depth, thread_lead
 from app.cnc.path import MillSpan, Op, Rows
+from app.cnc.plane import Element, signed_area
 from app.cnc.pocketing.regions import element_points
-from app.cnc.pocketing.routine import contours_at
 from app.cnc.process import placed_hole_list
-from app.cnc.thread import thread_depth, thread_lead
+from app.cnc.routines import INSIDE_PLACEMENTS
 from app.cnc.toolpath import ToolInfo
 from app.cnc.units import to_nm
 
@@ -121,33 +119,24 @@ class Programmed:
     slots: list[Contour] = field(default_factory=list)
 
 
-def _routine(
-    block: Circle | Frame,
-    number: int,
-    start: tuple[int, int],
-    radius: int,
-    depth: int | None,
-    drill: int,
-) -> Routine:
-    units = block.units
-    common = {
-        "block": number,
-        "drill": drill,
-        "inside": block.placement in INSIDE_PLACEMENTS,
-        "pocket": block.placement is Placement.POCKET,
-        "tool_radius": radius,
-        "depth": depth,
-    }
-    origin = (float(start[0]), float(start[1]))
-    if isinstance(block, Circle):
-        return Routine(is_frame=False, centre=origin, radius=to_nm(block.radius, units), **common)  # type: ignore[arg-type]
+def _routine(mill: MillSpan, radius: int) -> Routine:
+    """The CIRCLE/FRAME routine of `mill`, as the compile planned it where it is cut."""
+    shape = mill.shape()
+    assert shape is not None  # a routine's span has one
     return Routine(
-        is_frame=True,
-        corner=origin,
-        width=to_nm(block.xl, units),
-        height=to_nm(block.yw, units),
-        corner_radius=to_nm(block.corner_radius, units),
-        **common,  # type: ignore[arg-type]
+        block=mill.routine,
+        is_frame=shape.is_frame,
+        inside=shape.placement in INSIDE_PLACEMENTS,
+        pocket=shape.placement is Placement.POCKET,
+        tool_radius=radius,
+        depth=mill.depth,
+        centre=shape.centre,
+        radius=shape.radius,
+        corner=shape.corner,
+        width=shape.width,
+        height=shape.height,
+        corner_radius=shape.corner_radius,
+        drill=mill.drill,
     )
 
 
@@ -156,7 +145,7 @@ def programmed_geometry(program: Program) -> Programmed:
     compiled = compile_program(program).path
     found = Programmed()
     seen: set[tuple[int, int, int]] = set()
-    for placed in placed_hole_list(program, compiled):
+    for placed in placed_hole_list(compiled):
         if (placed.block, placed.x, placed.y) not in seen:
             seen.add((placed.block, placed.x, placed.y))
             radius = 0 if placed.diameter is None else placed.diameter // 2
@@ -177,20 +166,21 @@ def programmed_geometry(program: Program) -> Programmed:
         for mill in chunk.mills:
             info = compiled.tools.get(mill.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
-            if mill.routine and isinstance(program.blocks[mill.routine - 1], Pocket):
+            outlines = mill.outlines()
+            if outlines:
                 if mill.start == mill.end:
                     continue  # not cut: its plan has errors, which validation names
                 # A POCKET's walls and islands are finished surfaces, as a compensated
                 # contour's: the part outside the boundary and inside each island.
                 walls = []
-                for drawn in contours_at(program.blocks, mill.routine, (mill.x, mill.y)):
-                    inside_left = signed_area(drawn.path) > 0  # counter-clockwise
-                    island = drawn.name != "boundary"
+                for name, outline in outlines:
+                    inside_left = signed_area(outline) > 0  # counter-clockwise
+                    island = name != "boundary"
                     walls.append(
                         Contour(
                             drill=mill.drill,
-                            start=drawn.path.start,
-                            elements=drawn.path.elements,
+                            start=outline.start,
+                            elements=outline.elements,
                             part_left=inside_left if island else not inside_left,
                             tool_radius=radius,
                             depth=mill.depth,
@@ -200,13 +190,7 @@ def programmed_geometry(program: Program) -> Programmed:
                 found.pockets.append(PocketArea(mill.routine, tuple(walls), radius, mill.depth))
                 continue
             if mill.routine:
-                routine = program.blocks[mill.routine - 1]
-                assert isinstance(routine, Circle | Frame)
-                found.routines.append(
-                    _routine(
-                        routine, mill.routine, (mill.x, mill.y), radius, mill.depth, mill.drill
-                    )
-                )
+                found.routines.append(_routine(mill, radius))
                 continue
             contour = mill.contour()
             if contour is None or not contour.elements or mill.start == mill.end:

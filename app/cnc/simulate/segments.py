@@ -32,9 +32,8 @@ from decimal import Decimal
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.blocks import BoltCircle, Hole, HoleOp, Program
-from app.cnc.path import Op, Rows
-from app.cnc.structure import starts_mill_sequence
+from app.cnc.blocks import HoleOp
+from app.cnc.path import HOLE_OPS, CompiledPath, Op, Rows, placed_holes
 from app.cnc.toolpath import ToolInfo
 from app.cnc.units import Units, format_length, to_nm
 
@@ -129,16 +128,22 @@ class Segments:
 _FIELDS = tuple(Segments.__dataclass_fields__)
 
 
-def drill_point_blocks(program: Program) -> set[int]:
-    """Numbers of the blocks whose holes are cut with a drill point (DRILL holes)."""
-    numbers = set()
-    for index, block in enumerate(program.blocks):
-        if isinstance(block, Hole) and block.op is HoleOp.DRILL:
-            if not starts_mill_sequence(program.blocks, index):
-                numbers.add(index + 1)
-        elif isinstance(block, BoltCircle) and block.op is HoleOp.DRILL:
-            numbers.add(index + 1)
-    return numbers
+def default_diameter(units: Units) -> int:
+    """The diameter (nm) the simulation gives a tool Data Block 0 gives none:
+    DEFAULT_DIAMETER, stated in Verify's report."""
+    return to_nm(DEFAULT_DIAMETER[units], units)
+
+
+def drill_point_blocks(path: CompiledPath) -> set[int]:
+    """Numbers of the blocks whose holes are cut with a drill point: the compiled holes a
+    DRILL makes (a bolt circle's on its BOLT CIR block; a DRILL that starts a mill sequence
+    makes none, the end mill goes down there). Read from the holes' intent the compile
+    keeps, not from the blocks again."""
+    drill = HOLE_OPS.index(HoleOp.DRILL)
+    found: set[int] = set()
+    for blocks, holes in placed_holes(path.root):
+        found.update(np.unique(blocks[holes["op"] == drill]).tolist())
+    return found
 
 
 @dataclass
@@ -152,13 +157,13 @@ class ToolShapes:
     used: set[int] = field(default_factory=set)
 
     @staticmethod
-    def of(program: Program, tools: dict[int, ToolInfo]) -> ToolShapes:
-        pointed = np.array(sorted(drill_point_blocks(program)), dtype=np.int64)
-        return ToolShapes(tools, program.units, pointed)
+    def of(path: CompiledPath) -> ToolShapes:
+        pointed = np.array(sorted(drill_point_blocks(path)), dtype=np.int64)
+        return ToolShapes(path.tools, path.units, pointed)
 
     @property
     def default_diameter(self) -> int:
-        return to_nm(DEFAULT_DIAMETER[self.units], self.units)
+        return default_diameter(self.units)
 
     def radius(self, tool: int) -> float:
         """The radius the simulation gives `tool`, nm."""

@@ -17,13 +17,16 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from app.cnc.blocks import Stock as StockBlock
-from app.cnc.simulate.placements import Placed
 from app.cnc.simulate.segments import BOOL, Segments
 from app.cnc.units import Units, format_length, to_nm
+
+if TYPE_CHECKING:  # placements reads the stock's top from here
+    from app.cnc.simulate.placements import Placed
 
 
 class StockError(ValueError):
@@ -102,6 +105,12 @@ def program_stock(stock: StockBlock, units: Units) -> Stock:
             f"got {stock.z - stock.zh}",
             "zh",
         )
+    return stock_box(stock, units)
+
+
+def stock_box(stock: StockBlock, units: Units) -> Stock:
+    """The program's own stock in nm as typed, unchecked: `program_stock` checks it first
+    for the simulation; the drawing and the below-the-stock rule take it as it is."""
     x0, y0, top = (to_nm(v, units) for v in (stock.x, stock.y, stock.z))
     return Stock(
         x0=x0,
@@ -119,7 +128,6 @@ def extent_stock(placed: Placed, units: Units) -> Stock:
     """A stock that holds every cut: the feed moves' reach (tool radius included) plus a
     margin, rounded outward; its top is part Z0 and its bottom a little below the deepest
     cut. With no cut below Z0, the reach of every move, 0.25 in (6 mm) deep."""
-    margin = to_nm(MARGIN[units], units)
     step = to_nm(ROUND_TO[units], units)
 
     def cutting(s: Segments) -> BOOL:
@@ -156,17 +164,28 @@ def extent_stock(placed: Placed, units: Units) -> Stock:
         size = to_nm(BELOW[units], units)
         return Stock(-size, -size, size, size, -size, 0)
 
+    below = to_nm(BELOW[units], units)
+    bottom = math.floor((deepest - below) / step) * step if any_cut else -below
+    x0, y0 = min(lows[0::2]), min(lows[1::2])
+    x1, y1 = max(highs[0::2]), max(highs[1::2])
+    return Stock(*rounded_out(x0, y0, x1, y1, units), bottom, 0)
+
+
+def rounded_out(
+    x0: float, y0: float, x1: float, y1: float, units: Units
+) -> tuple[int, int, int, int]:
+    """The box (nm) grown by MARGIN on every side and rounded outward to ROUND_TO: a stock
+    sized from the reach of the cuts, in XY (the simulation's, and the drawing's outline)."""
+    margin = to_nm(MARGIN[units], units)
+    step = to_nm(ROUND_TO[units], units)
+
     def down(v: float) -> int:
         return math.floor((v - margin) / step) * step
 
     def up(v: float) -> int:
         return math.ceil((v + margin) / step) * step
 
-    below = to_nm(BELOW[units], units)
-    bottom = math.floor((deepest - below) / step) * step if any_cut else -below
-    x0, y0 = min(lows[0::2]), min(lows[1::2])
-    x1, y1 = max(highs[0::2]), max(highs[1::2])
-    return Stock(down(x0), down(y0), up(x1), up(y1), bottom, 0)
+    return down(x0), down(y0), up(x1), up(y1)
 
 
 @dataclass(frozen=True)

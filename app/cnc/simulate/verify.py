@@ -36,7 +36,7 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
-from app.cnc.mill import Path
+from app.cnc.plane import Path
 from app.cnc.pocketing.regions import offset, path_points
 from app.cnc.problems import Rule
 from app.cnc.process import in_ring
@@ -63,7 +63,7 @@ from app.cnc.simulate.programmed import (
     Routine,
     programmed_geometry,
 )
-from app.cnc.simulate.segments import BOOL, DEFAULT_DIAMETER, F64
+from app.cnc.simulate.segments import BOOL, F64, default_diameter
 from app.cnc.simulate.stock import (
     Grid,
     Stock,
@@ -209,7 +209,7 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     heights = sim.heights()
     owners = Owners(sim)
     u = result.units
-    default_radius = to_nm(DEFAULT_DIAMETER[u], u) // 2
+    default_radius = default_diameter(u) // 2
     grid = sim.grid
     intent = intended(grid, geometry, tol, default_radius)
     # Material removed below what any block means to cut there: gouges. Each is named by
@@ -484,7 +484,7 @@ def _slug_findings(
     )
     if not inside_blocks:
         return []
-    default_radius = to_nm(DEFAULT_DIAMETER[u], u) // 2
+    default_radius = default_diameter(u) // 2
     cut = inner & (intended(grid, features, tol, default_radius).floor < grid.stock.top - tol)
     if cut.sum() > cells / 2:
         return []  # they clear most of it: the window roughed out before its wall

@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportFailure, ImportNote, NoteKind, decode_text
-from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.recognition.common import ImportFailure, ImportNote, NoteKind, decode_text
 
 
 @register_importer

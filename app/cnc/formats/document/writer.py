@@ -8,7 +8,7 @@ from typing import Any
 
 from app.cnc import document
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Out, Report, Target, register
+from app.cnc.formats.targets import Out, Report, Target, register
 from app.cnc.path import CompiledPath
 
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportNote
-from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
 from app.cnc.options import Option, OptionKind
+from app.cnc.recognition.common import ImportNote
 
 BINARY_SENTINEL = b"AutoCAD Binary DXF\r\n\x1a\x00"
 

@@ -47,8 +47,11 @@ from app.cnc.blocks import (
     Program,
 )
 from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Hole, Segment
-from app.cnc.imports.build import Builder, SetUp, block0, make_program, used_tools
-from app.cnc.imports.common import (
+from app.cnc.plane import Element as MillElement
+from app.cnc.plane import Path, signed_area
+from app.cnc.pocketing import regions
+from app.cnc.recognition.build import Builder, SetUp, block0, make_program, used_tools
+from app.cnc.recognition.common import (
     XY,
     ImportNote,
     Notes,
@@ -57,12 +60,9 @@ from app.cnc.imports.common import (
     quantize_nm,
     resolution_nm,
 )
-from app.cnc.imports.ops import Element, HoleOpR, HoleSpec, MillOp, Op, PocketOp, RoutineOp
-from app.cnc.imports.recognise import find_bolt_circles
-from app.cnc.imports.steps import ToolData
-from app.cnc.mill import Element as MillElement
-from app.cnc.mill import Path, signed_area
-from app.cnc.pocketing import regions
+from app.cnc.recognition.ops import Element, HoleOpR, HoleSpec, MillOp, Op, PocketOp, RoutineOp
+from app.cnc.recognition.recognise import find_bolt_circles
+from app.cnc.recognition.steps import ToolData
 
 CHORD_NM = 500  # chords within 0.5 µm of an arc when deciding which contour holds which
 

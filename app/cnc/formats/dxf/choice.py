@@ -45,11 +45,11 @@ from app.cnc.formats.dxf.blocks import (
     resolution_half,
 )
 from app.cnc.formats.dxf.reader import Contour, Drawing, DxfNotes, Segment
-from app.cnc.imports.build import Builder
-from app.cnc.imports.common import ImportNote
-from app.cnc.imports.ops import HoleOpR, Op, PocketOp
-from app.cnc.imports.recognise import find_bolt_circles
 from app.cnc.numbers import NumberError, parse_decimal, parse_int
+from app.cnc.recognition.build import Builder
+from app.cnc.recognition.common import ImportNote
+from app.cnc.recognition.ops import HoleOpR, Op, PocketOp
+from app.cnc.recognition.recognise import find_bolt_circles
 from app.cnc.structure import mill_sequence_end, starts_mill_sequence
 from app.cnc.units import Units, to_nm
 

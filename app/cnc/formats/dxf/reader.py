@@ -47,8 +47,8 @@ from decimal import Decimal, InvalidOperation
 from typing import Any
 
 from app.cnc.formats.dxf import OPTIONS, is_binary_dxf
-from app.cnc.imports.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.numbers import NumberError, parse_int
+from app.cnc.recognition.common import MAX_ABS_NM, XY, ImportFailure, Notes, show
 from app.cnc.sizes import MAX_DRAWING_ENTITIES
 from app.cnc.units import Units
 

@@ -12,8 +12,8 @@ import re
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.imports.common import ImportNote, decode_text
-from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.recognition.common import ImportNote, decode_text
 
 # A G100-G109 word (seed 003 §2.2.1): no G-code or tape has those.
 _EVENT = re.compile(r"(?<![A-Z0-9.])G10[0-9](?![0-9.])", re.IGNORECASE)

@@ -69,8 +69,10 @@ from app.cnc.formats.events.model import (
     implied,
     millblocks_angle,
 )
-from app.cnc.imports.build import Builder, SetUp, block0, make_program
-from app.cnc.imports.common import (
+from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_int
+from app.cnc.plane import Element as MillElement
+from app.cnc.recognition.build import Builder, SetUp, block0, make_program
+from app.cnc.recognition.common import (
     MAX_ABS_NM,
     XY,
     ImportFailure,
@@ -82,7 +84,7 @@ from app.cnc.imports.common import (
     quantize_nm,
     show,
 )
-from app.cnc.imports.ops import (
+from app.cnc.recognition.ops import (
     BoltOp,
     Element,
     HoleSpec,
@@ -93,11 +95,9 @@ from app.cnc.imports.ops import (
     RoutineOp,
     tool_of,
 )
-from app.cnc.imports.recognise import find_loops
-from app.cnc.imports.steps import ToolData
-from app.cnc.mill import Element as MillElement
-from app.cnc.mill import rough_wall, routine_clockwise
-from app.cnc.numbers import NUMBER_TEXT, NumberError, parse_int
+from app.cnc.recognition.recognise import find_loops
+from app.cnc.recognition.steps import ToolData
+from app.cnc.routines import rough_wall, routine_clockwise
 from app.cnc.solve import CONRAD, make_corner
 from app.cnc.units import Units
 

@@ -33,7 +33,7 @@ chose where the manual is vague (docs/readings.md):
 - TC 0/1/2 = tool centre/right/left of the travel (§2.2.4). DR 1 = clockwise, 2 =
   counter-clockwise: §2.2.6.3's circular pocket is `DR2 TC2` and the same part's G-code
   (§2.2.6.1) cuts it with G03. Circle and frame routines get DR from climb/conventional and
-  the spindle direction as app/cnc/mill.py decides, and TC from inside/outside for that
+  the spindle direction as app/cnc/routines.py decides, and TC from inside/outside for that
   direction; FC is the 2P finishing allowance (0.010 in, 0.25 mm) or 0. On G106/G107 CR is
   the frame's corner radius (circles have none, §2.2.5 N009-N010).
 - G104's angle A is measured counter-clockwise from +X and the holes go counter-clockwise
@@ -82,7 +82,6 @@ from app.cnc.blocks import (
     Rep,
     ThreadMill,
 )
-from app.cnc.emit.target import Option, OptionKind, Out, Report, Target, register
 from app.cnc.formats.events.model import (
     FEED_RANGE_NM,
     MAX_DIMENSION_NM,
@@ -108,24 +107,14 @@ from app.cnc.formats.events.model import (
     plus_holes,
     written,
 )
+from app.cnc.formats.targets import Option, OptionKind, Out, Report, Target, register
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.mill import (
-    INSIDE_PLACEMENTS,
-    Element,
-    Path,
-    clearance,
-    plan_sequence,
-    pocket_overlap,
-    programmed_contour,
-    rough_depth,
-    rough_wall,
-    routine_clockwise,
-    sweep,
-)
 from app.cnc.motions import motions
-from app.cnc.path import CompiledPath, Op
+from app.cnc.path import CompiledPath, MillSpan, Op, placed_mills
+from app.cnc.plane import Element, Path, sweep
 from app.cnc.pocketing.model import LinkKind
 from app.cnc.problems import Rule
+from app.cnc.routines import INSIDE_PLACEMENTS, clearance, pocket_overlap, rough_depth, rough_wall
 from app.cnc.solve import CONRAD
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import Units, to_nm
@@ -163,7 +152,11 @@ def routine_comp(placement: Placement, clockwise: bool) -> int:
 
 
 def build_events(program: Program, path: CompiledPath, report: Report) -> Events:
-    """The events of a validated program (COPY blocks carried out), reporting what is lost."""
+    """The events of a validated program (COPY blocks carried out), reporting what is lost.
+
+    The events mirror the blocks, but every mill sequence is read from the compiled path
+    (its programmed contour, routine, pocket passes and the problems its plan found), as
+    the compile planned it where it is cut: nothing is planned again here."""
     builder = _Builder(program, path, report)
     builder.run_nodes(build_nodes(program.blocks))
     builder.report_program()
@@ -180,6 +173,8 @@ class _Builder:
         self.report = report
         self.result = Events(program.units, program.part_number)
         self.reference: XY = (0, 0)
+        # Every mill sequence as compiled, by its DRILL block and where it is cut.
+        self.mills = {(m.drill, m.x, m.y): m for m in placed_mills(path.root)}
 
     @property
     def events(self) -> list[Event]:
@@ -196,6 +191,10 @@ class _Builder:
     def diameter(self, tool: int) -> int | None:
         info = self.path.tools.get(tool)
         return None if info is None else info.diameter
+
+    def mill(self, node: MillSequence, start: XY) -> MillSpan:
+        """The compiled mill sequence of `node` cut from `start`."""
+        return self.mills[node.drill + 1, start[0], start[1]]
 
     def resolve(self, block: Block) -> XY:
         x: Decimal = getattr(block, "x")  # noqa: B009 - every positioned block has x and y
@@ -279,7 +278,16 @@ class _Builder:
         start = self.resolve(drill)
         self.report_hole(node.drill + 1, drill, "the operator lowers the quill to depth by hand")
         first = self.blocks[node.mills[0]]
-        if isinstance(first, Circle | Frame):
+        if isinstance(first, Circle | Frame) and first.entry is not None:
+            # A ramp goes down along X and Y; the operator lowers a Plus's quill by hand.
+            self.report.error(
+                node.mills[0] + 1,
+                f"{first.type_name} with ENTRY {first.entry.name} is not written: a ramp moves "
+                "Z with X and Y, and the Plus is a 2-axis control whose events have no Z "
+                "(seed 003 §2.1); use a G-code target, or ENTRY empty (PLUNGE)",
+            )
+            self.reference = start
+        elif isinstance(first, Circle | Frame):
             self.routine(node, drill, first, start)
             self.reference = start
         elif isinstance(first, Pocket):
@@ -363,13 +371,15 @@ class _Builder:
     def contour(self, node: MillSequence, drill: Hole, start: XY) -> None:
         """Line, quarter-circle and arc blocks: one G101/G102/G103 per element."""
         drill_number = node.drill + 1
-        path, _, end = programmed_contour(self.blocks, node.mills, start)
+        mill = self.mill(node, start)
+        path = mill.contour()
+        assert path is not None  # a contour's span has one
         tool = drill.tool
         diameter = self.diameter(tool)
         checked = drill.comp is Comp.NONE
         if not checked:
-            self.report_compensation(node, drill, start, diameter)
-        depth = to_nm(drill.z_dn, drill.units) if drill.z_dn is not None else None
+            self.report_compensation(node, drill, mill, diameter)
+        depth = mill.depth
         events: list[Mill] = []
         checks: list[list[Check]] = []
         current = start
@@ -437,7 +447,7 @@ class _Builder:
             self.add(event, event_checks)
         if not checked:
             self.result.unchecked.update([drill_number, *(i + 1 for i in node.mills)])
-        self.reference = end
+        self.reference = mill.exit()
 
     def conrad_written(
         self,
@@ -480,8 +490,7 @@ class _Builder:
         the Plus has no irregular pocket. A G100 position comes first and wherever the tool
         retracts between passes (the operator raises and lowers the quill there)."""
         number = node.mills[0] + 1
-        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
-        pocket = plan.pocket
+        pocket = self.mill(node, start).pocket()
         blocks = [node.drill + 1, *(i + 1 for i in node.mills)]
         self.result.unchecked.update(blocks)
         if pocket is None:
@@ -497,7 +506,7 @@ class _Builder:
             if current is None or link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
                 if events and isinstance(events[-1], Mill):
                     events[-1] = replace(events[-1], conrad=None)
-                current = _on_grid(link.path.start, to_nm(self.units.resolution, self.units))
+                current = _on_grid(link.path.start, self.units.resolution_nm)
                 events.append(Position(number, current, tool))
                 plunges += 1
             at = link.path.start
@@ -537,7 +546,7 @@ class _Builder:
         next to the true end whose radius matches the start's within half a step, so the
         arc is cut as written, without a divot (`mill.true_arc`).
         """
-        step = to_nm(self.units.resolution, self.units)
+        step = self.units.resolution_nm
         target = _on_grid(element.end, step)
         centre = None if element.centre is None else _on_grid(element.centre, step)
         if target == current and (centre is None or abs(sweep(at, element)) < math.pi):
@@ -563,7 +572,7 @@ class _Builder:
         return current
 
     def report_compensation(
-        self, node: MillSequence, drill: Hole, start: XY, diameter: int | None
+        self, node: MillSequence, drill: Hole, mill: MillSpan, diameter: int | None
     ) -> None:
         number = node.drill + 1
         side = "right" if drill.comp is Comp.RIGHT else "left"
@@ -573,8 +582,7 @@ class _Builder:
             f"cutter compensation {side}: the finished contour is written with "
             f"TC{TC[drill.comp]}{dia}; the Plus computes the tool's offset path itself",
         )
-        plan = plan_sequence(self.blocks, self.block0, self.units, node.drill, node.mills, start)
-        for finding in plan.findings:
+        for finding in mill.findings():
             if finding.rule is Rule.COMP_DIVOT:
                 self.report.warning(
                     finding.block,
@@ -585,9 +593,9 @@ class _Builder:
     def routine(self, node: MillSequence, drill: Hole, block: Circle | Frame, start: XY) -> None:
         """CIRCLE → G108 pocket / G109 frame; FRAME → G106 pocket / G107 frame."""
         number = node.mills[0] + 1
-        tool_entry = self.block0.tool(drill.tool)
-        rpm = None if tool_entry is None else tool_entry.rpm
-        clockwise = routine_clockwise(block.placement, self.block0.milling, rpm)
+        shape = self.mill(node, start).shape()
+        assert shape is not None  # a routine's span has one
+        clockwise = shape.clockwise
         pocket = block.placement is Placement.POCKET
         finish = rough_wall(block.units) if block.two_pass else 0
         common: dict[str, Any] = {
@@ -601,16 +609,12 @@ class _Builder:
             "diameter": self.diameter(drill.tool),
             "tool": drill.tool,
         }
-        if isinstance(block, Circle):
-            radius = to_nm(block.radius, block.units)
-            event = Routine(rectangular=False, diagonal=None, radius=radius, **common)
+        if not shape.is_frame:
+            event = Routine(rectangular=False, diagonal=None, radius=shape.radius, **common)
             name = "G108 circular pocket" if pocket else "G109 circular frame"
         else:
-            diagonal = (
-                start[0] + to_nm(block.xl, block.units),
-                start[1] + to_nm(block.yw, block.units),
-            )
-            radius = to_nm(block.corner_radius, block.units)
+            diagonal = (start[0] + shape.width, start[1] + shape.height)
+            radius = shape.corner_radius
             event = Routine(rectangular=True, diagonal=diagonal, radius=radius, **common)
             name = "G106 rectangular pocket" if pocket else "G107 rectangular frame"
         self.add(event)

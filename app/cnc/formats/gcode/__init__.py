@@ -3,7 +3,7 @@ the Bridgeport BOSS tape.
 
 dialects.py says what each dialect does differently (and the options they share);
 writer.py writes any dialect from a compiled program, boss.py the BOSS's segmented tape;
-reader.py reads RS274/NGC, Fanuc and BOSS words into motion, which app.cnc.imports recognises
+reader.py reads RS274/NGC, Fanuc and BOSS words into motion, which app.cnc.recognition recognises
 as data blocks; bossread.py joins a BOSS tape's segments for it. Here: the two importers'
 declarations (their sniffs are light); the reader is imported when a file is read, the
 writers when their target is used (app.cnc.formats.TARGET_MODULES).
@@ -15,9 +15,9 @@ from collections.abc import Mapping
 
 from app.cnc.blocks import Program
 from app.cnc.formats.gcode.bossread import looks_segmented
-from app.cnc.imports import wordaddress
-from app.cnc.imports.common import ImportNote, byte_lines, collector_paused, decode_text
-from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.recognition import wordaddress
+from app.cnc.recognition.common import ImportNote, byte_lines, collector_paused, decode_text
 
 
 @register_importer
@@ -34,7 +34,11 @@ class GcodeImporter(Importer):
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
         from app.cnc.formats.gcode.reader import FrontEnd, GcodeStream, parse_gcode
-        from app.cnc.imports.motion import Unstreamable, program_from_motion, program_from_stream
+        from app.cnc.recognition.motion import (
+            Unstreamable,
+            program_from_motion,
+            program_from_stream,
+        )
 
         with collector_paused():
             try:
@@ -71,7 +75,7 @@ class BossImporter(Importer):
     ) -> tuple[Program, list[ImportNote]]:
         from app.cnc.formats.gcode.bossread import join_segments
         from app.cnc.formats.gcode.reader import parse_gcode
-        from app.cnc.imports.motion import program_from_motion
+        from app.cnc.recognition.motion import program_from_motion
 
         with collector_paused():
             tape = join_segments(decode_text(data))

@@ -26,10 +26,10 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Option, OptionKind, Out, Report, register
-from app.cnc.emit.text import Lines
 from app.cnc.formats.gcode.dialects import BOSS, dialect_options
 from app.cnc.formats.gcode.writer import GcodeTarget, Row, Writer
+from app.cnc.formats.targets import Option, OptionKind, Out, Report, register
+from app.cnc.formats.text import Lines
 from app.cnc.motions import motions
 from app.cnc.path import Chunk, CompiledPath, Op
 from app.cnc.problems import Need

@@ -20,7 +20,7 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from app.cnc.imports.common import failure, split_lines
+from app.cnc.recognition.common import failure, split_lines
 
 _SUBROUTINE = re.compile(r"T(\d+)\s*/")
 _MARK = re.compile(r"#(\d*)")

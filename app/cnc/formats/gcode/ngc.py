@@ -76,8 +76,8 @@ from fractions import Fraction
 from functools import lru_cache
 from typing import Final
 
-from app.cnc.imports.common import MAX_DIGITS, ImportFailure, Notes, failure
 from app.cnc.numbers import NUMBER_TEXT
+from app.cnc.recognition.common import MAX_DIGITS, ImportFailure, Notes, failure
 from app.cnc.sizes import MAX_EXPANDED_LINES
 
 CALL_LEVELS: Final = 10  # LinuxCNC's INTERP_SUB_ROUTINE_LEVELS: the main program and 9 calls

@@ -48,7 +48,8 @@ from typing import Final
 
 from app.cnc import limits
 from app.cnc.formats.gcode import ngc
-from app.cnc.imports.common import (
+from app.cnc.numbers import NUMBER_TEXT
+from app.cnc.recognition.common import (
     MAX_ABS_NM,
     MAX_DIGITS,
     ImportFailure,
@@ -60,7 +61,7 @@ from app.cnc.imports.common import (
     split_lines,
     text_lines,
 )
-from app.cnc.imports.steps import (
+from app.cnc.recognition.steps import (
     Arc,
     Coolant,
     Cycle,
@@ -79,7 +80,6 @@ from app.cnc.imports.steps import (
     ToolChange,
     ToolData,
 )
-from app.cnc.numbers import NUMBER_TEXT
 from app.cnc.units import NM_PER_INCH, NM_PER_MM, Units, half_even
 
 NUMBER: Final = re.compile(NUMBER_TEXT)
@@ -1691,7 +1691,7 @@ class _Reader:
                 "lead-out, turn those off (a lead in XY, or none)",
             )
         # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
-        # block, or a refusal naming the line) is the segmenter's (app.cnc.imports.segment).
+        # block, or a refusal naming the line) is the segmenter's (app.cnc.recognition.segment).
         k = block.get("K")
         if k is not None:
             raise failure(line, k.column, "K in an XY arc")

@@ -40,9 +40,9 @@ import numpy.typing as npt
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.compiler import peck_levels
-from app.cnc.emit.target import Out, Remedy, Report, Target, register
-from app.cnc.emit.text import Lengths, Lines, comment_text
 from app.cnc.formats.gcode.dialects import FANUC, LINUXCNC, PROTOTRAK, Dialect, dialect_options
+from app.cnc.formats.targets import Out, Remedy, Report, Target, register
+from app.cnc.formats.text import Lengths, Lines, comment_text
 from app.cnc.geometry import arc_points, chord_step
 from app.cnc.limits import HELIX_CHORD_INCH, HOLE_DWELL_SECONDS
 from app.cnc.motions import is_motion

@@ -6,7 +6,7 @@ targets' options); plan.py turns the compiled path into the blocks to be; words.
 them, chooses their G codes and writes their words; image.py lays the blocks out on tape
 (listing, punch rows); picture.py draws the tape (svgwrite); targets.py makes a tape through
 those stages and offers the five targets; reader.py reads a listing or a punch image into
-motion, which app.cnc.imports recognises as data blocks. Here: the importer's declaration
+motion, which app.cnc.recognition recognises as data blocks. Here: the importer's declaration
 (its options, its sniff); the reader is imported when a tape is read.
 """
 
@@ -15,10 +15,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from app.cnc.blocks import Program
-from app.cnc.imports import wordaddress
-from app.cnc.imports.common import ImportNote
-from app.cnc.imports.registry import Content, Importer, Sniff, Strength, register_importer
+from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
 from app.cnc.options import Option, OptionKind
+from app.cnc.recognition import wordaddress
+from app.cnc.recognition.common import ImportNote
 
 # Options the user gives where a tape cannot say (the tape target has the same two).
 READER_OPTIONS: tuple[Option, ...] = (

@@ -31,10 +31,10 @@ from decimal import Decimal
 from typing import Any
 
 from app.cnc.blocks import HoleOp, Program
-from app.cnc.emit.target import Report
-from app.cnc.emit.text import comment_text
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.profile import Profile
+from app.cnc.formats.targets import Report
+from app.cnc.formats.text import comment_text
 from app.cnc.geometry import arc_points, chord_step
 from app.cnc.needs import blocks_text
 from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move

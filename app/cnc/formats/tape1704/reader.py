@@ -49,9 +49,9 @@ from app.cnc import limits
 from app.cnc.blocks import Program
 from app.cnc.formats.tape1704 import codes as tapecode
 from app.cnc.formats.tape1704.codes import TapeCode
-from app.cnc.imports.common import ImportFailure, Notes, arc_end_off, is_text, show
-from app.cnc.imports.motion import program_from_motion
-from app.cnc.imports.steps import (
+from app.cnc.recognition.common import ImportFailure, Notes, arc_end_off, is_text, show
+from app.cnc.recognition.motion import program_from_motion
+from app.cnc.recognition.steps import (
     Arc,
     Coolant,
     Cycle,

@@ -19,14 +19,14 @@ from collections.abc import Iterator, Mapping
 from typing import Any, ClassVar
 
 from app.cnc.blocks import Program
-from app.cnc.emit.target import Option, Out, Remedy, Report, Target, register
-from app.cnc.emit.text import Lines
 from app.cnc.formats.tape1704 import codes
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.image import TapeImage
 from app.cnc.formats.tape1704.plan import Planner, sanitize_comment
 from app.cnc.formats.tape1704.profile import PROFILE_OPTIONS, Profile, read_profile
 from app.cnc.formats.tape1704.words import Line, Rounder, Words, check_reader, with_starts
+from app.cnc.formats.targets import Option, Out, Remedy, Report, Target, register
+from app.cnc.formats.text import Lines
 from app.cnc.options import OptionKind
 from app.cnc.path import CompiledPath
 from app.cnc.problems import Need

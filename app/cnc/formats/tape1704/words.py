@@ -23,9 +23,9 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from app.cnc.emit.target import Report
 from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion, sanitize_comment
 from app.cnc.formats.tape1704.profile import Profile, TapeFormat
+from app.cnc.formats.targets import Report
 from app.cnc.geometry import arc_sweep
 from app.cnc.units import half_even
 

@@ -1,1 +1,0 @@
-"""Emitters: pure functions of a Toolpath (and options) to bytes or text."""

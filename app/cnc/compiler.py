@@ -39,8 +39,6 @@ compile finds are the geometry's (`Compiled.problems`); validate.py adds the res
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass, replace
 from decimal import Decimal
 from typing import TYPE_CHECKING, NamedTuple
@@ -70,7 +68,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.cutter import Finding
 from app.cnc.geometry import bolt_circle_points, resolve_xy
-from app.cnc.memo import ByObject, Memo
+from app.cnc.memo import ByObject, Memo, Recent
 from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
 from app.cnc.operations.face import face_rows
 from app.cnc.operations.helix import helix_ends
@@ -213,15 +211,15 @@ _BLOCK_HASHES: ByObject[int] = ByObject()
 # One object per distinct (Data Block 0, units): every node's key holds it, and a key
 # compared with a kept one then finds it the same object instead of comparing every tool
 # (each version read from the library has a Data Block 0 object of its own).
-_CONTEXTS: dict[tuple[DataBlock0, Units], tuple[DataBlock0, Units]] = {}
-_CONTEXT_LOCK = threading.Lock()
+_CONTEXTS: Recent[tuple[DataBlock0, Units]] = Recent(64)
 
 
 def _interned(context: tuple[DataBlock0, Units]) -> tuple[DataBlock0, Units]:
-    with _CONTEXT_LOCK:
-        if len(_CONTEXTS) > 64:
-            _CONTEXTS.clear()
-        return _CONTEXTS.setdefault(context, context)
+    found = _CONTEXTS.get(context)
+    if found is None:
+        _CONTEXTS.keep(context, context)
+        found = context
+    return found
 
 
 def _block_hash(block: Block) -> int:
@@ -251,9 +249,7 @@ SHARED_CACHE = Cache()
 # By what the compile reads of a program, by object for its blocks and Data Block 0 (a
 # program's hash would hash every block's values): each entry keeps its program, so no id
 # in a key is reused while the entry is in.
-_RECENT: OrderedDict[tuple[int, int, Units, int], tuple[Program, Compiled]] = OrderedDict()
-_RECENT_SIZE = 8
-_RECENT_LOCK = threading.Lock()
+_RECENT: Recent[tuple[Program, Compiled]] = Recent(8, lru=True)
 
 
 def compile_program(program: Program, cache: Cache | None = None) -> Compiled:
@@ -272,16 +268,11 @@ def compile_program(program: Program, cache: Cache | None = None) -> Compiled:
     if cache is not None:
         return _Compiler(program, cache).run()
     key = (id(program.blocks), id(program.block0), program.units, sizes.move_limit())
-    with _RECENT_LOCK:
-        found = _RECENT.get(key)
-        if found is not None:
-            _RECENT.move_to_end(key)
-            return found[1]
+    found = _RECENT.get(key)
+    if found is not None and found[0].blocks is program.blocks:
+        return found[1]
     result = _Compiler(program, SHARED_CACHE).run()
-    with _RECENT_LOCK:
-        _RECENT[key] = (program, result)
-        while len(_RECENT) > _RECENT_SIZE:
-            _RECENT.popitem(last=False)
+    _RECENT.keep(key, (program, result))
     return result
 
 

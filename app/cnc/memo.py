@@ -61,23 +61,32 @@ class Memo(Generic[V]):
 
 
 class Recent(Generic[V]):
-    """The last `limit` values kept, by key: the oldest kept goes first. Reads take no lock
-    (a dict read is atomic); safe to share between threads."""
+    """The last `limit` values kept, by key: the oldest kept goes first, or with `lru` the
+    least recently used (a read moves its entry to the end: for the few recent programs a
+    request asks for again and again). Reads without `lru` take no lock (a dict read is
+    atomic); safe to share between threads."""
 
-    def __init__(self, limit: int) -> None:
+    def __init__(self, limit: int, lru: bool = False) -> None:
         self.limit = limit
-        self.entries: dict[object, V] = {}
+        self.lru = lru
+        self.entries: OrderedDict[object, V] = OrderedDict()
         self.lock = threading.Lock()
 
     def get(self, key: object) -> V | None:
-        return self.entries.get(key)
+        if not self.lru:
+            return self.entries.get(key)
+        with self.lock:
+            found = self.entries.get(key)
+            if found is not None:
+                self.entries.move_to_end(key)
+            return found
 
     def keep(self, key: object, value: V) -> None:
         with self.lock:
-            self.entries.pop(key, None)
             self.entries[key] = value
+            self.entries.move_to_end(key)
             while len(self.entries) > self.limit:
-                del self.entries[next(iter(self.entries))]
+                self.entries.popitem(last=False)
 
 
 class ByObject(Generic[V]):

@@ -8,8 +8,6 @@ RPM, the divot of an arc whose end is off its radius).
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from collections.abc import Iterator
 from dataclasses import replace
 from decimal import Decimal
@@ -45,6 +43,7 @@ from app.cnc.blocks import (
 from app.cnc.compiler import compile_program
 from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
 from app.cnc.kinds import REGISTRY, Mill, Value
+from app.cnc.memo import ByObject, Recent
 from app.cnc.needs import unmet
 from app.cnc.operations.engrave import missing
 from app.cnc.operations.thread import thread_depth, thread_lead
@@ -97,17 +96,12 @@ def validate(program: Program) -> list[Problem]:
     A program is a value: the same Program object validated again (the editor does, several
     times per request) gets the answer it got, from a small memo of recent programs."""
     key = _identity(program)
-    with _LOCK:
-        hit = _RECENT.get(key)
-        if hit is not None and _identity(hit[0]) == key:
-            _RECENT.move_to_end(key)
-            return list(hit[1])
+    hit = _RECENT.get(key)
+    if hit is not None and _identity(hit[0]) == key:
+        return list(hit[1])
     checker = _Checker(program)
     checker.run()
-    with _LOCK:
-        _RECENT[key] = (program, tuple(checker.problems))
-        while len(_RECENT) > RECENT_PROGRAMS:
-            _RECENT.popitem(last=False)
+    _RECENT.keep(key, (program, tuple(checker.problems)))
     return checker.problems
 
 
@@ -129,12 +123,11 @@ def _identity(program: Program) -> tuple[Any, ...]:
 # entry is in.
 RECENT_PROGRAMS = 8
 _NOTHING = Program(name="")
-_RECENT: OrderedDict[tuple[Any, ...], tuple[Program, tuple[Problem, ...]]] = OrderedDict()
-_LOCK = threading.Lock()
-_OWN: dict[tuple[Any, ...], tuple[Problem, ...]] = {}
+_RECENT: Recent[tuple[Program, tuple[Problem, ...]]] = Recent(RECENT_PROGRAMS, lru=True)
 OWN_BLOCKS = 1 << 15
+_OWN: Recent[tuple[Problem, ...]] = Recent(OWN_BLOCKS)
 # The same block objects come back (a program is edited one block at a time): by identity.
-_SEEN: dict[int, tuple[Block, tuple[Problem, ...]]] = {}
+_SEEN: ByObject[tuple[Problem, ...]] = ByObject(OWN_BLOCKS)
 
 
 def _own_problems(block: Block) -> tuple[Problem, ...]:
@@ -142,9 +135,9 @@ def _own_problems(block: Block) -> tuple[Problem, ...]:
     problems of block 0. A block says the same wherever it stands, so each distinct block is
     checked once. The key keeps each value as typed: 1.0 and 1.00 are equal Decimals, but a
     message shows the one typed."""
-    seen = _SEEN.get(id(block))
-    if seen is not None and seen[0] is block:
-        return seen[1]
+    seen = _SEEN.get(block)
+    if seen is not None:
+        return seen
     key = (type(block), *(_as_typed(getattr(block, f.name)) for f in REGISTRY.fields(type(block))))
     found = _OWN.get(key)
     if found is None:
@@ -153,14 +146,8 @@ def _own_problems(block: Block) -> tuple[Problem, ...]:
         checker.check_kind_rules(0, block)
         checker.check_message(0, block)
         found = tuple(checker.problems)
-        with _LOCK:
-            if len(_OWN) >= OWN_BLOCKS:
-                _OWN.clear()
-            _OWN[key] = found
-    with _LOCK:
-        if len(_SEEN) >= OWN_BLOCKS:
-            _SEEN.clear()
-        _SEEN[id(block)] = (block, found)
+        _OWN.keep(key, found)
+    _SEEN.keep(block, found)
     return found
 
 

@@ -560,7 +560,7 @@ def _load(row: ProgramRow) -> Program:
 # same text is the same Program: an edit reads the stored version (to edit it, and again for
 # the revision summary) and then the version it saved, and parses none of them twice.
 PARSED_DOCUMENTS = 16
-_PARSED: Recent[Program] = Recent(PARSED_DOCUMENTS)
+_PARSED: Recent[Program] = Recent(PARSED_DOCUMENTS, lru=True)
 
 
 def _parse(text: str) -> Program:

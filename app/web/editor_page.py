@@ -18,8 +18,6 @@ from __future__ import annotations
 import dataclasses
 import enum
 import hashlib
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
@@ -31,7 +29,7 @@ from app.cnc.compiler import compile_program
 from app.cnc.crib import feed_offers
 from app.cnc.estimate import format_seconds
 from app.cnc.kinds import REGISTRY
-from app.cnc.memo import ByObject
+from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.problems import Problem, Severity
 from app.cnc.validate import validate
@@ -156,18 +154,15 @@ class Shown:
 
 
 SHOWN_VERSIONS = 4
-_SHOWN: OrderedDict[int, Shown] = OrderedDict()
-_LOCK = threading.Lock()
+_SHOWN: Recent[Shown] = Recent(SHOWN_VERSIONS, lru=True)  # by id; each keeps its program
 
 
 def shown_of(program: Program) -> Shown:
     """What the editor shows of `program`, worked out once per Program object (the library
     hands out the same object for the same stored text)."""
-    with _LOCK:
-        found = _SHOWN.get(id(program))
-        if found is not None and found.program is program:
-            _SHOWN.move_to_end(id(program))
-            return found
+    found = _SHOWN.get(id(program))
+    if found is not None and found.program is program:
+        return found
     problems = validate(program)
     per_block, total = times(program, problems)
     by_block: dict[int, list[Problem]] = {}
@@ -175,10 +170,7 @@ def shown_of(program: Program) -> Shown:
         if problem.block is not None:
             by_block.setdefault(problem.block, []).append(problem)
     found = Shown(program, problems, by_block, per_block, total)
-    with _LOCK:
-        _SHOWN[id(program)] = found
-        while len(_SHOWN) > SHOWN_VERSIONS:
-            _SHOWN.popitem(last=False)
+    _SHOWN.keep(id(program), found)
     return found
 
 

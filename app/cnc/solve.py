@@ -721,11 +721,7 @@ class _Solver:
                 end_block=True,
             )
         found = _meet(locus, _Circle(c, radius, c, clockwise))
-        if isinstance(locus, _Line) and not locus.ray:
-            # A line given only X or Y: the first point it meets, the one nearer its start.
-            chosen = min(found, key=lambda p: math.dist(p, self.start), default=None)
-        else:
-            chosen = _first(locus, found)
+        chosen = self.first_met(locus, found)
         if chosen is None:
             raise self.impossible(
                 seg,
@@ -736,6 +732,14 @@ class _Solver:
                 end_block=True,
             )
         return self.keep(seg.end_index, seg.end_block, chosen)
+
+    def first_met(self, locus: _Line | _Circle, found: list[Pt]) -> Pt | None:
+        """Of the points where the segment's `locus` meets the next one, the one it reaches
+        first: along its direction of travel, or for a line given only X or Y (no
+        direction), the one nearer its start."""
+        if isinstance(locus, _Line) and not locus.ray:
+            return min(found, key=lambda p: math.dist(p, self.start), default=None)
+        return _first(locus, found)
 
     def from_next_line(self, seg: _Seg, locus: _Line | _Circle, nxt: _Seg, block: MillLine) -> Pt:
         """The next line is given its ANGLE and end: this end is where the line through
@@ -751,10 +755,7 @@ class _Solver:
         q = (float(to_nm(block.x, block.units)), float(to_nm(block.y, block.units)))
         assert block.angle is not None
         found = _meet(locus, _Line(q, _heading(block.angle), ray=False))
-        if isinstance(locus, _Line) and not locus.ray:
-            chosen = min(found, key=lambda p: math.dist(p, self.start), default=None)
-        else:
-            chosen = _first(locus, found)
+        chosen = self.first_met(locus, found)
         if chosen is None:
             raise self.impossible(
                 seg,

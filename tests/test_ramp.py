@@ -1,7 +1,8 @@
-"""Ramp entry for CIRCLE/FRAME pockets (issue 33 point 3): the helical ramp worked out by
-hand from the block, and what the document and Verify make of it.
+"""Ramp entry for CIRCLE/FRAME pockets (issue 33 point 3): the helical and zigzag ramps
+worked out by hand from the block, and what the document and Verify make of them.
 
-The golden cases (tests/golden/circle-pocket-helix-ramp, frame-2p-pocket-helix-ramp-mm) pin
+The golden cases (tests/golden/circle-pocket-helix-ramp, frame-2p-pocket-helix-ramp-mm,
+frame-pocket-zigzag-ramp) pin
 every target's bytes; rs274 reads their G-code with the same motion (tests/test_referee.py);
 the events target and the importers refuse them naming why (test_referee,
 test_import_roundtrip); the bad corpus has the errors (tests/bad/ramp-*).

@@ -115,6 +115,7 @@ _OPERATION_CASES = (
     "circle-pocket-helix-ramp",
     "frame-2p-pocket-helix-ramp-mm",
     "frame-pocket-zigzag-ramp",
+    "pocket-islands-helix-ramp",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,

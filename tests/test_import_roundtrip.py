@@ -182,7 +182,11 @@ for target in (*CHORD_TARGETS, "gcode-linuxcnc"):
 # A pocket's ramp entry (issue 33) is not read back: G-code refuses its helix (not a HELIX:
 # no whole turn at the bottom), a tape its chords as a ramp; each naming the line.
 RAMP_HELIX = ("a pocket's helical ramp entry is not read back: refused, naming the line", "HELIX")
-for name in ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm"):
+for name in (
+    "circle-pocket-helix-ramp",
+    "frame-2p-pocket-helix-ramp-mm",
+    "pocket-islands-helix-ramp",
+):
     NOT_READ_BACK["gcode-linuxcnc"][name] = RAMP_HELIX
     for target in CHORD_TARGETS:
         NOT_READ_BACK[target][name] = CHORDS

@@ -1,8 +1,9 @@
-"""Ramp entry for CIRCLE/FRAME pockets (issue 33 point 3): the helical and zigzag ramps
-worked out by hand from the block, and what the document and Verify make of them.
+"""Ramp entry for CIRCLE/FRAME pockets and POCKET blocks (issue 33 point 3): the helical
+and zigzag ramps worked out by hand from the block, and what the document and Verify make
+of them.
 
 The golden cases (tests/golden/circle-pocket-helix-ramp, frame-2p-pocket-helix-ramp-mm,
-frame-pocket-zigzag-ramp) pin
+frame-pocket-zigzag-ramp, pocket-islands-helix-ramp) pin
 every target's bytes; rs274 reads their G-code with the same motion (tests/test_referee.py);
 the events target and the importers refuse them naming why (test_referee,
 test_import_roundtrip); the bad corpus has the errors (tests/bad/ramp-*).
@@ -18,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from app.cnc import document
-from app.cnc.blocks import Circle, Entry, Hole, Program
+from app.cnc.blocks import Circle, Entry, Hole, Pocket, Program
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.simulate.verify import verify
@@ -259,4 +260,93 @@ def test_the_bounded_work_estimate_counts_the_zigzags_legs() -> None:
     assert [e for e in validate(program) if e.severity is Severity.ERROR] == []
     rows = len(compile_program(program, Cache()).path)
     assert rows > 3_696
+    assert rows <= cost.estimate(program).moves
+
+
+def test_a_pocket_with_islands_ramps_down_at_every_place_it_goes_down() -> None:
+    """POCKET with two islands, ENTRY HELIX at 3° (golden pocket-islands-helix-ramp, tool
+    DIA 0.25 in, Z UP 0.1 to Z DN -0.25 in 2 pecks): the plan goes down at 6 places (its
+    first plunge and 5 re-entries after a retract), so 12 ways down, each a helix of
+    radius DIA/4 about one centre falling tan 3° per unit of its length (to 0.0001 in),
+    ending at its level; no straight plunge is left. Every point of every ramp keeps the
+    tool's radius off the wall and both islands (measured to the programmed contours),
+    and Verify finds nothing."""
+    from app.cnc.plane import distance_to_element
+    from app.cnc.sequences import plan_sequence
+
+    program = load("pocket-islands-helix-ramp")
+    runs = ramps(program)
+    levels = [-0.075 * IN, -0.25 * IN]
+    assert len(runs) == 12
+    tool = 0.25 * IN
+    plan = plan_sequence(
+        program.blocks,
+        program.block0,
+        program.units,
+        0,
+        tuple(range(1, len(program.blocks))),
+        (0, 0),
+    )
+    outlines = [path for _, path in plan.outlines]
+    assert len(outlines) == 3  # the wall and two islands
+
+    def clearance(p: tuple[float, float]) -> float:
+        return min(
+            distance_to_element(p, start, element)
+            for path in outlines
+            for start, element in zip(
+                [path.start, *(e.end for e in path.elements)], path.elements, strict=False
+            )
+        )
+
+    for k, run in enumerate(runs):
+        centre = (run[0][1].cx, run[0][1].cy)
+        length = 0.0
+        for start, arc in run:
+            assert (arc.cx, arc.cy) == centre
+            radius = math.dist(start[:2], centre)
+            assert radius == pytest.approx(tool / 4, abs=2)
+            length += radius * sweep(start, arc)
+        top, last = run[0][0][2], run[-1][1]
+        assert last.z == round(levels[k // 6])
+        assert abs((top - last.z) - length * math.tan(math.radians(3))) <= 0.0001 * IN
+        # Every point of the ramp's circle (the whole circle: it turns round it).
+        for j in range(72):
+            a = 2 * math.pi * j / 72
+            p = (centre[0] + radius * math.cos(a), centre[1] + radius * math.sin(a))
+            assert clearance(p) >= tool / 2 - 0.0001 * IN
+    here = (0, 0, 0)
+    plunges = []
+    for move in interpret(program).moves:
+        if not isinstance(move, Rapid | Feed | ArcFeed):
+            continue
+        if isinstance(move, Feed) and (move.x, move.y) == here[:2] and move.z < here[2]:
+            plunges.append(move)
+        here = (move.x, move.y, move.z)
+    assert plunges == []
+    assert verify(program).findings == []
+
+
+def test_the_pocket_estimate_counts_its_ramps() -> None:
+    """The bounded work estimate (app/cnc/cost.py) counts a POCKET's ramps: at 0.5° down
+    2 in, a 0.0625 in radius helix turns 2π × 0.0625 × tan 0.5° = 0.00343 in a turn, about
+    583 rows at each of the 6 places it goes down; the estimate must not count fewer rows
+    than the compile makes (it did without the ramps: fewer than 3 500)."""
+    from app.cnc import cost
+    from app.cnc.compiler import Cache, compile_program
+
+    golden = load("pocket-islands-helix-ramp")
+    drill, pocket = golden.blocks[:2]
+    assert isinstance(drill, Hole) and isinstance(pocket, Pocket)
+    program = dataclasses.replace(
+        golden,
+        blocks=(
+            dataclasses.replace(drill, z_dn=Decimal("-1.9")),
+            dataclasses.replace(pocket, ramp_angle=Decimal("0.5")),
+            *golden.blocks[2:],
+        ),
+    )
+    assert [e for e in validate(program) if e.severity is Severity.ERROR] == []
+    rows = len(compile_program(program, Cache()).path)
+    assert rows > 6 * 583
     assert rows <= cost.estimate(program).moves

@@ -168,7 +168,12 @@ EVENTS_REFUSED = dict.fromkeys(
 ) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
 EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
 EVENTS_REFUSED |= dict.fromkeys(
-    ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm", "frame-pocket-zigzag-ramp"),
+    (
+        "circle-pocket-helix-ramp",
+        "frame-2p-pocket-helix-ramp-mm",
+        "frame-pocket-zigzag-ramp",
+        "pocket-islands-helix-ramp",
+    ),
     "a ramp entry moves Z with XY",
 )
 

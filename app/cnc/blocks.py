@@ -177,7 +177,8 @@ ENTRY_HELP = (
 RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
 RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
 POCKET_ONLY = (("placement", Placement.POCKET),)
-RAMPED = (*POCKET_ONLY, ("entry", frozenset(Entry)))
+ENTERED = (("entry", frozenset(Entry)),)
+RAMPED = (*POCKET_ONLY, *ENTERED)
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -566,6 +567,7 @@ class Pocket(Block):
                 Rule.POCKET_ORDER,
                 Rule.POCKET_NARROW,
                 Rule.POCKET_STEP,
+                Rule.RAMP_ENTRY,
             }
         ),
     )
@@ -577,6 +579,11 @@ class Pocket(Block):
     )
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
+    # A POCKET has no placement: it is always a pocket, so ENTRY always applies.
+    entry: Entry | None = prompt("ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP)
+    ramp_angle: Decimal | None = prompt(
+        "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=ENTERED
+    )
 
 
 @dataclass(frozen=True, kw_only=True)

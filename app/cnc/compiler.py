@@ -615,7 +615,7 @@ class _Compiler:
         first_row = len(self.buffer.rows)
         if plan.pocket is not None:
             if drill.has_depth:
-                self.cut_pocket(number, last, drill, plan.pocket)
+                self.cut_pocket(number, last, drill, plan.pocket, plan.ramps, node.mills[0] + 1)
             else:
                 self.cut_pocket_by_hand(number, last, plan.pocket)
             self.record_mill(node, drill, start, first_row, plan)
@@ -684,38 +684,67 @@ class _Compiler:
         for end in ends:
             self.helix_to(number, end, centre, ramp.clockwise, feed, "lead-in")
 
-    def cut_pocket(self, number: int, last: int, drill: Hole, pocket: PocketPlan) -> None:
+    def cut_pocket(
+        self,
+        number: int,
+        last: int,
+        drill: Hole,
+        pocket: PocketPlan,
+        ramps: tuple[Ramp | Zigzag | None, ...] = (),
+        pocket_block: int = 0,
+    ) -> None:
         """A POCKET: every pass at each peck level (app.cnc.pocketing).
 
         The tool goes down only where the plan says it fits: at the first pass's plunge
         point, and after a retract at a RETRACT link's start. At the first level it feeds
         down from Z UP; at the levels after, it rapids to the level just cut (that point was
         cleared there) and feeds on down, as the DRILL's pecks do. Between levels it
-        retracts and returns to the first plunge point.
+        retracts and returns to the first plunge point. With a ramp entry (`ramps`, one a
+        pass: SequencePlan.ramps) it goes down on that pass's ramp instead, at the POCKET's
+        (`pocket_block`) XY feed, from the same height, starting over the ramp's start, at
+        every place and every level.
         """
         from app.cnc.pocketing.model import LinkKind
 
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
-        first = _round(pocket.passes[0].entry.path.start)
+        levels = peck_levels(z_up, z_dn, drill.pecks)
+
+        def way_down(
+            k: int, above: int, down_to: int
+        ) -> tuple[tuple[int, int], list[tuple[int, int, int]]]:
+            # Pass k's entry: where the tool is over before it goes down from `above` to
+            # `down_to`, and its ramp's rows (none: it feeds straight down).
+            ramp = ramps[k] if ramps else None
+            if ramp is None:
+                return _round(pocket.passes[k].entry.path.start), []
+            return ramp.rows(above, down_to)
+
+        first = way_down(0, z_up, levels[0])[0]
         self.position(number, first, self.retract)
         self.rapid_z(number, z_up)
         above = z_up
-        levels = peck_levels(z_up, z_dn, drill.pecks)
         for k, level in enumerate(levels):
-            for cut in pocket.passes:
+            for index, cut in enumerate(pocket.passes):
                 link = cut.entry
+                if link.kind not in (LinkKind.PLUNGE, LinkKind.RETRACT):
+                    self.cut_pocket_path(link.path, "step-over")
+                    self.cut_pocket_path(cut.path, "")
+                    continue
+                over, rows = way_down(index, above, level)
                 if link.kind is LinkKind.RETRACT:
                     self.retract_up(number)
-                    self.rapid_xy(number, _round(link.path.start))
+                    self.rapid_xy(number, over)
                     self.rapid_z(number, above, tag="" if k == 0 else "peck-reentry")
-                if link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
+                if rows:
+                    self.ramp_down(pocket_block, rows, ramps[index])
+                else:
                     self.feed_to(number, (self.x, self.y, level), feed_z)
                 self.cut_pocket_path(link.path, "step-over")
                 self.cut_pocket_path(cut.path, "")
             if k < len(levels) - 1:
                 self.retract_up(number)
-                self.rapid_xy(number, first)
+                self.rapid_xy(number, way_down(0, level, levels[k + 1])[0])
                 self.rapid_z(number, level, tag="peck-reentry")
             above = level
         self.retract_up(last)

@@ -239,7 +239,9 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
     if isinstance(mill, Pocket):
         rings, per_ring, work = _pocket(blocks, program, node)
         per_level = rings * per_ring + LEVEL_ROWS
-        moves = extra + SEQUENCE_ROWS + levels * per_level
+        # A ramp at each place it may go down: at most a place a ring.
+        ramps = rings * _ramp_rows(program, block, mill, levels)
+        moves = extra + SEQUENCE_ROWS + levels * per_level + ramps
         return _Size(moves, 0, levels * rings, (node.mills[0] + 1, *work)), used
     if isinstance(mill, MILL_ROUTINE_CLASSES):
         rings = _routine_rings(program, mill)
@@ -299,7 +301,9 @@ def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> in
     """About how many rows a pocket's ramp entry makes (app/cnc/ramp.py): a row a helix's
     turn or a zigzag's leg down the whole depth, and one more a level for what is left. From the
     numbers alone: a tiny tool at a shallow angle is refused before it is compiled."""
-    if not isinstance(routine, Circle | Frame) or routine.entry is None or not drill.has_depth:
+    if not isinstance(routine, Circle | Frame | Pocket) or routine.entry is None:
+        return 0
+    if not drill.has_depth:
         return 0
     tool_radius = _tool_radius(program, routine.tool)
     # The length of one row: a helix's turn, or a zigzag's leg.

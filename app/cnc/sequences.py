@@ -54,6 +54,9 @@ class SequencePlan:
     routine: Routine | None = None  # a CIRCLE/FRAME routine's size and direction
     outlines: tuple[tuple[str, Path], ...] = ()  # a POCKET's contours, by name
     ramp: Ramp | Zigzag | None = None  # a pocketing routine's ramp entry (None: it plunges)
+    # A POCKET's ramp entries: one a pass of `pocket`, where that pass goes down (None where
+    # it does not, or plunges); empty when the POCKET plunges.
+    ramps: tuple[Ramp | Zigzag | None, ...] = ()
     # Values calculated from the print (app.cnc.solve): (block number, field) → value.
     calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
 
@@ -84,7 +87,7 @@ def plan_sequence(
         contours = tuple((i + 1, blocks[i]) for i in mills[1:])
         at = RoutineStart(mills[0] + 1, block0, rpm, radius, start, contours)
         plan: SequencePlan = planner(first, at)
-        if plan.ramp is not None and not drill.has_depth:
+        if (plan.ramp is not None or plan.ramps) and not drill.has_depth:
             # A 2-axis sequence's depth is the operator's quill: no ramp, and no silent plunge.
             message = (
                 "a ramp entry goes down along X and Y, and this sequence's depth is the "

@@ -8,7 +8,7 @@ and elements (lines, or arcs with centre and direction) — the shape the interp
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from app.cnc.plane import Path, Pt
 from app.cnc.problems import Severity
@@ -116,6 +116,9 @@ class PocketPlan:
     findings: tuple[PocketFinding, ...]
     chordal_tolerance: float
     entry: str = "plunge"
+    # Where the tool centre may feed (nm rings, Clipper's; the planner's `moves`): a ramp
+    # entry is checked against it (app.cnc.pocketing.routine).
+    centres: tuple[tuple[tuple[int, int], ...], ...] = field(default=(), compare=False)
 
     @property
     def plunges(self) -> tuple[Pt, ...]:

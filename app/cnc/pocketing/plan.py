@@ -146,7 +146,8 @@ def plan_pocket(
             )
         )
     passes = planner.classify_links()
-    return PocketPlan(tuple(passes), tuple(findings), t)
+    centres = tuple(tuple((int(x), int(y)) for x, y in ring) for ring in planner.moves)
+    return PocketPlan(tuple(passes), tuple(findings), t, centres=centres)
 
 
 def pass_levels(

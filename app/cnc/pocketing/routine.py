@@ -10,20 +10,42 @@ from the arc's start, an ISLAND's start from the point the contour before it clo
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from app.cnc import limits
-from app.cnc.blocks import Block, Direction, Island, Pocket, PocketArc, PocketArcEnd, PocketLine
+from app.cnc.blocks import (
+    Block,
+    Direction,
+    Entry,
+    Island,
+    Placement,
+    Pocket,
+    PocketArc,
+    PocketArcEnd,
+    PocketLine,
+)
 from app.cnc.cutter import Finding
 from app.cnc.geometry import resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
-from app.cnc.plane import Element, Path, half_step
-from app.cnc.pocketing.model import PocketFinding, PocketIssue
+from app.cnc.plane import Element, Path, Pt, dim, half_step, tangent
+from app.cnc.pocketing import regions
+from app.cnc.pocketing.model import LinkKind, PocketFinding, PocketIssue, PocketPlan
 from app.cnc.pocketing.plan import plan_pocket
 from app.cnc.problems import Rule, Severity
-from app.cnc.routines import pocket_overlap, rough_wall
+from app.cnc.ramp import (
+    Ramp,
+    Zigzag,
+    angle_of,
+    helix_radius,
+    helix_ramp,
+    zigzag_length,
+    zigzag_ramp,
+)
+from app.cnc.routines import pocket_overlap, rough_wall, routine_clockwise
 from app.cnc.sequences import RoutineStart, SequencePlan
 from app.cnc.units import Units, message_length, to_nm
 
@@ -256,7 +278,115 @@ def _planned(block: Block, at: RoutineStart, contours: list[Contour]) -> Sequenc
     findings += [_finding(f, contours, at.number) for f in plan.findings]
     if plan.has_errors:
         return SequencePlan([], 0, at.start, findings)
-    return SequencePlan([p.path for p in plan.passes], 0, at.start, findings, pocket=plan)
+    ramps: tuple[Ramp | Zigzag | None, ...] = ()
+    if block.entry is not None:
+        clockwise = routine_clockwise(Placement.POCKET, at.block0.milling, at.rpm)
+        ramps, problem = _ramps(block, plan, float(at.tool_radius), clockwise, at.number)
+        if problem is not None:
+            return SequencePlan([], 0, at.start, [*findings, problem])
+    return SequencePlan(
+        [p.path for p in plan.passes], 0, at.start, findings, pocket=plan, ramps=ramps
+    )
+
+
+# The directions a ramp is tried in at an entry point after square to the way the tool
+# moves on from it: eight, 45 degrees apart, turning counter-clockwise (deterministic).
+_TURNS = tuple(k * math.pi / 4 for k in range(8))
+# A helix's circle is checked as this many straights (chords; the planner's region is
+# already the chordal tolerance generous, app.cnc.pocketing.plan).
+_CHORDS = 72
+
+
+def _ramps(
+    block: Pocket, plan: PocketPlan, r: float, clockwise: bool, number: int
+) -> tuple[tuple[Ramp | Zigzag | None, ...], Finding | None]:
+    """A ramp (app.cnc.ramp, the geometry CIRCLE/FRAME use) at every point the POCKET's
+    plan goes down (the first pass's PLUNGE, each RETRACT's re-entry), its path inside the
+    region the tool centre may feed in (`PocketPlan.centres`); or the error naming ENTRY
+    at the first point none fits, with the largest that does fit there."""
+    angle = angle_of(block.ramp_angle)
+    region = [list(ring) for ring in plan.centres]
+    boxes = [regions.box_of([ring]) for ring in region]
+    helix = block.entry is Entry.HELIX
+    wanted = helix_radius(r) if helix else zigzag_length(r)
+
+    def make(entry: Pt, inward: Pt, size: float) -> Ramp | Zigzag:
+        if helix:
+            return helix_ramp(entry, inward, clockwise, size, angle)
+        return zigzag_ramp(entry, inward, size, angle)
+
+    def fits(ramp: Ramp | Zigzag) -> bool:
+        if isinstance(ramp, Zigzag):
+            return regions.segment_inside(region, ramp.entry, ramp.far, boxes)
+        (cx, cy), rad = ramp.centre, ramp.radius
+        points = [
+            (
+                cx + rad * math.cos(2 * math.pi * k / _CHORDS),
+                cy + rad * math.sin(2 * math.pi * k / _CHORDS),
+            )
+            for k in range(_CHORDS + 1)
+        ]
+        pairs = itertools.pairwise(points)
+        return all(regions.segment_inside(region, a, b, boxes) for a, b in pairs)
+
+    ramps: list[Ramp | Zigzag | None] = []
+    for cut in plan.passes:
+        link = cut.entry
+        if link.kind not in (LinkKind.PLUNGE, LinkKind.RETRACT):
+            ramps.append(None)
+            continue
+        entry = link.path.start
+        # First square off the way the tool moves on from the entry point (a pass's entry
+        # lies on the edge of the region: in from it is to one side), then round from it.
+        path = link.path if link.path.elements else cut.path
+        along = tangent(path.start, path.elements[0], at_end=False)
+        way = math.atan2(along[1], along[0])
+        turns = (math.pi / 2, -math.pi / 2, *_TURNS)
+        directions = [(math.cos(way + t), math.sin(way + t)) for t in turns]
+        found = next((ramp for d in directions if fits(ramp := make(entry, d, wanted))), None)
+        if found is None:
+            return (), _no_fit(block, number, r, wanted, entry, directions, make, fits)
+        ramps.append(found)
+    return tuple(ramps), None
+
+
+def _no_fit(
+    block: Pocket,
+    number: int,
+    r: float,
+    wanted: float,
+    entry: Pt,
+    directions: list[Pt],
+    make: Callable[[Pt, Pt, float], Ramp | Zigzag],
+    fits: Callable[[Ramp | Zigzag], bool],
+) -> Finding:
+    """ENTRY's error when no ramp of the `wanted` size fits at `entry`: the largest that
+    fits there in any direction tried (bisection to a nanometre's order)."""
+    best = 0.0
+    for d in directions:
+        low, high = 0.0, wanted
+        for _ in range(30):
+            mid = (low + high) / 2
+            low, high = (mid, high) if fits(make(entry, d, mid)) else (low, mid)
+        best = max(best, low)
+    u = block.units
+    at = f"({dim(entry[0], u)}, {dim(entry[1], u)})"
+    if block.entry is Entry.HELIX:
+        message = (
+            f"a HELIX ramp with a {dim(2 * r, u)} tool goes round a circle "
+            f"{dim(2 * wanted, u)} across (half the tool's DIA), which does not fit inside the "
+            f"pocket where the tool goes down at X, Y {at}: a circle at most "
+            f"{dim(2 * best, u)} across fits there; a smaller tool, ENTRY ZIGZAG, or ENTRY "
+            "empty (PLUNGE)"
+        )
+    else:
+        message = (
+            f"a ZIGZAG ramp with a {dim(2 * r, u)} tool goes back and forth on a straight "
+            f"{dim(wanted, u)} long (the tool's DIA), which does not fit inside the pocket "
+            f"where the tool goes down at X, Y {at}: a straight at most {dim(best, u)} long "
+            "fits there; a smaller tool, ENTRY HELIX, or ENTRY empty (PLUNGE)"
+        )
+    return Finding(number, Rule.RAMP_ENTRY, Severity.ERROR, message, "ENTRY")
 
 
 def _finding(found: PocketFinding, contours: list[Contour], pocket: int) -> Finding:

@@ -278,7 +278,7 @@ class _Builder:
         start = self.resolve(drill)
         self.report_hole(node.drill + 1, drill, "the operator lowers the quill to depth by hand")
         first = self.blocks[node.mills[0]]
-        if isinstance(first, Circle | Frame) and first.entry is not None:
+        if isinstance(first, Circle | Frame | Pocket) and first.entry is not None:
             # A ramp goes down along X and Y; the operator lowers a Plus's quill by hand.
             self.report.error(
                 node.mills[0] + 1,

@@ -184,6 +184,7 @@ class Mark(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("MARK"),),
         editor=(SubKind("MARK", "MARK", "MARK", 1),),
+        choices=((11, "MARK"),),
         positioned=True,
         loopable=True,
     )

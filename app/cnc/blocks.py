@@ -230,6 +230,7 @@ class Pos(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POS"),),
         editor=(SubKind("POS", "POS", "POS", 1),),
+        choices=((1, "POS"),),
         positioned=True,
         loopable=True,
     )
@@ -258,6 +259,7 @@ class Hole(Block):
             SubKind("BORE", "BORE", "BORE", 1, (("op", HoleOp.BORE),)),
             SubKind("TAP", "TAP", "TAP", 1, (("op", HoleOp.TAP),)),
         ),
+        choices=((2, "DRILL"), (3, "BORE"), (4, "TAP")),
         positioned=True,
         loopable=True,
     )
@@ -341,6 +343,7 @@ class MillLine(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("MILL_STD"),),
         editor=(SubKind("MILL_STD", "MILL STD", "MILL", 1),),
+        choices=((5, "MILL"),),
         positioned=True,
         mill=Mill.CONTOUR,
         follows=AFTER_MILL,
@@ -548,6 +551,7 @@ class Pocket(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POCKET"),),
         editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1),),
+        choices=((10, POCKET_GROUP),),  # key 0 on the control
         stoppable=False,
         mill=Mill.ROUTINE,
         planner="app.cnc.pocketing.routine:plan_pocket_routine",
@@ -697,6 +701,7 @@ class Helix(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("HELIX"),),
         editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
+        cost="app.cnc.operations.helix:estimate_moves",
         positioned=True,
         loopable=True,
     )
@@ -755,6 +760,7 @@ class ThreadMill(Block):
                 (("place", ThreadPlace.EXTERNAL),),
             ),
         ),
+        cost="app.cnc.operations.thread:estimate_moves",
         positioned=True,
         loopable=True,
     )
@@ -807,6 +813,7 @@ class Face(Block):
                 (("pattern", FacePattern.ONE_WAY),),
             ),
         ),
+        cost="app.cnc.operations.face:estimate_moves",
         positioned=True,
         # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
         loopable=False,
@@ -860,6 +867,7 @@ class Engrave(Block):
             ),
             SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
         ),
+        cost="app.cnc.operations.engrave:estimate_moves",
         positioned=True,
         loopable=False,  # as FACE: in POCKET's menu
     )
@@ -898,6 +906,7 @@ class Rep(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("REP"),),
         editor=(SubKind("REP", "REP", "REP", 1, offered=_loop_open),),
+        choices=((8, "REP"),),
         stoppable=False,
     )
     mode: Mode = prompt("ABS/INC", CHOICE, Mode.INC, prompted=False)
@@ -919,6 +928,7 @@ class Copy(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("COPY"),),
         editor=(SubKind("COPY", "COPY", "COPY", 1, offered=_at_end),),
+        choices=((9, "COPY"),),
         stoppable=False,
     )
     from_block: int = prompt("FROM", COUNT)

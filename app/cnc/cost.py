@@ -31,21 +31,16 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     Circle,
-    Engrave,
-    Face,
     Frame,
-    Helix,
     Hole,
     HoleOp,
     Placement,
     Pocket,
     Program,
     Rep,
-    ThreadMill,
 )
+from app.cnc.kinds import REGISTRY
 from app.cnc.memo import Recent
-from app.cnc.operations.engrave import glyph_strokes
-from app.cnc.operations.thread import thread_lead
 from app.cnc.plane import Path, sweep
 from app.cnc.ramp import angle_of, helix_radius
 from app.cnc.routines import pocket_overlap
@@ -224,8 +219,11 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
     if isinstance(node, Single):
         if isinstance(block, Hole):
             return _Size(extra + _hole_rows(block), 1, 0), used
-        if isinstance(block, Helix | ThreadMill | Face | Engrave):
-            return _Size(extra + _operation_rows(program, block), 0, 0), used
+        # A kind that counts its own moves declares how (`Kind.cost`: HELIX, THREAD MILL,
+        # FACE, ENGRAVE); any other block standing alone is a move to X/Y.
+        estimator = REGISTRY.estimator(type(block))
+        if estimator is not None:
+            return _Size(extra + estimator(program, block), 0, 0), used
         return _Size(extra + POS_ROWS, 0, 0), used
     if isinstance(node, BoltPattern):
         bolt = blocks[node.bolt]
@@ -272,26 +270,6 @@ def _heavier(
     if a is None or (b is not None and b[1] * b[2] > a[1] * a[2]):
         return b
     return a
-
-
-def _operation_rows(program: Program, block: Helix | ThreadMill | Face | Engrave) -> int:
-    """About how many moves an operation of issue 33 makes, from its numbers alone (before
-    its compile works them out: a pitch or step of nearly nothing is refused first)."""
-    units = block.units
-    if isinstance(block, Engrave):
-        strokes = list(glyph_strokes(block.text, 1.0))
-        return sum(len(s) + POS_ROWS for s in strokes) + POS_ROWS
-    depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
-    if isinstance(block, Helix):
-        return depth // max(to_nm(block.pitch, units), 1) + HOLE_ROWS
-    if isinstance(block, ThreadMill):
-        turns = depth // max(thread_lead(block), 1) + 2
-        return block.passes * (turns + POS_ROWS + 2) + POS_ROWS
-    tool = program.block0.tool(block.tool)
-    diameter = 0 if tool is None or tool.diameter is None else to_nm(tool.diameter, program.units)
-    step = max(diameter * block.step // 100, 1)
-    rows = to_nm(block.yw, units) // step + 2
-    return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
 
 
 def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> int:

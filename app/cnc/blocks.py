@@ -472,6 +472,7 @@ class Circle(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_circle",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("centre", in_menu=False),
         findings=ROUTINE_FINDINGS,
     )
@@ -506,6 +507,7 @@ class Frame(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_frame",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("lower left corner", in_menu=False),
         findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )
@@ -555,6 +557,7 @@ class Pocket(Block):
         stoppable=False,
         mill=Mill.ROUTINE,
         planner="app.cnc.pocketing.routine:plan_pocket_routine",
+        cost="app.cnc.cost:pocket_size",
         geometry=True,
         follows=_after_drill("depths and the boundary's start point", in_menu=True),
         # What its planner finds in the boundary and islands (app.cnc.pocketing.routine).

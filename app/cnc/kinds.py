@@ -189,9 +189,11 @@ class Kind:
     part: str = ""  # entered with another block: the suffix of its X/Y prompts
     mill: Mill | None = None
     planner: str = ""  # "module:function" planning a mill routine
-    # "module:function" (program, block) -> int: about how many moves a block of this kind
-    # standing alone makes, from its numbers before any of its work (cost.py, "Bounded
-    # work"); "" for a kind cost.py counts by its node (a hole, a mill sequence, a POS).
+    # "module:function" estimating, from its numbers before any of its work, the moves of
+    # a block of this kind (cost.py, "Bounded work"): (program, block) -> int for a block
+    # standing alone (HELIX); for a Mill.ROUTINE, (program, blocks, sequence) -> cost.Size
+    # for its mill sequence, less the drill's rows. "": cost.py counts it by its node (a
+    # hole, contour blocks a few elements each, anything else a move to X/Y).
     cost: str = ""
     # The editor's first-menu choices this kind opens, (number, name): the control's
     # numbers (POCKET is 10, key 0); other kinds' sub-kinds may sit under them too.
@@ -485,7 +487,7 @@ class Registry:
             raise LookupError(f"{cls.__name__} declares no planner")
         return found
 
-    def estimator(self, cls: type[Block]) -> Callable[..., int] | None:
+    def estimator(self, cls: type[Block]) -> Callable[..., Any] | None:
         """The function estimating the moves of a block of kind `cls` (`Kind.cost`, imported
         on first use), or None when it declares none."""
         return self._function(cls, "cost")

@@ -23,7 +23,9 @@ Adding a block kind (docs/adding-a-kind.md has the whole recipe, with what it to
    with `geometry=True` the `Mill.GEOMETRY` blocks after it are its contours
    (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND. The rules its
    planner finds go in `findings` (the preview compiles a block with only those as it is).
-   Other motion is a node in compiler.py.
+   Other motion is a node in compiler.py. Its moves estimate, for the bound cost.py checks
+   before any compile, is `cost="module:function"`; a first-menu choice of its own is
+   `choices=((number, name),)`.
 3. Its own rules beyond its order, if any, in validate.py, each with a case in tests/bad/.
 4. A golden case (tests/golden/<name>/program.json, `make regen-golden`); its JSON `type`
    in docs/program-format.md.

@@ -280,3 +280,15 @@ def test_first_menu_choices_are_declared_once() -> None:
         REGISTRY.remove(Mark)
     with pytest.raises(ValueError, match=r"numbers are \[1, 2, 3, 4, 5, 6, 8, 9, 10\]"):
         REGISTRY.first_menu({6: "LOOP"})
+
+
+def test_a_sub_kind_under_an_undeclared_choice_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A kind whose menu line sits under a first-menu choice no kind opens would be a line
+    no menu shows: the first menu refuses it, naming the kind and the choice."""
+    monkeypatch.setattr(Mark, "KIND", dataclasses.replace(Mark.KIND, choices=()))
+    REGISTRY.add(Mark)
+    try:
+        with pytest.raises(ValueError, match=r"^Mark: MARK sits under MARK, which no kind"):
+            REGISTRY.first_menu({6: "LOOP", 7: "STOP"})
+    finally:
+        REGISTRY.remove(Mark)

@@ -70,9 +70,10 @@ class Placement(enum.Enum):
 
 class Entry(enum.Enum):
     """How a pocketing routine goes down to each depth level instead of plunging (issue 33):
-    on a helical ramp (app/cnc/ramp.py). None on the block is the plunge."""
+    on a helical or zigzag ramp (app/cnc/ramp.py). None on the block is the plunge."""
 
     HELIX = "helix"
+    ZIGZAG = "zigzag"
 
 
 class MillingMode(enum.Enum):
@@ -169,11 +170,14 @@ COMPENSATED = frozenset(
 )
 ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL, Rule.RAMP_ENTRY})
 # A pocketing routine's ramp entry (app/cnc/ramp.py): how it goes down, and how steeply.
-ENTRY_HELP = "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across"
+ENTRY_HELP = (
+    "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across; "
+    "ZIGZAG back and forth on a straight the tool's DIA long"
+)
 RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
 RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
 POCKET_ONLY = (("placement", Placement.POCKET),)
-RAMPED = (*POCKET_ONLY, ("entry", Entry.HELIX))
+RAMPED = (*POCKET_ONLY, ("entry", frozenset(Entry)))
 
 # -- the kinds ------------------------------------------------------------------------------
 

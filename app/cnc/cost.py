@@ -30,6 +30,7 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     Circle,
+    Entry,
     Frame,
     Hole,
     HoleOp,
@@ -41,7 +42,7 @@ from app.cnc.blocks import (
 from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.memo import Recent
 from app.cnc.plane import Path, sweep
-from app.cnc.ramp import angle_of, helix_radius
+from app.cnc.ramp import angle_of, helix_radius, zigzag_length
 from app.cnc.routines import pocket_overlap
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import to_nm
@@ -296,16 +297,22 @@ def pocket_size(program: Program, blocks: tuple[Block, ...], sequence: MillSeque
 
 
 def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> int:
-    """About how many rows a pocket's helical ramp entry makes (app/cnc/ramp.py): a row a
-    turn down the whole depth, and one more a level for what is left of a turn. From the
+    """About how many rows a pocket's ramp entry makes (app/cnc/ramp.py): a row a helix's
+    turn or a zigzag's leg down the whole depth, and one more a level for what is left. From the
     numbers alone: a tiny tool at a shallow angle is refused before it is compiled."""
     if not isinstance(routine, Circle | Frame) or routine.entry is None or not drill.has_depth:
         return 0
-    radius = helix_radius(_tool_radius(program, routine.tool))
+    tool_radius = _tool_radius(program, routine.tool)
+    # The length of one row: a helix's turn, or a zigzag's leg.
+    row = (
+        zigzag_length(tool_radius)
+        if routine.entry is Entry.ZIGZAG
+        else 2 * math.pi * helix_radius(tool_radius)
+    )
     # An angle out of range is refused by validation; here it is only kept from nothing.
     stated = float(angle_of(routine.ramp_angle))
     angle = math.radians(min(max(stated, float(RAMP_LOW)), RAMP_HIGH))
-    pitch = max(2 * math.pi * radius * math.tan(angle), 1.0)
+    pitch = max(row * math.tan(angle), 1.0)
     assert drill.z_up is not None and drill.z_dn is not None
     depth = max(to_nm(drill.z_up, drill.units) - to_nm(drill.z_dn, drill.units), 0)
     return int(depth / pitch) + 2 * levels

@@ -49,6 +49,12 @@ if TYPE_CHECKING:
     from app.cnc.blocks import Block
 
 
+def matches(value: Any, wanted: Any) -> bool:
+    """True when `value` is what an `only_when` condition wants: the value, or any of a
+    frozenset of values."""
+    return value in wanted if isinstance(wanted, frozenset) else bool(value == wanted)
+
+
 class Value(enum.Enum):
     """What a field holds, which says how it is typed in and checked."""
 
@@ -92,9 +98,10 @@ class Prompt:
     `low`/`high`: the allowed range of a count or tool (None: unchecked); for a length `low`
     is its minimum (None: ±the largest dimension) and `positive` asks for more than 0.
     `feed`: a feed's limits per unit. `blank`: the choice shown for no value (None).
-    `only_when`: the field applies only while these other fields have these values; else
-    it keeps its default (the editor does not ask for it). `changes`: on COPY, the field of
-    the copied blocks this value replaces (or, for a STEP, adds to in absolute blocks).
+    `only_when`: the field applies only while these other fields have these values (a
+    frozenset: any of its values); else it keeps its default (the editor does not ask for
+    it). `changes`: on COPY, the field of the copied blocks this value replaces (or, for a
+    STEP, adds to in absolute blocks).
     `prompted`: False for fields the entry form does not ask for one by one.
     `calculated`: the field may be left empty and the compile calculates it from the blocks
     around it (a contour's X/Y from the print, app.cnc.solve).
@@ -311,7 +318,7 @@ class Registry:
 
     def applies(self, cls: type, field: Field, values: Mapping[str, Any]) -> bool:
         """True when `field` applies with these values of the other fields (`only_when`)."""
-        return all(values.get(name) == wanted for name, wanted in field.prompt.only_when)
+        return all(matches(values.get(name), wanted) for name, wanted in field.prompt.only_when)
 
     # -- the JSON document ---------------------------------------------------------------
 
@@ -360,7 +367,7 @@ class Registry:
             for f in self.fields(cls)
             if f.prompt.prompted
             and f.name not in fixed
-            and all(fixed[name] == wanted for name, wanted in f.prompt.only_when if name in fixed)
+            and all(matches(fixed[name], w) for name, w in f.prompt.only_when if name in fixed)
         )
 
     def shown_when(self, field: Field, sub: SubKind) -> tuple[tuple[str, Any], ...]:

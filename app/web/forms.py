@@ -73,6 +73,11 @@ def _hints(cls: type) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
 
+def _shown(value: object) -> str:
+    """A value as the form sends it (an enum's value)."""
+    return str(value.value if isinstance(value, enum.Enum) else value)
+
+
 def _spec(
     cls: type[Block], f: Field, name: str, label: str, sub: SubKind | None = None
 ) -> FieldSpec:
@@ -80,7 +85,7 @@ def _spec(
         ""
         if sub is None
         else " ".join(
-            f"{n}={v.value if isinstance(v, enum.Enum) else v}"
+            f"{n}={'|'.join(sorted(map(_shown, v))) if isinstance(v, frozenset) else _shown(v)}"
             for n, v in REGISTRY.shown_when(f, sub)
         )
     )

@@ -235,6 +235,7 @@ class Pos(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POS"),),
         editor=(SubKind("POS", "POS", "POS", 1),),
+        choices=((1, "POS"),),
         positioned=True,
         loopable=True,
     )
@@ -263,6 +264,7 @@ class Hole(Block):
             SubKind("BORE", "BORE", "BORE", 1, (("op", HoleOp.BORE),)),
             SubKind("TAP", "TAP", "TAP", 1, (("op", HoleOp.TAP),)),
         ),
+        choices=((2, "DRILL"), (3, "BORE"), (4, "TAP")),
         positioned=True,
         loopable=True,
     )
@@ -346,6 +348,7 @@ class MillLine(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("MILL_STD"),),
         editor=(SubKind("MILL_STD", "MILL STD", "MILL", 1),),
+        choices=((5, "MILL"),),
         positioned=True,
         mill=Mill.CONTOUR,
         follows=AFTER_MILL,
@@ -474,6 +477,7 @@ class Circle(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_circle",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("centre", in_menu=False),
         findings=ROUTINE_FINDINGS,
     )
@@ -508,6 +512,7 @@ class Frame(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_frame",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("lower left corner", in_menu=False),
         findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )
@@ -553,9 +558,11 @@ class Pocket(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POCKET"),),
         editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1),),
+        choices=((10, POCKET_GROUP),),  # key 0 on the control
         stoppable=False,
         mill=Mill.ROUTINE,
         planner="app.cnc.pocketing.routine:plan_pocket_routine",
+        cost="app.cnc.cost:pocket_size",
         geometry=True,
         follows=_after_drill("depths and the boundary's start point", in_menu=True),
         # What its planner finds in the boundary and islands (app.cnc.pocketing.routine).
@@ -708,6 +715,8 @@ class Helix(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("HELIX"),),
         editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
+        cost="app.cnc.operations.helix:estimate_moves",
+        cut="app.cnc.operations.helix:cut",
         positioned=True,
         loopable=True,
     )
@@ -766,6 +775,8 @@ class ThreadMill(Block):
                 (("place", ThreadPlace.EXTERNAL),),
             ),
         ),
+        cost="app.cnc.operations.thread:estimate_moves",
+        cut="app.cnc.operations.thread:cut",
         positioned=True,
         loopable=True,
     )
@@ -818,6 +829,8 @@ class Face(Block):
                 (("pattern", FacePattern.ONE_WAY),),
             ),
         ),
+        cost="app.cnc.operations.face:estimate_moves",
+        cut="app.cnc.operations.face:cut",
         positioned=True,
         # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
         loopable=False,
@@ -871,6 +884,8 @@ class Engrave(Block):
             ),
             SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
         ),
+        cost="app.cnc.operations.engrave:estimate_moves",
+        cut="app.cnc.operations.engrave:cut",
         positioned=True,
         loopable=False,  # as FACE: in POCKET's menu
     )
@@ -909,6 +924,7 @@ class Rep(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("REP"),),
         editor=(SubKind("REP", "REP", "REP", 1, offered=_loop_open),),
+        choices=((8, "REP"),),
         stoppable=False,
     )
     mode: Mode = prompt("ABS/INC", CHOICE, Mode.INC, prompted=False)
@@ -930,6 +946,7 @@ class Copy(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("COPY"),),
         editor=(SubKind("COPY", "COPY", "COPY", 1, offered=_at_end),),
+        choices=((9, "COPY"),),
         stoppable=False,
     )
     from_block: int = prompt("FROM", COUNT)

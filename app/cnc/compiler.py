@@ -70,7 +70,7 @@ from app.cnc.cutter import Finding
 from app.cnc.geometry import bolt_circle_points, resolve_xy
 from app.cnc.memo import ByObject, Memo, Recent
 from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
-from app.cnc.operations.face import face_rows
+from app.cnc.operations.face import face_clear, face_rows
 from app.cnc.operations.helix import helix_ends
 from app.cnc.operations.thread import thread_lead, thread_passes
 from app.cnc.path import (
@@ -993,10 +993,7 @@ class _Compiler:
         z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
         if tool_diameter is None or z_dn >= z_up:
             return
-        clear = to_nm(
-            block.clear if block.clear is not None else limits.FACE_CLEAR_INCH,
-            units if block.clear is not None else Units.INCH,
-        )
+        clear = face_clear(block.clear, units)
         rows = face_rows(
             centre,
             to_nm(block.xl, units),

@@ -12,6 +12,17 @@ Zig-zag rows alternate +X and −X starting +X; one-way rows all go +X.
 from __future__ import annotations
 
 import math
+from decimal import Decimal
+
+from app.cnc import limits
+from app.cnc.units import Units, to_nm
+
+
+def face_clear(clear: Decimal | None, units: Units) -> int:
+    """FACE's CLEAR in nm: the block's (in `units`), or 0.050 in when it is empty."""
+    if clear is None:
+        return to_nm(limits.FACE_CLEAR_INCH, Units.INCH)
+    return to_nm(clear, units)
 
 
 def face_rows(

@@ -29,9 +29,10 @@ from decimal import Decimal
 from typing import Final, TypeGuard
 
 from app.cnc import limits
-from app.cnc.blocks import Comp, Helix, HoleOp, MillingMode, Placement
+from app.cnc.blocks import Comp, Face, FacePattern, Helix, HoleOp, MillingMode, Placement
 from app.cnc.compiler import peck_levels
 from app.cnc.geometry import arc_sweep
+from app.cnc.operations.face import face_clear, face_rows
 from app.cnc.operations.helix import helix_ends
 from app.cnc.recognition.common import (
     XY,
@@ -484,6 +485,16 @@ class _Segmenter:
             )
         if (
             isinstance(step, Feed)
+            and not step.comp
+            and step.y == self.y
+            and self.z is not None
+            and step.z in (None, self.z)
+            and self.tool_diameter() is not None
+        ):
+            # Fed along X at the depth the tool came down to at rapid: a FACE's rows.
+            return self.face(i)
+        if (
+            isinstance(step, Feed)
             and step.z is not None
             and self.z is not None
             and step.z != self.z
@@ -605,6 +616,181 @@ class _Segmenter:
         )
         self.add(HelixOp(lines, centre, block, start[2]))
         self.awaiting_retract = (line, start[2])
+        self.x, self.y, self.z = x, y, z
+        return j
+
+    def tool_diameter(self) -> int | None:
+        """The diameter (nm) the file gives the tool in use, or None."""
+        data = self.parsed.tools.get(self.tool or self.next_tool())
+        return data.diameter if data is not None and data.diameter else None
+
+    def face(self, i: int) -> int:
+        """Rows fed along X at a depth the tool came down to at rapid: a FACE (blocks.Face)
+        when the file's moves are exactly what one cuts. Its rows are operations/face.py's
+        (`face_rows`) and its levels `peck_levels`, each level's rows alike, joined by a
+        feed in Y (zig-zag) or up to the retract height and across (one-way), the levels by
+        a retract, across to the first row's start and down. What the file cannot say (it
+        cuts the same either way) comes back as the prompts' defaults: CLEAR empty, the
+        rectangle's XL and YW from it, STEP % 70 or the nearest that gives the same rows, and Z UP 0
+        for a FACE of one level below 0. Lengths in nm. Raises ImportFailure naming the
+        line whose move no FACE makes."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Feed) and self.z is not None
+        units = first.units
+        near = 2 * self.tol + resolution_nm(units)
+
+        def refuse(line: int, why: str) -> ImportFailure:
+            return ImportFailure(
+                self.notes.where(line),
+                f"rows fed along X at one depth (as a FACE cuts them) that are not a "
+                f"MillBlocks FACE: {why}",
+                line,
+            )
+
+        # The file's rows (y, x from, x to, the line that set the row, feed) level by level.
+        Row = tuple[int, int, int, int, int]
+        levels: list[list[Row]] = [[]]
+        depths = [self.z]
+        level_lines = [first.line]  # where each level comes down (the first: its first row)
+        joins: set[str] = set()
+        lifts: set[int] = set()
+        feeds: set[int] = set()
+        x, y, z = self.x, self.y, self.z
+        set_by = first.line
+        j = i
+        while True:
+            s = steps.at(j)
+            if isinstance(s, Feed) and not s.comp and s.z in (None, z):
+                if s.y == y and s.x != x:
+                    levels[-1].append((y, x, s.x, set_by, s.feed))
+                    x = s.x
+                elif s.x == x and s.y != y and levels[-1]:
+                    joins.add("feed")
+                    y, set_by = s.y, s.line
+                else:
+                    break
+                feeds.add(s.feed)
+                j += 1
+                continue
+            if isinstance(s, Rapid) and s.z is not None and s.z > z and (s.x, s.y) == (x, y):
+                across, down, cut = steps.at(j + 1), steps.at(j + 2), steps.at(j + 3)
+                if (
+                    isinstance(across, Rapid)
+                    and across.z in (None, s.z)
+                    and (across.x, across.y) != (x, y)
+                    and isinstance(down, Rapid)
+                    and (down.x, down.y) == (across.x, across.y)
+                    and down.z is not None
+                    and down.z < s.z
+                    and isinstance(cut, Feed)
+                ):
+                    lifts.add(s.z)
+                    if down.z == z:
+                        joins.add("lift")
+                    else:
+                        levels.append([])
+                        depths.append(down.z)
+                        level_lines.append(down.line)
+                    x, y, z = across.x, across.y, down.z
+                    set_by = across.line
+                    j += 3
+                    continue
+            break
+        rows = levels[0]
+        if len(feeds) > 1:
+            raise refuse(first.line, "its rows are fed at more than one rate (one FEEDR XY)")
+        if len(lifts) > 1:
+            raise refuse(first.line, "it rises to more than one height between its rows")
+        if joins == {"feed", "lift"}:
+            raise refuse(first.line, "some rows are joined by a feed, others by a rapid")
+        zigzag = "lift" not in joins
+        for k, (_, x0, x1, line, _) in enumerate(rows):
+            if (x1 > x0) != (not zigzag or k % 2 == 0):
+                raise refuse(
+                    line,
+                    "a FACE's rows go +X first and then "
+                    + ("alternate" if zigzag else "all go +X"),
+                )
+        plain = [(ry, min(x0, x1), max(x0, x1)) for ry, x0, x1, _, _ in rows]
+        for level, down_line in zip(levels[1:], level_lines[1:], strict=True):
+            for k, (ry, x0, x1, line, _) in enumerate(level):
+                if k >= len(plain) or (ry, min(x0, x1), max(x0, x1)) != plain[k]:
+                    raise refuse(line, "each level of a FACE cuts the same rows as the first")
+            if len(level) != len(plain):
+                raise refuse(down_line, "each level of a FACE cuts as many rows as the first")
+        diameter = self.tool_diameter()
+        assert diameter is not None
+        radius = diameter // 2
+        clear = face_clear(None, units)
+        overhang = min(clear, radius)
+        low, x_from, x_to = plain[0]
+        high = plain[-1][0]
+        xl = quantize_nm(x_to - x_from - 2 * radius - 2 * clear, units)
+        yw = quantize_nm(high - low + 2 * radius - 2 * overhang, units)
+        if xl <= 0 or yw <= 0:
+            raise refuse(
+                first.line,
+                "its rows run off the part less than a FACE's (the tool's radius and "
+                f"{show(clear, units)} beyond the edges along X, and over them in Y)",
+            )
+        centre = (
+            quantize_nm(x_from + xl // 2 + radius + clear, units),
+            quantize_nm(low + yw // 2 - radius + overhang, units),
+        )
+        made: list[tuple[int, int, int]] = []
+        step = 70
+        for step in sorted(range(1, 101), key=lambda s: abs(s - 70)):  # 70 first
+            made = face_rows(centre, xl, yw, radius, diameter * step // 100, clear)
+            if len(made) == len(plain):
+                break
+        for (ry, x0, x1), want, row in zip(plain, made, rows, strict=False):
+            if any(abs(a - b) > near for a, b in zip((ry, x0, x1), want, strict=True)):
+                raise refuse(
+                    row[3],
+                    f"this row at Y{show(ry, units)} is not where a FACE's evenly spaced "
+                    f"rows put it (Y{show(want[0], units)} from X{show(want[1], units)} to "
+                    f"X{show(want[2], units)})",
+                )
+        if len(made) != len(plain):
+            raise refuse(first.line, f"no STEP % spaces {len(plain)} rows so")
+        z_dn = quantize_nm(depths[-1], units)
+        if len(depths) > 1:
+            z_up = quantize_nm(2 * depths[0] - depths[1], units)
+        elif z_dn < 0:
+            z_up = 0  # one level: the stock's top is not in the file; part zero's
+        else:
+            raise refuse(
+                first.line,
+                "one level at or above Z0: the stock's top (Z UP) is not in the file",
+            )
+        wanted = peck_levels(z_up, z_dn, len(depths))
+        for depth, target, line in zip(depths, wanted, level_lines, strict=True):
+            if abs(depth - target) > near:
+                raise refuse(
+                    line,
+                    f"its levels are not evenly spaced to Z{show(z_dn, units)}, as a "
+                    f"FACE's # PASS are (Z{show(target, units)} here)",
+                )
+        block = Face(
+            pattern=FacePattern.ZIGZAG if zigzag else FacePattern.ONE_WAY,
+            x=Decimal(0),
+            y=Decimal(0),
+            xl=decimal_of(xl, units),
+            yw=decimal_of(yw, units),
+            z_up=decimal_of(z_up, units),
+            z_dn=decimal_of(z_dn, units),
+            passes=len(depths),
+            step=step,
+            clear=None,
+            feed_xy=feed_decimal(first.feed, units),
+            tool=self.tool or self.next_tool(),
+            units=units,
+        )
+        start = (plain[0][1], plain[0][0])
+        lines = [*self.take_pending(start), first.line]
+        self.add(HelixOp(lines, centre, block, z_up))
+        self.awaiting_retract = (first.line, z_up)
         self.x, self.y, self.z = x, y, z
         return j
 

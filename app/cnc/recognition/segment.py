@@ -705,20 +705,17 @@ class _Segmenter:
         if joins == {"feed", "lift"}:
             raise refuse(first.line, "some rows are joined by a feed, others by a rapid")
         zigzag = "lift" not in joins
-        for k, (_, x0, x1, line, _) in enumerate(rows):
-            if (x1 > x0) != (not zigzag or k % 2 == 0):
-                raise refuse(
-                    line,
-                    "a FACE's rows go +X first and then "
-                    + ("alternate" if zigzag else "all go +X"),
-                )
+        for level in levels:
+            for k, (_, x0, x1, line, _) in enumerate(level):
+                if (x1 > x0) != (not zigzag or k % 2 == 0):
+                    raise refuse(
+                        line,
+                        "a FACE's rows go +X first and then "
+                        + ("alternate" if zigzag else "all go +X"),
+                    )
+        # The candidate FACE from the first level's outer rows; every row of every level
+        # must then be one of its rows.
         plain = [(ry, min(x0, x1), max(x0, x1)) for ry, x0, x1, _, _ in rows]
-        for level, down_line in zip(levels[1:], level_lines[1:], strict=True):
-            for k, (ry, x0, x1, line, _) in enumerate(level):
-                if k >= len(plain) or (ry, min(x0, x1), max(x0, x1)) != plain[k]:
-                    raise refuse(line, "each level of a FACE cuts the same rows as the first")
-            if len(level) != len(plain):
-                raise refuse(down_line, "each level of a FACE cuts as many rows as the first")
         diameter = self.tool_diameter()
         assert diameter is not None
         radius = diameter // 2
@@ -744,14 +741,20 @@ class _Segmenter:
             made = face_rows(centre, xl, yw, radius, diameter * step // 100, clear)
             if len(made) == len(plain):
                 break
-        for (ry, x0, x1), want, row in zip(plain, made, rows, strict=False):
-            if any(abs(a - b) > near for a, b in zip((ry, x0, x1), want, strict=True)):
-                raise refuse(
-                    row[3],
-                    f"this row at Y{show(ry, units)} is not where a FACE's evenly spaced "
-                    f"rows put it (Y{show(want[0], units)} from X{show(want[1], units)} to "
-                    f"X{show(want[2], units)})",
-                )
+        for level, down_line in zip(levels, level_lines, strict=True):
+            for (ry, x0, x1, line, _), want in zip(level, made, strict=False):
+                if any(
+                    abs(a - b) > near
+                    for a, b in zip((ry, min(x0, x1), max(x0, x1)), want, strict=True)
+                ):
+                    raise refuse(
+                        line,
+                        f"this row at Y{show(ry, units)} is not where a FACE's evenly spaced "
+                        f"rows put it (Y{show(want[0], units)} from X{show(want[1], units)} to "
+                        f"X{show(want[2], units)})",
+                    )
+            if len(level) != len(plain):
+                raise refuse(down_line, "each level of a FACE cuts as many rows as the first")
         if len(made) != len(plain):
             raise refuse(first.line, f"no STEP % spaces {len(plain)} rows so")
         z_dn = quantize_nm(depths[-1], units)

@@ -214,6 +214,10 @@ class _Pending:
     rose: bool = False  # the tool went up after it (and has not come down yet)
 
 
+# A FACE's row as a file cuts it: (y, x from, x to, the line that set the row, feed).
+FaceRow = tuple[int, int, int, int, int]
+
+
 class _Segmenter:
     def __init__(
         self,
@@ -649,8 +653,7 @@ class _Segmenter:
             )
 
         # The file's rows (y, x from, x to, the line that set the row, feed) level by level.
-        Row = tuple[int, int, int, int, int]
-        levels: list[list[Row]] = [[]]
+        levels: list[list[FaceRow]] = [[]]
         depths = [self.z]
         level_lines = [first.line]  # where each level comes down (the first: its first row)
         joins: set[str] = set()
@@ -738,6 +741,8 @@ class _Segmenter:
         made: list[tuple[int, int, int]] = []
         step = 70
         for step in sorted(range(1, 101), key=lambda s: abs(s - 70)):  # 70 first
+            if (high - low) // max(1, diameter * step // 100) > len(plain):
+                continue  # more rows than the file's (and a fine step would make millions)
             made = face_rows(centre, xl, yw, radius, diameter * step // 100, clear)
             if len(made) == len(plain):
                 break

@@ -345,7 +345,9 @@
       var shown = field.getAttribute("data-shown-when").split(" ").every(function (pair) {
         var at = pair.indexOf("=");
         var other = form.querySelector('[name="' + pair.slice(0, at) + '"]');
-        return other !== null && !other.disabled && other.value === pair.slice(at + 1);
+        // "name=a|b": any of the values.
+        return other !== null && !other.disabled &&
+          pair.slice(at + 1).split("|").indexOf(other.value) >= 0;
       });
       field.hidden = !shown;
       field.querySelectorAll("[data-beside]").forEach(function (el) { el.disabled = !shown; });

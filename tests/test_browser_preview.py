@@ -626,7 +626,7 @@ def test_a_pocket_entry_chosen_in_the_editor_is_drawn_as_its_ramp(
     page: Page, library: Library
 ) -> None:
     """A CIRCLE POCKET 4 in across with the 1 in tool: ENTRY is asked for only while
-    PLACEMENT is POCKET, RAMP ANGLE only while ENTRY is HELIX; choosing HELIX at 3° draws
+    PLACEMENT is POCKET, RAMP ANGLE only while ENTRY is HELIX or ZIGZAG; choosing HELIX at 3° draws
     the ramp, a circle of radius 0.25 in (the tool's DIA / 4) that the plunge did not have."""
     url = library.add(
         program(
@@ -646,6 +646,10 @@ def test_a_pocket_entry_chosen_in_the_editor_is_drawn_as_its_ramp(
     page.locator("#f-placement").select_option("inside")
     expect(page.locator("#f-entry")).to_be_hidden()
     page.locator("#f-placement").select_option("pocket")
+    page.locator("#f-entry").select_option("zigzag")
+    expect(page.locator("#f-ramp_angle")).to_be_visible()
+    page.locator("#f-entry").select_option("")
+    expect(page.locator("#f-ramp_angle")).to_be_hidden()
     page.locator("#f-entry").select_option("helix")
     expect(page.locator("#f-ramp_angle")).to_be_visible()
     page.locator("#f-ramp_angle").fill("3")

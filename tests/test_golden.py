@@ -114,6 +114,7 @@ _OPERATION_CASES = (
     # A pocket's ramp entry (issue 33): helical arcs in place of the plunges.
     "circle-pocket-helix-ramp",
     "frame-2p-pocket-helix-ramp-mm",
+    "frame-pocket-zigzag-ramp",
 )
 REGENERATE_FOR: dict[str, tuple[str, ...]] = {
     "gcode-linuxcnc": _GCODE_CASES + _POCKET_CASES + _PRINT_CASES + _OPERATION_CASES,

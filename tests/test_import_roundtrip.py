@@ -188,6 +188,10 @@ for name in ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm"):
     NOT_READ_BACK["gcode-linuxcnc"][name] = RAMP_HELIX
     for target in CHORD_TARGETS:
         NOT_READ_BACK[target][name] = CHORDS
+# A zigzag ramp's straights with Z are read as a ramp, refused naming the line.
+RAMP_ZIGZAG = ("a pocket's zigzag ramp entry is not read back: refused, naming the line", "a ramp")
+for target in ("gcode-linuxcnc", *CHORD_TARGETS):
+    NOT_READ_BACK[target]["frame-pocket-zigzag-ramp"] = RAMP_ZIGZAG
 
 
 def refused_as_chords(case: Path, target: str, data: bytes, options: dict[str, str] | None) -> None:

@@ -15,7 +15,7 @@ from typing import ClassVar
 
 import pytest
 
-from app.cnc import document, limits
+from app.cnc import cost, document, limits, sizes
 from app.cnc.blocks import (
     MAX_TOOLS,
     Block,
@@ -35,7 +35,7 @@ from app.cnc.copy import execute_copy
 from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
 from app.cnc.mirror import Axis, mirror
 from app.cnc.validate import validate
-from app.web.forms import entry_forms, parse_block
+from app.web.forms import Choice, entry_forms, group_menu, parse_block, sub_menu
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -184,6 +184,7 @@ class Mark(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("MARK"),),
         editor=(SubKind("MARK", "MARK", "MARK", 1),),
+        choices=((11, "MARK"),),
         positioned=True,
         loopable=True,
     )
@@ -210,5 +211,84 @@ def test_which_blocks_carry_loop_is_read_from_the_declarations() -> None:
         # Another block: validation keeps what it found in each block it has seen.
         other = dataclasses.replace(line, feed_xy=Decimal(11))
         assert message in [p.message for p in validate(spotted(other))]
+    finally:
+        REGISTRY.remove(Mark)
+
+
+def slot_moves(program: Program, block: Slot) -> int:
+    """SLOT's moves estimate (its `Kind.cost`): a pass there and back per 0.1 of its length."""
+    return 2 * int(block.length * 10) + 4
+
+
+@dataclass(frozen=True, kw_only=True)
+class Slot(Block):
+    """SLOT (a kind for this test only): a routine cut from one block, as HELIX or FACE, in
+    a first-menu choice of its own, which counts its own moves."""
+
+    kind: ClassVar[str] = "SLOT"
+    KIND: ClassVar[Kind] = Kind(
+        documents=(Document("SLOT"),),
+        editor=(SubKind("SLOT", "SLOT", "SLOT", 1),),
+        choices=((11, "SLOT"),),
+        cost="tests.test_kinds:slot_moves",
+        positioned=True,
+    )
+    x: Decimal = prompt("X", Value.LENGTH, role=Role.X)
+    y: Decimal = prompt("Y", Value.LENGTH, role=Role.Y)
+    length: Decimal = prompt("LENGTH", Value.LENGTH, positive=True)
+    tool: int = prompt("TOOL #", Value.TOOL, low=1, high=MAX_TOOLS)
+
+
+REGISTRY.remove(Slot)
+
+THE_FIRST_MENU = ["POS", "DRILL", "BORE", "TAP", "MILL", "LOOP", "STOP", "REP", "COPY", "POCKET"]
+
+
+def test_a_kind_declares_its_cost_and_its_first_menu_choice() -> None:
+    """A routine-like kind counts its own moves and opens a first-menu choice of its own from
+    its declaration alone: cost.py and forms.py name no kind. Before, cost.py counted any
+    block it did not list as a POS (4 moves) and forms.GROUPS listed the menu by hand."""
+    program = spotted(Pos(x=Decimal(0), y=Decimal(0), tool=1))
+    assert [c.key for c in group_menu(program, 2)] == THE_FIRST_MENU
+    REGISTRY.add(Slot)
+    try:
+        slot = Slot(x=Decimal(1), y=Decimal(1), length=Decimal(100), tool=1)
+        long = spotted(Pos(x=Decimal(0), y=Decimal(0), tool=1), slot)
+        assert cost.estimate(long).moves - cost.estimate(program).moves == (
+            cost.SPINDLE_ROWS + 2004
+        )
+        with pytest.raises(sizes.TooLarge, match=r"^block 2: the program would make about 2,"):
+            cost.check(long, limit=2000)
+        menu = group_menu(program, 2)
+        assert [c.key for c in menu] == [*THE_FIRST_MENU, "SLOT"]
+        assert menu[-1] == Choice(11, "SLOT", "SLOT")
+        assert sub_menu(program, 2, "SLOT") == [Choice(1, "SLOT", "SLOT")]
+    finally:
+        REGISTRY.remove(Slot)
+    assert [c.key for c in group_menu(program, 2)] == THE_FIRST_MENU
+
+
+def test_first_menu_choices_are_declared_once() -> None:
+    """A number claimed twice, or left out, is a declaration error naming the kind, not a
+    menu whose numbers move (the control's numbers are what the machinist keys)."""
+    REGISTRY.add(Mark)
+    try:
+        assert REGISTRY.first_menu({6: "LOOP", 7: "STOP"})[-1] == "MARK"
+        with pytest.raises(ValueError, match=r"^Mark: first-menu choice 11 is SLOT, not MARK$"):
+            REGISTRY.first_menu({6: "LOOP", 7: "STOP", 11: "SLOT"})
+    finally:
+        REGISTRY.remove(Mark)
+    with pytest.raises(ValueError, match=r"numbers are \[1, 2, 3, 4, 5, 6, 8, 9, 10\]"):
+        REGISTRY.first_menu({6: "LOOP"})
+
+
+def test_a_sub_kind_under_an_undeclared_choice_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A kind whose menu line sits under a first-menu choice no kind opens would be a line
+    no menu shows: the first menu refuses it, naming the kind and the choice."""
+    monkeypatch.setattr(Mark, "KIND", dataclasses.replace(Mark.KIND, choices=()))
+    REGISTRY.add(Mark)
+    try:
+        with pytest.raises(ValueError, match=r"^Mark: MARK sits under MARK, which no kind"):
+            REGISTRY.first_menu({6: "LOOP", 7: "STOP"})
     finally:
         REGISTRY.remove(Mark)

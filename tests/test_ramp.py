@@ -1,7 +1,8 @@
-"""Ramp entry for CIRCLE/FRAME pockets (issue 33 point 3): the helical ramp worked out by
-hand from the block, and what the document and Verify make of it.
+"""Ramp entry for CIRCLE/FRAME pockets (issue 33 point 3): the helical and zigzag ramps
+worked out by hand from the block, and what the document and Verify make of them.
 
-The golden cases (tests/golden/circle-pocket-helix-ramp, frame-2p-pocket-helix-ramp-mm) pin
+The golden cases (tests/golden/circle-pocket-helix-ramp, frame-2p-pocket-helix-ramp-mm,
+frame-pocket-zigzag-ramp) pin
 every target's bytes; rs274 reads their G-code with the same motion (tests/test_referee.py);
 the events target and the importers refuse them naming why (test_referee,
 test_import_roundtrip); the bad corpus has the errors (tests/bad/ramp-*).
@@ -168,4 +169,94 @@ def test_the_bounded_work_estimate_counts_the_ramps_turns() -> None:
     assert [e for e in validate(program) if e.severity is Severity.ERROR] == []
     rows = len(compile_program(program, Cache()).path)
     assert rows > 2_353
+    assert rows <= cost.estimate(program).moves
+
+
+def zigzags(program: Program) -> list[list[tuple[tuple[int, int, int], Feed]]]:
+    """Each run of straight feeds that move Z with X or Y, with the point each starts from."""
+    runs: list[list[tuple[tuple[int, int, int], Feed]]] = []
+    here = (0, 0, 0)
+    previous = False
+    for move in interpret(program).moves:
+        if not isinstance(move, Rapid | Feed | ArcFeed):
+            continue
+        ramping = isinstance(move, Feed) and move.z != here[2] and (move.x, move.y) != here[:2]
+        if ramping:
+            assert isinstance(move, Feed)
+            if not previous:
+                runs.append([])
+            runs[-1].append((here, move))
+        previous = ramping
+        here = (move.x, move.y, move.z)
+    return runs
+
+
+def test_the_zigzag_goes_back_and_forth_on_a_straight_the_tool_across_at_tan_angle() -> None:
+    """FRAME 3 x 2 in at (2, 2), corner 0.25, tool DIA 0.5 in, ENTRY ZIGZAG at 2°, Z UP 0.1
+    to Z DN -0.25 in 2 pecks (-0.075, then -0.25). The first pass enters at (3.375, 2.375)
+    (its lead-in arc's start, 0.125 in over the wall pass at Y 2.25): each level's way down
+    goes back and forth between there and 0.5 in straight in, (3.375, 2.875), falling
+    tan 2° per unit of its length (to 0.0001 in), and ends at the level over the entry point,
+    where the lead-in arc starts. Verify finds nothing."""
+    program = load("frame-pocket-zigzag-ramp")
+    entry, far = (3.375 * IN, 2.375 * IN), (3.375 * IN, 2.875 * IN)
+    runs = zigzags(program)
+    assert len(runs) == 2
+    moves = [m for m in interpret(program).moves if isinstance(m, Rapid | Feed | ArcFeed)]
+    for run, level in zip(runs, [-0.075 * IN, -0.25 * IN], strict=True):
+        length = 0.0
+        for start, leg in run:
+            assert start[0] == leg.x == round(entry[0])  # along the straight
+            assert entry[1] - 1 <= leg.y <= far[1] + 1 and entry[1] - 1 <= start[1] <= far[1] + 1
+            length += math.dist(start[:2], (leg.x, leg.y))
+        # Whole legs are the tool's DIA, turning at the straight's ends.
+        assert [round(leg.y) for _, leg in run[1:]] == [
+            round(far[1] if k % 2 == len(run) % 2 else entry[1]) for k in range(1, len(run))
+        ]
+        top, last = run[0][0][2], run[-1][1]
+        assert (last.x, last.y, last.z) == (round(entry[0]), round(entry[1]), round(level))
+        assert abs(top - last.z - length * math.tan(math.radians(2))) <= 0.0001 * IN
+        after = moves[moves.index(last) + 1]
+        assert isinstance(after, ArcFeed) and after.z == last.z and after.tag == "lead-in"
+    assert verify(program).findings == []
+
+
+def test_ramp_angle_is_asked_for_and_copied_with_either_ramp() -> None:
+    """RAMP ANGLE applies with ENTRY HELIX or ZIGZAG (a COPY keeps a zigzag's angle), and
+    not with the plunge."""
+    from app.cnc.blocks import Frame
+    from app.cnc.kinds import REGISTRY
+
+    frame = load("frame-pocket-zigzag-ramp").blocks[1]
+    assert isinstance(frame, Frame)
+    field = next(f for f in REGISTRY.fields(Frame) if f.name == "ramp_angle")
+    values = {"placement": frame.placement}
+    for entry, applies in ((Entry.ZIGZAG, True), (Entry.HELIX, True), (None, False)):
+        assert REGISTRY.applies(Frame, field, {**values, "entry": entry}) is applies
+
+
+def test_the_bounded_work_estimate_counts_the_zigzags_legs() -> None:
+    """A 0.062 in tool zigzagging at 0.5° down 2 in goes 0.062 × tan 0.5° = 0.000541 in down
+    a leg: about 3 696 rows, which the estimate must not count fewer of than the compile
+    makes (a helix's turn is π/2 times as long: counted as turns, it fell short)."""
+    from app.cnc import cost
+    from app.cnc.compiler import Cache, compile_program
+
+    golden = load("circle-pocket-helix-ramp")
+    drill, circle = golden.blocks
+    assert isinstance(drill, Hole) and isinstance(circle, Circle)
+    tool = dataclasses.replace(golden.block0.tools[0], diameter=Decimal("0.062"))
+    program = dataclasses.replace(
+        golden,
+        block0=dataclasses.replace(golden.block0, tools=(tool, *golden.block0.tools[1:])),
+        blocks=(
+            dataclasses.replace(drill, z_up=Decimal("0.1"), z_dn=Decimal("-1.9")),
+            dataclasses.replace(
+                circle, radius=Decimal("0.2"), entry=Entry.ZIGZAG, ramp_angle=Decimal("0.5")
+            ),
+        ),
+    )
+    assert [e for e in validate(program) if e.severity is Severity.ERROR] == []
+    rows = len(compile_program(program, Cache()).path)
+    assert rows > 3_696
     assert rows <= cost.estimate(program).moves

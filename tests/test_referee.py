@@ -168,7 +168,8 @@ EVENTS_REFUSED = dict.fromkeys(
 ) | dict.fromkeys(("face-zigzag", "face-one-way-mm"), "a FACE goes down level by level; no Z")
 EVENTS_REFUSED |= dict.fromkeys(("engrave-line", "engrave-arc-mm"), "ENGRAVE's strokes need Z")
 EVENTS_REFUSED |= dict.fromkeys(
-    ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm"), "a ramp entry moves Z with XY"
+    ("circle-pocket-helix-ramp", "frame-2p-pocket-helix-ramp-mm", "frame-pocket-zigzag-ramp"),
+    "a ramp entry moves Z with XY",
 )
 
 

@@ -70,9 +70,10 @@ class Placement(enum.Enum):
 
 class Entry(enum.Enum):
     """How a pocketing routine goes down to each depth level instead of plunging (issue 33):
-    on a helical ramp (app/cnc/ramp.py). None on the block is the plunge."""
+    on a helical or zigzag ramp (app/cnc/ramp.py). None on the block is the plunge."""
 
     HELIX = "helix"
+    ZIGZAG = "zigzag"
 
 
 class MillingMode(enum.Enum):
@@ -169,11 +170,14 @@ COMPENSATED = frozenset(
 )
 ROUTINE_FINDINGS = frozenset({Rule.ROUTINE_TOO_SMALL, Rule.POCKET_TOOL, Rule.RAMP_ENTRY})
 # A pocketing routine's ramp entry (app/cnc/ramp.py): how it goes down, and how steeply.
-ENTRY_HELP = "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across"
+ENTRY_HELP = (
+    "empty: PLUNGE; HELIX ramps down on a circle half the tool's DIA across; "
+    "ZIGZAG back and forth on a straight the tool's DIA long"
+)
 RAMP_HELP = "degrees below the horizontal, 0.5 to 30; empty: 3"
 RAMP_LOW, RAMP_HIGH = Decimal("0.5"), 30
 POCKET_ONLY = (("placement", Placement.POCKET),)
-RAMPED = (*POCKET_ONLY, ("entry", Entry.HELIX))
+RAMPED = (*POCKET_ONLY, ("entry", frozenset(Entry)))
 
 # -- the kinds ------------------------------------------------------------------------------
 
@@ -230,6 +234,7 @@ class Pos(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POS"),),
         editor=(SubKind("POS", "POS", "POS", 1),),
+        choices=((1, "POS"),),
         positioned=True,
         loopable=True,
     )
@@ -258,6 +263,7 @@ class Hole(Block):
             SubKind("BORE", "BORE", "BORE", 1, (("op", HoleOp.BORE),)),
             SubKind("TAP", "TAP", "TAP", 1, (("op", HoleOp.TAP),)),
         ),
+        choices=((2, "DRILL"), (3, "BORE"), (4, "TAP")),
         positioned=True,
         loopable=True,
     )
@@ -341,6 +347,7 @@ class MillLine(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("MILL_STD"),),
         editor=(SubKind("MILL_STD", "MILL STD", "MILL", 1),),
+        choices=((5, "MILL"),),
         positioned=True,
         mill=Mill.CONTOUR,
         follows=AFTER_MILL,
@@ -469,6 +476,7 @@ class Circle(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_circle",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("centre", in_menu=False),
         findings=ROUTINE_FINDINGS,
     )
@@ -503,6 +511,7 @@ class Frame(Block):
         ),
         mill=Mill.ROUTINE,
         planner="app.cnc.routines:plan_frame",
+        cost="app.cnc.cost:routine_size",
         follows=_after_drill("lower left corner", in_menu=False),
         findings=ROUTINE_FINDINGS | {Rule.FRAME_CORNER, Rule.CORNER_UNREACHABLE},
     )
@@ -548,9 +557,11 @@ class Pocket(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("POCKET"),),
         editor=(SubKind("POCKET", "POCKET", POCKET_GROUP, 1),),
+        choices=((10, POCKET_GROUP),),  # key 0 on the control
         stoppable=False,
         mill=Mill.ROUTINE,
         planner="app.cnc.pocketing.routine:plan_pocket_routine",
+        cost="app.cnc.cost:pocket_size",
         geometry=True,
         follows=_after_drill("depths and the boundary's start point", in_menu=True),
         # What its planner finds in the boundary and islands (app.cnc.pocketing.routine).
@@ -697,6 +708,7 @@ class Helix(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("HELIX"),),
         editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
+        cost="app.cnc.operations.helix:estimate_moves",
         positioned=True,
         loopable=True,
     )
@@ -755,6 +767,7 @@ class ThreadMill(Block):
                 (("place", ThreadPlace.EXTERNAL),),
             ),
         ),
+        cost="app.cnc.operations.thread:estimate_moves",
         positioned=True,
         loopable=True,
     )
@@ -807,6 +820,7 @@ class Face(Block):
                 (("pattern", FacePattern.ONE_WAY),),
             ),
         ),
+        cost="app.cnc.operations.face:estimate_moves",
         positioned=True,
         # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
         loopable=False,
@@ -860,6 +874,7 @@ class Engrave(Block):
             ),
             SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
         ),
+        cost="app.cnc.operations.engrave:estimate_moves",
         positioned=True,
         loopable=False,  # as FACE: in POCKET's menu
     )
@@ -898,6 +913,7 @@ class Rep(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("REP"),),
         editor=(SubKind("REP", "REP", "REP", 1, offered=_loop_open),),
+        choices=((8, "REP"),),
         stoppable=False,
     )
     mode: Mode = prompt("ABS/INC", CHOICE, Mode.INC, prompted=False)
@@ -919,6 +935,7 @@ class Copy(Block):
     KIND: ClassVar[Kind] = Kind(
         documents=(Document("COPY"),),
         editor=(SubKind("COPY", "COPY", "COPY", 1, offered=_at_end),),
+        choices=((9, "COPY"),),
         stoppable=False,
     )
     from_block: int = prompt("FROM", COUNT)

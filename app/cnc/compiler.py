@@ -91,7 +91,7 @@ from app.cnc.path import (
 )
 from app.cnc.plane import Path, length
 from app.cnc.problems import Rule, Severity
-from app.cnc.ramp import Ramp
+from app.cnc.ramp import Ramp, Zigzag
 from app.cnc.routines import peck_levels as peck_levels  # where it was, for its importers
 from app.cnc.routines import routine_clockwise
 from app.cnc.sequences import SequencePlan, plan_sequence
@@ -668,11 +668,18 @@ class _Compiler:
         self.record_mill(node, drill, start, first_row, plan)
         self.reference = plan.end
 
-    def ramp_down(self, number: int, ends: list[tuple[int, int, int]], ramp: Ramp | None) -> None:
+    def ramp_down(
+        self, number: int, ends: list[tuple[int, int, int]], ramp: Ramp | Zigzag | None
+    ) -> None:
         """Down a ramp (app.cnc.ramp) from where the tool is to its rows' `ends`, at block
-        `number`'s XY feed: each row a helical arc about the ramp's centre."""
+        `number`'s XY feed: each row a helical arc about a helix's centre, or a straight
+        leg of a zigzag."""
         assert ramp is not None
         feed = self.feed_of(number)
+        if isinstance(ramp, Zigzag):
+            for end in ends:
+                self.feed_to(number, end, feed, "lead-in")
+            return
         centre = _round(ramp.centre)
         for end in ends:
             self.helix_to(number, end, centre, ramp.clockwise, feed, "lead-in")

@@ -25,29 +25,24 @@ from decimal import Decimal
 
 from app.cnc import sizes
 from app.cnc.blocks import (
-    MILL_ROUTINE_CLASSES,
     RAMP_HIGH,
     RAMP_LOW,
     Block,
     BoltCircle,
     Circle,
-    Engrave,
-    Face,
+    Entry,
     Frame,
-    Helix,
     Hole,
     HoleOp,
     Placement,
     Pocket,
     Program,
     Rep,
-    ThreadMill,
 )
+from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.memo import Recent
-from app.cnc.operations.engrave import glyph_strokes
-from app.cnc.operations.thread import thread_lead
 from app.cnc.plane import Path, sweep
-from app.cnc.ramp import angle_of, helix_radius
+from app.cnc.ramp import angle_of, helix_radius, zigzag_length
 from app.cnc.routines import pocket_overlap
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Node, Single, build_nodes
 from app.cnc.units import to_nm
@@ -113,7 +108,11 @@ class Cost:
 
 
 @dataclass(frozen=True, slots=True)
-class _Size:
+class Size:
+    """What a node expands to: its moves, holes and irregular-pocket passes, and its
+    heaviest POCKET's planning (block, levels, points). A `Mill.ROUTINE` kind's `Kind.cost`
+    gives this for its sequence, less the drill's rows."""
+
     moves: int
     holes: int
     passes: int
@@ -193,7 +192,7 @@ def _patterns(rep: Block) -> int:
     return (max(rep.nx, 0) + 1) * (max(rep.ny, 0) + 1)
 
 
-def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) -> tuple[_Size, int]:
+def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) -> tuple[Size, int]:
     """The size of `node` entered with `tool` in the spindle, and the tool after it."""
     if isinstance(node, LoopPattern):
         first, after = _body(blocks, program, node, tool)
@@ -202,7 +201,7 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
             return first, after
         again, after = _body(blocks, program, node, after)
         return (
-            _Size(
+            Size(
                 first.moves + (k - 1) * again.moves,
                 first.holes + (k - 1) * again.holes,
                 first.passes + (k - 1) * again.passes,
@@ -223,36 +222,34 @@ def _node(blocks: tuple[Block, ...], program: Program, node: Node, tool: int) ->
     extra += TOOL_ROWS if used != tool else SPINDLE_ROWS
     if isinstance(node, Single):
         if isinstance(block, Hole):
-            return _Size(extra + _hole_rows(block), 1, 0), used
-        if isinstance(block, Helix | ThreadMill | Face | Engrave):
-            return _Size(extra + _operation_rows(program, block), 0, 0), used
-        return _Size(extra + POS_ROWS, 0, 0), used
+            return Size(extra + _hole_rows(block), 1, 0), used
+        # A kind that counts its own moves declares how (`Kind.cost`: HELIX, THREAD MILL,
+        # FACE, ENGRAVE); any other block standing alone is a move to X/Y.
+        estimator = REGISTRY.estimator(type(block))
+        if estimator is not None and REGISTRY.of(block).mill is not Mill.ROUTINE:
+            rows: int = estimator(program, block)
+            return Size(extra + rows, 0, 0), used
+        return Size(extra + POS_ROWS, 0, 0), used
     if isinstance(node, BoltPattern):
         bolt = blocks[node.bolt]
         assert isinstance(block, Hole) and isinstance(bolt, BoltCircle)
         count = max(bolt.holes, 1)
-        return _Size(extra + count * _hole_rows(block), count, 0), used
+        return Size(extra + count * _hole_rows(block), count, 0), used
     assert isinstance(node, MillSequence) and isinstance(block, Hole)
     levels = max(block.pecks, 1)
-    mill = blocks[node.mills[0]]
-    if isinstance(mill, Pocket):
-        rings, per_ring, work = _pocket(blocks, program, node)
-        per_level = rings * per_ring + LEVEL_ROWS
-        moves = extra + SEQUENCE_ROWS + levels * per_level
-        return _Size(moves, 0, levels * rings, (node.mills[0] + 1, *work)), used
-    if isinstance(mill, MILL_ROUTINE_CLASSES):
-        rings = _routine_rings(program, mill)
-        two_pass = 1 if getattr(mill, "two_pass", False) else 0
-        per_level = rings * RING_ELEMENTS + LEVEL_ROWS
-        ramp = _ramp_rows(program, block, mill, levels)
-        return _Size(extra + SEQUENCE_ROWS + (levels + two_pass) * per_level + ramp, 0, 0), used
+    # A routine (CIRCLE, FRAME, POCKET) declares how it counts its sequence (`Kind.cost`);
+    # contour blocks are counted here, a few elements each.
+    estimator = REGISTRY.estimator(type(blocks[node.mills[0]]))
+    if estimator is not None:
+        routine: Size = estimator(program, blocks, node)
+        return replace(routine, moves=extra + SEQUENCE_ROWS + routine.moves), used
     per_level = CONTOUR_ELEMENTS * len(node.mills) + LEVEL_ROWS
-    return _Size(extra + SEQUENCE_ROWS + levels * per_level, 0, 0), used
+    return Size(extra + SEQUENCE_ROWS + levels * per_level, 0, 0), used
 
 
 def _body(
     blocks: tuple[Block, ...], program: Program, node: LoopPattern, tool: int
-) -> tuple[_Size, int]:
+) -> tuple[Size, int]:
     """One pattern of a LOOP entered with `tool`, and the tool after it."""
     moves = holes = passes = 0
     pocket: tuple[int, int, int] | None = None
@@ -262,7 +259,7 @@ def _body(
         holes += size.holes
         passes += size.passes
         pocket = _heavier(pocket, size.pocket)
-    return _Size(moves, holes, passes, pocket), tool
+    return Size(moves, holes, passes, pocket), tool
 
 
 def _heavier(
@@ -274,37 +271,48 @@ def _heavier(
     return a
 
 
-def _operation_rows(program: Program, block: Helix | ThreadMill | Face | Engrave) -> int:
-    """About how many moves an operation of issue 33 makes, from its numbers alone (before
-    its compile works them out: a pitch or step of nearly nothing is refused first)."""
-    units = block.units
-    if isinstance(block, Engrave):
-        strokes = list(glyph_strokes(block.text, 1.0))
-        return sum(len(s) + POS_ROWS for s in strokes) + POS_ROWS
-    depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
-    if isinstance(block, Helix):
-        return depth // max(to_nm(block.pitch, units), 1) + HOLE_ROWS
-    if isinstance(block, ThreadMill):
-        turns = depth // max(thread_lead(block), 1) + 2
-        return block.passes * (turns + POS_ROWS + 2) + POS_ROWS
-    tool = program.block0.tool(block.tool)
-    diameter = 0 if tool is None or tool.diameter is None else to_nm(tool.diameter, program.units)
-    step = max(diameter * block.step // 100, 1)
-    rows = to_nm(block.yw, units) // step + 2
-    return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
+def routine_size(program: Program, blocks: tuple[Block, ...], sequence: MillSequence) -> Size:
+    """CIRCLE's and FRAME's `Kind.cost`: each peck level (and the second pass of a 2P) a
+    ring, or a ring per step-over across a pocket's half, and a helical ramp's turns."""
+    drill = blocks[sequence.drill]
+    routine = blocks[sequence.mills[0]]
+    assert isinstance(drill, Hole)
+    levels = max(drill.pecks, 1)
+    rings = _routine_rings(program, routine)
+    two_pass = 1 if getattr(routine, "two_pass", False) else 0
+    per_level = rings * RING_ELEMENTS + LEVEL_ROWS
+    ramp = _ramp_rows(program, drill, routine, levels)
+    return Size((levels + two_pass) * per_level + ramp, 0, 0)
+
+
+def pocket_size(program: Program, blocks: tuple[Block, ...], sequence: MillSequence) -> Size:
+    """An irregular POCKET's `Kind.cost`: its rings each peck level (`_pocket`), and what
+    its planning multiplies, for `sizes.MAX_POCKET_WORK`."""
+    drill = blocks[sequence.drill]
+    assert isinstance(drill, Hole)
+    levels = max(drill.pecks, 1)
+    rings, per_ring, work = _pocket(blocks, program, sequence)
+    per_level = rings * per_ring + LEVEL_ROWS
+    return Size(levels * per_level, 0, levels * rings, (sequence.mills[0] + 1, *work))
 
 
 def _ramp_rows(program: Program, drill: Hole, routine: Block, levels: int) -> int:
-    """About how many rows a pocket's helical ramp entry makes (app/cnc/ramp.py): a row a
-    turn down the whole depth, and one more a level for what is left of a turn. From the
+    """About how many rows a pocket's ramp entry makes (app/cnc/ramp.py): a row a helix's
+    turn or a zigzag's leg down the whole depth, and one more a level for what is left. From the
     numbers alone: a tiny tool at a shallow angle is refused before it is compiled."""
     if not isinstance(routine, Circle | Frame) or routine.entry is None or not drill.has_depth:
         return 0
-    radius = helix_radius(_tool_radius(program, routine.tool))
+    tool_radius = _tool_radius(program, routine.tool)
+    # The length of one row: a helix's turn, or a zigzag's leg.
+    row = (
+        zigzag_length(tool_radius)
+        if routine.entry is Entry.ZIGZAG
+        else 2 * math.pi * helix_radius(tool_radius)
+    )
     # An angle out of range is refused by validation; here it is only kept from nothing.
     stated = float(angle_of(routine.ramp_angle))
     angle = math.radians(min(max(stated, float(RAMP_LOW)), RAMP_HIGH))
-    pitch = max(2 * math.pi * radius * math.tan(angle), 1.0)
+    pitch = max(row * math.tan(angle), 1.0)
     assert drill.z_up is not None and drill.z_dn is not None
     depth = max(to_nm(drill.z_up, drill.units) - to_nm(drill.z_dn, drill.units), 0)
     return int(depth / pitch) + 2 * levels

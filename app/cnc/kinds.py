@@ -23,7 +23,9 @@ Adding a block kind (docs/adding-a-kind.md has the whole recipe, with what it to
    with `geometry=True` the `Mill.GEOMETRY` blocks after it are its contours
    (`RoutineStart.geometry`), as POCKET's PKT LINE / PKT ARC / ISLAND. The rules its
    planner finds go in `findings` (the preview compiles a block with only those as it is).
-   Other motion is a node in compiler.py.
+   Other motion is a node in compiler.py. Its moves estimate, for the bound cost.py checks
+   before any compile, is `cost="module:function"`; a first-menu choice of its own is
+   `choices=((number, name),)`.
 3. Its own rules beyond its order, if any, in validate.py, each with a case in tests/bad/.
 4. A golden case (tests/golden/<name>/program.json, `make regen-golden`); its JSON `type`
    in docs/program-format.md.
@@ -45,6 +47,12 @@ from app.cnc.units import Units
 
 if TYPE_CHECKING:
     from app.cnc.blocks import Block
+
+
+def matches(value: Any, wanted: Any) -> bool:
+    """True when `value` is what an `only_when` condition wants: the value, or any of a
+    frozenset of values."""
+    return value in wanted if isinstance(wanted, frozenset) else bool(value == wanted)
 
 
 class Value(enum.Enum):
@@ -90,9 +98,10 @@ class Prompt:
     `low`/`high`: the allowed range of a count or tool (None: unchecked); for a length `low`
     is its minimum (None: ±the largest dimension) and `positive` asks for more than 0.
     `feed`: a feed's limits per unit. `blank`: the choice shown for no value (None).
-    `only_when`: the field applies only while these other fields have these values; else
-    it keeps its default (the editor does not ask for it). `changes`: on COPY, the field of
-    the copied blocks this value replaces (or, for a STEP, adds to in absolute blocks).
+    `only_when`: the field applies only while these other fields have these values (a
+    frozenset: any of its values); else it keeps its default (the editor does not ask for
+    it). `changes`: on COPY, the field of the copied blocks this value replaces (or, for a
+    STEP, adds to in absolute blocks).
     `prompted`: False for fields the entry form does not ask for one by one.
     `calculated`: the field may be left empty and the compile calculates it from the blocks
     around it (a contour's X/Y from the print, app.cnc.solve).
@@ -189,6 +198,15 @@ class Kind:
     part: str = ""  # entered with another block: the suffix of its X/Y prompts
     mill: Mill | None = None
     planner: str = ""  # "module:function" planning a mill routine
+    # "module:function" estimating, from its numbers before any of its work, the moves of
+    # a block of this kind (cost.py, "Bounded work"): (program, block) -> int for a block
+    # standing alone (HELIX); for a Mill.ROUTINE, (program, blocks, sequence) -> cost.Size
+    # for its mill sequence, less the drill's rows. "": cost.py counts it by its node (a
+    # hole, contour blocks a few elements each, anything else a move to X/Y).
+    cost: str = ""
+    # The editor's first-menu choices this kind opens, (number, name): the control's
+    # numbers (POCKET is 10, key 0); other kinds' sub-kinds may sit under them too.
+    choices: tuple[tuple[int, str], ...] = ()
     geometry: bool = False  # a routine whose contour blocks (Mill.GEOMETRY) follow it
     follows: Follows | None = None
     findings: frozenset[Rule] = frozenset()
@@ -238,7 +256,7 @@ class Registry:
         self._names: dict[type, dict[str, str]] = {}
         self._documents: dict[str, tuple[type[Block], dict[str, Any]]] | None = None
         self._sub_kinds: dict[str, tuple[type[Block], SubKind]] | None = None
-        self._planners: dict[type, Callable[..., Any]] = {}
+        self._functions: dict[tuple[type, str], Callable[..., Any]] = {}
         self._geometry_rules: frozenset[Rule] | None = None
         self._named: dict[int, dict[type, bool | None]] = {}
         self.version = 0  # counts changes, for tables read from the registry elsewhere
@@ -300,7 +318,7 @@ class Registry:
 
     def applies(self, cls: type, field: Field, values: Mapping[str, Any]) -> bool:
         """True when `field` applies with these values of the other fields (`only_when`)."""
-        return all(values.get(name) == wanted for name, wanted in field.prompt.only_when)
+        return all(matches(values.get(name), wanted) for name, wanted in field.prompt.only_when)
 
     # -- the JSON document ---------------------------------------------------------------
 
@@ -349,7 +367,7 @@ class Registry:
             for f in self.fields(cls)
             if f.prompt.prompted
             and f.name not in fixed
-            and all(fixed[name] == wanted for name, wanted in f.prompt.only_when if name in fixed)
+            and all(matches(fixed[name], w) for name, w in f.prompt.only_when if name in fixed)
         )
 
     def shown_when(self, field: Field, sub: SubKind) -> tuple[tuple[str, Any], ...]:
@@ -435,6 +453,29 @@ class Registry:
         names = f"{', '.join(most)} or {last}" if most else last
         return f"cannot carry LOOP; a LOOP is a {names} block"
 
+    def first_menu(self, qualifiers: Mapping[int, str]) -> tuple[str, ...]:
+        """The editor's first menu in the control's order: the choices the kinds declare
+        (`Kind.choices`) and `qualifiers` (LOOP and STOP, which are not kinds), by number.
+        Raises ValueError when two choices claim one number or a number is left out."""
+        numbered: dict[int, str] = dict(qualifiers)
+        for cls in self._classes:
+            for number, name in self.kind(cls).choices:
+                if numbered.setdefault(number, name) != name:
+                    raise ValueError(
+                        f"{cls.__name__}: first-menu choice {number} is {numbered[number]}, "
+                        f"not {name}"
+                    )
+        if sorted(numbered) != list(range(1, len(numbered) + 1)):
+            raise ValueError(f"the first menu's numbers are {sorted(numbered)}, not 1 to n")
+        for cls in self._classes:
+            for sub in self.kind(cls).editor:
+                if sub.menu and sub.group not in numbered.values():
+                    raise ValueError(
+                        f"{cls.__name__}: {sub.title} sits under {sub.group}, which no kind "
+                        "declares in its choices"
+                    )
+        return tuple(numbered[number] for number in sorted(numbered))
+
     # -- findings --------------------------------------------------------------------------
 
     def geometry_rules(self) -> frozenset[Rule]:
@@ -448,14 +489,28 @@ class Registry:
     # -- planners ------------------------------------------------------------------------
 
     def planner(self, cls: type[Block]) -> Callable[..., Any]:
-        """The function planning a mill routine of kind `cls` (imported on first use)."""
-        found = self._planners.get(cls)
+        """The function planning a mill routine of kind `cls` (imported on first use).
+        Raises LookupError when `cls` declares none."""
+        found = self._function(cls, "planner")
         if found is None:
-            where = self.kind(cls).planner
+            raise LookupError(f"{cls.__name__} declares no planner")
+        return found
+
+    def estimator(self, cls: type[Block]) -> Callable[..., Any] | None:
+        """The function estimating the moves of a block of kind `cls` (`Kind.cost`, imported
+        on first use), or None when it declares none."""
+        return self._function(cls, "cost")
+
+    def _function(self, cls: type[Block], attribute: str) -> Callable[..., Any] | None:
+        """The "module:function" a kind declares as `attribute`, imported once."""
+        found = self._functions.get((cls, attribute))
+        if found is None:
+            where: str = getattr(self.kind(cls), attribute)
             if not where:
-                raise LookupError(f"{cls.__name__} declares no planner")
+                return None
             module, name = where.split(":")
-            found = self._planners[cls] = getattr(importlib.import_module(module), name)
+            found = getattr(importlib.import_module(module), name)
+            self._functions[(cls, attribute)] = found
         return found
 
     def mill_classes(self, family: Mill) -> tuple[type[Block], ...]:

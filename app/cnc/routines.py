@@ -42,7 +42,15 @@ from app.cnc.plane import (
     unit,
 )
 from app.cnc.problems import Rule, Severity
-from app.cnc.ramp import Ramp, angle_of, helix_radius, helix_ramp
+from app.cnc.ramp import (
+    Ramp,
+    Zigzag,
+    angle_of,
+    helix_radius,
+    helix_ramp,
+    zigzag_length,
+    zigzag_ramp,
+)
 from app.cnc.sequences import RoutineStart, SequencePlan
 from app.cnc.units import Units, half_even, to_nm
 
@@ -402,11 +410,14 @@ def _plan_routine(routine: Routine, block: Circle | Frame, start: tuple[int, int
     if block.two_pass:
         allowance = rough_wall(routine.units)
         passes.insert(0, routine_path(routine, wall_allowance=allowance))
-    ramp = None
+    ramp: Ramp | Zigzag | None = None
+    problem = None
     if block.entry is Entry.HELIX:
         ramp, problem = _helix_entry(routine, passes[0], allowance, angle_of(block.ramp_angle))
-        if problem is not None:
-            return SequencePlan([], 0, start, [*findings, problem], routine=routine)
+    elif block.entry is Entry.ZIGZAG:
+        ramp, problem = _zigzag_entry(routine, passes[0], allowance, angle_of(block.ramp_angle))
+    if problem is not None:
+        return SequencePlan([], 0, start, [*findings, problem], routine=routine)
     depth = rough_depth(routine.units) if block.two_pass else 0
     return SequencePlan(passes, depth, start, findings, ramp=ramp, routine=routine)
 
@@ -458,7 +469,7 @@ def _entry_problems(routine: Routine, block: Circle | Frame) -> list[Finding]:
                 Rule.RAMP_ENTRY,
                 Severity.ERROR,
                 "a RAMP ANGLE applies only to a ramp entry; with ENTRY empty (PLUNGE) the tool "
-                "goes straight down: choose ENTRY HELIX or leave RAMP ANGLE empty",
+                "goes straight down: choose ENTRY HELIX or ZIGZAG, or leave RAMP ANGLE empty",
                 "RAMP ANGLE",
             )
         ]
@@ -500,6 +511,45 @@ def _helix_entry(
         f"{dim(2 * wanted, u)} across (half the tool's DIA), which does not fit inside the "
         f"first pass at its entry point: a circle at most {dim(2 * low, u)} across fits "
         "there; a larger pocket, a smaller tool, or ENTRY empty (PLUNGE)",
+        "ENTRY",
+    )
+
+
+def _zigzag_entry(
+    routine: Routine, first: Path, allowance: int, angle: Decimal
+) -> tuple[Zigzag | None, Finding | None]:
+    """The zigzag ramp at the entry point of the first pass `first`, its straight going
+    straight in (as the helix's centre lies), or the error when the straight does not fit
+    inside that pass (`allowance`: the stock the pass leaves on the wall)."""
+    lead_in = first.elements[0]
+    assert lead_in.centre is not None  # a POCKET routine enters on a lead-in arc
+    r = float(routine.tool_radius)
+    wall = r + allowance
+    inward = unit(sub(lead_in.centre, lead_in.end))
+
+    def ramp(length: float) -> Zigzag:
+        return zigzag_ramp(first.start, inward, length, angle)
+
+    # The region is convex and holds the entry point: the straight fits when its far end does.
+    def fits(length: float) -> bool:
+        return _room_inside(routine, wall, ramp(length).far) >= -EPS
+
+    wanted = zigzag_length(r)
+    if fits(wanted):
+        return ramp(wanted), None
+    low, high = 0.0, wanted
+    for _ in range(60):
+        mid = (low + high) / 2
+        low, high = (mid, high) if fits(mid) else (low, mid)
+    u = routine.units
+    return None, Finding(
+        routine.block,
+        Rule.RAMP_ENTRY,
+        Severity.ERROR,
+        f"a ZIGZAG ramp with a {dim(2 * r, u)} tool goes back and forth on a straight "
+        f"{dim(wanted, u)} long (the tool's DIA), which does not fit inside the first pass "
+        f"straight in from its entry point: a straight at most {dim(low, u)} long fits "
+        "there; a larger pocket, a smaller tool, ENTRY HELIX, or ENTRY empty (PLUNGE)",
         "ENTRY",
     )
 

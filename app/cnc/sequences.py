@@ -25,7 +25,7 @@ from app.cnc.geometry import resolve_xy
 from app.cnc.kinds import REGISTRY, Mill
 from app.cnc.plane import Element, Path, fpt, qcir_centre, true_arc
 from app.cnc.problems import Rule, Severity
-from app.cnc.ramp import Ramp
+from app.cnc.ramp import Ramp, Zigzag
 from app.cnc.units import Units, message_length, to_nm
 
 if TYPE_CHECKING:
@@ -53,7 +53,7 @@ class SequencePlan:
     pocket: PocketPlan | None = None  # a POCKET's plan: its passes with their links
     routine: Routine | None = None  # a CIRCLE/FRAME routine's size and direction
     outlines: tuple[tuple[str, Path], ...] = ()  # a POCKET's contours, by name
-    ramp: Ramp | None = None  # a pocketing routine's ramp entry (None: it plunges)
+    ramp: Ramp | Zigzag | None = None  # a pocketing routine's ramp entry (None: it plunges)
     # Values calculated from the print (app.cnc.solve): (block number, field) → value.
     calculated: dict[tuple[int, str], Decimal] = field(default_factory=dict)
 

@@ -73,6 +73,11 @@ def _hints(cls: type) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
 
+def _shown(value: object) -> str:
+    """A value as the form sends it (an enum's value)."""
+    return str(value.value if isinstance(value, enum.Enum) else value)
+
+
 def _spec(
     cls: type[Block], f: Field, name: str, label: str, sub: SubKind | None = None
 ) -> FieldSpec:
@@ -80,7 +85,7 @@ def _spec(
         ""
         if sub is None
         else " ".join(
-            f"{n}={v.value if isinstance(v, enum.Enum) else v}"
+            f"{n}={'|'.join(sorted(map(_shown, v))) if isinstance(v, frozenset) else _shown(v)}"
             for n, v in REGISTRY.shown_when(f, sub)
         )
     )
@@ -135,28 +140,41 @@ def extra_fields(cls: type[Block], sub: SubKind) -> tuple[Field, ...]:
     )
 
 
-# The first menu, numbered in this order; the tenth (POCKET) is key 0.
-GROUPS = ("POS", "DRILL", "BORE", "TAP", "MILL", "LOOP", "STOP", "REP", "COPY", "POCKET")
-_FORMS: tuple[int, dict[str, EntryForm], dict[str, tuple[str, ...]]] = (-1, {}, {})
+# The first menu's choices that are qualifiers of the next block, not kinds, at the
+# control's numbers; the kinds declare the others (`Kind.choices`: POS 1 … POCKET 10, key 0).
+QUALIFIERS = {6: "LOOP", 7: "STOP"}
+_FORMS: tuple[int, dict[str, EntryForm], dict[str, tuple[str, ...]], tuple[str, ...]] = (
+    -1,
+    {},
+    {},
+    (),
+)
 
 
-def _tables() -> tuple[dict[str, EntryForm], dict[str, tuple[str, ...]]]:
-    """The entry forms and each group's menu, read once from the registry (again only if
-    a kind is declared later)."""
+def _tables() -> tuple[dict[str, EntryForm], dict[str, tuple[str, ...]], tuple[str, ...]]:
+    """The entry forms, each group's menu and the first menu, read once from the registry
+    (again only if a kind is declared later)."""
     global _FORMS
     if _FORMS[0] != REGISTRY.version:
         forms = {key: _form(cls, sub) for key, (cls, sub) in REGISTRY.sub_kinds().items()}
+        groups = REGISTRY.first_menu(QUALIFIERS)
         menus = {
             group: tuple(
                 form.key
                 for form in sorted(forms.values(), key=lambda form: form.menu)
                 if form.group == group and form.menu
             )
-            for group in GROUPS
-            if group not in ("LOOP", "STOP")
+            for group in groups
+            if group not in QUALIFIERS.values()
         }
-        _FORMS = (REGISTRY.version, forms, menus)
-    return _FORMS[1], _FORMS[2]
+        _FORMS = (REGISTRY.version, forms, menus, groups)
+    return _FORMS[1], _FORMS[2], _FORMS[3]
+
+
+def first_menu() -> tuple[str, ...]:
+    """The first menu's choices (POS, DRILL, …, LOOP, STOP, …, POCKET), numbered from 1 in
+    this order: the control's numbers."""
+    return _tables()[2]
 
 
 def entry_forms() -> dict[str, EntryForm]:
@@ -198,7 +216,7 @@ def group_menu(program: Program, at: int, loop: bool = False, stop: bool = False
     """The first menu for block `at`: every choice, numbered as always (the control's order),
     those that do not fit here (given the LOOP and STOP already chosen) with the reason."""
     choices = []
-    for number, group in enumerate(GROUPS, start=1):
+    for number, group in enumerate(first_menu(), start=1):
         reason = ""
         if group == "LOOP":
             if loop:

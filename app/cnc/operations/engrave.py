@@ -20,8 +20,14 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from HersheyFonts import HersheyFonts
+
+from app.cnc.cost import POS_ROWS
+
+if TYPE_CHECKING:
+    from app.cnc.blocks import Engrave, Program
 
 FONT = "futural"
 CAP, BASE = -12, 9  # the font's cap line and base line (its units, y down)
@@ -78,3 +84,10 @@ def along_arc(
             points.append((cx + r * math.cos(theta), cy + r * math.sin(theta)))
         placed.append(points)
     return placed
+
+
+def estimate_moves(program: Program, block: Engrave) -> int:
+    """About how many moves an ENGRAVE makes (its `Kind.cost`, read by cost.py): each
+    stroke's points and its plunge and retract."""
+    strokes = list(glyph_strokes(block.text, 1.0))
+    return sum(len(s) + POS_ROWS for s in strokes) + POS_ROWS

@@ -13,9 +13,14 @@ from __future__ import annotations
 
 import math
 from decimal import Decimal
+from typing import TYPE_CHECKING
 
 from app.cnc import limits
+from app.cnc.cost import LEVEL_ROWS, POS_ROWS
 from app.cnc.units import Units, to_nm
+
+if TYPE_CHECKING:
+    from app.cnc.blocks import Face, Program
 
 
 def face_clear(clear: Decimal | None, units: Units) -> int:
@@ -42,3 +47,14 @@ def face_rows(
         return [(cy, x_from, x_to)]
     count = math.ceil((high - low) / step) + 1
     return [(low + round((high - low) * k / (count - 1)), x_from, x_to) for k in range(count)]
+
+
+def estimate_moves(program: Program, block: Face) -> int:
+    """About how many moves a FACE makes (its `Kind.cost`, read by cost.py): each pass a
+    row per step across its width, there and back, from its numbers and its tool's DIA."""
+    units = block.units
+    tool = program.block0.tool(block.tool)
+    diameter = 0 if tool is None or tool.diameter is None else to_nm(tool.diameter, program.units)
+    step = max(diameter * block.step // 100, 1)
+    rows = to_nm(block.yw, units) // step + 2
+    return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS

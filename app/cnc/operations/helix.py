@@ -8,6 +8,13 @@ turns a depth takes is exact.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
+
+from app.cnc.cost import HOLE_ROWS
+from app.cnc.units import to_nm
+
+if TYPE_CHECKING:
+    from app.cnc.blocks import Helix, Program
 
 Point = tuple[int, int, int]
 # The shortest part of a turn a helix ends with (nm): 0.001 in along the arc, ten steps of
@@ -47,3 +54,12 @@ def helix_ends(
             (round(cx + radius * math.cos(angle)), round(cy + radius * math.sin(angle)), z_end)
         )
     return ends
+
+
+def estimate_moves(program: Program, block: Helix) -> int:
+    """About how many moves a HELIX makes (its `Kind.cost`, read by cost.py): a row a turn
+    down its depth, from its numbers alone (a pitch of nearly nothing is refused before its
+    compile works it out)."""
+    units = block.units
+    depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
+    return depth // max(to_nm(block.pitch, units), 1) + HOLE_ROWS

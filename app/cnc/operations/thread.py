@@ -30,10 +30,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from app.cnc.blocks import ThreadMill
+from app.cnc.blocks import Program, ThreadMill
+from app.cnc.cost import POS_ROWS
 from app.cnc.operations.helix import Point, helix_ends
 from app.cnc.tools import PitchUnit, lead_per_rev
-from app.cnc.units import Units
+from app.cnc.units import Units, to_nm
 
 INTERNAL_DEPTH = 5 / 8  # of H: the basic internal thread's depth (ISO 68-1, UN)
 EXTERNAL_DEPTH = 17 / 24  # of H: the basic external thread's
@@ -126,3 +127,12 @@ def thread_passes(
         lead_out = Arc(out_end, out_centre, clockwise if internal else not clockwise)
         found.append(ThreadPass(approach, z_start, lead_in, turns, lead_out))
     return found
+
+
+def estimate_moves(program: Program, block: ThreadMill) -> int:
+    """About how many moves a THREAD MILL makes (its `Kind.cost`, read by cost.py): each
+    pass its turns down the depth and its approach, from its numbers alone."""
+    units = block.units
+    depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
+    turns = depth // max(thread_lead(block), 1) + 2
+    return block.passes * (turns + POS_ROWS + 2) + POS_ROWS

@@ -11,7 +11,7 @@ import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import pytest
 
@@ -31,9 +31,12 @@ from app.cnc.blocks import (
     Program,
     field_label,
 )
+from app.cnc.compiler import compile_program
 from app.cnc.copy import execute_copy
 from app.cnc.kinds import REGISTRY, Document, Kind, Mill, Role, SubKind, Value, prompt
 from app.cnc.mirror import Axis, mirror
+from app.cnc.path import Op
+from app.cnc.units import Units, to_nm
 from app.cnc.validate import validate
 from app.web.forms import Choice, entry_forms, group_menu, parse_block, sub_menu
 
@@ -220,6 +223,17 @@ def slot_moves(program: Program, block: Slot) -> int:
     return 2 * int(block.length * 10) + 4
 
 
+def cut_slot(c: Any, number: int, block: Slot, at: tuple[int, int]) -> None:
+    """SLOT's cut (its `Kind.cut`): down at X/Y to Z 0, along +X its LENGTH at 10 a minute,
+    up again — through the compiler's motion methods alone."""
+    units = block.units
+    c.use_tool(number, block.tool)
+    c.position(number, at, c.retract)
+    c.rapid_z(number, 0)
+    c.feed_to(number, (at[0] + to_nm(block.length, units), at[1], 0), to_nm(Decimal(10), units))
+    c.retract_up(number)
+
+
 @dataclass(frozen=True, kw_only=True)
 class Slot(Block):
     """SLOT (a kind for this test only): a routine cut from one block, as HELIX or FACE, in
@@ -231,6 +245,7 @@ class Slot(Block):
         editor=(SubKind("SLOT", "SLOT", "SLOT", 1),),
         choices=((11, "SLOT"),),
         cost="tests.test_kinds:slot_moves",
+        cut="tests.test_kinds:cut_slot",
         positioned=True,
     )
     x: Decimal = prompt("X", Value.LENGTH, role=Role.X)
@@ -266,6 +281,26 @@ def test_a_kind_declares_its_cost_and_its_first_menu_choice() -> None:
     finally:
         REGISTRY.remove(Slot)
     assert [c.key for c in group_menu(program, 2)] == THE_FIRST_MENU
+
+
+def test_a_kind_declares_what_cuts_it() -> None:
+    """An operation standing alone is cut by the function its kind declares (`Kind.cut`):
+    the compiler names no operation kind (before, a block it did not list could not stand
+    on its own: "a SLOT block cannot stand on its own here")."""
+    REGISTRY.add(Slot)
+    try:
+        slot = Slot(x=Decimal(1), y=Decimal(2), length=Decimal("0.5"), tool=1)
+        compiled = compile_program(spotted(Pos(x=Decimal(0), y=Decimal(0), tool=1), slot))
+        feeds = [
+            (int(row["x"]), int(row["y"]), int(row["z"]))
+            for chunk in compiled.path.chunks()
+            for row in chunk.rows
+            if row["op"] == Op.FEED and row["block"] == 2
+        ]
+        inch = Units.INCH.nm
+        assert feeds == [(int(Decimal("1.5") * inch), 2 * inch, 0)]
+    finally:
+        REGISTRY.remove(Slot)
 
 
 def test_first_menu_choices_are_declared_once() -> None:

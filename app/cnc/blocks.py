@@ -709,6 +709,7 @@ class Helix(Block):
         documents=(Document("HELIX"),),
         editor=(SubKind("HELIX", "HELIX", "BORE", 3),),
         cost="app.cnc.operations.helix:estimate_moves",
+        cut="app.cnc.operations.helix:cut",
         positioned=True,
         loopable=True,
     )
@@ -768,6 +769,7 @@ class ThreadMill(Block):
             ),
         ),
         cost="app.cnc.operations.thread:estimate_moves",
+        cut="app.cnc.operations.thread:cut",
         positioned=True,
         loopable=True,
     )
@@ -821,6 +823,7 @@ class Face(Block):
             ),
         ),
         cost="app.cnc.operations.face:estimate_moves",
+        cut="app.cnc.operations.face:cut",
         positioned=True,
         # Not a LOOP carrier: its menu is POCKET's, and a LOOP is a POS, DRILL, BORE or TAP.
         loopable=False,
@@ -875,6 +878,7 @@ class Engrave(Block):
             SubKind("ENGRAVE_ARC", "ENGRAVE ARC", POCKET_GROUP, 9, ON_ARC),
         ),
         cost="app.cnc.operations.engrave:estimate_moves",
+        cut="app.cnc.operations.engrave:cut",
         positioned=True,
         loopable=False,  # as FACE: in POCKET's menu
     )

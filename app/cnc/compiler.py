@@ -50,29 +50,17 @@ from app.cnc.blocks import (
     Block,
     BoltCircle,
     DataBlock0,
-    Direction,
-    Engrave,
-    EngraveLayout,
-    Face,
-    FacePattern,
-    Helix,
     Hole,
     HoleOp,
     Mode,
-    Placement,
     Pos,
     Program,
     Rep,
-    ThreadMill,
-    ThreadPlace,
 )
 from app.cnc.cutter import Finding
 from app.cnc.geometry import bolt_circle_points, resolve_xy
+from app.cnc.kinds import REGISTRY
 from app.cnc.memo import ByObject, Memo, Recent
-from app.cnc.operations.engrave import along_arc, along_line, glyph_strokes, missing
-from app.cnc.operations.face import face_clear, face_rows
-from app.cnc.operations.helix import helix_ends
-from app.cnc.operations.thread import thread_lead, thread_passes
 from app.cnc.path import (
     HOLE,
     MOVE,
@@ -93,11 +81,9 @@ from app.cnc.plane import Path, length
 from app.cnc.problems import Rule, Severity
 from app.cnc.ramp import Ramp, Zigzag
 from app.cnc.routines import peck_levels as peck_levels  # where it was, for its importers
-from app.cnc.routines import routine_clockwise
 from app.cnc.sequences import SequencePlan, plan_sequence
 from app.cnc.structure import BoltPattern, LoopPattern, MillSequence, Single, build_nodes
 from app.cnc.toolpath import ToolInfo
-from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
 
 if TYPE_CHECKING:
@@ -526,23 +512,15 @@ class _Compiler:
             target = self.resolve(block)
             self.hole(number, block, target)
             self.reference = target
-        elif isinstance(block, Helix):
-            target = self.resolve(block)
-            self.helix(number, block, target)
-            self.reference = target
-        elif isinstance(block, Engrave):
-            target = self.resolve(block)
-            self.engrave(number, block, target)
-            self.reference = target
-        elif isinstance(block, Face):
-            self.face(number, block, self.resolve(block))
-            self.reference = self.resolve(block)
-        elif isinstance(block, ThreadMill):
-            target = self.resolve(block)
-            self.thread_mill(number, block, target)
-            self.reference = target
         else:
-            raise CompileError(number, f"a {block.title} block cannot stand on its own here")
+            # An operation (HELIX, THREAD MILL, FACE, ENGRAVE): its kind declares what cuts
+            # it (`Kind.cut`), at its X/Y.
+            cut = REGISTRY.cutter(type(block))
+            if cut is None:
+                raise CompileError(number, f"a {block.title} block cannot stand on its own here")
+            target = self.resolve(block)
+            cut(self, number, block, target)
+            self.reference = target
 
     def run_bolt_circle(self, node: BoltPattern) -> None:
         centre_block = self.blocks[node.centre]
@@ -621,7 +599,7 @@ class _Compiler:
             self.record_mill(node, drill, start, first_row, plan)
             self.reference = plan.end
             return
-        plunge = _round(plan.passes[0].start)
+        plunge = rounded_point(plan.passes[0].start)
         if not drill.has_depth:
             self.position(number, plunge, self.z)
             self.stop_for(number, "quill: lower the quill to depth by hand")
@@ -658,7 +636,7 @@ class _Compiler:
                 self.rapid_z(number, level, tag="peck-reentry")
         for path in plan.passes[1:]:
             # The finishing pass of a 2P routine: over to its plunge point, down to Z DN.
-            finish_start = _round(path.start)
+            finish_start = rounded_point(path.start)
             self.feed_to(
                 last, (finish_start[0], finish_start[1], self.z), self.feed_of(last), "step-over"
             )
@@ -680,7 +658,7 @@ class _Compiler:
             for end in ends:
                 self.feed_to(number, end, feed, "lead-in")
             return
-        centre = _round(ramp.centre)
+        centre = rounded_point(ramp.centre)
         for end in ends:
             self.helix_to(number, end, centre, ramp.clockwise, feed, "lead-in")
 
@@ -697,7 +675,7 @@ class _Compiler:
 
         z_up, z_dn, feed_z = _depths(drill)
         self.retract = retract_height(z_up, self.z_retract)
-        first = _round(pocket.passes[0].entry.path.start)
+        first = rounded_point(pocket.passes[0].entry.path.start)
         self.position(number, first, self.retract)
         self.rapid_z(number, z_up)
         above = z_up
@@ -707,7 +685,7 @@ class _Compiler:
                 link = cut.entry
                 if link.kind is LinkKind.RETRACT:
                     self.retract_up(number)
-                    self.rapid_xy(number, _round(link.path.start))
+                    self.rapid_xy(number, rounded_point(link.path.start))
                     self.rapid_z(number, above, tag="" if k == 0 else "peck-reentry")
                 if link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
                     self.feed_to(number, (self.x, self.y, level), feed_z)
@@ -732,7 +710,7 @@ class _Compiler:
             if link.kind in (LinkKind.PLUNGE, LinkKind.RETRACT):
                 if down:
                     self.stop_for(number, "quill: raise the quill by hand")
-                self.position(number, _round(link.path.start), self.z)
+                self.position(number, rounded_point(link.path.start), self.z)
                 self.stop_for(number, "quill: lower the quill to depth by hand")
                 down = True
             self.cut_pocket_path(link.path, "step-over")
@@ -746,7 +724,7 @@ class _Compiler:
         feed = -1
         at = path.start  # the true start: an arc's sweep is judged from it, not the rounding
         for element in path.elements:
-            end = _round(element.end)
+            end = rounded_point(element.end)
             if end == (self.x, self.y) and length(at, element) < 10:
                 at = element.end
                 continue
@@ -758,7 +736,12 @@ class _Compiler:
                 self.feed_to(element.block, (end[0], end[1], self.z), feed, move_tag)
             else:
                 self.arc_to(
-                    element.block, end, _round(element.centre), element.clockwise, feed, move_tag
+                    element.block,
+                    end,
+                    rounded_point(element.centre),
+                    element.clockwise,
+                    feed,
+                    move_tag,
                 )
                 self.x, self.y = end
 
@@ -808,12 +791,17 @@ class _Compiler:
                 if z != self.z:
                     self.feed_to(element.block, (self.x, self.y, z), feed_z)
             feed = self.feed_of(element.block)
-            end = _round(element.end)
+            end = rounded_point(element.end)
             if element.centre is None:
                 self.feed_to(element.block, (end[0], end[1], self.z), feed, element.tag)
             else:
                 self.arc_to(
-                    element.block, end, _round(element.centre), element.clockwise, feed, element.tag
+                    element.block,
+                    end,
+                    rounded_point(element.centre),
+                    element.clockwise,
+                    feed,
+                    element.tag,
                 )
 
     def feed_of(self, number: int) -> int:
@@ -884,151 +872,6 @@ class _Compiler:
                 block.tool,
             ).row()
         )
-
-    def helix(self, number: int, block: Helix, centre: tuple[int, int]) -> None:
-        """HELIX about `centre` (blocks.Helix says the motion). A block whose tool cannot
-        cut the diameter (no DIA, or not smaller than the bore's) makes no moves:
-        validation reports it."""
-        units = block.units
-        tool_diameter = self.tool_diameter(block.tool)
-        if tool_diameter is None:
-            return
-        radius = (to_nm(block.diameter, units) - tool_diameter) // 2
-        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
-        if radius <= 0 or z_dn >= z_up:
-            return
-        self.use_tool(number, block.tool)
-        milling = block.milling or self.program.block0.milling
-        clockwise = routine_clockwise(Placement.INSIDE, milling, self.spindle_rpm(block.tool))
-        feed = to_nm(block.feed_xy, units)
-        start = (centre[0] + radius, centre[1])
-        self.retract = retract_height(z_up, self.z_retract)
-        self.position(number, start, self.retract)
-        self.rapid_z(number, z_up)
-        pitch = to_nm(block.pitch, units)
-        for end in helix_ends((*start, z_up), centre, z_dn, pitch, clockwise):
-            self.helix_to(number, end, centre, clockwise, feed)
-        # The whole turn at Z DN: the bottom flat and the wall to size all round.
-        self.helix_to(number, (self.x, self.y, z_dn), centre, clockwise, feed)
-        if 2 * radius <= tool_diameter:
-            # The tool covers the centre (no core is left): off the wall to it.
-            self.feed_to(number, (*centre, z_dn), feed, "lead-out")
-        self.retract_up(number)
-
-    def thread_mill(self, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
-        """THREAD MILL about `centre` (app/cnc/operations/thread.py says the motion). A block whose
-        tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
-        validation reports it."""
-        units = block.units
-        tool_diameter = self.tool_diameter(block.tool)
-        lead = thread_lead(block)
-        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
-        if tool_diameter is None or z_up - z_dn <= lead // 2:
-            return
-        internal = block.place is ThreadPlace.INTERNAL
-        placement = Placement.INSIDE if internal else Placement.OUTSIDE
-        clockwise = routine_clockwise(placement, block.milling, self.spindle_rpm(block.tool))
-        passes = thread_passes(
-            centre,
-            to_nm(block.diameter, units),
-            tool_diameter,
-            lead,
-            z_up,
-            z_dn,
-            block.passes,
-            internal,
-            clockwise,
-            block.hand is Hand.RIGHT,
-            to_nm(limits.THREAD_CLEAR_INCH, Units.INCH),
-        )
-        self.use_tool(number, block.tool)
-        feed = to_nm(block.feed_xy, units)
-        self.retract = retract_height(z_up, self.z_retract)
-        for cut in passes:
-            self.position(number, cut.approach, self.retract)
-            self.rapid_z(number, cut.z_start)
-            lead_in = cut.lead_in
-            self.helix_to(number, lead_in.end, lead_in.centre, lead_in.clockwise, feed, "lead-in")
-            for turn in cut.turns:
-                self.helix_to(number, turn.end, turn.centre, turn.clockwise, feed)
-            out = cut.lead_out
-            self.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
-        self.retract_up(number)
-
-    def engrave(self, number: int, block: Engrave, at: tuple[int, int]) -> None:
-        """ENGRAVE (operations/engrave.py lays the strokes out): each stroke as a DRILL and its
-        MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
-        fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
-        block whose text the font cannot write makes no moves: validation reports it."""
-        units = block.units
-        if not block.text or missing(block.text) is not None:
-            return
-        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
-        if z_dn >= z_up or (block.layout is EngraveLayout.ARC and block.radius is None):
-            return
-        height = float(to_nm(block.height, units))
-        strokes = glyph_strokes(block.text, height)
-        if block.layout is EngraveLayout.LINE:
-            placed = along_line(strokes, at, float(block.angle))
-        else:
-            assert block.radius is not None
-            radius = float(to_nm(block.radius, units))
-            placed = along_arc(
-                strokes, at, radius, float(block.angle), block.direction is Direction.CW
-            )
-        self.use_tool(number, block.tool)
-        feed_z, feed = to_nm(block.feed_z, units), to_nm(block.feed_xy, units)
-        self.retract = retract_height(z_up, self.z_retract)
-        for stroke in placed:
-            points = [_round(p) for p in stroke]
-            if len(points) < 2:
-                continue
-            self.position(number, points[0], self.retract)
-            self.rapid_z(number, z_up)
-            self.feed_to(number, (*points[0], z_dn), feed_z)
-            for point in points[1:]:
-                self.feed_to(number, (*point, z_dn), feed)
-            self.retract_up(number)
-
-    def face(self, number: int, block: Face, centre: tuple[int, int]) -> None:
-        """FACE about `centre` (operations/face.py says the rows): at each of # PASS levels from
-        Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
-        feeds off the part's end) or one-way (up to the retract height and back between).
-        A block whose tool has no DIA makes no moves: validation reports it."""
-        units = block.units
-        tool_diameter = self.tool_diameter(block.tool)
-        z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
-        if tool_diameter is None or z_dn >= z_up:
-            return
-        clear = face_clear(block.clear, units)
-        rows = face_rows(
-            centre,
-            to_nm(block.xl, units),
-            to_nm(block.yw, units),
-            tool_diameter // 2,
-            tool_diameter * block.step // 100,
-            clear,
-        )
-        zigzag = block.pattern is FacePattern.ZIGZAG
-        feed = to_nm(block.feed_xy, units)
-        self.use_tool(number, block.tool)
-        self.retract = retract_height(z_up, self.z_retract)
-        first = (rows[0][1], rows[0][0])
-        for level in peck_levels(z_up, z_dn, block.passes):
-            self.position(number, first, self.retract)
-            self.rapid_z(number, level)
-            for k, (y, x_from, x_to) in enumerate(rows):
-                forward = not zigzag or k % 2 == 0
-                start, end = (x_from, x_to) if forward else (x_to, x_from)
-                if (self.x, self.y) != (start, y):
-                    if zigzag:
-                        self.feed_to(number, (start, y, level), feed, "step-over")
-                    else:
-                        self.retract_up(number)
-                        self.rapid_xy(number, (start, y))
-                        self.rapid_z(number, level)
-                self.feed_to(number, (end, y, level), feed)
-            self.retract_up(number)
 
     def tool_diameter(self, tool: int) -> int | None:
         """A tool's DIA in nm (None: not given, or not positive)."""
@@ -1213,7 +1056,7 @@ def _alike(a: State, b: State) -> bool:
     )
 
 
-def _round(point: tuple[float, float]) -> tuple[int, int]:
+def rounded_point(point: tuple[float, float]) -> tuple[int, int]:
     """A computed point rounded once to the nanometre."""
     return round(point[0]), round(point[1])
 

@@ -204,6 +204,10 @@ class Kind:
     # for its mill sequence, less the drill's rows. "": cost.py counts it by its node (a
     # hole, contour blocks a few elements each, anything else a move to X/Y).
     cost: str = ""
+    # "module:function" cutting a block that stands alone (an operation: HELIX, THREAD MILL,
+    # FACE, ENGRAVE) at its X/Y: (compiler, block number, block, (x, y) in nm) -> None,
+    # emitting its moves through the compiler's motion methods. "": not an operation.
+    cut: str = ""
     # The editor's first-menu choices this kind opens, (number, name): the control's
     # numbers (POCKET is 10, key 0); other kinds' sub-kinds may sit under them too.
     choices: tuple[tuple[int, str], ...] = ()
@@ -500,6 +504,11 @@ class Registry:
         """The function estimating the moves of a block of kind `cls` (`Kind.cost`, imported
         on first use), or None when it declares none."""
         return self._function(cls, "cost")
+
+    def cutter(self, cls: type[Block]) -> Callable[..., Any] | None:
+        """The function cutting an operation of kind `cls` (`Kind.cut`, imported on first
+        use), or None when it declares none."""
+        return self._function(cls, "cut")
 
     def _function(self, cls: type[Block], attribute: str) -> Callable[..., Any] | None:
         """The "module:function" a kind declares as `attribute`, imported once."""

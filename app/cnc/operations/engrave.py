@@ -24,10 +24,14 @@ from typing import TYPE_CHECKING
 
 from HersheyFonts import HersheyFonts
 
+from app.cnc.blocks import Direction, Engrave, EngraveLayout
+from app.cnc.compiler import retract_height, rounded_point
 from app.cnc.cost import POS_ROWS
+from app.cnc.units import to_nm
 
 if TYPE_CHECKING:
     from app.cnc.blocks import Engrave, Program
+    from app.cnc.compiler import _Compiler as Compiler
 
 FONT = "futural"
 CAP, BASE = -12, 9  # the font's cap line and base line (its units, y down)
@@ -91,3 +95,37 @@ def estimate_moves(program: Program, block: Engrave) -> int:
     stroke's points and its plunge and retract."""
     strokes = list(glyph_strokes(block.text, 1.0))
     return sum(len(s) + POS_ROWS for s in strokes) + POS_ROWS
+
+
+def cut(c: Compiler, number: int, block: Engrave, at: tuple[int, int]) -> None:
+    """ENGRAVE (operations/engrave.py lays the strokes out): each stroke as a DRILL and its
+    MILL STD blocks would cut it — across at the retract height, down at rapid to Z UP,
+    fed to Z DN at FEEDR Z, along the stroke at FEEDR XY, up to the retract height. A
+    block whose text the font cannot write makes no moves: validation reports it."""
+    units = block.units
+    if not block.text or missing(block.text) is not None:
+        return
+    z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+    if z_dn >= z_up or (block.layout is EngraveLayout.ARC and block.radius is None):
+        return
+    height = float(to_nm(block.height, units))
+    strokes = glyph_strokes(block.text, height)
+    if block.layout is EngraveLayout.LINE:
+        placed = along_line(strokes, at, float(block.angle))
+    else:
+        assert block.radius is not None
+        radius = float(to_nm(block.radius, units))
+        placed = along_arc(strokes, at, radius, float(block.angle), block.direction is Direction.CW)
+    c.use_tool(number, block.tool)
+    feed_z, feed = to_nm(block.feed_z, units), to_nm(block.feed_xy, units)
+    c.retract = retract_height(z_up, c.z_retract)
+    for stroke in placed:
+        points = [rounded_point(p) for p in stroke]
+        if len(points) < 2:
+            continue
+        c.position(number, points[0], c.retract)
+        c.rapid_z(number, z_up)
+        c.feed_to(number, (*points[0], z_dn), feed_z)
+        for point in points[1:]:
+            c.feed_to(number, (*point, z_dn), feed)
+        c.retract_up(number)

@@ -16,11 +16,15 @@ from decimal import Decimal
 from typing import TYPE_CHECKING
 
 from app.cnc import limits
+from app.cnc.blocks import Face, FacePattern
+from app.cnc.compiler import retract_height
 from app.cnc.cost import LEVEL_ROWS, POS_ROWS
+from app.cnc.routines import peck_levels
 from app.cnc.units import Units, to_nm
 
 if TYPE_CHECKING:
     from app.cnc.blocks import Face, Program
+    from app.cnc.compiler import _Compiler as Compiler
 
 
 def face_clear(clear: Decimal | None, units: Units) -> int:
@@ -58,3 +62,44 @@ def estimate_moves(program: Program, block: Face) -> int:
     step = max(diameter * block.step // 100, 1)
     rows = to_nm(block.yw, units) // step + 2
     return block.passes * (2 * rows + LEVEL_ROWS) + POS_ROWS
+
+
+def cut(c: Compiler, number: int, block: Face, centre: tuple[int, int]) -> None:
+    """FACE about `centre` (operations/face.py says the rows): at each of # PASS levels from
+    Z UP to Z DN, down at rapid beside the part, the rows at FEEDR XY, zig-zag (step-over
+    feeds off the part's end) or one-way (up to the retract height and back between).
+    A block whose tool has no DIA makes no moves: validation reports it."""
+    units = block.units
+    tool_diameter = c.tool_diameter(block.tool)
+    z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+    if tool_diameter is None or z_dn >= z_up:
+        return
+    clear = face_clear(block.clear, units)
+    rows = face_rows(
+        centre,
+        to_nm(block.xl, units),
+        to_nm(block.yw, units),
+        tool_diameter // 2,
+        tool_diameter * block.step // 100,
+        clear,
+    )
+    zigzag = block.pattern is FacePattern.ZIGZAG
+    feed = to_nm(block.feed_xy, units)
+    c.use_tool(number, block.tool)
+    c.retract = retract_height(z_up, c.z_retract)
+    first = (rows[0][1], rows[0][0])
+    for level in peck_levels(z_up, z_dn, block.passes):
+        c.position(number, first, c.retract)
+        c.rapid_z(number, level)
+        for k, (y, x_from, x_to) in enumerate(rows):
+            forward = not zigzag or k % 2 == 0
+            start, end = (x_from, x_to) if forward else (x_to, x_from)
+            if (c.x, c.y) != (start, y):
+                if zigzag:
+                    c.feed_to(number, (start, y, level), feed, "step-over")
+                else:
+                    c.retract_up(number)
+                    c.rapid_xy(number, (start, y))
+                    c.rapid_z(number, level)
+            c.feed_to(number, (end, y, level), feed)
+        c.retract_up(number)

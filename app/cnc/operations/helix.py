@@ -10,11 +10,15 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from app.cnc.blocks import Helix, Placement
+from app.cnc.compiler import retract_height
 from app.cnc.cost import HOLE_ROWS
+from app.cnc.routines import routine_clockwise
 from app.cnc.units import to_nm
 
 if TYPE_CHECKING:
     from app.cnc.blocks import Helix, Program
+    from app.cnc.compiler import _Compiler as Compiler
 
 Point = tuple[int, int, int]
 # The shortest part of a turn a helix ends with (nm): 0.001 in along the arc, ten steps of
@@ -63,3 +67,34 @@ def estimate_moves(program: Program, block: Helix) -> int:
     units = block.units
     depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
     return depth // max(to_nm(block.pitch, units), 1) + HOLE_ROWS
+
+
+def cut(c: Compiler, number: int, block: Helix, centre: tuple[int, int]) -> None:
+    """HELIX about `centre` (blocks.Helix says the motion). A block whose tool cannot
+    cut the diameter (no DIA, or not smaller than the bore's) makes no moves:
+    validation reports it."""
+    units = block.units
+    tool_diameter = c.tool_diameter(block.tool)
+    if tool_diameter is None:
+        return
+    radius = (to_nm(block.diameter, units) - tool_diameter) // 2
+    z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+    if radius <= 0 or z_dn >= z_up:
+        return
+    c.use_tool(number, block.tool)
+    milling = block.milling or c.program.block0.milling
+    clockwise = routine_clockwise(Placement.INSIDE, milling, c.spindle_rpm(block.tool))
+    feed = to_nm(block.feed_xy, units)
+    start = (centre[0] + radius, centre[1])
+    c.retract = retract_height(z_up, c.z_retract)
+    c.position(number, start, c.retract)
+    c.rapid_z(number, z_up)
+    pitch = to_nm(block.pitch, units)
+    for end in helix_ends((*start, z_up), centre, z_dn, pitch, clockwise):
+        c.helix_to(number, end, centre, clockwise, feed)
+    # The whole turn at Z DN: the bottom flat and the wall to size all round.
+    c.helix_to(number, (c.x, c.y, z_dn), centre, clockwise, feed)
+    if 2 * radius <= tool_diameter:
+        # The tool covers the centre (no core is left): off the wall to it.
+        c.feed_to(number, (*centre, z_dn), feed, "lead-out")
+    c.retract_up(number)

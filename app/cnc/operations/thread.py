@@ -29,12 +29,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from app.cnc.blocks import Program, ThreadMill
+from app.cnc import limits
+from app.cnc.blocks import Placement, Program, ThreadMill, ThreadPlace
+from app.cnc.compiler import retract_height
 from app.cnc.cost import POS_ROWS
 from app.cnc.operations.helix import Point, helix_ends
-from app.cnc.tools import PitchUnit, lead_per_rev
+from app.cnc.routines import routine_clockwise
+from app.cnc.tools import Hand, PitchUnit, lead_per_rev
 from app.cnc.units import Units, to_nm
+
+if TYPE_CHECKING:
+    from app.cnc.compiler import _Compiler as Compiler
 
 INTERNAL_DEPTH = 5 / 8  # of H: the basic internal thread's depth (ISO 68-1, UN)
 EXTERNAL_DEPTH = 17 / 24  # of H: the basic external thread's
@@ -59,6 +66,11 @@ class ThreadPass:
     lead_in: Arc
     turns: tuple[Arc, ...]
     lead_out: Arc
+
+
+def thread_clear() -> int:
+    """How far (nm) an external thread's lead-in starts beyond its major diameter: 0.050 in."""
+    return to_nm(limits.THREAD_CLEAR_INCH, Units.INCH)
 
 
 def thread_lead(block: ThreadMill) -> int:
@@ -136,3 +148,44 @@ def estimate_moves(program: Program, block: ThreadMill) -> int:
     depth = max(to_nm(block.z_up, units) - to_nm(block.z_dn, units), 0)
     turns = depth // max(thread_lead(block), 1) + 2
     return block.passes * (turns + POS_ROWS + 2) + POS_ROWS
+
+
+def cut(c: Compiler, number: int, block: ThreadMill, centre: tuple[int, int]) -> None:
+    """THREAD MILL about `centre` (app/cnc/operations/thread.py says the motion). A block whose
+    tool has no DIA, or whose thread is shorter than half its lead, makes no moves:
+    validation reports it."""
+    units = block.units
+    tool_diameter = c.tool_diameter(block.tool)
+    lead = thread_lead(block)
+    z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
+    if tool_diameter is None or z_up - z_dn <= lead // 2:
+        return
+    internal = block.place is ThreadPlace.INTERNAL
+    placement = Placement.INSIDE if internal else Placement.OUTSIDE
+    clockwise = routine_clockwise(placement, block.milling, c.spindle_rpm(block.tool))
+    passes = thread_passes(
+        centre,
+        to_nm(block.diameter, units),
+        tool_diameter,
+        lead,
+        z_up,
+        z_dn,
+        block.passes,
+        internal,
+        clockwise,
+        block.hand is Hand.RIGHT,
+        thread_clear(),
+    )
+    c.use_tool(number, block.tool)
+    feed = to_nm(block.feed_xy, units)
+    c.retract = retract_height(z_up, c.z_retract)
+    for cut in passes:
+        c.position(number, cut.approach, c.retract)
+        c.rapid_z(number, cut.z_start)
+        lead_in = cut.lead_in
+        c.helix_to(number, lead_in.end, lead_in.centre, lead_in.clockwise, feed, "lead-in")
+        for turn in cut.turns:
+            c.helix_to(number, turn.end, turn.centre, turn.clockwise, feed)
+        out = cut.lead_out
+        c.helix_to(number, out.end, out.centre, out.clockwise, feed, "lead-out")
+    c.retract_up(number)

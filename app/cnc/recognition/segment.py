@@ -44,7 +44,7 @@ from app.cnc.compiler import peck_levels
 from app.cnc.geometry import arc_sweep
 from app.cnc.operations.face import face_clear, face_rows
 from app.cnc.operations.helix import helix_ends
-from app.cnc.operations.thread import thread_depth, thread_lead, thread_passes
+from app.cnc.operations.thread import thread_clear, thread_depth, thread_lead, thread_passes
 from app.cnc.recognition.common import (
     XY,
     ImportFailure,
@@ -804,7 +804,7 @@ class _Segmenter:
             internal,
             clockwise,
             right,
-            to_nm(limits.THREAD_CLEAR_INCH, Units.INCH),
+            thread_clear(),
         )
         for (at, down, arcs), cut in zip(seen, made, strict=True):
             wanted = [cut.lead_in, *cut.turns, cut.lead_out]

@@ -6,13 +6,16 @@ through rs274 (tests/test_referee.py).
 
 from __future__ import annotations
 
+from decimal import Decimal
 from pathlib import Path
 
 import pytest
 
 from app.cnc import document
-from app.cnc.blocks import Program
+from app.cnc.blocks import Face, FacePattern, Program
+from app.cnc.formats.reading import read_program
 from app.cnc.interpret import interpret
+from app.cnc.recognition.common import ImportFailure
 from app.cnc.simulate.verify import verify
 from app.cnc.toolpath import Feed, Rapid
 
@@ -65,3 +68,56 @@ def test_verify_finds_the_plate_faced_and_nothing_else(name: str) -> None:
     assert result.findings == []
     volume = 4 * 2.5 * 0.05 * IN**3 if name == "face-zigzag" else 80 * 50 * 1 * MM**3
     assert result.simulation.removed_volume() == pytest.approx(volume, rel=1e-3)
+
+
+def gcode(name: str) -> str:
+    return (GOLDEN / name / "expected.gcode-linuxcnc").read_text()
+
+
+def test_our_zigzag_gcode_reads_back_as_its_face_block() -> None:
+    """The rows of face-zigzag's G-code are what its FACE cuts: the import is that block
+    (CLEAR empty, as it was), not a refusal."""
+    program = read_program(gcode("face-zigzag").encode(), "face", "gcode").program
+    assert program.blocks == (
+        Face(
+            pattern=FacePattern.ZIGZAG,
+            x=Decimal("2.000"),
+            y=Decimal("1.250"),
+            xl=Decimal("4.000"),
+            yw=Decimal("2.500"),
+            z_up=Decimal("0.000"),
+            z_dn=Decimal("-0.050"),
+            passes=2,
+            step=70,
+            clear=None,
+            feed_xy=Decimal("30.0"),
+            tool=1,
+        ),
+    )
+
+
+def test_one_way_gcode_reads_back_as_a_face_cutting_the_same_rows() -> None:
+    """The file cannot tell CLEAR 3 mm from the rectangle 3.46 mm bigger with CLEAR empty:
+    it comes back so, one-way, cutting the very rows the file does."""
+    program = read_program(gcode("face-one-way-mm").encode(), "face", "gcode").program
+    (block,) = program.blocks
+    assert isinstance(block, Face)
+    assert block.pattern is FacePattern.ONE_WAY and block.clear is None
+    assert (block.xl, block.yw, block.passes) == (Decimal("83.46"), Decimal("53.46"), 1)
+    assert [(m.x, m.y, m.z) for m in cuts(program)] == [
+        (m.x, m.y, m.z) for m in cuts(golden("face-one-way-mm"))
+    ]
+
+
+def test_a_face_with_one_row_moved_is_refused_at_that_row() -> None:
+    """The zig-zag's second row moved up 0.05 in: no FACE's evenly spaced rows are there,
+    and the refusal names the line of the step-over that put it there."""
+    lines = gcode("face-zigzag").splitlines()
+    at = lines.index("Y0.9833")
+    lines[at] = "Y1.0333"
+    with pytest.raises(ImportFailure) as refused:
+        read_program("\n".join(lines).encode(), "bad", "gcode")
+    message = str(refused.value)
+    assert message.startswith(f"line {at + 1}:")
+    assert "not a MillBlocks FACE" in message
+    assert "Y1.0333 in is not where a FACE's evenly spaced rows put it (Y0.9833 in" in message

@@ -153,13 +153,17 @@ for target in ("gcode-linuxcnc", "tape-ascii", "punch-eia", "tape-boss"):
     ROUNDED[target] |= {"engrave-line": ENGRAVED, "engrave-arc-mm": ENGRAVED}
 NOT_THE_SAME_BLOCKS["helix-bore"] = f"an INC HELIX comes back ABS; {CLIMB_STATED}"
 NOT_THE_SAME_BLOCKS["helix-entry-mm"] = CLIMB_STATED
+NOT_THE_SAME_BLOCKS["thread-mill-internal"] = "an INC THREAD MILL comes back ABS"
+# A FACE's rows say XL + 2 CLEAR and YW - 2 CLEAR, not each: it comes back with CLEAR
+# empty (0.050 in) and the rectangle that gives the same rows, STEP % the nearest 70 that
+# spaces them so (the same cut).
+NOT_THE_SAME_BLOCKS["face-one-way-mm"] = "a FACE comes back with CLEAR empty, the same rows"
 
 # Files that do not read back as blocks: (why, what the importer's refusal says). A target
 # without helical arcs writes a helix as straight moves along it (chords: Z and X/Y fed
-# together), which the importer refuses as a ramp, naming the line; no THREAD MILL is read
-# back from any file (its arcs go up, or its passes are no HELIX).
+# together), which the importer refuses as a ramp, naming the line (a THREAD MILL's among
+# them: G-code reads its helical passes back as the THREAD MILL).
 CHORDS = ("a helix written as chords reads back as a ramp, refused", "a ramp")
-THREADS = ("a THREAD MILL is not read back: refused, naming the line", "THREAD MILL")
 CHORD_TARGETS = ("tape-ascii", "punch-eia", "tape-boss")
 NOT_READ_BACK: dict[str, dict[str, tuple[str, str]]] = {
     target: {
@@ -170,14 +174,12 @@ NOT_READ_BACK: dict[str, dict[str, tuple[str, str]]] = {
     }
     for target in CHORD_TARGETS
 }
-NOT_READ_BACK["gcode-linuxcnc"] = {
-    "thread-mill-internal": THREADS,
-    "thread-mill-external-mm": THREADS,
-}
-# A FACE comes down at rapid beside the part and cuts at that depth: no DRILL feeds down
-# first, so no file reads back as a FACE (refused, naming the line).
-FACES = ("a FACE is not read back: refused, naming the line", "has not fed down to it")
-for target in (*CHORD_TARGETS, "gcode-linuxcnc"):
+NOT_READ_BACK["gcode-linuxcnc"] = {}
+# A FACE reads back from a file that gives its tool's diameter (its rows run the tool's
+# radius off the part): an EIA or BOSS tape has no comments to give it, so its rows are
+# cuts the tool never fed down to, refused naming the line.
+FACES = ("a FACE's tool diameter is not on the tape: refused, naming the line", "not fed down")
+for target in ("punch-eia", "tape-boss"):
     NOT_READ_BACK[target] |= {"face-zigzag": FACES, "face-one-way-mm": FACES}
 # A pocket's ramp entry (issue 33) is not read back: G-code refuses its helix (not a HELIX:
 # no whole turn at the bottom), a tape its chords as a ramp; each naming the line.

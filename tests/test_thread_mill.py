@@ -126,10 +126,33 @@ def test_linuxcnc_writes_each_turn_as_a_g3_with_z() -> None:
     assert "X1.0792 Y1.0000 Z-0.4038 I-0.0792 J0.0000" in text.splitlines()
 
 
-def test_a_thread_mill_is_refused_on_import_naming_its_line() -> None:
-    data = export(one_thread("thread-mill-internal"), "gcode-linuxcnc").data
-    with pytest.raises(ImportFailure, match="reads no THREAD MILL back"):
-        read_program(data, "thread", "gcode")
+def test_our_thread_mill_gcode_reads_back_as_its_block() -> None:
+    """The passes our G-code writes (lead-in, turns, lead-out) are the THREAD MILL's: the
+    import is that block, its TPI, hand, climb and passes found from the arcs."""
+    program = one_thread("thread-mill-internal")
+    data = export(program, "gcode-linuxcnc").data
+    assert read_program(data, "thread", "gcode").program.blocks == program.blocks
+
+
+def test_an_external_thread_reads_back_as_its_block() -> None:
+    program = golden("thread-mill-external-mm")
+    data = export(program, "gcode-linuxcnc").data
+    assert read_program(data, "thread", "gcode").program.blocks == program.blocks
+
+
+def test_a_thread_with_one_turn_moved_is_refused_at_that_line() -> None:
+    """One turn of the external thread's first pass ends 0.1 mm low: no THREAD MILL cuts
+    that, and the refusal names its line and where the turn would end."""
+    lines = export(golden("thread-mill-external-mm"), "gcode-linuxcnc").data.decode()
+    text = lines.splitlines()
+    at = text.index("X44.693 Y25.000 Z-6.375 I-14.693 J0.000")
+    text[at] = "X44.693 Y25.000 Z-6.475 I-14.693 J0.000"
+    with pytest.raises(ImportFailure) as refused:
+        read_program("\n".join(text).encode(), "bad", "gcode")
+    message = str(refused.value)
+    assert message.startswith(f"line {at + 1}:")
+    assert "not a MillBlocks THREAD MILL" in message
+    assert "(to X44.693 mm Y25 mm Z-6.375 mm)" in message
 
 
 def test_a_thread_leaves_no_arc_that_a_file_writes_as_a_whole_circle() -> None:

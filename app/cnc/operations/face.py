@@ -12,6 +12,7 @@ Zig-zag rows alternate +X and −X starting +X; one-way rows all go +X.
 from __future__ import annotations
 
 import math
+from decimal import Decimal
 from typing import TYPE_CHECKING
 
 from app.cnc import limits
@@ -24,6 +25,13 @@ from app.cnc.units import Units, to_nm
 if TYPE_CHECKING:
     from app.cnc.blocks import Face, Program
     from app.cnc.compiler import _Compiler as Compiler
+
+
+def face_clear(clear: Decimal | None, units: Units) -> int:
+    """FACE's CLEAR in nm: the block's (in `units`), or 0.050 in when it is empty."""
+    if clear is None:
+        return to_nm(limits.FACE_CLEAR_INCH, Units.INCH)
+    return to_nm(clear, units)
 
 
 def face_rows(
@@ -66,10 +74,7 @@ def cut(c: Compiler, number: int, block: Face, centre: tuple[int, int]) -> None:
     z_up, z_dn = to_nm(block.z_up, units), to_nm(block.z_dn, units)
     if tool_diameter is None or z_dn >= z_up:
         return
-    clear = to_nm(
-        block.clear if block.clear is not None else limits.FACE_CLEAR_INCH,
-        units if block.clear is not None else Units.INCH,
-    )
+    clear = face_clear(block.clear, units)
     rows = face_rows(
         centre,
         to_nm(block.xl, units),

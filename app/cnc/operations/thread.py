@@ -68,6 +68,11 @@ class ThreadPass:
     lead_out: Arc
 
 
+def thread_clear() -> int:
+    """How far (nm) an external thread's lead-in starts beyond its major diameter: 0.050 in."""
+    return to_nm(limits.THREAD_CLEAR_INCH, Units.INCH)
+
+
 def thread_lead(block: ThreadMill) -> int:
     """A THREAD MILL's lead in nm: 1/PITCH in in an inch block, PITCH mm in a mm block."""
     unit = PitchUnit.TPI if block.units is Units.INCH else PitchUnit.MM
@@ -169,7 +174,7 @@ def cut(c: Compiler, number: int, block: ThreadMill, centre: tuple[int, int]) ->
         internal,
         clockwise,
         block.hand is Hand.RIGHT,
-        to_nm(limits.THREAD_CLEAR_INCH, Units.INCH),
+        thread_clear(),
     )
     c.use_tool(number, block.tool)
     feed = to_nm(block.feed_xy, units)

@@ -12,7 +12,7 @@ from collections.abc import Hashable
 from dataclasses import dataclass, field
 from decimal import Decimal
 
-from app.cnc.blocks import Circle, Comp, Frame, Helix, HoleOp
+from app.cnc.blocks import Circle, Comp, Face, Frame, Helix, HoleOp, ThreadMill
 from app.cnc.recognition.common import XY
 from app.cnc.units import Units
 
@@ -147,12 +147,12 @@ class PocketOp:
 
 @dataclass
 class HelixOp:
-    """A HELIX about `at`: `block` is the HELIX with X/Y 0 (placed when it is written),
-    `z_up` its Z UP in nm."""
+    """A HELIX, FACE or THREAD MILL about `at` (one block whose moves the file gives whole): `block`
+    is the block with X/Y 0 (placed when it is written), `z_up` its Z UP in nm."""
 
     lines: list[int]
     at: XY
-    block: Helix
+    block: Helix | Face | ThreadMill
     z_up: int
     stop: bool = False
     message: str = ""

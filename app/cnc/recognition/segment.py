@@ -29,10 +29,22 @@ from decimal import Decimal
 from typing import Final, TypeGuard
 
 from app.cnc import limits
-from app.cnc.blocks import Comp, Helix, HoleOp, MillingMode, Placement
+from app.cnc.blocks import (
+    Comp,
+    Face,
+    FacePattern,
+    Helix,
+    HoleOp,
+    MillingMode,
+    Placement,
+    ThreadMill,
+    ThreadPlace,
+)
 from app.cnc.compiler import peck_levels
 from app.cnc.geometry import arc_sweep
+from app.cnc.operations.face import face_clear, face_rows
 from app.cnc.operations.helix import helix_ends
+from app.cnc.operations.thread import thread_clear, thread_depth, thread_lead, thread_passes
 from app.cnc.recognition.common import (
     XY,
     ImportFailure,
@@ -75,6 +87,7 @@ from app.cnc.recognition.steps import (
     ToolChange,
 )
 from app.cnc.routines import routine_clockwise
+from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
 
 DWELL: Final = limits.HOLE_DWELL_SECONDS
@@ -211,6 +224,10 @@ class _Pending:
     units: Units
     tool: int
     rose: bool = False  # the tool went up after it (and has not come down yet)
+
+
+# A FACE's row as a file cuts it: (y, x from, x to, the line that set the row, feed).
+FaceRow = tuple[int, int, int, int, int]
 
 
 class _Segmenter:
@@ -472,16 +489,28 @@ class _Segmenter:
             return i + 1
         if self.two_axis:
             return self.two_axis_sequence(i)
+        if isinstance(step, Arc) and step.z is not None and self.z is not None and self.leads_in(i):
+            return self.thread(i)
         if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z < self.z:
             return self.helix(i)
         if isinstance(step, Arc) and step.z is not None and self.z is not None and step.z > self.z:
             raise ImportFailure(
                 self.notes.where(step.line),
                 "an arc going up in Z (a helix cut upwards, as a thread is milled from the "
-                "bottom): MillBlocks reads a helix going down as a HELIX, and reads no "
-                "THREAD MILL back",
+                "bottom) with no lead-in arc: MillBlocks reads a helix going down as a HELIX, "
+                "and a THREAD MILL's passes by their lead-in and lead-out arcs",
                 step.line,
             )
+        if (
+            isinstance(step, Feed)
+            and not step.comp
+            and step.y == self.y
+            and self.z is not None
+            and step.z in (None, self.z)
+            and self.tool_diameter() is not None
+        ):
+            # Fed along X at the depth the tool came down to at rapid: a FACE's rows.
+            return self.face(i)
         if (
             isinstance(step, Feed)
             and step.z is not None
@@ -523,8 +552,8 @@ class _Segmenter:
         def refuse(why: str) -> ImportFailure:
             return ImportFailure(
                 where,
-                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX (MillBlocks "
-                f"reads no THREAD MILL back): {why}",
+                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX (nor a THREAD "
+                f"MILL: its passes lead in and out along arcs): {why}",
                 line,
             )
 
@@ -605,6 +634,383 @@ class _Segmenter:
         )
         self.add(HelixOp(lines, centre, block, start[2]))
         self.awaiting_retract = (line, start[2])
+        self.x, self.y, self.z = x, y, z
+        return j
+
+    def leads_in(self, i: int) -> bool:
+        """Whether the arc at step i is a THREAD MILL pass's lead-in: a helical arc from where
+        the tool came down at rapid, into helical arcs about another centre."""
+        step, turn = self.steps[i], self.steps.at(i + 1)
+        return (
+            isinstance(step, Arc)
+            and isinstance(turn, Arc)
+            and turn.z is not None
+            and step.z != self.z
+            and (turn.cx, turn.cy) != (step.cx, step.cy)
+            and self.tool_diameter() is not None
+        )
+
+    def thread(self, i: int) -> int:
+        """THREAD MILL passes (blocks.ThreadMill): each down at rapid at its approach point,
+        a lead-in arc, helical turns about the thread's centre, a lead-out arc, and up to one
+        retract height between passes; a THREAD MILL when operations/thread.py's
+        `thread_passes` makes exactly these arcs (within the file's rounding). Lengths in nm.
+        Raises ImportFailure naming the line whose move no THREAD MILL makes."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Arc) and self.z is not None
+        units = first.units
+        near = 2 * self.tol + resolution_nm(units)
+
+        def refuse(line: int, why: str) -> ImportFailure:
+            return ImportFailure(
+                self.notes.where(line),
+                f"helical arcs with a lead-in and lead-out (as a THREAD MILL cuts) that are "
+                f"not a MillBlocks THREAD MILL: {why}",
+                line,
+            )
+
+        # The file's passes: (approach, Z it came down to, its arcs).
+        seen: list[tuple[XY, int, list[Arc]]] = []
+        approach, z = (self.x, self.y), self.z
+        lifts: set[int] = set()
+        j = i
+        centre = (0, 0)
+        while True:
+            arcs: list[Arc] = []
+            arc = steps.at(j)
+            while isinstance(arc, Arc):
+                arcs.append(arc)
+                j += 1
+                arc = steps.at(j)
+            if len(arcs) < 3:
+                raise refuse(arcs[-1].line, "a pass is a lead-in, turns and a lead-out")
+            if not seen:
+                centre = (arcs[1].cx, arcs[1].cy)
+            seen.append((approach, z, arcs))
+            up = steps.at(j)
+            end = arcs[-1]
+            if not (
+                isinstance(up, Rapid)
+                and up.z is not None
+                and end.z is not None
+                and up.z > end.z
+                and (up.x, up.y) == (end.x, end.y)
+            ):
+                break
+            k = j + 1
+            across = steps.at(k)
+            if (
+                isinstance(across, Rapid)
+                and across.z in (None, up.z)
+                and (across.x, across.y)
+                != (
+                    up.x,
+                    up.y,
+                )
+            ):
+                k += 1
+            else:
+                across = up
+            drop, entry, turn = steps.at(k), steps.at(k + 1), steps.at(k + 2)
+            if not (
+                isinstance(drop, Rapid)
+                and isinstance(across, Rapid)
+                and (drop.x, drop.y) == (across.x, across.y)
+                and drop.z is not None
+                and drop.z < up.z
+                and isinstance(entry, Arc)
+                and isinstance(turn, Arc)
+                and (turn.cx, turn.cy) == centre
+            ):
+                break
+            lifts.add(up.z)
+            approach, z = (drop.x, drop.y), drop.z
+            j = k + 1
+        if len(lifts) > 1:
+            raise refuse(first.line, "it rises to more than one height between passes")
+        tool = self.tool or self.next_tool()
+        diameter = self.tool_diameter()
+        assert diameter is not None
+        approach0, z_start, arcs0 = seen[0]
+        lead_in0, turns0 = arcs0[0], arcs0[1:-1]
+        clockwise = turns0[0].clockwise
+        rising = (lead_in0.z or 0) > z_start
+        z_end = seen[0][2][-1].z
+        assert z_end is not None
+        # The lead from the whole turns (each ends over where it began): their rise each.
+        whole = [t for t in turns0 if (t.x, t.y) == (lead_in0.x, lead_in0.y)]
+        if not whole:
+            raise refuse(turns0[0].line, "its turns are not whole turns of one lead")
+        lead_est = abs((whole[-1].z or 0) - (lead_in0.z or 0)) / len(whole)
+        internal = approach0 == centre
+        # PITCH as a programmer types it: threads per inch to 0.1, a mm lead to 0.01 mm.
+        if units is Units.INCH:
+            pitch = Decimal(round(10 * units.nm / lead_est)).scaleb(-1)
+        else:
+            pitch = Decimal(round(100 * lead_est / units.nm)).scaleb(-2)
+        pitch = (
+            pitch.quantize(Decimal(1)) if pitch == pitch.to_integral_value() else pitch.normalize()
+        )
+        if pitch <= 0:
+            raise refuse(first.line, "its turns do not rise")
+        radius = math.dist((seen[-1][2][0].x, seen[-1][2][0].y), centre)
+        probe = ThreadMill(
+            place=ThreadPlace.INTERNAL,
+            x=Decimal(0),
+            y=Decimal(0),
+            diameter=Decimal(1),
+            pitch=pitch,
+            z_up=Decimal(0),
+            z_dn=Decimal(-1),
+            feed_xy=Decimal(1),
+            tool=tool,
+            units=units,
+        )
+        lead = thread_lead(probe)
+        if internal:
+            major = 2 * radius + diameter
+        else:
+            major = 2 * (radius + thread_depth(lead, False)) - diameter
+        z_up, z_dn = (z_end, z_start) if rising else (z_start, z_end)
+        right = rising != clockwise
+        placement = Placement.INSIDE if internal else Placement.OUTSIDE
+        climb = routine_clockwise(
+            placement, MillingMode.CLIMB, None if self.spindle_cw is not False else -1
+        )
+        block = ThreadMill(
+            place=ThreadPlace.INTERNAL if internal else ThreadPlace.EXTERNAL,
+            x=Decimal(0),
+            y=Decimal(0),
+            diameter=decimal_of(quantize_nm(round(major), units), units),
+            pitch=pitch,
+            hand=Hand.RIGHT if right else Hand.LEFT,
+            z_up=decimal_of(quantize_nm(z_up, units), units),
+            z_dn=decimal_of(quantize_nm(z_dn, units), units),
+            passes=len(seen),
+            milling=MillingMode.CLIMB if clockwise == climb else MillingMode.CONVENTIONAL,
+            feed_xy=feed_decimal(first.feed, units),
+            tool=tool,
+            units=units,
+        )
+        made = thread_passes(
+            centre,
+            to_nm(block.diameter, units),
+            diameter,
+            lead,
+            to_nm(block.z_up, units),
+            to_nm(block.z_dn, units),
+            block.passes,
+            internal,
+            clockwise,
+            right,
+            thread_clear(),
+        )
+        for (at, down, arcs), cut in zip(seen, made, strict=True):
+            wanted = [cut.lead_in, *cut.turns, cut.lead_out]
+            if math.dist(at, cut.approach) > near or abs(down - cut.z_start) > near:
+                raise refuse(arcs[0].line, "a pass does not start where a THREAD MILL's does")
+            if len(arcs) != len(wanted):
+                raise refuse(
+                    arcs[0].line, f"a pass of {len(wanted)} arcs, this one has {len(arcs)}"
+                )
+            for arc, want in zip(arcs, wanted, strict=True):
+                if (
+                    arc.clockwise != want.clockwise
+                    or arc.feed != first.feed
+                    or math.dist((arc.x, arc.y, arc.z or 0), want.end) > near
+                    or math.dist((arc.cx, arc.cy), want.centre) > near
+                ):
+                    raise refuse(
+                        arc.line,
+                        f"this arc is not where a THREAD MILL of {show(major, units)}, "
+                        f"{pitch} {'TPI' if units is Units.INCH else 'mm lead'}, puts it (to X"
+                        f"{show(want.end[0], units)} Y{show(want.end[1], units)} Z"
+                        f"{show(want.end[2], units)})",
+                    )
+        lines = [*self.take_pending(approach0), first.line]
+        self.add(HelixOp(lines, centre, block, to_nm(block.z_up, units)))
+        self.awaiting_retract = (first.line, to_nm(block.z_up, units))
+        last = seen[-1][2][-1]
+        self.x, self.y, self.z = last.x, last.y, last.z
+        return j
+
+    def tool_diameter(self) -> int | None:
+        """The diameter (nm) the file gives the tool in use, or None."""
+        data = self.parsed.tools.get(self.tool or self.next_tool())
+        return data.diameter if data is not None and data.diameter else None
+
+    def face(self, i: int) -> int:
+        """Rows fed along X at a depth the tool came down to at rapid: a FACE (blocks.Face)
+        when the file's moves are exactly what one cuts. Its rows are operations/face.py's
+        (`face_rows`) and its levels `peck_levels`, each level's rows alike, joined by a
+        feed in Y (zig-zag) or up to the retract height and across (one-way), the levels by
+        a retract, across to the first row's start and down. What the file cannot say (it
+        cuts the same either way) comes back as the prompts' defaults: CLEAR empty, the
+        rectangle's XL and YW from it, STEP % 70 or the nearest that gives the same rows, and Z UP 0
+        for a FACE of one level below 0. Lengths in nm. Raises ImportFailure naming the
+        line whose move no FACE makes."""
+        steps = self.steps
+        first = steps[i]
+        assert isinstance(first, Feed) and self.z is not None
+        units = first.units
+        near = 2 * self.tol + resolution_nm(units)
+
+        def refuse(line: int, why: str) -> ImportFailure:
+            return ImportFailure(
+                self.notes.where(line),
+                f"rows fed along X at one depth (as a FACE cuts them) that are not a "
+                f"MillBlocks FACE: {why}",
+                line,
+            )
+
+        # The file's rows (y, x from, x to, the line that set the row, feed) level by level.
+        levels: list[list[FaceRow]] = [[]]
+        depths = [self.z]
+        level_lines = [first.line]  # where each level comes down (the first: its first row)
+        joins: set[str] = set()
+        lifts: set[int] = set()
+        feeds: set[int] = set()
+        x, y, z = self.x, self.y, self.z
+        set_by = first.line
+        j = i
+        while True:
+            s = steps.at(j)
+            if isinstance(s, Feed) and not s.comp and s.z in (None, z):
+                if s.y == y and s.x != x:
+                    levels[-1].append((y, x, s.x, set_by, s.feed))
+                    x = s.x
+                elif s.x == x and s.y != y and levels[-1]:
+                    joins.add("feed")
+                    y, set_by = s.y, s.line
+                else:
+                    break
+                feeds.add(s.feed)
+                j += 1
+                continue
+            if isinstance(s, Rapid) and s.z is not None and s.z > z and (s.x, s.y) == (x, y):
+                across, down, cut = steps.at(j + 1), steps.at(j + 2), steps.at(j + 3)
+                if (
+                    isinstance(across, Rapid)
+                    and across.z in (None, s.z)
+                    and (across.x, across.y) != (x, y)
+                    and isinstance(down, Rapid)
+                    and (down.x, down.y) == (across.x, across.y)
+                    and down.z is not None
+                    and down.z < s.z
+                    and isinstance(cut, Feed)
+                ):
+                    lifts.add(s.z)
+                    if down.z == z:
+                        joins.add("lift")
+                    else:
+                        levels.append([])
+                        depths.append(down.z)
+                        level_lines.append(down.line)
+                    x, y, z = across.x, across.y, down.z
+                    set_by = across.line
+                    j += 3
+                    continue
+            break
+        rows = levels[0]
+        if len(feeds) > 1:
+            raise refuse(first.line, "its rows are fed at more than one rate (one FEEDR XY)")
+        if len(lifts) > 1:
+            raise refuse(first.line, "it rises to more than one height between its rows")
+        if joins == {"feed", "lift"}:
+            raise refuse(first.line, "some rows are joined by a feed, others by a rapid")
+        zigzag = "lift" not in joins
+        for level in levels:
+            for k, (_, x0, x1, line, _) in enumerate(level):
+                if (x1 > x0) != (not zigzag or k % 2 == 0):
+                    raise refuse(
+                        line,
+                        "a FACE's rows go +X first and then "
+                        + ("alternate" if zigzag else "all go +X"),
+                    )
+        # The candidate FACE from the first level's outer rows; every row of every level
+        # must then be one of its rows.
+        plain = [(ry, min(x0, x1), max(x0, x1)) for ry, x0, x1, _, _ in rows]
+        diameter = self.tool_diameter()
+        assert diameter is not None
+        radius = diameter // 2
+        clear = face_clear(None, units)
+        overhang = min(clear, radius)
+        low, x_from, x_to = plain[0]
+        high = plain[-1][0]
+        xl = quantize_nm(x_to - x_from - 2 * radius - 2 * clear, units)
+        yw = quantize_nm(high - low + 2 * radius - 2 * overhang, units)
+        if xl <= 0 or yw <= 0:
+            raise refuse(
+                first.line,
+                "its rows run off the part less than a FACE's (the tool's radius and "
+                f"{show(clear, units)} beyond the edges along X, and over them in Y)",
+            )
+        centre = (
+            quantize_nm(x_from + xl // 2 + radius + clear, units),
+            quantize_nm(low + yw // 2 - radius + overhang, units),
+        )
+        made: list[tuple[int, int, int]] = []
+        step = 70
+        for step in sorted(range(1, 101), key=lambda s: abs(s - 70)):  # 70 first
+            if (high - low) // max(1, diameter * step // 100) > len(plain):
+                continue  # more rows than the file's (and a fine step would make millions)
+            made = face_rows(centre, xl, yw, radius, diameter * step // 100, clear)
+            if len(made) == len(plain):
+                break
+        for level, down_line in zip(levels, level_lines, strict=True):
+            for (ry, x0, x1, line, _), want in zip(level, made, strict=False):
+                if any(
+                    abs(a - b) > near
+                    for a, b in zip((ry, min(x0, x1), max(x0, x1)), want, strict=True)
+                ):
+                    raise refuse(
+                        line,
+                        f"this row at Y{show(ry, units)} is not where a FACE's evenly spaced "
+                        f"rows put it (Y{show(want[0], units)} from X{show(want[1], units)} to "
+                        f"X{show(want[2], units)})",
+                    )
+            if len(level) != len(plain):
+                raise refuse(down_line, "each level of a FACE cuts as many rows as the first")
+        if len(made) != len(plain):
+            raise refuse(first.line, f"no STEP % spaces {len(plain)} rows so")
+        z_dn = quantize_nm(depths[-1], units)
+        if len(depths) > 1:
+            z_up = quantize_nm(2 * depths[0] - depths[1], units)
+        elif z_dn < 0:
+            z_up = 0  # one level: the stock's top is not in the file; part zero's
+        else:
+            raise refuse(
+                first.line,
+                "one level at or above Z0: the stock's top (Z UP) is not in the file",
+            )
+        wanted = peck_levels(z_up, z_dn, len(depths))
+        for depth, target, line in zip(depths, wanted, level_lines, strict=True):
+            if abs(depth - target) > near:
+                raise refuse(
+                    line,
+                    f"its levels are not evenly spaced to Z{show(z_dn, units)}, as a "
+                    f"FACE's # PASS are (Z{show(target, units)} here)",
+                )
+        block = Face(
+            pattern=FacePattern.ZIGZAG if zigzag else FacePattern.ONE_WAY,
+            x=Decimal(0),
+            y=Decimal(0),
+            xl=decimal_of(xl, units),
+            yw=decimal_of(yw, units),
+            z_up=decimal_of(z_up, units),
+            z_dn=decimal_of(z_dn, units),
+            passes=len(depths),
+            step=step,
+            clear=None,
+            feed_xy=feed_decimal(first.feed, units),
+            tool=self.tool or self.next_tool(),
+            units=units,
+        )
+        start = (plain[0][1], plain[0][0])
+        lines = [*self.take_pending(start), first.line]
+        self.add(HelixOp(lines, centre, block, z_up))
+        self.awaiting_retract = (first.line, z_up)
         self.x, self.y, self.z = x, y, z
         return j
 

@@ -10,7 +10,7 @@ of any size stays inside the ±99.999 in a dimension may have (app.cnc.limits). 
 padded with single-axis G1 moves to exactly the line count. rs274 must accept it (its exit
 status is checked), so all three readers see a valid program.
 
-- ours: `app.cnc.recognition.read_as` with the G-code importer (parse, motion, recognition of
+- ours: `app.cnc.formats.reading.read_as` with the G-code importer (parse, motion, recognition of
   data blocks; without the web's and CLI's size limits), then `compile_program()` of the
   program it returns — as the installed app runs it: the wheel with the importer compiled
   by mypyc (`make wheel-native`, built and installed into a fresh environment by

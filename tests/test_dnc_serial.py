@@ -372,7 +372,7 @@ def test_receive_program_saves_nothing_that_does_not_import(
 
 
 def test_events_capture_imports_through_the_import_package(events: bytes) -> None:
-    """Through app.cnc.recognition.read_program once it exists; until then a clear error."""
+    """Through app.cnc.formats.reading.read_program once it exists; until then a clear error."""
     now = datetime(2025, 3, 1)
     result = ReceiveResult(
         port="/dev/ttyS0",
@@ -386,7 +386,7 @@ def test_events_capture_imports_through_the_import_package(events: bytes) -> Non
         text=events.decode("ascii"),
     )
     try:
-        available = hasattr(importlib.import_module("app.cnc.recognition"), "read_program")
+        available = hasattr(importlib.import_module("app.cnc.formats.reading"), "read_program")
     except ImportError:
         available = False
     if not available:

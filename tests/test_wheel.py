@@ -264,7 +264,7 @@ def test_a_checkout_never_loads_extension_modules(tmp_path: Path) -> None:
         source.with_name(source.stem + suffix).write_bytes(b"")
     script = (
         "from app.cnc import native\n"
-        "from app.cnc.recognition import read_program\n"
+        "from app.cnc.formats.reading import read_program\n"
         "r = read_program(b'G21 G90\\nG0 X0 Y0 Z5\\nG1 Z-1 F100\\nG0 Z5\\nM30\\n', 'x')\n"
         "import app.cnc.recognition.build as b\n"
         "print(len(r.program.blocks), b.__file__.endswith('.py'), native.status())\n"

@@ -290,7 +290,7 @@ def program_from_capture(result: ReceiveResult, format: str, name: str = "") -> 
 
 def import_capture(result: ReceiveResult, format: str, name: str = "") -> tuple[Program, str]:
     """The program in a capture and its import report (empty for a MillBlocks document),
-    read by app.cnc.recognition as `format` (an import format or an export target's name).
+    read by app.cnc.formats.reading as `format` (an import format or an export target's name).
     Raises CaptureImportError saying why, with the importer's line and column; nothing is
     returned half-read."""
     chosen = import_format(format)

@@ -587,7 +587,9 @@ class Pocket(Block):
     feed_xy: Decimal = prompt("FEEDR XY", FEED, feed=limits.FEED_XY)
     tool: int = prompt("TOOL #", TOOL, low=1, high=MAX_TOOLS)
     # A POCKET has no placement: it is always a pocket, so ENTRY always applies.
-    entry: Entry | None = prompt("ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP)
+    entry: Entry | None = prompt(
+        "ENTRY", CHOICE, None, blank="PLUNGE", help=ENTRY_HELP, beside=True
+    )
     ramp_angle: Decimal | None = prompt(
         "RAMP ANGLE", ANGLE, None, low=RAMP_LOW, high=RAMP_HIGH, help=RAMP_HELP, only_when=ENTERED
     )

@@ -103,6 +103,9 @@ class Prompt:
     it). `changes`: on COPY, the field of the copied blocks this value replaces (or, for a
     STEP, adds to in absolute blocks).
     `prompted`: False for fields the entry form does not ask for one by one.
+    `beside`: asked beside the control's own prompts, outside their Enter sequence (an
+    option the control never prompted for: a POCKET's ENTRY), as a field with `only_when`
+    is.
     `calculated`: the field may be left empty and the compile calculates it from the blocks
     around it (a contour's X/Y from the print, app.cnc.solve).
     """
@@ -119,6 +122,7 @@ class Prompt:
     only_when: tuple[tuple[str, Any], ...] = ()
     changes: str = ""
     prompted: bool = True
+    beside: bool = False
     calculated: bool = False
 
 

@@ -43,6 +43,9 @@ class FieldSpec:
     # Shown only while these prompts have these values ("placement=pocket entry=helix"):
     # the declaration's `only_when` on prompts the form asks for (static/app.js).
     shown_when: str = ""
+    # Beside the Enter sequence, not in it: a field shown only sometimes, or one the control
+    # never prompted for (the declaration's `beside`).
+    beside: bool = False
 
 
 @dataclass(frozen=True)
@@ -95,7 +98,16 @@ def _spec(
         choices = tuple((m.value, m.name.replace("_", "/")) for m in members)
         if f.optional:
             choices = (("", f.prompt.blank), *choices)
-    return FieldSpec(name, label, f.prompt.value.value, f.required, choices, f.prompt.help, shown)
+    return FieldSpec(
+        name,
+        label,
+        f.prompt.value.value,
+        f.required,
+        choices,
+        f.prompt.help,
+        shown,
+        bool(shown) or f.prompt.beside,
+    )
 
 
 def _form(cls: type[Block], sub: SubKind) -> EntryForm:

@@ -20,6 +20,7 @@ and 0.13 mm."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
@@ -476,6 +477,17 @@ def _entry_problems(routine: Routine, block: Circle | Frame) -> list[Finding]:
     return []
 
 
+def largest_fitting(fits: Callable[[float], bool], wanted: float, halvings: int = 60) -> float:
+    """The largest size up to `wanted` (which does not fit) that `fits`, by bisection
+    (`halvings` of them: 60 reach the float's resolution): what a ramp's refusal says
+    would fit."""
+    low, high = 0.0, wanted
+    for _ in range(halvings):
+        mid = (low + high) / 2
+        low, high = (mid, high) if fits(mid) else (low, mid)
+    return low
+
+
 def _helix_entry(
     routine: Routine, first: Path, allowance: int, angle: Decimal
 ) -> tuple[Ramp | None, Finding | None]:
@@ -498,10 +510,7 @@ def _helix_entry(
     wanted = helix_radius(r)
     if fits(wanted):
         return ramp(wanted), None
-    low, high = 0.0, wanted
-    for _ in range(60):
-        mid = (low + high) / 2
-        low, high = (mid, high) if fits(mid) else (low, mid)
+    low = largest_fitting(fits, wanted)
     u = routine.units
     return None, Finding(
         routine.block,
@@ -537,10 +546,7 @@ def _zigzag_entry(
     wanted = zigzag_length(r)
     if fits(wanted):
         return ramp(wanted), None
-    low, high = 0.0, wanted
-    for _ in range(60):
-        mid = (low + high) / 2
-        low, high = (mid, high) if fits(mid) else (low, mid)
+    low = largest_fitting(fits, wanted)
     u = routine.units
     return None, Finding(
         routine.block,

@@ -45,7 +45,7 @@ from app.cnc.ramp import (
     zigzag_length,
     zigzag_ramp,
 )
-from app.cnc.routines import pocket_overlap, rough_wall, routine_clockwise
+from app.cnc.routines import largest_fitting, pocket_overlap, rough_wall, routine_clockwise
 from app.cnc.sequences import RoutineStart, SequencePlan
 from app.cnc.units import Units, message_length, to_nm
 
@@ -364,11 +364,13 @@ def _no_fit(
     fits there in any direction tried (bisection to a nanometre's order)."""
     best = 0.0
     for d in directions:
-        low, high = 0.0, wanted
-        for _ in range(30):
-            mid = (low + high) / 2
-            low, high = (mid, high) if fits(make(entry, d, mid)) else (low, mid)
-        best = max(best, low)
+        # 30 halvings: each tries a whole ramp against the region, and a nanometre's order
+        # is all the message shows.
+
+        def fits_along(size: float, d: Pt = d) -> bool:
+            return fits(make(entry, d, size))
+
+        best = max(best, largest_fitting(fits_along, wanted, 30))
     u = block.units
     at = f"({dim(entry[0], u)}, {dim(entry[1], u)})"
     if block.entry is Entry.HELIX:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import enum
 import gc
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
@@ -292,19 +292,54 @@ def byte_lines(data: bytes) -> Iterator[str]:
     are never part of a longer UTF-8 character, so splitting the bytes splits the text.)
     Raises ImportFailure, as `decode_text` does, when the line reached is not UTF-8."""
     try:
-        yield from _byte_lines(data)
+        yield from _byte_lines(data, _after_boms(data), len(data), True)
     except UnicodeDecodeError:
         decode_text(data)  # (names the line and column)
         raise
 
 
-def _byte_lines(data: bytes) -> Iterator[str]:
+def chunk_lines(chunks: Iterable[bytes]) -> Iterator[str]:
+    """`byte_lines` of the bytes `chunks` make together (a file read a part at a time:
+    `byte_lines` of it without its bytes held whole). The first chunk holds the file's
+    start (its byte order marks). Raises ImportFailure when a line is not UTF-8 (the line
+    reached is not known here: `decode_text` of the whole file names it)."""
+    rest = b""
+    first = True
+    try:
+        for chunk in chunks:
+            data = rest + chunk if rest else chunk
+            start = 0
+            if first:
+                start = _after_boms(data)
+                if len(data) - start < len(_BOM) and _BOM.startswith(data[start:]):
+                    rest = data  # (perhaps a byte order mark yet: its bytes read so far)
+                    continue
+                first = False
+            # Up to the last line break, but a CR at the very end may be a CR LF's half.
+            end = len(data) - 1 if data.endswith(b"\r") else len(data)
+            cut = max(data.rfind(b"\n", start, end), data.rfind(b"\r", start, end)) + 1
+            if cut <= start:
+                rest = data[start:]
+                continue
+            yield from _byte_lines(data, start, cut, False)
+            rest = data[cut:]
+        yield from _byte_lines(rest, _after_boms(rest) if first else 0, len(rest), True)
+    except UnicodeDecodeError as exc:
+        raise ImportFailure("", f"byte 0x{exc.object[exc.start]:02X} is not text (UTF-8)") from None
+
+
+def _after_boms(data: bytes) -> int:
     start = 0
     while data.startswith(_BOM, start):
         start += len(_BOM)
-    n = len(data)
+    return start
+
+
+def _byte_lines(data: bytes, start: int, n: int, final: bool) -> Iterator[str]:
+    """The lines of `data[start:n]`; when not `final`, what follows its last line break
+    is not a line (the next part of the file goes on with it)."""
     while True:
-        lf = data.find(b"\n", start)
+        lf = data.find(b"\n", start, n)
         cr = data.find(b"\r", start, n if lf < 0 else lf)
         if cr >= 0:
             yield data[start:cr].decode("utf-8")
@@ -313,7 +348,8 @@ def _byte_lines(data: bytes) -> Iterator[str]:
             yield data[start:lf].decode("utf-8")
             start = lf + 1
         else:
-            yield data[start:].decode("utf-8")
+            if final:
+                yield data[start:n].decode("utf-8")
             return
 
 

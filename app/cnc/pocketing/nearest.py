@@ -98,8 +98,17 @@ def table(starts: Sequence[Pt], elements: Sequence[Element]) -> Elements:
 def bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
     """(lower, upper): for each point (a row x, y) and element, bounds on the distance from
     the point to the element's nearest point as the planner finds it (P × E arrays)."""
-    px = points[:, 0:1]
-    py = points[:, 1:2]
+    return _bounds(points[:, 0:1], points[:, 1:2], elements)
+
+
+def pair_bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
+    """(lower, upper) as `bounds` gives them, of each point (row i) to element i alone
+    (P arrays, P points and P elements): many small questions in one numpy pass."""
+    return _bounds(points[:, 0], points[:, 1], elements)
+
+
+def _bounds(px: Array, py: Array, elements: Elements) -> tuple[Array, Array]:
+    """`bounds` for point columns `px`, `py` broadcast against the elements' columns."""
     # Lines: the nearest point of the segment.
     dx, dy = elements.ex - elements.sx, elements.ey - elements.sy
     denom = dx * dx + dy * dy

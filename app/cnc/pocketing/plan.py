@@ -32,6 +32,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+import numpy.typing as npt
 
 from app.cnc import sizes
 from app.cnc.blocks import MillingMode, Placement
@@ -48,7 +49,13 @@ from app.cnc.plane import (
 )
 from app.cnc.pocketing import nearest, regions
 from app.cnc.pocketing.checks import contour_problems, island_problems, show, starts_of
-from app.cnc.pocketing.exact import Carrier, carriers, exact_ring, matched_sources
+from app.cnc.pocketing.exact import (
+    Carrier,
+    carrier_boxes,
+    carriers,
+    exact_ring,
+    matched_sources,
+)
 from app.cnc.pocketing.model import (
     Link,
     LinkKind,
@@ -168,6 +175,7 @@ def pass_levels(
 
 
 Level = tuple[float, list[regions.Ring]]
+FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass
@@ -192,7 +200,7 @@ class _Planner:
     passes: list[Pass] = field(default_factory=list)
     position: Pt | None = None
     cleared: regions.SweptIndex | None = None
-    _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
+    _carriers: dict[int, tuple[list[Carrier], FloatArray]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
     _sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
     _narrow_sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
@@ -249,8 +257,8 @@ class _Planner:
         d, _ = self.levels[node.level]
         finish = node.level == 0
         tag = "finish" if finish else "rough"
-        level = self._level_carriers(node.level, d)
-        exact = exact_ring(ring, level, self.match, self.block, tag)
+        level, level_boxes = self._level_carriers(node.level, d)
+        exact = exact_ring(ring, level, self.match, self.block, tag, level_boxes)
         if exact is not None:
             path, sources, is_exact = exact.path, exact.sources, True
         else:
@@ -323,9 +331,12 @@ class _Planner:
             elements.append(Element(self.block, ring.start, tag="link"))
         return Link(kind, Path(along.start, tuple(elements)))
 
-    def _level_carriers(self, k: int, d: float) -> list[Carrier]:
+    def _level_carriers(self, k: int, d: float) -> tuple[list[Carrier], FloatArray]:
+        """Level `k`'s carriers and their boxes (`carrier_boxes`), kept: a level has many
+        rings."""
         if k not in self._carriers:
-            self._carriers[k] = carriers(self.contours, d, self.t)
+            level = carriers(self.contours, d, self.t)
+            self._carriers[k] = (level, carrier_boxes(level, self.match))
         return self._carriers[k]
 
     # -- areas -------------------------------------------------------------------------------

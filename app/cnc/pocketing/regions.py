@@ -389,6 +389,9 @@ class SweptIndex:
         self.sweeps: dict[tuple[int, int], Swept] = {} if sweeps is None else sweeps
         self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
         self.cells: dict[tuple[int, int], list[int]] = {}
+        # The boxes of a move's pieces by the id of its points (kept with them, so the id
+        # is not reused): a pass is asked about as the one a link leads to, then recorded.
+        self._boxes: dict[int, tuple[Sequence[Pt], list[Box]]] = {}
 
     def add(self, points: Sequence[Pt]) -> None:
         """Record a move along `points` (one point: the tool went down there). The list
@@ -402,12 +405,16 @@ class SweptIndex:
     def boxes(self, points: Sequence[Pt]) -> list[Box]:
         """The box of each piece of a move along `points`, grown by the tool's reach: the
         tool's sweep along the piece lies inside it."""
+        kept = self._boxes.get(id(points))
+        if kept is not None and kept[0] is points:
+            return kept[1]
         reach = self.radius + self.tolerance
         found = []
         for piece in _pieces(points, self.PIECE):
             xs = [p[0] for p in piece]
             ys = [p[1] for p in piece]
             found.append((min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach))
+        self._boxes[id(points)] = (points, found)
         return found
 
     def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> Swept:

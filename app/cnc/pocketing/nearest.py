@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.plane import Element, Pt, sweep
+from app.cnc.plane import Element, Path, Pt, length, points_along, sweep
 
 Array = npt.NDArray[np.float64]
 
@@ -216,6 +216,53 @@ def _to_segments(point: Pt, starts: Array, ends: Array) -> Array:
     foot = starts + d * t[:, None]
     found: Array = np.hypot(point[0] - foot[:, 0], point[1] - foot[:, 1])
     return found
+
+
+@dataclass(frozen=True)
+class Samples:
+    """The points `plane.sample` takes along a path, to numpy's rounding (`at`, rows x, y,
+    in the same order), and each one exactly (`exact`, the same arithmetic as
+    `plane.sample`): a caller bounds them all with numpy and measures the few that can
+    win, as the rest of this module does with distances."""
+
+    at: Array
+    starts: tuple[Pt, ...]
+    elements: tuple[Element, ...]
+    owner: npt.NDArray[np.intp]
+    fraction: Array
+
+    def exact(self, k: int) -> Pt:
+        """The `k`th sample as `plane.sample` makes it, to the last bit."""
+        e = int(self.owner[k])
+        return points_along(self.starts[e], self.elements[e], (float(self.fraction[k]),))[0]
+
+
+def samples(path: Path, step: float) -> Samples:
+    """The points of `plane.sample(path, step)`: each element cut into the same n pieces,
+    fractions i / n (both ends included), the points made for all elements at once."""
+    starts: list[Pt] = []
+    counts: list[int] = []
+    current = path.start
+    for element in path.elements:
+        starts.append(current)
+        counts.append(max(1, math.ceil(length(current, element) / step)))
+        current = element.end
+    table_ = table(starts, path.elements)
+    sizes = np.array(counts, dtype=np.intp) + 1
+    owner = np.repeat(np.arange(len(counts), dtype=np.intp), sizes)
+    first = np.cumsum(sizes) - sizes
+    steps = np.arange(len(owner), dtype=np.intp) - first[owner]
+    fraction = steps / np.array(counts, dtype=np.float64)[owner]
+    sx, sy = table_.sx[owner], table_.sy[owner]
+    x = sx + (table_.ex[owner] - sx) * fraction
+    y = sy + (table_.ey[owner] - sy) * fraction
+    arc = table_.arc[owner]
+    if arc.any():
+        signed = np.where(table_.clockwise, -table_.turn, table_.turn)[owner]
+        angle = table_.a0[owner] + signed * fraction
+        x = np.where(arc, table_.cx[owner] + table_.radius[owner] * np.cos(angle), x)
+        y = np.where(arc, table_.cy[owner] + table_.radius[owner] * np.sin(angle), y)
+    return Samples(np.column_stack((x, y)), tuple(starts), path.elements, owner, fraction)
 
 
 def joined(tables: Sequence[Elements]) -> Elements:

@@ -43,7 +43,6 @@ from app.cnc.plane import (
     distance_to_element,
     length,
     reverse,
-    sample,
     signed_area,
     sub,
 )
@@ -539,14 +538,16 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     nearest pair, so could never be the smallest): the same point as measuring them all,
     at the cost of the samples and elements near each other."""
     ring_starts = starts_of(ring)
-    samples = sample(previous, step)
-    points = np.array([p for p, _ in samples], dtype=np.float64)
+    # The samples to numpy's rounding for the bounds (a sample's bounds move by about
+    # 1e-6 nm, far inside MARGIN), each one measured exactly as `sample` makes it.
+    samples = nearest.samples(previous, step)
+    points = samples.at
     # Some sample is within its distance to the ring's start (a point of the ring).
     reach = float(np.hypot(points[:, 0] - ring.start[0], points[:, 1] - ring.start[1]).min())
     table = nearest.table(ring_starts, ring.elements)
     best: tuple[float, Pt] | None = None
     for i, near in nearest.nearest_pairs(points, table, reach):
-        point = samples[i][0]
+        point = samples.exact(i)
         for k in near:
             d = math.dist(_closest_on_element(point, ring_starts[k], ring.elements[k]), point)
             if best is None or d < best[0] - 1e-9:

@@ -416,12 +416,20 @@ def exact_ring(
     junctions: list[Pt] = []
     for k, (label, first, length) in enumerate(runs):
         nxt_label = runs[(k + 1) % len(runs)][0]
-        window = [points[(first + j) % n] for j in range(length + 1)]
-        after = points[(first + length + 1) % n]
-        meet = _junction(level[label], level[nxt_label], window[-1], after, tolerance)
-        if meet is None or nearest.polyline_distance(meet, [*window, after]) > 4 * tolerance:
+        last, after = points[(first + length) % n], points[(first + length + 1) % n]
+        meet = _junction(level[label], level[nxt_label], last, after, tolerance)
+        if meet is None:
             return None
         junctions.append(meet)
+    # Each junction lies near its run and the point after it (one numpy pass for all).
+    far = nearest.stretch_distances(
+        at,
+        np.array(junctions, dtype=np.float64),
+        [first for _, first, _ in runs],
+        [length + 1 for _, _, length in runs],
+    )
+    if (far > 4 * tolerance).any():
+        return None
     elements: list[Element] = []
     element_starts: list[Pt] = []
     groups: list[list[Pt]] = []

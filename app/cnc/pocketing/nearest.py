@@ -197,24 +197,36 @@ def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> 
     return _to_segments(point, starts, ends)
 
 
-def polyline_distance(point: Pt, points: Sequence[Pt]) -> float:
-    """The distance from `point` to the open polyline through `points` (one point: to it),
-    as `mill.distance_to_element` measures each segment."""
-    at = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    if len(at) == 1:
-        return math.dist(point, points[0])
-    return float(_to_segments(point, at[:-1], at[1:]).min())
+def stretch_distances(
+    ring: Array, points: Array, firsts: Sequence[int], counts: Sequence[int]
+) -> Array:
+    """For each k, the distance from `points[k]` to the open polyline of `counts[k]`
+    segments of the closed `ring` (rows x, y) from its point `firsts[k]` on, as
+    `mill.distance_to_element` measures each segment: every stretch in one numpy pass."""
+    n = len(ring)
+    sizes = np.asarray(counts, dtype=np.intp)
+    owner = np.repeat(np.arange(len(sizes), dtype=np.intp), sizes)
+    first_segment = np.cumsum(sizes) - sizes
+    rows = (
+        np.asarray(firsts, dtype=np.intp)[owner] + np.arange(len(owner)) - first_segment[owner]
+    ) % n
+    found: Array = np.minimum.reduceat(
+        _to_segments(points[owner], ring[rows], ring[(rows + 1) % n]), first_segment
+    )
+    return found
 
 
-def _to_segments(point: Pt, starts: Array, ends: Array) -> Array:
+def _to_segments(point: Pt | Array, starts: Array, ends: Array) -> Array:
+    """The distance from `point` (or from each row of `point`) to each segment."""
     d = ends - starts
     denom = (d * d).sum(axis=1)
-    q = np.array(point) - starts
+    at = np.broadcast_to(np.asarray(point, dtype=np.float64), starts.shape)
+    q = at - starts
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(denom > 0, (q * d).sum(axis=1) / denom, 0.0)
     t = np.clip(t, 0.0, 1.0)
     foot = starts + d * t[:, None]
-    found: Array = np.hypot(point[0] - foot[:, 0], point[1] - foot[:, 1])
+    found: Array = np.hypot(at[:, 0] - foot[:, 0], at[:, 1] - foot[:, 1])
     return found
 
 

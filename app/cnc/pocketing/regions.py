@@ -177,8 +177,10 @@ def inset(contours: Sequence[Path], d: float, tolerance: float) -> list[Ring]:
     )
 
 
-def _raw_inset(contour: Path, d: float, tolerance: float) -> Ring:
-    """One closed contour's raw offset `d` to its left (see `inset`)."""
+def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
+    """One closed contour's raw offset `d` to its left (see `inset`), as Clipper reads it
+    (lists of [x, y]: only Clipper reads it, and tuples of its points were a third of a
+    level's time)."""
     chunks: list[npt.NDArray[np.float64]] = []
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
@@ -213,7 +215,8 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> Ring:
     at = at[keep]
     if len(at) > 1 and (at[0] == at[-1]).all():
         at = at[:-1]
-    return list(map(tuple, at.tolist()))
+    found: list[list[int]] = at.tolist()
+    return found
 
 
 def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np.float64]:

@@ -219,14 +219,18 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     gouged = heights < intent.floor - tol
     claimed = np.zeros_like(gouged)
     found: list[Finding] = []
-    for contour in geometry.contours:
-        found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
+    for k, contour in enumerate(geometry.contours):
+        if k not in intent.contours:  # a roughing's wall is no finished surface
+            found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
         found += _contour_rest(grid, heights, contour, geometry, tol, u)
     pocket_floor, must_clear = clearing(grid, geometry.routines, tol)
     left_in_pockets = must_clear & (heights > np.maximum(pocket_floor, grid.stock.bottom) + tol)
-    for routine in geometry.routines:
+    # A roughing's wall is no finished surface: nothing is a gouge past it.
+    nothing = np.zeros_like(gouged) if intent.roughing else gouged
+    for k, routine in enumerate(geometry.routines):
+        walled = nothing if k in intent.roughing else gouged
         found += _routine_findings(
-            grid, heights, owners, routine, tol, u, gouged, claimed, left_in_pockets
+            grid, heights, owners, routine, tol, u, walled, claimed, left_in_pockets
         )
     for pocket in geometry.pockets:
         found += _pocket_findings(grid, heights, pocket, tol, u)

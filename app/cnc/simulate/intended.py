@@ -16,6 +16,14 @@ What a block means to remove (its *waste*), each to its depth:
   inside an inner one);
 - an open compensated contour or an uncompensated one (a slot): the tool's swath.
 
+Bosses (OUTSIDE routines, outer profiles) keep each other: a boss's waste is never another
+boss's inside. Of nested ones the part at each depth is the smallest boss cut to that
+depth: a boss that holds another cut at least as deep is its roughing and drops out (its
+wall is no finished surface), one cut deeper is the step the smaller stands on. A boss
+standing in a pocket (a CIRCLE/FRAME INSIDE or IN/TAN, a closed contour cut from inside,
+an irregular POCKET's wall) is kept by the pocket's wall pass, and its own waste ends at
+that wall; a CIRCLE/FRAME POCKET clears it all the same.
+
 Each waste is widened by the tolerance (a cut that meets the exact edge of one is no
 gouge). `intended` draws them all at once: the shapes of one depth are filled together as a
 union (scanlines with winding numbers, so thousands of a LOOP's pockets or a bolt circle's

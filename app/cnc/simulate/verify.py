@@ -5,8 +5,9 @@ findings, each named by the block at fault:
 
 - **gouge**: material removed below what every block means to cut there. Beside a
   finished surface (a compensated contour, a POCKET's wall or island, a CIRCLE/FRAME
-  wall: a band two tool radii wide) it names the surface damaged, else it is material no
-  block means to remove. Also a closed contour cut from inside through the stock around
+  wall: a band two tool radii wide; not the wall of a boss that roughs out a smaller one,
+  `Intent.roughing`) it names the surface damaged, else it is material no block means to
+  remove. Also a closed contour cut from inside through the stock around
   features of the part: the slug that drops out is the part, cut on the wrong side.
 - **rest material**: material left above Z DN that a block means to clear: a POCKET
   routine's inside (a frame whose corner radius is smaller than the tool's), the band one

@@ -19,6 +19,7 @@ The tables below are the corpus; `cases(surface)` expands them:
 
 from __future__ import annotations
 
+import json
 import struct
 from dataclasses import dataclass, field
 from decimal import Decimal
@@ -50,6 +51,30 @@ GRID_OF_GRIDS = (
     Path(__file__).parent / "bad" / "loops-multiply-past-the-moves-limit" / "program.json"
 ).read_bytes()
 """Five blocks, two nested LOOP/REP of 99 x 99: 10^9 moves, refused naming block 2."""
+
+
+def loop_of_holes(n: int, name: str = "HOLE GRID") -> Program:
+    """The audit's program of issue 30 (five blocks): POS; POS INC LOOP; DRILL INC LOOP
+    X 0.001; REP `n` x `n` at 0.01; REP `n` x `n` at 0.3 — (n + 1)^4 holes, each about 13
+    moves. With n = 15, 65 536 holes and ~854 000 moves: the heaviest such program the
+    moves limit allows (16 is refused), and before Verify's own limit, 14-60 s of Verify."""
+    data = json.loads(GOLDEN_LOOP.read_text())
+    pos: dict[str, Any] = {"type": "POS", "mode": "abs", "units": "inch", "loop": False}
+    pos |= {"stop": False, "x": 0, "y": 0, "index": False, "tool": 1}
+    drill: dict[str, Any] = {"type": "DRILL", "mode": "inc", "units": "inch", "loop": True}
+    drill |= {"stop": False, "x": 0.001, "y": 0, "z_up": 0.1, "z_dn": -0.2, "feed_z": 5}
+    drill |= {"pecks": 1, "tool": 1, "comp": "none"}
+
+    def rep(step: float) -> dict[str, Any]:
+        rep: dict[str, Any] = {"type": "REP", "mode": "inc", "units": "inch", "loop": False}
+        return rep | {"stop": False, "x": step, "y": step, "nx": n, "ny": n}
+
+    data |= {"name": name, "notes": ""}
+    data["blocks"] = [pos, pos | {"mode": "inc", "loop": True}, drill, rep(0.01), rep(0.3)]
+    return document.loads(json.dumps(data))
+
+
+GOLDEN_LOOP = Path(__file__).parent / "golden" / "loop-nested-3-deep" / "program.json"
 
 
 def eight_island_pocket(

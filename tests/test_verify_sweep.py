@@ -270,3 +270,25 @@ def test_a_bolt_circle_is_simulated_as_one_group_and_cuts_as_its_holes_do() -> N
     together = run_simulation(circle, resolution).heights()
     apart = run_simulation(one_by_one, resolution).heights()
     assert np.array_equal(together, apart)
+
+
+def test_the_time_budget_stops_the_simulation_and_its_checks() -> None:
+    """The request time budget (sizes.spend) is the last line of defence inside Verify too:
+    with it used up, the sweep and the part's checks stop with a clear refusal (a 503 page
+    on the server) instead of running on until gunicorn kills the worker. Before issue 30
+    neither asked it: the heaviest legal program ran 60 s past a 20 s budget."""
+    from app.cnc import sizes
+    from app.cnc.simulate.programmed import programmed_geometry
+    from app.cnc.simulate.sweep import simulate
+    from app.cnc.simulate.verify import Verification, check_part, default_tolerance, prepare
+
+    program = load(GOLDEN_DIR / "loop-rep-grid" / "program.json")
+    grid, placed = prepare(program)  # the compile and the placing: outside the budget
+    tol = default_tolerance(program.units)
+    with sizes.time_budget(0), pytest.raises(sizes.OverBudget, match="more than the 0 s"):
+        simulate(grid, placed, None, tol)
+    sim = simulate(grid, placed, None, tol)
+    geometry = programmed_geometry(program)
+    result = Verification(program, sim, tolerance=tol)
+    with sizes.time_budget(0), pytest.raises(sizes.OverBudget, match="millblocks command"):
+        check_part(result, geometry, tol)

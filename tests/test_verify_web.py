@@ -5,12 +5,17 @@ from __future__ import annotations
 
 import struct
 from decimal import Decimal
+from pathlib import Path
 
+from click.testing import CliRunner
 from flask import Flask
 from flask.testing import FlaskClient
 
-from app.cnc import document
+from app.cli import main
+from app.cnc import document, sizes
+from app.cnc.simulate.verify import prepare, work
 from app.web import get_library
+from tests.hostile_corpus import loop_of_holes
 from tests.test_verify import CASES_DIR
 from tests.test_web import app, client, token
 
@@ -19,6 +24,15 @@ __all__ = ["app", "client"]
 
 def add(app: Flask, case: str) -> int:
     program = document.loads((CASES_DIR / case / "program.json").read_text())
+    with app.app_context():
+        return get_library().create(program).id
+
+
+GOLDEN = Path(__file__).parent / "golden"
+
+
+def add_golden(app: Flask, case: str) -> int:
+    program = document.loads((GOLDEN / case / "program.json").read_text())
     with app.app_context():
         return get_library().create(program).id
 
@@ -142,3 +156,48 @@ def test_the_editor_s_verify_panel_reads_the_findings_per_block(
     fragment = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
     assert 'class="finding" data-block="5"' in fragment
     assert f'href="/programs/{pid}?edit=5"' in fragment and "MILL STD" in fragment
+
+
+def test_a_simulation_past_the_server_s_limit_is_refused_on_every_page(
+    app: Flask, client: FlaskClient
+) -> None:
+    """The thread mill's 55 moves sweep ~76 M cells (6 s of Verify here): every page that
+    simulates refuses it before the work starts, naming the figure, the limit and what to
+    do; before issue 30 each ran it, and the heaviest legal program ran 14-60 s."""
+    pid = add_golden(app, "thread-mill-external-mm")
+    limit = f"sweeps at most {sizes.MAX_VERIFY_WORK:,}"
+    page = client.get(f"/programs/{pid}/verify")
+    text = page.get_data(as_text=True)
+    assert page.status_code == 422, text
+    assert "Too much to simulate" in text and limit in text
+    assert "simulating this program means sweeping about 7" in text
+    assert "millblocks verify" in text
+    report = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
+    assert limit in report and "millblocks verify" in report
+    # The set-up sheet's picture: the same 800 cells along the stock. (The 3D view's
+    # surface, at 320, is a sixth of the work, and held to the same limit.)
+    picture = client.get(f"/programs/{pid}/verify/part.png")
+    assert picture.status_code == 422 and limit in picture.get_data(as_text=True)
+
+
+def test_the_heaviest_legal_loop_of_holes_is_refused_not_simulated_for_a_minute(
+    app: Flask, client: FlaskClient
+) -> None:
+    """Issue 30's program: within the moves limit, yet 14-60 s of Verify on a shop server;
+    the page now says at once that it is too much to simulate here."""
+    with app.app_context():
+        pid = get_library().create(loop_of_holes(15)).id
+    report = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
+    assert f"sweeps at most {sizes.MAX_VERIFY_WORK:,}" in report, report
+
+
+def test_the_command_line_verifies_what_the_server_refuses(tmp_path: Path) -> None:
+    """`millblocks verify` has no work limit: the user's own computer, the user's time."""
+    program = document.loads((GOLDEN / "helix-entry-mm" / "program.json").read_text())
+    grid, placed = prepare(program)
+    assert work(grid, placed) > sizes.MAX_VERIFY_WORK
+    path = tmp_path / "helix.json"
+    path.write_text(document.dumps(program))
+    result = CliRunner().invoke(main, ["verify", str(path)])
+    assert "sweeps at most" not in result.output
+    assert "removed" in result.output, result.output

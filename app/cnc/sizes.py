@@ -109,6 +109,33 @@ its levels (one per step-over across it). The planner offsets the contours once 
 and asks its questions of what is near each ring, so its time grows with both
 (docs/pocketing.md, "Cost"; docs/security.md, "Pockets")."""
 
+MAX_VERIFY_WORK = 20_000_000
+"""The work one Verify on the server may take: the grid cells its segments sweep (each
+segment's box at the simulation's resolution, every placement of a LOOP counted) and a
+share for each group of placements (`app.cnc.simulate.verify.work`). Chosen so that the
+heaviest Verify a page accepts takes about 2 s (docs/security.md, "Verify"). The server
+puts it in force for every request (app.web); the command line has none (`millblocks
+verify` runs on the user's own computer, and its user chooses the resolution)."""
+
+_VERIFY_LIMIT: ContextVar[int | None] = ContextVar("millblocks_verify_limit", default=None)
+
+
+def verify_limit() -> int | None:
+    """The work a Verify may take here (None: any), as `verify_allowed` says: the server
+    allows MAX_VERIFY_WORK."""
+    return _VERIFY_LIMIT.get()
+
+
+@contextmanager
+def verify_allowed(limit: int | None) -> Iterator[None]:
+    """Allow Verify `limit` work inside the block (None: any)."""
+    token = _VERIFY_LIMIT.set(limit)
+    try:
+        yield
+    finally:
+        _VERIFY_LIMIT.reset(token)
+
+
 _MOVE_LIMIT: ContextVar[int] = ContextVar("millblocks_move_limit", default=MAX_MOVES)
 
 

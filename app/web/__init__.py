@@ -140,12 +140,14 @@ def _budget_requests(app: Flask) -> None:
     """Give each request REQUEST_SECONDS (MILLBLOCKS_REQUEST_SECONDS, default 20) of work:
     past that the core stops it (app.cnc.sizes.spend) and the page says so (503), well
     before gunicorn's 30 s timeout would kill the worker. The last line of defence behind
-    the size limits (app.cnc.sizes, app.cnc.cost), which keep legal programs below it."""
+    the size limits (app.cnc.sizes, app.cnc.cost), which keep legal programs below it; one
+    of them, Verify's (sizes.MAX_VERIFY_WORK), is the server's alone, so it is set here for
+    every page that simulates."""
     seconds = float(app.config["REQUEST_SECONDS"])
     inner = app.wsgi_app
 
     def budgeted(environ: dict[str, Any], start_response: Any) -> Any:
-        with sizes.time_budget(seconds):
+        with sizes.time_budget(seconds), sizes.verify_allowed(sizes.MAX_VERIFY_WORK):
             return inner(environ, start_response)
 
     app.wsgi_app = budgeted  # type: ignore[method-assign]

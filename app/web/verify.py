@@ -25,7 +25,7 @@ from app.cnc.simulate.image import png_bytes, render
 from app.cnc.simulate.mesh import stl_bytes
 from app.cnc.simulate.stock import StockError, program_stock
 from app.cnc.simulate.sweep import Simulation
-from app.cnc.simulate.verify import Verification, run_simulation, verify
+from app.cnc.simulate.verify import Verification, VerifyTooLarge, run_simulation, verify
 from app.cnc.units import Units
 from app.cnc.validate import validate
 from app.storage.library import StaleSave, StoredProgram
@@ -71,6 +71,8 @@ def _render(
     program = stored.program
     try:
         result = verify(program)
+    except VerifyTooLarge as exc:
+        return _too_large(exc), 422
     except StockError as exc:
         result = None
         errors = errors or {"stock": str(exc)}
@@ -108,13 +110,18 @@ def report(program_id: int) -> tuple[str, int]:
         return _verified(stored, '<p class="hint">Fix the program\'s errors first.</p>'), 200
     try:
         result = verify(stored.program)
-    except StockError as exc:
+    except (StockError, VerifyTooLarge) as exc:
         return _verified(stored, f'<p class="message error">{escape(str(exc))}</p>'), 200
     titles = {n: block.title for n, block in enumerate(stored.program.blocks, start=1)}
     html = render_template(
         "verify/report.html", stored=stored, result=result, titles=titles, removed=_removed(result)
     )
     return _verified(stored, html), 200
+
+
+def _too_large(error: VerifyTooLarge) -> str:
+    """The page instead of a simulation past the server's limit (sizes.MAX_VERIFY_WORK)."""
+    return render_template("errors/error.html", title="Too much to simulate", message=str(error))
 
 
 def _verified(stored: StoredProgram, html: str) -> str:
@@ -204,7 +211,7 @@ def _simulated(program_id: int, cells: int = VIEW_CELLS) -> tuple[Program, Simul
         )
     try:
         return stored.program, run_simulation(stored.program, upto=upto, cells=cells)
-    except StockError as exc:
+    except (StockError, VerifyTooLarge) as exc:
         return Response(str(exc), 422, mimetype="text/plain")
 
 

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.cnc import sizes
 from app.cnc.memo import Memo
 from app.cnc.simulate.cells import (
     DISC,
@@ -246,6 +247,9 @@ def simulate(
     groups = _merged(placed.groups, stamped)
     first = 0
     for group in groups:
+        # The time budget (sizes.spend) is the last line of defence behind the limit on
+        # Verify's work (verify.check_work): here, in every batch and every band.
+        sizes.spend()
         result.orders.add(first, group.segments.block)
         run.group(group, first)
         first += group.count
@@ -374,6 +378,7 @@ class _Run:
 
     def _sweep(self, s: Segments, orders: I64) -> None:
         """Fold segments `s` (numbered `orders`) into the map."""
+        sizes.spend()
         rows = _collapse(s)
         s, orders = s.select(rows), orders[rows]
         i0, i1, j0, j1 = bounding_cells(self.grid, s)
@@ -528,6 +533,7 @@ def _place(run: _Run, pending: list[_Pending]) -> int:
     part = run.keys.reshape(grid.ny, grid.nx)
     made = 0
     for band in range(low, high, BAND_ROWS):
+        sizes.spend()
         end = band + BAND_ROWS
         here = live[(r0[live] < end) & (r1[live] > band)]
         for p in here.tolist():

@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from app.cnc import sizes
 from app.cnc.blocks import Program
 from app.cnc.compiler import compile_program
 from app.cnc.plane import Path
@@ -152,14 +153,57 @@ def stock_of(program: Program, placed: Placed) -> Stock:
     return extent_stock(placed, program.units)
 
 
+# What sweeping one group of placements costs beside its cells (its stamps, its batches),
+# in cells: a LOOP of many small pieces is slow for its groups, not its cells.
+GROUP_WORK = 1000
+
+
+class VerifyTooLarge(sizes.TooLarge):
+    """Verify of this program would take more work than this server allows (the message
+    names the figure, the limit and what to do)."""
+
+
+def work(grid: Grid, placed: Placed) -> int:
+    """The work the simulation of `placed` on `grid` will do, known before it starts: the
+    cells every segment's box covers (its length and its tool's diameter at the grid's
+    resolution, each placement counted), and GROUP_WORK for each group. Time grows with
+    it (docs/security.md, "Verify")."""
+    res = grid.resolution
+    cells = 0.0
+    for group in placed.groups:
+        s = group.segments
+        across = 2 * s.radius / res + 1
+        along = np.hypot(s.x1 - s.x0, s.y1 - s.y0) / res + across
+        cells += float((along * across).sum()) * len(group.offsets)
+    return int(cells) + GROUP_WORK * len(placed.groups)
+
+
+def check_work(grid: Grid, placed: Placed, units: Units) -> int:
+    """The simulation's `work`; raises VerifyTooLarge when it is past `sizes.verify_limit()`."""
+    found = work(grid, placed)
+    limit = sizes.verify_limit()
+    if limit is not None and found > limit:
+        raise VerifyTooLarge(
+            f"simulating this program means sweeping about {found:,} cells "
+            f"({len(placed):,} segments in cells of {_len(grid.resolution, units)}); "
+            f"Verify on this server sweeps at most {limit:,}, so that it answers in about 2 s: "
+            "run `millblocks verify` on your own computer, which has no such limit, or make "
+            "the program smaller (fewer LOOP patterns, fewer helix turns)"
+        )
+    return found
+
+
 def prepare(
     program: Program, resolution: int | None = None, cells: int = 800
 ) -> tuple[Grid, Placed]:
     """The grid (the program's stock, `resolution` nm cells, or about `cells` along the
-    longer side) and the placed segments of a validated program. Raises StockError."""
+    longer side) and the placed segments of a validated program. Raises StockError, and
+    VerifyTooLarge when simulating them is past the server's limit (`check_work`)."""
     placed = place(program, compile_program(program).path)
     stock = stock_of(program, placed)
-    return make_grid(stock, resolution or auto_resolution(stock, program.units, cells)), placed
+    grid = make_grid(stock, resolution or auto_resolution(stock, program.units, cells))
+    check_work(grid, placed, program.units)
+    return grid, placed
 
 
 def run_simulation(
@@ -221,6 +265,7 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     claimed = np.zeros_like(gouged)
     found: list[Finding] = []
     for k, contour in enumerate(geometry.contours):
+        sizes.spend()
         if k not in intent.contours:  # a roughing's wall is no finished surface
             found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
         found += _contour_rest(grid, heights, contour, geometry, tol, u)
@@ -229,11 +274,13 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     # A roughing's wall is no finished surface: nothing is a gouge past it.
     nothing = np.zeros_like(gouged) if intent.roughing else gouged
     for k, routine in enumerate(geometry.routines):
+        sizes.spend()
         walled = nothing if k in intent.roughing else gouged
         found += _routine_findings(
             grid, heights, owners, routine, tol, u, walled, claimed, left_in_pockets
         )
     for pocket in geometry.pockets:
+        sizes.spend()
         found += _pocket_findings(grid, heights, pocket, tol, u)
     crashed = {crash.block for crash in sim.crashes}
     found += _waste_gouges(grid, heights, owners, intent, gouged & ~claimed, crashed, u)
@@ -692,6 +739,7 @@ def _hole_findings(
     for hole in geometry.holes:
         deepest[hole.x, hole.y] = min(hole.depth, deepest.get((hole.x, hole.y), hole.depth))
     for hole in geometry.holes:
+        sizes.spend()
         cell = grid.cell_of(hole.x, hole.y)
         if cell is None:
             continue

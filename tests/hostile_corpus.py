@@ -74,6 +74,17 @@ def loop_of_holes(n: int, name: str = "HOLE GRID") -> Program:
     return document.loads(json.dumps(data))
 
 
+def verify_at_the_limit(name: str = "HELIX") -> Program:
+    """A HELIX whose simulation is about as much work as the server's Verify accepts
+    (sizes.MAX_VERIFY_WORK): tests/golden/helix-entry-mm down to Z DN -4 instead of -12
+    (its 44 M cells of work are refused; these 18.5 M are not). Arcs whose Z changes are
+    the simulation's costliest cells: the heaviest Verify a page runs."""
+    data = json.loads((GOLDEN_LOOP.parent.parent / "helix-entry-mm" / "program.json").read_text())
+    data["name"] = name
+    data["blocks"][0]["z_dn"] = -4
+    return document.loads(json.dumps(data))
+
+
 GOLDEN_LOOP = Path(__file__).parent / "golden" / "loop-nested-3-deep" / "program.json"
 
 

@@ -7,6 +7,7 @@ import struct
 from decimal import Decimal
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 from flask import Flask
 from flask.testing import FlaskClient
@@ -201,3 +202,27 @@ def test_the_command_line_verifies_what_the_server_refuses(tmp_path: Path) -> No
     result = CliRunner().invoke(main, ["verify", str(path)])
     assert "sweeps at most" not in result.output
     assert "removed" in result.output, result.output
+
+
+def test_a_heavy_request_waits_its_turn_then_hears_the_server_is_busy(
+    app: Flask, client: FlaskClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One heavy request (Verify, the set-up sheet, an export) at a time per process: while
+    one runs, another waits at most HEAVY_WAIT and is then told to try again (503, a
+    page that says so), and a light page is answered meanwhile."""
+    from app.web import heavy
+
+    pid = add(app, "frame-pocket")
+    monkeypatch.setattr(heavy, "HEAVY_WAIT", 0.01)
+    assert heavy._RUNNING.acquire(timeout=5)  # another heavy request is running
+    try:
+        for path in ("verify", "verify/report", "verify/part.png", "setup", "export/download"):
+            busy = client.get(f"/programs/{pid}/{path}")
+            text = busy.get_data(as_text=True)
+            assert busy.status_code == 503, (path, busy.status_code)
+            assert "working on another large program" in text and "try again" in text, path
+            assert busy.headers["Retry-After"] == "5"
+        assert client.get(f"/programs/{pid}").status_code == 200
+    finally:
+        heavy._RUNNING.release()
+    assert client.get(f"/programs/{pid}/verify").status_code == 200

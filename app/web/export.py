@@ -26,6 +26,7 @@ from app.storage.library import LibraryError
 from app.web.downloads import attachment, file_name
 from app.web.editor import is_htmx, load
 from app.web.extensions import get_library
+from app.web.heavy import heavy
 
 bp = Blueprint("export", __name__)
 PREVIEW_LINES = 400
@@ -135,6 +136,7 @@ def remedy_offers(
 
 
 @bp.get("/programs/<int:program_id>/export")
+@heavy
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     machine_name = request.args.get("machine", "")
@@ -211,6 +213,7 @@ def page(program_id: int) -> tuple[str, int]:
 
 
 @bp.get("/programs/<int:program_id>/export/download")
+@heavy
 def download(program_id: int) -> Response | tuple[str, int]:
     stored = load(program_id)
     target_name = request.args.get("target", DEFAULT_TARGET)

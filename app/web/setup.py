@@ -11,11 +11,13 @@ from app.cnc.setup import setup_sheet
 from app.cnc.validate import validate
 from app.web.editor import load
 from app.web.export import _machine_options, options_from, remedy_offers, shown_targets
+from app.web.heavy import heavy
 
 bp = Blueprint("setup", __name__)
 
 
 @bp.get("/programs/<int:program_id>/setup")
+@heavy
 def sheet(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     program = stored.program

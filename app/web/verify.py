@@ -32,6 +32,7 @@ from app.storage.library import StaleSave, StoredProgram
 from app.web.downloads import attachment, file_name
 from app.web.editor import _int, current_user, load
 from app.web.extensions import get_library
+from app.web.heavy import heavy
 
 bp = Blueprint("verify", __name__)
 
@@ -57,6 +58,7 @@ def _refusal(stored: StoredProgram) -> tuple[str, int] | None:
 
 
 @bp.get("/programs/<int:program_id>/verify")
+@heavy
 def page(program_id: int) -> tuple[str, int]:
     stored = load(program_id)
     return _render(stored, {}, {}, "")
@@ -101,6 +103,7 @@ def _render(
 
 
 @bp.get("/programs/<int:program_id>/verify/report")
+@heavy
 def report(program_id: int) -> tuple[str, int]:
     """Verify's findings per block, as a fragment for the editor's panel. It says which
     version of the program it verified (`data-version`): the panel shows it as out of date
@@ -216,6 +219,7 @@ def _simulated(program_id: int, cells: int = VIEW_CELLS) -> tuple[Program, Simul
 
 
 @bp.get("/programs/<int:program_id>/verify/surface")
+@heavy
 def surface(program_id: int) -> Response:
     """The height map for the 3D view (program units; little-endian):
 
@@ -249,6 +253,7 @@ def surface(program_id: int) -> Response:
 
 
 @bp.get("/programs/<int:program_id>/verify/part.png")
+@heavy
 def part_png(program_id: int) -> Response:
     found = _simulated(program_id, cells=800)
     if isinstance(found, Response):
@@ -258,6 +263,7 @@ def part_png(program_id: int) -> Response:
 
 
 @bp.get("/programs/<int:program_id>/verify/part.stl")
+@heavy
 def part_stl(program_id: int) -> Response:
     found = _simulated(program_id, cells=400)
     if isinstance(found, Response):

@@ -155,7 +155,7 @@ def stock_of(program: Program, placed: Placed) -> Stock:
 
 # What sweeping one group of placements costs beside its cells (its stamps, its batches),
 # in cells: a LOOP of many small pieces is slow for its groups, not its cells.
-GROUP_WORK = 1000
+GROUP_WORK = 10_000
 
 
 class VerifyTooLarge(sizes.TooLarge):

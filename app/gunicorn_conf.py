@@ -8,7 +8,9 @@ the first time, Verify of a large program) holds one thread, not a whole worker,
 other requests of the shop — a login, a library page — are answered meanwhile
 (tests/test_server_load.py). Every request's work is bounded in size (app/cnc/sizes.py,
 app/cnc/cost.py) and in time (MILLBLOCKS_REQUEST_SECONDS, 20 s: a clear refusal), well
-inside `timeout`, so no worker is killed for a slow request.
+inside `timeout`, so no worker is killed for a slow request. Within a process the heavy
+requests (Verify, the set-up sheet, exports) run one at a time (app/web/heavy.py), so the
+interpreter lock is shared with the light ones by at most one of them.
 """
 
 worker_class = "gthread"

@@ -593,8 +593,10 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
     if target:
         try:
             found = run_export(loaded, target, raw, machine).report
-        except (OptionError, ExportError) as exc:
+        except OptionError as exc:
             raise click.ClickException(str(exc)) from None
+        except ExportError as exc:
+            raise click.ClickException(exc.explained()) from None
     click.echo(render_text(setup_sheet(loaded, found, machine)), nl=False)
 
 
@@ -1377,7 +1379,9 @@ def send_command(
             progress=_progress_printer(f"send {chosen.name}"),
             cancel=cancelled,
         )
-    except (TransferError, ExportError, OptionError, ValueError) as exc:
+    except ExportError as exc:
+        raise click.ClickException(exc.explained()) from None
+    except (TransferError, OptionError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(sent.record.summary())
     if stop.is_set():

@@ -395,3 +395,28 @@ def test_a_damaged_sqlite_file_is_named_with_what_to_do(
         "move the file aside and restore from a backup"
     )
     assert "millblocks restore ARCHIVE" in result.stderr
+
+
+def test_a_send_the_target_refuses_says_why(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The audit of issue 31: `millblocks send` said only "events cannot take this
+    program"; now the reason (the Plus's line numbers run to 999), before any port."""
+    from decimal import Decimal
+
+    from app.cnc.blocks import Rep
+    from app.storage.library import Machine, open_library
+    from tests.test_events import loop
+
+    url = f"sqlite:///{tmp_path / 'send.db'}"
+    monkeypatch.setenv("DATABASE_URL", url)
+    library = open_library(url, seed_demo=False)
+    program = library.create(loop(Rep(x=Decimal(5), y=Decimal("0.15"), nx=1, ny=600)))
+    library.save_machine(Machine("Plus", "events", {}, {"port": str(tmp_path / "no-port")}))
+    library.engine.dispose()
+    result = CliRunner().invoke(main, ["send", str(program.id), "--machine", "Plus"])
+    assert result.exit_code == 1, result.output
+    assert result.stderr == (
+        "Error: events cannot take this program (program: 1203 events: line numbers run to "
+        "999 (seed 003 §2.2.4))\n"
+    )

@@ -22,6 +22,7 @@ order a whole-program pass would have added them.
 
 from __future__ import annotations
 
+import bisect
 import enum
 import math
 from collections import deque
@@ -29,6 +30,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
+
+import numpy as np
+import numpy.typing as npt
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.formats.tape1704.codes import TapeCode
@@ -107,6 +111,118 @@ class Aux:
 Item = Motion | Aux
 
 
+RAPID, LINE, ARC, DWELL = 0, 1, 2, 3
+"""A run's rows (`Run.kind`): a rapid, a feed, an arc at F (circular), a dwell (G04)."""
+
+
+@dataclass
+class Run:
+    """Items one after another as columns, a row each: rapids, feeds, arcs (with circular
+    interpolation) and dwells, most of a program's blocks. The stages handle them a slice
+    of the compiled path at a time with array operations, to the same blocks and report
+    entries as the items one by one (`items`), which is what a stage does with a run its
+    columns do not cover.
+
+    Coordinates in nm until rounded, then tape units; `z` is None in a two-axis program;
+    `feed` is 0 on rapids and dwells; `tag` indexes `TAGS`; `cx`, `cy`, `clockwise` and
+    `full` are an arc's (`Motion.full_circle`); `tenths` a dwell's G04 F; `restart` is the
+    first motion's.
+    """
+
+    block: npt.NDArray[np.int64]
+    kind: npt.NDArray[np.uint8]
+    x: npt.NDArray[np.int64]
+    y: npt.NDArray[np.int64]
+    z: npt.NDArray[np.int64] | None
+    feed: npt.NDArray[np.int64]
+    tag: npt.NDArray[np.uint8]
+    cx: npt.NDArray[np.int64]
+    cy: npt.NDArray[np.int64]
+    clockwise: npt.NDArray[np.bool_]
+    full: npt.NDArray[np.bool_]
+    tenths: npt.NDArray[np.int64]
+    restart: bool = False
+
+    def __len__(self) -> int:
+        return len(self.block)
+
+    def take(self, rows: Any, restart: bool) -> Run:
+        """The rows `rows` (a slice or index array) as a run."""
+        return Run(
+            self.block[rows],
+            self.kind[rows],
+            self.x[rows],
+            self.y[rows],
+            None if self.z is None else self.z[rows],
+            self.feed[rows],
+            self.tag[rows],
+            self.cx[rows],
+            self.cy[rows],
+            self.clockwise[rows],
+            self.full[rows],
+            self.tenths[rows],
+            restart,
+        )
+
+    def motions(self) -> npt.NDArray[np.intp]:
+        """The rows that are motion (not dwells)."""
+        return np.flatnonzero(self.kind != DWELL)
+
+    def end(self) -> tuple[int, int, int | None] | None:
+        """Where the last motion ends (None: the run has none)."""
+        moving = self.motions()
+        if not len(moving):
+            return None
+        k = int(moving[-1])
+        return (int(self.x[k]), int(self.y[k]), None if self.z is None else int(self.z[k]))
+
+    def items(self) -> list[Item]:
+        """The run as the items it stands for."""
+        count = len(self.block)
+        zs: list[int | None] = [None] * count if self.z is None else self.z.tolist()
+        items: list[Item] = []
+        restart = self.restart
+        for block, kind, x, y, z, feed, tag, cx, cy, clockwise, full, tenths in zip(
+            self.block.tolist(),
+            self.kind.tolist(),
+            self.x.tolist(),
+            self.y.tolist(),
+            zs,
+            self.feed.tolist(),
+            self.tag.tolist(),
+            self.cx.tolist(),
+            self.cy.tolist(),
+            self.clockwise.tolist(),
+            self.full.tolist(),
+            self.tenths.tolist(),
+            strict=True,
+        ):
+            if kind == DWELL:
+                items.append(Aux(block, [("G", "04"), ("F", str(tenths))]))
+                continue
+            if kind == RAPID:
+                motion = Motion(block, Kind.RAPID, (x, y, z), tag=TAGS[tag])
+            elif kind == LINE:
+                motion = Motion(block, Kind.LINE, (x, y, z), feed=feed)
+            else:
+                motion = Motion(
+                    block,
+                    Kind.ARC,
+                    (x, y, z),
+                    centre=(cx, cy),
+                    clockwise=clockwise,
+                    feed=feed,
+                    full_circle=full,
+                )
+            motion.restart, restart = restart, False
+            items.append(motion)
+        return items
+
+
+Piece = Item | Run
+"""What the stages pass on: an item, or a run of straight moves."""
+
+
 _SLICE_ROWS = 1024
 """Rows of a chunk `Planner.planned` turns into Python lists at a time (memory, not speed)."""
 _CYCLE_ROWS = 4
@@ -138,13 +254,18 @@ class Planner:
         self.moves_report = Report("plan")
         self.restarts_report = Report("restarts")
         self.merge_report = Report("merge")
+        # Runs of straight moves as columns (`Run`) where no stage needs the moves one by
+        # one: a tape search looks ahead from each, xyz=together merges them, the quill's
+        # drill cycle may change the rapid before its stop.
+        self.runs = not (profile.tape_search or profile.xyz_together or profile.quill)
 
     @property
     def stages(self) -> list[Report]:
         return [self.moves_report, self.restarts_report, self.merge_report]
 
-    def items(self) -> Iterator[Item]:
-        """The tape's items in order, in nm (see the module docstring)."""
+    def items(self) -> Iterator[Piece]:
+        """The tape's items in order, in nm (see the module docstring), straight moves in
+        runs (`Run`) where `runs`."""
         items = self.restarts(self.planned())
         return self.merged(items) if self.profile.xyz_together else items
 
@@ -173,10 +294,12 @@ class Planner:
 
     # -- pass 1: moves → items ------------------------------------------------------------
 
-    def planned(self) -> Iterator[Item]:
-        """The items of the moves, one move at a time; the last item is held back while a
-        quill stop after it may still make it the quill's drill cycle."""
+    def planned(self) -> Iterator[Piece]:
+        """The items of the moves, one move at a time but for runs of straight moves; the
+        last item is held back while a quill stop after it may still make it the quill's
+        drill cycle."""
         path, profile, report = self.path, self.profile, self.moves_report
+        runs = self.runs
         tool = path.initial_tool
         x, y, z = path.start
         changes = 0
@@ -198,6 +321,8 @@ class Planner:
             # than it starts, so a fixed cycle's rows (`cycle`) are always in it.
             index, base, limit = 0, 0, 0
             table: list[Any] = []
+            simple: list[bool] = []
+            breaks: list[int] = []
             while index < count:
                 if len(items) > 1:
                     yield from items[:-1]
@@ -205,6 +330,18 @@ class Planner:
                 if index >= limit:
                     base, limit = index, min(count, index + _SLICE_ROWS)
                     table = rows[base : limit + _CYCLE_ROWS].tolist()
+                    if runs:
+                        simple, breaks = _simple(rows, base, limit, cycles, profile)
+                if runs and simple[index - base] and not self.uncalibrated(tool):
+                    stop = breaks[bisect.bisect_left(breaks, index)]
+                    made = self.run(rows[index:stop], tool, (x, y, z))
+                    if made is not None:
+                        run, (x, y, z) = made
+                        yield from items
+                        items.clear()
+                        yield run
+                        index += len(run)
+                        continue
                 row = table[index - base]
                 index += 1
                 op = row[0]
@@ -280,6 +417,63 @@ class Planner:
                         items.append(Aux(move.block, [("G", "94"), ("Z", "0")], preset_z=True))
                         items.append(Motion(move.block, Kind.RAPID, (x, y, z), z_only=True))
         yield from items
+
+    def run(
+        self, rows: Any, tool: int, at: tuple[int, int, int]
+    ) -> tuple[Run, tuple[int, int, int]] | None:
+        """Rows of the compiled path `_simple` found (no fixed cycle's, `tool` calibrated or
+        its Z words not needing it) as a run, what `planned` makes of each, and where the
+        tool path is after them; `at` is where it is before. It stops before an arc that
+        leaves its plane (chords); None when the first row is one."""
+        ops = rows["op"]
+        kind = np.full(len(ops), LINE, dtype=np.uint8)
+        kind[ops == Op.RAPID] = RAPID
+        arcs = (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+        kind[arcs] = ARC
+        dwell = ops == Op.DWELL
+        kind[dwell] = DWELL
+        moving = ~dwell
+        # Where each row starts: the last motion's end before it (dwells do not move).
+        last = np.maximum.accumulate(np.where(moving, np.arange(len(ops)), -1))
+        before = np.empty(len(ops), dtype=np.int64)
+        before[0] = -1
+        before[1:] = last[:-1]
+        path_z = rows["z"]
+        start_z = np.where(before >= 0, path_z[np.maximum(before, 0)], at[2])
+        helical = np.flatnonzero(arcs & (path_z != start_z))
+        if len(helical):
+            if helical[0] == 0:
+                return None
+            return self.run(rows[: helical[0]], tool, at)
+        x, y = rows["x"].astype(np.int64), rows["y"].astype(np.int64)
+        start_x = np.where(before >= 0, x[np.maximum(before, 0)], at[0])
+        start_y = np.where(before >= 0, y[np.maximum(before, 0)], at[1])
+        z: npt.NDArray[np.int64] | None = None
+        if not self.two_axis:
+            z = path_z.astype(np.int64)
+            if not self.profile.g94:
+                info = self.path.tools.get(tool)
+                if info is not None and info.tcal is not None:
+                    z += info.tcal
+        feeding = (kind == LINE) | arcs
+        run = Run(
+            rows["block"].astype(np.int64),
+            kind,
+            x,
+            y,
+            z,
+            np.where(feeding, rows["feed"], 0).astype(np.int64),
+            rows["tag"].copy(),
+            rows["cx"].astype(np.int64),
+            rows["cy"].astype(np.int64),
+            ops == Op.ARC_CW,
+            arcs & (x == start_x) & (y == start_y),
+            np.where(dwell, _tenths(rows["value"]), 0),
+        )
+        final = int(last[-1])
+        if final < 0:
+            return run, at
+        return run, (int(x[final]), int(y[final]), int(path_z[final]))
 
     def quill_hole(self, stop: ProgramStop, items: list[Item], at: tuple[int, int]) -> bool:
         """With the quill actuator, a two-axis hole is its drill cycle (G99): the rapid to
@@ -559,7 +753,7 @@ class Planner:
 
     # -- restarts and tape search ---------------------------------------------------------
 
-    def restarts(self, items: Iterator[Item]) -> Iterator[Item]:
+    def restarts(self, items: Iterator[Piece]) -> Iterator[Piece]:
         """The first motion of the tape and the first after each tool change write every
         axis (and G and F again): they are where an operator restarts or searches to.
 
@@ -585,11 +779,22 @@ class Planner:
         )
         in_cut: list[int] = []  # data blocks that start in a cut: no restart there
         ahead = _Ahead(items)
-        out: list[Item] = []
+        out: list[Piece] = []
         for item in ahead:
             if len(out) > 1:
                 yield from out[:-1]
                 del out[:-1]
+            if isinstance(item, Run):
+                # Made without tape search (Planner.runs): the first motion is where a
+                # restart is pending, as for the items one by one below.
+                last_block = int(item.block[-1])
+                end = item.end()
+                if end is not None:
+                    item.restart = pending
+                    pending = False
+                    here = end
+                out.append(item)
+                continue
             if isinstance(item, Aux):
                 codes = {value for letter, value in item.words if letter == "M"}
                 if "06" in codes:
@@ -653,12 +858,12 @@ class Planner:
         group.append(Motion(item.block, Kind.RAPID, here, restart=True, search_feed=feed))
         return group
 
-    def merged(self, items: Iterator[Item]) -> Iterator[Item]:
+    def merged(self, items: Iterator[Piece]) -> Iterator[Piece]:
         """xyz=together (seed 002 XYZ/ON): the positioning rapids of one block (up, across,
         down) become one XYZ move. A retract out of the work (tagged `retract`, `peck-…`)
         is never merged: it stays straight up."""
 
-        def positioning(item: Item | None) -> bool:
+        def positioning(item: Piece | None) -> bool:
             return (
                 isinstance(item, Motion)
                 and item.kind is Kind.RAPID
@@ -667,7 +872,7 @@ class Planner:
                 and not item.tag
             )
 
-        previous: Item | None = None
+        previous: Piece | None = None
         for item in items:
             if (
                 positioning(item)
@@ -694,11 +899,11 @@ class _Ahead:
     """Items one at a time, with a look ahead into the rest of a data block (those items
     wait here until their turn)."""
 
-    def __init__(self, items: Iterator[Item]) -> None:
+    def __init__(self, items: Iterator[Piece]) -> None:
         self.source = items
-        self.waiting: deque[Item] = deque()
+        self.waiting: deque[Piece] = deque()
 
-    def __iter__(self) -> Iterator[Item]:
+    def __iter__(self) -> Iterator[Piece]:
         while True:
             if self.waiting:
                 yield self.waiting.popleft()
@@ -721,11 +926,44 @@ class _Ahead:
                     return 0
                 self.waiting.append(found)
             following = self.waiting[k]
+            assert not isinstance(following, Run)  # no runs with tape search (Planner.runs)
             if following.block != item.block:
                 return 0
             if isinstance(following, Motion) and following.kind is not Kind.RAPID:
                 return following.feed
             k += 1
+
+
+def _tenths(ms: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """Dwells of `ms` milliseconds in tenths of a second, rounded half-even (`aux`'s G04 F:
+    Decimal's to_integral_value of the seconds times ten)."""
+    quotient, remainder = np.divmod(ms.astype(np.int64), 100)
+    twice = 2 * remainder
+    quotient += (twice > 100) | ((twice == 100) & (quotient % 2 == 1))
+    result: npt.NDArray[np.int64] = quotient
+    return result
+
+
+def _simple(
+    rows: Any, base: int, limit: int, cycles: dict[int, HoleSpan], profile: Profile
+) -> tuple[list[bool], list[int]]:
+    """Which rows [base, limit) of a chunk a run may hold (rapids and feeds, not the rapid
+    of a fixed cycle's hole; arcs with circular interpolation; dwells G04 can carry), and
+    the rows from base on that end a run, `limit` last."""
+    part = rows[base:limit]
+    ops = part["op"]
+    straight = ops <= Op.FEED
+    if profile.circular:
+        straight |= (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+    if profile.dwell:
+        tenths = _tenths(part["value"])
+        straight |= (ops == Op.DWELL) & (tenths >= 1) & (tenths <= 999)
+    for k in cycles:
+        if base <= k < limit:
+            straight[k - base] = False
+    breaks = (np.flatnonzero(~straight) + base).tolist()
+    breaks.append(limit)
+    return straight.tolist(), breaks
 
 
 def _first_straight_block(path: CompiledPath) -> int:

@@ -164,6 +164,28 @@ class Run:
             restart,
         )
 
+    @staticmethod
+    def joined(runs: list[Run]) -> Run:
+        """`runs` one after another as one run (the first's restart)."""
+        if len(runs) == 1:
+            return runs[0]
+        zs = [run.z for run in runs]
+        return Run(
+            np.concatenate([run.block for run in runs]),
+            np.concatenate([run.kind for run in runs]),
+            np.concatenate([run.x for run in runs]),
+            np.concatenate([run.y for run in runs]),
+            None if zs[0] is None else np.concatenate([z for z in zs if z is not None]),
+            np.concatenate([run.feed for run in runs]),
+            np.concatenate([run.tag for run in runs]),
+            np.concatenate([run.cx for run in runs]),
+            np.concatenate([run.cy for run in runs]),
+            np.concatenate([run.clockwise for run in runs]),
+            np.concatenate([run.full for run in runs]),
+            np.concatenate([run.tenths for run in runs]),
+            runs[0].restart,
+        )
+
     def motions(self) -> npt.NDArray[np.intp]:
         """The rows that are motion (not dwells)."""
         return np.flatnonzero(self.kind != DWELL)
@@ -225,6 +247,9 @@ Piece = Item | Run
 
 _SLICE_ROWS = 1024
 """Rows of a chunk `Planner.planned` turns into Python lists at a time (memory, not speed)."""
+_RUN_ROWS = 4096
+"""The most rows `Planner.planned` joins into one run (each stage's arrays and texts for a
+run are about 200 bytes a row)."""
 _CYCLE_ROWS = 4
 """The most rows a fixed cycle stands for (`Planner.cycle`'s window: down, feed, dwell, out)."""
 
@@ -311,6 +336,8 @@ class Planner:
                 "this program has depths",
             )
         items: list[Item] = []
+        waiting: list[Run] = []
+        waiting_rows = 0
         for chunk in path.chunks():
             cycles = self.cycles(chunk)
             rows, strings = chunk.rows, chunk.strings
@@ -319,8 +346,9 @@ class Planner:
             # its repeats (11 250 rows at 2x10^5 moves), and the whole of it as lists was the
             # writer's memory growing with the program. A slice holds _CYCLE_ROWS more rows
             # than it starts, so a fixed cycle's rows (`cycle`) are always in it.
+            # Runs take their rows as arrays: the lists are made when a row is not in one.
             index, base, limit = 0, 0, 0
-            table: list[Any] = []
+            table: list[Any] | None = None
             simple: list[bool] = []
             breaks: list[int] = []
             while index < count:
@@ -329,7 +357,7 @@ class Planner:
                     del items[:-1]
                 if index >= limit:
                     base, limit = index, min(count, index + _SLICE_ROWS)
-                    table = rows[base : limit + _CYCLE_ROWS].tolist()
+                    table = None
                     if runs:
                         simple, breaks = _simple(rows, base, limit, cycles, profile)
                 if runs and simple[index - base] and not self.uncalibrated(tool):
@@ -339,9 +367,20 @@ class Planner:
                         run, (x, y, z) = made
                         yield from items
                         items.clear()
-                        yield run
+                        # Runs one after another (across slices and chunks) go on as one,
+                        # up to _RUN_ROWS: each array operation then covers more rows.
+                        waiting.append(run)
+                        waiting_rows += len(run)
+                        if waiting_rows >= _RUN_ROWS:
+                            yield Run.joined(waiting)
+                            waiting, waiting_rows = [], 0
                         index += len(run)
                         continue
+                if waiting:
+                    yield Run.joined(waiting)
+                    waiting, waiting_rows = [], 0
+                if table is None:
+                    table = rows[base : limit + _CYCLE_ROWS].tolist()
                 row = table[index - base]
                 index += 1
                 op = row[0]
@@ -416,6 +455,8 @@ class Planner:
                         # Touched off at its zero, preset there, straight up before anything.
                         items.append(Aux(move.block, [("G", "94"), ("Z", "0")], preset_z=True))
                         items.append(Motion(move.block, Kind.RAPID, (x, y, z), z_only=True))
+        if waiting:
+            yield Run.joined(waiting)
         yield from items
 
     def run(
@@ -956,8 +997,9 @@ def _simple(
     if profile.circular:
         straight |= (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
     if profile.dwell:
-        tenths = _tenths(part["value"])
-        straight |= (ops == Op.DWELL) & (tenths >= 1) & (tenths <= 999)
+        dwells = np.flatnonzero(ops == Op.DWELL)
+        tenths = _tenths(part["value"][dwells])
+        straight[dwells[(tenths >= 1) & (tenths <= 999)]] = True
     for k in cycles:
         if base <= k < limit:
             straight[k - base] = False

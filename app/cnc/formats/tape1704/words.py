@@ -61,6 +61,14 @@ class Line:
     leader_after: int = 0
 
 
+_N_WORDS = np.array([f"N{n}" for n in range(1000)], dtype=object)
+"""The N word of each sequence number (`Words.line`: the number modulo 1000)."""
+_G_WORDS = np.array(["" for _ in range(51)], dtype=object)
+"""The G word of each motion code a run's blocks have (G04: its dwells)."""
+for _code in (0, 1, 2, 3, 4, 20, 30, 50):
+    _G_WORDS[_code] = f"G{_code:02d}"
+
+
 @dataclass
 class LineRun:
     """Blocks one after another (a `Run`'s) as columns: what each one's `Line` holds."""
@@ -737,7 +745,7 @@ class Words:
             self.ij = [None, None]
             self.g, self.feed = None, None
         pos = self.pos
-        columns: list[list[str]] = []
+        columns: list[npt.NDArray[np.object_]] = []
         if profile.sequence:
             numbers = self.number + profile.sequence_increment * np.arange(count, dtype=np.int64)
             over = np.flatnonzero(numbers > 999)
@@ -749,20 +757,16 @@ class Words:
                     "has three digits; a tape search stops at the first match)",
                 )
             self.number += profile.sequence_increment * count
-            columns.append([f"N{n}" for n in (numbers % 1000).tolist()])
+            columns.append(_N_WORDS[numbers % 1000])
         # Each word where it differs from the one before (the state before the run first);
         # a dwell's G04 leaves no motion mode in force.
         g_before = np.empty(count, dtype=np.int64)
         g_before[0] = -1 if self.g is None else int(self.g)
         g_before[1:] = np.where(moving[: count - 1], gcode[:-1], -1)
-        names = {50: "G50", 1: "G01", 0: "G00", 2: "G02", 20: "G20", 3: "G03", 30: "G30", 4: "G04"}
         written = (gcode != g_before) | ~moving[:count]
-        columns.append(
-            [
-                names[code] if word else ""
-                for code, word in zip(gcode.tolist(), written.tolist(), strict=True)
-            ]
-        )
+        column = _G_WORDS[gcode]
+        column[~written] = ""
+        columns.append(column)
         straight = moving[:count] & ~arc[:count]
         axes = [("X", x, pos[0], arc), ("Y", y, pos[1], arc)]
         if z is not None:
@@ -797,20 +801,13 @@ class Words:
         )
         shown_feed = feed[:count]
         written = feeding[:count] & (shown_feed != feed_before)
-        feed_word = self.feed_word
-        columns.append(
-            [
-                "F" + feed_word(value) if word else ("F" + str(tenths) if tenths else "")
-                for value, word, tenths in zip(
-                    shown_feed.tolist(),
-                    written.tolist(),
-                    run.tenths[:count].tolist(),
-                    strict=True,
-                )
-            ]
-        )
+        column = np.full(count, "", dtype=object)
+        column[written] = ["F" + self.feed_word(value) for value in shown_feed[written].tolist()]
+        dwells = ~moving[:count]
+        column[dwells] = ["F" + str(tenths) for tenths in run.tenths[:count][dwells].tolist()]
+        columns.append(column)
         joiner = "\t" if profile.tabs else ""
-        rows = list(zip(*columns, strict=True))
+        rows = list(zip(*[column.tolist() for column in columns], strict=True))
         if joiner:
             texts = [joiner.join([word for word in row if word]) for row in rows]
         else:
@@ -837,7 +834,7 @@ class Words:
                 motion_length(piece, (int(sx[k]), int(sy[k]), None)) * fmt.digit_nm / fmt.unit_nm
             )
         last = count - 1
-        self.g = names[int(gcode[last])][1:] if moving[last] else None
+        self.g = str(_G_WORDS[gcode[last]])[1:] if moving[last] else None
         motion = int(last_motion[last])
         if motion >= 0:
             self.pos = [
@@ -858,19 +855,17 @@ class Words:
 
     def word_column(
         self, letter: str, values: npt.NDArray[np.int64], written: npt.NDArray[np.bool_]
-    ) -> list[str]:
+    ) -> npt.NDArray[np.object_]:
         """`letter` and `digits` of each value where written, else ''."""
+        column = np.full(len(values), "", dtype=object)
+        shown = values[written].tolist()
         if self.profile.leading_zeros:
             digits = self.digits
-            return [
-                letter + digits(value) if word else ""
-                for value, word in zip(values.tolist(), written.tolist(), strict=True)
-            ]
-        # str of a negative int is its sign and digits: what `digits` writes without zeros.
-        return [
-            f"{letter}{value}" if word else ""
-            for value, word in zip(values.tolist(), written.tolist(), strict=True)
-        ]
+            column[written] = [letter + digits(value) for value in shown]
+        else:
+            # str of a negative int is its sign and digits: `digits` without zeros.
+            column[written] = [letter + text for text in map(str, shown)]
+        return column
 
     def digits(self, units: int) -> str:
         """A motion word's digits: sign only when negative, no point; leading zeros only

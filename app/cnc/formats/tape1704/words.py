@@ -858,13 +858,15 @@ class Words:
     ) -> npt.NDArray[np.object_]:
         """`letter` and `digits` of each value where written, else ''."""
         column = np.full(len(values), "", dtype=object)
-        shown = values[written].tolist()
+        # Each distinct value written once (a run repeats its Z levels, a grid its X and Y).
+        distinct, where = np.unique(values[written], return_inverse=True)
         if self.profile.leading_zeros:
             digits = self.digits
-            column[written] = [letter + digits(value) for value in shown]
+            words = [letter + digits(value) for value in distinct.tolist()]
         else:
             # str of a negative int is its sign and digits: `digits` without zeros.
-            column[written] = [letter + text for text in map(str, shown)]
+            words = [f"{letter}{value}" for value in distinct.tolist()]
+        column[written] = np.array(words, dtype=object)[where.reshape(-1)]
         return column
 
     def digits(self, units: int) -> str:

@@ -226,25 +226,17 @@ class Rounder:
         if z is not None:
             moved |= z != np.concatenate(([pos[2] or 0], z[:-1]))  # pos[2] is known (above)
         moved[arcs] = True
-        pieces: list[list[Item]] = []
+        pieces: list[list[tuple[int, int]]] = []
         for k in arcs.tolist():
             a = moving[k]
-            arc = Motion(
-                int(run.block[a]),
-                Kind.ARC,
-                (0, 0, None),
-                clockwise=bool(run.clockwise[a]),
-                full_circle=bool(run.full[a]),
-            )
+            clockwise, full_circle = bool(run.clockwise[a]), bool(run.full[a])
             start, centre = (int(sx[k]), int(sy[k])), (int(cx[len(pieces)]), int(cy[len(pieces)]))
-            radius = math.hypot(start[0] - centre[0], start[1] - centre[1])
+            # split_arc's refusals (a radius past the capacity, none, no sweep) go one by one.
+            radius = round(math.hypot(start[0] - centre[0], start[1] - centre[1]))
             end = (int(x[k]), int(y[k]))
-            if round(radius) > fmt.max_units or round(radius) == 0:
+            if radius > fmt.max_units or radius == 0 or (end == start and not full_circle):
                 return None
-            if end == start and not arc.full_circle:
-                return None
-            points = self.split_arc(arc, (*start, None), (*end, None), centre)
-            pieces.append(points)
+            pieces.append(quadrant_ends(start, end, centre, radius, clockwise, full_circle))
         restart = run.restart or self.carry_restart
         kept = np.flatnonzero(moved)
         for k in np.flatnonzero(~moved & feeding).tolist():
@@ -284,9 +276,8 @@ class Rounder:
             at_x, at_y = out.x.copy(), out.y.copy()
             for k, points in zip(moving[arcs].tolist(), pieces, strict=True):
                 first = int(firsts[k])
-                for offset, piece in enumerate(points):
-                    assert isinstance(piece, Motion)
-                    at_x[first + offset], at_y[first + offset] = piece.end[0], piece.end[1]
+                for offset, (px, py) in enumerate(points):
+                    at_x[first + offset], at_y[first + offset] = px, py
             out.x, out.y = at_x, at_y
         return out
 
@@ -409,30 +400,9 @@ class Rounder:
             )
         if radius == 0 or ((end[0], end[1]) == (sx, sy) and not arc.full_circle):
             return []
-        a0 = math.atan2(sy - cy, sx - cx)
-        if arc.full_circle:
-            sweep = 2 * math.pi
-        else:
-            sweep = arc_sweep((sx, sy), (end[0], end[1]), (cx, cy), arc.clockwise)
-        quarter = math.pi / 2
-        axis_points = ((1, 0), (0, 1), (-1, 0), (0, -1))
-        points: list[tuple[int, int]] = []
-        if arc.clockwise:
-            k = math.ceil(a0 / quarter) - 1
-            step = -1
-        else:
-            k = math.floor(a0 / quarter) + 1
-            step = 1
-        while True:
-            travelled = abs(k * quarter - a0)
-            if travelled >= sweep - 1e-12:
-                break
-            dx, dy = axis_points[k % 4]
-            point = (cx + dx * radius, cy + dy * radius)
-            if point not in ((sx, sy), (end[0], end[1])) and (not points or point != points[-1]):
-                points.append(point)
-            k += step
-        points.append((end[0], end[1]))
+        points = quadrant_ends(
+            (sx, sy), (end[0], end[1]), centre, radius, arc.clockwise, arc.full_circle
+        )
         pieces: list[Item] = []
         for px, py in points:
             pieces.append(
@@ -499,6 +469,42 @@ def _last_apart(
                 start = (int(item.x[k]), int(item.y[k]), z)
         # The restart is the first row's (a dwell first went one by one above).
         yield item.take(slice(count - 1, None), item.restart and count == 1).items()[0], start
+
+
+def quadrant_ends(
+    start: tuple[int, int],
+    end: tuple[int, int],
+    centre: tuple[int, int],
+    radius: int,
+    clockwise: bool,
+    full_circle: bool,
+) -> list[tuple[int, int]]:
+    """Where each quadrant block of an arc (`Rounder.split_arc`) ends: the axes through its
+    centre it crosses (centre ± radius), then its end."""
+    sx, sy = start
+    cx, cy = centre
+    a0 = math.atan2(sy - cy, sx - cx)
+    sweep = 2 * math.pi if full_circle else arc_sweep(start, end, centre, clockwise)
+    quarter = math.pi / 2
+    axis_points = ((1, 0), (0, 1), (-1, 0), (0, -1))
+    points: list[tuple[int, int]] = []
+    if clockwise:
+        k = math.ceil(a0 / quarter) - 1
+        step = -1
+    else:
+        k = math.floor(a0 / quarter) + 1
+        step = 1
+    while True:
+        travelled = abs(k * quarter - a0)
+        if travelled >= sweep - 1e-12:
+            break
+        dx, dy = axis_points[k % 4]
+        point = (cx + dx * radius, cy + dy * radius)
+        if point not in (start, end) and (not points or point != points[-1]):
+            points.append(point)
+        k += step
+    points.append(end)
+    return points
 
 
 def with_starts(items: Iterator[Piece], start: Point) -> Iterator[tuple[Piece, Point]]:
@@ -807,13 +813,15 @@ class Words:
         column[dwells] = ["F" + str(tenths) for tenths in run.tenths[:count][dwells].tolist()]
         columns.append(column)
         joiner = "\t" if profile.tabs else ""
-        rows = list(zip(*[column.tolist() for column in columns], strict=True))
+        lists = [column.tolist() for column in columns]
         if joiner:
-            texts = [joiner.join([word for word in row if word]) for row in rows]
+            texts = [
+                joiner.join([word for word in row if word]) for row in zip(*lists, strict=True)
+            ]
         else:
-            texts = list(map("".join, rows))
+            texts = list(map("".join, zip(*lists, strict=True)))
         if self.carried:
-            words = [word for word in rows[0] if word]
+            words = [words[0] for words in lists if words[0]]
             texts[0] = joiner.join(words + [letter + value for letter, value in self.carried])
             self.carried = []
         # What the reader limitation needs (check_reader): the G01-G03 blocks' length.

@@ -14,7 +14,10 @@ codes by the motion rules, and the blocks as text (seed 000 §2, §4).
 - The reader limitation (§3, scan-damaged: DESIGN.md's reading) is checked block by block.
 
 Each stage is a generator over the one before: `Rounder.items`, then `Words.lines`, then
-`check_reader`; each reports through its own `Report`.
+`check_reader`; each reports through its own `Report`. Each takes the planner's runs
+(`plan.Run`) in columns (`Rounder.run`, `Words.run_lines`, `LineRun`) and every other item
+one by one; a run whose columns would have something to report but a left-out move goes
+one by one too.
 """
 
 from __future__ import annotations

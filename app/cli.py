@@ -134,25 +134,27 @@ def read_file(
 ) -> tuple[Program, str]:
     """A program file of any format and the format read. A MillBlocks document has its
     executed or cancelled COPY blocks carried out; any other format is imported and its
-    report printed on stderr. Raises ProgramFileError (exit 2) naming line and column."""
-    from app.cnc.formats.reading import detect_format, read_program
+    report printed on stderr. Raises ProgramFileError (exit 2) naming line and column.
+
+    The file is not read whole unless its format needs it: the format is detected from
+    its start and G-code is read a part at a time (a 10^6-line CAM file converts in flat
+    memory, docs/imports.md "Streaming")."""
+    from app.cnc.formats import reading
 
     try:
-        data = path.read_bytes()
+        with path.open("rb") as file:
+            try:
+                chosen = file_format or reading.detect_format(reading.file_head(file))
+                if chosen == "json":
+                    return _load_document(path, file.read()), chosen
+                # The user's own file on their own machine: no line or block limit (the
+                # library still keeps only programs of at most app.cnc.sizes.MAX_BLOCKS
+                # blocks).
+                result = reading.read_file(file, path.stem, chosen, options or {})
+            except ValueError as exc:
+                raise ProgramFileError(f"{path}: {exc}") from None
     except OSError as exc:
         raise ProgramFileError(f"{path}: cannot read: {exc}") from None
-    try:
-        chosen = file_format or detect_format(data)
-    except ValueError as exc:
-        raise ProgramFileError(f"{path}: {exc}") from None
-    if chosen == "json":
-        return _load_document(path, data), chosen
-    try:
-        # The user's own file on their own machine: no line or block limit (the library
-        # still keeps only programs of at most app.cnc.sizes.MAX_BLOCKS blocks).
-        result = read_program(data, path.stem, chosen, options or {}, limited=False)
-    except ValueError as exc:
-        raise ProgramFileError(f"{path}: {exc}") from None
     for line in result.lines():
         click.echo(line, nl=False, err=True)
     return result.program, chosen

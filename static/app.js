@@ -12,6 +12,20 @@
     });
   }
 
+  // Where the cursor goes after a choice typed on `el`: the next prompt of the Enter
+  // sequence; from a prompt beside it (ENTRY), the next one beside it that is shown now
+  // (its RAMP ANGLE), else nowhere (the cursor stays).
+  function nextPrompt(form, el) {
+    if (!el.hasAttribute("data-beside")) {
+      var all = fields(form);
+      return all[all.indexOf(el) + 1] || null;
+    }
+    var beside = Array.from(form.querySelectorAll("[data-beside]")).filter(function (other) {
+      return !other.disabled;
+    });
+    return beside[beside.indexOf(el) + 1] || null;
+  }
+
   // A new block's form shows the values offered; until one is typed, Enter on the last
   // prompt does not enter it (a stray Enter saved unwanted blocks). Ctrl+Enter does.
   function untouched(form) {
@@ -172,8 +186,10 @@
       if (option) {
         event.preventDefault();
         target.value = option.value;
-        var all = fields(form);
-        var next = all[all.indexOf(target) + 1];
+        // As a choice made with the pointer: the prompts shown only for some values (a
+        // PLACEMENT's ENTRY, an ENTRY's RAMP ANGLE) follow it, and so does the rest.
+        target.dispatchEvent(new Event("change", { bubbles: true }));
+        var next = nextPrompt(form, target);
         if (next) { next.focus(); if (next.select) { next.select(); } }
       }
       return;

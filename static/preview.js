@@ -526,7 +526,9 @@
 
   function askForDrawing(url) {
     if (window.htmx && url) {
-      window.htmx.ajax("GET", url, { source: "#drawing-refresh", target: "#drawing-area", swap: "outerHTML" });
+      // From #drawing-refresh, whose hx-sync makes the last request for the drawing replace
+      // one still on its way (templates/editor/_preview.html).
+      window.htmx.ajax("GET", url, { source: "#drawing-refresh", target: "#drawing-holder", swap: "innerHTML" });
     }
   }
 

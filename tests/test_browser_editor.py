@@ -24,12 +24,16 @@ from app.cnc.blocks import (
     Comp,
     DataBlock0,
     Direction,
+    Entry,
     Hole,
     HoleOp,
+    Island,
     MillArc,
     MillLine,
     Mode,
+    Pocket,
     PocketArcEnd,
+    PocketLine,
     Pos,
     Program,
     Tool,
@@ -475,6 +479,151 @@ def test_a_pocket_with_an_island_entered_from_the_keyboard(page: Page, served: S
     expect(page.locator('.block-row[data-block="2"] .time')).not_to_have_text("")
     SHOTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(SHOTS / "pocket-entered.png"))
+
+
+def helix_arcs(page: Page) -> int:
+    """How many arcs of the POCKET's (block 2) feed in the drawing have a quarter of the
+    0.25 in tool's DIA for radius: a HELIX ramp's circle, half the DIA across."""
+    found: int = page.evaluate(
+        """() => {
+          const group = document.querySelector('#preview g.block[data-block="2"]');
+          let arcs = 0;
+          for (const path of group ? group.querySelectorAll('path.feed') : []) {
+            arcs += (path.getAttribute('d').match(/A0\\.0625 0\\.0625 /g) || []).length;
+          }
+          return arcs;
+        }"""
+    )
+    return found
+
+
+def test_a_pocket_ramps_down_on_a_helix_chosen_beside_the_prompts(
+    page: Page, served: Served
+) -> None:
+    """ENTRY (PLUNGE / HELIX / ZIGZAG) and its RAMP ANGLE stand beside the POCKET's prompts:
+    the machinist builds the pocket with an island going straight down, then opens the
+    POCKET, picks HELIX and an angle, and Enter steps through STEP, FIN CUT, FEEDR XY and
+    TOOL # and enters the block without stopping at ENTRY; at the keyboard, Tab reaches
+    ENTRY and its number shows RAMP ANGLE and moves there. The stored POCKET has them, and
+    the drawing has helical arcs where it had a plunge mark. An angle outside 0.5 to 30° is
+    refused beside RAMP ANGLE (the Enter sequence still ends at TOOL #) and the stored
+    program keeps its 5°. Failed before: a number typed on ENTRY chose HELIX but RAMP ANGLE
+    stayed hidden (only the pointer's change showed it) and the cursor went back to STEP."""
+    program_id = open_editor(page, served, program_of())
+
+    def entered(number: int) -> None:
+        expect(page.locator("#entry h2")).to_contain_text(f"Block {number + 1}: type")
+        settle(page)
+
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 1: DRILL")
+    enter(page, "0", "0", ".1", "-.25", "5", "2", "1")
+    entered(1)
+    choose(page, "0", "POCKET")
+    choose(page, "1", "Block 2: POCKET")
+    expect(page.locator("#f-ramp_angle")).to_be_hidden()  # PLUNGE: no angle to ask for
+    enter(page, "", "", "12", "1")
+    entered(2)
+    count = 2
+    for key, heading, values in (
+        ("2", "PKT LINE", ("3", "0")),
+        ("4", "PKT ARC CC", ("3", "1", "3", "2")),
+        ("2", "PKT LINE", ("0", "2")),
+        ("2", "PKT LINE", ("0", "0")),
+        ("5", "ISLAND", ("1", ".75")),
+        ("2", "PKT LINE", ("1.5", ".75")),
+        ("2", "PKT LINE", ("1.5", "1.25")),
+        ("2", "PKT LINE", ("1", "1.25")),
+        ("2", "PKT LINE", ("1", ".75")),
+    ):
+        choose(page, "0", "POCKET")
+        choose(page, key, heading)
+        enter(page, *values)
+        count += 2 if key == "4" else 1
+        entered(count)
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    expect(page.locator("#preview .plunge").first).to_be_attached()
+    assert helix_arcs(page) == 0
+
+    # At the keyboard: Enter to TOOL #, Tab to ENTRY beside it, its number, the angle.
+    page.locator('.block-row[data-block="2"] .summary').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POCKET")
+    settle(page)
+    enter(page, "", "", "")
+    expect(page.locator("#f-tool")).to_be_focused()
+    page.keyboard.press("Tab")
+    expect(page.locator("#f-entry")).to_be_focused()
+    page.keyboard.press("1")
+    expect(page.locator("#f-entry")).to_have_value("helix")
+    expect(page.locator("#f-ramp_angle")).to_be_visible()
+    expect(page.locator("#f-ramp_angle")).to_be_focused()
+    page.keyboard.type("5")
+    page.keyboard.press("Control+Enter")
+    entered(12)
+    pocket = saved_blocks(served, program_id)[1]
+    assert isinstance(pocket, Pocket)
+    assert (pocket.entry, pocket.ramp_angle) == (Entry.HELIX, D(5))
+    expect(page.locator('.block-row[data-block="2"] .summary')).to_contain_text("HELIX")
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    expect(page.locator("#preview .plunge")).to_have_count(0)
+    assert helix_arcs(page) > 0
+
+    page.locator('.block-row[data-block="2"] .summary').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POCKET")
+    settle(page)
+    expect(page.locator("#f-entry")).to_have_value("helix")
+    page.locator("#f-ramp_angle").fill("40")
+    page.locator("#f-step_over").focus()
+    enter(page, "", "", "", "")  # STEP, FIN CUT, FEEDR XY, TOOL #: the block is entered
+    refusal = page.locator("#e-ramp_angle")
+    expect(refusal).to_contain_text("RAMP ANGLE")
+    expect(refusal).to_contain_text("0.5 to 30")
+    pocket = saved_blocks(served, program_id)[1]
+    assert isinstance(pocket, Pocket) and pocket.ramp_angle == D(5)
+
+
+def test_a_helix_that_does_not_fit_says_what_would(page: Page, served: Served) -> None:
+    """A POCKET whose island leaves 0.35 in all round: the tool (0.25 in) goes down where a
+    HELIX's circle 0.125 in across does not fit. Chosen beside the prompts, the error stands
+    at ENTRY and says what fits (a smaller circle, ENTRY ZIGZAG, or PLUNGE); ZIGZAG fits."""
+
+    def lines(*points: tuple[str, str]) -> list[PocketLine]:
+        return [PocketLine(x=D(x), y=D(y)) for x, y in points]
+
+    program_id = open_editor(
+        page,
+        served,
+        program_of(
+            drill("0", "0", z_dn=D("-0.25"), pecks=2),
+            Pocket(feed_xy=D(12), tool=1),
+            *lines(("3", "0"), ("3", "2"), ("0", "2"), ("0", "0")),
+            Island(x=D("0.35"), y=D("0.35")),
+            *lines(("2.65", ".35"), ("2.65", "1.65"), (".35", "1.65"), (".35", ".35")),
+        ),
+    )
+    page.locator('.block-row[data-block="2"] .summary').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POCKET")
+    settle(page)
+    page.locator("#f-entry").select_option(label="1 HELIX")
+    page.locator("#f-step_over").focus()
+    enter(page, "", "", "", "")
+    expect(page.locator("#entry h2")).to_contain_text("Block 12: type")
+    problem = page.locator(".problems li.error")
+    expect(problem).to_have_count(1)
+    expect(problem).to_contain_text("ENTRY")
+    expect(problem).to_contain_text("a circle at most 0.0958 in across fits there")
+    expect(problem).to_contain_text("ENTRY ZIGZAG")
+    page.locator('.block-row[data-block="2"] .summary').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POCKET")
+    settle(page)
+    expect(page.locator("#e-entry")).to_contain_text("a circle at most 0.0958 in across fits")
+    page.locator("#f-entry").select_option(label="2 ZIGZAG")
+    page.locator("#f-step_over").focus()
+    enter(page, "", "", "", "")
+    expect(page.locator("#entry h2")).to_contain_text("Block 12: type")
+    expect(page.locator(".problems li.error")).to_have_count(0)
+    pocket = saved_blocks(served, program_id)[1]
+    assert isinstance(pocket, Pocket) and pocket.entry is Entry.ZIGZAG
 
 
 # -- any screen (issue 20 item 5) ------------------------------------------------------------

@@ -626,8 +626,9 @@ def test_a_pocket_entry_chosen_in_the_editor_is_drawn_as_its_ramp(
     page: Page, library: Library
 ) -> None:
     """A CIRCLE POCKET 4 in across with the 1 in tool: ENTRY is asked for only while
-    PLACEMENT is POCKET, RAMP ANGLE only while ENTRY is HELIX or ZIGZAG; choosing HELIX at 3° draws
-    the ramp, a circle of radius 0.25 in (the tool's DIA / 4) that the plunge did not have."""
+    PLACEMENT is POCKET (chosen with the pointer or its number typed), RAMP ANGLE only while
+    ENTRY is HELIX or ZIGZAG; choosing HELIX at 3° draws the ramp, a circle of radius 0.25 in
+    (the tool's DIA / 4) that the plunge did not have."""
     url = library.add(
         program(
             "Ramped pocket",
@@ -643,9 +644,15 @@ def test_a_pocket_entry_chosen_in_the_editor_is_drawn_as_its_ramp(
     open_block(page, 2)
     expect(page.locator("#f-entry")).to_be_visible()
     expect(page.locator("#f-ramp_angle")).to_be_hidden()
-    page.locator("#f-placement").select_option("inside")
+    # PLACEMENT's number typed at the keyboard shows or hides ENTRY as the pointer's choice
+    # does (it did not: the number set the value without a change).
+    page.locator("#f-placement").focus()
+    page.keyboard.press("1")  # INSIDE
     expect(page.locator("#f-entry")).to_be_hidden()
-    page.locator("#f-placement").select_option("pocket")
+    expect(page.locator("#f-radius")).to_be_focused()
+    page.locator("#f-placement").focus()
+    page.keyboard.press("5")  # POCKET
+    expect(page.locator("#f-entry")).to_be_visible()
     page.locator("#f-entry").select_option("zigzag")
     expect(page.locator("#f-ramp_angle")).to_be_visible()
     page.locator("#f-entry").select_option("")

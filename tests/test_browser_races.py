@@ -16,10 +16,13 @@ from __future__ import annotations
 import contextlib
 import re
 import time
+from collections.abc import Sized
 
-from playwright.sync_api import Error, Page, Route, expect
+import pytest
+from playwright.sync_api import APIResponse, Error, Page, Route, expect
 
-from tests.test_browser import browser, page, server  # noqa: F401 - fixtures
+from tests.test_browser import browser, page, server, until  # noqa: F401 - fixtures
+from tests.test_browser_preview import Library, drill, library, open_block, program  # noqa: F401
 
 
 def hold_first(tab: Page, pattern: str) -> list[Route]:
@@ -37,14 +40,32 @@ def hold_first(tab: Page, pattern: str) -> list[Route]:
     return held
 
 
-def wait_for(tab: Page, held: list[Route], timeout: float = 10.0) -> None:
-    """Wait until the first request is held (polled through Playwright, so that the routing
+def wait_for(tab: Page, held: Sized, count: int = 1, timeout: float = 10.0) -> None:
+    """Wait until `count` requests are held (polled through Playwright, so that the routing
     callback runs meanwhile)."""
     deadline = time.monotonic() + timeout
-    while not held:
+    while len(held) < count:
         if time.monotonic() > deadline:
-            raise AssertionError("the first request was never made")
+            raise AssertionError(f"request {len(held) + 1} was never made")
         tab.wait_for_timeout(20)
+
+
+def hold_answers(tab: Page, pattern: str) -> list[tuple[Route, APIResponse]]:
+    """Route requests matching `pattern`: each is answered by the server at once, and its
+    answer held (in the list, with its route) until the test hands it to the page."""
+    held: list[tuple[Route, APIResponse]] = []
+
+    def route(found: Route) -> None:
+        held.append((found, found.fetch()))
+
+    tab.route(pattern, route)
+    return held
+
+
+def hand_over(answer: tuple[Route, APIResponse]) -> None:
+    """Give a held answer to the page (which may have given its request up meanwhile)."""
+    with contextlib.suppress(Error):
+        answer[0].fulfill(response=answer[1])
 
 
 def let_through(route: Route) -> None:
@@ -107,3 +128,42 @@ def test_a_machine_shows_the_options_of_the_last_target_chosen(page: Page, serve
     page.wait_for_timeout(500)
     expect(legend).to_have_text("Options of Fanuc 6M G-code")
     expect(page.locator('input[name="options_for"]')).to_have_value("gcode-fanuc")
+
+
+@pytest.mark.parametrize("first", ["earlier", "later"])
+def test_the_drawing_shows_the_last_edit_when_two_whole_drawings_cross(
+    page: Page,  # noqa: F811
+    library: Library,  # noqa: F811
+    first: str,
+) -> None:
+    """Two edits in a row that each ask for the whole drawing (a tool Data Block 0 does not
+    have leaves nothing to draw; put right, the page's drawing is of another version than
+    the edit started from): whichever answer comes first, the drawing ends as the last edit
+    left the program, its holes drawn and no "tool 9" message. The answers are made by the
+    server in order and handed to the page in the order `first` says. Failed before with
+    the earlier answer first: it replaced #drawing-area, which took the later request's
+    target out of the page, and the later answer was dropped: the page kept saying that
+    nothing could be drawn for tool 9 while the program was right. With the earlier answer
+    last, a holder alone (no hx-sync replace) fails too: that answer lands last."""
+    page.goto(library.add(program("Crossing drawings", drill("3", "2"), drill("1", "1"))))
+    expect(page.locator("#preview circle.hole")).to_have_count(2)
+    held = hold_answers(page, "**/drawing?v=*")
+    open_block(page, 1)
+    page.locator("#f-tool").fill("9")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#version")).to_have_text("v2")
+    wait_for(page, held)  # the server drew version 2 (nothing): the answer is held
+    open_block(page, 1)
+    page.locator("#f-tool").fill("1")
+    page.locator("#entry button[data-submit]").click()
+    expect(page.locator("#version")).to_have_text("v3")
+    wait_for(page, held, 2)  # the page asks for version 3's drawing
+    order = held if first == "earlier" else held[::-1]
+    hand_over(order[0])
+    page.wait_for_timeout(300)  # the first answer, if the page takes it, is in
+    hand_over(order[1])
+    page.wait_for_timeout(300)
+    expect(page.locator("#preview circle.hole")).to_have_count(2)
+    expect(page.locator("#not-drawn")).not_to_contain_text("tool 9")
+    until(page, "document.getElementById('preview').dataset.version === '3'")
+    expect(page.locator("#drawing-area")).to_have_count(1)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import types
+from collections.abc import Sequence
 
 import pyclipper
 import pytest
@@ -19,6 +20,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
 
+from app.cnc import plane
 from app.cnc.blocks import MillingMode
 from app.cnc.plane import Element, Path, sample
 from app.cnc.pocketing import (
@@ -665,3 +667,49 @@ def test_way_round_the_previous_ring_grows_with_the_rings_not_their_product(
     eight, chosen_eight, exact_eight = way_round_pairs(monkeypatch, 8)
     assert chosen_four == exact_four and chosen_eight == exact_eight
     assert eight <= 2.2 * four, f"{four:,} -> {eight:,} pairs: {eight / four:.2f}x"
+
+
+def test_way_round_measures_exactly_only_the_samples_that_can_win(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Issue 30: the way round the previous ring samples it every eighth of the tool radius.
+    Every sample was made in Python (`plane.sample`); now numpy makes them all for the
+    bounds and Python only those a pair near the ring can hold (the same arithmetic, so
+    the same point: `way_round_pairs` checks it against measuring every pair)."""
+    made = [0]
+    real = plane.points_along
+
+    def points_along(start: Pt, element: Element, fractions: Sequence[float]) -> list[Pt]:
+        made[0] += len(fractions)
+        return real(start, element, fractions)
+
+    for n in (4, 8):
+        previous, ring, step = comb(n, IN / 10), comb(n), IN / 128
+        samples = len(sample(previous, step))
+        monkeypatch.setattr(plane, "points_along", points_along)
+        monkeypatch.setattr(nearest, "points_along", points_along, raising=False)
+        made[0] = 0
+        _, chosen = _way_round(previous, ring, step)
+        monkeypatch.undo()
+        assert made[0] < samples / 4, f"{made[0]:,} of {samples:,} samples made exactly"
+        assert chosen == way_round_pairs(monkeypatch, n)[2]
+
+
+def test_a_long_move_in_pieces_sweeps_about_the_points_of_the_whole_move() -> None:
+    """Issue 30: a link's "through cut material?" reads the sweeps of the pieces of the
+    passes near it (`regions.SweptIndex`), every 32 segments. Each piece had two round
+    ends (a circle of points at the chordal tolerance): the pieces of a ring held 2.3x the
+    points of the ring's own sweep, all handed to Clipper. Now only the move's own ends
+    are round: at most 1.3x (1.2x here), the same area."""
+    r, t = IN / 16, 500.0
+    for radius in (IN, 2 * IN):
+        points = regions.path_points(circle(0, 0, radius), t)
+        index = regions.SweptIndex(r, t, 4 * r)
+        index.add(points)
+        pieces = index.near(index.boxes(points))
+        whole = regions.sweep_lines([points], r, t)
+        assert sum(map(len, pieces)) <= 1.3 * sum(map(len, whole))
+        # The same area: the union of the pieces' sweeps is the whole move's sweep.
+        assert regions.area(regions.union(pieces)) == pytest.approx(
+            regions.area(regions.union(whole)), rel=1e-8
+        )

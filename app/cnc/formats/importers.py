@@ -15,7 +15,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, ClassVar
+from typing import Any, BinaryIO, ClassVar
 
 from app.cnc.blocks import Program
 from app.cnc.options import Option
@@ -124,6 +124,14 @@ class Importer(ABC):
     ) -> tuple[Program, list[ImportNote]]:
         """The program in `data` and its report. `name` names a program whose file gives no
         name. Raises ImportFailure naming line and column (or tape block and row)."""
+
+    def read_file(
+        self, file: BinaryIO, name: str, options: Mapping[str, str]
+    ) -> tuple[Program, list[ImportNote]]:
+        """`read` of the bytes of `file` (open, binary, at its start, seekable). A format
+        that can read a long file a part at a time does so here (the G-code importer);
+        the others read its bytes whole."""
+        return self.read(file.read(), name, options)
 
 
 _IMPORTERS: dict[str, Importer] = {}

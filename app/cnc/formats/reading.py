@@ -1,6 +1,7 @@
 """Imports: files that become editable MillBlocks programs (GitHub issue 5).
 
     read_program(data, name="", format=None) -> ImportResult
+    read_file(file, name="", format=None) -> ImportResult   (the command line's own files)
 
 `format` names an import format of the registry (`importers()`: a MillBlocks program
 document, ProtoTRAK Plus events, G-code, a Tektronix 1704 tape, a DXF drawing — each a
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import BinaryIO
 
 from app.cnc import cost
 from app.cnc.blocks import Program
@@ -43,6 +45,7 @@ __all__ = [
     "NoteKind",
     "detect_format",
     "importers",
+    "read_file",
     "read_program",
 ]
 
@@ -73,6 +76,39 @@ def detect_format(data: bytes) -> str:
     """The name of the import format `data` is in, from its content. Raises ImportFailure
     when it is empty or could be several formats alike (it then asks for the format)."""
     return detect(data).name
+
+
+# What detection reads of a file on disk (`read_file`): a long file shows its format in its
+# first lines (the word-address evidence looks at 5 000 of them, wordaddress.SNIFF_LINES).
+DETECT_BYTES = 1 << 20
+
+
+def file_head(file: BinaryIO) -> bytes:
+    """The start of `file` that detection reads: its first DETECT_BYTES, to the last line
+    break in them (the whole file when it is shorter). Leaves `file` at the start."""
+    data = file.read(DETECT_BYTES)
+    file.seek(0)
+    if len(data) < DETECT_BYTES:
+        return data
+    cut = max(data.rfind(b"\n"), data.rfind(b"\r")) + 1
+    return data[:cut] if cut else data
+
+
+def read_file(
+    file: BinaryIO,
+    name: str = "",
+    format: str | None = None,
+    options: Mapping[str, str] | None = None,
+) -> ImportResult:
+    """`read_program(..., limited=False)` of an open binary file (seekable, at its start),
+    for the command line converting the user's own files: the format is detected from its
+    start (`file_head`, the same `detect_format` rule), and a format that reads a part at a
+    time (G-code) never holds the file's bytes whole. Raises ImportFailure as
+    `read_program` does."""
+    importer = detect(file_head(file)) if format is None else get_importer(format)
+    check_options(importer, options or {})
+    program, notes = importer.read_file(file, name, options or {})
+    return ImportResult(program, notes, importer.name)
 
 
 def read_program(
@@ -117,6 +153,12 @@ def read_as(
 ) -> tuple[Program, list[ImportNote]]:
     """`importer.read`, after refusing options it does not have (no size limits: for
     callers that set their own, such as the benchmarks)."""
+    check_options(importer, options)
+    return importer.read(data, name, options)
+
+
+def check_options(importer: Importer, options: Mapping[str, str]) -> None:
+    """Raises ImportFailure naming an option `importer` does not have, and its options."""
     known = {option.name for option in importer.options}
     unknown = sorted(set(options) - known)
     if unknown:
@@ -124,4 +166,3 @@ def read_as(
         raise ImportFailure(
             "", f"{importer.name} import has no option {unknown[0]!r}; its options: {allowed}"
         )
-    return importer.read(data, name, options)

@@ -23,7 +23,7 @@ import tempfile
 import weakref
 from abc import ABC
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, BinaryIO, ClassVar, Protocol
 
 from app.cnc.blocks import Program
@@ -33,6 +33,7 @@ from app.cnc.machine import MachineModel, check_spindle, check_travel
 from app.cnc.needs import unmet
 from app.cnc.options import Option, OptionError, OptionKind
 from app.cnc.path import CompiledPath
+from app.cnc.places import Places, more_text
 from app.cnc.problems import Need, Problem, blocking
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
@@ -75,31 +76,95 @@ class Severity(enum.Enum):
 
 @dataclass(frozen=True)
 class Entry:
-    """One line of a compatibility report. `block` is None for the whole program."""
+    """One line of a compatibility report. `block` is None for the whole program.
+
+    An entry that recurs (`same`: the text its places share, e.g. "arcs written as
+    chords") is one entry: `message` is its first place's, `count` how many times it was
+    reported, `places` the next few places by name and `more` how many further places are
+    not named (app.cnc.places)."""
 
     severity: Severity
     block: int | None
     message: str
+    same: str = ""
+    count: int = 1
+    places: tuple[str, ...] = ()
+    more: int = 0
 
     def __str__(self) -> str:
         where = "program" if self.block is None else f"block {self.block}"
-        return f"{self.severity.value}: {where}: {self.message}"
+        return f"{self.severity.value}: {where}: {self.message}{self.recurring}"
+
+    @property
+    def recurring(self) -> str:
+        """` (… N in all; also at …)` for an entry reported at several places, else ""."""
+        if self.count == 1:
+            return ""
+        also = f"; also at {', '.join(self.places)}" if self.places else ""
+        return f" ({self.same}: {self.count} in all{also}{more_text(self.more)})"
 
 
 @dataclass
 class Report:
     """What a target did with a program: errors, losses, rewrites, warnings, notes (each
-    entry once, in the order first reported)."""
+    entry once, in the order first reported; an entry that recurs with its own details at
+    each place is one entry counting them, `Entry`)."""
 
     target: str
-    entries: list[Entry] = field(default_factory=list)
-    _seen: set[Entry] = field(default_factory=set, repr=False)
+    _entries: list[Entry] = field(default_factory=list, repr=False)
+    _index: dict[tuple[object, ...], int] = field(default_factory=dict, repr=False)
+    _places: dict[int, Places[str]] = field(default_factory=dict, repr=False)
 
-    def add(self, severity: Severity, block: int | None, message: str) -> None:
-        entry = Entry(severity, block, message)
-        if entry not in self._seen:
-            self._seen.add(entry)
-            self.entries.append(entry)
+    @property
+    def entries(self) -> list[Entry]:
+        """The entries, in the order first reported, each with its count and places."""
+        out = self._entries[:]
+        for k, seen in self._places.items():
+            out[k] = replace(out[k], count=seen.count, places=tuple(seen.named), more=seen.more)
+        return out
+
+    def add(
+        self,
+        severity: Severity,
+        block: int | None,
+        message: str,
+        same: str = "",
+        at: str = "",
+    ) -> None:
+        """Report `message` at `block`. Without `same`, the same message at the same block
+        is reported once. With `same` (the text every place shares; `message` is this
+        place's own), every place of that severity is one entry: the first place's message,
+        how many places, and the next few by name (`at`, by default `block N`)."""
+        key: tuple[object, ...] = (severity, same) if same else (severity, block, message)
+        index = self._index.get(key)
+        name = at or ("program" if block is None else f"block {block}")
+        if index is None:
+            self._index[key] = len(self._entries)
+            self._entries.append(Entry(severity, block, message, same))
+            if same:
+                self._places[len(self._entries) - 1] = Places(name)
+            return
+        seen = self._places.get(index)
+        if seen is not None:
+            seen.add(name)
+
+    def merge(self, other: Report) -> None:
+        """`other`'s entries after this report's, as if each place had been reported here
+        (a stage's report into the export's)."""
+        for k, entry in enumerate(other._entries):
+            seen = other._places.get(k)
+            if seen is None:
+                self.add(entry.severity, entry.block, entry.message, entry.same)
+                continue
+            key = (entry.severity, entry.same)
+            index = self._index.get(key)
+            if index is None:
+                self._index[key] = len(self._entries)
+                self._entries.append(entry)
+                self._places[len(self._entries) - 1] = seen.copy()
+            else:
+                # The same kind of place from two stages: counted on, places named as kept.
+                self._places[index].join(seen)
 
     def unsupported(self, block: int | None, message: str) -> None:
         """The one call for what the target cannot express (a loss, not an error)."""
@@ -108,18 +173,18 @@ class Report:
     def error(self, block: int | None, message: str) -> None:
         self.add(Severity.ERROR, block, message)
 
-    def rewritten(self, block: int | None, message: str) -> None:
-        self.add(Severity.REWRITTEN, block, message)
+    def rewritten(self, block: int | None, message: str, same: str = "", at: str = "") -> None:
+        self.add(Severity.REWRITTEN, block, message, same, at)
 
-    def warning(self, block: int | None, message: str) -> None:
-        self.add(Severity.WARNING, block, message)
+    def warning(self, block: int | None, message: str, same: str = "", at: str = "") -> None:
+        self.add(Severity.WARNING, block, message, same, at)
 
     def note(self, block: int | None, message: str) -> None:
         self.add(Severity.NOTE, block, message)
 
     @property
     def has_errors(self) -> bool:
-        return any(e.severity is Severity.ERROR for e in self.entries)
+        return any(e.severity is Severity.ERROR for e in self._entries)
 
     def text(self) -> str:
         """The report as lines, errors first, then in block order."""

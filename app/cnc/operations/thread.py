@@ -85,6 +85,25 @@ def thread_depth(lead: int, internal: bool) -> float:
     return height * (INTERNAL_DEPTH if internal else EXTERNAL_DEPTH)
 
 
+def lead_rise(lead: int) -> int:
+    """How far (nm) a pass's lead-in and lead-out each go along Z: a quarter of the lead.
+    The helix's turns stop that far short of both ends of the thread."""
+    return lead // 4
+
+
+def full_form_bottom(z_up: int, z_dn: int, lead: int) -> int:
+    """The lowest Z (nm) down to which a thread from `z_up` to `z_dn` of `lead` has its full
+    form all round. The helix goes one lead a turn and stops `lead_rise` short of Z DN (the
+    lead-in or lead-out takes it the rest of the way), so where its last turn ends the turn
+    before passed a lead higher: a lead and a quarter above Z DN. Below that the thread runs
+    out, partly cut, as a thread mill's last turn leaves it; nothing is cut below Z DN. A
+    helix shorter than a turn (a thread shorter than a lead and a half) goes round only part
+    of the way: no depth has the full form all round, and this is `z_up`."""
+    rise = lead_rise(lead)
+    bottom = z_dn + lead + rise
+    return bottom if bottom <= z_up - rise else z_up
+
+
 def thread_passes(
     centre: tuple[int, int],
     major: int,
@@ -110,7 +129,7 @@ def thread_passes(
     up = (not clockwise) if right_hand else clockwise
     way = 1 if up else -1
     z_start, z_end = (z_dn, z_up) if up else (z_up, z_dn)
-    quarter = lead // 4
+    quarter = lead_rise(lead)
     found = []
     for k in range(1, passes + 1):
         short = depth * (passes - k) / passes  # the depth this pass leaves for the next

@@ -267,52 +267,105 @@ class _Level:
         self.found.append(new)
 
 
-def _carriers_at(points: list[Pt], level: Sequence[Carrier], tolerance: float) -> list[set[int]]:
-    """For each point, the carriers it lies on within `tolerance` (one numpy pass per
-    carrier over all the points: a contour of hundreds of blocks has as many carriers)."""
-    at = np.array(points, dtype=np.float64)
-    on: list[set[int]] = [set() for _ in points]
+IntArray = npt.NDArray[np.intp]
+
+
+def carrier_boxes(level: Sequence[Carrier], tolerance: float) -> npt.NDArray[np.float64]:
+    """Each carrier's `box(tolerance)` as a row (x0, y0, x1, y1): for `exact_ring`, when a
+    caller asks it of many rings of one level."""
+    return np.array([c.box(tolerance) for c in level], dtype=np.float64).reshape(-1, 4)
+
+
+def _carriers_at(
+    at: npt.NDArray[np.float64],
+    level: Sequence[Carrier],
+    tolerance: float,
+    boxes: npt.NDArray[np.float64],
+) -> tuple[IntArray, IntArray]:
+    """(rows, carriers): every pair of a point (a row of `at`) and a carrier it lies on
+    within `tolerance`, by carrier in the level's order, rows ascending (one numpy pass
+    per carrier whose box meets the ring's over all the points: a contour of hundreds of
+    blocks has as many carriers)."""
     low, high = at.min(axis=0), at.max(axis=0)
-    for k, carrier in enumerate(level):
-        x0, y0, x1, y1 = carrier.box(tolerance)
-        if x0 > high[0] or x1 < low[0] or y0 > high[1] or y1 < low[1]:
-            continue  # no point of the ring comes within `tolerance` of it
+    x0, y0, x1, y1 = boxes.T
+    meets = (x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1])
+    rows: list[IntArray] = []
+    found: list[IntArray] = []
+    for k in np.flatnonzero(meets).tolist():
+        bx0, by0, bx1, by1 = boxes[k]
         near = np.flatnonzero(
-            (at[:, 0] >= x0) & (at[:, 0] <= x1) & (at[:, 1] >= y0) & (at[:, 1] <= y1)
+            (at[:, 0] >= bx0) & (at[:, 0] <= bx1) & (at[:, 1] >= by0) & (at[:, 1] <= by1)
         )
         if not len(near):
             continue
-        close = carrier.distances(at[near], tolerance) <= tolerance
-        for i in near[close].tolist():
-            on[i].add(k)
-    return on
+        close = near[level[k].distances(at[near], tolerance) <= tolerance]
+        rows.append(close)
+        found.append(np.full(len(close), k, dtype=np.intp))
+    if not rows:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    return np.concatenate(rows), np.concatenate(found)
+
+
+def _sets(rows: IntArray, values: IntArray, n: int) -> list[set[int]]:
+    """For each of `n` rows, the set of `values` paired with it (most rows have one: made
+    in one comprehension, not one Python call per pair)."""
+    order = np.lexsort((values, rows))
+    rows, values = rows[order], values[order]
+    count = np.bincount(rows, minlength=n)
+    first = np.searchsorted(rows, np.arange(n))
+    picked = values[np.minimum(first, max(len(values) - 1, 0))] if len(values) else first
+    found = [{v} for v in picked.tolist()]
+    for i in np.flatnonzero(count != 1).tolist():
+        found[i] = set(values[first[i] : first[i] + count[i]].tolist())
+    return found
 
 
 def _edge_labels(
-    points: list[Pt], on: list[set[int]], level: Sequence[Carrier], tolerance: float
+    at: npt.NDArray[np.float64],
+    rows: IntArray,
+    carriers_of: IntArray,
+    on: list[set[int]],
+    level: Sequence[Carrier],
+    tolerance: float,
 ) -> list[set[int]]:
     """For each edge of the ring (point i to point i + 1), the carriers its two ends and its
     middle lie on within `tolerance` (nm); for an edge across a junction (Clipper kept no
     point there), where no carrier holds all three, the carriers of either end: either
-    may take it. The middles are measured one numpy pass per carrier (`Carrier.distances`,
-    the numbers `distance` gives), not one Python call per edge and carrier."""
-    n = len(points)
-    at = np.array(points, dtype=np.float64)
+    may take it. `rows`, `carriers_of`: the (point, carrier) pairs (`_carriers_at`), `on`
+    the same as sets. The middles are measured one numpy pass per carrier
+    (`Carrier.distances`, the numbers `distance` gives), not one Python call per edge and
+    carrier."""
+    n = len(at)
     middles = (at + np.roll(at, -1, axis=0)) / 2
-    edges_of: dict[int, list[int]] = {}
-    for i in range(n):
-        following = on[(i + 1) % n]
-        for k in on[i]:
-            if k in following:
-                edges_of.setdefault(k, []).append(i)
-    labels: list[set[int]] = [set() for _ in range(n)]
-    for k, edges in edges_of.items():
-        close = level[k].distances(middles[edges], tolerance) <= tolerance
-        for i in np.asarray(edges)[close].tolist():
-            labels[i].add(k)
-    for i in range(n):
-        if not labels[i]:
-            labels[i] = on[i] | on[(i + 1) % n]
+    # An edge can lie on a carrier both its ends lie on: the pair (i + 1, k) is there too.
+    # The pairs come by carrier, rows ascending, so their codes k n + i ascend: (i + 1, k)
+    # is the next pair, or for the last point (i + 1 = 0) found by bisection.
+    codes = carriers_of * n + rows
+    both = np.zeros(len(codes), dtype=bool)
+    both[:-1] = codes[1:] == codes[:-1] + 1
+    last = np.flatnonzero(rows == n - 1)
+    wanted = carriers_of[last] * n
+    found = np.minimum(np.searchsorted(codes, wanted), len(codes) - 1)
+    both[last] = codes[found] == wanted
+    edges, edge_carriers = rows[both], carriers_of[both]
+    labelled: list[IntArray] = []
+    labels_of: list[IntArray] = []
+    # The pairs come by carrier, rows ascending: each carrier's edges are one slice.
+    cuts = np.flatnonzero(np.diff(edge_carriers)) + 1
+    for group in np.split(np.arange(len(edges)), cuts):
+        if not len(group):
+            continue
+        k = int(edge_carriers[group[0]])
+        close = level[k].distances(middles[edges[group]], tolerance) <= tolerance
+        labelled.append(edges[group][close])
+        labels_of.append(edge_carriers[group][close])
+    if labelled:
+        label_rows, label_carriers = np.concatenate(labelled), np.concatenate(labels_of)
+    else:
+        label_rows = label_carriers = np.zeros(0, dtype=np.intp)
+    labels = _sets(label_rows, label_carriers, n)
+    for i in np.flatnonzero(np.bincount(label_rows, minlength=n) == 0).tolist():
+        labels[i] = on[i] | on[(i + 1) % n]
     return labels
 
 
@@ -325,23 +378,33 @@ class ExactRing:
 
 
 def exact_ring(
-    ring: Ring, level: Sequence[Carrier], tolerance: float, block: int, tag: str
+    ring: Ring,
+    level: Sequence[Carrier],
+    tolerance: float,
+    block: int,
+    tag: str,
+    level_boxes: npt.NDArray[np.float64] | None = None,
 ) -> ExactRing | None:
     """The exact lines and arcs of a Clipper ring (region on its left), or None when the
-    ring cannot be matched to the level's carriers within `tolerance` nm.
+    ring cannot be matched to the level's carriers within `tolerance` nm. `level_boxes`:
+    `carrier_boxes(level, tolerance)`, when the caller asks of many rings of one level.
 
     Each edge of the ring (between consecutive points) is labelled with the carriers its
     two ends and its middle lie on; the ring is split into the fewest runs of edges on one
     carrier, and consecutive runs meet where their carriers intersect.
     """
-    points: list[Pt] = [(float(x), float(y)) for x, y in ring]
-    n = len(points)
+    n = len(ring)
     if n < 3:
         return None
-    on = _carriers_at(points, level, tolerance)
-    if any(not s for s in on):
+    at = np.array(ring, dtype=np.float64)
+    points: list[Pt] = list(map(tuple, at.tolist()))
+    if level_boxes is None:
+        level_boxes = carrier_boxes(level, tolerance)
+    rows, carriers_of = _carriers_at(at, level, tolerance, level_boxes)
+    if (np.bincount(rows, minlength=n) == 0).any():
         return None
-    labels = _edge_labels(points, on, level, tolerance)
+    on = _sets(rows, carriers_of, n)
+    labels = _edge_labels(at, rows, carriers_of, on, level, tolerance)
     runs = _runs(labels)
     if len(runs) == 1:
         carrier = level[runs[0][0]]
@@ -353,12 +416,20 @@ def exact_ring(
     junctions: list[Pt] = []
     for k, (label, first, length) in enumerate(runs):
         nxt_label = runs[(k + 1) % len(runs)][0]
-        window = [points[(first + j) % n] for j in range(length + 1)]
-        after = points[(first + length + 1) % n]
-        meet = _junction(level[label], level[nxt_label], window[-1], after, tolerance)
-        if meet is None or nearest.polyline_distance(meet, [*window, after]) > 4 * tolerance:
+        last, after = points[(first + length) % n], points[(first + length + 1) % n]
+        meet = _junction(level[label], level[nxt_label], last, after, tolerance)
+        if meet is None:
             return None
         junctions.append(meet)
+    # Each junction lies near its run and the point after it (one numpy pass for all).
+    far = nearest.stretch_distances(
+        at,
+        np.array(junctions, dtype=np.float64),
+        [first for _, first, _ in runs],
+        [length + 1 for _, _, length in runs],
+    )
+    if (far > 4 * tolerance).any():
+        return None
     elements: list[Element] = []
     element_starts: list[Pt] = []
     groups: list[list[Pt]] = []
@@ -393,19 +464,20 @@ def _checked(
     tolerance: float,
     used: list[Carrier],
 ) -> ExactRing | None:
-    for group, element, start in zip(groups, elements, starts, strict=True):
-        if not group:
-            continue
-        # numpy bounds the exact distance of every point at once; only a point whose
-        # bounds straddle the limit (beside an arc's end) is measured exactly.
-        lower, upper = nearest.bounds(
-            np.asarray(group, dtype=np.float64), nearest.table([start], [element])
+    # numpy bounds the exact distance of every point to its element at once (one pass for
+    # the ring); only a point whose bounds straddle the limit (beside an arc's end) is
+    # measured exactly.
+    points = [p for group in groups for p in group]
+    if points:
+        owner = np.repeat(np.arange(len(groups)), [len(group) for group in groups])
+        lower, upper = nearest.pair_bounds(
+            np.asarray(points, dtype=np.float64), nearest.table(starts, elements).take(owner)
         )
-        if (lower[:, 0] > 2 * tolerance + nearest.MARGIN).any():
+        if (lower > 2 * tolerance + nearest.MARGIN).any():
             return None
-        unsure = np.flatnonzero(upper[:, 0] > 2 * tolerance - nearest.MARGIN).tolist()
-        for i in unsure:
-            if distance_to_element(group[i], start, element) > 2 * tolerance:
+        for i in np.flatnonzero(upper > 2 * tolerance - nearest.MARGIN).tolist():
+            k = int(owner[i])
+            if distance_to_element(points[i], starts[k], elements[k]) > 2 * tolerance:
                 return None
     sources = tuple(sorted({s for c in used for s in c.sources}))
     return ExactRing(path, sources)

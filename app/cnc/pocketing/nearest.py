@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from app.cnc.plane import Element, Pt, sweep
+from app.cnc.plane import Element, Path, Pt, length, points_along, sweep
 
 Array = npt.NDArray[np.float64]
 
@@ -98,8 +98,17 @@ def table(starts: Sequence[Pt], elements: Sequence[Element]) -> Elements:
 def bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
     """(lower, upper): for each point (a row x, y) and element, bounds on the distance from
     the point to the element's nearest point as the planner finds it (P × E arrays)."""
-    px = points[:, 0:1]
-    py = points[:, 1:2]
+    return _bounds(points[:, 0:1], points[:, 1:2], elements)
+
+
+def pair_bounds(points: Array, elements: Elements) -> tuple[Array, Array]:
+    """(lower, upper) as `bounds` gives them, of each point (row i) to element i alone
+    (P arrays, P points and P elements): many small questions in one numpy pass."""
+    return _bounds(points[:, 0], points[:, 1], elements)
+
+
+def _bounds(px: Array, py: Array, elements: Elements) -> tuple[Array, Array]:
+    """`bounds` for point columns `px`, `py` broadcast against the elements' columns."""
     # Lines: the nearest point of the segment.
     dx, dy = elements.ex - elements.sx, elements.ey - elements.sy
     denom = dx * dx + dy * dy
@@ -188,25 +197,84 @@ def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> 
     return _to_segments(point, starts, ends)
 
 
-def polyline_distance(point: Pt, points: Sequence[Pt]) -> float:
-    """The distance from `point` to the open polyline through `points` (one point: to it),
-    as `mill.distance_to_element` measures each segment."""
-    at = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-    if len(at) == 1:
-        return math.dist(point, points[0])
-    return float(_to_segments(point, at[:-1], at[1:]).min())
+def stretch_distances(
+    ring: Array, points: Array, firsts: Sequence[int], counts: Sequence[int]
+) -> Array:
+    """For each k, the distance from `points[k]` to the open polyline of `counts[k]`
+    segments of the closed `ring` (rows x, y) from its point `firsts[k]` on, as
+    `mill.distance_to_element` measures each segment: every stretch in one numpy pass."""
+    n = len(ring)
+    sizes = np.asarray(counts, dtype=np.intp)
+    owner = np.repeat(np.arange(len(sizes), dtype=np.intp), sizes)
+    first_segment = np.cumsum(sizes) - sizes
+    rows = (
+        np.asarray(firsts, dtype=np.intp)[owner] + np.arange(len(owner)) - first_segment[owner]
+    ) % n
+    found: Array = np.minimum.reduceat(
+        _to_segments(points[owner], ring[rows], ring[(rows + 1) % n]), first_segment
+    )
+    return found
 
 
-def _to_segments(point: Pt, starts: Array, ends: Array) -> Array:
+def _to_segments(point: Pt | Array, starts: Array, ends: Array) -> Array:
+    """The distance from `point` (or from each row of `point`) to each segment."""
     d = ends - starts
     denom = (d * d).sum(axis=1)
-    q = np.array(point) - starts
+    at = np.broadcast_to(np.asarray(point, dtype=np.float64), starts.shape)
+    q = at - starts
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(denom > 0, (q * d).sum(axis=1) / denom, 0.0)
     t = np.clip(t, 0.0, 1.0)
     foot = starts + d * t[:, None]
-    found: Array = np.hypot(point[0] - foot[:, 0], point[1] - foot[:, 1])
+    found: Array = np.hypot(at[:, 0] - foot[:, 0], at[:, 1] - foot[:, 1])
     return found
+
+
+@dataclass(frozen=True)
+class Samples:
+    """The points `plane.sample` takes along a path, to numpy's rounding (`at`, rows x, y,
+    in the same order), and each one exactly (`exact`, the same arithmetic as
+    `plane.sample`): a caller bounds them all with numpy and measures the few that can
+    win, as the rest of this module does with distances."""
+
+    at: Array
+    starts: tuple[Pt, ...]
+    elements: tuple[Element, ...]
+    owner: npt.NDArray[np.intp]
+    fraction: Array
+
+    def exact(self, k: int) -> Pt:
+        """The `k`th sample as `plane.sample` makes it, to the last bit."""
+        e = int(self.owner[k])
+        return points_along(self.starts[e], self.elements[e], (float(self.fraction[k]),))[0]
+
+
+def samples(path: Path, step: float) -> Samples:
+    """The points of `plane.sample(path, step)`: each element cut into the same n pieces,
+    fractions i / n (both ends included), the points made for all elements at once."""
+    starts: list[Pt] = []
+    counts: list[int] = []
+    current = path.start
+    for element in path.elements:
+        starts.append(current)
+        counts.append(max(1, math.ceil(length(current, element) / step)))
+        current = element.end
+    table_ = table(starts, path.elements)
+    sizes = np.array(counts, dtype=np.intp) + 1
+    owner = np.repeat(np.arange(len(counts), dtype=np.intp), sizes)
+    first = np.cumsum(sizes) - sizes
+    steps = np.arange(len(owner), dtype=np.intp) - first[owner]
+    fraction = steps / np.array(counts, dtype=np.float64)[owner]
+    sx, sy = table_.sx[owner], table_.sy[owner]
+    x = sx + (table_.ex[owner] - sx) * fraction
+    y = sy + (table_.ey[owner] - sy) * fraction
+    arc = table_.arc[owner]
+    if arc.any():
+        signed = np.where(table_.clockwise, -table_.turn, table_.turn)[owner]
+        angle = table_.a0[owner] + signed * fraction
+        x = np.where(arc, table_.cx[owner] + table_.radius[owner] * np.cos(angle), x)
+        y = np.where(arc, table_.cy[owner] + table_.radius[owner] * np.sin(angle), y)
+    return Samples(np.column_stack((x, y)), tuple(starts), path.elements, owner, fraction)
 
 
 def joined(tables: Sequence[Elements]) -> Elements:

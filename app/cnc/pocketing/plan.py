@@ -32,6 +32,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+import numpy.typing as npt
 
 from app.cnc import sizes
 from app.cnc.blocks import MillingMode, Placement
@@ -42,13 +43,18 @@ from app.cnc.plane import (
     distance_to_element,
     length,
     reverse,
-    sample,
     signed_area,
     sub,
 )
 from app.cnc.pocketing import nearest, regions
 from app.cnc.pocketing.checks import contour_problems, island_problems, show, starts_of
-from app.cnc.pocketing.exact import Carrier, carriers, exact_ring, matched_sources
+from app.cnc.pocketing.exact import (
+    Carrier,
+    carrier_boxes,
+    carriers,
+    exact_ring,
+    matched_sources,
+)
 from app.cnc.pocketing.model import (
     Link,
     LinkKind,
@@ -168,6 +174,7 @@ def pass_levels(
 
 
 Level = tuple[float, list[regions.Ring]]
+FloatArray = npt.NDArray[np.float64]
 
 
 @dataclass
@@ -192,7 +199,7 @@ class _Planner:
     passes: list[Pass] = field(default_factory=list)
     position: Pt | None = None
     cleared: regions.SweptIndex | None = None
-    _carriers: dict[int, list[Carrier]] = field(default_factory=dict)
+    _carriers: dict[int, tuple[list[Carrier], FloatArray]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
     _sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
     _narrow_sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
@@ -249,8 +256,8 @@ class _Planner:
         d, _ = self.levels[node.level]
         finish = node.level == 0
         tag = "finish" if finish else "rough"
-        level = self._level_carriers(node.level, d)
-        exact = exact_ring(ring, level, self.match, self.block, tag)
+        level, level_boxes = self._level_carriers(node.level, d)
+        exact = exact_ring(ring, level, self.match, self.block, tag, level_boxes)
         if exact is not None:
             path, sources, is_exact = exact.path, exact.sources, True
         else:
@@ -323,9 +330,12 @@ class _Planner:
             elements.append(Element(self.block, ring.start, tag="link"))
         return Link(kind, Path(along.start, tuple(elements)))
 
-    def _level_carriers(self, k: int, d: float) -> list[Carrier]:
+    def _level_carriers(self, k: int, d: float) -> tuple[list[Carrier], FloatArray]:
+        """Level `k`'s carriers and their boxes (`carrier_boxes`), kept: a level has many
+        rings."""
         if k not in self._carriers:
-            self._carriers[k] = carriers(self.contours, d, self.t)
+            level = carriers(self.contours, d, self.t)
+            self._carriers[k] = (level, carrier_boxes(level, self.match))
         return self._carriers[k]
 
     # -- areas -------------------------------------------------------------------------------
@@ -528,14 +538,16 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     nearest pair, so could never be the smallest): the same point as measuring them all,
     at the cost of the samples and elements near each other."""
     ring_starts = starts_of(ring)
-    samples = sample(previous, step)
-    points = np.array([p for p, _ in samples], dtype=np.float64)
+    # The samples to numpy's rounding for the bounds (a sample's bounds move by about
+    # 1e-6 nm, far inside MARGIN), each one measured exactly as `sample` makes it.
+    samples = nearest.samples(previous, step)
+    points = samples.at
     # Some sample is within its distance to the ring's start (a point of the ring).
     reach = float(np.hypot(points[:, 0] - ring.start[0], points[:, 1] - ring.start[1]).min())
     table = nearest.table(ring_starts, ring.elements)
     best: tuple[float, Pt] | None = None
     for i, near in nearest.nearest_pairs(points, table, reach):
-        point = samples[i][0]
+        point = samples.exact(i)
         for k in near:
             d = math.dist(_closest_on_element(point, ring_starts[k], ring.elements[k]), point)
             if best is None or d < best[0] - 1e-9:

@@ -177,8 +177,10 @@ def inset(contours: Sequence[Path], d: float, tolerance: float) -> list[Ring]:
     )
 
 
-def _raw_inset(contour: Path, d: float, tolerance: float) -> Ring:
-    """One closed contour's raw offset `d` to its left (see `inset`)."""
+def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
+    """One closed contour's raw offset `d` to its left (see `inset`), as Clipper reads it
+    (lists of [x, y]: only Clipper reads it, and tuples of its points were a third of a
+    level's time)."""
     chunks: list[npt.NDArray[np.float64]] = []
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
@@ -213,7 +215,8 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> Ring:
     at = at[keep]
     if len(at) > 1 and (at[0] == at[-1]).all():
         at = at[:-1]
-    return list(map(tuple, at.tolist()))
+    found: list[list[int]] = at.tolist()
+    return found
 
 
 def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np.float64]:
@@ -222,17 +225,24 @@ def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np
     return np.column_stack((c[0] + radius * np.cos(angles), c[1] + radius * np.sin(angles)))
 
 
-def sweep_lines(paths: Sequence[Sequence[Pt]], radius: float, tolerance: float) -> Swept:
+def sweep_lines(
+    paths: Sequence[Sequence[Pt]], radius: float, tolerance: float, round_ends: bool = True
+) -> Swept:
     """The area a round tool of `radius` covers moving along polylines (round ends), as
     Clipper gave it: a sweep is only handed back to Clipper, and making tuples of its
-    points was a tenth of a large pocket's planning."""
+    points was a tenth of a large pocket's planning. `round_ends` False: square-cut ends
+    at the first and last points (a piece of a longer move, whose ends lie inside the
+    move's sweep; a round end is half the points of a short piece's sweep)."""
     offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
+    ends = pyclipper.ET_OPENROUND if round_ends else pyclipper.ET_OPENBUTT
     added = False
     for points in paths:
         ring = [(round(x), round(y)) for x, y in points]
         if len(ring) == 1 or all(p == ring[0] for p in ring):
             ring = [ring[0], (ring[0][0] + 1, ring[0][1])]
-        offsetter.AddPath(ring, pyclipper.JT_ROUND, pyclipper.ET_OPENROUND)
+            offsetter.AddPath(ring, pyclipper.JT_ROUND, pyclipper.ET_OPENROUND)
+        else:
+            offsetter.AddPath(ring, pyclipper.JT_ROUND, ends)
         added = True
     return cast(Swept, offsetter.Execute(float(radius))) if added else []
 
@@ -356,13 +366,16 @@ class SweptIndex:
     what is near it, not everything cut so far (a pocket's links asked it of the union of
     every pass before, which grew with each pass).
 
-    Each move is cut into pieces of `PIECE` segments (neighbours share a point), filed by
-    box under the grid cells (`cell` nm square) the box meets, and swept the first time a
-    question needs it (`sweeps` keeps the sweeps by (id of the points, piece), for indexes
-    over the same moves). The area near a box is the union of the sweeps of the pieces
-    there: the same area as the sweep of whole moves (a round tool's sweep along a polyline
-    is the union of its sweeps along the pieces), its round ends within `tolerance` as
-    every sweep here."""
+    Each move is cut into pieces of `PIECE` segments (and the next piece's first segment:
+    neighbours share a segment), filed by box under the grid cells (`cell` nm square) the
+    box meets, and swept the first time a question needs it (`sweeps` keeps the sweeps by
+    (id of the points, piece), for indexes over the same moves). The area near a box is
+    the union of the sweeps of the pieces there: the same area as the sweep of whole moves
+    (a round tool's sweep along a polyline is the union of its sweeps along the pieces),
+    its round ends within `tolerance` as every sweep here. Only the move's first and last
+    pieces have round ends: each point where a piece is cut is inside the piece that
+    shares the segment either side of it, whose sweep holds the round join there, so a
+    square end is enough (a round end was half the points handed to Clipper)."""
 
     PIECE = 32
 
@@ -379,6 +392,9 @@ class SweptIndex:
         self.sweeps: dict[tuple[int, int], Swept] = {} if sweeps is None else sweeps
         self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
         self.cells: dict[tuple[int, int], list[int]] = {}
+        # The boxes of a move's pieces by the id of its points (kept with them, so the id
+        # is not reused): a pass is asked about as the one a link leads to, then recorded.
+        self._boxes: dict[int, tuple[Sequence[Pt], list[Box]]] = {}
 
     def add(self, points: Sequence[Pt]) -> None:
         """Record a move along `points` (one point: the tool went down there). The list
@@ -392,12 +408,16 @@ class SweptIndex:
     def boxes(self, points: Sequence[Pt]) -> list[Box]:
         """The box of each piece of a move along `points`, grown by the tool's reach: the
         tool's sweep along the piece lies inside it."""
+        kept = self._boxes.get(id(points))
+        if kept is not None and kept[0] is points:
+            return kept[1]
         reach = self.radius + self.tolerance
         found = []
         for piece in _pieces(points, self.PIECE):
             xs = [p[0] for p in piece]
             ys = [p[1] for p in piece]
             found.append((min(xs) - reach, min(ys) - reach, max(xs) + reach, max(ys) + reach))
+        self._boxes[id(points)] = (points, found)
         return found
 
     def near(self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()) -> Swept:
@@ -431,7 +451,9 @@ class SweptIndex:
         key = (id(points), k)
         swept = self.sweeps.get(key)
         if swept is None:
-            swept = sweep_lines([_pieces(points, self.PIECE)[k]], self.radius, self.tolerance)
+            last = k == _piece_count(points, self.PIECE) - 1
+            piece = _piece(points, self.PIECE, k)
+            swept = sweep_lines([piece], self.radius, self.tolerance, k == 0 or last)
             self.sweeps[key] = swept
         return swept
 
@@ -447,8 +469,19 @@ def _meet(a: Box, b: Box) -> bool:
     return a[0] <= b[2] and a[2] >= b[0] and a[1] <= b[3] and a[3] >= b[1]
 
 
-def _pieces(points: Sequence[Pt], size: int) -> list[Sequence[Pt]]:
-    """`points` in runs of `size` segments, each run starting where the one before ends."""
+def _piece_count(points: Sequence[Pt], size: int) -> int:
+    """How many pieces `_piece` cuts `points` into."""
+    return 1 if len(points) <= size + 1 else math.ceil((len(points) - 1) / size)
+
+
+def _piece(points: Sequence[Pt], size: int, k: int) -> Sequence[Pt]:
+    """The `k`th run of `size` segments of `points` and the segment after it (the next
+    run's first): every point but the first and last is between two segments of one run."""
     if len(points) <= size + 1:
-        return [points]
-    return [points[k : k + size + 1] for k in range(0, len(points) - 1, size)]
+        return points
+    return points[k * size : k * size + size + 2]
+
+
+def _pieces(points: Sequence[Pt], size: int) -> list[Sequence[Pt]]:
+    """`points` cut by `_piece`, in order."""
+    return [_piece(points, size, k) for k in range(_piece_count(points, size))]

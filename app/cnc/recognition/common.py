@@ -14,7 +14,7 @@ from __future__ import annotations
 import enum
 import gc
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
@@ -25,6 +25,7 @@ from typing import Final
 from mypy_extensions import mypyc_attr
 
 from app.cnc import limits
+from app.cnc.places import Places, more_text
 from app.cnc.units import Units, half_even
 
 XY = tuple[int, int]
@@ -51,7 +52,12 @@ class NoteKind(enum.Enum):
 class ImportNote:
     """One line of an import report. `line` is the file's line (a tape's block for a punch
     image), None for the whole file; `where` says it in words (`line 12`, `block N003`).
-    `also` lists further lines the same note applies to (a G81 on every hole line)."""
+    `also` lists the next few further lines the same note applies to (a G81 on every hole
+    line), `more` counts those further lines not listed (app.cnc.places).
+
+    A note that recurs with its own details at each place (`same`: the text its places
+    share, e.g. "holes on a circle read as BOLT CIR") is one note: `message` is the first
+    place's, `count` how many places in all."""
 
     kind: NoteKind
     line: int | None
@@ -59,22 +65,27 @@ class ImportNote:
     where: str = ""
     also: tuple[int, ...] = ()
     unit: str = "line"  # what `line` and `also` count: "line" or "tape block"
+    same: str = ""
+    count: int = 1
+    more: int = 0
 
     @property
     def also_text(self) -> str:
-        """The further lines in words, the first eight of them (`also lines 48, 84 and 3
-        more`); empty when there are none. A bolt-circle grid repeats a note on hundreds of
-        lines: the report names where it starts, not all of them."""
+        """The further lines in words (`also lines 48, 84 and 3 more`), after the count of
+        a recurring note (`BOLT CIR: 2775 in all; also lines …`); empty when there are
+        none. A bolt-circle grid repeats a note on thousands of lines: the report names
+        where it starts and how many, not all of them."""
+        count = f"{self.same}: {self.count} in all" if self.same and self.count > 1 else ""
         if not self.also:
-            return ""
-        shown = ", ".join(str(n) for n in self.also[:8])
-        rest = len(self.also) - 8
-        return f"also {self.unit}s {shown}{f' and {rest} more' if rest > 0 else ''}"
+            return count
+        shown = ", ".join(str(n) for n in self.also)
+        also = f"also {self.unit}s {shown}{more_text(self.more)}"
+        return f"{count}; {also}" if count else also
 
     def __str__(self) -> str:
         place = self.where or ("file" if self.line is None else f"line {self.line}")
-        more = f" ({self.also_text})" if self.also else ""
-        return f"{self.kind.value}: {place}: {self.message}{more}"
+        told = self.also_text
+        return f"{self.kind.value}: {place}: {self.message}{f' ({told})' if told else ''}"
 
 
 class ImportFailure(ValueError):
@@ -107,7 +118,7 @@ class Notes:
     labels: dict[int, str] = field(default_factory=dict)
     unit: str = "line"  # what a number in the report counts: "line", or "tape block"
     _index: dict[tuple[NoteKind, str], int] = field(default_factory=dict)
-    _also: dict[int, list[int]] = field(default_factory=dict)
+    _places: dict[int, Places[int | None]] = field(default_factory=dict)
 
     def where(self, line: int | None) -> str:
         if line is None:
@@ -121,39 +132,67 @@ class Notes:
         low, high = min(lines), max(lines)
         return f"{self.unit} {low}" if low == high else f"{self.unit}s {low}-{high}"
 
-    def add(self, kind: NoteKind, line: int | None, message: str) -> None:
-        key = (kind, message)
+    def add(self, kind: NoteKind, line: int | None, message: str, same: str = "") -> None:
+        """Report `message` at `line`: the same message of the same kind again adds its
+        line to the note's places. With `same` (the text every place shares; `message` is
+        this place's own), every note of that kind and `same` is one: the first place's
+        message, how many places, the next few lines."""
+        key = (kind, same or message)
         index = self._index.get(key)
         if index is None:
             self._index[key] = len(self.entries)
-            self.entries.append(ImportNote(kind, line, message, self.where(line)))
+            self.entries.append(ImportNote(kind, line, message, self.where(line), same=same))
             return
-        first = self.entries[index].line
-        extra = self._also.setdefault(index, [])
-        if line is not None and line != first and line not in extra[-1:]:
-            extra.append(line)
+        places = self._places.get(index)
+        if places is None:
+            places = self._places[index] = Places(self.entries[index].line, count=1)
+        places.add(line)
+
+    def merge(self, more: Notes) -> None:
+        """`more`'s notes after these, as if each had been added here in turn."""
+        for k, note in enumerate(more.entries):
+            key = (note.kind, note.same or note.message)
+            index = self._index.get(key)
+            places = more._places.get(k)
+            if index is None:
+                self._index[key] = len(self.entries)
+                self.entries.append(note)
+                if places is not None:
+                    self._places[len(self.entries) - 1] = places.copy()
+                continue
+            mine = self._places.get(index)
+            if mine is None:
+                mine = self._places[index] = Places(self.entries[index].line, count=1)
+            mine.join(places if places is not None else Places(note.line))
 
     def report(self) -> list[ImportNote]:
         """The notes, each with the other lines it applies to."""
-        return [
-            replace(note, also=tuple(self._also.get(k, ())), unit=self.unit)
-            for k, note in enumerate(self.entries)
-        ]
+        out: list[ImportNote] = []
+        for k, note in enumerate(self.entries):
+            places = self._places.get(k)
+            if places is None:
+                out.append(replace(note, unit=self.unit))
+                continue
+            named = tuple(n for n in places.named if n is not None)
+            out.append(
+                replace(note, also=named, more=places.more, count=places.count, unit=self.unit)
+            )
+        return out
 
-    def became(self, line: int | None, message: str) -> None:
-        self.add(NoteKind.BECAME, line, message)
+    def became(self, line: int | None, message: str, same: str = "") -> None:
+        self.add(NoteKind.BECAME, line, message, same)
 
-    def ignored(self, line: int | None, message: str) -> None:
-        self.add(NoteKind.IGNORED, line, message)
+    def ignored(self, line: int | None, message: str, same: str = "") -> None:
+        self.add(NoteKind.IGNORED, line, message, same)
 
-    def assumed(self, line: int | None, message: str) -> None:
-        self.add(NoteKind.ASSUMED, line, message)
+    def assumed(self, line: int | None, message: str, same: str = "") -> None:
+        self.add(NoteKind.ASSUMED, line, message, same)
 
-    def rounded(self, line: int | None, message: str) -> None:
-        self.add(NoteKind.ROUNDED, line, message)
+    def rounded(self, line: int | None, message: str, same: str = "") -> None:
+        self.add(NoteKind.ROUNDED, line, message, same)
 
-    def needs(self, line: int | None, message: str) -> None:
-        self.add(NoteKind.NEEDS, line, message)
+    def needs(self, line: int | None, message: str, same: str = "") -> None:
+        self.add(NoteKind.NEEDS, line, message, same)
 
 
 # -- numbers --------------------------------------------------------------------------------
@@ -253,19 +292,54 @@ def byte_lines(data: bytes) -> Iterator[str]:
     are never part of a longer UTF-8 character, so splitting the bytes splits the text.)
     Raises ImportFailure, as `decode_text` does, when the line reached is not UTF-8."""
     try:
-        yield from _byte_lines(data)
+        yield from _byte_lines(data, _after_boms(data), len(data), True)
     except UnicodeDecodeError:
         decode_text(data)  # (names the line and column)
         raise
 
 
-def _byte_lines(data: bytes) -> Iterator[str]:
+def chunk_lines(chunks: Iterable[bytes]) -> Iterator[str]:
+    """`byte_lines` of the bytes `chunks` make together (a file read a part at a time:
+    `byte_lines` of it without its bytes held whole). The first chunk holds the file's
+    start (its byte order marks). Raises ImportFailure when a line is not UTF-8 (the line
+    reached is not known here: `decode_text` of the whole file names it)."""
+    rest = b""
+    first = True
+    try:
+        for chunk in chunks:
+            data = rest + chunk if rest else chunk
+            start = 0
+            if first:
+                start = _after_boms(data)
+                if len(data) - start < len(_BOM) and _BOM.startswith(data[start:]):
+                    rest = data  # (perhaps a byte order mark yet: its bytes read so far)
+                    continue
+                first = False
+            # Up to the last line break, but a CR at the very end may be a CR LF's half.
+            end = len(data) - 1 if data.endswith(b"\r") else len(data)
+            cut = max(data.rfind(b"\n", start, end), data.rfind(b"\r", start, end)) + 1
+            if cut <= start:
+                rest = data[start:]
+                continue
+            yield from _byte_lines(data, start, cut, False)
+            rest = data[cut:]
+        yield from _byte_lines(rest, _after_boms(rest) if first else 0, len(rest), True)
+    except UnicodeDecodeError as exc:
+        raise ImportFailure("", f"byte 0x{exc.object[exc.start]:02X} is not text (UTF-8)") from None
+
+
+def _after_boms(data: bytes) -> int:
     start = 0
     while data.startswith(_BOM, start):
         start += len(_BOM)
-    n = len(data)
+    return start
+
+
+def _byte_lines(data: bytes, start: int, n: int, final: bool) -> Iterator[str]:
+    """The lines of `data[start:n]`; when not `final`, what follows its last line break
+    is not a line (the next part of the file goes on with it)."""
     while True:
-        lf = data.find(b"\n", start)
+        lf = data.find(b"\n", start, n)
         cr = data.find(b"\r", start, n if lf < 0 else lf)
         if cr >= 0:
             yield data[start:cr].decode("utf-8")
@@ -274,7 +348,8 @@ def _byte_lines(data: bytes) -> Iterator[str]:
             yield data[start:lf].decode("utf-8")
             start = lf + 1
         else:
-            yield data[start:].decode("utf-8")
+            if final:
+                yield data[start:n].decode("utf-8")
             return
 
 

@@ -241,10 +241,7 @@ def merge_notes(notes: Notes, more: Notes) -> None:
     overlap = next((key for key in more._index if key in notes._index), None)
     if overlap is not None:
         raise NotesOverlap(str(overlap))
-    for k, note in enumerate(more.entries):
-        notes.add(note.kind, note.line, note.message)
-        for line in more._also.get(k, ()):
-            notes.add(note.kind, line, note.message)
+    notes.merge(more)
 
 
 class NotesOverlap(Exception):

@@ -564,6 +564,7 @@ def find_bolt_circles(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
             f"{notes.span(op.lines)}: {count} holes equally spaced on a circle: BOLT CIR about "
             f"X{show(op.centre[0], u)} Y{show(op.centre[1], u)}, radius "
             f"{show(op.radius, u)}, first hole at {op.angle}° (clockwise from below)",
+            same="holes on a circle read as BOLT CIR",
         )
         if reordered:
             notes.assumed(

@@ -9,7 +9,8 @@ What a block means to remove (its *waste*), each to its depth:
 
 - a hole: the cylinder of its tool's diameter;
 - a CIRCLE or FRAME routine: inside its finished contour for INSIDE, IN/TAN and POCKET,
-  outside it for OUTSIDE and OUT/TAN;
+  outside it for OUTSIDE and OUT/TAN (an external thread's minor diameter as an OUTSIDE
+  circle), to the lowest it may cut (`Routine.deepest`: a thread's Z DN);
 - an irregular POCKET: inside its wall, outside its islands;
 - a closed compensated contour: the whole side the tool is on (outside an outer profile,
   inside an inner one);
@@ -270,14 +271,15 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
         array = disc_rings(np.asarray(points, dtype=np.float64), radius + tol, chord)
         inside.setdefault(depth, []).extend(list(array))
     for routine in geometry.routines:
-        if routine.depth is None:
+        deepest = routine.deepest  # its waste goes as low as it may cut
+        if deepest is None:
             continue
         grow = tol if routine.inside else -tol
         shape = routine_ring(routine, grow, chord, outward=routine.inside)
         if routine.inside:
-            _group(inside, routine.depth, shape)
+            _group(inside, deepest, shape)
         elif len(shape) >= 3:
-            outside.setdefault(routine.depth, []).append([shape])
+            outside.setdefault(deepest, []).append([shape])
     for contour in geometry.contours:
         if contour.depth is None or any(contour in p.contours for p in geometry.pockets):
             continue

@@ -27,7 +27,7 @@ from app.cnc.blocks import (
     ThreadPlace,
 )
 from app.cnc.compiler import compile_program
-from app.cnc.operations.thread import thread_depth, thread_lead
+from app.cnc.operations.thread import full_form_bottom, thread_depth, thread_lead
 from app.cnc.path import MillSpan, Op, Rows
 from app.cnc.plane import Element, signed_area
 from app.cnc.pocketing.regions import element_points
@@ -58,7 +58,12 @@ class Contour:
 class Routine:
     """A CIRCLE (`centre`, `radius`) or FRAME (`corner`, `width`, `height`, `corner_radius`)
     routine: its finished contour, `inside` for INSIDE, IN/TAN and POCKET, `pocket` for
-    POCKET, cut by a tool of `tool_radius` to `depth` (None in a 2-axis program)."""
+    POCKET, cut by a tool of `tool_radius` to `depth` (None in a 2-axis program).
+
+    `depth` is the required depth: material left above it where the routine cuts is rest
+    material. `allowed` is how low it may cut, where that is lower (None: `depth`, as for
+    every CIRCLE and FRAME): an external thread must have its full form down to a lead and
+    a quarter above its Z DN, and may cut down to Z DN (its run-out, partly cut)."""
 
     block: int
     is_frame: bool
@@ -73,6 +78,12 @@ class Routine:
     height: int = 0
     corner_radius: int = 0
     drill: int = 0  # the DRILL block that starts it
+    allowed: int | None = None
+
+    @property
+    def deepest(self) -> int | None:
+        """The lowest Z (nm) it may cut to: cutting below it is a gouge."""
+        return self.depth if self.allowed is None else self.allowed
 
 
 @dataclass(frozen=True)
@@ -224,7 +235,11 @@ def _helical_cuts(
     centres) as what it removes: a HELIX the bore of its finished DIA to Z DN, flat; an
     internal thread the bore of its major diameter to Z DN (the thread's form is not
     simulated: the tool is a cylinder of its DIA); an external thread all round outside
-    its minor diameter, as a CIRCLE OUTSIDE."""
+    its minor diameter, as a CIRCLE OUTSIDE, its full form required down to a lead and a
+    quarter above Z DN and allowed down to Z DN (`full_form_bottom`: the helix reaches Z DN
+    only where its last turn ends). A HELIX ends with a whole turn at Z DN and an internal
+    thread's tool comes down at the bore's centre to Z DN: both are flat to Z DN, as a
+    hole is, where verify measures them."""
     turns = rows[((rows["op"] == Op.ARC_CW) | (rows["op"] == Op.ARC_CCW)) & (rows["tag"] == 0)]
     for number, cx, cy in zip(
         turns["block"].tolist(), turns["cx"].tolist(), turns["cy"].tolist(), strict=True
@@ -245,7 +260,8 @@ def _helical_cuts(
         else:
             info = tools.get(block.tool)
             radius = 0 if info is None or info.diameter is None else info.diameter // 2
-            minor = size - round(2 * thread_depth(thread_lead(block), False))
+            lead = thread_lead(block)
+            minor = size - round(2 * thread_depth(lead, False))
             found.routines.append(
                 Routine(
                     block=number,
@@ -253,10 +269,11 @@ def _helical_cuts(
                     inside=False,
                     pocket=False,
                     tool_radius=radius,
-                    depth=depth,
+                    depth=full_form_bottom(to_nm(block.z_up, units), depth, lead),
                     centre=(float(cx), float(cy)),
                     radius=minor // 2,
                     drill=number,
+                    allowed=depth,
                 )
             )
 

@@ -10,7 +10,9 @@ findings, each named by the block at fault:
   features of the part: the slug that drops out is the part, cut on the wrong side.
 - **rest material**: material left above Z DN that a block means to clear: a POCKET
   routine's inside (a frame whose corner radius is smaller than the tool's), the band one
-  tool radius wide beside any CIRCLE/FRAME wall, an irregular POCKET where the tool fits,
+  tool radius wide beside any CIRCLE/FRAME wall (beside an external thread's minor
+  diameter, above where its full form must reach: `Routine.depth`, a lead and a quarter
+  above its Z DN, down to which it may cut), an irregular POCKET where the tool fits,
   and the inside of a closed contour cut from inside (blind: an outer profile cut on the
   wrong side leaves the whole part standing in its groove).
 - **hole depth**: a DRILL/BORE/TAP hole whose bottom at its centre is shallower or deeper
@@ -563,10 +565,17 @@ def _routine_findings(
                 y,
             )
         )
+    # The depth it must cut to (a thread's full form, above the Z DN it may cut to).
     floor = max(routine.depth, grid.stock.bottom)
     left = h - floor
     must = (tool_side > tol) & (True if routine.pocket else tool_side <= r)
     rest = must & (left > tol)
+    level = (
+        "Z DN"
+        if routine.allowed is None
+        else f"Z {format_length(routine.depth, u)}, where its full form must reach all round "
+        f"(Z DN {format_length(routine.allowed, u)}),"
+    )
     for _, thick, x, y, cells in _worst(rest, left, qx, qy, None):
         where = "in the pocket" if routine.pocket else "beside the wall"
         area = cells * grid.resolution**2
@@ -574,7 +583,7 @@ def _routine_findings(
             Finding(
                 routine.block,
                 "rest material",
-                f"{_len(thick, u)} of material left above Z DN {where} at {_at(x, y, u)} "
+                f"{_len(thick, u)} of material left above {level} {where} at {_at(x, y, u)} "
                 f"({area / u.nm**2:.4f} {u.symbol}² of it)",
                 x,
                 y,

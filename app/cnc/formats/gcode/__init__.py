@@ -11,13 +11,22 @@ writers when their target is used (app.cnc.formats.TARGET_MODULES).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
+from typing import BinaryIO
 
 from app.cnc.blocks import Program
 from app.cnc.formats.gcode.bossread import looks_segmented
 from app.cnc.formats.importers import Content, Importer, Sniff, Strength, register_importer
 from app.cnc.recognition import wordaddress
-from app.cnc.recognition.common import ImportNote, byte_lines, collector_paused, decode_text
+from app.cnc.recognition.common import (
+    ImportNote,
+    byte_lines,
+    chunk_lines,
+    collector_paused,
+    decode_text,
+)
+
+FILE_PART = 1 << 20  # bytes of a file read at a time (GcodeImporter.read_file)
 
 
 @register_importer
@@ -33,6 +42,24 @@ class GcodeImporter(Importer):
     def read(
         self, data: bytes, name: str, options: Mapping[str, str]
     ) -> tuple[Program, list[ImportNote]]:
+        return self._read(byte_lines(data), lambda: data, name)
+
+    def read_file(
+        self, file: BinaryIO, name: str, options: Mapping[str, str]
+    ) -> tuple[Program, list[ImportNote]]:
+        """`read` of the file, a part of FILE_PART bytes at a time: its bytes are never
+        held whole, unless streaming must read the whole file (then it is read again)."""
+
+        def whole() -> bytes:
+            file.seek(0)
+            return file.read()
+
+        parts = iter(lambda: file.read(FILE_PART), b"")
+        return self._read(chunk_lines(parts), whole, name)
+
+    def _read(
+        self, lines: Iterator[str], whole: Callable[[], bytes], name: str
+    ) -> tuple[Program, list[ImportNote]]:
         from app.cnc.formats.gcode.reader import FrontEnd, GcodeStream, parse_gcode
         from app.cnc.recognition.motion import (
             Unstreamable,
@@ -46,11 +73,11 @@ class GcodeImporter(Importer):
                 # memory. What needs the whole program reads it whole: subroutines and
                 # parameters (the front end), and whatever streaming would read otherwise
                 # (a refusal among them: the whole file's is the first, bytes not text first).
-                program, notes = program_from_stream(GcodeStream(byte_lines(data), name))
+                program, notes = program_from_stream(GcodeStream(lines, name))
                 return program, notes.report()
             except (FrontEnd, Unstreamable):
                 pass
-            parsed = parse_gcode(decode_text(data), name)
+            parsed = parse_gcode(decode_text(whole()), name)
             return program_from_motion(parsed), parsed.notes.report()
 
 

@@ -792,6 +792,7 @@ class Planner:
             arc.block,
             f"arc written as {count} chords (no circular interpolation; chord tolerance "
             f"{format_length(self.profile.tolerance_nm, Units.INCH)} in on the part)",
+            same="arcs written as chords",
         )
         return motions
 

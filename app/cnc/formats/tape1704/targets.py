@@ -117,13 +117,11 @@ class Tape:
             self.words.report,
             self.header_report,
         ]:
-            for entry in stage.entries:
-                self.report.add(entry.severity, entry.block, entry.message)
+            self.report.merge(stage)
         if not self.encodable:
             self.report.error(None, f"the listing has characters {self.code.value} cannot punch")
             return
-        for entry in self.reader_report.entries:
-            self.report.add(entry.severity, entry.block, entry.message)
+        self.report.merge(self.reader_report)
         self.notes()
 
     def header(self) -> list[str]:

@@ -949,10 +949,12 @@ def _check_read(previous: Line, text: str, fmt: TapeFormat, report: Report) -> N
     t1 = 60 * previous.length / ((f1 + f2) / 2)
     t2 = 0.010 + (characters - 1) / 300
     if t2 > t1:
+        shown = previous.text.split(" (")[0].replace(chr(9), " ")
         report.warning(
             previous.block,
-            f"reader limitation: {previous.text.split(' (')[0].replace(chr(9), ' ')} "
-            f"moves {previous.length:.4f} "
+            f"reader limitation: {shown} moves {previous.length:.4f} "
             f"{fmt.unit} in {t1:.3f} s but the next block ({characters} characters) "
             f"takes {t2:.3f} s to read: the slides may stop and dwell (seed 000 §3)",
+            same="the same reader limitation",
+            at=shown,
         )

@@ -201,6 +201,16 @@ class Run:
         k = int(moving[-1])
         return (int(self.x[k]), int(self.y[k]), None if self.z is None else int(self.z[k]))
 
+    def start_of(self, row: int, start: tuple[int, int, int | None]) -> tuple[int, int, int | None]:
+        """Where row `row` starts: the end of the last motion before it, else `start`."""
+        moving = self.motions()
+        moving = moving[moving < row]
+        if not len(moving):
+            return start
+        k = int(moving[-1])
+        z = start[2] if self.z is None else int(self.z[k])
+        return (int(self.x[k]), int(self.y[k]), z)
+
     def items(self) -> list[Item]:
         """The run as the items it stands for."""
         count = len(self.block)
@@ -253,6 +263,8 @@ _SLICE_ROWS = 1024
 _RUN_ROWS = 4096
 """The most rows `Planner.planned` joins into one run (each stage's arrays and texts for a
 run are about 200 bytes a row)."""
+_MIN_RUN_ROWS = 64
+"""The fewest rows `Planner.planned` makes a run of (fewer go one by one)."""
 _CYCLE_ROWS = 4
 """The most rows a fixed cycle stands for (`Planner.cycle`'s window: down, feed, dwell, out)."""
 
@@ -343,6 +355,7 @@ class Planner:
         waiting_rows = 0
         for chunk in path.chunks():
             cycles = self.cycles(chunk)
+            cycle_rows = np.array(sorted(cycles), dtype=np.int64)
             rows, strings = chunk.rows, chunk.strings
             count = len(rows)
             # The chunk's rows as Python lists a slice at a time: a LOOP's chunk grows with
@@ -354,6 +367,7 @@ class Planner:
             table: list[Any] | None = None
             simple: list[bool] = []
             breaks: list[int] = []
+            one_by_one = 0  # the rows before it go one by one
             while index < count:
                 if len(items) > 1:
                     yield from items[:-1]
@@ -362,10 +376,16 @@ class Planner:
                     base, limit = index, min(count, index + _SLICE_ROWS)
                     table = None
                     if runs:
-                        simple, breaks = _simple(rows, base, limit, cycles, profile)
-                if runs and simple[index - base] and not self.uncalibrated(tool):
+                        simple, breaks = _simple(rows, base, limit, cycle_rows, profile)
+                if runs and index >= one_by_one and simple[index - base]:
                     stop = breaks[bisect.bisect_left(breaks, index)]
-                    made = self.run(rows[index:stop], tool, (x, y, z))
+                    made = None
+                    # A run of a few rows costs more in array operations than its rows one
+                    # by one (dwell=no or circular=no cut runs at every hole or arc).
+                    if (stop - index < _MIN_RUN_ROWS and not waiting) or self.uncalibrated(tool):
+                        one_by_one = stop
+                    else:
+                        made = self.run(rows[index:stop], tool, (x, y, z))
                     if made is not None:
                         run, (x, y, z) = made
                         yield from items
@@ -375,16 +395,20 @@ class Planner:
                         waiting.append(run)
                         waiting_rows += len(run)
                         if waiting_rows >= _RUN_ROWS:
-                            yield Run.joined(waiting)
+                            yield from _joined(waiting)
                             waiting, waiting_rows = [], 0
                         index += len(run)
                         continue
-                if waiting:
-                    yield Run.joined(waiting)
-                    waiting, waiting_rows = [], 0
                 if table is None:
                     table = rows[base : limit + _CYCLE_ROWS].tolist()
                 row = table[index - base]
+                # An arc written as chords goes on the waiting run; any other row is an item.
+                chordal = row[0] in (Op.ARC_CW, Op.ARC_CCW) and not (
+                    profile.circular and row[5] == z
+                )
+                if waiting and not chordal:
+                    yield from _joined(waiting)
+                    waiting, waiting_rows = [], 0
                 index += 1
                 op = row[0]
                 if op <= Op.ARC_CCW:
@@ -443,7 +467,14 @@ class Planner:
                                 "motion cannot be generated')",
                             )
                         start_z = self.machine_z(z, tool)
-                        items.extend(self.chords(arc, (x, y), start_z, mz, tool))
+                        chords = self.chords(arc, (x, y), start_z, mz, tool)
+                        if runs:
+                            yield from items
+                            items.clear()
+                            waiting.append(_chord_run(chords))
+                            waiting_rows += len(chords)
+                        else:
+                            items.extend(chords)
                     x, y, z = mx, my, mz_path
                     continue
                 move = as_move(row, strings)
@@ -458,8 +489,7 @@ class Planner:
                         # Touched off at its zero, preset there, straight up before anything.
                         items.append(Aux(move.block, [("G", "94"), ("Z", "0")], preset_z=True))
                         items.append(Motion(move.block, Kind.RAPID, (x, y, z), z_only=True))
-        if waiting:
-            yield Run.joined(waiting)
+        yield from _joined(waiting)
         yield from items
 
     def run(
@@ -979,6 +1009,42 @@ class _Ahead:
             k += 1
 
 
+def _joined(runs: list[Run]) -> Iterator[Piece]:
+    """`runs` as one run, or as their items when they are too few rows to be worth one."""
+    if not runs:
+        return
+    run = Run.joined(runs)
+    if len(run) >= _MIN_RUN_ROWS:
+        yield run
+    else:
+        yield from run.items()
+
+
+def _chord_run(chords: list[Item]) -> Run:
+    """An arc's chords (`Planner.chords`: feeds of one block) as a run."""
+    motions = [chord for chord in chords if isinstance(chord, Motion)]
+    count = len(motions)
+    zeros = np.zeros(count, dtype=np.int64)
+    ends = [motion.end for motion in motions]
+    z: npt.NDArray[np.int64] | None = None
+    if count and ends[0][2] is not None:
+        z = np.array([end[2] for end in ends], dtype=np.int64)
+    return Run(
+        np.array([motion.block for motion in motions], dtype=np.int64),
+        np.full(count, LINE, dtype=np.uint8),
+        np.array([end[0] for end in ends], dtype=np.int64),
+        np.array([end[1] for end in ends], dtype=np.int64),
+        z,
+        np.array([motion.feed for motion in motions], dtype=np.int64),
+        np.zeros(count, dtype=np.uint8),
+        zeros,
+        zeros,
+        np.zeros(count, dtype=np.bool_),
+        np.zeros(count, dtype=np.bool_),
+        zeros,
+    )
+
+
 def _tenths(ms: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
     """Dwells of `ms` milliseconds in tenths of a second, rounded half-even (`aux`'s G04 F:
     Decimal's to_integral_value of the seconds times ten)."""
@@ -990,7 +1056,7 @@ def _tenths(ms: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
 
 
 def _simple(
-    rows: Any, base: int, limit: int, cycles: dict[int, HoleSpan], profile: Profile
+    rows: Any, base: int, limit: int, cycle_rows: npt.NDArray[np.int64], profile: Profile
 ) -> tuple[list[bool], list[int]]:
     """Which rows [base, limit) of a chunk a run may hold (rapids and feeds, not the rapid
     of a fixed cycle's hole; arcs with circular interpolation; dwells G04 can carry), and
@@ -1004,9 +1070,8 @@ def _simple(
         dwells = np.flatnonzero(ops == Op.DWELL)
         tenths = _tenths(part["value"][dwells])
         straight[dwells[(tenths >= 1) & (tenths <= 999)]] = True
-    for k in cycles:
-        if base <= k < limit:
-            straight[k - base] = False
+    inside = cycle_rows[(cycle_rows >= base) & (cycle_rows < limit)]
+    straight[inside - base] = False
     breaks = (np.flatnonzero(~straight) + base).tolist()
     breaks.append(limit)
     return straight.tolist(), breaks

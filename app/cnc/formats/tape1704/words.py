@@ -241,6 +241,8 @@ class Rounder:
                 return None
             pieces.append(quadrant_ends(start, end, centre, radius, clockwise, full_circle))
         restart = run.restart or self.carry_restart
+        if restart and run.kind[0] == DWELL:
+            return None  # Words.lines restarts the motion mode on a run's first row only
         kept = np.flatnonzero(moved)
         for k in np.flatnonzero(~moved & feeding).tolist():
             self.report.note(
@@ -284,7 +286,7 @@ class Rounder:
             out.x, out.y = at_x, at_y
         return out
 
-    def motion(self, item: Motion) -> Iterator[Item]:
+    def motion(self, item: Motion) -> list[Item]:
         """One motion rounded: none when it is too short, an arc's quadrants."""
         fmt, report, pos = self.fmt, self.report, self.pos
         # fmt.units inlined for the end points (three a move): the same half-even rounding.
@@ -311,9 +313,8 @@ class Rounder:
             item.cycle_depth = fmt.units(item.cycle_depth)
             self.check_capacity(item.block, (0, 0, item.cycle_depth))
             item.end = end
-            yield item
             self.pos = end
-            return
+            return [item]
         if item.kind is Kind.ARC:
             assert item.centre is not None
             centre = (fmt.units(item.centre[0]), fmt.units(item.centre[1]))
@@ -322,10 +323,9 @@ class Rounder:
             if not pieces:
                 self.carry_restart = item.restart
                 report.note(item.block, "an arc shorter than the tape's resolution is left out")
-            yield from pieces
             if pieces:
                 self.pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
-            return
+            return pieces
         same_z = end[2] is None or pos[2] is None or end[2] == pos[2]
         searched = item.search_feed or (item.kind is Kind.RAPID and item.restart)
         if (
@@ -337,10 +337,10 @@ class Rounder:
             self.carry_restart = item.restart
             if item.kind is not Kind.RAPID:
                 report.note(item.block, "a move shorter than the tape's resolution is left out")
-            return
+            return []
         item.end = end
-        yield item
         self.pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
+        return [item]
 
     def check_capacity(self, block: int, point: Sequence[int | None], axes: str = "XYZ") -> None:
         limit = self.limit
@@ -445,33 +445,6 @@ def _within_30(
         other = (int(bx[k]), int(by[k]), int(bz[k]))
         within[k] = turn_degrees(one, other) <= limit
     return within
-
-
-def _last_apart(
-    items: Iterator[tuple[Piece, Point]],
-) -> Iterator[tuple[Piece, Point]]:
-    """The items with each run's last item apart, after the run (whose blocks are then all
-    but the last item's, `Words.run_lines`): what comes after a run decides its last
-    move's G code, and an auxiliary block may ride on the run's first. A run whose restart
-    is on a row after its first (a dwell before it) goes one item at a time."""
-    for item, start in items:
-        if not isinstance(item, Run):
-            yield item, start
-            continue
-        count = len(item)
-        if item.restart and item.kind[0] == DWELL:
-            yield from with_starts(iter(item.items()), start)
-            continue
-        if count > 1:
-            yield item, start
-            moving = item.motions()
-            moving = moving[moving < count - 1]
-            if len(moving):
-                k = int(moving[-1])
-                z = start[2] if item.z is None else int(item.z[k])
-                start = (int(item.x[k]), int(item.y[k]), z)
-        # The restart is the first row's (a dwell first went one by one above).
-        yield item.take(slice(count - 1, None), item.restart and count == 1).items()[0], start
 
 
 def quadrant_ends(
@@ -609,27 +582,33 @@ class Words:
         self.g99 = False
         self.carried: list[tuple[str, str]] = []
         last_block = 0
-        ahead = _last_apart(items)
+        ahead = iter(items)
         current = next(ahead, None)
+        following = next(ahead, None)
         while current is not None:
             item, start = current
-            following = next(ahead, None)
             if isinstance(item, Run):
-                # All but its last move (`_last_apart`): each one's next move is in the run.
-                yield self.run_lines(item, start)
-                current = following
+                # All but its last item in columns (each one's next is in the run), then the
+                # last one by one: what comes after the run decides its G code.
+                count = len(item)
+                if count > 1:
+                    yield self.run_lines(item, start)
+                    start = item.start_of(count - 1, start)
+                restart = item.restart and count == 1  # a dwell first went one by one
+                current = (item.take(slice(count - 1, None), restart).items()[0], start)
                 continue
             last_block = item.block
             yield from self.item_lines(item, start, following)
-            current = following
+            current, following = following, next(ahead, None)
         if self.g99:
             yield self.line([("G", "98")], last_block)
 
     def item_lines(
         self, item: Item, start: Point, following: tuple[Piece, Point] | None
-    ) -> Iterator[Line]:
+    ) -> list[Line]:
         """The blocks of one item; `following` is the next (an auxiliary block may ride on
         it, and a feed move's G code depends on it)."""
+        out: list[Line] = []
         after: Item | None = None
         after_start = start
         if following is not None:
@@ -649,19 +628,21 @@ class Words:
                     item.words if item.restate else spindle_words(item.words, self.s_code)
                 )
                 self.s_code = next((v for k, v in item.words if k == "S"), self.s_code)
-                return
+                return out
             if self.g99 and item.words[-1] in (("M", "30"), ("M", "02")):
-                yield self.line([("G", "98")], item.block)  # no drill cycle left on
+                out.append(self.line([("G", "98")], item.block))  # no drill cycle left on
                 self.g99 = False
             words = spindle_words(item.words, self.s_code)
             self.s_code = next((v for k, v in item.words if k == "S"), self.s_code)
             if words or item.comment:
-                yield self.line(words, item.block, item.comment, leader_after=item.leader_after)
+                out.append(
+                    self.line(words, item.block, item.comment, leader_after=item.leader_after)
+                )
                 if any(letter == "G" for letter, _ in words):
                     self.g = None  # G04 and G94 act in their block only; state the mode again
                 if item.preset_z:
                     self.pos[2] = 0
-            return
+            return out
         self.choose_g(item, start, after, after_start)
         pos, ij = self.pos, self.ij
         if item.restart:
@@ -669,7 +650,7 @@ class Words:
             ij = self.ij = [None, None]
             self.g, self.feed = None, None
         if item.quill_cycle != self.g99:
-            yield self.line([("G", "99" if item.quill_cycle else "98")], item.block)
+            out.append(self.line([("G", "99" if item.quill_cycle else "98")], item.block))
             self.g99 = item.quill_cycle
             self.g = None  # state the motion mode again after the quill's G
         words = []
@@ -701,9 +682,10 @@ class Words:
             self.feed = item.search_feed
         words.extend(self.carried)
         self.carried = []
-        yield self.line(words, item.block, motion=item, start=start, feed_before=feed_before)
+        out.append(self.line(words, item.block, motion=item, start=start, feed_before=feed_before))
         self.g = item.gcode
         self.pos = [ex, ey, ez if ez is not None else pos[2]]
+        return out
 
     def run_lines(self, run: Run, start: Point) -> LineRun:
         """The blocks of a run's items but its last, as `item_lines` writes each (G codes,
@@ -933,7 +915,7 @@ def check_reader(
             yield line
             previous = line.line(len(texts) - 1)
             continue
-        if previous is not None:
+        if previous is not None and previous.continuous:
             _check_read(previous, line.text, fmt, report)
         yield line
         previous = line

@@ -16,6 +16,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from decimal import Decimal as D
 from pathlib import Path
+from unittest import mock
 
 import pytest
 from hypothesis import given, settings
@@ -38,6 +39,7 @@ from app.cnc.blocks import (
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.formats.tape1704 import codes as tapecode
+from app.cnc.formats.tape1704 import plan
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.targets import Tape
 from app.cnc.formats.targets import (
@@ -926,15 +928,17 @@ _RUN_OPTIONS = st.fixed_dictionaries(
 
 
 def _tape(
-    program: Program, options: dict[str, str], code: TapeCode, runs: bool
+    program: Program, options: dict[str, str], code: TapeCode, runs: bool, fewest: int = 1
 ) -> tuple[list[str], list[tuple[object, int | None, str]]]:
-    """The listing's lines and the report of `program`'s tape, its straight moves, arcs and
-    dwells in runs (`plan.Run`) or not."""
+    """The listing's lines and the report of `program`'s tape, its straight moves, arcs,
+    chords and dwells in runs (`plan.Run`) of at least `fewest` rows (by default however
+    few: the generated programs are small), or not."""
     path = compile_program(program).path
     report = Report("tape")
     tape = Tape(program, path, get_target("tape-eia").parse_options(options), code, report)
     tape.planner.runs = runs
-    texts = [text for part in tape.image.listing(tape.lines()) for text in part]
+    with mock.patch.object(plan, "_MIN_RUN_ROWS", fewest):
+        texts = [text for part in tape.image.listing(tape.lines()) for text in part]
     tape.finish()
     return texts, [(entry.severity, entry.block, entry.message) for entry in report.entries]
 
@@ -950,10 +954,24 @@ def test_runs_write_the_tape_the_items_one_by_one_write(
     assert _tape(program, options, code, runs=True) == _tape(program, options, code, runs=False)
 
 
+@pytest.mark.parametrize(
+    "case", sorted(p.name for p in GOLDEN.iterdir() if (p / "program.json").exists())
+)
+def test_runs_write_each_golden_tape_as_the_items_one_by_one(case: str) -> None:
+    # Every golden program (tool changes, restarts, coolant, messages, holes, pockets, ...)
+    # in both codes, with arcs and as chords: every block and report entry the same.
+    program = golden(case)
+    for options in ({}, {"circular": "no", "tabs": "yes", "sequence-start": "995"}):
+        for code in TapeCode:
+            assert _tape(program, options, code, runs=True) == _tape(
+                program, options, code, runs=False
+            ), (case, options, code)
+
+
 @pytest.mark.parametrize("family", ["grid", "bolts"])
 def test_runs_write_a_large_tape_as_the_items_one_by_one(family: str) -> None:
     # The bench's programs: long runs of drilled holes (dwells) and arcs across chunks.
     program = resolve_copies(sized(family, 6_000))
-    assert _tape(program, {}, TapeCode.EIA, runs=True) == _tape(
-        program, {}, TapeCode.EIA, runs=False
-    )
+    items = _tape(program, {}, TapeCode.EIA, runs=False)
+    assert _tape(program, {}, TapeCode.EIA, runs=True) == items
+    assert _tape(program, {}, TapeCode.EIA, runs=True, fewest=plan._MIN_RUN_ROWS) == items

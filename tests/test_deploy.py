@@ -363,6 +363,8 @@ def test_a_shop_server_behind_nginx_with_tls(tmp_path: Path, shop_database: str)
         stop(server)
     lines = gunicorn_log.read_text()
     assert "Traceback" not in lines
+    # The unit gives gunicorn the app's settings: threaded workers, not the sync default.
+    assert "Using worker: gthread" in lines
     assert re.search(r"INFO millblocks\.request: GET / 200 \d+ ms 127\.0\.0\.1 ana\n", lines)
     assert re.search(r"INFO millblocks\.request: GET /healthz 200 \d+ ms 127\.0\.0\.1 -\n", lines)
     backups(tmp_path, env, millblocks, shop_database)
@@ -477,6 +479,23 @@ def test_db_upgrade_says_what_it_did(tmp_path: Path, monkeypatch: pytest.MonkeyP
     assert cli("db", "upgrade")[1] == f"already at {newest} ({database})\n"
     assert cli("db", "downgrade", older, "--yes")[1] == f"downgraded from {newest} to {older}\n"
     assert cli("db", "upgrade")[1] == f"upgraded from {older} to {newest} ({database})\n"
+
+
+def test_db_commands_take_a_percent_encoded_url(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A % in the database URL (a percent-encoded password, s3cr%40t, or a folder's @ as
+    %40) reaches Alembic as itself: every `db` command stopped with a traceback ("invalid
+    interpolation syntax", Alembic's ConfigParser reading % as interpolation)."""
+    folder = tmp_path / "shop@floor"
+    folder.mkdir()
+    database = f"sqlite:///{tmp_path / 'shop%40floor' / 'p.db'}"
+    monkeypatch.setenv("MILLBLOCKS_DATABASE_URL", database)
+    newest, previous = head(), revisions()[-2]
+    assert cli("db", "upgrade") == (0, f"created the database at {newest} ({database})\n", "")
+    assert (folder / "p.db").exists()
+    assert cli("db", "downgrade", "--yes")[:2] == (0, f"downgraded from {newest} to {previous}\n")
+    assert cli("db", "upgrade")[:2] == (0, f"upgraded from {previous} to {newest} ({database})\n")
 
 
 def test_db_current_and_downgrade(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -86,6 +86,21 @@ def test_the_idle_timeout_comes_from_the_environment(
     dispose(app)
 
 
+def test_a_short_idle_limit_does_not_end_a_session_in_use(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """MILLBLOCKS_SESSION_IDLE_MINUTES=1 and a request every 10 s: the session lives on.
+    `last_seen` was written once a minute, so a session used every 10 s ended at 60 s."""
+    app = accounts_server(tmp_path, monkeypatch, SESSION_IDLE_MINUTES="1")
+    client = logged_in(app)
+    for _ in range(12):  # two minutes of work
+        age(app, created=timedelta(seconds=10), seen=timedelta(seconds=10))
+        assert not is_logged_out(client)
+    age(app, created=timedelta(seconds=61), seen=timedelta(seconds=61))
+    assert is_logged_out(client)
+    dispose(app)
+
+
 def test_the_absolute_timeout_comes_from_the_environment(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -60,10 +60,11 @@ def external(**changes: object) -> Program:
     return dataclasses.replace(program, blocks=(changed,), stock=STOCK)
 
 
-def turned(program: Program) -> Program:
-    """`program`'s thread on a shank turned first to its major diameter, 1 mm longer than
-    the thread (a 16 mm end mill, tool 2, CIRCLE OUTSIDE): a thread cut from the bottom up
-    comes down at rapid beside the shank, where solid stock would make a crash."""
+def turned(program: Program, diameter: Decimal | None = None) -> Program:
+    """`program`'s thread on a shank turned first to its major diameter (or `diameter`) and
+    to its Z DN (a 16 mm end mill, tool 2, CIRCLE OUTSIDE): a thread cut from the bottom up
+    comes down at rapid beside the shank, where solid stock would make a crash. The shank
+    is the thread's roughing: the thread mill's cut inside it is the thread's waste."""
     (thread,) = program.blocks
     assert isinstance(thread, ThreadMill)
     end_mill = Tool(number=2, diameter=Decimal(16), rpm=1500, tcal=Decimal(0))
@@ -73,14 +74,14 @@ def turned(program: Program) -> Program:
             x=thread.x,
             y=thread.y,
             z_up=Decimal(1),
-            z_dn=thread.z_dn - 1,
+            z_dn=thread.z_dn,
             feed_z=Decimal(100),
             tool=2,
             units=thread.units,
         ),
         Circle(
             placement=Placement.OUTSIDE,
-            radius=thread.diameter / 2,
+            radius=(diameter or thread.diameter) / 2,
             feed_xy=Decimal(400),
             tool=2,
             units=thread.units,
@@ -128,6 +129,16 @@ def test_an_external_thread_cut_either_way_up_reports_nothing(
     hand: Hand, milling: MillingMode
 ) -> None:
     assert findings(turned(external(hand=hand, milling=milling))) == []
+
+
+def test_a_shank_turned_under_the_thread_s_major_diameter_is_reported() -> None:
+    """Turned to DIA 19.5 for an M20: the thread's crests would be cut off. The shank holds
+    the minor diameter but not the major one the THREAD MILL block states, so it is no
+    roughing of the thread, and the thread mill's cut inside it (down to the minor
+    diameter, 18.16 mm) is a gouge of the shank's finished wall."""
+    found = verify(turned(external(), Decimal("19.5")), resolution=RESOLUTION).findings
+    assert [(f.block, f.kind) for f in found] == [(3, "gouge")]
+    assert "past the finished wall of block 2" in found[0].message
 
 
 @pytest.mark.parametrize(

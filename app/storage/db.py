@@ -133,8 +133,14 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
     config = Config()
-    config.set_main_option("script_location", str(data_dir("migrations")))
-    config.set_main_option("sqlalchemy.url", engine.url.render_as_string(hide_password=False))
+    # Alembic keeps its options in a ConfigParser, which reads % as interpolation: a
+    # percent-encoded password (s3cr%40t) or a folder with a % in its name would stop every
+    # `db` command with "invalid interpolation syntax". %% is a literal %.
+    for option, value in (
+        ("script_location", str(data_dir("migrations"))),
+        ("sqlalchemy.url", engine.url.render_as_string(hide_password=False)),
+    ):
+        config.set_main_option(option, value.replace("%", "%%"))
     return config
 
 

@@ -16,6 +16,14 @@ What a block means to remove (its *waste*), each to its depth:
   inside an inner one);
 - an open compensated contour or an uncompensated one (a slot): the tool's swath.
 
+Bosses (OUTSIDE routines, outer profiles) keep each other: a boss's waste is never another
+boss's inside. Of nested ones the part at each depth is the smallest boss cut to that
+depth: a boss that holds another cut at least as deep is its roughing and drops out (its
+wall is no finished surface), one cut deeper is the step the smaller stands on. A boss
+standing in a pocket (a CIRCLE/FRAME INSIDE or IN/TAN, a closed contour cut from inside,
+an irregular POCKET's wall) is kept by the pocket's wall pass, and its own waste ends at
+that wall; a CIRCLE/FRAME POCKET clears it all the same.
+
 Each waste is widened by the tolerance (a cut that meets the exact edge of one is no
 gouge). `intended` draws them all at once: the shapes of one depth are filled together as a
 union (scanlines with winding numbers, so thousands of a LOOP's pockets or a bolt circle's
@@ -26,6 +34,7 @@ clear, the same way. Lengths in nm.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Sequence
@@ -37,7 +46,14 @@ import numpy.typing as npt
 import pyclipper
 
 from app.cnc.plane import Element, Path, signed_area
-from app.cnc.pocketing.regions import Ring, offset, path_points, sweep_lines
+from app.cnc.pocketing.regions import (
+    Ring,
+    area,
+    difference,
+    offset,
+    path_points,
+    sweep_lines,
+)
 from app.cnc.simulate.programmed import Contour, PocketArea, Programmed, Routine
 from app.cnc.simulate.segments import BOOL, F64
 from app.cnc.simulate.stock import Grid
@@ -246,9 +262,13 @@ def part_inside(contour: Contour) -> bool:
 @dataclass
 class Intent:
     """The lowest Z the program means to cut each cell to (`floor`, (ny, nx) nm; the
-    stock's top where no block means to cut)."""
+    stock's top where no block means to cut), and the bosses that rough a smaller one
+    out (`roughing`: indices of `Programmed.routines`, `contours` the same for outer
+    profiles): their walls are no finished surface."""
 
     floor: F64
+    roughing: frozenset[int] = frozenset()
+    contours: frozenset[int] = frozenset()
 
 
 def _group(groups: dict[int, list[Any]], depth: int, ring: Sequence[Pt] | F64) -> None:
@@ -256,13 +276,75 @@ def _group(groups: dict[int, list[Any]], depth: int, ring: Sequence[Pt] | F64) -
         groups.setdefault(depth, []).append(ring)
 
 
+@dataclass
+class _Shape:
+    """A boss (its outside is waste) or an enclosure (its inside is waste), to `depth`:
+    `rings` its waste's outline (nm, moved by the tolerance), `form` for a boss what its
+    part reaches out to (its rings, or an external thread's major diameter), `box` and
+    `form_box` their bounds (x0, y0, x1, y1), `clears` for an enclosure that cleans all of
+    its inside out (a POCKET) whatever stands there."""
+
+    depth: int
+    rings: list[Any]
+    form: list[Any]
+    box: tuple[float, float, float, float]
+    form_box: tuple[float, float, float, float]
+    clears: bool = False
+    source: tuple[str, int] = ("", -1)  # ("routine" or "contour", its index)
+
+
+def _bounds(rings: Sequence[Any]) -> tuple[float, float, float, float]:
+    points = np.concatenate([np.asarray(r, dtype=np.float64).reshape(-1, 2) for r in rings])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])
+
+
+def _shape(
+    depth: int,
+    rings: list[Any],
+    form: list[Any] | None = None,
+    clears: bool = False,
+    source: tuple[str, int] = ("", -1),
+) -> _Shape:
+    box = _bounds(rings)
+    if form is None:
+        return _Shape(depth, rings, rings, box, box, clears, source)
+    return _Shape(depth, rings, form, box, _bounds(form), clears, source)
+
+
+def _within(boxes: F64, box: tuple[float, float, float, float], slack: float) -> BOOL:
+    """Which of `boxes` ((n, 4): x0, y0, x1, y1) lie inside `box` grown by `slack`."""
+    held: BOOL = (
+        (boxes[:, 0] >= box[0] - slack)
+        & (boxes[:, 1] >= box[1] - slack)
+        & (boxes[:, 2] <= box[2] + slack)
+        & (boxes[:, 3] <= box[3] + slack)
+    )
+    return held
+
+
+def _holds(outer: Sequence[Any], inner: Sequence[Any], chord: float) -> bool:
+    """Whether the rings `outer` hold all of the rings `inner`: what is left of them
+    outside is no more than polygons of one curve drawn `chord` apart leave along their
+    edges."""
+    held = [ccw_ring(r) for r in inner]
+    left = difference(held, [ccw_ring(r) for r in outer])
+    edges = sum(
+        float(np.hypot(*np.diff(np.asarray([*r, r[0]], dtype=np.float64), axis=0).T).sum())
+        for r in held
+    )
+    return abs(area(left)) <= chord * edges
+
+
 def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) -> Intent:
     """What the program means to remove, on `grid` (see the module's note)."""
     floor = np.full((grid.ny, grid.nx), float(grid.stock.top))
     chord = max(min(grid.resolution / 8, tol / 2), 100.0)
     inside: dict[int, list[Any]] = {}
-    # Per depth, shapes whose outside is waste, each as its rings (an offset may part one).
-    outside: dict[int, list[list[Any]]] = {}
+    # Shapes whose outside is waste (bosses: OUTSIDE routines, outer profiles), each as its
+    # rings (an offset may part one); shapes whose inside is waste and that may hold them.
+    bosses: list[_Shape] = []
+    enclosures: list[_Shape] = []
     # Holes of one tool and depth (a LOOP's, a bolt circle's) as one array of discs.
     discs: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for hole in geometry.holes:
@@ -270,17 +352,23 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
     for (depth, radius), points in discs.items():
         array = disc_rings(np.asarray(points, dtype=np.float64), radius + tol, chord)
         inside.setdefault(depth, []).extend(list(array))
-    for routine in geometry.routines:
+    for index, routine in enumerate(geometry.routines):
         deepest = routine.deepest  # its waste goes as low as it may cut
         if deepest is None:
             continue
         grow = tol if routine.inside else -tol
         shape = routine_ring(routine, grow, chord, outward=routine.inside)
+        if len(shape) < 3:
+            continue
         if routine.inside:
-            _group(inside, deepest, shape)
-        elif len(shape) >= 3:
-            outside.setdefault(deepest, []).append([shape])
-    for contour in geometry.contours:
+            enclosures.append(_shape(deepest, [shape], clears=routine.pocket))
+        else:
+            form = None
+            if routine.crest:  # a thread: the shank turned for it holds its crests
+                crest = dataclasses.replace(routine, radius=routine.crest)
+                form = [routine_ring(crest, grow, chord, outward=False)]
+            bosses.append(_shape(deepest, [shape], form, source=("routine", index)))
+    for index, contour in enumerate(geometry.contours):
         if contour.depth is None or any(contour in p.contours for p in geometry.pockets):
             continue
         depth = _deepest(contour)
@@ -288,12 +376,14 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
             ring = path_points(Path(contour.start, contour.elements), chord)
             if part_inside(contour):
                 shrunk = offset([ccw_ring(ring)], -tol, chord)
-                outside.setdefault(depth, []).append(
-                    [[(float(x), float(y)) for x, y in piece] for piece in shrunk]
-                )
+                if shrunk:
+                    pieces = [[(float(x), float(y)) for x, y in piece] for piece in shrunk]
+                    bosses.append(_shape(depth, pieces, source=("contour", index)))
             else:
-                for grown in offset([ccw_ring(ring)], tol, chord):
-                    _group(inside, depth, [(float(x), float(y)) for x, y in grown])
+                grown = offset([ccw_ring(ring)], tol, chord)
+                pieces = [[(float(x), float(y)) for x, y in piece] for piece in grown]
+                if [p for p in pieces if len(p) >= 3]:
+                    enclosures.append(_shape(depth, [p for p in pieces if len(p) >= 3]))
         elif contour.swept:
             radius = (contour.tool_radius or default_radius) + tol
             for swath in sweep_lines(contour.swept, radius, chord):
@@ -303,38 +393,100 @@ def intended(grid: Grid, geometry: Programmed, tol: int, default_radius: int) ->
             radius = (slot.tool_radius or default_radius) + tol
             for swath in sweep_lines(slot.swept, radius, chord):
                 _group(inside, _deepest(slot), [(float(x), float(y)) for x, y in swath])
+    roughings = _roughings(bosses, chord)
+    rough = [bosses[k].source for k in sorted(roughings)]
+    bosses = [boss for k, boss in enumerate(bosses) if k not in roughings]
+    # An irregular POCKET's wall holds a boss too; its islands are already kept.
+    walls = [
+        _shape(pocket.depth, [[(float(x), float(y)) for x, y in r] for r in grown], clears=True)
+        for pocket in geometry.pockets
+        if pocket.depth is not None
+        for grown in [_pocket_wall(pocket, tol, chord)]
+        if grown
+    ]
+    holders = enclosures + walls
+    # Which enclosures hold each boss: a boss standing in a pocket.
+    around = _around(bosses, holders, chord)
+    for k, enclosure in enumerate(enclosures):
+        held = [b.rings for b, holding in zip(bosses, around, strict=True) if k in holding]
+        if enclosure.clears or not held:
+            for ring in enclosure.rings:
+                _group(inside, enclosure.depth, ring)
+            continue
+        # A pocket's wall pass round a boss: its inside is waste, the boss is not.
+        waste = fill(grid, enclosure.rings) & ~(winding(grid, [r for h in held for r in h]) > 0)
+        np.minimum(floor, float(enclosure.depth), out=floor, where=waste)
     for depth, rings in sorted(inside.items()):
         np.minimum(floor, float(depth), out=floor, where=winding(grid, rings) > 0)
-    _outside_wastes(grid, outside, floor)
+    _outside_wastes(grid, bosses, around, holders, floor)
     for pocket in geometry.pockets:
         if pocket.depth is not None:
-            area = _pocket_area(grid, pocket, tol, chord)
-            np.minimum(floor, float(pocket.depth), out=floor, where=area)
-    return Intent(floor)
-
-
-def _outside_wastes(grid: Grid, outside: dict[int, list[list[Any]]], floor: F64) -> None:
-    """Lower `floor` where outer profiles and OUTSIDE routines (bosses) mean to cut: the
-    outside of each, to its depth, but never into another boss. The waste at depth d is
-    outside every boss cut no deeper than d, and outside every deeper boss that stands
-    apart from those (two bosses side by side keep each other); a deeper boss that holds
-    a shallower one is the step it stands on, and its top between them is waste."""
-    if not outside:
-        return
-    shapes = [(depth, shape) for depth, group in outside.items() for shape in group]
-    boxes = np.array(
-        [
-            [
-                min(float(np.min(np.asarray(r)[:, 0])) for r in shape),
-                min(float(np.min(np.asarray(r)[:, 1])) for r in shape),
-                max(float(np.max(np.asarray(r)[:, 0])) for r in shape),
-                max(float(np.max(np.asarray(r)[:, 1])) for r in shape),
-            ]
-            for _, shape in shapes
-        ]
+            cleared = _pocket_area(grid, pocket, tol, chord)
+            np.minimum(floor, float(pocket.depth), out=floor, where=cleared)
+    return Intent(
+        floor,
+        frozenset(k for kind, k in rough if kind == "routine"),
+        frozenset(k for kind, k in rough if kind == "contour"),
     )
-    depths = np.array([depth for depth, _ in shapes])
-    for depth in sorted(outside):
+
+
+def _around(bosses: list[_Shape], holders: list[_Shape], chord: float) -> list[tuple[int, ...]]:
+    """For each boss, the enclosures among `holders` that hold it (their indices)."""
+    around: list[list[int]] = [[] for _ in bosses]
+    if not bosses or not holders:
+        return [()] * len(bosses)
+    boxes = np.array([boss.box for boss in bosses])
+    for k, holder in enumerate(holders):
+        for i in np.flatnonzero(_within(boxes, holder.box, chord)).tolist():
+            if _holds(holder.rings, bosses[i].rings, chord):
+                around[i].append(k)
+    return [tuple(a) for a in around]
+
+
+def _roughings(bosses: list[_Shape], chord: float) -> set[int]:
+    """Which of the bosses are roughings (their indices). A boss that holds another cut at
+    least as deep (a CIRCLE OUTSIDE DIA 10.5 before DIA 10, a shank turned before its
+    thread is milled) is roughing, its wall no finished surface; the smaller one's waste
+    takes it: the part is the smallest boss the program cuts to that depth. Of equal
+    bosses the last is kept. A larger boss cut deeper than a smaller one it holds is the
+    step that one stands on (a stepped shaft), and stays."""
+    rough: set[int] = set()
+    if len(bosses) < 2:
+        return rough
+    forms = np.array([boss.form_box for boss in bosses])
+    depths = np.array([boss.depth for boss in bosses])
+    for i, outer in enumerate(bosses):
+        candidates = np.flatnonzero(_within(forms, outer.box, chord) & (depths <= outer.depth))
+        for j in candidates.tolist():
+            inner = bosses[j]
+            if j == i or not _holds(outer.rings, inner.form, chord):
+                continue
+            same = inner.depth == outer.depth and _holds(inner.rings, outer.form, chord)
+            if not (same and j < i):
+                rough.add(i)
+                break
+    return rough
+
+
+def _outside_wastes(
+    grid: Grid,
+    bosses: list[_Shape],
+    around: list[tuple[int, ...]],
+    holders: list[_Shape],
+    floor: F64,
+) -> None:
+    """Lower `floor` where outer profiles and OUTSIDE routines (bosses) mean to cut: the
+    outside of each, to its depth, but never into another boss, nor past the wall of an
+    enclosure that holds it (`around`, indices into `holders`: a boss standing in a
+    pocket). The waste at depth d is outside every boss cut no deeper than d, and outside
+    every deeper boss that stands apart from those (two bosses side by side keep each
+    other); a deeper boss that holds a shallower one is the step it stands on, and its
+    top between them is waste."""
+    if not bosses:
+        return
+    boxes = np.array([boss.box for boss in bosses])
+    depths = np.array([boss.depth for boss in bosses])
+    for depth in sorted(set(depths.tolist())):
         level = depths >= depth  # this depth's bosses and the shallower ones
         b = boxes[level]
         deeper = np.flatnonzero(~level)
@@ -348,9 +500,19 @@ def _outside_wastes(grid: Grid, outside: dict[int, list[list[Any]]], floor: F64)
                 & (b[:, 1] <= boxes[k, 3])
             ).any()
         ]
-        kept = [ring for k in np.flatnonzero(level).tolist() + apart for ring in shapes[k][1]]
-        held = winding(grid, kept) > 0
-        np.minimum(floor, float(depth), out=floor, where=~held)
+        kept = [ring for k in np.flatnonzero(level).tolist() + apart for ring in bosses[k].rings]
+        waste = ~(winding(grid, kept) > 0)
+        # Bosses of this depth standing in pockets: their waste ends at the pockets' walls.
+        bounds = {around[k] for k in np.flatnonzero(depths == depth).tolist()}
+        if () not in bounds:
+            within = np.zeros_like(waste)
+            for holding in bounds:
+                inner = np.ones_like(waste)
+                for k in holding:
+                    inner &= fill(grid, holders[k].rings)
+                within |= inner
+            waste &= within
+        np.minimum(floor, float(depth), out=floor, where=waste)
 
 
 def clearing(grid: Grid, routines: Sequence[Routine], tol: int) -> tuple[F64, BOOL]:
@@ -415,6 +577,12 @@ def ccw_ring(points: Sequence[Pt]) -> Ring:
     """Integer points, counter-clockwise (Clipper grows those by a positive offset)."""
     ring = [(round(x), round(y)) for x, y in points]
     return ring if pyclipper.Orientation(ring) else ring[::-1]
+
+
+def _pocket_wall(pocket: PocketArea, tol: int, chord: float) -> list[Ring]:
+    """A POCKET's wall moved `tol` outward, as rings."""
+    contour = pocket.contours[0]
+    return offset([ccw_ring(path_points(Path(contour.start, contour.elements), chord))], tol, chord)
 
 
 def _pocket_area(grid: Grid, pocket: PocketArea, tol: int, chord: float) -> BOOL:

@@ -79,6 +79,7 @@ class Routine:
     corner_radius: int = 0
     drill: int = 0  # the DRILL block that starts it
     allowed: int | None = None
+    crest: int = 0  # an external thread's major radius: its form reaches out to it
 
     @property
     def deepest(self) -> int | None:
@@ -274,6 +275,7 @@ def _helical_cuts(
                     radius=minor // 2,
                     drill=number,
                     allowed=depth,
+                    crest=size // 2,
                 )
             )
 

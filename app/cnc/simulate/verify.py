@@ -5,8 +5,9 @@ findings, each named by the block at fault:
 
 - **gouge**: material removed below what every block means to cut there. Beside a
   finished surface (a compensated contour, a POCKET's wall or island, a CIRCLE/FRAME
-  wall: a band two tool radii wide) it names the surface damaged, else it is material no
-  block means to remove. Also a closed contour cut from inside through the stock around
+  wall: a band two tool radii wide; not the wall of a boss that roughs out a smaller one,
+  `Intent.roughing`) it names the surface damaged, else it is material no block means to
+  remove. Also a closed contour cut from inside through the stock around
   features of the part: the slug that drops out is the part, cut on the wrong side.
 - **rest material**: material left above Z DN that a block means to clear: a POCKET
   routine's inside (a frame whose corner radius is smaller than the tool's), the band one
@@ -219,14 +220,18 @@ def check_part(result: Verification, geometry: Programmed, tol: int) -> None:
     gouged = heights < intent.floor - tol
     claimed = np.zeros_like(gouged)
     found: list[Finding] = []
-    for contour in geometry.contours:
-        found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
+    for k, contour in enumerate(geometry.contours):
+        if k not in intent.contours:  # a roughing's wall is no finished surface
+            found += _contour_gouges(grid, heights, owners, contour, tol, u, gouged, claimed)
         found += _contour_rest(grid, heights, contour, geometry, tol, u)
     pocket_floor, must_clear = clearing(grid, geometry.routines, tol)
     left_in_pockets = must_clear & (heights > np.maximum(pocket_floor, grid.stock.bottom) + tol)
-    for routine in geometry.routines:
+    # A roughing's wall is no finished surface: nothing is a gouge past it.
+    nothing = np.zeros_like(gouged) if intent.roughing else gouged
+    for k, routine in enumerate(geometry.routines):
+        walled = nothing if k in intent.roughing else gouged
         found += _routine_findings(
-            grid, heights, owners, routine, tol, u, gouged, claimed, left_in_pockets
+            grid, heights, owners, routine, tol, u, walled, claimed, left_in_pockets
         )
     for pocket in geometry.pockets:
         found += _pocket_findings(grid, heights, pocket, tol, u)

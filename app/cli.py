@@ -274,6 +274,31 @@ class _Commands(click.Group):
             return super().invoke(ctx)
         except TextError as exc:
             raise ProgramFileError(str(exc)) from None
+        except Exception as exc:
+            # A damaged SQLite file fails in whatever statement reads it first (migrating,
+            # `db current`, a list): say so once here, naming the file, not a traceback.
+            if type(exc).__module__.startswith("sqlalchemy"):
+                _damaged_database(exc)
+            raise
+
+
+def _damaged_database(exc: Exception) -> None:
+    """ConfigurationError naming the SQLite file and what to do when `exc` says the file
+    is damaged (app.storage.db.damage); nothing for any other error."""
+    from sqlalchemy.engine import make_url
+
+    from app.storage.db import damage, database_url
+
+    found = damage(exc)
+    if found is None:
+        return
+    path = make_url(database_url(settings()["DATABASE_URL"])).database
+    raise ConfigurationError(
+        f"{path}: the database file is damaged (SQLite: {found}). Stop MillBlocks, move the "
+        "file aside and restore from a backup: put back a copy of the file, or let "
+        "MillBlocks create a new database and `millblocks restore ARCHIVE` an archive "
+        "made with `millblocks backup` (docs/deploy.md, Backups)"
+    ) from None
 
 
 @click.group(cls=_Commands)
@@ -568,8 +593,10 @@ def setup_sheet_command(program: str, target: str | None, machine_name: str | No
     if target:
         try:
             found = run_export(loaded, target, raw, machine).report
-        except (OptionError, ExportError) as exc:
+        except OptionError as exc:
             raise click.ClickException(str(exc)) from None
+        except ExportError as exc:
+            raise click.ClickException(exc.explained()) from None
     click.echo(render_text(setup_sheet(loaded, found, machine)), nl=False)
 
 
@@ -1352,7 +1379,9 @@ def send_command(
             progress=_progress_printer(f"send {chosen.name}"),
             cancel=cancelled,
         )
-    except (TransferError, ExportError, OptionError, ValueError) as exc:
+    except ExportError as exc:
+        raise click.ClickException(exc.explained()) from None
+    except (TransferError, OptionError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(sent.record.summary())
     if stop.is_set():

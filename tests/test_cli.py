@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
@@ -356,3 +358,65 @@ def test_the_benchmark_files_stay_inside_the_travel_at_any_size() -> None:
     assert "G10 L2 P1 X1.0000 Y1.0000 Z0" in text
     largest = max(float(value) for value in re.findall(r"[XY](-?\d+\.\d+)", text))
     assert 1.0 + largest <= 99.999
+
+
+def _damaged(path: Path, how: str) -> None:
+    """A library file damaged `how`: "header" (not a database at all) or "pages" (its
+    header is whole, its first page is not: SQLite's "disk image is malformed")."""
+    if how == "header":
+        path.write_bytes(bytes(range(256)) * 32)
+        return
+    with contextlib.closing(sqlite3.connect(path)) as database, database:
+        database.execute("CREATE TABLE notes (text TEXT)")
+        database.executemany("INSERT INTO notes VALUES (?)", [("x" * 500,)] * 100)
+    data = bytearray(path.read_bytes())
+    data[100:4096] = b"\xa5" * 3996  # the schema table's page, after the 100-byte header
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(
+    ("how", "said"),
+    [("header", "file is not a database"), ("pages", "database disk image is malformed")],
+)
+@pytest.mark.parametrize("command", [["db", "upgrade"], ["db", "current"], ["list"]])
+def test_a_damaged_sqlite_file_is_named_with_what_to_do(
+    command: list[str], how: str, said: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The audit of issue 31: `db upgrade` and `db current` ended in a traceback from the
+    driver. Now exit 2, naming the file, SQLite's words and the way back (a backup)."""
+    path = tmp_path / "library.db"
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{path}")
+    _damaged(path, how)
+    result = CliRunner().invoke(main, command)
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    assert result.stderr.startswith(
+        f"Error: {path}: the database file is damaged (SQLite: {said}). Stop MillBlocks, "
+        "move the file aside and restore from a backup"
+    )
+    assert "millblocks restore ARCHIVE" in result.stderr
+
+
+def test_a_send_the_target_refuses_says_why(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The audit of issue 31: `millblocks send` said only "events cannot take this
+    program"; now the reason (the Plus's line numbers run to 999), before any port."""
+    from decimal import Decimal
+
+    from app.cnc.blocks import Rep
+    from app.storage.library import Machine, open_library
+    from tests.test_events import loop
+
+    url = f"sqlite:///{tmp_path / 'send.db'}"
+    monkeypatch.setenv("DATABASE_URL", url)
+    library = open_library(url, seed_demo=False)
+    program = library.create(loop(Rep(x=Decimal(5), y=Decimal("0.15"), nx=1, ny=600)))
+    library.save_machine(Machine("Plus", "events", {}, {"port": str(tmp_path / "no-port")}))
+    library.engine.dispose()
+    result = CliRunner().invoke(main, ["send", str(program.id), "--machine", "Plus"])
+    assert result.exit_code == 1, result.output
+    assert result.stderr == (
+        "Error: events cannot take this program (program: 1203 events: line numbers run to "
+        "999 (seed 003 §2.2.4))\n"
+    )

@@ -323,3 +323,27 @@ def _answers(url: str) -> bool:
             return bool(reply.status == 200)
     except OSError:
         return False
+
+
+def test_a_queued_send_the_target_refuses_says_why(tmp_path: Path) -> None:
+    """The audit of issue 31: the transfers page said only "events cannot take this
+    program"; the send's row now keeps the export's reason (1 203 events: the Plus's line
+    numbers run to 999). Nothing reaches the port: the export fails first."""
+    from decimal import Decimal
+
+    from app.cnc.blocks import Rep
+    from tests.test_events import loop
+
+    library = open_library(f"sqlite:///{tmp_path / 'shop.db'}", seed_demo=False)
+    program = library.create(loop(Rep(x=Decimal(5), y=Decimal("0.15"), nx=1, ny=600)))
+    library.save_machine(Machine("Plus", "events", {}, {"port": str(tmp_path / "no-port")}))
+    log = TransferLog(library)
+    row = log.begin("send", "Plus", "", "events", "", program.id, queued=True)
+    service = TransferService(library)
+    assert [t.id for t in service.step()] == [row]
+    assert service.running["Plus"].job.wait(WAIT)
+    assert (log.get(row).outcome, log.get(row).error) == (
+        "failed",
+        "events cannot take this program (program: 1203 events: line numbers run to 999 "
+        "(seed 003 §2.2.4))",
+    )

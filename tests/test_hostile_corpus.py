@@ -401,7 +401,7 @@ def _document_name(name: str) -> Callable[[dict[str, Any], dict[str, bytes]], No
     return change
 
 
-def _manifest(*path: Any, value: str) -> Callable[[dict[str, Any], dict[str, bytes]], None]:
+def _manifest(*path: Any, value: Any) -> Callable[[dict[str, Any], dict[str, bytes]], None]:
     def change(manifest: dict[str, Any], _members: dict[str, bytes]) -> None:
         target: Any = manifest
         for key in path[:-1]:
@@ -435,6 +435,37 @@ TEXT_DAMAGE = {
     "machine notes with a lone surrogate": (
         _manifest("machines", 0, "notes", value="\ud800"),
         "machine 1, notes: has a lone surrogate",
+    ),
+    # The audit of issue 31: these three restored ("23 programs restored"), the machines page
+    # grew to 110 kB, and only a send refused them.
+    "a serial port with a NUL": (
+        _manifest("machines", 0, "serial", "port", value="/dev/tty\x00"),
+        "machine 1 (Bridgeport), serial, port: has a NUL character (U+0000) at character 9",
+    ),
+    "a serial end that is a NUL": (
+        _manifest("machines", 0, "serial", "end", value="\x00"),
+        "machine 1 (Bridgeport), serial, end: has a NUL character (U+0000)",
+    ),
+    "a serial port of 100 000 characters": (
+        _manifest("machines", 0, "serial", "port", value="/dev/" + "x" * 100_000),
+        "machine 1 (Bridgeport), serial, port: 100,005 characters is too long; allowed: at "
+        "most 500",
+    ),
+    "a serial setting named with a lone surrogate": (
+        _manifest("machines", 0, "serial", "\udc80", value="1"),
+        "machine 1 (Bridgeport), serial, a setting's name: has a lone surrogate (U+DC80)",
+    ),
+    "a machine option with a NUL": (
+        _manifest("machines", 0, "options", "sequence-start", value="1\x00"),
+        "machine 1 (Bridgeport), options, sequence-start: has a NUL character (U+0000)",
+    ),
+    "a travel limit with a lone surrogate": (
+        _manifest("machines", 0, "limits", value={"x": ["0", "\ud800"]}),
+        "machine 1 (Bridgeport), limits, x [2]: has a lone surrogate (U+D800)",
+    ),
+    "a target of 100 000 characters": (
+        _manifest("machines", 0, "target", value="t" * 100_000),
+        "machine 1 (Bridgeport), target: 100,000 characters is too long",
     ),
 }
 

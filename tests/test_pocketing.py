@@ -33,7 +33,8 @@ from app.cnc.pocketing import (
     plan_pocket,
     regions,
 )
-from app.cnc.pocketing.plan import _closest_on_element, _way_round
+from app.cnc.pocketing import plan as plan_module
+from app.cnc.pocketing.plan import RESIDUE_NM, _closest_on_element, _way_round
 from app.cnc.problems import Severity
 
 IN = 25_400_000
@@ -713,3 +714,50 @@ def test_a_long_move_in_pieces_sweeps_about_the_points_of_the_whole_move() -> No
         assert regions.area(regions.union(pieces)) == pytest.approx(
             regions.area(regions.union(whole)), rel=1e-8
         )
+
+
+def left_two_ways(
+    monkeypatch: pytest.MonkeyPatch, boundary: Path, islands: list[Path], **options: object
+) -> tuple[list[regions.Ring], list[regions.Ring]]:
+    """(material the rings leave as the cleanup search reads it, from each level's two
+    offsets; the same from the rings' passes swept one by one and united, as it was read
+    before) for the pocket planned with `options`, when the cleanup search starts."""
+    found: list[tuple[list[regions.Ring], list[regions.Ring]]] = []
+    real = plan_module._Planner.clean_up
+
+    def clean_up(planner: plan_module._Planner) -> int:
+        r, t = planner.r, planner.t
+        opening = regions.offset(planner.levels[0][1], r, t)
+        sweeps = [
+            regions.sweep_lines([regions.path_points(p.path, t)], r, t) for p in planner.passes
+        ]
+        found.append(
+            (planner._left_by_rings(), regions.difference(opening, regions.union(*sweeps)))
+        )
+        return real(planner)
+
+    monkeypatch.setattr(plan_module._Planner, "clean_up", clean_up)
+    plan(boundary, islands, R, **options)
+    monkeypatch.undo()
+    return found[0]
+
+
+@pytest.mark.parametrize(
+    ("case", "step"),
+    [(l_shape_with_two_islands, 1.8), (arc_bounded_boss, 1.8), (rectangle_with_round_island, 1.8)],
+)
+def test_the_cleanup_search_finds_what_the_passes_leave_from_the_levels(
+    monkeypatch: pytest.MonkeyPatch, case: object, step: float
+) -> None:
+    """The cleanup search reads the material the rings leave from two offsets of each
+    level's region (issue 30), not from a sweep of every pass: the pieces wide enough to
+    chase (`RESIDUE_NM`) are the ones sweeping the passes leaves, to within narrower
+    slivers. (From the contours shrunk by d - r and d + r instead, the cusps at the
+    rings' corners are missed: the region grown by r is round there.)"""
+    boundary, islands = case()  # type: ignore[operator]
+    levels, passes = left_two_ways(
+        monkeypatch, boundary, islands, step_over=round(step * R), finish_allowance=0
+    )
+    assert regions.thicker_than(passes, RESIDUE_NM, 500)  # there are cusps to find
+    for extra in (regions.difference(levels, passes), regions.difference(passes, levels)):
+        assert not regions.thicker_than(extra, RESIDUE_NM, 500)

@@ -198,6 +198,19 @@ def test_a_machine_with_unusable_serial_settings_is_not_saved(
     assert saved.serial["baud"] == "9600" and saved.limits == {"x": "-10/10"}
 
 
+def test_a_serial_port_of_100_000_characters_is_not_saved(app: Flask, client: FlaskClient) -> None:
+    """The audit of issue 31: the form stored it (only a send refused it, and the machines
+    page grew to 110 kB); the form and a restored backup now share one check."""
+    csrf = token(client, "/machines")
+    form = {"csrf_token": csrf, "name": "Plus", "target": "events"}
+    page = client.post("/machines", data={**form, "port": "/dev/" + "x" * 100_000})
+    assert page.status_code == 422
+    assert "Not saved: serial, port: 100,005 characters is too long; allowed: at most 500" in (
+        page.get_data(as_text=True)
+    )
+    assert all(m.name != "Plus" for m in library_of(app).machines())
+
+
 def test_send_and_receive_from_the_command_line(
     tmp_path: Path, pair: SocatPair, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -743,3 +743,24 @@ def test_a_machine_stored_with_an_unknown_key_is_never_exported_as_unlimited(
         assert "machine &#39;Old mill&#39;, limits: unknown key &#39;X&#39; (did you mean" in (
             response.get_data(as_text=True)
         )
+
+
+def test_a_download_the_target_refuses_says_why(app: Flask, client: FlaskClient) -> None:
+    """The audit of issue 31: a program of more events than the Plus numbers (1 203; its
+    line numbers run to 999) was a 422 saying only "events cannot take this program". The
+    page now gives the export's own reason, as the command line prints it."""
+    from decimal import Decimal
+
+    from app.cnc.blocks import Rep
+    from tests.test_events import loop
+
+    with app.app_context():
+        program_id = (
+            get_library().create(loop(Rep(x=Decimal(5), y=Decimal("0.15"), nx=1, ny=600))).id
+        )
+    refused = client.get(f"/programs/{program_id}/export/download?target=events")
+    assert refused.status_code == 422
+    assert (
+        "events cannot take this program (program: 1203 events: line numbers run to 999 "
+        "(seed 003 §2.2.4))"
+    ) in html.unescape(refused.get_data(as_text=True))

@@ -12,7 +12,8 @@ they all refuse the same things:
   or a command line of bytes that are not UTF-8 can produce, but which no UTF-8 database
   or file can store;
 - more characters than the field holds: `NAME_LENGTH` for a program's name,
-  `SHORT_NAME_LENGTH` for a machine's or a user's, `NOTES_LENGTH` for notes.
+  `SHORT_NAME_LENGTH` for a machine's or a user's, `NOTES_LENGTH` for notes,
+  `SETTING_LENGTH` for each of a machine's settings (its serial port, options, limits).
 
 A search is at most `SEARCH_WORDS` words of `SEARCH_WORD_LENGTH` characters (every word
 is one more condition on every row).
@@ -33,6 +34,11 @@ SHORT_NAME_LENGTH = 100
 
 NOTES_LENGTH = 4000
 """Characters of a program's or a machine's notes: a page of set-up notes."""
+
+SETTING_LENGTH = 500
+"""Characters of one of a machine's settings, its name or its value: the serial port (a
+device path under /dev/serial/by-path/ or a network port's URL with a host name of up to
+253 characters fits), an option of its target, a travel limit."""
 
 SEARCH_WORDS = 10
 """Words in one library search."""

@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 
+from app.cnc.formats.targets import ExportError
 from app.dnc.record import Direction, TransferRecord
 from app.dnc.transfer import Cancel, Outcome, Progress, TransferError
 
@@ -122,6 +123,8 @@ def start(
             job.done = record.bytes_done
             job.state = _STATES[record.outcome]
             job.message = record.summary()
+        except ExportError as exc:  # why, on the transfers page, not only that it failed
+            job.state, job.message = JobState.FAILED, exc.explained()
         except (TransferError, ValueError) as exc:
             job.state, job.message = JobState.FAILED, str(exc)
         except Exception as exc:  # a bug: shown on the page and logged, not lost in a thread

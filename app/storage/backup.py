@@ -25,10 +25,10 @@ from app.cnc.blocks import Program
 from app.cnc.document import DocumentError
 from app.cnc.formats.targets import OptionError, targets
 from app.cnc.machine import MachineError, read_machine
-from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, text_fault
+from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, TextError, text_fault
 from app.cnc.tools import CribTool, tool_faults
 from app.storage.crib import tool_from_document
-from app.storage.library import BACKUP_FORMAT, LibraryError, Machine
+from app.storage.library import BACKUP_FORMAT, LibraryError, Machine, check_machine_text
 
 MAX_MEMBER_BYTES = 16 * 1024 * 1024
 """One member (the manifest, one revision) inflated: far above any real document."""
@@ -272,6 +272,12 @@ def _machine(entry: Any, number: int) -> Machine:
         _string(entry, "notes", where, "", limit=NOTES_LENGTH),
         _mapping(entry, "limits", where, required=False),
     )
+    try:
+        # The one check the web form and the command line go through: a serial port with
+        # a NUL or of 100 000 characters was restored, and only a send refused it.
+        check_machine_text(machine)
+    except TextError as exc:
+        raise BackupError(f"{where} ({name}), {exc}") from None
     target = targets().get(machine.target)
     if target is None:
         raise BackupError(f"{where} ({name}), target: {machine.target!r} is not a target")

@@ -49,6 +49,20 @@ def database_url(url: str | None = None) -> str:
     return f"sqlite:///{default}"
 
 
+_DAMAGE = ("SQLITE_NOTADB", "SQLITE_CORRUPT")
+"""SQLite's names for a file that is not a database or whose pages are damaged (the
+extended codes, SQLITE_CORRUPT_INDEX and the like, begin the same)."""
+
+
+def damage(exc: BaseException) -> str | None:
+    """SQLite's own words ("file is not a database", "database disk image is malformed")
+    when `exc` (a SQLAlchemy error) says the database file is damaged; None for any other
+    error, which is not the file's fault (a lock, a full disk, PostgreSQL)."""
+    original = getattr(exc, "orig", None)
+    name = getattr(original, "sqlite_errorname", "")
+    return str(original) if isinstance(name, str) and name.startswith(_DAMAGE) else None
+
+
 def make_engine(url: str | None = None) -> Engine:
     """An engine for `url` (see `database_url`), with SQLite's safety pragmas."""
     resolved = database_url(url)

@@ -33,6 +33,7 @@ from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
 from app.cnc.text import (
     NAME_LENGTH,
     NOTES_LENGTH,
+    SETTING_LENGTH,
     SHORT_NAME_LENGTH,
     check_text,
     derived_name,
@@ -583,10 +584,40 @@ def _write(archive: zipfile.ZipFile, name: str, text: str) -> None:
     archive.writestr(info, text)
 
 
-def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
-    """Create or update a machine profile by name, in transaction `s`."""
+def check_machine_text(machine: Machine) -> None:
+    """Every string a machine profile stores meets the one text rule (app.cnc.text): its
+    name (at most SHORT_NAME_LENGTH characters), notes (NOTES_LENGTH), target, and each
+    name and text value of its options, serial settings and limits (SETTING_LENGTH each).
+    The web form, the command line and a backup being restored store machines through
+    this. Raises TextError naming the field (`serial, port`).
+
+    The settings are kept as JSON, whose escapes (`\\u0000`) pass the database's own net
+    (app.storage.db) and would come back as a NUL at the port or in the machines page."""
     check_text(machine.name, "machine name", SHORT_NAME_LENGTH)
     check_text(machine.notes, "notes", NOTES_LENGTH)
+    check_text(machine.target, "target", SETTING_LENGTH)
+    # A walk with a list, not recursion: limits may nest ([min, max]) as deep as JSON allows.
+    pending: list[tuple[str, Any]] = [
+        ("options", machine.options),
+        ("serial", machine.serial),
+        ("limits", machine.limits),
+    ]
+    while pending:
+        field_name, value = pending.pop()
+        if isinstance(value, str):
+            check_text(value, field_name, SETTING_LENGTH)
+        elif isinstance(value, dict):
+            for key, item in value.items():
+                check_text(str(key), f"{field_name}, a setting's name", SETTING_LENGTH)
+                pending.append((f"{field_name}, {key}", item))
+        elif isinstance(value, list):
+            pending.extend((f"{field_name} [{n}]", item) for n, item in enumerate(value, start=1))
+
+
+def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
+    """Create or update a machine profile by name, in transaction `s`. Raises TextError
+    (check_machine_text) and LibraryError for limits the machine model cannot read."""
+    check_machine_text(machine)
     if machine.limits:
         try:
             read_machine(machine.limits)

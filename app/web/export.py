@@ -161,9 +161,7 @@ def page(program_id: int) -> tuple[str, int]:
         options_wrong = True
     except ExportError as exc:
         error = str(exc)
-        problems = [str(p) for p in exc.problems if p.severity.value == "error"]
-        if exc.report is not None:
-            problems += [str(e) for e in exc.report.entries if e.severity.value == "error"]
+        problems = exc.errors
         remedies = exc.remedies
         missing = sorted({p.need.value for p in exc.problems if p.need is not None})
     target = all_targets[target_name]
@@ -221,8 +219,12 @@ def download(program_id: int) -> Response | tuple[str, int]:
     raw = machine_options | options_from(request.args, target_name)
     try:
         result = export(stored.program, target_name, raw, model)
-    except (OptionError, ExportError) as exc:
+    except OptionError as exc:
         return render_template("errors/error.html", title="Not exported", message=str(exc)), 422
+    except ExportError as exc:
+        # Why, not only that: this page has no report beside it (the export page has).
+        message = exc.explained()
+        return render_template("errors/error.html", title="Not exported", message=message), 422
     filename = file_name(stored.program.name, result.extension, "program")
     # The export was spooled as it was made; it goes out a piece at a time.
     response = Response(result.chunks(), mimetype=result.media_type.split(";")[0])

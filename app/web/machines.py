@@ -14,6 +14,7 @@ from werkzeug.wrappers import Response
 
 from app.cnc.formats.targets import OptionError, get_target, targets
 from app.cnc.machine import PRESETS, MachineError, read_machine
+from app.cnc.text import TextError
 from app.dnc.service import available_ports, settings_of
 from app.dnc.settings import SettingsError
 from app.storage.library import LibraryError, Machine
@@ -209,7 +210,7 @@ def save() -> Response | tuple[str, int]:
             get_library().save_machine(
                 Machine(name, target, options, serial, form.get("notes", ""), limits)
             )
-        except LibraryError as exc:
+        except (LibraryError, TextError) as exc:  # TextError: a setting too long (SETTING_LENGTH)
             message = f"Not saved: {exc}"
     if message:
         return _page(

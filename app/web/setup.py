@@ -38,12 +38,7 @@ def sheet(program_id: int) -> tuple[str, int]:
     except OptionError as exc:
         error = str(exc)
     except ExportError as exc:
-        reasons = (
-            [str(e) for e in exc.report.entries if e.severity.value == "error"]
-            if exc.report
-            else []
-        )
-        error = "; ".join([str(exc), *reasons])
+        error = exc.explained()
         # The need an option takes away is offered as that choice (as on the export page).
         effective = get_target(target).parse_options(options)
         offers = remedy_offers(get_target(target), effective, machine_name, exc.remedies)

@@ -35,6 +35,7 @@ from app.cnc.options import Option, OptionError, OptionKind
 from app.cnc.path import CompiledPath
 from app.cnc.places import Places, more_text
 from app.cnc.problems import Need, Problem, blocking
+from app.cnc.problems import Severity as ProblemSeverity
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
 
@@ -92,8 +93,14 @@ class Entry:
     more: int = 0
 
     def __str__(self) -> str:
+        return f"{self.severity.value}: {self.reason}"
+
+    @property
+    def reason(self) -> str:
+        """Where and what, without the severity: `program: 1203 events: line numbers run
+        to 999 (seed 003 §2.2.4)`."""
         where = "program" if self.block is None else f"block {self.block}"
-        return f"{self.severity.value}: {where}: {self.message}{self.recurring}"
+        return f"{where}: {self.message}{self.recurring}"
 
     @property
     def recurring(self) -> str:
@@ -259,6 +266,10 @@ class Remedy:
         return f"or export with {self.option}={self.value} to {self.does}"
 
 
+EXPLAINED = 5
+"""Errors an ExportError's one-line explanation names (the rest are counted)."""
+
+
 class ExportError(ValueError):
     """The program cannot be exported: validation errors, or the target's own errors.
     `remedies`: option values that would take away every need the program lacks (empty
@@ -275,6 +286,27 @@ class ExportError(ValueError):
         self.problems = problems
         self.report = report
         self.remedies = remedies
+
+    @property
+    def errors(self) -> list[str]:
+        """Each error that stops the export, one line each: the program's (`block 3, ARC:
+        …`) and the target's or the machine's (`program: 1203 events: line numbers run to
+        999 (seed 003 §2.2.4)`)."""
+        found = [str(p) for p in self.problems if p.severity is ProblemSeverity.ERROR]
+        if self.report is not None:
+            found += [e.reason for e in self.report.entries if e.severity is Severity.ERROR]
+        return found
+
+    def explained(self) -> str:
+        """The message with the errors behind it, for a place that shows one message (a
+        download refused, a send that failed): `events cannot take this program: program:
+        1203 events: line numbers run to 999 (seed 003 §2.2.4)`. At most EXPLAINED errors
+        are named, the rest counted: a program off the table in every block is one line."""
+        errors = self.errors
+        shown = "; ".join(errors[:EXPLAINED])
+        if len(errors) > EXPLAINED:
+            shown += f"; and {len(errors) - EXPLAINED:,} more errors"
+        return f"{self} ({shown})" if shown else str(self)
 
 
 class Target(ABC):

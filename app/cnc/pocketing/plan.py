@@ -142,7 +142,7 @@ def plan_pocket(
         moves=regions.offset(region, -(r - t), t),
     )
     planner.cut_all()
-    left = planner.clean_up(opening)
+    left = planner.clean_up()
     if left:
         findings.append(
             PocketFinding(
@@ -202,6 +202,8 @@ class _Planner:
     _carriers: dict[int, tuple[list[Carrier], FloatArray]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
     _sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
+    # The rings each level's passes were made from (by level): what the passes sweep.
+    _cut_rings: dict[int, list[regions.Ring]] = field(default_factory=dict)
     _narrow_sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
     _pieces: dict[tuple[int, int], regions.Swept] = field(default_factory=dict)
     _tables: dict[int, tuple[Path, nearest.Elements]] = field(default_factory=dict)
@@ -269,6 +271,7 @@ class _Planner:
         names = tuple(dict.fromkeys(self.names[c] for c, _ in sources)) if finish else ()
         kind = PassKind.FINISH if finish else PassKind.ROUGH
         self.passes.append(Pass(kind, path, d, is_exact, entry, names))
+        self._cut_rings.setdefault(node.level, []).append(ring)
         assert self.cleared is not None
         self.cleared.add(self._path_points(entry.path))
         self.cleared.add(self._path_points(path))
@@ -377,12 +380,11 @@ class _Planner:
         extra = regions.difference(swept, near)
         return not regions.thicker_than(extra, RESIDUE_NM, self.t)
 
-    def clean_up(self, opening: list[regions.Ring]) -> int:
+    def clean_up(self) -> int:
         """Add cleanup moves until the tool has swept all it can reach; how many pieces of
         material are left that no move could reach (0 normally)."""
-        swept = regions.union(*(self._swept(p.path) for p in self.passes))
-        swept = regions.union(swept, *(self._swept(p.entry.path) for p in self.passes))
-        residue = regions.difference(opening, swept)
+        links = [s for p in self.passes for s in self._swept(p.entry.path)]
+        residue = regions.difference(self._left_by_rings(), links)
         unreachable: list[Pt] = []
         for _ in range(MAX_CLEANUPS):
             sizes.spend()
@@ -412,6 +414,31 @@ class _Planner:
             kept = [ring for piece in pieces for ring in piece.rings]
             residue = regions.difference(kept, regions.sweep_lines(spikes, self.r, self.t))
         return 0
+
+    def _left_by_rings(self) -> list[regions.Ring]:
+        """The material within the tool's reach that the rings leave (links and cleanup
+        moves aside), from each level's two offsets rather than a sweep of every pass.
+
+        A level's rings are the edges of its region C; the tool going round them sweeps
+        the band between C grown by the tool radius r and C shrunk by r. The levels nest
+        (each region inside the one before), so a point the tool reaches and no ring
+        sweeps lies, for the deepest level k whose C grown by r holds it, inside C_k
+        shrunk by r and outside C_k+1 grown by r: the material left is the union of
+        those differences, one per level, disjoint, without uniting any sweep. (Grown,
+        not the contours shrunk by d - r: at a corner of C the grown region is round,
+        the other sharp, and the corner cusps are what the cleanup looks for.) Were a
+        level's region not inside the one before, the answer would only hold more (a
+        point is in it if it is left), never less. Its edges lie within the chordal
+        tolerance of the passes' sweeps: the pieces narrower than `RESIDUE_NM` that
+        the difference makes are not chased."""
+        cut = self._cut_rings
+        grown = {k: regions.offset_raw(rings, self.r, self.t) for k, rings in cut.items() if k}
+        left: list[regions.Ring] = []
+        for k, rings in sorted(cut.items()):
+            sizes.spend()
+            inner = regions.offset_raw(rings, -self.r, self.t)
+            left += regions.difference(inner, grown.get(k + 1, []))
+        return left
 
     def _reachable(self, p: IPtF) -> Pt:
         """The point nearest `p` where the tool centre may go (inside `safe`): the first

@@ -147,11 +147,17 @@ def intersection(a: Region, b: Region) -> list[Ring]:
 def offset(region: Sequence[Ring], delta: float, tolerance: float) -> list[Ring]:
     """The region grown by `delta` nm (shrunk when negative), round joins within
     `tolerance` of the true arcs."""
+    return _rings(offset_raw(region, delta, tolerance))
+
+
+def offset_raw(region: Sequence[Ring], delta: float, tolerance: float) -> Swept:
+    """`offset` as Clipper gave it, for a region only handed back to Clipper (making
+    tuples of a level's offset points was a sixth of the cleanup search's time)."""
     if not region:
         return []
     offsetter = pyclipper.PyclipperOffset(2.0, float(tolerance))
     offsetter.AddPaths(region, pyclipper.JT_ROUND, pyclipper.ET_CLOSEDPOLYGON)
-    return _rings(offsetter.Execute(float(delta)))
+    return cast(Swept, offsetter.Execute(float(delta)))
 
 
 def inset(contours: Sequence[Path], d: float, tolerance: float) -> list[Ring]:

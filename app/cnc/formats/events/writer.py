@@ -778,7 +778,6 @@ def check_events(events: Events, path: CompiledPath, report: Report) -> None:
     expected = _expected_points(events)
     anywhere = _Near(expected.points, cell)  # the events' points, whatever their block
     mine = _Near(expected.points, cell, expected.blocks)  # each block's own points
-    reached = np.zeros(len(expected.points), dtype=bool)
     moved_blocks: set[int] = set()
     extra: dict[int, Pt] = {}
     # Circular routines: the turns of arcs about their centre, by block.
@@ -789,11 +788,11 @@ def check_events(events: Events, path: CompiledPath, report: Report) -> None:
     }
     turns: dict[tuple[int, XY], set[bool]] = defaultdict(set)
     start = np.array([[path.start[0], path.start[1]]], dtype=np.float64)
-    anywhere.mark(start, tolerance, reached)
+    anywhere.mark(start, tolerance)
     for m in motions(path):
         rows = m.rows
         xy = np.column_stack((rows["x"], rows["y"])).astype(np.float64)
-        anywhere.mark(np.unique(xy, axis=0), tolerance, reached)
+        anywhere.mark(np.unique(xy, axis=0), tolerance)
         moved = (rows["x"] != m.x0) | (rows["y"] != m.y0)
         blocks = rows["block"][moved]
         if not len(blocks):
@@ -828,7 +827,7 @@ def check_events(events: Events, path: CompiledPath, report: Report) -> None:
         px, py = format_dimension(round(p[0]), units), format_dimension(round(p[1]), units)
         return f"X{px} Y{py}"
 
-    missing = ~reached
+    missing = ~anywhere.marked()
     for block in np.unique(expected.blocks).tolist():
         first = np.flatnonzero(missing & (expected.blocks == block))
         if len(first):
@@ -905,7 +904,12 @@ def _expected_points(events: Events) -> _Expected:
 class _Near:
     """Points bucketed by cell (sorted cell keys, optionally with a block), to find for many
     query points at once whether one lies within a tolerance below the cell size: the
-    neighbouring cells of each query are looked up with `searchsorted`."""
+    neighbouring cells of each query are looked up with `searchsorted`.
+
+    Each distinct point (of its block) is kept once: a query takes the points of a cell one
+    pass at a time, as many passes as the fullest cell holds, and a program can put the
+    tool at one place hundreds of times (DRILLs repeated there, a REP X0 Y0), which made
+    every chunk of the path cost that many passes (600 DRILLs at one place took 7 s)."""
 
     SPAN = 1 << 20  # cells either side of zero a key can hold (±2.6 m at 2.54 µm)
 
@@ -916,8 +920,12 @@ class _Near:
         blocks: npt.NDArray[np.int64] | None = None,
     ) -> None:
         self.cell = cell
-        self.points = points
-        keys = self.keys(points, blocks)
+        rows = points if blocks is None else np.column_stack((points, blocks))
+        distinct, inverse = np.unique(rows.reshape(-1, rows.shape[1]), axis=0, return_inverse=True)
+        self.inverse = inverse.reshape(-1)  # the distinct point of each point given
+        self.points = np.ascontiguousarray(distinct[:, :2], dtype=np.float64)
+        self.reached = np.zeros(len(distinct), dtype=bool)  # by `mark`, per distinct point
+        keys = self.keys(self.points, None if blocks is None else distinct[:, 2].astype(np.int64))
         self.order = np.argsort(keys, kind="stable")
         self.sorted_keys = keys[self.order]
         # The most points in one key: how many candidates a query takes from each cell.
@@ -972,12 +980,14 @@ class _Near:
             hit[which] = True
         return hit
 
-    def mark(
-        self, query: npt.NDArray[np.float64], tolerance: float, reached: npt.NDArray[np.bool_]
-    ) -> None:
-        """Set `reached` for every point within `tolerance` of a query point."""
+    def mark(self, query: npt.NDArray[np.float64], tolerance: float) -> None:
+        """Mark every point within `tolerance` of a query point as reached (`marked`)."""
         for _, found in self._pairs(query, tolerance, None):
-            reached[found] = True
+            self.reached[found] = True
+
+    def marked(self) -> npt.NDArray[np.bool_]:
+        """For each point given (in order), whether `mark` reached it."""
+        return self.reached[self.inverse]
 
 
 # -- text (§2.2.5) -----------------------------------------------------------------------------

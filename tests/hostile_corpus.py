@@ -76,12 +76,21 @@ def loop_of_holes(n: int, name: str = "HOLE GRID") -> Program:
 
 def verify_at_the_limit(name: str = "HELIX") -> Program:
     """A HELIX whose simulation is about as much work as the server's Verify accepts
-    (sizes.MAX_VERIFY_WORK): tests/golden/helix-entry-mm down to Z DN -4 instead of -12
-    (its 44 M cells of work are refused; these 18.5 M are not). Arcs whose Z changes are
-    the simulation's costliest cells: the heaviest Verify a page runs."""
+    (sizes.MAX_VERIFY_WORK): tests/golden/helix-entry-mm down to Z DN -28 instead of -12
+    (97 M cells of work). Arcs whose Z changes are the simulation's costliest cells: the
+    heaviest Verify a page runs."""
+    return _deeper_helix(name, -28)
+
+
+def verify_past_the_limit(name: str = "HELIX") -> Program:
+    """The same HELIX down to Z DN -40: 137 M cells, past the server's Verify limit."""
+    return _deeper_helix(name, -40)
+
+
+def _deeper_helix(name: str, z_dn: int) -> Program:
     data = json.loads((GOLDEN_LOOP.parent.parent / "helix-entry-mm" / "program.json").read_text())
     data["name"] = name
-    data["blocks"][0]["z_dn"] = -4
+    data["blocks"][0]["z_dn"] = z_dn
     return document.loads(json.dumps(data))
 
 

@@ -16,7 +16,7 @@ from app.cli import main
 from app.cnc import document, sizes
 from app.cnc.simulate.verify import prepare, work
 from app.web import get_library
-from tests.hostile_corpus import loop_of_holes
+from tests.hostile_corpus import loop_of_holes, verify_past_the_limit
 from tests.test_verify import CASES_DIR
 from tests.test_web import app, client, token
 
@@ -162,16 +162,20 @@ def test_the_editor_s_verify_panel_reads_the_findings_per_block(
 def test_a_simulation_past_the_server_s_limit_is_refused_on_every_page(
     app: Flask, client: FlaskClient
 ) -> None:
-    """The thread mill's 55 moves sweep ~76 M cells (6 s of Verify here): every page that
-    simulates refuses it before the work starts, naming the figure, the limit and what to
-    do; before issue 30 each ran it, and the heaviest legal program ran 14-60 s."""
-    pid = add_golden(app, "thread-mill-external-mm")
+    """A HELIX 52 mm deep sweeps ~137 M cells: every page that simulates refuses it before
+    the work starts, naming the figure, the limit and what to do; before issue 30 each ran
+    it, and the heaviest legal program ran 14-60 s. (Every golden program is within the
+    limit: the thread mill, 76 M, is verified on the web in a few seconds.)"""
+    with app.app_context():
+        pid = get_library().create(verify_past_the_limit()).id
+    golden = client.get(f"/programs/{add_golden(app, 'thread-mill-external-mm')}/verify")
+    assert golden.status_code == 200, golden.get_data(as_text=True)
     limit = f"sweeps at most {sizes.MAX_VERIFY_WORK:,}"
     page = client.get(f"/programs/{pid}/verify")
     text = page.get_data(as_text=True)
     assert page.status_code == 422, text
     assert "Too much to simulate" in text and limit in text
-    assert "simulating this program means sweeping about 7" in text
+    assert "simulating this program means sweeping about 136,544,820 cells" in text
     assert "millblocks verify" in text
     report = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
     assert limit in report and "millblocks verify" in report
@@ -194,7 +198,7 @@ def test_the_heaviest_legal_loop_of_holes_is_refused_not_simulated_for_a_minute(
 
 def test_the_command_line_verifies_what_the_server_refuses(tmp_path: Path) -> None:
     """`millblocks verify` has no work limit: the user's own computer, the user's time."""
-    program = document.loads((GOLDEN / "helix-entry-mm" / "program.json").read_text())
+    program = verify_past_the_limit()
     grid, placed = prepare(program)
     assert work(grid, placed) > sizes.MAX_VERIFY_WORK
     path = tmp_path / "helix.json"

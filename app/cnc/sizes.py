@@ -109,11 +109,12 @@ its levels (one per step-over across it). The planner offsets the contours once 
 and asks its questions of what is near each ring, so its time grows with both
 (docs/pocketing.md, "Cost"; docs/security.md, "Pockets")."""
 
-MAX_VERIFY_WORK = 20_000_000
+MAX_VERIFY_WORK = 100_000_000
 """The work one Verify on the server may take: the grid cells its segments sweep (each
 segment's box at the simulation's resolution, every placement of a LOOP counted) and a
 share for each group of placements (`app.cnc.simulate.verify.work`). Chosen so that the
-heaviest Verify a page accepts takes about 2 s (docs/security.md, "Verify"). The server
+heaviest Verify a page accepts takes a few seconds (docs/security.md, "Verify") and every
+golden program is within it (the external thread mill, 76 M, the most). The server
 puts it in force for every request (app.web); the command line has none (`millblocks
 verify` runs on the user's own computer, and its user chooses the resolution)."""
 

@@ -186,7 +186,7 @@ def check_work(grid: Grid, placed: Placed, units: Units) -> int:
         raise VerifyTooLarge(
             f"simulating this program means sweeping about {found:,} cells "
             f"({len(placed):,} segments in cells of {_len(grid.resolution, units)}); "
-            f"Verify on this server sweeps at most {limit:,}, so that it answers in about 2 s: "
+            f"Verify on this server sweeps at most {limit:,}, so that it answers within seconds: "
             "run `millblocks verify` on your own computer, which has no such limit, or make "
             "the program smaller (fewer LOOP patterns, fewer helix turns)"
         )

@@ -16,8 +16,11 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from decimal import Decimal as D
 from pathlib import Path
+from unittest import mock
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from app.cnc import document
 from app.cnc.blocks import (
@@ -36,7 +39,9 @@ from app.cnc.blocks import (
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.formats.tape1704 import codes as tapecode
+from app.cnc.formats.tape1704 import plan
 from app.cnc.formats.tape1704.codes import TapeCode
+from app.cnc.formats.tape1704.targets import Tape
 from app.cnc.formats.targets import (
     Export,
     ExportError,
@@ -47,6 +52,7 @@ from app.cnc.formats.targets import (
 )
 from app.cnc.units import Units
 from bench.programs import sized
+from tests.strategies import programs
 
 GOLDEN = Path(__file__).parent / "golden"
 SAMPLES = ["contour-cut-right", "stop-and-tool-changes", "tap-metric", "two-axis", "frame-in-tan"]
@@ -894,3 +900,78 @@ def test_the_tape_writer_memory_does_not_grow_with_the_program() -> None:
     large_size, large = _writer_peak(200_000)
     assert large_size > 9 * small_size  # the tape did grow tenfold
     assert large < 2 * small, f"writer peak {small / 1e6:.1f} MB → {large / 1e6:.1f} MB"
+
+
+# --- runs: the writer's columns against the items one by one -------------------------------
+
+# Options that change what a run's columns write (the others, tape-search, xyz=together and
+# the quill, take the items one by one: `Planner.runs`).
+_RUN_OPTIONS = st.fixed_dictionaries(
+    {
+        "circular": st.sampled_from(("yes", "no")),
+        "decel": st.sampled_from(("no", "yes")),
+        "tabs": st.sampled_from(("no", "yes")),
+        "zeros": st.sampled_from(("2", "0")),
+        "sequence": st.sampled_from(("yes", "no")),
+        "sequence-start": st.sampled_from(("1", "990", "999")),
+        "sequence-increment": st.sampled_from(("1", "5")),
+        "dwell": st.sampled_from(("yes", "no")),
+        "z-zero": st.sampled_from(("tcal", "g94")),
+        "resolution": st.sampled_from(("standard", "option1", "option2")),
+        "units": st.sampled_from(("program", "inch", "metric")),
+        "drill-cycle": st.sampled_from(("0", "81")),
+    }
+).map(
+    # Options 1 and 2 are inch formats (a metric tape is refused with them).
+    lambda options: options | {"units": "inch"} if options["resolution"] != "standard" else options
+)
+
+
+def _tape(
+    program: Program, options: dict[str, str], code: TapeCode, runs: bool, fewest: int = 1
+) -> tuple[list[str], list[tuple[object, int | None, str]]]:
+    """The listing's lines and the report of `program`'s tape, its straight moves, arcs,
+    chords and dwells in runs (`plan.Run`) of at least `fewest` rows (by default however
+    few: the generated programs are small), or not."""
+    path = compile_program(program).path
+    report = Report("tape")
+    tape = Tape(program, path, get_target("tape-eia").parse_options(options), code, report)
+    tape.planner.runs = runs
+    with mock.patch.object(plan, "_MIN_RUN_ROWS", fewest):
+        texts = [text for part in tape.image.listing(tape.lines()) for text in part]
+    tape.finish()
+    return texts, [(entry.severity, entry.block, entry.message) for entry in report.entries]
+
+
+@settings(max_examples=60, deadline=None)
+@given(programs(), _RUN_OPTIONS, st.sampled_from(TapeCode))
+def test_runs_write_the_tape_the_items_one_by_one_write(
+    program: Program, options: dict[str, str], code: TapeCode
+) -> None:
+    # Issue 31: the writer makes most blocks in columns. Every block, its words, its
+    # sequence number, and every report entry (left-out moves, reader limitation, N999)
+    # must be what the items one by one make (the path tape-search takes).
+    assert _tape(program, options, code, runs=True) == _tape(program, options, code, runs=False)
+
+
+@pytest.mark.parametrize(
+    "case", sorted(p.name for p in GOLDEN.iterdir() if (p / "program.json").exists())
+)
+def test_runs_write_each_golden_tape_as_the_items_one_by_one(case: str) -> None:
+    # Every golden program (tool changes, restarts, coolant, messages, holes, pockets, ...)
+    # in both codes, with arcs and as chords: every block and report entry the same.
+    program = golden(case)
+    for options in ({}, {"circular": "no", "tabs": "yes", "sequence-start": "995"}):
+        for code in TapeCode:
+            assert _tape(program, options, code, runs=True) == _tape(
+                program, options, code, runs=False
+            ), (case, options, code)
+
+
+@pytest.mark.parametrize("family", ["grid", "bolts"])
+def test_runs_write_a_large_tape_as_the_items_one_by_one(family: str) -> None:
+    # The bench's programs: long runs of drilled holes (dwells) and arcs across chunks.
+    program = resolve_copies(sized(family, 6_000))
+    items = _tape(program, {}, TapeCode.EIA, runs=False)
+    assert _tape(program, {}, TapeCode.EIA, runs=True) == items
+    assert _tape(program, {}, TapeCode.EIA, runs=True, fewest=plan._MIN_RUN_ROWS) == items

@@ -25,6 +25,7 @@ Record code, not the ASCII `%`), a newline for End of Block, a tab for the tab c
 from __future__ import annotations
 
 import enum
+import re
 from dataclasses import dataclass, field
 
 
@@ -168,7 +169,11 @@ ASCII_CODES: dict[str, int] = {
 }
 
 _TABLES = {TapeCode.EIA: EIA_CODES, TapeCode.ASCII: ASCII_CODES}
-_CHARACTERS = {code: frozenset(table) for code, table in _TABLES.items()}
+# A character outside each code's table (one search over a whole run of blocks' text).
+_OUTSIDE = {
+    code: re.compile("[^" + "".join(re.escape(ch) for ch in sorted(table)) + "]")
+    for code, table in _TABLES.items()
+}
 _DELETE = {TapeCode.EIA: EIA_DELETE, TapeCode.ASCII: ASCII_DELETE}
 
 
@@ -212,7 +217,7 @@ def parity_ok(row: int, code: TapeCode) -> bool:
 
 def can_encode(text: str, code: TapeCode) -> bool:
     """True when every character of `text` has a row in `code`."""
-    return _CHARACTERS[code].issuperset(text)
+    return _OUTSIDE[code].search(text) is None
 
 
 def encode(text: str, code: TapeCode) -> bytes:

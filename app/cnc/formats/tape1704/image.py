@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from app.cnc.formats.tape1704 import codes
 from app.cnc.formats.tape1704.codes import TapeCode
-from app.cnc.formats.tape1704.words import Line
+from app.cnc.formats.tape1704.words import Line, LineRun
 
 
 @dataclass
@@ -44,14 +44,14 @@ class TapeImage:
         header = sum(len(text) + 1 for text in self.header)
         return len(self.leader()) + 2 + header + self.trailer_rows
 
-    def listing(self, lines: Iterable[Line]) -> Iterator[str]:
-        """The listing, line by line: rewind stop, header comments, one block per line."""
-        yield codes.REWIND_STOP_CHAR
-        yield from self.header
+    def listing(self, lines: Iterable[Line | LineRun]) -> Iterator[list[str]]:
+        """The listing, a few lines at a time: rewind stop, header comments, one block per
+        line."""
+        yield [codes.REWIND_STOP_CHAR, *self.header]
         for line in lines:
-            yield line.text
+            yield line.texts if isinstance(line, LineRun) else [line.text]
 
-    def punched(self, lines: Iterable[Line]) -> Iterator[tuple[bytes, list[str]]]:
+    def punched(self, lines: Iterable[Line | LineRun]) -> Iterator[tuple[bytes, list[str]]]:
         """The punch image in pieces (one row per byte, channel n in bit n-1), each with
         what its rows are (`` for blank tape): the leader, each block with its End of
         Block, the trailer."""
@@ -73,5 +73,9 @@ class TapeImage:
         for text in self.header:
             yield piece(text + codes.EOB_CHAR)
         for line in lines:
-            yield piece(line.text + codes.EOB_CHAR, line.leader_after)
+            if isinstance(line, LineRun):
+                for text in line.texts:
+                    yield piece(text + codes.EOB_CHAR)
+            else:
+                yield piece(line.text + codes.EOB_CHAR, line.leader_after)
         yield bytes(self.trailer_rows), [""] * self.trailer_rows

@@ -15,13 +15,17 @@ Seed 000 §2-§4 and DESIGN.md §4 ("1704 motion rules", "Tool length") are the 
   of the work begins with a block the operator can search to.
 
 `Planner.items()` yields the blocks one by one: each stage holds back the one item a later
-move may still change, so the plan's memory does not grow with the program. Each stage
+move may still change, so the plan's memory does not grow with the program. Most blocks
+(rapids, feeds, arcs, dwells) come in runs (`Run`, columns of up to `_RUN_ROWS` rows) that
+every later stage handles with array operations, to what the items one by one would make
+(issue 31: about 10 µs a block in Python stages before). Each stage
 reports through its own `Report` (`stages`), so the export's report lists entries in the
 order a whole-program pass would have added them.
 """
 
 from __future__ import annotations
 
+import bisect
 import enum
 import math
 from collections import deque
@@ -29,6 +33,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
+
+import numpy as np
+import numpy.typing as npt
 
 from app.cnc.blocks import HoleOp, Program
 from app.cnc.formats.tape1704.codes import TapeCode
@@ -107,8 +114,157 @@ class Aux:
 Item = Motion | Aux
 
 
+RAPID, LINE, ARC, DWELL = 0, 1, 2, 3
+"""A run's rows (`Run.kind`): a rapid, a feed, an arc at F (circular), a dwell (G04)."""
+
+
+@dataclass
+class Run:
+    """Items one after another as columns, a row each: rapids, feeds, arcs (with circular
+    interpolation) and dwells, most of a program's blocks. The stages handle them a slice
+    of the compiled path at a time with array operations, to the same blocks and report
+    entries as the items one by one (`items`), which is what a stage does with a run its
+    columns do not cover.
+
+    Coordinates in nm until rounded, then tape units; `z` is None in a two-axis program;
+    `feed` is 0 on rapids and dwells; `tag` indexes `TAGS`; `cx`, `cy`, `clockwise` and
+    `full` are an arc's (`Motion.full_circle`); `tenths` a dwell's G04 F; `restart` is the
+    first motion's.
+    """
+
+    block: npt.NDArray[np.int64]
+    kind: npt.NDArray[np.uint8]
+    x: npt.NDArray[np.int64]
+    y: npt.NDArray[np.int64]
+    z: npt.NDArray[np.int64] | None
+    feed: npt.NDArray[np.int64]
+    tag: npt.NDArray[np.uint8]
+    cx: npt.NDArray[np.int64]
+    cy: npt.NDArray[np.int64]
+    clockwise: npt.NDArray[np.bool_]
+    full: npt.NDArray[np.bool_]
+    tenths: npt.NDArray[np.int64]
+    restart: bool = False
+
+    def __len__(self) -> int:
+        return len(self.block)
+
+    def take(self, rows: Any, restart: bool) -> Run:
+        """The rows `rows` (a slice or index array) as a run."""
+        return Run(
+            self.block[rows],
+            self.kind[rows],
+            self.x[rows],
+            self.y[rows],
+            None if self.z is None else self.z[rows],
+            self.feed[rows],
+            self.tag[rows],
+            self.cx[rows],
+            self.cy[rows],
+            self.clockwise[rows],
+            self.full[rows],
+            self.tenths[rows],
+            restart,
+        )
+
+    @staticmethod
+    def joined(runs: list[Run]) -> Run:
+        """`runs` one after another as one run (the first's restart)."""
+        if len(runs) == 1:
+            return runs[0]
+        zs = [run.z for run in runs]
+        return Run(
+            np.concatenate([run.block for run in runs]),
+            np.concatenate([run.kind for run in runs]),
+            np.concatenate([run.x for run in runs]),
+            np.concatenate([run.y for run in runs]),
+            None if zs[0] is None else np.concatenate([z for z in zs if z is not None]),
+            np.concatenate([run.feed for run in runs]),
+            np.concatenate([run.tag for run in runs]),
+            np.concatenate([run.cx for run in runs]),
+            np.concatenate([run.cy for run in runs]),
+            np.concatenate([run.clockwise for run in runs]),
+            np.concatenate([run.full for run in runs]),
+            np.concatenate([run.tenths for run in runs]),
+            runs[0].restart,
+        )
+
+    def motions(self) -> npt.NDArray[np.intp]:
+        """The rows that are motion (not dwells)."""
+        return np.flatnonzero(self.kind != DWELL)
+
+    def end(self) -> tuple[int, int, int | None] | None:
+        """Where the last motion ends (None: the run has none)."""
+        moving = self.motions()
+        if not len(moving):
+            return None
+        k = int(moving[-1])
+        return (int(self.x[k]), int(self.y[k]), None if self.z is None else int(self.z[k]))
+
+    def start_of(self, row: int, start: tuple[int, int, int | None]) -> tuple[int, int, int | None]:
+        """Where row `row` starts: the end of the last motion before it, else `start`."""
+        moving = self.motions()
+        moving = moving[moving < row]
+        if not len(moving):
+            return start
+        k = int(moving[-1])
+        z = start[2] if self.z is None else int(self.z[k])
+        return (int(self.x[k]), int(self.y[k]), z)
+
+    def items(self) -> list[Item]:
+        """The run as the items it stands for."""
+        count = len(self.block)
+        zs: list[int | None] = [None] * count if self.z is None else self.z.tolist()
+        items: list[Item] = []
+        restart = self.restart
+        for block, kind, x, y, z, feed, tag, cx, cy, clockwise, full, tenths in zip(
+            self.block.tolist(),
+            self.kind.tolist(),
+            self.x.tolist(),
+            self.y.tolist(),
+            zs,
+            self.feed.tolist(),
+            self.tag.tolist(),
+            self.cx.tolist(),
+            self.cy.tolist(),
+            self.clockwise.tolist(),
+            self.full.tolist(),
+            self.tenths.tolist(),
+            strict=True,
+        ):
+            if kind == DWELL:
+                items.append(Aux(block, [("G", "04"), ("F", str(tenths))]))
+                continue
+            if kind == RAPID:
+                motion = Motion(block, Kind.RAPID, (x, y, z), tag=TAGS[tag])
+            elif kind == LINE:
+                motion = Motion(block, Kind.LINE, (x, y, z), feed=feed)
+            else:
+                motion = Motion(
+                    block,
+                    Kind.ARC,
+                    (x, y, z),
+                    centre=(cx, cy),
+                    clockwise=clockwise,
+                    feed=feed,
+                    full_circle=full,
+                )
+            motion.restart, restart = restart, False
+            items.append(motion)
+        return items
+
+
+Piece = Item | Run
+"""What the stages pass on: an item, or a run of straight moves."""
+
+
 _SLICE_ROWS = 1024
 """Rows of a chunk `Planner.planned` turns into Python lists at a time (memory, not speed)."""
+_RUN_ROWS = 4096
+"""The most rows `Planner.planned` joins into one run (each stage's arrays and texts for a
+run are about 200 bytes a row)."""
+_MIN_RUN_ROWS = 64
+"""The fewest rows `Planner.planned` makes a run of (fewer go one by one)."""
 _CYCLE_ROWS = 4
 """The most rows a fixed cycle stands for (`Planner.cycle`'s window: down, feed, dwell, out)."""
 
@@ -138,13 +294,18 @@ class Planner:
         self.moves_report = Report("plan")
         self.restarts_report = Report("restarts")
         self.merge_report = Report("merge")
+        # Runs of straight moves as columns (`Run`) where no stage needs the moves one by
+        # one: a tape search looks ahead from each, xyz=together merges them, the quill's
+        # drill cycle may change the rapid before its stop.
+        self.runs = not (profile.tape_search or profile.xyz_together or profile.quill)
 
     @property
     def stages(self) -> list[Report]:
         return [self.moves_report, self.restarts_report, self.merge_report]
 
-    def items(self) -> Iterator[Item]:
-        """The tape's items in order, in nm (see the module docstring)."""
+    def items(self) -> Iterator[Piece]:
+        """The tape's items in order, in nm (see the module docstring), straight moves in
+        runs (`Run`) where `runs`."""
         items = self.restarts(self.planned())
         return self.merged(items) if self.profile.xyz_together else items
 
@@ -173,10 +334,12 @@ class Planner:
 
     # -- pass 1: moves → items ------------------------------------------------------------
 
-    def planned(self) -> Iterator[Item]:
-        """The items of the moves, one move at a time; the last item is held back while a
-        quill stop after it may still make it the quill's drill cycle."""
+    def planned(self) -> Iterator[Piece]:
+        """The items of the moves, one move at a time but for runs of straight moves; the
+        last item is held back while a quill stop after it may still make it the quill's
+        drill cycle."""
         path, profile, report = self.path, self.profile, self.moves_report
+        runs = self.runs
         tool = path.initial_tool
         x, y, z = path.start
         changes = 0
@@ -188,24 +351,64 @@ class Planner:
                 "this program has depths",
             )
         items: list[Item] = []
+        waiting: list[Run] = []
+        waiting_rows = 0
         for chunk in path.chunks():
             cycles = self.cycles(chunk)
+            cycle_rows = np.array(sorted(cycles), dtype=np.int64)
             rows, strings = chunk.rows, chunk.strings
             count = len(rows)
             # The chunk's rows as Python lists a slice at a time: a LOOP's chunk grows with
             # its repeats (11 250 rows at 2x10^5 moves), and the whole of it as lists was the
             # writer's memory growing with the program. A slice holds _CYCLE_ROWS more rows
             # than it starts, so a fixed cycle's rows (`cycle`) are always in it.
+            # Runs take their rows as arrays: the lists are made when a row is not in one.
             index, base, limit = 0, 0, 0
-            table: list[Any] = []
+            table: list[Any] | None = None
+            simple: list[bool] = []
+            breaks: list[int] = []
+            one_by_one = 0  # the rows before it go one by one
             while index < count:
                 if len(items) > 1:
                     yield from items[:-1]
                     del items[:-1]
                 if index >= limit:
                     base, limit = index, min(count, index + _SLICE_ROWS)
+                    table = None
+                    if runs:
+                        simple, breaks = _simple(rows, base, limit, cycle_rows, profile)
+                if runs and index >= one_by_one and simple[index - base]:
+                    stop = breaks[bisect.bisect_left(breaks, index)]
+                    made = None
+                    # A run of a few rows costs more in array operations than its rows one
+                    # by one (dwell=no or circular=no cut runs at every hole or arc).
+                    if (stop - index < _MIN_RUN_ROWS and not waiting) or self.uncalibrated(tool):
+                        one_by_one = stop
+                    else:
+                        made = self.run(rows[index:stop], tool, (x, y, z))
+                    if made is not None:
+                        run, (x, y, z) = made
+                        yield from items
+                        items.clear()
+                        # Runs one after another (across slices and chunks) go on as one,
+                        # up to _RUN_ROWS: each array operation then covers more rows.
+                        waiting.append(run)
+                        waiting_rows += len(run)
+                        if waiting_rows >= _RUN_ROWS:
+                            yield from _joined(waiting)
+                            waiting, waiting_rows = [], 0
+                        index += len(run)
+                        continue
+                if table is None:
                     table = rows[base : limit + _CYCLE_ROWS].tolist()
                 row = table[index - base]
+                # An arc written as chords goes on the waiting run; any other row is an item.
+                chordal = row[0] in (Op.ARC_CW, Op.ARC_CCW) and not (
+                    profile.circular and row[5] == z
+                )
+                if waiting and not chordal:
+                    yield from _joined(waiting)
+                    waiting, waiting_rows = [], 0
                 index += 1
                 op = row[0]
                 if op <= Op.ARC_CCW:
@@ -264,7 +467,14 @@ class Planner:
                                 "motion cannot be generated')",
                             )
                         start_z = self.machine_z(z, tool)
-                        items.extend(self.chords(arc, (x, y), start_z, mz, tool))
+                        chords = self.chords(arc, (x, y), start_z, mz, tool)
+                        if runs:
+                            yield from items
+                            items.clear()
+                            waiting.append(_chord_run(chords))
+                            waiting_rows += len(chords)
+                        else:
+                            items.extend(chords)
                     x, y, z = mx, my, mz_path
                     continue
                 move = as_move(row, strings)
@@ -279,7 +489,65 @@ class Planner:
                         # Touched off at its zero, preset there, straight up before anything.
                         items.append(Aux(move.block, [("G", "94"), ("Z", "0")], preset_z=True))
                         items.append(Motion(move.block, Kind.RAPID, (x, y, z), z_only=True))
+        yield from _joined(waiting)
         yield from items
+
+    def run(
+        self, rows: Any, tool: int, at: tuple[int, int, int]
+    ) -> tuple[Run, tuple[int, int, int]] | None:
+        """Rows of the compiled path `_simple` found (no fixed cycle's, `tool` calibrated or
+        its Z words not needing it) as a run, what `planned` makes of each, and where the
+        tool path is after them; `at` is where it is before. It stops before an arc that
+        leaves its plane (chords); None when the first row is one."""
+        ops = rows["op"]
+        kind = np.full(len(ops), LINE, dtype=np.uint8)
+        kind[ops == Op.RAPID] = RAPID
+        arcs = (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+        kind[arcs] = ARC
+        dwell = ops == Op.DWELL
+        kind[dwell] = DWELL
+        moving = ~dwell
+        # Where each row starts: the last motion's end before it (dwells do not move).
+        last = np.maximum.accumulate(np.where(moving, np.arange(len(ops)), -1))
+        before = np.empty(len(ops), dtype=np.int64)
+        before[0] = -1
+        before[1:] = last[:-1]
+        path_z = rows["z"]
+        start_z = np.where(before >= 0, path_z[np.maximum(before, 0)], at[2])
+        helical = np.flatnonzero(arcs & (path_z != start_z))
+        if len(helical):
+            if helical[0] == 0:
+                return None
+            return self.run(rows[: helical[0]], tool, at)
+        x, y = rows["x"].astype(np.int64), rows["y"].astype(np.int64)
+        start_x = np.where(before >= 0, x[np.maximum(before, 0)], at[0])
+        start_y = np.where(before >= 0, y[np.maximum(before, 0)], at[1])
+        z: npt.NDArray[np.int64] | None = None
+        if not self.two_axis:
+            z = path_z.astype(np.int64)
+            if not self.profile.g94:
+                info = self.path.tools.get(tool)
+                if info is not None and info.tcal is not None:
+                    z += info.tcal
+        feeding = (kind == LINE) | arcs
+        run = Run(
+            rows["block"].astype(np.int64),
+            kind,
+            x,
+            y,
+            z,
+            np.where(feeding, rows["feed"], 0).astype(np.int64),
+            rows["tag"].copy(),
+            rows["cx"].astype(np.int64),
+            rows["cy"].astype(np.int64),
+            ops == Op.ARC_CW,
+            arcs & (x == start_x) & (y == start_y),
+            np.where(dwell, _tenths(rows["value"]), 0),
+        )
+        final = int(last[-1])
+        if final < 0:
+            return run, at
+        return run, (int(x[final]), int(y[final]), int(path_z[final]))
 
     def quill_hole(self, stop: ProgramStop, items: list[Item], at: tuple[int, int]) -> bool:
         """With the quill actuator, a two-axis hole is its drill cycle (G99): the rapid to
@@ -560,7 +828,7 @@ class Planner:
 
     # -- restarts and tape search ---------------------------------------------------------
 
-    def restarts(self, items: Iterator[Item]) -> Iterator[Item]:
+    def restarts(self, items: Iterator[Piece]) -> Iterator[Piece]:
         """The first motion of the tape and the first after each tool change write every
         axis (and G and F again): they are where an operator restarts or searches to.
 
@@ -586,11 +854,22 @@ class Planner:
         )
         in_cut: list[int] = []  # data blocks that start in a cut: no restart there
         ahead = _Ahead(items)
-        out: list[Item] = []
+        out: list[Piece] = []
         for item in ahead:
             if len(out) > 1:
                 yield from out[:-1]
                 del out[:-1]
+            if isinstance(item, Run):
+                # Made without tape search (Planner.runs): the first motion is where a
+                # restart is pending, as for the items one by one below.
+                last_block = int(item.block[-1])
+                end = item.end()
+                if end is not None:
+                    item.restart = pending
+                    pending = False
+                    here = end
+                out.append(item)
+                continue
             if isinstance(item, Aux):
                 codes = {value for letter, value in item.words if letter == "M"}
                 if "06" in codes:
@@ -654,12 +933,12 @@ class Planner:
         group.append(Motion(item.block, Kind.RAPID, here, restart=True, search_feed=feed))
         return group
 
-    def merged(self, items: Iterator[Item]) -> Iterator[Item]:
+    def merged(self, items: Iterator[Piece]) -> Iterator[Piece]:
         """xyz=together (seed 002 XYZ/ON): the positioning rapids of one block (up, across,
         down) become one XYZ move. A retract out of the work (tagged `retract`, `peck-…`)
         is never merged: it stays straight up."""
 
-        def positioning(item: Item | None) -> bool:
+        def positioning(item: Piece | None) -> bool:
             return (
                 isinstance(item, Motion)
                 and item.kind is Kind.RAPID
@@ -668,7 +947,7 @@ class Planner:
                 and not item.tag
             )
 
-        previous: Item | None = None
+        previous: Piece | None = None
         for item in items:
             if (
                 positioning(item)
@@ -695,11 +974,11 @@ class _Ahead:
     """Items one at a time, with a look ahead into the rest of a data block (those items
     wait here until their turn)."""
 
-    def __init__(self, items: Iterator[Item]) -> None:
+    def __init__(self, items: Iterator[Piece]) -> None:
         self.source = items
-        self.waiting: deque[Item] = deque()
+        self.waiting: deque[Piece] = deque()
 
-    def __iter__(self) -> Iterator[Item]:
+    def __iter__(self) -> Iterator[Piece]:
         while True:
             if self.waiting:
                 yield self.waiting.popleft()
@@ -722,11 +1001,80 @@ class _Ahead:
                     return 0
                 self.waiting.append(found)
             following = self.waiting[k]
+            assert not isinstance(following, Run)  # no runs with tape search (Planner.runs)
             if following.block != item.block:
                 return 0
             if isinstance(following, Motion) and following.kind is not Kind.RAPID:
                 return following.feed
             k += 1
+
+
+def _joined(runs: list[Run]) -> Iterator[Piece]:
+    """`runs` as one run, or as their items when they are too few rows to be worth one."""
+    if not runs:
+        return
+    run = Run.joined(runs)
+    if len(run) >= _MIN_RUN_ROWS:
+        yield run
+    else:
+        yield from run.items()
+
+
+def _chord_run(chords: list[Item]) -> Run:
+    """An arc's chords (`Planner.chords`: feeds of one block) as a run."""
+    motions = [chord for chord in chords if isinstance(chord, Motion)]
+    count = len(motions)
+    zeros = np.zeros(count, dtype=np.int64)
+    ends = [motion.end for motion in motions]
+    z: npt.NDArray[np.int64] | None = None
+    if count and ends[0][2] is not None:
+        z = np.array([end[2] for end in ends], dtype=np.int64)
+    return Run(
+        np.array([motion.block for motion in motions], dtype=np.int64),
+        np.full(count, LINE, dtype=np.uint8),
+        np.array([end[0] for end in ends], dtype=np.int64),
+        np.array([end[1] for end in ends], dtype=np.int64),
+        z,
+        np.array([motion.feed for motion in motions], dtype=np.int64),
+        np.zeros(count, dtype=np.uint8),
+        zeros,
+        zeros,
+        np.zeros(count, dtype=np.bool_),
+        np.zeros(count, dtype=np.bool_),
+        zeros,
+    )
+
+
+def _tenths(ms: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """Dwells of `ms` milliseconds in tenths of a second, rounded half-even (`aux`'s G04 F:
+    Decimal's to_integral_value of the seconds times ten)."""
+    quotient, remainder = np.divmod(ms.astype(np.int64), 100)
+    twice = 2 * remainder
+    quotient += (twice > 100) | ((twice == 100) & (quotient % 2 == 1))
+    result: npt.NDArray[np.int64] = quotient
+    return result
+
+
+def _simple(
+    rows: Any, base: int, limit: int, cycle_rows: npt.NDArray[np.int64], profile: Profile
+) -> tuple[list[bool], list[int]]:
+    """Which rows [base, limit) of a chunk a run may hold (rapids and feeds, not the rapid
+    of a fixed cycle's hole; arcs with circular interpolation; dwells G04 can carry), and
+    the rows from base on that end a run, `limit` last."""
+    part = rows[base:limit]
+    ops = part["op"]
+    straight = ops <= Op.FEED
+    if profile.circular:
+        straight |= (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+    if profile.dwell:
+        dwells = np.flatnonzero(ops == Op.DWELL)
+        tenths = _tenths(part["value"][dwells])
+        straight[dwells[(tenths >= 1) & (tenths <= 999)]] = True
+    inside = cycle_rows[(cycle_rows >= base) & (cycle_rows < limit)]
+    straight[inside - base] = False
+    breaks = (np.flatnonzero(~straight) + base).tolist()
+    breaks.append(limit)
+    return straight.tolist(), breaks
 
 
 def _first_straight_block(path: CompiledPath) -> int:

@@ -24,7 +24,14 @@ from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.image import TapeImage
 from app.cnc.formats.tape1704.plan import Planner, sanitize_comment
 from app.cnc.formats.tape1704.profile import PROFILE_OPTIONS, Profile, read_profile
-from app.cnc.formats.tape1704.words import Line, Rounder, Words, check_reader, with_starts
+from app.cnc.formats.tape1704.words import (
+    Line,
+    LineRun,
+    Rounder,
+    Words,
+    check_reader,
+    with_starts,
+)
 from app.cnc.formats.targets import Option, Out, Remedy, Report, Target, register
 from app.cnc.formats.text import Lines
 from app.cnc.options import OptionKind
@@ -76,15 +83,27 @@ class Tape:
         self.rows = 0
         self.encodable = all(codes.can_encode(text, code) for text in self.image.header)
 
-    def lines(self) -> Iterator[Line]:
-        """The tape's blocks, made as they are asked for."""
+    def lines(self) -> Iterator[Line | LineRun]:
+        """The tape's blocks, made as they are asked for (a run's in columns)."""
         items = self.planner.items()
         rounded = self.rounder.items(items)
         lines = self.words.lines(with_starts(rounded, self.rounder.first()))
         rows = self.image.fixed_rows()
+        code = self.code
         for line in check_reader(lines, self.fmt, self.reader_report):
+            if isinstance(line, LineRun):
+                texts = line.texts
+                rows += sum(map(len, texts)) + len(texts)
+                if codes.can_encode("".join(texts), code):
+                    yield line
+                    continue
+                self.encodable = False
+                for k, text in enumerate(texts):
+                    if codes.can_encode(text, code):
+                        yield line.line(k)
+                continue
             rows += len(line.text) + 1 + line.leader_after
-            if not codes.can_encode(line.text, self.code):
+            if not codes.can_encode(line.text, code):
                 self.encodable = False
                 continue
             yield line
@@ -233,8 +252,8 @@ class TapeTarget(Target):
     ) -> None:
         tape = Tape(program, path, options, self.code, report)
         lines = Lines(out)
-        for text in tape.image.listing(tape.lines()):
-            lines.add(text)
+        for texts in tape.image.listing(tape.lines()):
+            lines.add_many(texts)
         lines.flush()
         tape.finish()
 

@@ -14,7 +14,10 @@ codes by the motion rules, and the blocks as text (seed 000 §2, §4).
 - The reader limitation (§3, scan-damaged: DESIGN.md's reading) is checked block by block.
 
 Each stage is a generator over the one before: `Rounder.items`, then `Words.lines`, then
-`check_reader`; each reports through its own `Report`.
+`check_reader`; each reports through its own `Report`. Each takes the planner's runs
+(`plan.Run`) in columns (`Rounder.run`, `Words.run_lines`, `LineRun`) and every other item
+one by one; a run whose columns would have something to report but a left-out move goes
+one by one too.
 """
 
 from __future__ import annotations
@@ -23,7 +26,22 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from app.cnc.formats.tape1704.plan import Aux, Item, Kind, Motion, sanitize_comment
+import numpy as np
+import numpy.typing as npt
+
+from app.cnc.formats.tape1704.plan import (
+    ARC,
+    DWELL,
+    LINE,
+    RAPID,
+    Aux,
+    Item,
+    Kind,
+    Motion,
+    Piece,
+    Run,
+    sanitize_comment,
+)
 from app.cnc.formats.tape1704.profile import Profile, TapeFormat
 from app.cnc.formats.targets import Report
 from app.cnc.geometry import arc_sweep
@@ -44,6 +62,36 @@ class Line:
     feed_start: int = 0  # F word values
     feed_end: int = 0
     leader_after: int = 0
+
+
+_N_WORDS = np.array([f"N{n}" for n in range(1000)], dtype=object)
+"""The N word of each sequence number (`Words.line`: the number modulo 1000)."""
+_G_WORDS = np.array(["" for _ in range(51)], dtype=object)
+"""The G word of each motion code a run's blocks have (G04: its dwells)."""
+for _code in (0, 1, 2, 3, 4, 20, 30, 50):
+    _G_WORDS[_code] = f"G{_code:02d}"
+
+
+@dataclass
+class LineRun:
+    """Blocks one after another (a `Run`'s) as columns: what each one's `Line` holds."""
+
+    texts: list[str]
+    block: npt.NDArray[np.int64]
+    continuous: npt.NDArray[np.bool_]
+    length: npt.NDArray[np.float64]
+    feed_start: npt.NDArray[np.int64]
+    feed_end: npt.NDArray[np.int64]
+
+    def line(self, k: int) -> Line:
+        return Line(
+            self.texts[k],
+            int(self.block[k]),
+            bool(self.continuous[k]),
+            float(self.length[k]),
+            int(self.feed_start[k]),
+            int(self.feed_end[k]),
+        )
 
 
 # -- geometry of the motion rules -------------------------------------------------------------
@@ -91,6 +139,16 @@ def motion_length(motion: Motion, start: Point) -> float:
 # -- pass 2: round to the tape's resolution, split arcs at the quadrants -----------------------
 
 
+def units_array(nm: npt.NDArray[np.int64], fmt: TapeFormat) -> npt.NDArray[np.int64]:
+    """`fmt.units` of each of `nm`: half_even(nm, step) in units of the last digit."""
+    step = fmt.step_nm
+    quotient, remainder = np.divmod(nm, step)  # floor: 0 <= remainder < step
+    twice = 2 * remainder
+    quotient += (twice > step) | ((twice == step) & (quotient % 2 == 1))
+    result: npt.NDArray[np.int64] = quotient * (step // fmt.digit_nm)
+    return result
+
+
 class Rounder:
     """Items in nm → items in tape units. `start` is where the tape starts (nm, the
     control's Z)."""
@@ -101,6 +159,8 @@ class Rounder:
         self.start = start
         self.report = Report("rounding")
         self.limit = fmt.max_units
+        self.pos: Point = self.first()  # where the last kept move ends (tape units)
+        self.carry_restart = False  # a left-out move's restart, for the next one kept
 
     def first(self) -> Point:
         """The start in tape units."""
@@ -108,70 +168,179 @@ class Rounder:
         x, y, z = self.start
         return (fmt.units(x), fmt.units(y), None if z is None else fmt.units(z))
 
-    def items(self, items: Iterator[Item]) -> Iterator[Item]:
-        fmt, report = self.fmt, self.report
-        pos = self.first()
-        carry_restart = False
-        # fmt.units inlined for the end points (three a move): the same half-even rounding.
-        step, ratio, limit = fmt.step_nm, fmt.step_nm // fmt.digit_nm, self.limit
+    def items(self, items: Iterator[Piece]) -> Iterator[Piece]:
         for item in items:
             if isinstance(item, Aux):
                 if item.preset_z:
-                    pos = (pos[0], pos[1], 0)
+                    self.pos = (self.pos[0], self.pos[1], 0)
                 yield item
-                continue
-            ex, ey, ez = item.end
-            end = (
-                half_even(ex, step) * ratio,
-                half_even(ey, step) * ratio,
-                None if ez is None else half_even(ez, step) * ratio,
+            elif isinstance(item, Run):
+                rounded = self.run(item)
+                if rounded is None:
+                    for each in item.items():
+                        if isinstance(each, Aux):
+                            yield each
+                        else:
+                            yield from self.motion(each)
+                elif len(rounded):
+                    yield rounded
+            else:
+                yield from self.motion(item)
+
+    def run(self, run: Run) -> Run | None:
+        """A run rounded as `motion` rounds each of its moves, in columns, its arcs split at
+        the quadrants; None when a move has something to report but its being too short
+        (a coordinate past the capacity, a feed the tape cannot carry exactly, an arc too
+        short or too large): then the items go one by one."""
+        fmt, pos, limit = self.fmt, self.pos, self.limit
+        moving = run.motions()
+        if not len(moving):
+            return run
+        kind = run.kind[moving]
+        x, y = units_array(run.x[moving], fmt), units_array(run.y[moving], fmt)
+        z = None if run.z is None else units_array(run.z[moving], fmt)
+        arcs = np.flatnonzero(kind == ARC)
+        cx, cy = units_array(run.cx[moving][arcs], fmt), units_array(run.cy[moving][arcs], fmt)
+        if (
+            np.abs(x).max() > limit
+            or np.abs(y).max() > limit
+            or (z is not None and (pos[2] is None or np.abs(z).max() > limit))
+            or (len(arcs) and max(np.abs(cx).max(), np.abs(cy).max()) > limit)
+        ):
+            return None
+        feed = run.feed[moving]
+        feeding = kind != RAPID
+        if feeding.any():
+            values, where = np.unique(feed[feeding], return_inverse=True)
+            words = []
+            for value in values.tolist():
+                word = fmt.feed_value(value)
+                if not (fmt.feed_min <= word <= fmt.feed_max and word * fmt.feed_unit_nm == value):
+                    return None
+                words.append(word)
+            feed = feed.copy()
+            feed[feeding] = np.array(words, dtype=np.int64)[where.reshape(-1)]
+        # Where each motion starts: the one before's end (a move left out ends there too).
+        sx = np.concatenate(([pos[0]], x[:-1]))
+        sy = np.concatenate(([pos[1]], y[:-1]))
+        # A straight move that ends where it starts is left out (a feed's reported), its
+        # restart the next kept move's. In a two-axis program only X and Y count.
+        moved = (x != sx) | (y != sy)
+        if z is not None:
+            moved |= z != np.concatenate(([pos[2] or 0], z[:-1]))  # pos[2] is known (above)
+        moved[arcs] = True
+        pieces: list[list[tuple[int, int]]] = []
+        for k in arcs.tolist():
+            a = moving[k]
+            clockwise, full_circle = bool(run.clockwise[a]), bool(run.full[a])
+            start, centre = (int(sx[k]), int(sy[k])), (int(cx[len(pieces)]), int(cy[len(pieces)]))
+            # split_arc's refusals (a radius past the capacity, none, no sweep) go one by one.
+            radius = round(math.hypot(start[0] - centre[0], start[1] - centre[1]))
+            end = (int(x[k]), int(y[k]))
+            if radius > fmt.max_units or radius == 0 or (end == start and not full_circle):
+                return None
+            pieces.append(quadrant_ends(start, end, centre, radius, clockwise, full_circle))
+        restart = run.restart or self.carry_restart
+        if restart and run.kind[0] == DWELL:
+            return None  # Words.lines restarts the motion mode on a run's first row only
+        kept = np.flatnonzero(moved)
+        for k in np.flatnonzero(~moved & feeding).tolist():
+            self.report.note(
+                int(run.block[moving[k]]), "a move shorter than the tape's resolution is left out"
             )
-            if not (
-                -limit <= end[0] <= limit
-                and -limit <= end[1] <= limit
-                and (end[2] is None or -limit <= end[2] <= limit)
-            ):
-                self.check_capacity(item.block, end)
-            item.restart = item.restart or carry_restart
-            carry_restart = False
-            if item.kind in (Kind.LINE, Kind.ARC, Kind.CYCLE):
-                item.feed = self.check_feed(item.block, item.feed)
-            if item.search_feed:
-                item.search_feed = self.check_feed(item.block, item.search_feed)
-            if item.kind is Kind.CYCLE:
-                item.cycle_depth = fmt.units(item.cycle_depth)
-                self.check_capacity(item.block, (0, 0, item.cycle_depth))
-                item.end = end
-                yield item
-                pos = end
-                continue
-            if item.kind is Kind.ARC:
-                assert item.centre is not None
-                centre = (fmt.units(item.centre[0]), fmt.units(item.centre[1]))
-                self.check_capacity(item.block, centre, "IJ")
-                pieces = self.split_arc(item, pos, end, centre)
-                if not pieces:
-                    carry_restart = item.restart
-                    report.note(item.block, "an arc shorter than the tape's resolution is left out")
-                yield from pieces
-                if pieces:
-                    pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
-                continue
-            same_z = end[2] is None or pos[2] is None or end[2] == pos[2]
-            searched = item.search_feed or (item.kind is Kind.RAPID and item.restart)
-            if (
-                (end[0], end[1]) == (pos[0], pos[1])
-                and same_z
-                and not item.quill_cycle
-                and not (searched and self.profile.tape_search)
-            ):
-                carry_restart = item.restart
-                if item.kind is not Kind.RAPID:
-                    report.note(item.block, "a move shorter than the tape's resolution is left out")
-                continue
+        if not len(kept):
+            self.carry_restart = restart
+        else:
+            self.carry_restart = False
+        self.pos = (int(x[-1]), int(y[-1]), pos[2] if z is None else int(z[-1]))
+        # The run's rows again, each kept motion once and each arc once a quadrant.
+        count = np.ones(len(run), dtype=np.int64)
+        count[moving[~moved]] = 0
+        count[moving[arcs]] = [len(points) for points in pieces]
+        rows = np.repeat(np.arange(len(run)), count)
+        out = run.take(rows, restart)
+        xs = np.zeros(len(run), dtype=np.int64)
+        ys = np.zeros(len(run), dtype=np.int64)
+        xs[moving], ys[moving] = x, y
+        out.x, out.y = xs[rows], ys[rows]
+        if z is not None:
+            zs = np.zeros(len(run), dtype=np.int64)
+            zs[moving] = z
+            out.z = zs[rows]
+        feeds = np.zeros(len(run), dtype=np.int64)
+        feeds[moving] = feed
+        out.feed = feeds[rows]
+        if len(arcs):
+            cxs = np.zeros(len(run), dtype=np.int64)
+            cys = np.zeros(len(run), dtype=np.int64)
+            cxs[moving[arcs]], cys[moving[arcs]] = cx, cy
+            out.cx, out.cy = cxs[rows], cys[rows]
+            out.full = np.zeros(len(rows), dtype=np.bool_)
+            # Each arc's quadrant ends in place of its end.
+            firsts = np.cumsum(count) - count
+            at_x, at_y = out.x.copy(), out.y.copy()
+            for k, points in zip(moving[arcs].tolist(), pieces, strict=True):
+                first = int(firsts[k])
+                for offset, (px, py) in enumerate(points):
+                    at_x[first + offset], at_y[first + offset] = px, py
+            out.x, out.y = at_x, at_y
+        return out
+
+    def motion(self, item: Motion) -> list[Item]:
+        """One motion rounded: none when it is too short, an arc's quadrants."""
+        fmt, report, pos = self.fmt, self.report, self.pos
+        # fmt.units inlined for the end points (three a move): the same half-even rounding.
+        step, ratio, limit = fmt.step_nm, fmt.step_nm // fmt.digit_nm, self.limit
+        ex, ey, ez = item.end
+        end = (
+            half_even(ex, step) * ratio,
+            half_even(ey, step) * ratio,
+            None if ez is None else half_even(ez, step) * ratio,
+        )
+        if not (
+            -limit <= end[0] <= limit
+            and -limit <= end[1] <= limit
+            and (end[2] is None or -limit <= end[2] <= limit)
+        ):
+            self.check_capacity(item.block, end)
+        item.restart = item.restart or self.carry_restart
+        self.carry_restart = False
+        if item.kind in (Kind.LINE, Kind.ARC, Kind.CYCLE):
+            item.feed = self.check_feed(item.block, item.feed)
+        if item.search_feed:
+            item.search_feed = self.check_feed(item.block, item.search_feed)
+        if item.kind is Kind.CYCLE:
+            item.cycle_depth = fmt.units(item.cycle_depth)
+            self.check_capacity(item.block, (0, 0, item.cycle_depth))
             item.end = end
-            yield item
-            pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
+            self.pos = end
+            return [item]
+        if item.kind is Kind.ARC:
+            assert item.centre is not None
+            centre = (fmt.units(item.centre[0]), fmt.units(item.centre[1]))
+            self.check_capacity(item.block, centre, "IJ")
+            pieces = self.split_arc(item, pos, end, centre)
+            if not pieces:
+                self.carry_restart = item.restart
+                report.note(item.block, "an arc shorter than the tape's resolution is left out")
+            if pieces:
+                self.pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
+            return pieces
+        same_z = end[2] is None or pos[2] is None or end[2] == pos[2]
+        searched = item.search_feed or (item.kind is Kind.RAPID and item.restart)
+        if (
+            (end[0], end[1]) == (pos[0], pos[1])
+            and same_z
+            and not item.quill_cycle
+            and not (searched and self.profile.tape_search)
+        ):
+            self.carry_restart = item.restart
+            if item.kind is not Kind.RAPID:
+                report.note(item.block, "a move shorter than the tape's resolution is left out")
+            return []
+        item.end = end
+        self.pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
+        return [item]
 
     def check_capacity(self, block: int, point: Sequence[int | None], axes: str = "XYZ") -> None:
         limit = self.limit
@@ -234,30 +403,9 @@ class Rounder:
             )
         if radius == 0 or ((end[0], end[1]) == (sx, sy) and not arc.full_circle):
             return []
-        a0 = math.atan2(sy - cy, sx - cx)
-        if arc.full_circle:
-            sweep = 2 * math.pi
-        else:
-            sweep = arc_sweep((sx, sy), (end[0], end[1]), (cx, cy), arc.clockwise)
-        quarter = math.pi / 2
-        axis_points = ((1, 0), (0, 1), (-1, 0), (0, -1))
-        points: list[tuple[int, int]] = []
-        if arc.clockwise:
-            k = math.ceil(a0 / quarter) - 1
-            step = -1
-        else:
-            k = math.floor(a0 / quarter) + 1
-            step = 1
-        while True:
-            travelled = abs(k * quarter - a0)
-            if travelled >= sweep - 1e-12:
-                break
-            dx, dy = axis_points[k % 4]
-            point = (cx + dx * radius, cy + dy * radius)
-            if point not in ((sx, sy), (end[0], end[1])) and (not points or point != points[-1]):
-                points.append(point)
-            k += step
-        points.append((end[0], end[1]))
+        points = quadrant_ends(
+            (sx, sy), (end[0], end[1]), centre, radius, arc.clockwise, arc.full_circle
+        )
         pieces: list[Item] = []
         for px, py in points:
             pieces.append(
@@ -274,7 +422,68 @@ class Rounder:
         return pieces
 
 
-def with_starts(items: Iterator[Item], start: Point) -> Iterator[tuple[Item, Point]]:
+def _within_30(
+    a: tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]],
+    b: tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]],
+) -> npt.NDArray[np.bool_]:
+    """For each pair of directions of `a` and `b` (columns x, y, z), whether they differ by
+    30° or less: `turn_degrees` in columns. Where floating point could make a different
+    last digit matter (within 1e-6° of the limit), `turn_degrees` answers."""
+    ax, ay, az = a
+    bx, by, bz = b
+    dot = (ax * bx + ay * by + az * bz).astype(np.float64)
+    norm = np.sqrt((ax * ax + ay * ay + az * az).astype(np.float64)) * np.sqrt(
+        (bx * bx + by * by + bz * bz).astype(np.float64)
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        degrees = np.degrees(np.arccos(np.clip(dot / norm, -1.0, 1.0)))
+    degrees[norm == 0] = 180.0
+    limit = 30.0 + 1e-9
+    within: npt.NDArray[np.bool_] = degrees <= limit
+    for k in np.flatnonzero(np.abs(degrees - limit) < 1e-6).tolist():
+        one = (int(ax[k]), int(ay[k]), int(az[k]))
+        other = (int(bx[k]), int(by[k]), int(bz[k]))
+        within[k] = turn_degrees(one, other) <= limit
+    return within
+
+
+def quadrant_ends(
+    start: tuple[int, int],
+    end: tuple[int, int],
+    centre: tuple[int, int],
+    radius: int,
+    clockwise: bool,
+    full_circle: bool,
+) -> list[tuple[int, int]]:
+    """Where each quadrant block of an arc (`Rounder.split_arc`) ends: the axes through its
+    centre it crosses (centre ± radius), then its end."""
+    sx, sy = start
+    cx, cy = centre
+    a0 = math.atan2(sy - cy, sx - cx)
+    sweep = 2 * math.pi if full_circle else arc_sweep(start, end, centre, clockwise)
+    quarter = math.pi / 2
+    axis_points = ((1, 0), (0, 1), (-1, 0), (0, -1))
+    points: list[tuple[int, int]] = []
+    if clockwise:
+        k = math.ceil(a0 / quarter) - 1
+        step = -1
+    else:
+        k = math.floor(a0 / quarter) + 1
+        step = 1
+    while True:
+        travelled = abs(k * quarter - a0)
+        if travelled >= sweep - 1e-12:
+            break
+        dx, dy = axis_points[k % 4]
+        point = (cx + dx * radius, cy + dy * radius)
+        if point not in (start, end) and (not points or point != points[-1]):
+            points.append(point)
+        k += step
+    points.append(end)
+    return points
+
+
+def with_starts(items: Iterator[Piece], start: Point) -> Iterator[tuple[Piece, Point]]:
     """Each item with where it starts (tape units), for the direction rules."""
     pos = start
     for item in items:
@@ -282,6 +491,10 @@ def with_starts(items: Iterator[Item], start: Point) -> Iterator[tuple[Item, Poi
         if isinstance(item, Aux):
             if item.preset_z:
                 pos = (pos[0], pos[1], 0)
+        elif isinstance(item, Run):
+            end = item.end()
+            if end is not None:
+                pos = (end[0], end[1], end[2] if end[2] is not None else pos[2])
         else:
             z = item.end[2] if item.end[2] is not None else pos[2]
             pos = (item.end[0], item.end[1], z)
@@ -359,95 +572,295 @@ class Words:
             line.feed_start = motion.feed if feed_before is None else feed_before
         return line
 
-    def lines(self, items: Iterator[tuple[Item, Point]]) -> Iterator[Line]:
-        g: str | None = None
-        pos: list[int | None] = [None, None, None]
-        ij: list[int | None] = [None, None]
-        feed: int | None = None
-        s_code: str | None = None
-        g99 = False
-        carried: list[tuple[str, str]] = []
+    def lines(self, items: Iterator[tuple[Piece, Point]]) -> Iterator[Line | LineRun]:
+        """The blocks of the rounded items (each with where it starts), a run's in columns."""
+        self.g: str | None = None
+        self.pos: list[int | None] = [None, None, None]
+        self.ij: list[int | None] = [None, None]
+        self.feed: int | None = None
+        self.s_code: str | None = None
+        self.g99 = False
+        self.carried: list[tuple[str, str]] = []
         last_block = 0
         ahead = iter(items)
         current = next(ahead, None)
+        following = next(ahead, None)
         while current is not None:
             item, start = current
-            following = next(ahead, None)
-            last_block = item.block
-            if isinstance(item, Aux):
-                after = following[0] if following is not None else None
-                if (
-                    item.forward
-                    and isinstance(after, Motion)
-                    and after.kind is Kind.RAPID
-                    and not any(letter == "G" for letter, _ in item.words)
-                ):
-                    carried.extend(
-                        item.words if item.restate else spindle_words(item.words, s_code)
-                    )
-                    s_code = next((v for k, v in item.words if k == "S"), s_code)
-                    current = following
-                    continue
-                if g99 and item.words[-1] in (("M", "30"), ("M", "02")):
-                    yield self.line([("G", "98")], item.block)  # no drill cycle left on
-                    g99 = False
-                words = spindle_words(item.words, s_code)
-                s_code = next((v for k, v in item.words if k == "S"), s_code)
-                if words or item.comment:
-                    yield self.line(words, item.block, item.comment, leader_after=item.leader_after)
-                    if any(letter == "G" for letter, _ in words):
-                        g = None  # G04 and G94 act in their block only; state the mode again
-                    if item.preset_z:
-                        pos[2] = 0
-                current = following
+            if isinstance(item, Run):
+                # All but its last item in columns (each one's next is in the run), then the
+                # last one by one: what comes after the run decides its G code.
+                count = len(item)
+                if count > 1:
+                    yield self.run_lines(item, start)
+                    start = item.start_of(count - 1, start)
+                restart = item.restart and count == 1  # a dwell first went one by one
+                current = (item.take(slice(count - 1, None), restart).items()[0], start)
                 continue
-            if following is None:
-                self.choose_g(item, start, None, start)
-            else:
-                self.choose_g(item, start, following[0], following[1])
-            if item.restart:
-                pos = [None, None, None]
-                ij = [None, None]
-                g, feed = None, None
-            if item.quill_cycle != g99:
-                yield self.line([("G", "99" if item.quill_cycle else "98")], item.block)
-                g99 = item.quill_cycle
-                g = None  # state the motion mode again after the quill's G
-            words = []
-            if item.gcode != g:
-                words.append(("G", item.gcode))
-            ex, ey, ez = item.end
-            arc = item.kind is Kind.ARC
-            for axis, value in enumerate((ex, ey)):
-                if not item.z_only and (arc or item.quill_cycle or value != pos[axis]):
-                    words.append(("XY"[axis], self.digits(value)))
-            if item.kind is Kind.CYCLE:
-                words.append(("Z", self.digits(item.cycle_depth)))
-                assert ez is not None
-                words.append(("R", self.digits(ez)))
-            elif ez is not None and not arc and ez != pos[2]:
-                words.append(("Z", self.digits(ez)))
-            if arc:
-                assert item.centre is not None
-                for axis, value in enumerate(item.centre):
-                    if value != ij[axis]:
-                        words.append(("IJ"[axis], self.digits(value)))
-                        ij[axis] = value
-            feed_before = feed
-            if item.kind is not Kind.RAPID and item.feed != feed:
-                words.append(("F", self.feed_word(item.feed)))
-                feed = item.feed
-            elif item.kind is Kind.RAPID and item.search_feed:
-                words.append(("F", self.feed_word(item.search_feed)))
-                feed = item.search_feed
-            words.extend(carried)
-            carried = []
-            yield self.line(words, item.block, motion=item, start=start, feed_before=feed_before)
-            g = item.gcode
-            pos = [ex, ey, ez if ez is not None else pos[2]]
-            current = following
-        if g99:
+            last_block = item.block
+            yield from self.item_lines(item, start, following)
+            current, following = following, next(ahead, None)
+        if self.g99:
             yield self.line([("G", "98")], last_block)
+
+    def item_lines(
+        self, item: Item, start: Point, following: tuple[Piece, Point] | None
+    ) -> list[Line]:
+        """The blocks of one item; `following` is the next (an auxiliary block may ride on
+        it, and a feed move's G code depends on it)."""
+        out: list[Line] = []
+        after: Item | None = None
+        after_start = start
+        if following is not None:
+            next_piece, after_start = following
+            if isinstance(next_piece, Run):
+                after = next_piece.take(slice(0, 1), next_piece.restart).items()[0]
+            else:
+                after = next_piece
+        if isinstance(item, Aux):
+            if (
+                item.forward
+                and isinstance(after, Motion)
+                and after.kind is Kind.RAPID
+                and not any(letter == "G" for letter, _ in item.words)
+            ):
+                self.carried.extend(
+                    item.words if item.restate else spindle_words(item.words, self.s_code)
+                )
+                self.s_code = next((v for k, v in item.words if k == "S"), self.s_code)
+                return out
+            if self.g99 and item.words[-1] in (("M", "30"), ("M", "02")):
+                out.append(self.line([("G", "98")], item.block))  # no drill cycle left on
+                self.g99 = False
+            words = spindle_words(item.words, self.s_code)
+            self.s_code = next((v for k, v in item.words if k == "S"), self.s_code)
+            if words or item.comment:
+                out.append(
+                    self.line(words, item.block, item.comment, leader_after=item.leader_after)
+                )
+                if any(letter == "G" for letter, _ in words):
+                    self.g = None  # G04 and G94 act in their block only; state the mode again
+                if item.preset_z:
+                    self.pos[2] = 0
+            return out
+        self.choose_g(item, start, after, after_start)
+        pos, ij = self.pos, self.ij
+        if item.restart:
+            pos = [None, None, None]
+            ij = self.ij = [None, None]
+            self.g, self.feed = None, None
+        if item.quill_cycle != self.g99:
+            out.append(self.line([("G", "99" if item.quill_cycle else "98")], item.block))
+            self.g99 = item.quill_cycle
+            self.g = None  # state the motion mode again after the quill's G
+        words = []
+        if item.gcode != self.g:
+            words.append(("G", item.gcode))
+        ex, ey, ez = item.end
+        arc = item.kind is Kind.ARC
+        for axis, value in enumerate((ex, ey)):
+            if not item.z_only and (arc or item.quill_cycle or value != pos[axis]):
+                words.append(("XY"[axis], self.digits(value)))
+        if item.kind is Kind.CYCLE:
+            words.append(("Z", self.digits(item.cycle_depth)))
+            assert ez is not None
+            words.append(("R", self.digits(ez)))
+        elif ez is not None and not arc and ez != pos[2]:
+            words.append(("Z", self.digits(ez)))
+        if arc:
+            assert item.centre is not None
+            for axis, value in enumerate(item.centre):
+                if value != ij[axis]:
+                    words.append(("IJ"[axis], self.digits(value)))
+                    ij[axis] = value
+        feed_before = self.feed
+        if item.kind is not Kind.RAPID and item.feed != self.feed:
+            words.append(("F", self.feed_word(item.feed)))
+            self.feed = item.feed
+        elif item.kind is Kind.RAPID and item.search_feed:
+            words.append(("F", self.feed_word(item.search_feed)))
+            self.feed = item.search_feed
+        words.extend(self.carried)
+        self.carried = []
+        out.append(self.line(words, item.block, motion=item, start=start, feed_before=feed_before))
+        self.g = item.gcode
+        self.pos = [ex, ey, ez if ez is not None else pos[2]]
+        return out
+
+    def run_lines(self, run: Run, start: Point) -> LineRun:
+        """The blocks of a run's items but its last, as `item_lines` writes each (G codes,
+        modal words, sequence numbers) in columns. `start` is where the run starts."""
+        profile, fmt = self.profile, self.fmt
+        count = len(run) - 1
+        kind, x, y, z, feed = run.kind, run.x, run.y, run.z, run.feed
+        moving = kind != DWELL
+        arc = kind == ARC
+        indices = np.arange(len(run))
+        # The motion before each row (-1: none in the run) and where each row starts.
+        last_motion = np.maximum.accumulate(np.where(moving, indices, -1))
+        before = np.concatenate(([-1], last_motion[:-1]))
+        had = before >= 0
+        prior = np.maximum(before, 0)
+        sx = np.where(had, x[prior], start[0])
+        sy = np.where(had, y[prior], start[1])
+        dx, dy = x - sx, y - sy
+        if z is None:
+            dz = np.zeros_like(dx)
+        elif start[2] is None:
+            dz = np.where(had, z - z[prior], 0)
+        else:
+            dz = z - np.where(had, z[prior], start[2])
+        # Directions: a straight move's own, an arc's tangent at its end (out) and start (in).
+        turn = np.where(run.clockwise, 1, -1)
+        ex, ey = x - run.cx, y - run.cy
+        bx, by = sx - run.cx, sy - run.cy
+        out_x, out_y = np.where(arc, turn * ey, dx), np.where(arc, -turn * ex, dy)
+        in_x, in_y = np.where(arc, turn * by, dx), np.where(arc, -turn * bx, dy)
+        out_z = np.where(arc, 0, dz)
+        feeding = (kind == LINE) | arc
+        gcode = np.where(kind == RAPID, 50, np.where(arc, np.where(run.clockwise, 20, 30), 0))
+        gcode[kind == DWELL] = 4
+        gcode = gcode[:count]
+        if not profile.decel:
+            smooth = feeding[:count] & feeding[1:]
+            ahead = np.flatnonzero(smooth)
+            smooth[ahead] = _within_30(
+                (out_x[ahead], out_y[ahead], out_z[ahead]),
+                (in_x[ahead + 1], in_y[ahead + 1], out_z[ahead + 1]),
+            )
+            # G01, G02, G03 into a smooth turn; G00, G20, G30 otherwise.
+            gcode[smooth] = np.where(arc[:count][smooth], gcode[smooth] // 10, 1)
+        first = int(np.argmax(moving)) if moving.any() else -1
+        if run.restart and first == 0:
+            self.pos = [None, None, None]
+            self.ij = [None, None]
+            self.g, self.feed = None, None
+        pos = self.pos
+        columns: list[npt.NDArray[np.object_]] = []
+        if profile.sequence:
+            numbers = self.number + profile.sequence_increment * np.arange(count, dtype=np.int64)
+            over = np.flatnonzero(numbers > 999)
+            if not self.wrapped and len(over):
+                self.wrapped = True
+                self.report.warning(
+                    int(run.block[over[0]]),
+                    "sequence numbers pass N999 here and start again at N000 (the N word "
+                    "has three digits; a tape search stops at the first match)",
+                )
+            self.number += profile.sequence_increment * count
+            columns.append(_N_WORDS[numbers % 1000])
+        # Each word where it differs from the one before (the state before the run first);
+        # a dwell's G04 leaves no motion mode in force.
+        g_before = np.empty(count, dtype=np.int64)
+        g_before[0] = -1 if self.g is None else int(self.g)
+        g_before[1:] = np.where(moving[: count - 1], gcode[:-1], -1)
+        written = (gcode != g_before) | ~moving[:count]
+        column = _G_WORDS[gcode]
+        column[~written] = ""
+        columns.append(column)
+        straight = moving[:count] & ~arc[:count]
+        axes = [("X", x, pos[0], arc), ("Y", y, pos[1], arc)]
+        if z is not None:
+            axes.append(("Z", z, pos[2], np.zeros_like(arc)))
+        for letter, values, state, always in axes:
+            written = np.where(had[:count], values[prior[:count]] != values[:count], True)
+            if state is not None:
+                written[~had[:count]] = values[:count][~had[:count]] != state
+            written = (written & straight) | always[:count]
+            columns.append(self.word_column(letter, values[:count], written))
+        last_arc = np.maximum.accumulate(np.where(arc, indices, -1))
+        arc_before = np.concatenate(([-1], last_arc[:-1]))[:count]
+        has_arc = arc_before >= 0
+        prior_arc = np.maximum(arc_before, 0)
+        for letter, centre, axis in (("I", run.cx, 0), ("J", run.cy, 1)):
+            state = self.ij[axis]
+            shown = centre[:count]
+            if state is None:
+                written = arc[:count] & (~has_arc | (shown != centre[prior_arc]))
+            else:
+                written = arc[:count] & (shown != np.where(has_arc, centre[prior_arc], state))
+            columns.append(self.word_column(letter, shown, written))
+            if last_arc[count - 1] >= 0:
+                self.ij[axis] = int(centre[last_arc[count - 1]])
+        # The feed in force before each row: the last feed or arc's in the run, else the
+        # state's; a dwell's F is its time.
+        last_feed = np.maximum.accumulate(np.where(feeding, indices, -1))[:count]
+        feed_before = np.empty(count, dtype=np.int64)
+        feed_before[0] = -1 if self.feed is None else self.feed
+        feed_before[1:] = np.where(
+            last_feed[:-1] >= 0, feed[np.maximum(last_feed[:-1], 0)], feed_before[0]
+        )
+        shown_feed = feed[:count]
+        written = feeding[:count] & (shown_feed != feed_before)
+        column = np.full(count, "", dtype=object)
+        column[written] = ["F" + self.feed_word(value) for value in shown_feed[written].tolist()]
+        dwells = ~moving[:count]
+        column[dwells] = ["F" + str(tenths) for tenths in run.tenths[:count][dwells].tolist()]
+        columns.append(column)
+        joiner = "\t" if profile.tabs else ""
+        lists = [column.tolist() for column in columns]
+        if joiner:
+            texts = [
+                joiner.join([word for word in row if word]) for row in zip(*lists, strict=True)
+            ]
+        else:
+            texts = list(map("".join, zip(*lists, strict=True)))
+        if self.carried:
+            words = [words[0] for words in lists if words[0]]
+            texts[0] = joiner.join(words + [letter + value for letter, value in self.carried])
+            self.carried = []
+        # What the reader limitation needs (check_reader): the G01-G03 blocks' length.
+        continuous = (gcode == 1) | (gcode == 2) | (gcode == 3)
+        length = np.zeros(count)
+        lines = continuous & ~arc[:count]
+        squares = dx[:count] ** 2 + dy[:count] ** 2 + dz[:count] ** 2
+        length[lines] = np.sqrt(squares[lines].astype(np.float64)) * fmt.digit_nm / fmt.unit_nm
+        for k in np.flatnonzero(continuous & arc[:count]).tolist():
+            piece = Motion(
+                0,
+                Kind.ARC,
+                (int(x[k]), int(y[k]), None),
+                centre=(int(run.cx[k]), int(run.cy[k])),
+                clockwise=bool(run.clockwise[k]),
+            )
+            length[k] = (
+                motion_length(piece, (int(sx[k]), int(sy[k]), None)) * fmt.digit_nm / fmt.unit_nm
+            )
+        last = count - 1
+        self.g = str(_G_WORDS[gcode[last]])[1:] if moving[last] else None
+        motion = int(last_motion[last])
+        if motion >= 0:
+            self.pos = [
+                int(x[motion]),
+                int(y[motion]),
+                pos[2] if z is None else int(z[motion]),
+            ]
+        if last_feed[last] >= 0:
+            self.feed = int(feed[last_feed[last]])
+        return LineRun(
+            texts,
+            run.block[:count],
+            continuous,
+            length,
+            np.where(feed_before >= 0, feed_before, shown_feed),
+            shown_feed,
+        )
+
+    def word_column(
+        self, letter: str, values: npt.NDArray[np.int64], written: npt.NDArray[np.bool_]
+    ) -> npt.NDArray[np.object_]:
+        """`letter` and `digits` of each value where written, else ''."""
+        column = np.full(len(values), "", dtype=object)
+        # Each distinct value written once (a run repeats its Z levels, a grid its X and Y).
+        distinct, where = np.unique(values[written], return_inverse=True)
+        if self.profile.leading_zeros:
+            digits = self.digits
+            words = [letter + digits(value) for value in distinct.tolist()]
+        else:
+            # str of a negative int is its sign and digits: `digits` without zeros.
+            words = [f"{letter}{value}" for value in distinct.tolist()]
+        column[written] = np.array(words, dtype=object)[where.reshape(-1)]
+        return column
 
     def digits(self, units: int) -> str:
         """A motion word's digits: sign only when negative, no point; leading zeros only
@@ -467,28 +880,63 @@ def spindle_words(words: list[tuple[str, str]], s_code: str | None) -> list[tupl
     return [(k, v) for k, v in words if not (k == "S" and v == s_code)]
 
 
-def check_reader(lines: Iterator[Line], fmt: TapeFormat, report: Report) -> Iterator[Line]:
+def check_reader(
+    lines: Iterator[Line | LineRun], fmt: TapeFormat, report: Report
+) -> Iterator[Line | LineRun]:
     """The lines, checked as they pass for seed 000 §3 "Reader Limitation" (scan-damaged
     formulas, DESIGN.md's reading): T1 = 60·L / ((F1 + F2)/2) to execute a non-decelerated
     block, T2 = 0.010 + (N − 1)/300 to read the next one (N characters, its End of Block
-    included); warn where T2 > T1."""
+    included); warn where T2 > T1. A run's blocks are checked in columns, and where T2 and
+    T1 are near each other each block is checked as a `Line`."""
     previous: Line | None = None
     for line in lines:
-        if previous is not None and previous.continuous and previous.length > 0:
-            characters = len(line.text) + 1
-            f1 = previous.feed_start * fmt.feed_unit_nm / fmt.unit_nm
-            f2 = previous.feed_end * fmt.feed_unit_nm / fmt.unit_nm
-            t1 = 60 * previous.length / ((f1 + f2) / 2)
-            t2 = 0.010 + (characters - 1) / 300
-            if t2 > t1:
-                text = previous.text.split(" (")[0].replace(chr(9), " ")
-                report.warning(
-                    previous.block,
-                    f"reader limitation: {text} moves {previous.length:.4f} "
-                    f"{fmt.unit} in {t1:.3f} s but the next block ({characters} characters) "
-                    f"takes {t2:.3f} s to read: the slides may stop and dwell (seed 000 §3)",
-                    same="the same reader limitation",
-                    at=text,
+        if isinstance(line, LineRun):
+            texts = line.texts
+            characters = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts)) + 1
+            ahead = line.continuous[:-1] & (line.length[:-1] > 0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t1 = (
+                    60
+                    * line.length[:-1]
+                    / (
+                        (
+                            line.feed_start[:-1] * fmt.feed_unit_nm / fmt.unit_nm
+                            + line.feed_end[:-1] * fmt.feed_unit_nm / fmt.unit_nm
+                        )
+                        / 2
+                    )
                 )
+            t2 = 0.010 + (characters[1:] - 1) / 300
+            near = np.flatnonzero(ahead & (t2 > t1 * (1 - 1e-9)))
+            if previous is not None:
+                _check_read(previous, texts[0], fmt, report)
+            for k in near.tolist():
+                _check_read(line.line(k), texts[k + 1], fmt, report)
+            yield line
+            previous = line.line(len(texts) - 1)
+            continue
+        if previous is not None and previous.continuous:
+            _check_read(previous, line.text, fmt, report)
         yield line
         previous = line
+
+
+def _check_read(previous: Line, text: str, fmt: TapeFormat, report: Report) -> None:
+    """Warn when the block `text` takes longer to read than `previous` to execute."""
+    if not (previous.continuous and previous.length > 0):
+        return
+    characters = len(text) + 1
+    f1 = previous.feed_start * fmt.feed_unit_nm / fmt.unit_nm
+    f2 = previous.feed_end * fmt.feed_unit_nm / fmt.unit_nm
+    t1 = 60 * previous.length / ((f1 + f2) / 2)
+    t2 = 0.010 + (characters - 1) / 300
+    if t2 > t1:
+        shown = previous.text.split(" (")[0].replace(chr(9), " ")
+        report.warning(
+            previous.block,
+            f"reader limitation: {shown} moves {previous.length:.4f} "
+            f"{fmt.unit} in {t1:.3f} s but the next block ({characters} characters) "
+            f"takes {t2:.3f} s to read: the slides may stop and dwell (seed 000 §3)",
+            same="the same reader limitation",
+            at=shown,
+        )

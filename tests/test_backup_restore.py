@@ -195,3 +195,87 @@ def test_cli_restore_of_a_damaged_backup_exits_2_with_a_message(
     archive.write_bytes(b"PK\x03\x04 not really a zip")
     result = CliRunner().invoke(main, ["restore", str(archive)])
     assert result.exit_code == 2 and "not a zip" in result.stderr.lower()
+
+
+# A manifest's machine with settings the machines form refuses (issue 30.4 / 31.6): each was
+# restored, and only a later send (serial) or export (options, limits) refused it.
+REFUSED_SETTINGS = {
+    "a baud that is not a number": (
+        {"serial": {"port": "", "baud": "abc"}},
+        "serial, baud: baud 'abc' is not a whole number",
+    ),
+    "a baud no UART runs": (
+        {"serial": {"port": "", "baud": 4801}},
+        "serial, baud: baud 4801 is not a standard rate; use one of 110, 150,",
+    ),
+    "a parity not allowed": (
+        {"serial": {"port": "", "parity": "X"}},
+        "serial, parity: parity 'X': use N, E or O",
+    ),
+    "three stop bits": (
+        {"serial": {"port": "", "stop_bits": "3"}},
+        "serial, stop_bits: stop bits 3: use 1 or 2",
+    ),
+    "a negative hold": (
+        {"serial": {"port": "", "hold": "-5"}},
+        "serial, hold: hold -5 s: use 1 to 86400 seconds, or 0 for no limit",
+    ),
+    "a setting no line has": (
+        {"serial": {"port": "", "speed": "fast"}},
+        "serial, speed: unknown serial setting 'speed'; the settings: port, baud,",
+    ),
+    "an option the target has not": (
+        {"options": {"nope": "1"}},
+        "options: gcode-linuxcnc has no option 'nope'; its options: ",
+    ),
+    "travel limits the machine model cannot read": (
+        {"limits": {"spindle": "fast"}},
+        "limits: spindle: 'fast' is not a range of speeds",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", REFUSED_SETTINGS, ids=list(REFUSED_SETTINGS))
+def test_a_machine_the_form_refuses_is_not_restored(library: Library, case: str) -> None:
+    settings, message = REFUSED_SETTINGS[case]
+
+    def change(manifest: dict[str, Any], _members: dict[str, bytes]) -> None:
+        manifest["machines"][0].update(settings)
+
+    kept = Machine("Bridgeport", "gcode-linuxcnc", {}, {"port": "/dev/ttyUSB0", "baud": "9600"})
+    library.save_machine(kept)
+    with pytest.raises(LibraryError) as caught:
+        library.restore_backup(io.BytesIO(rezip(good_backup(), change)))
+    assert f"cannot read the backup: manifest, machine 1 (Bridgeport), {message}" in str(
+        caught.value
+    )
+    # Nothing stored: the machine keeps its settings, no program came in.
+    assert library.machines() == [kept]
+    assert library.programs(trash=True) == []
+
+
+def test_saving_a_machine_checks_its_serial_settings_as_the_form_does(library: Library) -> None:
+    with pytest.raises(LibraryError) as caught:
+        library.save_machine(Machine("m12", "events", {}, {"port": "", "baud": "abc"}))
+    assert str(caught.value) == "machine 'm12', serial, baud: baud 'abc' is not a whole number"
+    with pytest.raises(LibraryError, match=r"^machine 'm12', target: 'nope' is not a target"):
+        library.save_machine(Machine("m12", "nope", {}, {}))
+    assert library.machines() == []
+
+
+def test_cli_restore_names_the_serial_setting_it_refuses(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("DATABASE_URL", f"sqlite:///{tmp_path / 'c.db'}")
+
+    def change(manifest: dict[str, Any], _members: dict[str, bytes]) -> None:
+        manifest["machines"][0]["serial"] = {"port": "/dev/ttyS0", "parity": "mark"}
+
+    archive = tmp_path / "serial.zip"
+    archive.write_bytes(rezip(good_backup(), change))
+    result = CliRunner().invoke(main, ["restore", str(archive)])
+    assert result.exit_code == 2, result.output
+    assert (
+        "manifest, machine 1 (Bridgeport), serial, parity: parity 'mark': use N, E or O "
+        "(none, even, odd)" in result.stderr
+    )

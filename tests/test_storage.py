@@ -231,7 +231,7 @@ def test_find_by_id_or_name(library: Library) -> None:
 
 
 def test_machines(library: Library) -> None:
-    mill = Machine("Bridgeport 1704", "tape-eia", {"sequence_numbers": "yes"}, {"baud": 4800})
+    mill = Machine("Bridgeport 1704", "tape-eia", {"sequence": "yes"}, {"baud": 4800})
     library.save_machine(mill)
     library.save_machine(replace(mill, notes="bay 3"))
     assert library.machines() == [replace(mill, notes="bay 3")]

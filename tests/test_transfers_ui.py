@@ -188,7 +188,7 @@ def test_a_machine_with_unusable_serial_settings_is_not_saved(
     form = {"csrf_token": csrf, "name": "Plus", "target": "events", "port": "/dev/ttyS0"}
     page = client.post("/machines", data={**form, "baud": "4801", "limits": "x=-10/10"})
     assert page.status_code == 422
-    assert "Not saved: serial: baud 4801 is not a standard rate; use one of 110, 150," in (
+    assert "Not saved: serial, baud: baud 4801 is not a standard rate; use one of 110, 150," in (
         page.get_data(as_text=True)
     )
     assert all(m.name != "Plus" for m in library_of(app).machines())

@@ -34,7 +34,12 @@ DEL = 0x7F
 
 class SettingsError(ValueError):
     """Settings the line cannot use, or data they cannot carry. The message says which
-    field is wrong and what is allowed; nothing has touched the port."""
+    field is wrong and what is allowed; nothing has touched the port. `field` is the key of
+    `Machine.serial` at fault (`baud`), "" when the fault is not one setting's."""
+
+    def __init__(self, message: str, field: str = "") -> None:
+        super().__init__(message)
+        self.field = field
 
 
 class Parity(enum.Enum):
@@ -162,7 +167,9 @@ class PortSettings:
         unknown = sorted(set(serial) - set(SERIAL_FIELDS) - {"port"})
         if unknown:
             known = ", ".join(("port", *SERIAL_FIELDS))
-            raise SettingsError(f"unknown serial setting {unknown[0]!r}; the settings: {known}")
+            raise SettingsError(
+                f"unknown serial setting {unknown[0]!r}; the settings: {known}", unknown[0]
+            )
         values: dict[str, Any] = {}
         for name, reader in _READERS.items():
             raw = serial.get(name)
@@ -245,42 +252,50 @@ class PortSettings:
         """Raise SettingsError if the line cannot be used so; the message says what to change."""
         if self.baud not in BAUD_RATES:
             rates = ", ".join(map(str, BAUD_RATES))
-            raise SettingsError(f"baud {self.baud} is not a standard rate; use one of {rates}")
+            raise SettingsError(
+                f"baud {self.baud} is not a standard rate; use one of {rates}", "baud"
+            )
         if self.data_bits not in (7, 8):
-            raise SettingsError(f"data bits {self.data_bits}: use 7 or 8")
+            raise SettingsError(f"data bits {self.data_bits}: use 7 or 8", "data_bits")
         if self.stop_bits not in (1, 2):
-            raise SettingsError(f"stop bits {self.stop_bits}: use 1 or 2")
+            raise SettingsError(f"stop bits {self.stop_bits}: use 1 or 2", "stop_bits")
         for name in ("leader", "trailer"):
             count = getattr(self, name)
             if not 0 <= count <= MAX_LEADER:
-                raise SettingsError(f"{name} {count}: use 0 to {MAX_LEADER} NUL characters")
+                raise SettingsError(f"{name} {count}: use 0 to {MAX_LEADER} NUL characters", name)
         found = targets().get(self.target)
         if found is None:
             raise SettingsError(
-                f"no export target {self.target!r}; targets: {', '.join(targets())}"
+                f"no export target {self.target!r}; targets: {', '.join(targets())}", "target"
             )
         if found.media_type.startswith("image/"):
-            raise SettingsError(f"{self.target} is a drawing, not something a control reads")
+            raise SettingsError(
+                f"{self.target} is a drawing, not something a control reads", "target"
+            )
         if self.cps is not None and not 1 <= self.cps <= self.line_cps:
             raise SettingsError(
                 f"drip feed {self.cps} characters per second: use 1 to the line's own rate, "
-                f"{self.line_cps:g} at {self.baud} baud {self.frame}"
+                f"{self.line_cps:g} at {self.baud} baud {self.frame}",
+                "cps",
             )
         if not 0 <= self.hold <= MAX_HOLD:
             raise SettingsError(
-                f"hold {self.hold} s: use 1 to {MAX_HOLD} seconds, or 0 for no limit (drip feed)"
+                f"hold {self.hold} s: use 1 to {MAX_HOLD} seconds, or 0 for no limit (drip feed)",
+                "hold",
             )
         if self.framing is Framing.SOFTWARE and not Framing.can_stand_in(
             self.data_bits, self.parity
         ):
             raise SettingsError(
                 f"software parity is for 7 data bits with even or odd parity (sent as 8N1 "
-                f"with the parity in bit 8), not {self.frame}"
+                f"with the parity in bit 8), not {self.frame}",
+                "framing",
             )
         if self.is_binary and self.data_bits != 8:
             raise SettingsError(
                 f"{self.target} is an 8-bit image (a byte per tape row, channel 8 in bit 8): "
-                f"use 8 data bits (8N1), not {self.frame}"
+                f"use 8 data bits (8N1), not {self.frame}",
+                "data_bits",
             )
         target = targets().get(self.target)
         if self.flow is Flow.XONXOFF and target is not None and target.flow_codes_in_data:
@@ -288,12 +303,14 @@ class PortSettings:
                 f"XON/XOFF cannot be used with {self.target}: its bytes can be the XON and "
                 "XOFF codes (in EIA RS-244 the row 0x13, DC3 or XOFF, is the digit 3 and 0x11, "
                 "DC1 or XON, can be data too), so flow control and data collide; use "
-                "RTS/CTS, or none with a drip-feed rate"
+                "RTS/CTS, or none with a drip-feed rate",
+                "flow",
             )
         end = self.end
         if not end or len(end) > 16 or not all(32 < ord(c) < 127 for c in end):
             raise SettingsError(
-                f"end {end!r}: use '%', 'idle', or up to 16 printable characters such as M30"
+                f"end {end!r}: use '%', 'idle', or up to 16 printable characters such as M30",
+                "end",
             )
 
 
@@ -304,7 +321,8 @@ def port_of(serial: Mapping[str, Any]) -> str:
     port = str(serial.get("port") or "").strip()
     if not port:
         raise SettingsError(
-            "the machine has no serial port: set its port (e.g. /dev/ttyUSB0 or socket://10.0.0.5:4001)"
+            "the machine has no serial port: set its port (e.g. /dev/ttyUSB0 or socket://10.0.0.5:4001)",
+            "port",
         )
     return port
 
@@ -314,14 +332,14 @@ def port_of(serial: Mapping[str, Any]) -> str:
 
 def _int(name: str, raw: Any) -> int:
     if isinstance(raw, bool):
-        raise SettingsError(f"{name} {raw!r} is not a whole number")
+        raise SettingsError(f"{name} {raw!r} is not a whole number", name)
     if isinstance(raw, int):
         return raw
     text = str(raw).strip()
     try:
         return int(text)
     except ValueError:
-        raise SettingsError(f"{name} {raw!r} is not a whole number") from None
+        raise SettingsError(f"{name} {raw!r} is not a whole number", name) from None
 
 
 def _optional_int(name: str, raw: Any) -> int | None:
@@ -334,7 +352,7 @@ def _word(table: Mapping[str, Any], allowed: str) -> Any:
     def read(name: str, raw: Any) -> Any:
         found = table.get(str(raw).strip().lower())
         if found is None:
-            raise SettingsError(f"{name} {raw!r}: use {allowed}")
+            raise SettingsError(f"{name} {raw!r}: use {allowed}", name)
         return found
 
     return read

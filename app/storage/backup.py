@@ -23,12 +23,16 @@ from typing import Any, BinaryIO
 from app.cnc import document
 from app.cnc.blocks import Program
 from app.cnc.document import DocumentError
-from app.cnc.formats.targets import OptionError, targets
-from app.cnc.machine import MachineError, read_machine
 from app.cnc.text import NOTES_LENGTH, SHORT_NAME_LENGTH, TextError, text_fault
 from app.cnc.tools import CribTool, tool_faults
 from app.storage.crib import tool_from_document
-from app.storage.library import BACKUP_FORMAT, LibraryError, Machine, check_machine_text
+from app.storage.library import (
+    BACKUP_FORMAT,
+    LibraryError,
+    Machine,
+    MachineSettingsError,
+    check_machine,
+)
 
 MAX_MEMBER_BYTES = 16 * 1024 * 1024
 """One member (the manifest, one revision) inflated: far above any real document."""
@@ -273,20 +277,11 @@ def _machine(entry: Any, number: int) -> Machine:
         _mapping(entry, "limits", where, required=False),
     )
     try:
-        # The one check the web form and the command line go through: a serial port with
-        # a NUL or of 100 000 characters was restored, and only a send refused it.
-        check_machine_text(machine)
-    except TextError as exc:
+        # The one check saving a machine goes through: a serial port with a NUL, or a baud
+        # of "abc", was restored, and only a send refused it.
+        check_machine(machine)
+    except (TextError, MachineSettingsError) as exc:
         raise BackupError(f"{where} ({name}), {exc}") from None
-    target = targets().get(machine.target)
-    if target is None:
-        raise BackupError(f"{where} ({name}), target: {machine.target!r} is not a target")
-    try:
-        target.parse_options(machine.options)
-        if machine.limits:
-            read_machine(machine.limits)
-    except (OptionError, MachineError) as exc:
-        raise BackupError(f"{where} ({name}): {exc}") from None
     return machine
 
 

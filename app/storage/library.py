@@ -26,6 +26,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from app.cnc import cost, document
 from app.cnc.blocks import Block, Hole, Program
 from app.cnc.diff import diff, summary
+from app.cnc.formats.targets import OptionError, targets
 from app.cnc.machine import MachineError, read_machine
 from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, parse_int
@@ -39,6 +40,7 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
+from app.dnc.settings import PortSettings, SettingsError
 from app.storage.db import make_engine, migration_lock, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 from app.storage.revisions import RevisionInfo, Versioned, stale_message
@@ -61,6 +63,17 @@ PROGRAMS = Versioned(ProgramRow, RevisionRow, "program_id")
 
 class LibraryError(ValueError):
     """A library operation that cannot be done (the message says why)."""
+
+
+class MachineSettingsError(LibraryError):
+    """A machine profile's target, options, travel limits or serial settings the machines
+    form would refuse. The message starts with the field (`serial, baud: …`, `options: …`,
+    `limits: …`); `field` is that field."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(f"{field}: {message}")
+        self.field = field
+        self.detail = message
 
 
 class NotFound(LibraryError):
@@ -614,15 +627,47 @@ def check_machine_text(machine: Machine) -> None:
             pending.extend((f"{field_name} [{n}]", item) for n, item in enumerate(value, start=1))
 
 
-def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
-    """Create or update a machine profile by name, in transaction `s`. Raises TextError
-    (check_machine_text) and LibraryError for limits the machine model cannot read."""
+def check_machine(machine: Machine) -> None:
+    """A machine profile as the machines form takes it: its text (check_machine_text), a
+    target that exists, options that target takes, travel limits the machine model reads
+    (app.cnc.machine.read_machine) and serial settings the line can use
+    (`PortSettings.from_serial`, the rule a send reads them by). Saving a machine and
+    restoring a backup go through this, so nothing is stored that only a later export or
+    send would refuse.
+
+    Raises TextError, or MachineSettingsError naming the field (`serial, baud`) and what
+    is allowed."""
     check_machine_text(machine)
+    target = targets().get(machine.target)
+    if target is None:
+        raise MachineSettingsError(
+            "target", f"{machine.target!r} is not a target; targets: {', '.join(targets())}"
+        )
+    try:
+        target.parse_options(machine.options)
+    except OptionError as exc:
+        raise MachineSettingsError("options", str(exc)) from None
     if machine.limits:
         try:
             read_machine(machine.limits)
         except MachineError as exc:
-            raise LibraryError(f"machine {machine.name!r}, limits: {exc}") from None
+            raise MachineSettingsError("limits", str(exc)) from None
+    try:
+        PortSettings.from_serial(machine.serial, target=machine.target)
+    except SettingsError as exc:
+        # A fault of the machine's own target (a drawing) is the target field's, not serial's.
+        own_target = exc.field == "target" and "target" not in machine.serial
+        field = "target" if own_target else f"serial, {exc.field}" if exc.field else "serial"
+        raise MachineSettingsError(field, str(exc)) from None
+
+
+def _store_machine(s: Session, machine: Machine, now: datetime) -> None:
+    """Create or update a machine profile by name, in transaction `s`. Raises TextError
+    and MachineSettingsError (check_machine; the latter naming the machine)."""
+    try:
+        check_machine(machine)
+    except MachineSettingsError as exc:
+        raise MachineSettingsError(f"machine {machine.name!r}, {exc.field}", exc.detail) from None
     row = s.scalar(select(MachineRow).where(MachineRow.name == machine.name))
     if row is None:
         row = MachineRow(name=machine.name, created_at=now)

@@ -13,11 +13,10 @@ from jinja2_fragments.flask import render_block
 from werkzeug.wrappers import Response
 
 from app.cnc.formats.targets import OptionError, get_target, targets
-from app.cnc.machine import PRESETS, MachineError, read_machine
+from app.cnc.machine import PRESETS
 from app.cnc.text import TextError
-from app.dnc.service import available_ports, settings_of
-from app.dnc.settings import SettingsError
-from app.storage.library import LibraryError, Machine
+from app.dnc.service import available_ports
+from app.storage.library import LibraryError, Machine, check_machine
 from app.web.export import (
     DEFAULT_TARGET,
     form_values,
@@ -195,27 +194,17 @@ def save() -> Response | tuple[str, int]:
             message = f"Not saved: limits line {line!r} is not NAME=VALUE"
         else:
             limits[key.strip()] = value.strip()
-    if not message and limits:
-        try:
-            read_machine(limits)
-        except MachineError as exc:
-            message = f"Not saved: limits: {exc}"
+    machine = Machine(name, target, options, serial, form.get("notes", ""), limits)
     if not message:
         try:
-            settings_of(Machine(name, target, options, serial))
-        except SettingsError as exc:
-            message = f"Not saved: serial: {exc}"
-    if not message:
-        try:
-            get_library().save_machine(
-                Machine(name, target, options, serial, form.get("notes", ""), limits)
-            )
+            # The one check saving and restoring a machine go through (text, options,
+            # limits, serial settings); its message names the field (`serial, baud: …`).
+            check_machine(machine)
+            get_library().save_machine(machine)
         except (LibraryError, TextError) as exc:  # TextError: a setting too long (SETTING_LENGTH)
             message = f"Not saved: {exc}"
     if message:
-        return _page(
-            Machine(name, target, options, serial, form.get("notes", ""), limits), message
-        ), 422
+        return _page(machine, message), 422
     return redirect(url_for("machines.index"))
 
 

@@ -22,6 +22,7 @@ together). What is not carried (coolant, stray dwells, spindle stops) is reporte
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -111,6 +112,20 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
 }
 
 # An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
+# What an operation's moves look like, where a file's are not what its block makes: the
+# start of the import's refusal (`not_ours`).
+_NOT_A_HELIX: Final = (
+    "a helix (arcs going down in Z) that is not a MillBlocks HELIX (nor a THREAD MILL: its "
+    "passes lead in and out along arcs)"
+)
+_NOT_A_THREAD_MILL: Final = (
+    "helical arcs with a lead-in and lead-out (as a THREAD MILL cuts) that are not a "
+    "MillBlocks THREAD MILL"
+)
+_NOT_A_FACE: Final = (
+    "rows fed along X at one depth (as a FACE cuts them) that are not a MillBlocks FACE"
+)
+
 Retract = tuple[int, int, int]
 
 # `Segmenter.hole_spec`'s key: the HoleSpec's fields, its enums by identity.
@@ -549,13 +564,7 @@ class _Segmenter:
         start = (self.x, self.y, self.z)
         units = first.units
 
-        def refuse(why: str) -> ImportFailure:
-            return ImportFailure(
-                where,
-                f"a helix (arcs going down in Z) that is not a MillBlocks HELIX (nor a THREAD "
-                f"MILL: its passes lead in and out along arcs): {why}",
-                line,
-            )
+        refuse = functools.partial(self.not_ours, _NOT_A_HELIX, line)
 
         down: list[Arc] = []
         j = i
@@ -662,13 +671,7 @@ class _Segmenter:
         units = first.units
         near = 2 * self.tol + resolution_nm(units)
 
-        def refuse(line: int, why: str) -> ImportFailure:
-            return ImportFailure(
-                self.notes.where(line),
-                f"helical arcs with a lead-in and lead-out (as a THREAD MILL cuts) that are "
-                f"not a MillBlocks THREAD MILL: {why}",
-                line,
-            )
+        refuse = functools.partial(self.not_ours, _NOT_A_THREAD_MILL)
 
         # The file's passes: (approach, Z it came down to, its arcs).
         seen: list[tuple[XY, int, list[Arc]]] = []
@@ -835,6 +838,11 @@ class _Segmenter:
         self.x, self.y, self.z = last.x, last.y, last.z
         return j
 
+    def not_ours(self, shape: str, line: int, why: str) -> ImportFailure:
+        """The refusal of moves from `line` that have the `shape` an operation cuts but are
+        not what the MillBlocks block makes (`why`), named at its line."""
+        return ImportFailure(self.notes.where(line), f"{shape}: {why}", line)
+
     def tool_diameter(self) -> int | None:
         """The diameter (nm) the file gives the tool in use, or None."""
         data = self.parsed.tools.get(self.tool or self.next_tool())
@@ -856,13 +864,7 @@ class _Segmenter:
         units = first.units
         near = 2 * self.tol + resolution_nm(units)
 
-        def refuse(line: int, why: str) -> ImportFailure:
-            return ImportFailure(
-                self.notes.where(line),
-                f"rows fed along X at one depth (as a FACE cuts them) that are not a "
-                f"MillBlocks FACE: {why}",
-                line,
-            )
+        refuse = functools.partial(self.not_ours, _NOT_A_FACE)
 
         # The file's rows (y, x from, x to, the line that set the row, feed) level by level.
         levels: list[list[FaceRow]] = [[]]

@@ -705,7 +705,7 @@ def test_a_long_move_in_pieces_sweeps_about_the_points_of_the_whole_move() -> No
     r, t = IN / 16, 500.0
     for radius in (IN, 2 * IN):
         points = regions.path_points(circle(0, 0, radius), t)
-        index = regions.SweptIndex(r, t, 4 * r)
+        index = regions.SweptIndex(r, t)
         index.add(points)
         pieces = index.near(index.boxes(points))
         whole = regions.sweep_lines([points], r, t)
@@ -829,7 +829,7 @@ def covered_two_ways(passes: list[list[Pt]], a: Pt, b: Pt, r: float = R) -> tupl
     `passes` swept by the tool radius `r` (the move by r less the tolerance, as the planner
     asks it)."""
     t = 500.0
-    index = regions.SweptIndex(r, t, 4 * r)
+    index = regions.SweptIndex(r, t)
     for points in passes:
         index.add(points)
     boxes = index.boxes([a, b])

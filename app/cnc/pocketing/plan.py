@@ -219,8 +219,7 @@ class _Planner:
         return regions.segment_inside(self.moves, a, b, self._move_boxes)
 
     def _index(self) -> regions.SweptIndex:
-        # Cells of two tool diameters: a link's question reads a few of them.
-        return regions.SweptIndex(self.r, self.t, 4 * self.r, self._pieces)
+        return regions.SweptIndex(self.r, self.t, self._pieces)
 
     # -- order -------------------------------------------------------------------------------
 
@@ -695,9 +694,16 @@ _Y_THEN_X = operator.itemgetter(1, 0)
 
 
 def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
+    """The distance from `here` to the nearest point of `ring`, as `math.dist` measures it
+    (numpy finds the few points that can be nearest: a ring has thousands)."""
     if here is None:
         return 0.0
-    return min(math.dist(here, p) for p in ring)
+    at = np.asarray(ring, dtype=np.float64)
+    squared = (at[:, 0] - here[0]) ** 2 + (at[:, 1] - here[1]) ** 2
+    # numpy's squares and math.dist differ in the last bits: every point within a
+    # millionth of the least is measured exactly.
+    near = np.flatnonzero(squared <= squared.min() * (1 + 1e-6) + 1.0)
+    return min(math.dist(here, ring[k]) for k in near.tolist())
 
 
 # -- levels and findings ----------------------------------------------------------------------

@@ -373,8 +373,10 @@ class SweptIndex:
     every pass before, which grew with each pass).
 
     Each move is cut into pieces of `PIECE` segments (and the next piece's first segment:
-    neighbours share a segment), filed by box under the grid cells (`cell` nm square) the
-    box meets, and swept the first time a question needs it (`sweeps` keeps the sweeps by
+    neighbours share a segment), kept with its box (the boxes as one numpy array, which a
+    question compares with its own boxes in one pass: a grid of cells, each piece filed
+    under every cell its box met, took a tenth of a large pocket's planning to fill), and
+    swept the first time a question needs it (`sweeps` keeps the sweeps by
     (id of the points, piece), for indexes over the same moves). The area near a box is
     the union of the sweeps of the pieces there: the same area as the sweep of whole moves
     (a round tool's sweep along a polyline is the union of its sweeps along the pieces),
@@ -389,15 +391,14 @@ class SweptIndex:
         self,
         radius: float,
         tolerance: float,
-        cell: float,
         sweeps: dict[tuple[int, int], Swept] | None = None,
     ) -> None:
         self.radius = radius
         self.tolerance = tolerance
-        self.cell = cell
         self.sweeps: dict[tuple[int, int], Swept] = {} if sweeps is None else sweeps
-        self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
-        self.cells: dict[tuple[int, int], list[int]] = {}
+        self.pieces: list[tuple[Sequence[Pt], int]] = []
+        self._piece_boxes: list[Box] = []
+        self._box_array = np.zeros((0, 4), dtype=np.float64)  # the first rows of those
         # The boxes of a move's pieces by the id of its points (kept with them, so the id
         # is not reused): a pass is asked about as the one a link leads to, then recorded.
         self._boxes: dict[int, tuple[Sequence[Pt], list[Box]]] = {}
@@ -409,10 +410,8 @@ class SweptIndex:
         """Record a move along `points` (one point: the tool went down there). The list
         must stay alive and unchanged while the index is used (its id names its sweeps)."""
         for k, box in enumerate(self.boxes(points)):
-            number = len(self.pieces)
-            self.pieces.append((points, k, box))
-            for cell in self._cells(box):
-                self.cells.setdefault(cell, []).append(number)
+            self.pieces.append((points, k))
+            self._piece_boxes.append(box)
 
     def boxes(self, points: Sequence[Pt]) -> list[Box]:
         """The box of each piece of a move along `points`, grown by the tool's reach: the
@@ -473,13 +472,18 @@ class SweptIndex:
         """The (move, piece) pairs, recorded or in `also`, whose piece's box meets one of
         `boxes`: the only pieces whose sweeps can reach into them."""
         found: list[tuple[Sequence[Pt], int]] = []
-        numbers = sorted(
-            {n for box in boxes for cell in self._cells(box) for n in self.cells.get(cell, ())}
-        )
-        for number in numbers:
-            points, k, piece_box = self.pieces[number]
-            if any(_meet(piece_box, box) for box in boxes):
-                found.append((points, k))
+        if len(self._box_array) < len(self._piece_boxes):
+            added = np.array(self._piece_boxes[len(self._box_array) :], dtype=np.float64)
+            self._box_array = np.concatenate((self._box_array, added.reshape(-1, 4)))
+        if len(self._box_array) and boxes:
+            have, asked = self._box_array[:, None, :], np.array(boxes, dtype=np.float64)[None]
+            meets = (
+                (have[..., 0] <= asked[..., 2])
+                & (have[..., 2] >= asked[..., 0])
+                & (have[..., 1] <= asked[..., 3])
+                & (have[..., 3] >= asked[..., 1])
+            ).any(axis=1)
+            found += [self.pieces[number] for number in np.flatnonzero(meets).tolist()]
         for points in also:
             for k, piece_box in enumerate(self.boxes(points)):
                 if any(_meet(piece_box, box) for box in boxes):
@@ -495,12 +499,6 @@ class SweptIndex:
             swept = sweep_lines([piece], self.radius, self.tolerance, k == 0 or last)
             self.sweeps[key] = swept
         return swept
-
-    def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
-        c = self.cell
-        for kx in range(math.floor(box[0] / c), math.floor(box[2] / c) + 1):
-            for ky in range(math.floor(box[1] / c), math.floor(box[3] / c) + 1):
-                yield (kx, ky)
 
 
 def _meet(a: Box, b: Box) -> bool:

@@ -530,6 +530,8 @@ class Planner:
                 if info is not None and info.tcal is not None:
                     z += info.tcal
         feeding = (kind == LINE) | arcs
+        tenths = np.zeros(len(ops), dtype=np.int64)
+        tenths[dwell] = _tenths(rows["value"][dwell])
         run = Run(
             rows["block"].astype(np.int64),
             kind,
@@ -542,7 +544,7 @@ class Planner:
             rows["cy"].astype(np.int64),
             ops == Op.ARC_CW,
             arcs & (x == start_x) & (y == start_y),
-            np.where(dwell, _tenths(rows["value"]), 0),
+            tenths,
         )
         final = int(last[-1])
         if final < 0:

@@ -253,7 +253,7 @@ class Writer:
                 end = int(run_end[i])
                 if end - i < self.bulk_rows:
                     # A short run: row by row (a hole among them is no cycle), from lists.
-                    for row, wx, wy, wz, at in zip(
+                    for each, wx, wy, wz, at in zip(
                         rows[i:end].tolist(),
                         xs[i:end].tolist(),
                         ys[i:end].tolist(),
@@ -261,7 +261,7 @@ class Writer:
                         z[i:end].tolist(),
                         strict=True,
                     ):
-                        self.move(row, wx, wy, wz, at, chunk)
+                        self.move(each, wx, wy, wz, at, chunk)
                     i = end
                     continue
                 i += self.straight_run(rows[i:end], xs[i:end], ys[i:end], zs[i:end], z[i:end])

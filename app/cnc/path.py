@@ -563,6 +563,25 @@ def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]
             yield from walk(node.node, dx + ox, dy + oy, base + node.base)
 
 
+def pieces(node: Node) -> Iterator[Piece]:
+    """Each distinct piece under `node` once, unplaced: for the questions a placement does
+    not change (which hole operations, which tools), so a LOOP of 10^4 patterns costs its
+    pieces, not its placements."""
+    seen: set[int] = set()
+    stack = [node]
+    while stack:
+        here = stack.pop()
+        if id(here) in seen:
+            continue
+        seen.add(id(here))
+        if isinstance(here, Piece):
+            yield here
+        elif isinstance(here, Seq):
+            stack.extend(reversed(here.nodes))
+        else:
+            stack.append(here.node)
+
+
 def placed_holes(
     node: Node, dx: int = 0, dy: int = 0, base: int = 0
 ) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.void]]]:

@@ -267,6 +267,14 @@ class _Commands(click.Group):
     surrogate from arguments that are not UTF-8, a name or notes too long), wherever a
     command meets it, ends the command with exit 2 and the message naming the field."""
 
+    def main(self, *args: Any, **kwargs: Any) -> Any:
+        # numpy's OpenBLAS starts a thread per core when numpy is imported, about 60 ms of
+        # CPU on every command that loads numpy (half a small export's start, issue 31.3);
+        # nothing MillBlocks runs multiplies matrices, so one thread does the same work.
+        # Set before a command imports numpy; a setting of the user's own is kept.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        return super().main(*args, **kwargs)
+
     def invoke(self, ctx: click.Context) -> Any:
         from app.cnc.text import TextError
 

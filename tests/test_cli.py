@@ -335,7 +335,8 @@ def test_a_small_export_starts_nothing_it_does_not_use(tmp_path: Path) -> None:
     numpy.ma then reads the signatures of numpy's functions), 6 ms the ENGRAVE font
     package, and the simulation's stock and segments and the THREAD MILL and ENGRAVE
     modules, all loaded by validation for a program without STOCK, THREAD MILL or
-    ENGRAVE. The export now runs in one thread and loads none of them."""
+    ENGRAVE; tempfile, for a spool an export to OUT does not use. The export now runs
+    in one thread and loads none of them."""
     out = tmp_path / "out.ngc"
     program = ROOT / "app" / "demo" / "03-frame-pocket.json"
     loaded, threads = _process_after(
@@ -344,7 +345,7 @@ def test_a_small_export_starts_nothing_it_does_not_use(tmp_path: Path) -> None:
     assert out.read_text().startswith("%")
     assert threads == 1
     assert "numpy" in loaded
-    assert not {"numpy.ma", "HersheyFonts"} & loaded
+    assert not {"numpy.ma", "HersheyFonts", "tempfile"} & loaded
     assert not [name for name in loaded if name.startswith(OPERATION_MODULES)]
 
 

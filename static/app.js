@@ -32,7 +32,11 @@
     if (form.getAttribute("data-offered") !== "1") { return false; }
     var mode = form.querySelector("[data-mode]");
     if (mode && mode.value !== mode.defaultValue) { return false; }
-    return fields(form).every(function (el) {
+    // The prompts beside the sequence count too: a HELIX chosen is a value typed.
+    var beside = Array.from(form.querySelectorAll("[data-beside]")).filter(function (el) {
+      return !el.disabled;
+    });
+    return fields(form).concat(beside).every(function (el) {
       if (el.type === "checkbox") { return el.checked === el.defaultChecked; }
       if (el.tagName === "SELECT") {
         return Array.from(el.options).every(function (o) { return o.selected === o.defaultSelected; });
@@ -155,6 +159,22 @@
     if (event.key === "Enter" && target.matches && target.matches("#entry .choices")) {
       // On a menu a number chooses; Enter does nothing (it opened POS by accident).
       event.preventDefault();
+      return;
+    }
+    if (event.key === "Enter" && form && target.hasAttribute && target.hasAttribute("data-beside")) {
+      // A prompt beside the sequence (ENTRY, its RAMP ANGLE) steps to the next one beside
+      // it that is shown, and from the last enters the block as the last prompt does: the
+      // browser's own Enter would submit the form past the check for untouched values.
+      event.preventDefault();
+      var beside = nextPrompt(form, target);
+      if (beside) {
+        beside.focus();
+        if (beside.select) { beside.select(); }
+        return;
+      }
+      var untouchedNote = form.querySelector(".untouched");
+      if (untouched(form)) { if (untouchedNote) { untouchedNote.hidden = false; } return; }
+      enterBlock(form);
       return;
     }
     if (event.key === "Enter" && form && target.tagName !== "TEXTAREA" && target.tagName !== "BUTTON") {

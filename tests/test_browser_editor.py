@@ -11,6 +11,7 @@ import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal
+from pathlib import Path
 
 import pytest
 from flask import Flask
@@ -18,6 +19,7 @@ from playwright.sync_api import Page, expect
 from werkzeug.serving import make_server
 
 from app import create_app
+from app.cnc import document
 from app.cnc.blocks import (
     ArcEnd,
     Block,
@@ -580,6 +582,58 @@ def test_a_pocket_ramps_down_on_a_helix_chosen_beside_the_prompts(
     expect(refusal).to_contain_text("0.5 to 30")
     pocket = saved_blocks(served, program_id)[1]
     assert isinstance(pocket, Pocket) and pocket.ramp_angle == D(5)
+
+
+def test_enter_beside_the_prompts_steps_to_the_angle_then_enters_the_block(
+    page: Page, served: Served
+) -> None:
+    """Enter on a prompt beside the sequence does what Enter does in it: on ENTRY (HELIX
+    chosen) it moves to RAMP ANGLE, on RAMP ANGLE it enters the block. Failed before: Enter on
+    ENTRY left the cursor where it was, and on RAMP ANGLE the browser submitted the form
+    itself, past the check that a new block's offered values were typed (which now counts
+    ENTRY and RAMP ANGLE as values typed)."""
+    golden = (Path(__file__).parent / "golden" / "pocket-islands" / "program.json").read_text()
+    program = document.loads(golden)
+    program_id = open_editor(page, served, program)
+    page.locator('.block-row[data-block="2"] .summary').click()
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: POCKET")
+    settle(page)
+    page.locator("#f-entry").focus()
+    page.keyboard.press("1")
+    expect(page.locator("#f-ramp_angle")).to_be_focused()
+    page.keyboard.press("Shift+Tab")
+    expect(page.locator("#f-entry")).to_be_focused()
+    page.keyboard.press("Enter")
+    expect(page.locator("#f-ramp_angle")).to_be_focused()
+    page.keyboard.press("Control+a")
+    page.keyboard.type("7")
+    page.keyboard.press("Enter")
+    expect(page.locator("#entry h2")).to_contain_text(f"Block {len(program.blocks) + 1}: type")
+    pocket = saved_blocks(served, program_id)[1]
+    assert isinstance(pocket, Pocket)
+    assert (pocket.entry, pocket.ramp_angle) == (Entry.HELIX, D(7))
+
+    # A new POCKET after its DRILL: FEEDR XY typed, Tab to ENTRY, HELIX, 7°, Enter.
+    program_id = open_editor(page, served, program_of())
+    choose(page, "2", "DRILL")
+    choose(page, "1", "Block 1: DRILL")
+    enter(page, "0", "0", ".1", "-.25", "5", "2", "1")
+    expect(page.locator("#entry h2")).to_contain_text("Block 2: type")
+    settle(page)
+    choose(page, "0", "POCKET")
+    choose(page, "1", "Block 2: POCKET")
+    enter(page, "", "", "12")
+    expect(page.locator("#f-tool")).to_be_focused()
+    page.keyboard.press("Tab")
+    page.keyboard.press("1")
+    expect(page.locator("#f-ramp_angle")).to_be_focused()
+    page.keyboard.press("Control+a")
+    page.keyboard.type("7")
+    page.keyboard.press("Enter")
+    expect(page.locator("#entry h2")).to_contain_text("Block 3: type")
+    added = saved_blocks(served, program_id)[1]
+    assert isinstance(added, Pocket)
+    assert (added.entry, added.ramp_angle) == (Entry.HELIX, D(7))
 
 
 def test_a_helix_that_does_not_fit_says_what_would(page: Page, served: Served) -> None:

@@ -375,6 +375,14 @@ def test_block_delete_numbers_and_percent() -> None:
         ("G20\nO100 sub\n", "line 2, column 1: o100 sub has no o100 endsub"),
         ("G20\nG0 X1 $\n", "line 2, column 7: unexpected character '$'"),
         ("G20\nG33 X1 K0.1\n", "line 2, column 1: G33: thread cutting is not supported"),
+        # Fanuc's codes that change what X and Y mean: ignored before, and the next
+        # G1 X1. Y45. was cut as a straight move to X1 Y45.
+        ("G20\nG0 X0 Y0\nG16\nG1 X1. Y45. F10\n", "line 3, column 1: G16: polar coordinates"),
+        ("G20\nG51.1 X0\nG1 X1 Y1 F10\n", "line 2, column 1: G51.1: a programmable mirror"),
+        ("G20\nG12.1\nG1 X1 Y1 F10\n", "line 2, column 1: G12.1: polar coordinate interp"),
+        ("G20\nG7.1\nG1 X1 Y1 F10\n", "line 2, column 1: G7.1: cylindrical interpolation"),
+        ("G20\nG0 X1 Y1\nG12 I0.5 D1 F10\n", "line 3, column 1: G12: a circle cutting cycle"),
+        ("G20\nG68.2 X0 Y0 Z0 I0 J45 K0\n", "line 2, column 1: G68.2: a tilted working plane"),
         ("G20\nG0 Z0.1\nG1 X1 Y1\n", "line 3, column 1: a feed move with no F given yet"),
         ("G20\nM98 P100\n", "line 2, column 1: M98 P100: the file has no O100"),
         ("G20\nG0 X1 M98 P100\n", "line 2, column 7: M98: a subprogram call not at the beg"),

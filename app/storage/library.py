@@ -693,16 +693,18 @@ def _machine(row: MachineRow) -> Machine:
 
 def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = UTC) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
-    the demo programs added the first time (unless not `seed_demo`); its messages state
-    times in `zone`."""
+    the demo programs added the first time it is opened (unless not `seed_demo`: then it
+    never gets them); its messages state times in `zone`."""
     engine = make_engine(url)
     library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").
     with migration_lock(engine):
         upgrade(engine)
-        if seed_demo:
-            from app.storage.demo import seed
+        from app.storage.demo import decline, seed
 
+        if seed_demo:
             seed(library)
+        else:
+            decline(library)
     return library

@@ -161,6 +161,16 @@ REFUSED_G = {
     "65": "macro call",
     "66": "macro call",
     "68": "coordinate rotation",
+    # Fanuc's codes that change what X and Y mean (seed 002 and later Fanuc manuals): read
+    # as if absent, the next G1 X1. Y45. would be a straight move to X1 Y45.
+    "7.1": "cylindrical interpolation",
+    "12": "a circle cutting cycle of the control",
+    "12.1": "polar coordinate interpolation",
+    "13": "a circle cutting cycle of the control",
+    "16": "polar coordinates (X a radius, Y an angle)",
+    "51.1": "a programmable mirror image",
+    "68.1": "a tilted working plane",
+    "68.2": "a tilted working plane",
 }
 NOTED_G = {
     "17": "",
@@ -177,6 +187,10 @@ NOTED_G = {
     "64": "continuous mode: not carried",
     "67": "macro modal call cancel: nothing to import",
     "69": "coordinate rotation off: nothing to import",
+    "13.1": "polar coordinate interpolation off: nothing to import",
+    "15": "polar coordinates off: nothing to import",
+    "50.1": "programmable mirror image off: nothing to import",
+    "69.1": "tilted working plane off: nothing to import",
     "80": "",
     "94": "",
     "96": "constant surface speed: not carried",

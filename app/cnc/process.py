@@ -44,7 +44,6 @@ from app.cnc.path import (
 )
 from app.cnc.problems import Problem, Rule, Severity
 from app.cnc.routines import routine_outline
-from app.cnc.simulate.stock import stock_box
 from app.cnc.units import Units, format_length
 
 # Two holes this close (nm) are at the same point: half the finest step a program can type
@@ -282,6 +281,10 @@ def below_stock_problems(program: Program, compiled: Compiled) -> list[Problem]:
     stock = program.stock
     if stock is None:
         return []
+    # The simulation's stock (and its segment arrays) loads with a program that has a
+    # stock, not with every validation (issue 31.3).
+    from app.cnc.simulate.stock import stock_box
+
     units = program.units
     box = stock_box(stock, units)
     bottom, room = box.bottom, box.clear

@@ -46,7 +46,7 @@ from app.cnc.formats.text import Lengths, Lines, comment_text
 from app.cnc.geometry import arc_points, chord_step
 from app.cnc.limits import HELIX_CHORD_INCH, HOLE_DWELL_SECONDS
 from app.cnc.motions import is_motion
-from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op
+from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, distinct
 from app.cnc.problems import Need
 from app.cnc.units import Units, to_nm
 
@@ -339,9 +339,7 @@ class Writer:
         g[dwelling] = self.code("G", 4)
         p = empty.copy()
         values = rows["value"][lines][dwelling]
-        texts = {
-            v: self.d.dwell(Decimal(v) / 1000, cycle=False) for v in np.unique(values).tolist()
-        }
+        texts = {v: self.d.dwell(Decimal(v) / 1000, cycle=False) for v in distinct(values).tolist()}
         p[dwelling] = [texts[v] for v in values.tolist()]
         f = empty.copy()
         feeding = np.flatnonzero(ops == Op.FEED)
@@ -349,7 +347,7 @@ class Writer:
             feeds = rows["feed"][lines][feeding]
             previous = np.concatenate(([-1 if self.feed is None else self.feed], feeds[:-1]))
             fresh = feeds != previous
-            words = {v: f"F{self.feed_value(v)}" for v in np.unique(feeds[fresh]).tolist()}
+            words = {v: f"F{self.feed_value(v)}" for v in distinct(feeds[fresh]).tolist()}
             f[feeding[fresh]] = [words[v] for v in feeds[fresh].tolist()]
             self.feed = int(feeds[-1])
         axes = []
@@ -388,12 +386,12 @@ class Writer:
         tools = np.full(len(rows), self.tool, dtype=np.int64)
         for k in changes.tolist():
             tools[k:] = rows["value"][k]
-        distinct = np.unique(tools)
-        lifts = {int(t): self.z_lift(int(t)) for t in distinct.tolist()}
+        found = distinct(tools)
+        lifts = {int(t): self.z_lift(int(t)) for t in found.tolist()}
         if not any(lifts.values()):
             return None
-        return np.array([lifts[int(t)] for t in distinct.tolist()], dtype=np.int64)[
-            np.searchsorted(distinct, tools)
+        return np.array([lifts[int(t)] for t in found.tolist()], dtype=np.int64)[
+            np.searchsorted(found, tools)
         ]
 
     def header(self) -> None:

@@ -291,11 +291,17 @@ def _carriers_at(
     meets = (x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1])
     rows: list[IntArray] = []
     found: list[IntArray] = []
-    for k in np.flatnonzero(meets).tolist():
-        bx0, by0, bx1, by1 = boxes[k]
-        near = np.flatnonzero(
-            (at[:, 0] >= bx0) & (at[:, 0] <= bx1) & (at[:, 1] >= by0) & (at[:, 1] <= by1)
-        )
+    # The points by x: a carrier's box holds a run of them, found by bisection, and only
+    # that run is compared in y (not every point of the ring for every carrier).
+    by_x = np.argsort(at[:, 0], kind="stable")
+    xs, ys = at[by_x, 0], at[by_x, 1]
+    for k, (bx0, by0, bx1, by1) in zip(
+        np.flatnonzero(meets).tolist(), boxes[meets].tolist(), strict=True
+    ):
+        first = int(np.searchsorted(xs, bx0, side="left"))
+        last = int(np.searchsorted(xs, bx1, side="right"))
+        run = ys[first:last]
+        near = np.sort(by_x[first:last][(run >= by0) & (run <= by1)])
         if not len(near):
             continue
         close = near[level[k].distances(at[near], tolerance) <= tolerance]

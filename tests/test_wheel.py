@@ -222,8 +222,9 @@ def test_a_later_commits_wheel_upgrades_and_the_earlier_rolls_back(tmp_path: Pat
             timeout=300,
         )
         ask = "import importlib.metadata as m; print(m.version('millblocks'))"
+        # Asked from outside the checkout, whose editable install's metadata is in it.
         return subprocess.run(
-            [python, "-c", ask], capture_output=True, text=True, check=True, timeout=60
+            [python, "-c", ask], cwd=venv, capture_output=True, text=True, check=True, timeout=60
         ).stdout.strip()
 
     assert install(older) == _version(older)

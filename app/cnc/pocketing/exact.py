@@ -291,11 +291,17 @@ def _carriers_at(
     meets = (x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1])
     rows: list[IntArray] = []
     found: list[IntArray] = []
-    for k in np.flatnonzero(meets).tolist():
-        bx0, by0, bx1, by1 = boxes[k]
-        near = np.flatnonzero(
-            (at[:, 0] >= bx0) & (at[:, 0] <= bx1) & (at[:, 1] >= by0) & (at[:, 1] <= by1)
-        )
+    # The points by x: a carrier's box holds a run of them, found by bisection, and only
+    # that run is compared in y (not every point of the ring for every carrier).
+    by_x = np.argsort(at[:, 0], kind="stable")
+    xs, ys = at[by_x, 0], at[by_x, 1]
+    for k, (bx0, by0, bx1, by1) in zip(
+        np.flatnonzero(meets).tolist(), boxes[meets].tolist(), strict=True
+    ):
+        first = int(np.searchsorted(xs, bx0, side="left"))
+        last = int(np.searchsorted(xs, bx1, side="right"))
+        run = ys[first:last]
+        near = np.sort(by_x[first:last][(run >= by0) & (run <= by1)])
         if not len(near):
             continue
         close = near[level[k].distances(at[near], tolerance) <= tolerance]
@@ -324,15 +330,14 @@ def _edge_labels(
     at: npt.NDArray[np.float64],
     rows: IntArray,
     carriers_of: IntArray,
-    on: list[set[int]],
     level: Sequence[Carrier],
     tolerance: float,
 ) -> list[set[int]]:
     """For each edge of the ring (point i to point i + 1), the carriers its two ends and its
     middle lie on within `tolerance` (nm); for an edge across a junction (Clipper kept no
     point there), where no carrier holds all three, the carriers of either end: either
-    may take it. `rows`, `carriers_of`: the (point, carrier) pairs (`_carriers_at`), `on`
-    the same as sets. The middles are measured one numpy pass per carrier
+    may take it. `rows`, `carriers_of`: the (point, carrier) pairs (`_carriers_at`). The
+    middles are measured one numpy pass per carrier
     (`Carrier.distances`, the numbers `distance` gives), not one Python call per edge and
     carrier."""
     n = len(at)
@@ -364,8 +369,18 @@ def _edge_labels(
     else:
         label_rows = label_carriers = np.zeros(0, dtype=np.intp)
     labels = _sets(label_rows, label_carriers, n)
-    for i in np.flatnonzero(np.bincount(label_rows, minlength=n) == 0).tolist():
-        labels[i] = on[i] | on[(i + 1) % n]
+    unlabelled = np.flatnonzero(np.bincount(label_rows, minlength=n) == 0).tolist()
+    if unlabelled:
+        # The carriers of each point, as sets, only for the ends of these edges.
+        order = np.lexsort((carriers_of, rows))
+        by_row, values = rows[order], carriers_of[order]
+        first = np.searchsorted(by_row, np.arange(n + 1))
+
+        def on(i: int) -> set[int]:
+            return set(values[first[i] : first[i + 1]].tolist())
+
+        for i in unlabelled:
+            labels[i] = on(i) | on((i + 1) % n)
     return labels
 
 
@@ -403,8 +418,9 @@ def exact_ring(
     rows, carriers_of = _carriers_at(at, level, tolerance, level_boxes)
     if (np.bincount(rows, minlength=n) == 0).any():
         return None
-    on = _sets(rows, carriers_of, n)
-    labels = _edge_labels(at, rows, carriers_of, on, level, tolerance)
+    # The pairs come by carrier, rows ascending: their codes k n + i ascend (`_has`).
+    codes = carriers_of * n + rows
+    labels = _edge_labels(at, rows, carriers_of, level, tolerance)
     runs = _runs(labels)
     if len(runs) == 1:
         carrier = level[runs[0][0]]
@@ -412,7 +428,8 @@ def exact_ring(
             return None
         start = carrier.project(_lowest(points))
         element = Element(block, start, centre=carrier.origin, clockwise=carrier.clockwise, tag=tag)
-        return _checked(Path(start, (element,)), [points], [element], [start], tolerance, [carrier])
+        path = Path(start, (element,))
+        return _checked(path, at, points, [np.arange(n)], [element], [start], tolerance, [carrier])
     junctions: list[Pt] = []
     for k, (label, first, length) in enumerate(runs):
         nxt_label = runs[(k + 1) % len(runs)][0]
@@ -432,7 +449,7 @@ def exact_ring(
         return None
     elements: list[Element] = []
     element_starts: list[Pt] = []
-    groups: list[list[Pt]] = []
+    groups: list[IntArray] = []
     used: list[Carrier] = []
     for k, (label, first, length) in enumerate(runs):
         start, end = junctions[k - 1], junctions[k]
@@ -447,18 +464,30 @@ def exact_ring(
             )
         elements.append(element)
         element_starts.append(start)
-        run = [(first + j) % n for j in range(length + 1)]
-        groups.append([points[i] for i in run if label in on[i]])
+        # The run's points that lie on its carrier (in order), found among the pairs.
+        run = (first + np.arange(length + 1)) % n
+        groups.append(run[_has(codes, label * n + run)])
         used.append(carrier)
     if not elements:
         return None
     path = Path(junctions[-1], tuple(elements))
-    return _checked(path, groups, elements, element_starts, tolerance, used)
+    return _checked(path, at, points, groups, elements, element_starts, tolerance, used)
+
+
+def _has(codes: IntArray, wanted: IntArray) -> npt.NDArray[np.bool_]:
+    """Whether each of `wanted` is among `codes` (ascending)."""
+    if not len(codes):
+        return np.zeros(len(wanted), dtype=bool)
+    found = np.minimum(np.searchsorted(codes, wanted), len(codes) - 1)
+    there: npt.NDArray[np.bool_] = codes[found] == wanted
+    return there
 
 
 def _checked(
     path: Path,
-    groups: list[list[Pt]],
+    at: npt.NDArray[np.float64],
+    points: list[Pt],
+    groups: list[IntArray],
     elements: list[Element],
     starts: list[Pt],
     tolerance: float,
@@ -466,18 +495,17 @@ def _checked(
 ) -> ExactRing | None:
     # numpy bounds the exact distance of every point to its element at once (one pass for
     # the ring); only a point whose bounds straddle the limit (beside an arc's end) is
-    # measured exactly.
-    points = [p for group in groups for p in group]
-    if points:
+    # measured exactly. `groups`: each element's points, as rows of `at` (the ring's
+    # points, `points` the same as tuples).
+    which = np.concatenate(groups)
+    if len(which):
         owner = np.repeat(np.arange(len(groups)), [len(group) for group in groups])
-        lower, upper = nearest.pair_bounds(
-            np.asarray(points, dtype=np.float64), nearest.table(starts, elements).take(owner)
-        )
+        lower, upper = nearest.pair_bounds(at[which], nearest.table(starts, elements).take(owner))
         if (lower > 2 * tolerance + nearest.MARGIN).any():
             return None
         for i in np.flatnonzero(upper > 2 * tolerance - nearest.MARGIN).tolist():
             k = int(owner[i])
-            if distance_to_element(points[i], starts[k], elements[k]) > 2 * tolerance:
+            if distance_to_element(points[int(which[i])], starts[k], elements[k]) > 2 * tolerance:
                 return None
     sources = tuple(sorted({s for c in used for s in c.sources}))
     return ExactRing(path, sources)

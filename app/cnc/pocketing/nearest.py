@@ -154,27 +154,45 @@ def nearest_pairs(points: Array, elements: Elements, reach: float) -> list[tuple
     extent = float(max(np.ptp(points[:, 0]), np.ptp(points[:, 1]), 1.0))
     cell = max(grow, extent / 128)  # (not thousands of cells under one large element)
     keys = np.floor(points / cell).astype(np.int64)
-    filed: dict[tuple[int, int], list[int]] = {}
-    for k, key in enumerate(map(tuple, keys.tolist())):
-        filed.setdefault(key, []).append(k)
-    under: dict[tuple[int, int], list[int]] = {}
-    cells_of = np.floor(boxes / cell).astype(np.int64).tolist()
-    for e, (kx0, ky0, kx1, ky1) in enumerate(cells_of):
-        for kx in range(kx0, kx1 + 1):
-            for ky in range(ky0, ky1 + 1):
-                if (kx, ky) in filed:
-                    under.setdefault((kx, ky), []).append(e)
+    # Cells numbered x-major within the points' cells' box: the points filed by number
+    # (rows ascending in each), and every element under each numbered cell its box meets
+    # (elements ascending), in numpy passes rather than one Python step per point and cell.
+    low, high = keys.min(axis=0), keys.max(axis=0)
+    width = int(high[1] - low[1]) + 1
+    codes = (keys[:, 0] - low[0]) * width + (keys[:, 1] - low[1])
+    by_code = np.argsort(codes, kind="stable")
+    cells, first = np.unique(codes[by_code], return_index=True)
+    filed = dict(zip(cells.tolist(), np.split(by_code, first[1:]), strict=True))
+    spans = np.floor(boxes / cell).astype(np.int64)
+    kx0, ky0 = np.maximum(spans[:, 0], low[0]), np.maximum(spans[:, 1], low[1])
+    kx1, ky1 = np.minimum(spans[:, 2], high[0]), np.minimum(spans[:, 3], high[1])
+    nx, ny = np.maximum(kx1 - kx0 + 1, 0), np.maximum(ky1 - ky0 + 1, 0)
+    count = nx * ny
+    element = np.repeat(np.arange(len(elements)), count)
+    place = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    per_row = ny[element]
+    met = (kx0[element] + place // np.maximum(per_row, 1) - low[0]) * width + (
+        ky0[element] + place % np.maximum(per_row, 1) - low[1]
+    )
+    there = np.isin(met, cells)
+    met, element = met[there], element[there]
+    by_cell = np.argsort(met, kind="stable")
+    met, element = met[by_cell], element[by_cell]
+    starts = np.flatnonzero(np.diff(met)) + 1
+    under: dict[int, npt.NDArray[np.intp]] = {}
+    if len(met):
+        heads = met[np.concatenate(([0], starts))].tolist()
+        under = dict(zip(heads, np.split(element, starts), strict=True))
     best = math.inf
     found: list[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], Array]] = []
     for key, rows in filed.items():
-        near = under.get(key)
-        if not near:
+        which = under.get(key)
+        if which is None or not len(which):
             continue
-        which = np.array(near, dtype=np.intp)
         table = elements.take(which)
         per = max(1, _PAIRS // len(which))  # (memory bounded, however many are near)
         for k in range(0, len(rows), per):
-            at = np.array(rows[k : k + per], dtype=np.intp)
+            at = rows[k : k + per]
             low, high = bounds(points[at], table)
             best = min(best, float(high.min()))
             found.append((at, which, low))

@@ -244,11 +244,19 @@ class _Planner:
         for child in node.children:
             self._cut(child)
         rings = list(node.component.rings)
+        # Each ring's points as numpy reads them and its key, made once: the nearest ring
+        # is asked again after every ring cut (a component's outer ring and its holes).
+        arrays = [np.asarray(g, dtype=np.float64) for g in rings]
+        keys = [_key_ring(g) for g in rings]
         leaf_entry = not node.children
         while rings:
             here = self.position
-            ring = min(rings, key=lambda g: (_ring_distance(g, here), _key_ring(g)))
-            rings.remove(ring)
+            k = min(
+                range(len(rings)),
+                key=lambda i: (_ring_distance(rings[i], here, arrays[i]), keys[i]),
+            )
+            ring = rings.pop(k)
+            del arrays[k], keys[k]
             self._add_ring(node, ring, plunge_deep=leaf_entry)
             leaf_entry = False
 
@@ -693,12 +701,12 @@ def _key_ring(ring: regions.Ring) -> tuple[int, int]:
 _Y_THEN_X = operator.itemgetter(1, 0)
 
 
-def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
+def _ring_distance(ring: regions.Ring, here: Pt | None, at: FloatArray) -> float:
     """The distance from `here` to the nearest point of `ring`, as `math.dist` measures it
-    (numpy finds the few points that can be nearest: a ring has thousands)."""
+    (numpy finds the few points that can be nearest: a ring has thousands). `at`: the
+    ring's points as a float array (made once by the caller, who asks many times)."""
     if here is None:
         return 0.0
-    at = np.asarray(ring, dtype=np.float64)
     squared = (at[:, 0] - here[0]) ** 2 + (at[:, 1] - here[1]) ** 2
     # numpy's squares and math.dist differ in the last bits: every point within a
     # millionth of the least is measured exactly.

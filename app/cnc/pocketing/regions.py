@@ -16,6 +16,7 @@ within `tolerance` nm of the arc (the chordal tolerance the planner states).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -187,22 +188,27 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
     """One closed contour's raw offset `d` to its left (see `inset`), as Clipper reads it
     (lists of [x, y]: only Clipper reads it, and tuples of its points were a third of a
     level's time)."""
-    chunks: list[npt.NDArray[np.float64]] = []
+    # Each piece: its points, or the number of an arc of `arcs` (all the arcs' points are
+    # made in one numpy pass, not one small pass per arc and corner: a level has thousands).
+    pieces: list[list[Pt] | int] = []
+    arcs: list[_ArcRun] = []
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
     for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
         moved_start, moved = offset_element(start, element, 1.0, d)
         c = element.centre
         if c is None:
-            chunks.append(np.array([moved_start, moved.end]))
+            pieces.append([moved_start, moved.end])
         elif math.dist(moved_start, c) < 1.0:
-            chunks.append(np.array([c]))  # an arc of radius d: its offset is its centre
+            pieces.append([c])  # an arc of radius d: its offset is its centre
         else:
             radius = math.dist(moved_start, c)
             turn = sweep(moved_start, moved)
             a0 = math.atan2(moved_start[1] - c[1], moved_start[0] - c[0])
             signed = -turn if element.clockwise else turn
-            chunks.append(_arc(c, radius, a0, signed, arc_steps(radius, turn, tolerance)))
+            n = arc_steps(radius, turn, tolerance)
+            pieces.append(len(arcs))
+            arcs.append((c[0], c[1], radius, a0, signed, n, 0, n + 1))
         following = elements[(k + 1) % len(elements)]
         t1 = tangent(start, element, at_end=True)
         t2 = tangent(element.end, following, at_end=False)
@@ -211,9 +217,17 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
         if turn < -TURN_EPS:  # a right turn: the moved elements part, joined by an arc of d
             n1 = left_normal(t1)
             a1 = math.atan2(n1[1], n1[0])
-            chunks.append(_arc(corner, d, a1, turn, arc_steps(d, -turn, tolerance))[1:-1])
+            n = arc_steps(d, -turn, tolerance)
+            if n > 1:  # (its ends, on the moved elements, are theirs)
+                pieces.append(len(arcs))
+                arcs.append((corner[0], corner[1], d, a1, turn, n, 1, n))
         elif turn > TURN_EPS:  # a left turn: the moved elements overlap; the corner keeps
-            chunks.append(np.array([corner]))  # the winding of their loop (as Clipper does)
+            pieces.append([corner])  # the winding of their loop (as Clipper does)
+    on_arcs, first = _arcs(arcs)
+    chunks = [
+        on_arcs[first[p] : first[p + 1]] if isinstance(p, int) else np.array(p, dtype=np.float64)
+        for p in pieces
+    ]
     at = np.rint(np.concatenate(chunks)).astype(np.int64)
     # Consecutive repeats (and the closing one) dropped, as `to_ring` does.
     keep = np.ones(len(at), dtype=bool)
@@ -225,10 +239,27 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
     return found
 
 
-def _arc(c: Pt, radius: float, a0: float, turn: float, n: int) -> npt.NDArray[np.float64]:
-    """n + 1 points on the circle about `c` from angle `a0` turning `turn` (signed)."""
-    angles = a0 + turn * np.arange(n + 1) / n
-    return np.column_stack((c[0] + radius * np.cos(angles), c[1] + radius * np.sin(angles)))
+_ArcRun = tuple[float, float, float, float, float, int, int, int]
+"""An arc's points for `_arcs`: centre x, y, radius, start angle, turn (signed, radians),
+chords n, and which of its n + 1 points (from, to: 0, n + 1 is all of them)."""
+
+
+def _arcs(arcs: Sequence[_ArcRun]) -> tuple[npt.NDArray[np.float64], list[int]]:
+    """The points of `arcs` one after another, and where each arc's begin (with the end
+    after the last): point i of an arc is at angle a0 + turn i / n on its circle."""
+    counts = [to - start for *_, start, to in arcs]
+    first = [0, *itertools.accumulate(counts)]
+    if not arcs:
+        return np.zeros((0, 2)), first
+    cx, cy, radius, a0, turn, n, start, _ = np.array(arcs, dtype=np.float64).T
+    sizes = np.array(counts, dtype=np.intp)
+    which = np.repeat(np.arange(len(arcs)), sizes)
+    # Each point's number on its arc: its place in the whole less its arc's first place.
+    i = np.arange(first[-1]) - np.repeat(np.array(first[:-1]), sizes) + start[which]
+    angles = a0[which] + turn[which] * i / n[which]
+    x = cx[which] + radius[which] * np.cos(angles)
+    y = cy[which] + radius[which] * np.sin(angles)
+    return np.column_stack((x, y)), first
 
 
 def sweep_lines(

@@ -41,7 +41,7 @@ from app.cnc.text import (
     search_terms,
 )
 from app.dnc.settings import PortSettings, SettingsError
-from app.storage.db import make_engine, migration_lock, upgrade
+from app.storage.db import migration_lock, open_engine, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 from app.storage.revisions import RevisionInfo, Versioned, stale_message
 
@@ -695,7 +695,7 @@ def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = 
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
     the demo programs added the first time (unless not `seed_demo`); its messages state
     times in `zone`."""
-    engine = make_engine(url)
+    engine = open_engine(url)
     library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").

@@ -1508,13 +1508,18 @@ def dnc_service(poll: float, stop_with: int | None) -> None:
     machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
     transfers running then, naming them). Run one per library, beside the web server."""
     from app.dnc.daemon import TransferService
+    from app.web.logs import setup
 
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     if stop_with is not None:
         _stop_with_parent(stop, stop_with, poll)
-    running = TransferService(library(), poll=poll)
+    config = settings()
+    # The service's log lines (a database that stopped answering, a transfer that failed)
+    # as the web server's: time or journal priority, level, logger (docs/deploy.md, Logs).
+    setup(config["LOG_LEVEL"])
+    running = TransferService(library(config), poll=poll)
     for transfer in running.recover():
         click.echo(
             f"transfer {transfer.id} ({transfer.direction} {transfer.program_name or '-'} on "

@@ -31,7 +31,12 @@ def check() -> tuple[dict[str, str], int, dict[str, str]]:
         first = (str(exc).splitlines() or [exc.__class__.__name__])[0]
         log.warning("health check: the database does not answer: %s", first)
         return {"status": "unavailable"}, 503, headers
-    gone = service_died(get_library())
+    try:
+        gone = service_died(get_library())
+    except SQLAlchemyError:
+        # The database answers but has no library's tables (emptied, a restore under way):
+        # no service's heartbeat to judge; the database's answer is the health.
+        gone = None
     if gone is not None:
         log.warning(
             "health check: the transfer service (%s UTC, its last heartbeat) stopped without "

@@ -288,6 +288,21 @@ class _Commands(click.Group):
     surrogate from arguments that are not UTF-8, a name or notes too long), wherever a
     command meets it, ends the command with exit 2 and the message naming the field."""
 
+    def main(self, *args: Any, **kwargs: Any) -> Any:
+        # numpy's OpenBLAS starts a thread per core when numpy is imported, 20-60 ms of CPU
+        # on every command that loads numpy (issue 31.3, docs/benchmarks.md); nothing
+        # MillBlocks runs multiplies matrices, so one thread does the same work.
+        # Set before a command imports numpy; a setting of the user's own is kept, and a
+        # process that calls `main` itself (the tests) has its environment back after.
+        ours = "OPENBLAS_NUM_THREADS" not in os.environ
+        if ours:
+            os.environ["OPENBLAS_NUM_THREADS"] = "1"
+        try:
+            return super().main(*args, **kwargs)
+        finally:
+            if ours:
+                os.environ.pop("OPENBLAS_NUM_THREADS", None)
+
     def invoke(self, ctx: click.Context) -> Any:
         from app.cnc.text import TextError
 

@@ -235,17 +235,36 @@ def test_an_events_import_with_errors_converts_to_json(tmp_path: Path) -> None:
 
 def _modules_after(args: list[str], tmp_path: Path) -> set[str]:
     """The modules a whole `millblocks ARGS` process has imported when it exits."""
+    return _process_after(args)[0]
+
+
+def _process_after(args: list[str]) -> tuple[set[str], int]:
+    """The modules a whole `millblocks ARGS` process has imported when it exits, and how
+    many threads it runs then (Linux's /proc/self/task)."""
+    report = (
+        "print(json.dumps([sorted(sys.modules), len(os.listdir('/proc/self/task'))]), "
+        "file=sys.stderr)"
+    )
     script = (
-        "import atexit, json, sys\n"
-        "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
+        "import atexit, json, os, sys\n"
+        f"atexit.register(lambda: {report})\n"
         "from app.cli import main\n"
         f"main({args!r})\n"
     )
+    # The process's environment as a shell gives it: no thread setting inherited from this
+    # test process.
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     done = subprocess.run(
-        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, check=False
+        [sys.executable, "-c", script],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=False,
+        env=env,
     )
     assert done.returncode == 0, done.stderr
-    return set(json.loads(done.stderr.strip().splitlines()[-1]))
+    modules, threads = json.loads(done.stderr.strip().splitlines()[-1])
+    return set(modules), threads
 
 
 HEAVY = {"sqlalchemy", "alembic", "ezdxf", "flask", "numpy", "serial"}
@@ -306,6 +325,33 @@ def test_a_small_export_loads_its_own_format_alone(tmp_path: Path) -> None:
     assert FORMAT_MODULES & loaded == {"app.cnc.formats.gcode.writer"}
     assert not FORMAT_LIBRARIES & {name.split(".")[0] for name in loaded}
     assert "pyclipper" not in loaded and "app.cnc.pocketing.plan" not in loaded
+
+
+def test_a_small_export_starts_nothing_it_does_not_use(tmp_path: Path) -> None:
+    """Before: the export of a small program cost 0.28-0.31 s of CPU over a bare Python
+    start (issue 31.3). Of that, about 60 ms were OpenBLAS starting a thread per core
+    that no command line work uses (nothing in MillBlocks multiplies matrices), about
+    20 ms numpy.ma, which `np.unique` imports to ask whether its argument is masked (and
+    numpy.ma then reads the signatures of numpy's functions), 6 ms the ENGRAVE font
+    package, and the simulation's stock and segments and the THREAD MILL and ENGRAVE
+    modules, all loaded by validation for a program without STOCK, THREAD MILL or
+    ENGRAVE; tempfile, for a spool an export to OUT does not use. The export now runs
+    in one thread and loads none of them."""
+    out = tmp_path / "out.ngc"
+    program = ROOT / "app" / "demo" / "03-frame-pocket.json"
+    loaded, threads = _process_after(
+        ["export", str(program), "--to", "gcode-linuxcnc", "-o", str(out)]
+    )
+    assert out.read_text().startswith("%")
+    assert threads == 1
+    assert "numpy" in loaded
+    assert not {"numpy.ma", "HersheyFonts", "tempfile"} & loaded
+    assert not [name for name in loaded if name.startswith(OPERATION_MODULES)]
+
+
+# What a program without STOCK, THREAD MILL or ENGRAVE does not use: the simulation's
+# stock and segments, and the operations' own modules (the kinds name them as text).
+OPERATION_MODULES = ("app.cnc.simulate", "app.cnc.operations")
 
 
 def test_converting_gcode_to_a_tape_loads_the_two_formats_alone(tmp_path: Path) -> None:

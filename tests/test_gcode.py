@@ -26,7 +26,7 @@ from app.cnc.blocks import (
 )
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
-from app.cnc.formats.gcode.writer import Writer
+from app.cnc.formats.gcode.writer import BULK_ROWS, Writer
 from app.cnc.formats.targets import Report, Severity, export, get_target
 from app.cnc.problems import has_errors
 from app.cnc.validate import validate
@@ -165,7 +165,8 @@ def test_runs_written_in_one_go_are_the_lines_written_one_by_one(
 ) -> None:
     """The writer writes runs of rapids, feeds and dwells a run at a time (numpy finds the
     words that change); the same program written one line at a time gives the same bytes,
-    also when the N numbers pass the control's largest inside a run and start again."""
+    also when the N numbers pass the control's largest inside a run and start again. A run
+    shorter than BULK_ROWS goes one by one; with every run in one go, the same bytes."""
     assume(not has_errors(validate(program)))
     made = get_target(target)
     largest = made.dialect.largest_line_number  # type: ignore[attr-defined]
@@ -174,7 +175,7 @@ def test_runs_written_in_one_go_are_the_lines_written_one_by_one(
     parsed = made.parse_options(options)
     path = compile_program(resolve_copies(program)).path
     texts = []
-    for bulk in (True, False):
+    for bulk, bulk_rows in ((True, BULK_ROWS), (True, 1), (False, BULK_ROWS)):
         lines: list[str] = []
         writer = Writer(
             made.dialect,  # type: ignore[attr-defined]
@@ -185,9 +186,11 @@ def test_runs_written_in_one_go_are_the_lines_written_one_by_one(
             lines.append,
             bulk=lines.extend if bulk else None,
         )
+        writer.bulk_rows = bulk_rows
         writer.write()
         texts.append(lines)
-    assert texts[0] == texts[1]
+    assert texts[0] == texts[2]
+    assert texts[1] == texts[2]
 
 
 # -- the first plunge (found by a review of POCKET; older than it) ---------------------------

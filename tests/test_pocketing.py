@@ -705,7 +705,7 @@ def test_a_long_move_in_pieces_sweeps_about_the_points_of_the_whole_move() -> No
     r, t = IN / 16, 500.0
     for radius in (IN, 2 * IN):
         points = regions.path_points(circle(0, 0, radius), t)
-        index = regions.SweptIndex(r, t, 4 * r)
+        index = regions.SweptIndex(r, t)
         index.add(points)
         pieces = index.near(index.boxes(points))
         whole = regions.sweep_lines([points], r, t)
@@ -761,3 +761,132 @@ def test_the_cleanup_search_finds_what_the_passes_leave_from_the_levels(
     assert regions.thicker_than(passes, RESIDUE_NM, 500)  # there are cusps to find
     for extra in (regions.difference(levels, passes), regions.difference(passes, levels)):
         assert not regions.thicker_than(extra, RESIDUE_NM, 500)
+
+
+# -- a link's "through cut material?" from distances (issue 30.2) -----------------------------
+
+
+def link_answers(
+    monkeypatch: pytest.MonkeyPatch, boundary: Path, islands: list[Path], **options: object
+) -> list[tuple[bool, bool, bool]]:
+    """(the planner's answer, Clipper's answer by area, whether the distances decided) for
+    every straight link the planner weighs planning the pocket with `options` (a link
+    along a pass, asked again once the cleanup moves are made, is Clipper's)."""
+    found: list[tuple[bool, bool, bool]] = []
+    real = plan_module._Planner._through_cleared
+    by_area = plan_module._Planner._through_cleared_by_area
+    asked = [0]
+
+    def through_cleared(planner: plan_module._Planner, move: Path, then: Path) -> bool:
+        asked[0] = 0
+        answer = real(planner, move, then)
+        if len(move.elements) == 1 and move.elements[0].centre is None:
+            found.append((answer, by_area(planner, move, then), asked[0] == 0))
+        return answer
+
+    def counted(planner: plan_module._Planner, move: Path, then: Path) -> bool:
+        asked[0] += 1
+        return by_area(planner, move, then)
+
+    monkeypatch.setattr(plan_module._Planner, "_through_cleared", through_cleared)
+    monkeypatch.setattr(plan_module._Planner, "_through_cleared_by_area", counted)
+    plan(boundary, islands, R, **options)
+    monkeypatch.undo()
+    return found
+
+
+def test_a_straight_link_is_answered_from_distances_as_clipper_answers_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Issue 30.2: whether a link cuts only cut material was Clipper's area of the link's
+    sweep less the sweeps of every pass near it, a quarter of the 8-island pocket's
+    planning. A straight link is now answered from its distances to those passes
+    (`regions.move_covered`): every answer is Clipper's, both yes and no are met, and
+    Clipper is asked of none of these."""
+    cases = [
+        (l_shape_with_two_islands, 1.2),
+        (l_shape_with_two_islands, 1.8),
+        (arc_bounded_boss, 1.5),
+        (rectangle_with_round_island, 1.8),
+        (lambda: island_row(4), 1.2),
+    ]
+    answers = []
+    for case, step in cases:
+        boundary, islands = case()
+        answers += link_answers(monkeypatch, boundary, islands, step_over=round(step * R))
+    assert all(answer == area for answer, area, _ in answers)
+    assert {answer for answer, _, _ in answers} == {True, False}
+    assert all(decided for _, _, decided in answers)
+
+
+def two_passes(gap: float, r: float = R) -> list[list[Pt]]:
+    """Two long straight passes `gap` nm apart (y = 0 and y = gap)."""
+    return [[(-4 * r, 0.0), (4 * r, 0.0)], [(-4 * r, gap), (4 * r, gap)]]
+
+
+def covered_two_ways(passes: list[list[Pt]], a: Pt, b: Pt, r: float = R) -> tuple[object, bool]:
+    """(`move_covered`'s answer, Clipper's by area) for the straight move a-b among
+    `passes` swept by the tool radius `r` (the move by r less the tolerance, as the planner
+    asks it)."""
+    t = 500.0
+    index = regions.SweptIndex(r, t)
+    for points in passes:
+        index.add(points)
+    boxes = index.boxes([a, b])
+    starts, ends = index.segments_near(boxes)
+    fast = regions.move_covered(a, b, r - t, r, starts, ends, RESIDUE_NM, t)
+    extra = regions.difference(regions.sweep_lines([[a, b]], r - t, t), index.near(boxes))
+    return fast, not regions.thicker_than(extra, RESIDUE_NM, t)
+
+
+@pytest.mark.parametrize(
+    ("gap", "across", "expected"),
+    [
+        (1.2 * R, 1.2 * R, True),  # between neighbouring passes: all cut
+        (1.99 * R, 1.99 * R, True),  # the sweeps still overlap
+        (2 * R + 50_000, 2 * R + 50_000, False),  # a strip 0.05 mm wide is left between them
+        (1.2 * R, 3 * R, False),  # on past the second pass into uncut material
+    ],
+)
+def test_move_covered_finds_what_a_straight_move_would_cut(
+    gap: float, across: float, expected: bool
+) -> None:
+    """Issue 30.2: a straight move between two passes cuts nothing new while their sweeps
+    meet; past them, or across a strip they leave wider than `RESIDUE_NM`, it does. The
+    distances answer as Clipper's areas do. A move along the middle, its ends on no pass
+    (the planner's links all start and end on one), finds a strip left, but cannot clear
+    its own round ends (bounded from the passes they lie on): that is left to Clipper."""
+    passes = two_passes(gap)
+    for a, b in (((0.0, 0.0), (0.0, across)), ((-R, 0.0), (R, across))):
+        fast, area = covered_two_ways(passes, a, b)
+        assert area is expected
+        assert fast is expected
+    fast, area = covered_two_ways(passes, (-2 * R, gap / 2), (2 * R, gap / 2))
+    assert fast is (None if area else False)
+
+
+def test_move_covered_leaves_a_strip_near_the_limit_to_clipper() -> None:
+    """A strip between two passes a few micrometres either side of `RESIDUE_NM` wide is
+    too near the limit for the distances' margins: `move_covered` says so (None) rather
+    than guess, and the planner asks Clipper."""
+    for strip in (RESIDUE_NM - 1_000, RESIDUE_NM + 1_000):
+        fast, _ = covered_two_ways(two_passes(2 * R + strip), (0.0, 0.0), (0.0, 2 * R + strip))
+        assert fast is None
+
+
+def test_no_pass_is_swept_to_answer_a_straight_link(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 30.2, counting operations: planning `island_row(8)` sweeps no piece of a pass
+    for a link's question (each was a Clipper offset, and the sweeps beside a long link
+    were then united), where it swept hundreds."""
+    swept = [0]
+    real = regions.SweptIndex._sweep
+
+    def sweep(index: regions.SweptIndex, points: Sequence[Pt], k: int) -> regions.Swept:
+        swept[0] += 1
+        return real(index, points, k)
+
+    monkeypatch.setattr(regions.SweptIndex, "_sweep", sweep)
+    boundary, islands = island_row(8)
+    result = plan_pocket(boundary, islands, tool_radius=IN // 16, step_over=IN // 10)
+    assert not result.has_errors
+    assert swept[0] == 0

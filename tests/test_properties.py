@@ -19,7 +19,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from decimal import Decimal
 
+import numpy as np
 from hypothesis import given, settings
+from hypothesis import strategies as hst
 
 from app.cnc.blocks import (
     BoltCircle,
@@ -35,6 +37,7 @@ from app.cnc.blocks import (
 from app.cnc.document import as_stored, dumps, loads, to_dict
 from app.cnc.formats import canon
 from app.cnc.interpret import interpret
+from app.cnc.path import distinct
 from app.cnc.problems import Severity, has_errors
 from app.cnc.toolpath import (
     ArcFeed,
@@ -623,3 +626,13 @@ def test_stop_and_spindle(program: Program) -> None:
                 assert role.z_up is not None
                 assert move.z == role.z_up + TAP_LIFT_NM, f"TAP feed out of block {move.block}"
             assert (spindle.rpm, spindle.clockwise) == (abs(rpm), clockwise), move
+
+
+@given(hst.lists(hst.integers(-(2**63), 2**63 - 1), max_size=200))
+def test_distinct_is_numpys_unique(values: list[int]) -> None:
+    """path.distinct stands in for np.unique on the export path (np.unique imports
+    numpy.ma, issue 31.3): for any int64 column the same values, order and type."""
+    column = np.array(values, dtype=np.int64)
+    ours, numpys = distinct(column), np.unique(column)
+    assert ours.dtype == numpys.dtype
+    assert ours.tolist() == numpys.tolist()

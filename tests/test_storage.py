@@ -104,6 +104,18 @@ def test_every_entry_point_migrates_by_itself(database_url: str) -> None:
     again.engine.dispose()
 
 
+def test_a_library_started_without_the_demo_programs_never_gets_them(database_url: str) -> None:
+    """MILLBLOCKS_DEMO_PROGRAMS=0: "a new library starts empty". Failed before: the next
+    command run without the setting (an admin's `millblocks user list`) added the six demo
+    programs to the shop's library, and so did opening a restored dump of it."""
+    lib = open_library(database_url, seed_demo=False)
+    assert lib.programs() == []
+    lib.engine.dispose()
+    again = open_library(database_url)  # the default: demo programs on
+    assert again.programs() == []
+    again.engine.dispose()
+
+
 def test_sqlite_runs_wal_with_foreign_keys_and_full_sync(tmp_path: Path) -> None:
     engine = make_engine(f"sqlite:///{tmp_path / 'x.db'}")
     with engine.connect() as conn:

@@ -33,8 +33,10 @@ from app.cnc.blocks import (
     Hole,
     HoleOp,
     MillLine,
+    Mode,
     Placement,
     Program,
+    Rep,
     Stock,
     Tool,
 )
@@ -182,6 +184,49 @@ def test_a_tapped_bolt_circle_whose_drilling_was_deleted_names_its_holes() -> No
     ]
     found = verify(deleted).findings
     assert [(f.block, f.kind) for f in found] == [(2, "process")]
+
+
+def test_taps_that_only_nested_loops_repeat_are_found_and_every_repeat_counted() -> None:
+    """The pilot rule asks each distinct piece of the compiled path whether it has a TAP or
+    BORE (a long CAM file's LOOPs place 10^5 DRILLs, and walking them all took longer than
+    writing the tape): a TAP inside a LOOP inside a LOOP is found, each block's holes all
+    counted; the same LOOPs of DRILLs warn of nothing."""
+    tools = (Tool(number=4, diameter=Decimal("0.25"), rpm=300, tcal=Decimal(0)),)
+
+    def hole(op: HoleOp, x: str, y: str) -> Hole:
+        # A LOOP's block is incremental: from where the tool is (part zero first).
+        return Hole(
+            op=op,
+            mode=Mode.INC,
+            x=Decimal(x),
+            y=Decimal(y),
+            z_up=Decimal("0.1"),
+            z_dn=Decimal("-0.5"),
+            feed_z=Decimal(4),
+            tool=4,
+            loop=True,
+        )
+
+    def program(op: HoleOp) -> Program:
+        # The outer LOOP repeats blocks 1-3 twice (Y 1 apart), the inner one block 2 three
+        # times (X 0.5 apart): 2 holes of block 1, 6 of block 2, none at the same point.
+        blocks = (
+            hole(op, "1", "1"),
+            hole(op, "0.25", "0"),
+            Rep(x=Decimal("0.5"), nx=2),
+            Rep(y=Decimal(1), ny=1),
+        )
+        return Program(name="grid", block0=DataBlock0(current_tool=4, tools=tools), blocks=blocks)
+
+    assert [p for p in validate(program(HoleOp.DRILL)) if p.rule is Rule.PILOT] == []
+    advice = (
+        "nothing is drilled there before it, so the tap goes into solid material; drill a "
+        "smaller hole there first, at least to Z DN -0.5000"
+    )
+    assert [str(p) for p in validate(program(HoleOp.TAP)) if p.rule is Rule.PILOT] == [
+        f"block 1: warning: 2 TAP holes; the first, TAP at X 1.0000 Y 1.0000: {advice}",
+        f"block 2: warning: 6 TAP holes; the first, TAP at X 1.2500 Y 1.0000: {advice}",
+    ]
 
 
 def test_a_drill_below_the_stock_is_found_and_a_declared_through_hole_is_not() -> None:

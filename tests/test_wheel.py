@@ -64,13 +64,13 @@ class Installed:
         )
 
 
-def _build_wheel(out: Path, compiled: bool) -> Path:
+def _build_wheel(out: Path, compiled: bool, source: Path = ROOT) -> Path:
     env = {**os.environ, "MILLBLOCKS_MYPYC": "1" if compiled else "0"}
     command = [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "-w", str(out)]
     if compiled:
         command.append("--no-build-isolation")  # mypy (mypyc) from the project's environment
     done = subprocess.run(
-        [*command, str(ROOT)], env=env, capture_output=True, text=True, timeout=1200, check=False
+        [*command, str(source)], env=env, capture_output=True, text=True, timeout=1200, check=False
     )
     assert done.returncode == 0, done.stdout + done.stderr
     (wheel,) = out.glob("millblocks-*.whl")
@@ -178,6 +178,58 @@ def test_an_installed_wheel_serves_the_app(served: str, installed: Installed) ->
         assert editor.status == 200 and "Data Block 0" in editor.read().decode()
     assert (installed.workdir / "instance" / "millblocks.db").is_file()
     assert not list(installed.venv.glob("lib/python*/site-packages/instance"))
+
+
+def _version(wheel: Path) -> str:
+    return wheel.name.split("-")[1]
+
+
+def test_the_installed_command_line_says_its_wheels_version(installed: Installed) -> None:
+    shown = installed.run(installed.command("millblocks"), "--version")
+    assert shown.returncode == 0, shown.stderr
+    assert shown.stdout.split()[-1] == _version(installed.wheel)
+
+
+def test_a_later_commits_wheel_upgrades_and_the_earlier_rolls_back(tmp_path: Path) -> None:
+    """docs/deploy.md's upgrade is `pip install millblocks-NEW.whl`, its rollback `pip
+    install millblocks-OLD.whl`. Failed before: every wheel was 0.1.0, so pip said "already
+    installed with the same version" and kept the old code (the new database schema then met
+    old code, or a rollback left the new code in place). The version now comes from git."""
+    from packaging.version import Version
+
+    clone = tmp_path / "clone"
+    subprocess.run(["git", "clone", "--quiet", str(ROOT), str(clone)], check=True, timeout=300)
+    older = _build_wheel(tmp_path / "older", compiled=False, source=clone)
+    who = ["-c", "user.name=MillBlocks tests", "-c", "user.email=tests@millblocks.invalid"]
+    subprocess.run(
+        ["git", *who, "commit", "--quiet", "--allow-empty", "-m", "a later change"],
+        cwd=clone,
+        check=True,
+        timeout=60,
+    )
+    newer = _build_wheel(tmp_path / "newer", compiled=False, source=clone)
+    assert Version(_version(newer)) > Version(_version(older)) > Version("0.1.0")
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    python = str(venv / "bin" / "python")
+
+    def install(wheel: Path) -> str:
+        # --no-deps: what is at stake is whether pip replaces the package, not its deps.
+        subprocess.run(
+            [python, "-m", "pip", "install", "--quiet", "--no-deps", str(wheel)],
+            check=True,
+            timeout=300,
+        )
+        ask = "import importlib.metadata as m; print(m.version('millblocks'))"
+        # Asked from outside the checkout, whose editable install's metadata is in it.
+        return subprocess.run(
+            [python, "-c", ask], cwd=venv, capture_output=True, text=True, check=True, timeout=60
+        ).stdout.strip()
+
+    assert install(older) == _version(older)
+    assert install(newer) == _version(newer)  # the upgrade
+    assert install(older) == _version(older)  # the rollback
 
 
 def test_the_installed_command_line_exports_as_the_checkout_does(installed: Installed) -> None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from app.cnc.blocks import Program
 from app.cnc.motions import motions
-from app.cnc.path import CompiledPath
+from app.cnc.path import CompiledPath, Op, pieces
 from app.cnc.problems import Need, Problem, Rule, Severity
 
 
@@ -90,7 +90,17 @@ def _spindle_speeds(program: Program) -> list[Problem]:
 def _calibrated_tools(path: CompiledPath) -> list[Problem]:
     """Tools without TCAL that move down in Z (a 2-axis program never does)."""
     users: dict[int, list[int]] = defaultdict(list)
-    calibrated = np.array([n for n, t in path.tools.items() if t.tcal is not None], dtype=np.int64)
+    known = {n for n, t in path.tools.items() if t.tcal is not None}
+    # The tools a motion can be made with: the first, and those of the TOOL rows, which a
+    # placement does not change (each piece read once). All calibrated, there is nothing to
+    # find, and the motions of a 10^5-line file need not be walked (0.1 s).
+    in_spindle = {path.initial_tool}
+    for piece in pieces(path.root):
+        rows = piece.rows
+        in_spindle.update(rows["value"][rows["op"] == Op.TOOL].tolist())
+    if in_spindle <= known | {0}:
+        return []
+    calibrated = np.array(sorted(known), dtype=np.int64)
     for m in motions(path):
         down = m.rows["z"] < m.z0
         uncalibrated = (m.tool != 0) & ~np.isin(m.tool, calibrated)

@@ -563,6 +563,25 @@ def walk(node: Node, dx: int = 0, dy: int = 0, base: int = 0) -> Iterator[Chunk]
             yield from walk(node.node, dx + ox, dy + oy, base + node.base)
 
 
+def pieces(node: Node) -> Iterator[Piece]:
+    """Each distinct piece under `node` once, unplaced: for the questions a placement does
+    not change (which hole operations, which tools), so a LOOP of 10^4 patterns costs its
+    pieces, not its placements."""
+    seen: set[int] = set()
+    stack = [node]
+    while stack:
+        here = stack.pop()
+        if id(here) in seen:
+            continue
+        seen.add(id(here))
+        if isinstance(here, Piece):
+            yield here
+        elif isinstance(here, Seq):
+            stack.extend(reversed(here.nodes))
+        else:
+            stack.append(here.node)
+
+
 def placed_holes(
     node: Node, dx: int = 0, dy: int = 0, base: int = 0
 ) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.void]]]:
@@ -645,6 +664,17 @@ def _has_mills(node: Node) -> bool:
     return _has_mills(node.node)
 
 
+def distinct(values: npt.NDArray[np.integer]) -> npt.NDArray[np.integer]:
+    """The different values of an integer array, in increasing order: `np.unique(values)`
+    for the columns of a path. numpy's own asks whether its argument is a masked array,
+    which imports numpy.ma (about 20 ms, most of it numpy.ma reading the signatures of
+    numpy's functions) into every command that exports (issue 31.3)."""
+    ordered = np.sort(values, axis=None)
+    first = np.ones(len(ordered), dtype=bool)
+    np.not_equal(ordered[1:], ordered[:-1], out=first[1:])
+    return ordered[first]
+
+
 def lowest_by_block(node: Node, base: int = 0, out: dict[int, int] | None = None) -> dict[int, int]:
     """The lowest Z (nm) any move of each block reaches, by block number. Z does not move
     with a LOOP's placements, so each repeated node is read once."""
@@ -655,7 +685,7 @@ def lowest_by_block(node: Node, base: int = 0, out: dict[int, int] | None = None
         if moving.any():
             blocks = rows["block"][moving] + (node.base + base)
             zs = rows["z"][moving]
-            for block in np.unique(blocks).tolist():
+            for block in distinct(blocks).tolist():
                 low = int(zs[blocks == block].min())
                 found[block] = min(low, found.get(block, low))
     elif isinstance(node, Seq):

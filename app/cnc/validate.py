@@ -45,8 +45,6 @@ from app.cnc.cutting import tap_feed, tap_speeds_text, workpiece_faults
 from app.cnc.kinds import REGISTRY, Mill, Value
 from app.cnc.memo import ByObject, Recent
 from app.cnc.needs import unmet
-from app.cnc.operations.engrave import missing
-from app.cnc.operations.thread import thread_depth, thread_lead
 from app.cnc.problems import CONTROL_NEEDS, Problem, Rule, Severity
 from app.cnc.process import process_problems
 from app.cnc.structure import is_mill, mill_sequence_end, starts_mill_sequence
@@ -467,6 +465,10 @@ class _Checker:
 
     def check_engrave(self, number: int, engrave: Engrave) -> None:
         """Text the font has, Z DN below Z UP, and an arc's radius."""
+        # An operation's module loads with a program that has the operation, as the kinds
+        # name them (app.cnc.kinds): not with every validation (issue 31.3).
+        from app.cnc.operations.engrave import missing
+
         u = engrave.units.symbol
         if not engrave.text:
             self.add(number, "TEXT", ERROR, Rule.ENGRAVE_TEXT, "missing; ENGRAVE needs a text")
@@ -498,6 +500,8 @@ class _Checker:
     def check_thread_mill(self, number: int, thread: ThreadMill) -> None:
         """Z DN below Z UP by more than half a lead: the lead-in and lead-out take a
         quarter each (the tool's size is `check_thread_tool`'s)."""
+        from app.cnc.operations.thread import thread_lead
+
         u = thread.units.symbol
         lead = thread_lead(thread)
         if to_nm(thread.z_up, thread.units) - to_nm(thread.z_dn, thread.units) <= lead // 2:
@@ -742,6 +746,8 @@ class _Checker:
         diameter."""
         if tool.diameter is None or thread.place is not ThreadPlace.INTERNAL:
             return
+        from app.cnc.operations.thread import thread_depth, thread_lead
+
         tool_diameter = to_nm(tool.diameter, self.program.units)
         lead = thread_lead(thread)
         minor = to_nm(thread.diameter, thread.units) - round(2 * thread_depth(lead, True))

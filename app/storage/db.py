@@ -6,6 +6,10 @@ with WAL, foreign keys on and synchronous FULL: an acknowledged save survives a 
 `upgrade()` runs the committed Alembic migrations; every entry point calls it first,
 inside `migration_lock()`, so any number of workers may start on an empty database: the
 first migrates (and seeds), the others wait for it and then find nothing left to do.
+
+Alembic (with Mako and Pygments under it, a quarter of a second) is imported only to run a
+migration or to read the migrations' history: a database already at `HEAD` is told apart
+by one query of its version table, so a command on an up-to-date library starts at once.
 """
 
 from __future__ import annotations
@@ -15,18 +19,26 @@ import os
 import re
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from alembic import command
-from alembic.config import Config
-from alembic.runtime.migration import MigrationContext
-from alembic.script import ScriptDirectory
-from sqlalchemy import Engine, create_engine, event, text
+from sqlalchemy import Engine, create_engine, event, inspect, text
 from sqlalchemy.exc import ArgumentError, DBAPIError, NoSuchModuleError
 
 from app.cnc.text import check_text
 from app.resources import data_dir
 from app.settings import instance_folder
+
+if TYPE_CHECKING:
+    from alembic.config import Config
+
+HEAD = "0010"
+"""The newest schema revision this MillBlocks knows: the revision of the newest file in
+migrations/versions/ (tests/test_storage_start.py holds it to Alembic's own head, so a new
+migration fails the tests until this moves with it). Opening a library compares the
+database's revision with it instead of loading Alembic's script directory."""
+
+VERSION_TABLE = "alembic_version"
+"""Where Alembic keeps the database's revision (its default; migrations/env.py keeps it)."""
 
 
 class SchemaError(RuntimeError):
@@ -223,6 +235,8 @@ def migration_lock(engine: Engine) -> Iterator[None]:
 
 def alembic_config(engine: Engine) -> Config:
     """An Alembic configuration for the project's migrations on `engine`."""
+    from alembic.config import Config
+
     config = Config()
     # Alembic keeps its options in a ConfigParser, which reads % as interpolation: a
     # percent-encoded password (s3cr%40t) or a folder with a % in its name would stop every
@@ -236,14 +250,15 @@ def alembic_config(engine: Engine) -> Config:
 
 
 def head() -> str:
-    """The newest schema revision this MillBlocks knows."""
-    newest = ScriptDirectory(str(data_dir("migrations"))).get_current_head()
-    assert newest is not None, "migrations/ has no revisions"
-    return newest
+    """The newest schema revision this MillBlocks knows (`HEAD`)."""
+    return HEAD
 
 
 def history() -> list[tuple[str, str]]:
-    """Every schema revision this MillBlocks knows with what it does, oldest first."""
+    """Every schema revision this MillBlocks knows with what it does, oldest first (read
+    from the migrations by Alembic)."""
+    from alembic.script import ScriptDirectory
+
     walked = ScriptDirectory(str(data_dir("migrations"))).walk_revisions()
     return [(r.revision, (r.doc or "").splitlines()[0]) for r in reversed(list(walked))]
 
@@ -254,9 +269,21 @@ def revisions() -> list[str]:
 
 
 def current(engine: Engine) -> str | None:
-    """The database's schema revision; None for an empty database."""
+    """The database's schema revision; None for an empty database (no version table, or
+    one emptied by a downgrade to base). Raises SchemaError for a version table holding
+    more than one revision (branched migrations: not this MillBlocks' schema)."""
+    # What Alembic's MigrationContext.get_current_revision reads, without importing it.
     with engine.connect() as connection:
-        return MigrationContext.configure(connection).get_current_revision()
+        if not inspect(connection).has_table(VERSION_TABLE):
+            return None
+        found = connection.execute(text(f"SELECT version_num FROM {VERSION_TABLE}")).scalars()
+        rows = list(found)
+    if len(rows) > 1:
+        raise SchemaError(
+            f"the database's {VERSION_TABLE} table holds {len(rows)} revisions "
+            f"({', '.join(sorted(rows))}); MillBlocks' schema has one line of revisions"
+        )
+    return rows[0] if rows else None
 
 
 def check_known(engine: Engine) -> str | None:
@@ -264,7 +291,7 @@ def check_known(engine: Engine) -> str | None:
     MillBlocks migrated it (rolling the code back without the database), and Alembic would
     only say "Can't locate revision"."""
     found = current(engine)
-    if found is not None and found not in revisions():
+    if found is not None and found != HEAD and found not in revisions():
         newest = head()
         raise SchemaError(
             f"the database's schema is at revision {found}, newer than this MillBlocks "
@@ -279,7 +306,11 @@ def check_known(engine: Engine) -> str | None:
 def upgrade(engine: Engine, revision: str = "head") -> None:
     """Bring the database up to `revision` (an empty or older database included). Raises
     SchemaError when the database is newer than this code."""
-    check_known(engine)
+    found = check_known(engine)
+    if found == HEAD and revision in ("head", HEAD):
+        return  # nothing to do: Alembic would load every migration to find that out
+    from alembic import command
+
     config = alembic_config(engine)
     with engine.begin() as connection:
         config.attributes["connection"] = connection
@@ -312,6 +343,8 @@ def downgrade(engine: Engine, revision: str) -> None:
     migration created is dropped with its data. Raises SchemaError for a database newer than
     this code or a revision it does not know (see `undone`)."""
     undone(check_known(engine), revision)
+    from alembic import command
+
     config = alembic_config(engine)
     with engine.begin() as connection:
         config.attributes["connection"] = connection

@@ -1,7 +1,9 @@
 """The demo library: the seeds' sample parts, added the first time a library is opened.
 
 The programs live as JSON documents in app/demo/. A setting records that they were added,
-so a shop that deletes them does not get them back.
+so a shop that deletes them does not get them back, or that the library was first opened
+without them (MILLBLOCKS_DEMO_PROGRAMS=0), so a later command run without that setting
+does not add them either.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ if TYPE_CHECKING:
     from app.storage.library import Library
 
 SETTING = "demo_seeded"
+DECLINED = "declined"  # SETTING's value when the library was first opened without them
 
 
 def demo_programs() -> list[Program]:
@@ -34,3 +37,10 @@ def seed(library: Library) -> int:
         library.create(program, author="MillBlocks", summary_text="demo program")
     library.set_setting(SETTING, "1")
     return len(programs)
+
+
+def decline(library: Library) -> None:
+    """Record that this library was opened without the demo programs, unless it already has
+    a decision: a library that started empty stays so, whoever opens it next."""
+    if not library.setting(SETTING):
+        library.set_setting(SETTING, DECLINED)

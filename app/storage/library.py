@@ -23,11 +23,8 @@ from sqlalchemy import Engine, delete, func, or_, select
 from sqlalchemy.exc import SQLAlchemyError
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.cnc import cost, document
+from app.cnc import document
 from app.cnc.blocks import Block, Hole, Program
-from app.cnc.diff import diff, summary
-from app.cnc.formats.targets import OptionError, targets
-from app.cnc.machine import MachineError, read_machine
 from app.cnc.memo import ByObject, Recent
 from app.cnc.numbers import NumberError, parse_int
 from app.cnc.sizes import MAX_MOVES, TooLarge, check_block_count
@@ -40,10 +37,14 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
-from app.dnc.settings import PortSettings, SettingsError
 from app.storage.db import migration_lock, open_engine, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 from app.storage.revisions import RevisionInfo, Versioned, stale_message
+
+# Reading the library needs the document model and the rows; what only writing, comparing
+# or checking a machine needs (the cost of a program's moves, the diff, the targets and
+# their writers, the machine model with numpy, the serial settings) is imported where it
+# is used, so a command that reads one program starts at once (issue 31).
 
 SORTS = ("name", "part_number", "updated", "created")
 DRAWING_KEEP = timedelta(days=1)
@@ -183,6 +184,8 @@ def _columns(program: Program) -> dict[str, Any]:
     app.cnc.sizes.MAX_BLOCKS or MAX_MOVES (the server's, whatever a command line allows
     for files): the library keeps only programs it can open; TextError for a name or
     notes past the text rule (app.cnc.text), whatever the entry."""
+    from app.cnc import cost
+
     try:
         check_block_count(len(program.blocks))
         cost.check(program, MAX_MOVES)
@@ -221,6 +224,8 @@ class Library:
 
     def create(self, program: Program, author: str = "", summary_text: str = "") -> ProgramInfo:
         """Add a program; its first revision is version 1."""
+        from app.cnc.diff import summary
+
         check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
@@ -296,6 +301,8 @@ class Library:
 
         Raises StaleSave (nothing written) when someone saved after `based_on`.
         """
+        from app.cnc.diff import summary
+
         check_text(author, "author", SHORT_NAME_LENGTH)
         now = _now()
         with self.session() as s:
@@ -320,6 +327,8 @@ class Library:
             return _info(row)
 
     def _stale(self, s: Session, row: ProgramRow, based_on: int, mine: Program) -> StaleSave:
+        from app.cnc.diff import diff
+
         base = PROGRAMS.revision(s, row.id, based_on)
         changes = diff(document.loads(base.document), document.loads(row.document)) if base else []
         listed = changes[:6] or ["no change to the program itself"]
@@ -386,6 +395,8 @@ class Library:
 
     def diff(self, program_id: int, old: int, new: int) -> list[str]:
         """Block-level differences from version `old` to version `new`."""
+        from app.cnc.diff import diff
+
         return diff(self.revision(program_id, old), self.revision(program_id, new))
 
     # -- machines -----------------------------------------------------------------------------
@@ -637,6 +648,10 @@ def check_machine(machine: Machine) -> None:
 
     Raises TextError, or MachineSettingsError naming the field (`serial, baud`) and what
     is allowed."""
+    from app.cnc.formats.targets import OptionError, targets
+    from app.cnc.machine import MachineError, read_machine
+    from app.dnc.settings import PortSettings, SettingsError
+
     check_machine_text(machine)
     target = targets().get(machine.target)
     if target is None:
@@ -693,16 +708,18 @@ def _machine(row: MachineRow) -> Machine:
 
 def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = UTC) -> Library:
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
-    the demo programs added the first time (unless not `seed_demo`); its messages state
-    times in `zone`."""
+    the demo programs added the first time it is opened (unless not `seed_demo`: then it
+    never gets them); its messages state times in `zone`."""
     engine = open_engine(url)
     library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").
     with migration_lock(engine):
         upgrade(engine)
-        if seed_demo:
-            from app.storage.demo import seed
+        from app.storage.demo import decline, seed
 
+        if seed_demo:
             seed(library)
+        else:
+            decline(library)
     return library

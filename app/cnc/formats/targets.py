@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import enum
 import importlib
-import tempfile
 import weakref
 from abc import ABC
 from collections.abc import Callable, Iterator, Mapping
@@ -585,4 +584,8 @@ def _export_document(
 
 
 def _spool() -> BinaryIO:
+    # tempfile (with shutil and random, 4 ms) loads for an export kept in memory or sent
+    # on, not for one written to the caller's file (the command line's -o, issue 31.3).
+    import tempfile
+
     return tempfile.SpooledTemporaryFile(max_size=SPOOL_BYTES)  # type: ignore[return-value]

@@ -22,14 +22,14 @@ import math
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
-from HersheyFonts import HersheyFonts
-
 from app.cnc.blocks import Direction, Engrave, EngraveLayout
 from app.cnc.compiler import retract_height, rounded_point
 from app.cnc.cost import POS_ROWS
 from app.cnc.units import to_nm
 
 if TYPE_CHECKING:
+    from HersheyFonts import HersheyFonts
+
     from app.cnc.blocks import Engrave, Program
     from app.cnc.compiler import _Compiler as Compiler
 
@@ -41,6 +41,9 @@ Pt = tuple[float, float]
 
 @functools.cache
 def _font() -> HersheyFonts:
+    # Imported when a program has ENGRAVE text, not with validation (6 ms of every start).
+    from HersheyFonts import HersheyFonts
+
     font = HersheyFonts()
     font.load_default_font(FONT)
     return font

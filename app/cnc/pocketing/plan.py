@@ -219,8 +219,7 @@ class _Planner:
         return regions.segment_inside(self.moves, a, b, self._move_boxes)
 
     def _index(self) -> regions.SweptIndex:
-        # Cells of two tool diameters: a link's question reads a few of them.
-        return regions.SweptIndex(self.r, self.t, 4 * self.r, self._pieces)
+        return regions.SweptIndex(self.r, self.t, self._pieces)
 
     # -- order -------------------------------------------------------------------------------
 
@@ -363,20 +362,39 @@ class _Planner:
         """True when the tool moving along `move` cuts nothing but what is already cut or
         what the pass `then` (the one it leads to) cuts. Only what was cut near the move is
         read (`SweptIndex`): the answer is the same, at the cost of the place, not of
-        every pass so far."""
+        every pass so far.
+
+        The move is swept by a radius a tolerance short of the tool's: the chords of a
+        move along a pass and of the pass differ by that much. A straight move (every link
+        the planner weighs) is answered from its distances to the passes near it
+        (`regions.move_covered`); Clipper's sweeps are made only when that cannot tell, or
+        for a link along a pass: the same answer (tests/test_pocketing.py holds them to
+        it), without sweeping and uniting every pass beside a long link."""
         assert self.cleared is not None
-        # The move swept by a radius a tolerance short of the tool's: the chords of a move
-        # along a pass and of the pass differ by that much. One boolean operation takes
-        # the swept area less everything cut near it (united as it is subtracted).
+        points = self._path_points(move)
+        boxes = self.cleared.boxes(points)
+        also = [self._path_points(then)]
+        if len(points) == 2:
+            starts, ends = self.cleared.segments_near(boxes, also)
+            found = regions.move_covered(
+                points[0], points[1], self.r - self.t, self.r, starts, ends, RESIDUE_NM, self.t
+            )
+            if found is not None:
+                return found
+        return self._through_cleared_by_area(move, then)
+
+    def _through_cleared_by_area(self, move: Path, then: Path) -> bool:
+        """`_through_cleared` asked of Clipper: the move's sweep less the sweeps of the
+        passes near it, by one boolean operation (united as it is subtracted)."""
+        assert self.cleared is not None
+        points = self._path_points(move)
         swept = self._narrow_sweeps.get(move)
         if swept is None:
-            swept = regions.sweep_lines([self._path_points(move)], self.r - self.t, self.t)
+            swept = regions.sweep_lines([points], self.r - self.t, self.t)
             self._narrow_sweeps[move] = swept
         if not swept:
             return True
-        near = self.cleared.near(
-            self.cleared.boxes(self._path_points(move)), [self._path_points(then)]
-        )
+        near = self.cleared.near(self.cleared.boxes(points), [self._path_points(then)])
         extra = regions.difference(swept, near)
         return not regions.thicker_than(extra, RESIDUE_NM, self.t)
 
@@ -676,9 +694,16 @@ _Y_THEN_X = operator.itemgetter(1, 0)
 
 
 def _ring_distance(ring: regions.Ring, here: Pt | None) -> float:
+    """The distance from `here` to the nearest point of `ring`, as `math.dist` measures it
+    (numpy finds the few points that can be nearest: a ring has thousands)."""
     if here is None:
         return 0.0
-    return min(math.dist(here, p) for p in ring)
+    at = np.asarray(ring, dtype=np.float64)
+    squared = (at[:, 0] - here[0]) ** 2 + (at[:, 1] - here[1]) ** 2
+    # numpy's squares and math.dist differ in the last bits: every point within a
+    # millionth of the least is measured exactly.
+    near = np.flatnonzero(squared <= squared.min() * (1 + 1e-6) + 1.0)
+    return min(math.dist(here, ring[k]) for k in near.tolist())
 
 
 # -- levels and findings ----------------------------------------------------------------------

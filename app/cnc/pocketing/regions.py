@@ -373,8 +373,10 @@ class SweptIndex:
     every pass before, which grew with each pass).
 
     Each move is cut into pieces of `PIECE` segments (and the next piece's first segment:
-    neighbours share a segment), filed by box under the grid cells (`cell` nm square) the
-    box meets, and swept the first time a question needs it (`sweeps` keeps the sweeps by
+    neighbours share a segment), kept with its box (the boxes as one numpy array, which a
+    question compares with its own boxes in one pass: a grid of cells, each piece filed
+    under every cell its box met, took a tenth of a large pocket's planning to fill), and
+    swept the first time a question needs it (`sweeps` keeps the sweeps by
     (id of the points, piece), for indexes over the same moves). The area near a box is
     the union of the sweeps of the pieces there: the same area as the sweep of whole moves
     (a round tool's sweep along a polyline is the union of its sweeps along the pieces),
@@ -389,27 +391,27 @@ class SweptIndex:
         self,
         radius: float,
         tolerance: float,
-        cell: float,
         sweeps: dict[tuple[int, int], Swept] | None = None,
     ) -> None:
         self.radius = radius
         self.tolerance = tolerance
-        self.cell = cell
         self.sweeps: dict[tuple[int, int], Swept] = {} if sweeps is None else sweeps
-        self.pieces: list[tuple[Sequence[Pt], int, Box]] = []
-        self.cells: dict[tuple[int, int], list[int]] = {}
+        self.pieces: list[tuple[Sequence[Pt], int]] = []
+        self._piece_boxes: list[Box] = []
+        self._box_array = np.zeros((0, 4), dtype=np.float64)  # the first rows of those
         # The boxes of a move's pieces by the id of its points (kept with them, so the id
         # is not reused): a pass is asked about as the one a link leads to, then recorded.
         self._boxes: dict[int, tuple[Sequence[Pt], list[Box]]] = {}
+        self._segments: dict[
+            tuple[int, int], tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]
+        ] = {}
 
     def add(self, points: Sequence[Pt]) -> None:
         """Record a move along `points` (one point: the tool went down there). The list
         must stay alive and unchanged while the index is used (its id names its sweeps)."""
         for k, box in enumerate(self.boxes(points)):
-            number = len(self.pieces)
-            self.pieces.append((points, k, box))
-            for cell in self._cells(box):
-                self.cells.setdefault(cell, []).append(number)
+            self.pieces.append((points, k))
+            self._piece_boxes.append(box)
 
     def boxes(self, points: Sequence[Pt]) -> list[Box]:
         """The box of each piece of a move along `points`, grown by the tool's reach: the
@@ -436,21 +438,56 @@ class SweptIndex:
         in its box, so the others cannot reach into `boxes`. Asked with the boxes of a
         move's pieces (`boxes`), a long move along a ring reads the passes beside it, not
         every pass within its bounding box."""
-        found: Swept = []
-        numbers = sorted(
-            {n for box in boxes for cell in self._cells(box) for n in self.cells.get(cell, ())}
-        )
-        for number in numbers:
-            points, k, piece_box = self.pieces[number]
-            if not any(_meet(piece_box, box) for box in boxes):
-                continue
-            found += self._sweep(points, k)
+        # Kept by the same key: the move asked about (`also`) is recorded next, as a rule,
+        # and its pieces' sweeps are then made already.
+        return [
+            ring for points, k in self._pieces_near(boxes, also) for ring in self._sweep(points, k)
+        ]
+
+    def segments_near(
+        self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]] = ()
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """(starts, ends): the segments (rows x, y; a point alone is a segment of no length)
+        of the pieces `near` reads for the same question, whose sweeps are its answer."""
+        starts: list[npt.NDArray[np.float64]] = []
+        ends: list[npt.NDArray[np.float64]] = []
+        for points, k in self._pieces_near(boxes, also):
+            key = (id(points), k)
+            kept = self._segments.get(key)
+            if kept is None:
+                at = np.rint(np.array(_piece(points, self.PIECE, k), dtype=np.float64))
+                at = at.reshape(-1, 2)
+                kept = (at[:-1], at[1:]) if len(at) > 1 else (at, at)
+                self._segments[key] = kept
+            starts.append(kept[0])
+            ends.append(kept[1])
+        if not starts:
+            empty = np.zeros((0, 2), dtype=np.float64)
+            return empty, empty
+        return np.concatenate(starts), np.concatenate(ends)
+
+    def _pieces_near(
+        self, boxes: Sequence[Box], also: Sequence[Sequence[Pt]]
+    ) -> list[tuple[Sequence[Pt], int]]:
+        """The (move, piece) pairs, recorded or in `also`, whose piece's box meets one of
+        `boxes`: the only pieces whose sweeps can reach into them."""
+        found: list[tuple[Sequence[Pt], int]] = []
+        if len(self._box_array) < len(self._piece_boxes):
+            added = np.array(self._piece_boxes[len(self._box_array) :], dtype=np.float64)
+            self._box_array = np.concatenate((self._box_array, added.reshape(-1, 4)))
+        if len(self._box_array) and boxes:
+            have, asked = self._box_array[:, None, :], np.array(boxes, dtype=np.float64)[None]
+            meets = (
+                (have[..., 0] <= asked[..., 2])
+                & (have[..., 2] >= asked[..., 0])
+                & (have[..., 1] <= asked[..., 3])
+                & (have[..., 3] >= asked[..., 1])
+            ).any(axis=1)
+            found += [self.pieces[number] for number in np.flatnonzero(meets).tolist()]
         for points in also:
             for k, piece_box in enumerate(self.boxes(points)):
                 if any(_meet(piece_box, box) for box in boxes):
-                    # Kept by the same key: the move asked about is recorded next, as a
-                    # rule, and its pieces' sweeps are then made already.
-                    found += self._sweep(points, k)
+                    found.append((points, k))
         return found
 
     def _sweep(self, points: Sequence[Pt], k: int) -> Swept:
@@ -462,12 +499,6 @@ class SweptIndex:
             swept = sweep_lines([piece], self.radius, self.tolerance, k == 0 or last)
             self.sweeps[key] = swept
         return swept
-
-    def _cells(self, box: Box) -> Iterable[tuple[int, int]]:
-        c = self.cell
-        for kx in range(math.floor(box[0] / c), math.floor(box[2] / c) + 1):
-            for ky in range(math.floor(box[1] / c), math.floor(box[3] / c) + 1):
-                yield (kx, ky)
 
 
 def _meet(a: Box, b: Box) -> bool:
@@ -491,3 +522,126 @@ def _piece(points: Sequence[Pt], size: int, k: int) -> Sequence[Pt]:
 def _pieces(points: Sequence[Pt], size: int) -> list[Sequence[Pt]]:
     """`points` cut by `_piece`, in order."""
     return [_piece(points, size, k) for k in range(_piece_count(points, size))]
+
+
+def move_covered(
+    a: Pt,
+    b: Pt,
+    radius: float,
+    reach: float,
+    starts: npt.NDArray[np.float64],
+    ends: npt.NDArray[np.float64],
+    width: float,
+    tolerance: float,
+) -> bool | None:
+    """Whether the straight move from `a` to `b`, swept by `radius`, leaves nothing wider
+    than `width` outside the sweeps by `reach` of the segments `starts`-`ends` (rows x, y),
+    as `thicker_than` reads the difference of those sweeps made by Clipper within
+    `tolerance` (nm): True when nothing is left, False when something is, None when this
+    cannot tell (the answer is near the limit: ask Clipper).
+
+    Why: the sweeps of every pass beside a long link, made and united for one yes or no,
+    were a quarter of a large pocket's planning. Something wider than `width` is left
+    where a point within `radius` - `width`/2 of the move is farther than `reach` +
+    `width`/2 from every segment (the margins take in Clipper's chords, within
+    `tolerance` of the true arcs, and rounding to whole nm). The distance to the nearest
+    segment changes no faster than the point moves, so over a rectangle it is at most
+    its value at a point plus the rectangle's farthest corner from that point: the
+    rectangles covering the move's band are bounded from their centres and from the
+    move's ends (on the passes it joins), and only those neither bound nor a centre
+    decides are halved, a few times. The round ends of the band are within
+    `radius` of the move's ends."""
+    ax, ay = float(a[0]), float(a[1])
+    dx, dy = float(b[0]) - ax, float(b[1]) - ay
+    span = math.hypot(dx, dy)
+    if span < 1.0 or not len(starts):
+        return None
+    ux, uy = dx / span, dy / span
+    # Clipper's sweeps hold the true sweeps by reach - tolerance, and its move's sweep
+    # lies within the true one by radius; its erosion by width/2 is true within tolerance.
+    band = radius - width / 2 + tolerance + 10.0
+    covered = reach + width / 2 - 2 * tolerance - 10.0
+    left = reach + width / 2 + tolerance + 10.0
+    inner = radius - width / 2 - 2 * tolerance - 10.0
+    # The segments in the move's frame (along u from a, across v); only those that can
+    # come within `left` of the band matter.
+    su = (starts[:, 0] - ax) * ux + (starts[:, 1] - ay) * uy
+    sv = (starts[:, 1] - ay) * ux - (starts[:, 0] - ax) * uy
+    eu = (ends[:, 0] - ax) * ux + (ends[:, 1] - ay) * uy
+    ev = (ends[:, 1] - ay) * ux - (ends[:, 0] - ax) * uy
+    u_lo, u_hi = np.minimum(su, eu), np.maximum(su, eu)
+    v_lo, v_hi = np.minimum(sv, ev), np.maximum(sv, ev)
+    pad = band + left
+    keep = (u_lo <= span + pad) & (u_hi >= -pad) & (v_lo <= pad) & (v_hi >= -pad)
+    if not keep.any():
+        return None
+    frame = np.column_stack((su, sv, eu, ev))[keep]
+    u_lo, u_hi = u_lo[keep], u_hi[keep]
+    # Stretches of the move a tool diameter long, each with the segments near it.
+    chunk = 2 * reach
+    count = max(1, math.ceil(span / chunk))
+    near = [
+        frame[(u_lo <= (k + 1) * chunk + left) & (u_hi >= k * chunk - left)] for k in range(count)
+    ]
+
+    def far(cu: npt.NDArray[np.float64], cv: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        found = np.full(len(cu), np.inf)
+        which = np.clip((cu // chunk).astype(np.intp), 0, count - 1)
+        for k in np.unique(which).tolist():
+            rows = np.flatnonzero(which == k)
+            segments = near[k]
+            if len(segments):
+                points = np.column_stack((cu[rows], cv[rows]))
+                found[rows] = _nearest_segment(points, segments[:, :2], segments[:, 2:])
+        return found
+
+    fa, fb = far(np.array([0.0, span]), np.zeros(2)).tolist()
+    # The round ends of the band lie within `band` of the move's ends.
+    ends_covered = fa + band < covered and fb + band < covered
+    # Rectangles (u0, u1) along the move x (v0, v1) across it, tiling the band's middle.
+    nu = max(1, math.ceil(span / (reach / 2)))
+    nv = max(1, math.ceil(2 * band / (reach / 2)))
+    u_edges = np.linspace(0.0, span, nu + 1)
+    v_edges = np.linspace(-band, band, nv + 1)
+    u0, v0 = (g.ravel() for g in np.meshgrid(u_edges[:-1], v_edges[:-1]))
+    u1, v1 = (g.ravel() for g in np.meshgrid(u_edges[1:], v_edges[1:]))
+    for _ in range(10):
+        cu, cv = (u0 + u1) / 2, (v0 + v1) / 2
+        f = far(cu, cv)
+        if ((f >= left) & (np.abs(cv) <= inner)).any():
+            return False
+        wide = np.maximum(np.abs(v0), np.abs(v1))
+        bound = np.minimum(
+            f + np.hypot(u1 - u0, v1 - v0) / 2,
+            np.minimum(
+                fa + np.hypot(np.maximum(np.abs(u0), np.abs(u1)), wide),
+                fb + np.hypot(np.maximum(np.abs(span - u0), np.abs(span - u1)), wide),
+            ),
+        )
+        open_ = bound >= covered
+        if not open_.any():
+            return True if ends_covered else None
+        if 4 * int(open_.sum()) > 4096:
+            return None
+        u0, u1, v0, v1 = u0[open_], u1[open_], v0[open_], v1[open_]
+        um, vm = (u0 + u1) / 2, (v0 + v1) / 2
+        u0, u1 = np.concatenate((u0, um, u0, um)), np.concatenate((um, u1, um, u1))
+        v0, v1 = np.concatenate((v0, v0, vm, vm)), np.concatenate((vm, vm, v1, v1))
+    return None
+
+
+def _nearest_segment(
+    points: npt.NDArray[np.float64], starts: npt.NDArray[np.float64], ends: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
+    """The distance from each row of `points` to the nearest of the segments."""
+    d = ends - starts
+    denom = (d * d).sum(axis=1)
+    safe = np.where(denom > 0, denom, 1.0)
+    px = points[:, 0:1] - starts[None, :, 0]
+    py = points[:, 1:2] - starts[None, :, 1]
+    t = np.clip((px * d[None, :, 0] + py * d[None, :, 1]) / safe[None, :], 0.0, 1.0)
+    t = np.where(denom[None, :] > 0, t, 0.0)
+    ex = px - t * d[None, :, 0]
+    ey = py - t * d[None, :, 1]
+    found: npt.NDArray[np.float64] = np.sqrt((ex * ex + ey * ey).min(axis=1))
+    return found

@@ -267,6 +267,12 @@ _MIN_RUN_ROWS = 64
 """The fewest rows `Planner.planned` makes a run of (fewer go one by one)."""
 _CYCLE_ROWS = 4
 """The most rows a fixed cycle stands for (`Planner.cycle`'s window: down, feed, dwell, out)."""
+# The row ops as numpy compares a column with them: an IntEnum member costs numpy about 3 µs
+# more a comparison than its int, and a long CAM file makes some 400 runs of a few hundred
+# rows, each compared several times.
+_OP_RAPID, _OP_FEED, _OP_ARC_CW, _OP_ARC_CCW, _OP_DWELL = (
+    int(op) for op in (Op.RAPID, Op.FEED, Op.ARC_CW, Op.ARC_CCW, Op.DWELL)
+)
 
 COMMENT_CHARACTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 .,-+/:=*#")
 """What the 1704's ASCII table punches in a comment."""
@@ -501,10 +507,10 @@ class Planner:
         leaves its plane (chords); None when the first row is one."""
         ops = rows["op"]
         kind = np.full(len(ops), LINE, dtype=np.uint8)
-        kind[ops == Op.RAPID] = RAPID
-        arcs = (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+        kind[ops == _OP_RAPID] = RAPID
+        arcs = (ops == _OP_ARC_CW) | (ops == _OP_ARC_CCW)
         kind[arcs] = ARC
-        dwell = ops == Op.DWELL
+        dwell = ops == _OP_DWELL
         kind[dwell] = DWELL
         moving = ~dwell
         # Where each row starts: the last motion's end before it (dwells do not move).
@@ -530,6 +536,8 @@ class Planner:
                 if info is not None and info.tcal is not None:
                     z += info.tcal
         feeding = (kind == LINE) | arcs
+        tenths = np.zeros(len(ops), dtype=np.int64)
+        tenths[dwell] = _tenths(rows["value"][dwell])
         run = Run(
             rows["block"].astype(np.int64),
             kind,
@@ -540,9 +548,9 @@ class Planner:
             rows["tag"].copy(),
             rows["cx"].astype(np.int64),
             rows["cy"].astype(np.int64),
-            ops == Op.ARC_CW,
+            ops == _OP_ARC_CW,
             arcs & (x == start_x) & (y == start_y),
-            np.where(dwell, _tenths(rows["value"]), 0),
+            tenths,
         )
         final = int(last[-1])
         if final < 0:
@@ -1063,11 +1071,11 @@ def _simple(
     the rows from base on that end a run, `limit` last."""
     part = rows[base:limit]
     ops = part["op"]
-    straight = ops <= Op.FEED
+    straight = ops <= _OP_FEED
     if profile.circular:
-        straight |= (ops == Op.ARC_CW) | (ops == Op.ARC_CCW)
+        straight |= (ops == _OP_ARC_CW) | (ops == _OP_ARC_CCW)
     if profile.dwell:
-        dwells = np.flatnonzero(ops == Op.DWELL)
+        dwells = np.flatnonzero(ops == _OP_DWELL)
         tenths = _tenths(part["value"][dwells])
         straight[dwells[(tenths >= 1) & (tenths <= 999)]] = True
     inside = cycle_rows[(cycle_rows >= base) & (cycle_rows < limit)]

@@ -23,7 +23,7 @@ one by one too.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,12 +128,18 @@ def motion_length(motion: Motion, start: Point) -> float:
     """A motion's path length in tape units (an arc along its circle)."""
     ex, ey, ez = motion.end
     if motion.kind is Kind.ARC and motion.centre is not None:
-        cx, cy = motion.centre
-        radius = math.hypot(start[0] - cx, start[1] - cy)
-        sweep = arc_sweep((start[0], start[1]), (ex, ey), (cx, cy), motion.clockwise)
-        return radius * sweep
+        return arc_length((start[0], start[1]), (ex, ey), motion.centre, motion.clockwise)
     dz = 0 if ez is None or start[2] is None else ez - start[2]
     return math.sqrt((ex - start[0]) ** 2 + (ey - start[1]) ** 2 + dz**2)
+
+
+def arc_length(
+    start: tuple[int, int], end: tuple[int, int], centre: tuple[int, int], clockwise: bool
+) -> float:
+    """An arc's length along its circle, in the units of its points (a whole turn when it
+    ends where it starts)."""
+    radius = math.hypot(start[0] - centre[0], start[1] - centre[1])
+    return radius * arc_sweep(start, end, centre, clockwise)
 
 
 # -- pass 2: round to the tape's resolution, split arcs at the quadrants -----------------------
@@ -230,14 +236,19 @@ class Rounder:
             moved |= z != np.concatenate(([pos[2] or 0], z[:-1]))  # pos[2] is known (above)
         moved[arcs] = True
         pieces: list[list[tuple[int, int]]] = []
-        for k in arcs.tolist():
-            a = moving[k]
-            clockwise, full_circle = bool(run.clockwise[a]), bool(run.full[a])
-            start, centre = (int(sx[k]), int(sy[k])), (int(cx[len(pieces)]), int(cy[len(pieces)]))
+        arc_rows = moving[arcs]
+        # Scalars from lists (not numpy's, one at a time): a CAM file's run has 10^4 arcs.
+        for start, centre, end, clockwise, full_circle in zip(
+            zip(sx[arcs].tolist(), sy[arcs].tolist(), strict=True),
+            zip(cx.tolist(), cy.tolist(), strict=True),
+            zip(x[arcs].tolist(), y[arcs].tolist(), strict=True),
+            run.clockwise[arc_rows].tolist(),
+            run.full[arc_rows].tolist(),
+            strict=True,
+        ):
             # split_arc's refusals (a radius past the capacity, none, no sweep) go one by one.
             radius = round(math.hypot(start[0] - centre[0], start[1] - centre[1]))
-            end = (int(x[k]), int(y[k]))
-            if radius > fmt.max_units or radius == 0 or (end == start and not full_circle):
+            if radius > limit or radius == 0 or (end == start and not full_circle):
                 return None
             pieces.append(quadrant_ends(start, end, centre, radius, clockwise, full_circle))
         restart = run.restart or self.carry_restart
@@ -256,7 +267,7 @@ class Rounder:
         # The run's rows again, each kept motion once and each arc once a quadrant.
         count = np.ones(len(run), dtype=np.int64)
         count[moving[~moved]] = 0
-        count[moving[arcs]] = [len(points) for points in pieces]
+        count[arc_rows] = [len(points) for points in pieces]
         rows = np.repeat(np.arange(len(run)), count)
         out = run.take(rows, restart)
         xs = np.zeros(len(run), dtype=np.int64)
@@ -273,16 +284,17 @@ class Rounder:
         if len(arcs):
             cxs = np.zeros(len(run), dtype=np.int64)
             cys = np.zeros(len(run), dtype=np.int64)
-            cxs[moving[arcs]], cys[moving[arcs]] = cx, cy
+            cxs[arc_rows], cys[arc_rows] = cx, cy
             out.cx, out.cy = cxs[rows], cys[rows]
             out.full = np.zeros(len(rows), dtype=np.bool_)
-            # Each arc's quadrant ends in place of its end.
-            firsts = np.cumsum(count) - count
+            # Each arc's quadrant ends in place of its end: an arc's rows follow each other
+            # in `rows`, and the arcs come in order, as `pieces` has them.
+            is_arc = np.zeros(len(run), dtype=np.bool_)
+            is_arc[arc_rows] = True
+            slots = np.flatnonzero(is_arc[rows])
+            ends = np.array([point for points in pieces for point in points], dtype=np.int64)
             at_x, at_y = out.x.copy(), out.y.copy()
-            for k, points in zip(moving[arcs].tolist(), pieces, strict=True):
-                first = int(firsts[k])
-                for offset, (px, py) in enumerate(points):
-                    at_x[first + offset], at_y[first + offset] = px, py
+            at_x[slots], at_y[slots] = ends[:, 0], ends[:, 1]
             out.x, out.y = at_x, at_y
         return out
 
@@ -792,10 +804,9 @@ class Words:
         )
         shown_feed = feed[:count]
         written = feeding[:count] & (shown_feed != feed_before)
-        column = np.full(count, "", dtype=object)
-        column[written] = ["F" + self.feed_word(value) for value in shown_feed[written].tolist()]
+        column = _distinct_words(shown_feed, written, lambda value: "F" + self.feed_word(value))
         dwells = ~moving[:count]
-        column[dwells] = ["F" + str(tenths) for tenths in run.tenths[:count][dwells].tolist()]
+        _distinct_words(run.tenths[:count], dwells, lambda tenths: f"F{tenths}", column)
         columns.append(column)
         joiner = "\t" if profile.tabs else ""
         lists = [column.tolist() for column in columns]
@@ -815,17 +826,23 @@ class Words:
         lines = continuous & ~arc[:count]
         squares = dx[:count] ** 2 + dy[:count] ** 2 + dz[:count] ** 2
         length[lines] = np.sqrt(squares[lines].astype(np.float64)) * fmt.digit_nm / fmt.unit_nm
-        for k in np.flatnonzero(continuous & arc[:count]).tolist():
-            piece = Motion(
-                0,
-                Kind.ARC,
-                (int(x[k]), int(y[k]), None),
-                centre=(int(run.cx[k]), int(run.cy[k])),
-                clockwise=bool(run.clockwise[k]),
+        # The arcs' lengths as `motion_length` has them (the same floats as a block
+        # written alone), from lists: a long CAM file's run has 10^4 arcs.
+        curved = np.flatnonzero(continuous & arc[:count])
+        digit_nm, unit_nm = fmt.digit_nm, fmt.unit_nm
+        length[curved] = [
+            arc_length((bx, by), (ax, ay), (cx, cy), cw) * digit_nm / unit_nm
+            for bx, by, ax, ay, cx, cy, cw in zip(
+                sx[curved].tolist(),
+                sy[curved].tolist(),
+                x[curved].tolist(),
+                y[curved].tolist(),
+                run.cx[curved].tolist(),
+                run.cy[curved].tolist(),
+                run.clockwise[curved].tolist(),
+                strict=True,
             )
-            length[k] = (
-                motion_length(piece, (int(sx[k]), int(sy[k]), None)) * fmt.digit_nm / fmt.unit_nm
-            )
+        ]
         last = count - 1
         self.g = str(_G_WORDS[gcode[last]])[1:] if moving[last] else None
         motion = int(last_motion[last])
@@ -850,17 +867,11 @@ class Words:
         self, letter: str, values: npt.NDArray[np.int64], written: npt.NDArray[np.bool_]
     ) -> npt.NDArray[np.object_]:
         """`letter` and `digits` of each value where written, else ''."""
-        column = np.full(len(values), "", dtype=object)
-        # Each distinct value written once (a run repeats its Z levels, a grid its X and Y).
-        distinct, where = np.unique(values[written], return_inverse=True)
         if self.profile.leading_zeros:
             digits = self.digits
-            words = [letter + digits(value) for value in distinct.tolist()]
-        else:
-            # str of a negative int is its sign and digits: `digits` without zeros.
-            words = [f"{letter}{value}" for value in distinct.tolist()]
-        column[written] = np.array(words, dtype=object)[where.reshape(-1)]
-        return column
+            return _distinct_words(values, written, lambda value: letter + digits(value))
+        # str of a negative int is its sign and digits: `digits` without zeros.
+        return _distinct_words(values, written, lambda value: f"{letter}{value}")
 
     def digits(self, units: int) -> str:
         """A motion word's digits: sign only when negative, no point; leading zeros only
@@ -873,6 +884,23 @@ class Words:
     def feed_word(self, value: int) -> str:
         """An F word's digits (F3.1: four, F4: four), leading zeros only with zeros=0."""
         return str(value).zfill(4) if self.profile.leading_zeros else str(value)
+
+
+def _distinct_words(
+    values: npt.NDArray[np.int64],
+    written: npt.NDArray[np.bool_],
+    word: Callable[[int], str],
+    column: npt.NDArray[np.object_] | None = None,
+) -> npt.NDArray[np.object_]:
+    """`word(value)` of each of `values` where written, else '' (or what `column` has
+    there). Each distinct value is made once (a run repeats its Z levels, a grid its X and
+    Y, a CAM file its few feeds)."""
+    if column is None:
+        column = np.full(len(values), "", dtype=object)
+    distinct, where = np.unique(values[written], return_inverse=True)
+    words = [word(value) for value in distinct.tolist()]
+    column[written] = np.array(words, dtype=object)[where.reshape(-1)]
+    return column
 
 
 def spindle_words(words: list[tuple[str, str]], s_code: str | None) -> list[tuple[str, str]]:

@@ -45,7 +45,6 @@ from app.cnc.blocks import (
     Placement,
     Tool,
 )
-from app.cnc.compiler import peck_levels
 from app.cnc.geometry import bolt_circle_points
 from app.cnc.plane import Path
 from app.cnc.recognition.common import (
@@ -72,7 +71,7 @@ from app.cnc.recognition.ops import (
     tools_of,
     units_of,
 )
-from app.cnc.routines import INSIDE_PLACEMENTS, rough_depth, rough_wall
+from app.cnc.routines import INSIDE_PLACEMENTS, peck_levels, rough_depth, rough_wall
 from app.cnc.sequences import plan_sequence
 from app.cnc.units import Units
 

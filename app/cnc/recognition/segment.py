@@ -41,7 +41,6 @@ from app.cnc.blocks import (
     ThreadMill,
     ThreadPlace,
 )
-from app.cnc.compiler import peck_levels
 from app.cnc.geometry import arc_sweep
 from app.cnc.operations.face import face_clear, face_rows
 from app.cnc.operations.helix import helix_ends
@@ -87,7 +86,7 @@ from app.cnc.recognition.steps import (
     Stop,
     ToolChange,
 )
-from app.cnc.routines import routine_clockwise
+from app.cnc.routines import peck_levels, routine_clockwise
 from app.cnc.tools import Hand
 from app.cnc.units import Units, to_nm
 
@@ -297,7 +296,7 @@ class _Segmenter:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
                 continue
-            if not is_quiet(step):
+            if self.spindle_off_line is not None and not is_quiet(step):
                 self.note_spindle_off()
             if isinstance(step, Rapid):
                 self.rapid(step)

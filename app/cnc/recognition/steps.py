@@ -262,14 +262,23 @@ class StepWindow:
 
     def __init__(self, source: StepSource) -> None:
         self.source = source
+        # The steps before this one are settled: the source said so once, and a settled
+        # step does not change, so `has` answers for them without asking it again (the
+        # walk asks for nearly every step several times).
+        self.known = 0
 
     def has(self, i: int) -> bool:
         """Whether the file has a step i (reading on as far as that needs)."""
+        if i < self.known:
+            return True
         source = self.source
-        while i >= source.settled():
+        while True:
+            settled = source.settled()
+            if i < settled:
+                self.known = settled
+                return True
             if not source.more():
                 return i < source.settled()
-        return True
 
     def __getitem__(self, i: int) -> Step:
         """Step i; `has(i)` must have said it exists."""
@@ -278,7 +287,10 @@ class StepWindow:
 
     def at(self, i: int) -> Step | None:
         """Step i, or None past the end of the file."""
-        return self[i] if self.has(i) else None
+        if i < self.known or self.has(i):
+            source = self.source
+            return source.steps[i - source.dropped]
+        return None
 
     def start(self) -> int:
         """The index of the first step still held."""

@@ -345,15 +345,23 @@ _LENGTHS: Final[dict[int, dict[str, tuple[int, int]]]] = {}
 def text_length(text: str, nm_per_unit: int) -> tuple[int, int]:
     """`text_nm` and the decimal places `text` is written with. Remembered: a file writes
     the same few heights, feeds and offsets over and over."""
-    known = _LENGTHS.get(nm_per_unit)
-    if known is None:
-        known = _LENGTHS[nm_per_unit] = {}
+    known = lengths_known(nm_per_unit)
     found = known.get(text)
     if found is None:
         if len(known) >= 1 << 16:
             known.clear()
         found = known[text] = (_text_nm(text, nm_per_unit), places(text))
     return found
+
+
+def lengths_known(nm_per_unit: int) -> dict[str, tuple[int, int]]:
+    """`text_length`'s memory for these units: a hot loop looks a number up in it first
+    (`known.get(text) or text_length(text, per)`) and calls `text_length` only for a new
+    one."""
+    known = _LENGTHS.get(nm_per_unit)
+    if known is None:
+        known = _LENGTHS[nm_per_unit] = {}
+    return known
 
 
 def _text_nm(text: str, nm_per_unit: int) -> int:
@@ -444,13 +452,16 @@ class GcodeStream(StreamSource):
     def more(self) -> bool:
         if self.parsed is not None:
             return False
-        reader = self.reader
+        read = self.reader.read
+        number = self.number
         for raw in self.lines:
-            self.number += 1
-            reader.read(self.number, raw, True)
-            if self.number % STREAM_LINES == 0:
+            number += 1
+            read(number, raw, True)
+            if number % STREAM_LINES == 0:
+                self.number = number
                 return True
-        self.parsed = reader.finish()
+        self.number = number
+        self.parsed = self.reader.finish()
         return True
 
     def drop(self, count: int) -> None:
@@ -828,18 +839,24 @@ class _Reader:
         nx, ny, nz, decimals = axes
         if nx is None or ny is None or (nz is not None and self.z is not None and nz != self.z):
             return False
-        offsets = [0, 0]
-        for k, text in enumerate((i, j)):
-            if text is not None:
-                nm, written = text_length(text, per)
-                if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                    return False
-                offsets[k] = nm
-                decimals = max(decimals, written)
+        known = lengths_known(per)
+        ci = cj = 0
+        if i is not None:
+            ci, written = known.get(i) or text_length(i, per)
+            if not -MAX_ABS_NM <= ci <= MAX_ABS_NM:
+                return False
+            if written > decimals:
+                decimals = written
+        if j is not None:
+            cj, written = known.get(j) or text_length(j, per)
+            if not -MAX_ABS_NM <= cj <= MAX_ABS_NM:
+                return False
+            if written > decimals:
+                decimals = written
         if self.arc_absolute:
-            cx, cy = offsets[0] + self.shift[0], offsets[1] + self.shift[1]
+            cx, cy = ci + self.shift[0], cj + self.shift[1]
         else:
-            cx, cy = sx + offsets[0], sy + offsets[1]
+            cx, cy = sx + ci, sy + cj
         units = self.units
         assert units is not None
         r1 = math.dist((sx, sy), (cx, cy))
@@ -863,19 +880,36 @@ class _Reader:
         """Where absolute axis words go, as `target` has it (an axis without a word stays
         where it is), and the decimal places the file is then written to; None when a word
         is out of `length`'s range. Changes nothing."""
+        # Written out axis by axis, not a loop over the three: this runs for nearly every
+        # line of a long file, and the loop's tuple, enumerate and list were a third of it.
+        # Without a G92 shift the remembered nm object itself is kept (one int for every
+        # repeat of a number in a long file).
+        known = lengths_known(per)
         decimals = self.decimals
-        ends = [self.x, self.y, self.z]
-        for k, text in enumerate((x, y, z)):
-            if text is None:
-                continue
-            nm, written = text_length(text, per)
+        shift = self.shift
+        nx, ny, nz = self.x, self.y, self.z
+        if x is not None:
+            nm, written = known.get(x) or text_length(x, per)
             if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
                 return None
-            # Without a G92 shift the remembered nm object itself is kept (one int for
-            # every repeat of a number in a long file).
-            ends[k] = nm + self.shift[k] if self.shift[k] else nm
-            decimals = max(decimals, written)
-        return ends[0], ends[1], ends[2], decimals
+            nx = nm + shift[0] if shift[0] else nm
+            if written > decimals:
+                decimals = written
+        if y is not None:
+            nm, written = known.get(y) or text_length(y, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            ny = nm + shift[1] if shift[1] else nm
+            if written > decimals:
+                decimals = written
+        if z is not None:
+            nm, written = known.get(z) or text_length(z, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return None
+            nz = nm + shift[2] if shift[2] else nm
+            if written > decimals:
+                decimals = written
+        return nx, ny, nz, decimals
 
     def cycle_clear(self, start_z: int, r: int) -> int:
         """Where a canned cycle's hole retracts to: R (G99), or (G98) the height the tool
@@ -896,8 +930,9 @@ class _Reader:
             return False
         if self.comp:
             return False
-        if (code in ("73", "83") and not self.cycle_q) or self.made() + 1 > MAX_STEPS:
-            return False
+        pecking = code == "73" or code == "83"
+        if (pecking and not self.cycle_q) or self.out.dropped + len(self.steps) >= MAX_STEPS:
+            return False  # (the second: `made() + 1 > MAX_STEPS`, written out for speed)
         axes = self.fast_axes(x, y, None, per)
         if axes is None:
             return False
@@ -909,7 +944,7 @@ class _Reader:
         self.feed = feed
         self.change_pending = None
         clear = self.cycle_clear(start_z, r)
-        peck = (self.cycle_q or 0) if code in ("73", "83") else 0
+        peck = (self.cycle_q or 0) if pecking else 0
         self.steps.append(
             Cycle(number, int(code), nx, ny, r, bottom, clear, feed, peck, self.cycle_p, self.units)
         )

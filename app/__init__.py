@@ -15,12 +15,14 @@ if TYPE_CHECKING:
 
 def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     """The Flask application (see app.web.create_app), for a server to start: a setting it
-    cannot use or a database newer than this code is said in one line on stderr (the
-    journal), and the process exits with status 4, which gunicorn reads as "the app failed
-    to load" and stops on, instead of restarting workers that cannot start (the unit file
-    does not restart on it either)."""
+    cannot use (a database URL, password or instance folder among them) or a database newer
+    than this code is said in one line on stderr (the journal), and the process exits with
+    status 4, which gunicorn reads as "the app failed to load" and stops on, instead of
+    restarting workers that cannot start (the unit file does not restart on it either). A
+    database that does not answer is one line too, and status 3 ("worker failed to boot"):
+    gunicorn stops, and the unit starts it again after RestartSec."""
     from app.settings import SettingError
-    from app.storage.db import SchemaError
+    from app.storage.db import DatabaseUnavailable, SchemaError
     from app.web import create_app as factory
 
     try:
@@ -28,3 +30,7 @@ def create_app(test_config: dict[str, Any] | None = None) -> Flask:
     except (SettingError, SchemaError) as exc:
         print(f"MillBlocks cannot start: {exc}", file=sys.stderr, flush=True)
         raise SystemExit(4) from None
+    except DatabaseUnavailable as exc:
+        # 3: gunicorn's "worker failed to boot"; it stops, and the unit tries again later.
+        print(f"MillBlocks cannot start yet: {exc}", file=sys.stderr, flush=True)
+        raise SystemExit(3) from None

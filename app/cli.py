@@ -27,7 +27,7 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -212,6 +212,13 @@ class ConfigurationError(click.ClickException):
     exit_code = 2
 
 
+class DatabaseUnavailableError(click.ClickException):
+    """A database that does not answer now (not started yet, restarting): exit 1, on which
+    the systemd unit tries again."""
+
+    exit_code = 1
+
+
 def settings() -> dict[str, Any]:
     """The MILLBLOCKS_* settings of the environment (app.settings), read."""
     from app.settings import SettingError, environment
@@ -222,19 +229,33 @@ def settings() -> dict[str, Any]:
         raise ConfigurationError(str(exc)) from None
 
 
-def library() -> Library:
+@contextlib.contextmanager
+def opening_database() -> Iterator[None]:
+    """Opening the database: a setting that cannot work (a URL, a password, the instance
+    folder) or a newer schema is ConfigurationError (exit 2), a database that does not
+    answer DatabaseUnavailableError (exit 1); each one line naming the variable."""
+    from app.settings import SettingError
+    from app.storage.db import DatabaseUnavailable, SchemaError
+
+    try:
+        yield
+    except (SettingError, SchemaError) as exc:
+        raise ConfigurationError(str(exc)) from None
+    except DatabaseUnavailable as exc:
+        raise DatabaseUnavailableError(str(exc)) from None
+
+
+def library(config: dict[str, Any] | None = None) -> Library:
     """The library (MILLBLOCKS_DATABASE_URL or DATABASE_URL, else millblocks.db in the
-    instance folder), migrated to the newest; its times in the shop's zone."""
-    from app.storage.db import SchemaError
+    instance folder), migrated to the newest; its times in the shop's zone. `config`: the
+    settings when the command has read them already."""
     from app.storage.library import open_library
 
-    config = settings()
-    try:
+    config = config or settings()
+    with opening_database():
         return open_library(
             config["DATABASE_URL"], seed_demo=config["DEMO_PROGRAMS"], zone=config["TIME_ZONE"]
         )
-    except SchemaError as exc:
-        raise ConfigurationError(str(exc)) from None
 
 
 def shop_time(lib: Library, moment: datetime, seconds: bool = False) -> str:
@@ -858,9 +879,10 @@ def db_upgrade() -> None:
     command does this by itself too)."""
     from app.storage.db import current
 
-    engine = _database()
+    config = settings()
+    engine = _database(config)
     before = _known_revision(engine)
-    after = current(library().engine)
+    after = current(library(config).engine)
     where = engine.url.render_as_string(hide_password=True)
     if before is None:
         click.echo(f"created the database at {after} ({where})")
@@ -926,11 +948,13 @@ def db_downgrade(revision: str | None, yes: bool) -> None:
     click.echo(f"downgraded from {found} to {current(engine) or 'base (empty)'}")
 
 
-def _database() -> Engine:
-    """An engine on the configured database, without migrating it."""
-    from app.storage.db import make_engine
+def _database(config: dict[str, Any] | None = None) -> Engine:
+    """An engine on the configured database, without migrating it (a database that cannot
+    be opened: `opening_database`)."""
+    from app.storage.db import open_engine
 
-    return make_engine(settings()["DATABASE_URL"])
+    with opening_database():
+        return open_engine((config or settings())["DATABASE_URL"])
 
 
 def _known_revision(engine: Engine) -> str | None:
@@ -1499,13 +1523,18 @@ def dnc_service(poll: float, stop_with: int | None) -> None:
     machine, any number of machines at once, until SIGTERM or Ctrl-C (which interrupt the
     transfers running then, naming them). Run one per library, beside the web server."""
     from app.dnc.daemon import TransferService
+    from app.web.logs import setup
 
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     if stop_with is not None:
         _stop_with_parent(stop, stop_with, poll)
-    running = TransferService(library(), poll=poll)
+    config = settings()
+    # The service's log lines (a database that stopped answering, a transfer that failed)
+    # as the web server's: time or journal priority, level, logger (docs/deploy.md, Logs).
+    setup(config["LOG_LEVEL"])
+    running = TransferService(library(config), poll=poll)
     for transfer in running.recover():
         click.echo(
             f"transfer {transfer.id} ({transfer.direction} {transfer.program_name or '-'} on "

@@ -11,8 +11,16 @@ app/cnc/cost.py) and in time (MILLBLOCKS_REQUEST_SECONDS, 20 s: a clear refusal)
 inside `timeout`, so no worker is killed for a slow request. Within a process the heavy
 requests (Verify, the set-up sheet, exports) run one at a time (app/web/heavy.py), so the
 interpreter lock is shared with the light ones by at most one of them.
+
+The control socket (gunicorn 25 and later, for `gunicornc`) is `gunicorn.ctl` in the instance
+folder: gunicorn's default, `$XDG_RUNTIME_DIR` or `~/.gunicorn`, is one for every gunicorn of
+a user, so a second `millblocks serve` took over the first one's socket (and removed it on
+stopping). An older gunicorn ignores the setting.
 """
+
+from app.resources import instance_dir
 
 worker_class = "gthread"
 threads = 4
 timeout = 30
+control_socket = str(instance_dir() / "gunicorn.ctl")

@@ -61,6 +61,25 @@ def _text(default: str | None) -> Callable[[Any], Any]:
     return read
 
 
+SECRET_KEY_LEAST = 32
+"""The shortest secret key taken (characters): `token_hex(32)` gives 64, and a short key
+is one an attacker can guess to forge a session cookie."""
+
+
+def _secret_key(raw: Any) -> str | None:
+    if raw is None or raw == "":
+        return None
+    key = str(raw)
+    if len(key) < SECRET_KEY_LEAST:
+        raise ValueError(
+            f"the key has {len(key)} characters, fewer than {SECRET_KEY_LEAST} (a short key "
+            "can be guessed); give 64 hex digits: "
+            "`python3 -c 'import secrets; print(secrets.token_hex(32))'`, or leave it unset "
+            "for a key made once in the instance folder"
+        )
+    return key
+
+
 def _whole(default: int, minimum: int) -> Callable[[Any], int]:
     def read(raw: Any) -> int:
         if raw is None or raw == "":
@@ -169,10 +188,11 @@ SETTINGS: tuple[Setting, ...] = (
     Setting(
         "SECRET_KEY",
         "made once, kept in `secret_key` in the instance folder",
-        _text(None),
+        _secret_key,
         "Signs the session cookies. Give every server of one shop the same key (64 hex "
-        "digits: `python3 -c 'import secrets; print(secrets.token_hex(32))'`) so a login "
-        "on one is good on all; a new key logs everyone out.",
+        "digits: `python3 -c 'import secrets; print(secrets.token_hex(32))'`; fewer than "
+        "32 characters is refused) so a login on one is good on all; a new key logs "
+        "everyone out.",
     ),
     Setting(
         "AUTH",
@@ -244,12 +264,25 @@ SETTINGS: tuple[Setting, ...] = (
         "What goes to stderr (the journal): `INFO` a line per request, `WARNING` only "
         "warnings and errors.",
     ),
+    Setting(
+        "NATIVE",
+        "`1`",
+        _choice("1", "0", "1"),
+        "`0`: the G-code importer runs from its Python sources where the wheel has it "
+        "compiled (`make wheel-native`): the same results, slower (app/cnc/native.py reads it).",
+    ),
 )
 
 BY_KEY = {setting.key: setting for setting in SETTINGS}
 
-DEVELOPMENT = frozenset({"NATIVE", "MYPYC", "FUZZ_EXAMPLES", "FUZZ_RANDOM", "REGEN_GOLDEN"})
-"""MILLBLOCKS_* variables of building, the test suite and benchmarks, not of a server."""
+DEVELOPMENT = frozenset(
+    {"MYPYC", "FUZZ_EXAMPLES", "FUZZ_DXF_EXAMPLES", "FUZZ_RANDOM", "REGEN_GOLDEN"}
+)
+"""MILLBLOCKS_* variables of building, the test suite and benchmarks, not of a server
+(tests/test_settings.py finds every one they read here)."""
+
+_warned: set[tuple[str, str]] = set()
+"""The not-a-setting variables already named (with their values): once a process."""
 
 
 def apply(config: MutableMapping[str, Any], environment: Mapping[str, str]) -> None:
@@ -259,7 +292,11 @@ def apply(config: MutableMapping[str, Any], environment: Mapping[str, str]) -> N
     for name in sorted(environment):
         key = name.removeprefix(f"{PREFIX}_")
         if name.startswith(f"{PREFIX}_") and key not in BY_KEY and key not in DEVELOPMENT:
-            log.warning("%s is not a MillBlocks setting (docs/deploy.md lists them); ignored", name)
+            if (name, environment[name]) not in _warned:
+                _warned.add((name, environment[name]))
+                log.warning(
+                    "%s is not a MillBlocks setting (docs/deploy.md lists them); ignored", name
+                )
             config.pop(key, None)
     for setting in SETTINGS:
         raw = config.get(setting.key)
@@ -267,6 +304,28 @@ def apply(config: MutableMapping[str, Any], environment: Mapping[str, str]) -> N
             config[setting.key] = setting.read(raw)
         except ValueError as exc:
             raise SettingError(f"{setting.variable}: {exc}") from None
+
+
+def instance_folder(folder: Path | None = None) -> Path:
+    """The instance folder (`folder`, else app.resources.instance_dir()), made if missing.
+    Raises SettingError naming MILLBLOCKS_INSTANCE_PATH when it cannot be made or is not
+    writable by this user (a path under /proc, a file, another user's folder)."""
+    from app.resources import instance_dir
+
+    path = folder or instance_dir()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SettingError(
+            f"{PREFIX}_INSTANCE_PATH: cannot make the folder {path}: {exc.strerror}; give a "
+            "folder the user MillBlocks runs as may write (docs/deploy.md: /var/lib/millblocks)"
+        ) from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise SettingError(
+            f"{PREFIX}_INSTANCE_PATH: the folder {path} is not writable by this user; give a "
+            "folder the user MillBlocks runs as may write (docs/deploy.md: /var/lib/millblocks)"
+        )
+    return path
 
 
 def environment() -> dict[str, Any]:

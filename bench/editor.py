@@ -273,7 +273,7 @@ def parts_case(blocks: int) -> Result:
     )
     with tempfile.TemporaryDirectory() as tmp:
         app = create_app(
-            {"DATABASE_URL": f"sqlite:///{Path(tmp) / 'parts.db'}", "SECRET_KEY": "bench"}
+            {"DATABASE_URL": f"sqlite:///{Path(tmp) / 'parts.db'}", "SECRET_KEY": "bench" * 32}
         )
         with app.app_context():
             from app.web import get_library
@@ -396,7 +396,7 @@ def phases_case(blocks: int, edits: int) -> Result:
         setattr(owner, name, timed(label, getattr(owner, name)))
     with tempfile.TemporaryDirectory() as tmp:
         app = create_app(
-            {"DATABASE_URL": f"sqlite:///{Path(tmp) / 'phases.db'}", "SECRET_KEY": "bench"}
+            {"DATABASE_URL": f"sqlite:///{Path(tmp) / 'phases.db'}", "SECRET_KEY": "bench" * 32}
         )
         with app.app_context():
             program_id = get_library().create(editor_program(blocks)).id

@@ -148,7 +148,7 @@ def browser_case(family: str, moves: int) -> Result:
         program = sized(family, moves * MAX_MOVES // estimated)
     validate(program)  # compiled once, as after the edit that saved it
     with tempfile.TemporaryDirectory() as folder:
-        app = create_app({"DATABASE_URL": f"sqlite:///{folder}/bench.db", "SECRET_KEY": "b"})
+        app = create_app({"DATABASE_URL": f"sqlite:///{folder}/bench.db", "SECRET_KEY": "b" * 32})
         with app.app_context():
             pid = get_library().create(program).id
         http = make_server("127.0.0.1", 0, app, threaded=True)

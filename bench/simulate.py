@@ -167,7 +167,7 @@ def browser_case(family: str, moves: int, steps: int = 360) -> Result:
     from tests.test_browser_verify import WEBGL_ARGS
 
     with tempfile.TemporaryDirectory() as folder:
-        app = create_app({"DATABASE_URL": f"sqlite:///{folder}/bench.db", "SECRET_KEY": "b"})
+        app = create_app({"DATABASE_URL": f"sqlite:///{folder}/bench.db", "SECRET_KEY": "b" * 32})
         with app.app_context():
             library = get_library()
             if family == "demo":

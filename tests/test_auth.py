@@ -94,7 +94,7 @@ def test_login_starts_a_new_session(app: Flask) -> None:
 
 
 def test_local_mode_serves_only_loopback(tmp_path: Path) -> None:
-    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'l.db'}", "SECRET_KEY": "t"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'l.db'}", "SECRET_KEY": "t" * 32})
     client = app.test_client()
     assert client.get("/", environ_base={"REMOTE_ADDR": "127.0.0.1"}).status_code == 200
     far = client.get("/", environ_base={"REMOTE_ADDR": "192.0.2.7"})

@@ -73,7 +73,7 @@ class Served:
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
     db = tmp_path_factory.mktemp("browser-crib") / "library.db"
-    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "browser-test"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "browser-test" * 32})
     with app.app_context():
         crib = Crib(get_library())
         for tool in TOOLS:

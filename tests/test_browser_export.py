@@ -30,7 +30,7 @@ UNCALIBRATED = Path(__file__).parent / "bad" / "tool-uncalibrated-for-a-tape" / 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, int]]:
     db = tmp_path_factory.mktemp("export") / "library.db"
-    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "browser-test"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "browser-test" * 32})
     with app.app_context():
         pid = get_library().create(document.loads(UNCALIBRATED.read_text())).id
     http = make_server("127.0.0.1", 0, app, threaded=True)

@@ -88,7 +88,7 @@ class Library:
 @pytest.fixture(scope="module")
 def library(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Library]:
     db = tmp_path_factory.mktemp("preview") / "library.db"
-    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "preview-test"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{db}", "SECRET_KEY": "preview-test" * 32})
     http = make_server("127.0.0.1", 0, app, threaded=True)
     thread = threading.Thread(target=http.serve_forever, daemon=True)
     thread.start()

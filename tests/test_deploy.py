@@ -448,7 +448,7 @@ def test_health_says_whether_the_database_answers() -> None:
     with admin.connect() as conn:
         conn.execute(text(f'CREATE DATABASE "{name}"'))
     url = admin.url.set(database=name).render_as_string(hide_password=False)
-    app = create_app({"DATABASE_URL": url, "SECRET_KEY": "t", "AUTH": "accounts"})
+    app = create_app({"DATABASE_URL": url, "SECRET_KEY": "t" * 32, "AUTH": "accounts"})
     client = app.test_client()
     answer = client.get("/healthz", environ_base={"REMOTE_ADDR": "10.0.0.9"})
     assert (answer.status_code, answer.get_json()) == (200, {"status": "ok"})
@@ -602,7 +602,7 @@ def test_an_unexpected_error_shows_a_page_with_a_reference_the_log_has(
     reference with the traceback (Werkzeug's bare page said nothing, logged nothing to
     quote)."""
     database = tmp_path / "broken.db"
-    app = create_app({"DATABASE_URL": f"sqlite:///{database}", "SECRET_KEY": "t"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{database}", "SECRET_KEY": "t" * 32})
     engine = make_engine(f"sqlite:///{database}")
     with engine.begin() as conn:
         conn.execute(text("DROP TABLE revisions"))
@@ -630,7 +630,7 @@ def test_log_lines_carry_the_journals_priority_under_systemd(tmp_path: Path) -> 
     """With stderr the journal (systemd's JOURNAL_STREAM names it), each line starts with
     its syslog priority (<6> info, <3> error), which journald keeps as the entry's level."""
     stderr = tmp_path / "journal"
-    config = {"DATABASE_URL": f"sqlite:///{tmp_path / 'j.db'}", "SECRET_KEY": "t"}
+    config = {"DATABASE_URL": f"sqlite:///{tmp_path / 'j.db'}", "SECRET_KEY": "t" * 32}
     script = (
         "from app.web import create_app\n"
         f"app = create_app({config!r})\n"

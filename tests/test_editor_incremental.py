@@ -34,7 +34,7 @@ PATCH = re.compile(r'<template id="drawing-patch" hx-swap-oob="true" data-from="
 
 @pytest.fixture
 def app(tmp_path: Path) -> Iterator[Flask]:
-    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'edits.db'}", "SECRET_KEY": "t"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'edits.db'}", "SECRET_KEY": "t" * 32})
     yield app
     with app.app_context():
         get_library().engine.dispose()

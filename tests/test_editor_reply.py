@@ -28,7 +28,7 @@ OOB_ROW = re.compile(r'<li class="block-row[^"]*" data-block="(\d+)" id="b-\1" h
 
 @pytest.fixture
 def app(tmp_path: Path) -> Iterator[Flask]:
-    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'reply.db'}", "SECRET_KEY": "t"})
+    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'reply.db'}", "SECRET_KEY": "t" * 32})
     yield app
     with app.app_context():
         get_library().engine.dispose()

@@ -53,7 +53,7 @@ def test_the_import_has_errors_and_the_document_writer_writes_it() -> None:
 
 @pytest.fixture
 def app(tmp_path: Path) -> Flask:
-    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t"})
+    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t" * 32})
 
 
 def test_the_upload_page_stores_it_and_the_editor_shows_its_errors(app: Flask) -> None:

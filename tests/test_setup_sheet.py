@@ -70,7 +70,7 @@ def test_a_bad_tool_name_is_an_error_naming_the_tool(name: str, message: str) ->
 
 @pytest.fixture
 def app(tmp_path: Path) -> Flask:
-    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t"})
+    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t" * 32})
 
 
 def db0_form(program: Program, version: int, **extra: str) -> dict[str, str]:

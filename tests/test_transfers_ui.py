@@ -40,7 +40,9 @@ def pair() -> Iterator[SocatPair]:
 
 @pytest.fixture
 def app(tmp_path: Path) -> Iterator[Flask]:
-    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "test"})
+    app = create_app(
+        {"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "test" * 32}
+    )
     yield app
     with app.app_context():
         get_library().engine.dispose()

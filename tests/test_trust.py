@@ -223,7 +223,7 @@ def test_a_line_that_goes_nowhere_in_a_compensated_contour_exports_everywhere() 
 
 @pytest.fixture
 def app(tmp_path: Path) -> Flask:
-    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t"})
+    return create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "t" * 32})
 
 
 def test_the_editor_and_its_pages_open_such_a_program(app: Flask) -> None:

@@ -19,7 +19,9 @@ from app.web import get_library
 
 @pytest.fixture
 def app(tmp_path: Path) -> Iterator[Flask]:
-    app = create_app({"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "test"})
+    app = create_app(
+        {"DATABASE_URL": f"sqlite:///{tmp_path / 'web.db'}", "SECRET_KEY": "test" * 32}
+    )
     yield app
     get_library_engine(app).dispose()
 

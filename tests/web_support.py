@@ -22,7 +22,7 @@ def accounts_app(tmp_path: Path, **config: Any) -> Flask:
     app = create_app(
         {
             "DATABASE_URL": f"sqlite:///{tmp_path / 'accounts.db'}",
-            "SECRET_KEY": "test",
+            "SECRET_KEY": "test" * 32,
             "AUTH": "accounts",
             **config,
         }
@@ -38,7 +38,7 @@ def accounts_app(tmp_path: Path, **config: Any) -> Flask:
 def local_app(tmp_path: Path, **config: Any) -> Flask:
     """An app in local mode (one local user) on a fresh SQLite file with the demo set."""
     return create_app(
-        {"DATABASE_URL": f"sqlite:///{tmp_path / 'local.db'}", "SECRET_KEY": "test", **config}
+        {"DATABASE_URL": f"sqlite:///{tmp_path / 'local.db'}", "SECRET_KEY": "test" * 32, **config}
     )
 
 

@@ -32,6 +32,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 
+from sqlalchemy.exc import DBAPIError
+
 from app.dnc import jobs, service
 from app.dnc.jobs import JobState, TransferJob
 from app.dnc.record import Direction, TransferRecord
@@ -56,6 +58,8 @@ HEARTBEAT_KEY = "dnc_service_heartbeat"
 ALIVE = timedelta(seconds=20)
 """A service heard from within this long is taken to be running (the page says so)."""
 HEARTBEAT_EVERY = 5.0  # s
+RETRY_FIRST = 1.0  # s: the first wait after the database did not answer
+RETRY_MOST = 30.0  # s: the longest
 
 INTERRUPTED_BY_CRASH = (
     "the transfer service stopped before this transfer ended (it was restarted); check what "
@@ -71,15 +75,35 @@ def _now() -> datetime:
     return datetime.now(UTC).replace(tzinfo=None, microsecond=0)
 
 
+STOPPED = " stopped at "
+"""In the heartbeat of a service that stopped as asked (`{name} stopped at {time}`)."""
+
+
+def _last_heard(library: Library) -> tuple[str, datetime | None, bool]:
+    """The last heartbeat: its text, its time (None when there is none), whether the
+    service said it stopped."""
+    value = library.setting(HEARTBEAT_KEY) or ""
+    try:
+        seen = datetime.fromisoformat(value.rpartition(" at ")[2])
+    except ValueError:
+        return value, None, False
+    return value, seen, STOPPED in value
+
+
 def service_alive(library: Library, now: datetime | None = None) -> bool:
     """Whether a transfer service has been heard from lately."""
-    value = library.setting(HEARTBEAT_KEY) or ""
-    stamp = value.rpartition(" at ")[2]
-    try:
-        seen = datetime.fromisoformat(stamp)
-    except ValueError:
-        return False
-    return (now or _now()) - seen <= ALIVE
+    _, seen, stopped = _last_heard(library)
+    return seen is not None and not stopped and (now or _now()) - seen <= ALIVE
+
+
+def service_died(library: Library, now: datetime | None = None) -> str | None:
+    """The last heartbeat (`{name} at {UTC time}`) of a transfer service that went silent
+    without stopping as asked (killed, crashed); None while one runs, after one stopped
+    as asked, and where none ever ran."""
+    value, seen, stopped = _last_heard(library)
+    if seen is None or stopped or (now or _now()) - seen <= ALIVE:
+        return None
+    return value
 
 
 @dataclass
@@ -166,13 +190,30 @@ class TransferService:
         the transfers the stop interrupted."""
         import time
 
+        retry = 0.0
         while not stop.is_set():
-            self.heartbeat(time.monotonic())
-            for transfer in self.step():
-                if on_start is not None:
-                    on_start(transfer)
+            try:
+                self.heartbeat(time.monotonic())
+                for transfer in self.step():
+                    if on_start is not None:
+                        on_start(transfer)
+            except DBAPIError as exc:
+                # PostgreSQL restarted, the network dropped, SQLite's file unreadable for a
+                # while: the transfers running go on (their rows catch up later), and the
+                # queue is looked at again after a wait that doubles up to RETRY_MOST.
+                retry = min(RETRY_MOST, retry * 2 or RETRY_FIRST)
+                said = " ".join(str(exc.orig).split()) or type(exc.orig).__name__
+                log.error("the database does not answer (%s); trying again in %g s", said, retry)
+                stop.wait(retry)
+                continue
+            if retry:
+                log.warning("the database answers again; the service carries on")
+                retry = 0.0
             stop.wait(self.poll)
-        return self.shutdown()
+        stopped = self.shutdown()
+        with contextlib.suppress(DBAPIError):  # a database that is gone: the page says so
+            self.library.set_setting(HEARTBEAT_KEY, f"{self.name}{STOPPED}{_now().isoformat()}")
+        return stopped
 
     def shutdown(self, timeout: float = 5.0) -> list[Transfer]:
         """Cancel every running transfer, wait for it to let go of its port, and mark its

@@ -22,9 +22,11 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import Engine, create_engine, event, inspect, text
+from sqlalchemy.exc import ArgumentError, DBAPIError, NoSuchModuleError
 
 from app.cnc.text import check_text
-from app.resources import data_dir, instance_dir
+from app.resources import data_dir
+from app.settings import instance_folder
 
 if TYPE_CHECKING:
     from alembic.config import Config
@@ -43,22 +45,97 @@ class SchemaError(RuntimeError):
     """A database this MillBlocks cannot use as it is (the message says what to do)."""
 
 
+class DatabaseSettingError(SchemaError):
+    """The database setting names a database MillBlocks cannot open as it is: not a URL, a
+    kind of database it has no driver for, a password or user or database the server
+    refuses, a SQLite file that cannot be opened. The message names the variable and never
+    holds the password; restarting does not help (the command line exits 2, the server 4)."""
+
+
+class DatabaseUnavailable(RuntimeError):
+    """The database does not answer (PostgreSQL not started yet, restarting, the network):
+    it may later, so a restart helps (the command line exits 1, the server 3). The message
+    names the variable and never holds the password."""
+
+
 def database_url(url: str | None = None) -> str:
     """The URL to use: the argument, else MILLBLOCKS_DATABASE_URL, else DATABASE_URL, else
     `millblocks.db` in the instance folder."""
-    if url:
-        return url
-    env = os.environ.get("MILLBLOCKS_DATABASE_URL") or os.environ.get("DATABASE_URL")
-    if env:
+    given = url or os.environ.get("MILLBLOCKS_DATABASE_URL") or os.environ.get("DATABASE_URL")
+    if given:
         # Heroku-style postgres:// URLs name the old driver; psycopg 3 is what we ship.
-        if env.startswith("postgres://"):
-            env = "postgresql+psycopg://" + env[len("postgres://") :]
-        elif env.startswith("postgresql://"):
-            env = "postgresql+psycopg://" + env[len("postgresql://") :]
-        return env
-    default = instance_dir() / "millblocks.db"
-    default.parent.mkdir(parents=True, exist_ok=True)
-    return f"sqlite:///{default}"
+        for scheme in ("postgres://", "postgresql://"):
+            if given.startswith(scheme):
+                return "postgresql+psycopg://" + given[len(scheme) :]
+        return given
+    return f"sqlite:///{instance_folder() / 'millblocks.db'}"
+
+
+def database_variable(url: str | None = None) -> str:
+    """The setting that chose the database `database_url(url)` opens, to name in a message:
+    MILLBLOCKS_DATABASE_URL (also when a caller gave the URL), DATABASE_URL, or
+    MILLBLOCKS_INSTANCE_PATH for the default SQLite file."""
+    if url or os.environ.get("MILLBLOCKS_DATABASE_URL"):
+        return "MILLBLOCKS_DATABASE_URL"
+    return "DATABASE_URL" if os.environ.get("DATABASE_URL") else "MILLBLOCKS_INSTANCE_PATH"
+
+
+_PASSWORD = re.compile(r"(://[^:/@]*:).*@")
+
+
+def without_password(url: str) -> str:
+    """`url` with the password of its `user:password@` replaced by `***` (also in text
+    SQLAlchemy could not parse), to be written in a message or a log."""
+    return _PASSWORD.sub(r"\1***@", url)
+
+
+_REFUSED = ("password", "authentication", "does not exist", "pg_hba.conf", "permission denied")
+"""PostgreSQL's refusals at login that a setting causes (FATAL: password authentication
+failed, role or database does not exist, no pg_hba.conf entry); anything else at connection
+(refused, timed out, starting up, too many clients) may pass."""
+
+
+def open_engine(url: str | None = None) -> Engine:
+    """`make_engine(url)` after one connection made and returned: raises
+    DatabaseSettingError when the setting cannot work, DatabaseUnavailable when the
+    database does not answer, each one line naming the variable, without the password."""
+    variable = database_variable(url)
+    shown = without_password(database_url(url))
+    try:
+        engine = make_engine(url)
+        with engine.connect():
+            pass
+    except ArgumentError:
+        raise DatabaseSettingError(
+            f"{variable}: {shown!r} is not a database URL (such as "
+            "postgresql+psycopg://USER:PASSWORD@HOST/DATABASE, or sqlite:////PATH/millblocks.db)"
+        ) from None
+    except (NoSuchModuleError, ImportError) as exc:
+        raise DatabaseSettingError(
+            f"{variable}: {shown}: MillBlocks cannot open this kind of database "
+            f"({_first_line(exc)}); it uses PostgreSQL (postgresql+psycopg://…) or SQLite "
+            "(sqlite:///…)"
+        ) from None
+    except DBAPIError as exc:
+        if damage(exc) is not None:
+            raise  # a damaged SQLite file: the command line says what to do (app.cli)
+        said = _first_line(exc.orig or exc)
+        if shown.startswith("sqlite"):
+            raise DatabaseSettingError(
+                f"{variable}: {shown}: SQLite cannot open the file ({said}); its folder must "
+                "exist and be writable by the user MillBlocks runs as"
+            ) from None
+        if "FATAL" in said and any(word in said for word in _REFUSED):
+            raise DatabaseSettingError(f"{variable}: {shown}: the server refused: {said}") from None
+        raise DatabaseUnavailable(
+            f"{variable}: {shown}: the database does not answer: {said}"
+        ) from None
+    return engine
+
+
+def _first_line(exc: BaseException) -> str:
+    """An error's message on one line (psycopg's run over several)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 _DAMAGE = ("SQLITE_NOTADB", "SQLITE_CORRUPT")

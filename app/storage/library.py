@@ -37,7 +37,7 @@ from app.cnc.text import (
     derived_name,
     search_terms,
 )
-from app.storage.db import make_engine, migration_lock, upgrade
+from app.storage.db import migration_lock, open_engine, upgrade
 from app.storage.models import DrawingRow, MachineRow, ProgramRow, RevisionRow, SettingRow
 from app.storage.revisions import RevisionInfo, Versioned, stale_message
 
@@ -710,7 +710,7 @@ def open_library(url: str | None = None, seed_demo: bool = True, zone: tzinfo = 
     """The library at `url` (DATABASE_URL, else the SQLite default), migrated to head, with
     the demo programs added the first time it is opened (unless not `seed_demo`: then it
     never gets them); its messages state times in `zone`."""
-    engine = make_engine(url)
+    engine = open_engine(url)
     library = Library(engine, zone)
     # Workers starting together: one migrates and seeds, the others wait, then find both
     # done (migrating twice fails: "table alembic_version already exists").

@@ -173,8 +173,7 @@ def _trust_proxy(app: Flask) -> None:
 
 def _secret_key(instance: Path) -> str:
     """A per-installation key kept in instance/secret_key (created on first start)."""
-    instance.mkdir(parents=True, exist_ok=True)
-    path = instance / "secret_key"
+    path = settings.instance_folder(instance) / "secret_key"
     if not path.exists():
         path.write_text(secrets.token_hex(32))
         path.chmod(0o600)

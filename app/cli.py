@@ -320,21 +320,12 @@ class _Commands(click.Group):
 
 def _damaged_database(exc: Exception) -> None:
     """ConfigurationError naming the SQLite file and what to do when `exc` says the file
-    is damaged (app.storage.db.damage); nothing for any other error."""
-    from sqlalchemy.engine import make_url
+    is damaged (app.storage.db.damaged_file); nothing for any other error."""
+    from app.storage.db import damaged_file
 
-    from app.storage.db import damage, database_url
-
-    found = damage(exc)
-    if found is None:
-        return
-    path = make_url(database_url(settings()["DATABASE_URL"])).database
-    raise ConfigurationError(
-        f"{path}: the database file is damaged (SQLite: {found}). Stop MillBlocks, move the "
-        "file aside and restore from a backup: put back a copy of the file, or let "
-        "MillBlocks create a new database and `millblocks restore ARCHIVE` an archive "
-        "made with `millblocks backup` (docs/deploy.md, Backups)"
-    ) from None
+    said = damaged_file(exc, settings()["DATABASE_URL"])
+    if said is not None:
+        raise ConfigurationError(said) from None
 
 
 @click.group(cls=_Commands)

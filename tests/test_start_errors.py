@@ -167,6 +167,36 @@ def test_the_app_factory_says_a_bad_database_in_one_line_and_exits_4(
         monkeypatch.delenv(f"MILLBLOCKS_{variable}")
 
 
+@pytest.mark.parametrize(
+    ("how", "said"),
+    [("header", "file is not a database"), ("pages", "database disk image is malformed")],
+)
+def test_the_app_factory_says_a_damaged_sqlite_file_in_one_line_and_exits_4(
+    how: str,
+    said: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The command line named a damaged file and what to do; the app factory (gunicorn's
+    workers) ended in the driver's traceback, and gunicorn tried again. Now the same words
+    as the command line's, and exit 4: no restart mends the file."""
+    from tests.test_cli import _damaged
+
+    path = tmp_path / "library.db"
+    _damaged(path, how)
+    monkeypatch.setenv("MILLBLOCKS_INSTANCE_PATH", str(tmp_path))
+    monkeypatch.setenv("MILLBLOCKS_DATABASE_URL", f"sqlite:///{path}")
+    with pytest.raises(SystemExit) as ended:
+        create_app()
+    assert ended.value.code == 4
+    line = one_line(capsys.readouterr().err)
+    assert line.startswith(
+        f"MillBlocks cannot start: {path}: the database file is damaged (SQLite: {said}). "
+        "Stop MillBlocks, move the file aside and restore from a backup"
+    )
+
+
 def test_a_database_that_does_not_answer_is_one_line_and_a_status_the_unit_restarts_on(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -152,6 +152,23 @@ def damage(exc: BaseException) -> str | None:
     return str(original) if isinstance(name, str) and name.startswith(_DAMAGE) else None
 
 
+def damaged_file(exc: BaseException, url: str | None = None) -> str | None:
+    """What to say when `exc` says the SQLite file of `url` (see `database_url`) is damaged:
+    the file, SQLite's words and what to do; None for any other error."""
+    found = damage(exc)
+    if found is None:
+        return None
+    from sqlalchemy.engine import make_url
+
+    path = make_url(database_url(url)).database
+    return (
+        f"{path}: the database file is damaged (SQLite: {found}). Stop MillBlocks, move the "
+        "file aside and restore from a backup: put back a copy of the file, or let "
+        "MillBlocks create a new database and `millblocks restore ARCHIVE` an archive "
+        "made with `millblocks backup` (docs/deploy.md, Backups)"
+    )
+
+
 def make_engine(url: str | None = None) -> Engine:
     """An engine for `url` (see `database_url`), with SQLite's safety pragmas."""
     resolved = database_url(url)

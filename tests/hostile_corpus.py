@@ -97,6 +97,22 @@ def _deeper_helix(name: str, z_dn: int) -> Program:
 GOLDEN_LOOP = Path(__file__).parent / "golden" / "loop-nested-3-deep" / "program.json"
 
 
+def helix_of_many_turns(name: str = "BIG HELIX") -> Program:
+    """An audit's program of issue 30: one HELIX, DIA 99 in, Z UP 0 to Z DN -5 in at PITCH
+    0.001 in (5 000 turns, a 0.5 in tool), every value within its limits and the compiled
+    path small (a few arcs a turn). Where a helix is written as chords it is millions: the
+    3D view's surface 18-28 s, the STL 28 s, the tape picture and punch image 19-30 s."""
+    data = json.loads((GOLDEN_LOOP.parent.parent / "helix-entry-mm" / "program.json").read_text())
+    data |= {"name": name, "units": "inch", "notes": ""}
+    data["data_block_0"] |= {"x_offset": 0, "y_offset": 0, "current_tool": 2, "z_retract": 0.1}
+    data["data_block_0"]["tools"] = [{"number": 2, "diameter": 0.5, "rpm": 800, "tcal": 0}]
+    helix = {"type": "HELIX", "mode": "abs", "units": "inch", "loop": False, "stop": False}
+    helix |= {"x": 0, "y": 0, "diameter": 99, "z_up": 0, "z_dn": -5, "pitch": 0.001}
+    helix |= {"milling": None, "feed_xy": 10, "tool": 2}
+    data["blocks"] = [helix]
+    return document.loads(json.dumps(data))
+
+
 def eight_island_pocket(
     size: Decimal = Decimal(10), tool: Decimal = Decimal("0.125"), name: str = "BASE PLATE"
 ) -> Program:

@@ -16,7 +16,7 @@ from app.cli import main
 from app.cnc import document, sizes
 from app.cnc.simulate.verify import prepare, work
 from app.web import get_library
-from tests.hostile_corpus import loop_of_holes, verify_past_the_limit
+from tests.hostile_corpus import helix_of_many_turns, loop_of_holes, verify_past_the_limit
 from tests.test_verify import CASES_DIR
 from tests.test_web import app, client, token
 
@@ -175,7 +175,7 @@ def test_a_simulation_past_the_server_s_limit_is_refused_on_every_page(
     text = page.get_data(as_text=True)
     assert page.status_code == 422, text
     assert "Too much to simulate" in text and limit in text
-    assert "simulating this program means sweeping about 136,544,820 cells" in text
+    assert "simulating this program means sweeping about 136,597,876 cells" in text
     assert "millblocks verify" in text
     report = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
     assert limit in report and "millblocks verify" in report
@@ -194,6 +194,31 @@ def test_the_heaviest_legal_loop_of_holes_is_refused_not_simulated_for_a_minute(
         pid = get_library().create(loop_of_holes(15)).id
     report = client.get(f"/programs/{pid}/verify/report").get_data(as_text=True)
     assert f"sweeps at most {sizes.MAX_VERIFY_WORK:,}" in report, report
+
+
+def test_a_helix_of_thousands_of_turns_is_refused_on_every_page_that_would_chord_it(
+    app: Flask, client: FlaskClient
+) -> None:
+    """An audit of issue 30: a 5 000-turn HELIX (a small compiled path, millions of chords)
+    passed the work limit on the 3D view's coarse grid (47 M cells) and its surface took
+    18-28 s and the STL 28 s; the tape picture and punch image 19-30 s. A segment's own
+    cost now counts (SEGMENT_WORK), and a tape's chords are held to the moves a program may
+    make; LinuxCNC's G-code, which writes helical arcs, still exports it."""
+    with app.app_context():
+        pid = get_library().create(helix_of_many_turns()).id
+    limit = f"sweeps at most {sizes.MAX_VERIFY_WORK:,}"
+    for page in ("verify/surface", "verify/part.stl", "verify/part.png", "verify"):
+        answer = client.get(f"/programs/{pid}/{page}")
+        assert answer.status_code == 422, page
+        assert limit in answer.get_data(as_text=True), page
+    for target in ("tape-eia", "tape-svg"):
+        refused = client.get(f"/programs/{pid}/export/download?target={target}")
+        text = refused.get_data(as_text=True)
+        assert refused.status_code == 422, target
+        assert "its arcs written as chords (this target has no helical arcs) make more than" in text
+        assert "1,000,000 moves" in text
+    gcode = client.get(f"/programs/{pid}/export/download?target=gcode-linuxcnc")
+    assert gcode.status_code == 200 and b"G2" in gcode.data
 
 
 def test_the_command_line_verifies_what_the_server_refuses(tmp_path: Path) -> None:

@@ -156,6 +156,36 @@ def moves_allowed(limit: int) -> Iterator[None]:
         _MOVE_LIMIT.reset(token)
 
 
+class OutputTooLarge(TooLarge):
+    """A target's output past the moves a program may make here (`move_limit`); `block` is
+    the block where it went past."""
+
+    def __init__(self, message: str, block: int | None) -> None:
+        super().__init__(message)
+        self.block = block
+
+
+class ChordRows:
+    """The rows a writer adds by writing arcs as chords (a helix on a tape that has no
+    helical arcs), held to `move_limit()`: the compiled path counts a helix's turn as a few
+    arcs, so a 5 000-turn HELIX is a small program whose tape would have millions of rows."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+        self.limit = move_limit()
+
+    def add(self, rows: int, block: int | None) -> None:
+        """Count `rows` more for `block`; raises OutputTooLarge past the limit."""
+        self.rows += rows
+        if self.rows > self.limit:
+            raise OutputTooLarge(
+                f"its arcs written as chords (this target has no helical arcs) make more "
+                f"than {self.limit:,} moves, the most a program may make here: fewer turns "
+                "or a coarser PITCH, or a target that writes helical arcs",
+                block,
+            )
+
+
 class OverBudget(TooLarge):
     """The work of one request ran past its time budget (the message says what to do)."""
 

@@ -35,6 +35,7 @@ from app.cnc.path import CompiledPath
 from app.cnc.places import Places, more_text
 from app.cnc.problems import Need, Problem, blocking
 from app.cnc.problems import Severity as ProblemSeverity
+from app.cnc.sizes import OutputTooLarge
 from app.cnc.toolpath import Toolpath
 from app.cnc.validate import validate
 
@@ -528,9 +529,13 @@ def export(
         # The speeds written must be ones the machine's spindle runs.
         for message in check_spindle(program, None if machine is None else machine.spindle):
             report.error(None, message)
-    result = _written(
-        target, report, out, lambda sink: target.write(program, path, options, report, sink)
-    )
+    try:
+        result = _written(
+            target, report, out, lambda sink: target.write(program, path, options, report, sink)
+        )
+    except OutputTooLarge as exc:
+        report.error(exc.block, str(exc))
+        raise ExportError(f"{target.name} cannot take this program", problems, report) from None
     if report.has_errors:
         result.close()
         raise ExportError(f"{target.name} cannot take this program", problems, report)

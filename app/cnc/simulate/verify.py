@@ -157,6 +157,11 @@ def stock_of(program: Program, placed: Placed) -> Stock:
 # in cells: a LOOP of many small pieces is slow for its groups, not its cells.
 GROUP_WORK = 10_000
 
+# What sweeping one segment costs beside its cells, in cells (about 3-4 µs against 40-50 ns
+# a cell here): a HELIX of thousands of turns is millions of short chords, few cells each,
+# and took 18-28 s on the 3D view's coarse grid while its work read 47 M cells.
+SEGMENT_WORK = 64
+
 
 class VerifyTooLarge(sizes.TooLarge):
     """Verify of this program would take more work than this server allows (the message
@@ -166,7 +171,8 @@ class VerifyTooLarge(sizes.TooLarge):
 def work(grid: Grid, placed: Placed) -> int:
     """The work the simulation of `placed` on `grid` will do, known before it starts: the
     cells every segment's box covers (its length and its tool's diameter at the grid's
-    resolution, each placement counted), and GROUP_WORK for each group. Time grows with
+    resolution, each placement counted) and SEGMENT_WORK for each segment placed, and
+    GROUP_WORK for each group. Time grows with
     it (docs/security.md, "Verify")."""
     res = grid.resolution
     cells = 0.0
@@ -174,7 +180,7 @@ def work(grid: Grid, placed: Placed) -> int:
         s = group.segments
         across = 2 * s.radius / res + 1
         along = np.hypot(s.x1 - s.x0, s.y1 - s.y0) / res + across
-        cells += float((along * across).sum()) * len(group.offsets)
+        cells += (float((along * across).sum()) + SEGMENT_WORK * len(s.x0)) * len(group.offsets)
     return int(cells) + GROUP_WORK * len(placed.groups)
 
 

@@ -48,6 +48,7 @@ from app.cnc.limits import HELIX_CHORD_INCH, HOLE_DWELL_SECONDS
 from app.cnc.motions import is_motion
 from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, distinct
 from app.cnc.problems import Need
+from app.cnc.sizes import ChordRows
 from app.cnc.units import Units, to_nm
 
 # A row of a chunk as a tuple (path.MOVE's fields, in order).
@@ -138,6 +139,7 @@ class Writer:
         self.path = path
         self.o = options
         self.report = report
+        self.chord_rows = ChordRows()
         self.emit = emit
         # Where many lines go at once (straight moves written a run at a time); None: one
         # line at a time through `emit`, for writers that watch every line.
@@ -707,6 +709,7 @@ class Writer:
             op == Op.ARC_CW,
             chord_step(radius, tolerance),
         )
+        self.chord_rows.add(len(points), block)
         for px, py, pz in points[:-1]:
             words = self.axis_words(self.length(px), self.length(py), self.length(pz))
             if words:

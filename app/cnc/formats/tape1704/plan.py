@@ -45,6 +45,7 @@ from app.cnc.formats.text import comment_text
 from app.cnc.geometry import arc_points, chord_step
 from app.cnc.needs import blocks_text
 from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move
+from app.cnc.sizes import ChordRows
 from app.cnc.toolpath import (
     ArcFeed,
     CoolantOff,
@@ -304,6 +305,7 @@ class Planner:
         # one: a tape search looks ahead from each, xyz=together merges them, the quill's
         # drill cycle may change the rapid before its stop.
         self.runs = not (profile.tape_search or profile.xyz_together or profile.quill)
+        self.chord_rows = ChordRows()
 
     @property
     def stages(self) -> list[Report]:
@@ -817,6 +819,7 @@ class Planner:
             (start[0], start[1], 0), (arc.x, arc.y, rise), (cx, cy), arc.clockwise, step
         )
         count = len(points)
+        self.chord_rows.add(count, arc.block)
         motions: list[Item] = [
             Motion(
                 arc.block,

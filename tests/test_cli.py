@@ -241,6 +241,13 @@ def _modules_after(args: list[str], tmp_path: Path) -> set[str]:
 def _process_after(args: list[str]) -> tuple[set[str], int]:
     """The modules a whole `millblocks ARGS` process has imported when it exits, and how
     many threads it runs then (Linux's /proc/self/task)."""
+    _, modules, threads = whole_process(args)
+    return modules, threads
+
+
+def whole_process(args: list[str], env: dict[str, str] | None = None) -> tuple[str, set[str], int]:
+    """A whole `millblocks ARGS` process (`env` added to this one's environment): its
+    standard output, the modules it had imported when it exited and its threads then."""
     report = (
         "print(json.dumps([sorted(sys.modules), len(os.listdir('/proc/self/task'))]), "
         "file=sys.stderr)"
@@ -253,18 +260,18 @@ def _process_after(args: list[str]) -> tuple[set[str], int]:
     )
     # The process's environment as a shell gives it: no thread setting inherited from this
     # test process.
-    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    environment = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     done = subprocess.run(
         [sys.executable, "-c", script],
         cwd=ROOT,
         capture_output=True,
         text=True,
         check=False,
-        env=env,
+        env=environment | (env or {}),
     )
     assert done.returncode == 0, done.stderr
     modules, threads = json.loads(done.stderr.strip().splitlines()[-1])
-    return set(modules), threads
+    return done.stdout, set(modules), threads
 
 
 HEAVY = {"sqlalchemy", "alembic", "ezdxf", "flask", "numpy", "serial"}

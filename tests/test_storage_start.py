@@ -9,17 +9,14 @@ command: about 1.1 s of CPU where a file's export takes 0.3 s.
 
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 from alembic.script import ScriptDirectory
 
-from app.resources import CHECKOUT, data_dir
+from app.resources import data_dir
 from app.storage.db import current, head, make_engine, upgrade
 from app.storage.library import open_library
+from tests.test_cli import whole_process
 
 MIGRATION_ONLY = {"alembic", "mako", "pygments"}
 """What only a migration (or a schema history) needs."""
@@ -28,27 +25,12 @@ MIGRATION_ONLY = {"alembic", "mako", "pygments"}
 def _run(args: list[str], database_url: str, tmp_path: Path) -> tuple[str, set[str]]:
     """A whole `millblocks ARGS` process on `database_url`: its standard output and the
     modules it had imported when it exited."""
-    script = (
-        "import atexit, json, sys\n"
-        "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
-        "from app.cli import main\n"
-        f"main({args!r})\n"
-    )
     env = {
-        **os.environ,
         "MILLBLOCKS_DATABASE_URL": database_url,
         "MILLBLOCKS_INSTANCE_PATH": str(tmp_path / "instance"),
     }
-    done = subprocess.run(
-        [sys.executable, "-c", script],
-        cwd=CHECKOUT,
-        env=env,
-        capture_output=True,
-        text=True,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr
-    return done.stdout, set(json.loads(done.stderr.strip().splitlines()[-1]))
+    out, modules, _ = whole_process(args, env)
+    return out, modules
 
 
 def _tops(modules: set[str]) -> set[str]:

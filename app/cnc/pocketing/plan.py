@@ -100,7 +100,40 @@ def plan_pocket(
 
     Raises nothing for bad geometry: errors come back as findings (and no passes); raises
     app.cnc.sizes.OverBudget when a time budget is in force and runs out.
+
+    Python's cyclic garbage collector is paused meanwhile (`sizes.collector_paused`: a
+    plan's many small objects live until it is made, and full collections walking them
+    again were a quarter of a large pocket's planning).
     """
+    with sizes.collector_paused():
+        return _plan(
+            boundary,
+            islands,
+            tool_radius=tool_radius,
+            step_over=step_over,
+            finish_allowance=finish_allowance,
+            milling=milling,
+            rpm=rpm,
+            block=block,
+            units=units,
+            chordal_tolerance=chordal_tolerance,
+        )
+
+
+def _plan(
+    boundary: Path,
+    islands: Sequence[Path],
+    *,
+    tool_radius: int,
+    step_over: int,
+    finish_allowance: int,
+    milling: MillingMode,
+    rpm: int | None,
+    block: int,
+    units: Units,
+    chordal_tolerance: int,
+) -> PocketPlan:
+    """`plan_pocket`'s work, the collector paused."""
     r = float(tool_radius)
     t = float(chordal_tolerance)
     match = 2 * t + 2  # Clipper's points lie this close to the true offsets

@@ -12,10 +12,8 @@ programming resolution (0.001 in / 0.01 mm) — and every value that moves is re
 from __future__ import annotations
 
 import enum
-import gc
 import re
 from collections.abc import Iterable, Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from fractions import Fraction
@@ -394,21 +392,3 @@ def decode_text(data: bytes) -> str:
             f"byte 0x{data[exc.start]:02X} is not text (UTF-8)",
             line,
         ) from None
-
-
-@contextmanager
-def collector_paused() -> Iterator[None]:
-    """Pause Python's cyclic garbage collector while reading a file, then restore it.
-
-    A long file makes millions of small objects that live until the import ends; each full
-    collection walks all of them again (a quarter of the recognition's time on a 100 000-line
-    file). Reference counting still frees everything as usual; cycles made meanwhile are
-    collected once the collector runs again.
-    """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()

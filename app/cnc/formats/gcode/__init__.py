@@ -22,9 +22,9 @@ from app.cnc.recognition.common import (
     ImportNote,
     byte_lines,
     chunk_lines,
-    collector_paused,
     decode_text,
 )
+from app.cnc.sizes import collector_paused
 
 FILE_PART = 1 << 20  # bytes of a file read at a time (GcodeImporter.read_file)
 

@@ -68,15 +68,14 @@ def element_points(start: Pt, element: Element, tolerance: float) -> list[Pt]:
     turn = sweep(start, element)
     n = arc_steps(radius, turn, tolerance)
     a0 = math.atan2(start[1] - c[1], start[0] - c[0])
-    sign = -1.0 if element.clockwise else 1.0
-    points = [
-        (
-            c[0] + radius * math.cos(a0 + sign * turn * i / n),
-            c[1] + radius * math.sin(a0 + sign * turn * i / n),
-        )
-        for i in range(1, n)
-    ]
-    return [*points, element.end]
+    signed = -turn if element.clockwise else turn
+    # Each angle made once for its cosine and sine (a pass's chords are thousands of
+    # points); -turn * i is the same number as -1.0 * turn * i, so the same points.
+    angles = [a0 + signed * i / n for i in range(1, n)]
+    cx, cy = c
+    points = [(cx + radius * math.cos(a), cy + radius * math.sin(a)) for a in angles]
+    points.append(element.end)
+    return points
 
 
 def path_points(path: Path, tolerance: float) -> list[Pt]:

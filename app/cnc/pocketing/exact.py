@@ -78,24 +78,7 @@ class Carrier:
 
     def distances(self, points: npt.NDArray[np.float64], slack: float) -> npt.NDArray[np.float64]:
         """`distance` for every row (x, y) of `points` at once, the same numbers."""
-        qx, qy = points[:, 0] - self.origin[0], points[:, 1] - self.origin[1]
-        if self.direction is not None:
-            dx, dy = self.direction
-            along = qx * dx + qy * dy
-            within = np.zeros(len(points), dtype=bool)
-            for lo, hi in self.spans:
-                within |= (lo - slack <= along) & (along <= hi + slack)
-            return np.where(within, np.abs(dx * qy - dy * qx), math.inf)
-        within = np.zeros(len(points), dtype=bool)
-        angle = np.arctan2(qy, qx)
-        slack_angle = slack / max(self.radius, 1.0) + 1e-9
-        for start, turn in self.spans:
-            if turn >= 2 * math.pi - 1e-9:
-                within[:] = True
-                break
-            along = np.mod((start - angle) if self.clockwise else (angle - start), 2 * math.pi)
-            within |= (along <= turn + slack_angle) | (along >= 2 * math.pi - slack_angle)
-        return np.where(within, np.abs(np.hypot(qx, qy) - self.radius), math.inf)
+        return _pair_distances(points, np.zeros(len(points), dtype=np.intp), [self], slack)
 
     def box(self, tolerance: float) -> tuple[float, float, float, float]:
         """A box holding every point within `tolerance` of the carrier's spans (and of their
@@ -283,33 +266,95 @@ def _carriers_at(
     boxes: npt.NDArray[np.float64],
 ) -> tuple[IntArray, IntArray]:
     """(rows, carriers): every pair of a point (a row of `at`) and a carrier it lies on
-    within `tolerance`, by carrier in the level's order, rows ascending (one numpy pass
-    per carrier whose box meets the ring's over all the points: a contour of hundreds of
-    blocks has as many carriers)."""
+    within `tolerance`, by carrier in the level's order, rows ascending (numpy passes over
+    the (point, carrier) pairs whose carrier's box holds the point: a contour of hundreds
+    of blocks has as many carriers, and one pass per carrier cost more in calls than in
+    arithmetic)."""
     low, high = at.min(axis=0), at.max(axis=0)
     x0, y0, x1, y1 = boxes.T
-    meets = (x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1])
-    rows: list[IntArray] = []
-    found: list[IntArray] = []
+    meets = np.flatnonzero((x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1]))
     # The points by x: a carrier's box holds a run of them, found by bisection, and only
     # that run is compared in y (not every point of the ring for every carrier).
     by_x = np.argsort(at[:, 0], kind="stable")
     xs, ys = at[by_x, 0], at[by_x, 1]
-    for k, (bx0, by0, bx1, by1) in zip(
-        np.flatnonzero(meets).tolist(), boxes[meets].tolist(), strict=True
-    ):
-        first = int(np.searchsorted(xs, bx0, side="left"))
-        last = int(np.searchsorted(xs, bx1, side="right"))
-        run = ys[first:last]
-        near = np.sort(by_x[first:last][(run >= by0) & (run <= by1)])
-        if not len(near):
+    box = boxes[meets]
+    first = np.searchsorted(xs, box[:, 0], side="left")
+    counts = np.maximum(np.searchsorted(xs, box[:, 2], side="right") - first, 0)
+    owner = np.repeat(np.arange(len(meets)), counts)
+    place = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts) + first[owner]
+    inside = (ys[place] >= box[owner, 1]) & (ys[place] <= box[owner, 3])
+    owner, rows = owner[inside], by_x[place[inside]]
+    order = np.lexsort((rows, owner))  # by carrier, rows ascending
+    rows, found = rows[order], meets[owner[order]]
+    close = _pair_distances(at[rows], found, level, tolerance) <= tolerance
+    return rows[close], found[close]
+
+
+def _pair_distances(
+    points: npt.NDArray[np.float64], which: IntArray, level: Sequence[Carrier], slack: float
+) -> npt.NDArray[np.float64]:
+    """`Carrier.distance` of each row of `points` to the carrier `which` names beside it
+    (the same numbers as `Carrier.distances`, by the same arithmetic), in numpy passes
+    over every pair at once rather than one pass per carrier."""
+    result = np.full(len(which), math.inf)
+    if not len(which):
+        return result
+    used = np.unique(which).tolist()
+    # The carriers' numbers as columns (by carrier), and their spans one row each.
+    ox, oy, dx, dy, radius, slack_angle = (np.zeros(len(level)) for _ in range(6))
+    line = np.zeros(len(level), dtype=bool)
+    clockwise = np.zeros(len(level), dtype=bool)
+    full = np.zeros(len(level), dtype=bool)
+    span_of: list[int] = []
+    span_a: list[float] = []
+    span_b: list[float] = []
+    for k in used:
+        carrier = level[k]
+        ox[k], oy[k] = carrier.origin
+        if carrier.direction is not None:
+            line[k] = True
+            dx[k], dy[k] = carrier.direction
+            for lo, hi in carrier.spans:
+                span_of.append(k)
+                span_a.append(lo - slack)
+                span_b.append(hi + slack)
             continue
-        close = near[level[k].distances(at[near], tolerance) <= tolerance]
-        rows.append(close)
-        found.append(np.full(len(close), k, dtype=np.intp))
-    if not rows:
-        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-    return np.concatenate(rows), np.concatenate(found)
+        radius[k], clockwise[k] = carrier.radius, carrier.clockwise
+        angle_slack = slack / max(carrier.radius, 1.0) + 1e-9
+        slack_angle[k] = angle_slack
+        for start, turn in carrier.spans:
+            if turn >= 2 * math.pi - 1e-9:
+                full[k] = True
+                break
+            span_of.append(k)
+            span_a.append(start)
+            span_b.append(turn + angle_slack)
+    qx, qy = points[:, 0] - ox[which], points[:, 1] - oy[which]
+    is_line = line[which]
+    angle = np.arctan2(qy, qx)
+    # Each pair against each span of its carrier: rows of (pair, span).
+    spans_at = np.array(span_of, dtype=np.intp)
+    order = np.argsort(spans_at, kind="stable")
+    starts = np.searchsorted(spans_at[order], which, side="left")
+    counts = np.searchsorted(spans_at[order], which, side="right") - starts
+    pair = np.repeat(np.arange(len(which)), counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    span = order[np.arange(len(pair)) - first + starts[pair]]
+    a, b = np.array(span_a)[span], np.array(span_b)[span]
+    k = which[pair]
+    along_line = qx[pair] * dx[k] + qy[pair] * dy[k]
+    on_line = (a <= along_line) & (along_line <= b)
+    turned = np.where(clockwise[k], a - angle[pair], angle[pair] - a)
+    along = np.mod(turned, 2 * math.pi)
+    on_circle = (along <= b) | (along >= 2 * math.pi - slack_angle[k])
+    hit = np.where(line[k], on_line, on_circle)
+    within = full[which].copy()
+    within[pair[hit]] = True
+    lines = within & is_line
+    result[lines] = np.abs(dx[which][lines] * qy[lines] - dy[which][lines] * qx[lines])
+    circles = within & ~is_line
+    result[circles] = np.abs(np.hypot(qx[circles], qy[circles]) - radius[which][circles])
+    return result
 
 
 def _sets(rows: IntArray, values: IntArray, n: int) -> list[set[int]]:
@@ -337,9 +382,8 @@ def _edge_labels(
     middle lie on within `tolerance` (nm); for an edge across a junction (Clipper kept no
     point there), where no carrier holds all three, the carriers of either end: either
     may take it. `rows`, `carriers_of`: the (point, carrier) pairs (`_carriers_at`). The
-    middles are measured one numpy pass per carrier
-    (`Carrier.distances`, the numbers `distance` gives), not one Python call per edge and
-    carrier."""
+    middles are measured in one numpy pass over the pairs (`_pair_distances`, the numbers
+    `distance` gives), not one Python call per edge and carrier."""
     n = len(at)
     middles = (at + np.roll(at, -1, axis=0)) / 2
     # An edge can lie on a carrier both its ends lie on: the pair (i + 1, k) is there too.
@@ -353,21 +397,8 @@ def _edge_labels(
     found = np.minimum(np.searchsorted(codes, wanted), len(codes) - 1)
     both[last] = codes[found] == wanted
     edges, edge_carriers = rows[both], carriers_of[both]
-    labelled: list[IntArray] = []
-    labels_of: list[IntArray] = []
-    # The pairs come by carrier, rows ascending: each carrier's edges are one slice.
-    cuts = np.flatnonzero(np.diff(edge_carriers)) + 1
-    for group in np.split(np.arange(len(edges)), cuts):
-        if not len(group):
-            continue
-        k = int(edge_carriers[group[0]])
-        close = level[k].distances(middles[edges[group]], tolerance) <= tolerance
-        labelled.append(edges[group][close])
-        labels_of.append(edge_carriers[group][close])
-    if labelled:
-        label_rows, label_carriers = np.concatenate(labelled), np.concatenate(labels_of)
-    else:
-        label_rows = label_carriers = np.zeros(0, dtype=np.intp)
+    close = _pair_distances(middles[edges], edge_carriers, level, tolerance) <= tolerance
+    label_rows, label_carriers = edges[close], edge_carriers[close]
     labels = _sets(label_rows, label_carriers, n)
     unlabelled = np.flatnonzero(np.bincount(label_rows, minlength=n) == 0).tolist()
     if unlabelled:

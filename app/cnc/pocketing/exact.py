@@ -34,11 +34,10 @@ from app.cnc.plane import (
     scale,
     sub,
     sweep,
-    tangent,
     unit,
 )
 from app.cnc.pocketing import nearest
-from app.cnc.pocketing.regions import TURN_EPS, Ring
+from app.cnc.pocketing.regions import TURN_EPS, Ring, corners
 
 
 @dataclass(frozen=True)
@@ -129,27 +128,16 @@ def carriers(contours: Sequence[Path], d: float, tolerance: float) -> list[Carri
     level = _Level()
     for ci, contour in enumerate(contours):
         starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+        turns = corners(contour)
         for ei, (start, element) in enumerate(zip(starts, contour.elements, strict=True)):
             moved = _moved(start, element, d, tolerance, (ci, ei))
             if moved is not None:
                 level.merge(moved)
             nxt = (ei + 1) % len(contour.elements)
-            corner = element.end
-            t1 = tangent(start, element, at_end=True)
-            t2 = tangent(corner, contour.elements[nxt], at_end=False)
-            turn = math.atan2(cross(t1, t2), dot(t1, t2))
+            turn, normal = turns[ei]
             if turn < -TURN_EPS:  # a right turn: a reflex corner of the region
-                n1 = left_normal(t1)
-                level.merge(
-                    Carrier(
-                        corner,
-                        None,
-                        d,
-                        True,
-                        ((math.atan2(n1[1], n1[0]), -turn),),
-                        ((ci, nxt),),
-                    )
-                )
+                corner = element.end
+                level.merge(Carrier(corner, None, d, True, ((normal, -turn),), ((ci, nxt),)))
     return level.found
 
 

@@ -16,6 +16,7 @@ within `tolerance` nm of the arc (the chordal tolerance the planner states).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Iterable, Sequence
@@ -193,6 +194,7 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
     arcs: list[_ArcRun] = []
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
+    turns = corners(contour)
     for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
         moved_start, moved = offset_element(start, element, 1.0, d)
         c = element.centre
@@ -208,14 +210,9 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
             n = arc_steps(radius, turn, tolerance)
             pieces.append(len(arcs))
             arcs.append((c[0], c[1], radius, a0, signed, n, 0, n + 1))
-        following = elements[(k + 1) % len(elements)]
-        t1 = tangent(start, element, at_end=True)
-        t2 = tangent(element.end, following, at_end=False)
-        turn = math.atan2(cross(t1, t2), dot(t1, t2))
+        turn, a1 = turns[k]
         corner = element.end
         if turn < -TURN_EPS:  # a right turn: the moved elements part, joined by an arc of d
-            n1 = left_normal(t1)
-            a1 = math.atan2(n1[1], n1[0])
             n = arc_steps(d, -turn, tolerance)
             if n > 1:  # (its ends, on the moved elements, are theirs)
                 pieces.append(len(arcs))
@@ -236,6 +233,24 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
         at = at[:-1]
     found: list[list[int]] = at.tolist()
     return found
+
+
+@functools.lru_cache(maxsize=64)
+def corners(contour: Path) -> tuple[tuple[float, float], ...]:
+    """For each element of a closed contour, the turn at its end into the next element
+    (radians, left positive) and the direction (radians) of the left normal of its end
+    tangent, where a right turn's corner arc starts. The same at every level: made once
+    for a contour (kept for the last few), not again for each offset and each level's
+    carriers."""
+    elements = contour.elements
+    starts = [contour.start] + [e.end for e in elements[:-1]]
+    found = []
+    for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
+        t1 = tangent(start, element, at_end=True)
+        t2 = tangent(element.end, elements[(k + 1) % len(elements)], at_end=False)
+        n1 = left_normal(t1)
+        found.append((math.atan2(cross(t1, t2), dot(t1, t2)), math.atan2(n1[1], n1[0])))
+    return tuple(found)
 
 
 _ArcRun = tuple[float, float, float, float, float, int, int, int]

@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from shapely.geometry import LineString, Point, Polygon
 
-from app.cnc import plane
+from app.cnc import plane, sizes
 from app.cnc.blocks import MillingMode
 from app.cnc.plane import Element, Path, sample
 from app.cnc.pocketing import (
@@ -640,6 +640,21 @@ def test_planning_frees_what_it_makes_as_it_goes() -> None:
         if was_enabled:
             gc.enable()
     assert left == 0, f"{left:,} objects in reference cycles after planning"
+
+
+def test_planning_gives_the_garbage_collector_back_as_it_was() -> None:
+    """The pause lasts the planning only: a plan stopped by the time budget leaves the
+    collector running (a server's worker would otherwise run on without it), and planning
+    inside another pause (an import's) leaves it paused."""
+    boundary, islands = island_row(2)
+    assert gc.isenabled()
+    with pytest.raises(sizes.OverBudget), sizes.time_budget(0.0):
+        plan(boundary, islands, R / 4, step_over=round(0.3 * R))
+    assert gc.isenabled()
+    with sizes.collector_paused():
+        assert plan(boundary, islands, R / 4, step_over=round(0.3 * R)).passes
+        assert not gc.isenabled()
+    assert gc.isenabled()
 
 
 def comb(n: int, lift: float = 0.0) -> Path:

@@ -226,15 +226,19 @@ def collector_paused() -> Iterator[None]:
     Why: an import or a pocket's planning makes hundreds of thousands of small objects that
     live until it ends, and every full collection walks all of them again, with every
     object of the process (a quarter of the recognition's time on a 100 000-line file, a
-    quarter of the 8-island pocket's planning). Reference counting still frees everything
+    fifth to a quarter of the 8-island pocket's planning). Reference counting still frees everything
     as usual; only reference cycles made meanwhile wait for the collector's next run.
 
     Why memory stays bounded: the work inside is bounded by the limits above before it
     starts, so what it keeps is too — an import by its bytes and lines
     (`check_import_size`), a pocket's planning by its levels times the points of its
     contours (`MAX_POCKET_WORK`, checked by app/cnc/cost.py before the compile) and the
-    planner's MAX_LEVELS and MAX_CLEANUPS; and the cycles it makes (a few, of the work's
-    own objects) are freed at the next collection after it."""
+    planner's MAX_LEVELS and MAX_CLEANUPS; the pocket planner makes no reference cycles
+    (tests/test_pocketing.py holds it to that), so what it drops is freed at once. The
+    collector is the process's: a server's other threads run without it meanwhile too, so
+    their cycles wait as long as the work inside does (bounded by the same limits and the
+    request's time budget): the pause that found it running gives it back when it ends.
+    """
     enabled = gc.isenabled()
     gc.disable()
     try:

@@ -226,8 +226,8 @@ def collector_paused() -> Iterator[None]:
     Why: an import or a pocket's planning makes hundreds of thousands of small objects that
     live until it ends, and every full collection walks all of them again, with every
     object of the process (a quarter of the recognition's time on a 100 000-line file, a
-    fifth to a quarter of the 8-island pocket's planning). Reference counting still frees everything
-    as usual; only reference cycles made meanwhile wait for the collector's next run.
+    fifth to a quarter of the 8-island pocket's planning). Reference counting still frees
+    everything as usual; only reference cycles made meanwhile wait for the collector.
 
     Why memory stays bounded: the work inside is bounded by the limits above before it
     starts, so what it keeps is too — an import by its bytes and lines

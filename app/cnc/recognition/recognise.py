@@ -264,17 +264,18 @@ class RoutineFinder:
             self.asked[tool] = (diameter, self.rpms.get(tool))
         if diameter is None or op.comp is not Comp.NONE or not op.elements:
             return op
-        cuts = normalise(_f(op.at), _segments(op.elements), self.tol)
-        if not cuts:
-            return op
-        wanted_feed = op.elements[0].feed
-        if any(e.feed != wanted_feed for e in op.elements):
-            return op
         # The same cuts elsewhere (a pattern of pockets) are the same routine: planned once.
+        # The key holds all the cuts are made of, seen from the plunge point, so the cuts
+        # too are the same there (`normalise` compares differences of points alone).
         key = self.key(op, diameter)
         found = self.cache.get(key)
         if found is None:
-            found = self.search(op, cuts, diameter)
+            cuts = normalise(_f(op.at), _segments(op.elements), self.tol)
+            wanted_feed = op.elements[0].feed
+            if not cuts or any(e.feed != wanted_feed for e in op.elements):
+                found = []  # no cuts, or more than one feed: no routine
+            else:
+                found = self.search(op, cuts, diameter)
             self.cache[key] = found
         conflict: tuple[Circle | Frame, MillingMode] | None = None
         for block, offset, milling in found:
@@ -595,12 +596,15 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
             break
     if len(run) < MIN_BOLT_HOLES:
         return None
-    p = [_f(h.at) for h in run]
-    rough = _circumcentre(p[0], p[1], p[2])
+    # The holes' X and Y as floats, in two lists: a centroid is then one `sum` of a slice.
+    xs = [float(h.at[0]) for h in run]
+    ys = [float(h.at[1]) for h in run]
+    x0, y0, x1, y1 = xs[0], ys[0], xs[1], ys[1]
+    rough = _circumcentre((x0, y0), (x1, y1), (xs[2], ys[2]))
     if rough is None:
         return None
-    a0 = math.atan2(p[0][1] - rough[1], p[0][0] - rough[0])
-    a1 = math.atan2(p[1][1] - rough[1], p[1][0] - rough[0])
+    a0 = math.atan2(y0 - rough[1], x0 - rough[0])
+    a1 = math.atan2(y1 - rough[1], x1 - rough[0])
     delta = math.remainder(a1 - a0, 2 * math.pi)
     if abs(delta) < 1e-9:
         return None
@@ -611,9 +615,9 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
         guess = min(guess, len(run))
         if guess < MIN_BOLT_HOLES:
             break
-        c = (sum(q[0] for q in p[:guess]) / guess, sum(q[1] for q in p[:guess]) / guess)
-        b0 = math.atan2(p[0][1] - c[1], p[0][0] - c[0])
-        b1 = math.atan2(p[1][1] - c[1], p[1][0] - c[0])
+        cx, cy = sum(xs[:guess]) / guess, sum(ys[:guess]) / guess
+        b0 = math.atan2(y0 - cy, x0 - cx)
+        b1 = math.atan2(y1 - cy, x1 - cx)
         step = abs(math.remainder(b1 - b0, 2 * math.pi))
         if step < 1e-9:
             return None
@@ -621,27 +625,32 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
         if better == guess:
             break
         guess = better
+    # Where the run's stop is (it ends the run): a circle cannot go on past it.
+    stopped = len(run) - 1 if run[-1].stop else len(run)
     tried: set[int] = set()
     for count in (guess, guess - 1, guess + 1, guess - 2, guess + 2, len(run)):
         if count in tried:
             continue
         tried.add(count)
-        if not MIN_BOLT_HOLES <= count <= len(run) or any(h.stop for h in run[: count - 1]):
+        if not MIN_BOLT_HOLES <= count <= len(run) or stopped < count - 1:
             continue
-        found = _bolt_of(run, p, count, tol)
+        found = _bolt_of(run, xs, ys, count, tol)
         if found is not None:
             return found
     return None
 
 
 def _bolt_of(
-    run: list[HoleOpR], p: list[Pt], count: int, tol: int
+    run: list[HoleOpR], xs: list[float], ys: list[float], count: int, tol: int
 ) -> tuple[BoltOp, int, bool] | None:
+    """The first `count` holes of `run` (X and Y in `xs`, `ys`) as one BOLT CIR, if
+    MillBlocks' holes of it are the file's within `tol` (nm)."""
     first = run[0]
-    centre = (sum(q[0] for q in p[:count]) / count, sum(q[1] for q in p[:count]) / count)
-    radius = math.dist(p[0], centre)
-    a0 = math.atan2(p[0][1] - centre[1], p[0][0] - centre[0])
-    a1 = math.atan2(p[1][1] - centre[1], p[1][0] - centre[0])
+    x0, y0 = xs[0], ys[0]
+    centre = (sum(xs[:count]) / count, sum(ys[:count]) / count)
+    radius = math.dist((x0, y0), centre)
+    a0 = math.atan2(y0 - centre[1], x0 - centre[0])
+    a1 = math.atan2(ys[1] - centre[1], xs[1] - centre[0])
     delta = math.remainder(a1 - a0, 2 * math.pi)
     if abs(abs(delta) * count - 2 * math.pi) > 0.01:
         return None
@@ -650,7 +659,7 @@ def _bolt_of(
     rq = quantize_nm(round(radius), units)
     if rq <= 0:
         return None
-    dx, dy = p[0][0] - centre[0], p[0][1] - centre[1]
+    dx, dy = x0 - centre[0], y0 - centre[1]
     theta = math.degrees(math.atan2(-dx, -dy)) % 360
     angle = Decimal(repr(theta)).quantize(HUNDREDTH, rounding=ROUND_HALF_EVEN)
     if angle >= 360:
@@ -659,8 +668,10 @@ def _bolt_of(
     clockwise = delta < 0
     order = made if clockwise else [made[0], *reversed(made[1:])]
     holes = run[:count]
-    if not all(_close(h.at, q, tol) for h, q in zip(holes, order, strict=True)):
-        return None
+    for h, q in zip(holes, order, strict=True):
+        at = h.at
+        if abs(at[0] - q[0]) > tol or abs(at[1] - q[1]) > tol:
+            return None
     lines = sorted({line for h in holes for line in h.lines})
     bolt = BoltOp(lines, cq, first.spec, count, angle, rq, holes[-1].stop, first.message)
     return bolt, count, not clockwise
@@ -730,21 +741,30 @@ class _LoopFinder:
         n = len(ops)
         tol = self.tol
         kinds, anchors, sigs = seen.kinds, seen.anchors, seen.sigs
+        kind0 = kinds[i]
+        a0 = anchors[i]
+        units: Units | None = None
         for length in range(1, min(MAX_LOOP_BODY, (n - i) // 2) + 1):
-            a0, a1 = anchors[i], anchors[i + length]
+            # A body whose first operation does not come again right after it repeats
+            # nowhere (an int compare, before any arithmetic).
+            if kinds[i + length] != kind0:
+                continue
+            a1 = anchors[i + length]
             raw = (a1[0] - a0[0], a1[1] - a0[1])
             along_x = abs(raw[1]) <= tol and abs(raw[0]) > tol
             along_y = abs(raw[0]) <= tol and abs(raw[1]) > tol
             if not (along_x or along_y):
                 continue
-            units = _units(ops[i])
+            if units is None:
+                units = _units(ops[i])
             step = (quantize_nm(raw[0], units), 0) if along_x else (0, quantize_nm(raw[1], units))
             if step == (0, 0):
                 continue
+            sx, sy = step
             count = 1
             while i + (count + 1) * length <= n and count <= limits.MAX_REPEAT:
                 base = i + count * length
-                dx, dy = count * step[0], count * step[1]
+                dx, dy = count * sx, count * sy
                 for t in range(length):
                     here, there = base + t, i + t
                     # Same kind first (an int compare): most candidates fail there.

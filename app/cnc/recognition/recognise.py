@@ -64,7 +64,6 @@ from app.cnc.recognition.ops import (
     MillOp,
     Op,
     RoutineOp,
-    Signature,
     anchor,
     close_numbers,
     signature,
@@ -246,7 +245,8 @@ class RoutineFinder:
         out: list[Op] = []
         i = 0
         while i < len(ops):
-            chain = _two_pass_levels(ops, i, self.tol)
+            # (Most operations of a file are not mill sequences: no call for those.)
+            chain = _two_pass_levels(ops, i, self.tol) if isinstance(ops[i], MillOp) else None
             if chain is not None:
                 found = self.routine(chain, two_pass_only=True)
                 if isinstance(found, RoutineOp):
@@ -717,10 +717,16 @@ class _LoopFinder:
         seen = _Kinds()
         kinds = [seen.of(sig.labels) for sig in sigs]
         anchors = [anchor(op) for op in ops]
+        seen_ops = _Seen(
+            kinds,
+            [a[0] for a in anchors],
+            [a[1] for a in anchors],
+            [sig.numbers for sig in sigs],
+        )
         out: list[Op] = []
         i = 0
         while i < len(ops):
-            found = self.best_run(ops, _Seen(sigs, kinds, anchors), i)
+            found = self.best_run(ops, seen_ops, i)
             if found is None:
                 out.append(ops[i])
                 i += 1
@@ -740,17 +746,16 @@ class _LoopFinder:
         best: tuple[int, int, XY] | None = None
         n = len(ops)
         tol = self.tol
-        kinds, anchors, sigs = seen.kinds, seen.anchors, seen.sigs
+        kinds, xs, ys, numbers = seen.kinds, seen.xs, seen.ys, seen.numbers
         kind0 = kinds[i]
-        a0 = anchors[i]
+        x0, y0 = xs[i], ys[i]
         units: Units | None = None
         for length in range(1, min(MAX_LOOP_BODY, (n - i) // 2) + 1):
             # A body whose first operation does not come again right after it repeats
             # nowhere (an int compare, before any arithmetic).
             if kinds[i + length] != kind0:
                 continue
-            a1 = anchors[i + length]
-            raw = (a1[0] - a0[0], a1[1] - a0[1])
+            raw = (xs[i + length] - x0, ys[i + length] - y0)
             along_x = abs(raw[1]) <= tol and abs(raw[0]) > tol
             along_y = abs(raw[0]) <= tol and abs(raw[1]) > tol
             if not (along_x or along_y):
@@ -770,10 +775,11 @@ class _LoopFinder:
                     # Same kind first (an int compare): most candidates fail there.
                     if kinds[here] != kinds[there]:
                         break
-                    moved, first = anchors[here], anchors[there]
-                    if abs(moved[0] - first[0] - dx) > tol or abs(moved[1] - first[1] - dy) > tol:
+                    if abs(xs[here] - xs[there] - dx) > tol or abs(ys[here] - ys[there] - dy) > tol:
                         break
-                    if not close_numbers(sigs[here].numbers, sigs[there].numbers, tol):
+                    # (Equal numbers, the usual repetition, without a call.)
+                    shape, first = numbers[here], numbers[there]
+                    if shape != first and not close_numbers(shape, first, tol):
                         break
                 else:
                     count += 1
@@ -809,12 +815,13 @@ class _LoopFinder:
 
 @dataclass(frozen=True)
 class _Seen:
-    """One pass's view of its operations: signatures, their kinds (equal labels, equal
-    kind), anchors."""
+    """One pass's view of its operations, each a list in their order: their kinds (equal
+    labels, equal kind), their anchors' X and Y (nm), their signatures' numbers."""
 
-    sigs: list[Signature]
     kinds: list[int]
-    anchors: list[XY]
+    xs: list[int]
+    ys: list[int]
+    numbers: list[list[int]]
 
 
 class _Kinds:

@@ -81,6 +81,7 @@ MAX_LOOP_BODY = 32  # operations in one repeated pattern
 MAX_FRAME_CUTS = 400  # a frame routine's passes are fewer cuts than this
 MIN_BOLT_HOLES = 3
 HUNDREDTH: Final = Decimal("0.01")  # a BOLT CIR's angle is in hundredths of a degree
+_BOLT_NOTE: Final = "holes on a circle read as BOLT CIR"  # what every BOLT CIR's note shares
 
 
 # -- pecks through a mill sequence ----------------------------------------------------------
@@ -550,6 +551,9 @@ def _collinear(a: Pt, b: Pt, c: Pt, tol: float) -> bool:
 def find_bolt_circles(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
     out: list[Op] = []
     i = 0
+    # Every BOLT CIR is one note, the first one's words and the others' lines (`same`):
+    # once it is made, a circle's own words would be dropped, and are not written.
+    noted = False
     while i < len(ops):
         bolt = _bolt_at(ops, i, tolerance + 2)
         if bolt is None:
@@ -561,11 +565,14 @@ def find_bolt_circles(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
         u = op.spec.units
         notes.became(
             op.lines[0],
-            f"{notes.span(op.lines)}: {count} holes equally spaced on a circle: BOLT CIR about "
-            f"X{show(op.centre[0], u)} Y{show(op.centre[1], u)}, radius "
+            ""
+            if noted
+            else f"{notes.span(op.lines)}: {count} holes equally spaced on a circle: BOLT CIR "
+            f"about X{show(op.centre[0], u)} Y{show(op.centre[1], u)}, radius "
             f"{show(op.radius, u)}, first hole at {op.angle}° (clockwise from below)",
-            same="holes on a circle read as BOLT CIR",
+            same=_BOLT_NOTE,
         )
+        noted = True
         if reordered:
             notes.assumed(
                 op.lines[0],

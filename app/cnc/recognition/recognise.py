@@ -757,10 +757,17 @@ class _LoopFinder:
         kind0 = kinds[i]
         x0, y0 = xs[i], ys[i]
         units: Units | None = None
+        # Lengths whose every comparison held exactly (no tolerance used), with their count.
+        # A multiple m·L of such a length L, m < count, compares the same operations with
+        # the same differences up to the one where L stopped, so it repeats count // m
+        # times (m·L · count // m <= L · count): it cannot do better, and is not tried.
+        exact: list[tuple[int, int]] = []
         for length in range(1, min(MAX_LOOP_BODY, (n - i) // 2) + 1):
             # A body whose first operation does not come again right after it repeats
             # nowhere (an int compare, before any arithmetic).
             if kinds[i + length] != kind0:
+                continue
+            if any(length % base == 0 and length // base < times for base, times in exact):
                 continue
             raw = (xs[i + length] - x0, ys[i + length] - y0)
             along_x = abs(raw[1]) <= tol and abs(raw[0]) > tol
@@ -774,6 +781,7 @@ class _LoopFinder:
                 continue
             sx, sy = step
             count = 1
+            held = True  # every comparison so far exact
             while i + (count + 1) * length <= n and count <= limits.MAX_REPEAT:
                 base = i + count * length
                 dx, dy = count * sx, count * sy
@@ -782,16 +790,23 @@ class _LoopFinder:
                     # Same kind first (an int compare): most candidates fail there.
                     if kinds[here] != kinds[there]:
                         break
-                    if abs(xs[here] - xs[there] - dx) > tol or abs(ys[here] - ys[there] - dy) > tol:
+                    off_x, off_y = xs[here] - xs[there] - dx, ys[here] - ys[there] - dy
+                    if abs(off_x) > tol or abs(off_y) > tol:
                         break
                     # (Equal numbers, the usual repetition, without a call.)
                     shape, first = numbers[here], numbers[there]
-                    if shape != first and not close_numbers(shape, first, tol):
-                        break
+                    if shape != first:
+                        if not close_numbers(shape, first, tol):
+                            break
+                        held = False
+                    if off_x or off_y:
+                        held = False
                 else:
                     count += 1
                     continue
                 break
+            if held:
+                exact.append((length, count))
             if count < 2 or count * length < 3:
                 continue
             if best is None or count * length > best[0] * best[1]:

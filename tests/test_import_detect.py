@@ -82,6 +82,29 @@ def test_evidence_for_both_is_named() -> None:
     assert "line 1: G17, which the 1704 does not have" in message
 
 
+@pytest.mark.parametrize(
+    ("block", "reason"),
+    [
+        ("N2G50X1000Y1000", "line 3: G50 with axis words"),
+        ("N2 g+050. x1000", "line 3: G50 with axis words"),
+        ("N2G20X1000Y0I500J0", "line 3: G20/G30 with an arc centre"),
+        ("N2 G030 X1000 K500", "line 3: G20/G30 with an arc centre"),
+        ("N2G04F0015", "line 3: G04 with F"),
+        ("N2 G4.0 F15", "line 3: G04 with F"),
+        ("N2G01Z-12500", "line 3: Z-12500: 12500 in as G-code"),
+        ("N2 x 10000", "line 3: X10000: 10000 in as G-code"),
+    ],
+)
+def test_a_tapes_evidence_after_gcodes_is_found(block: str, reason: str) -> None:
+    # Once the text is known to have G-code's evidence, only blocks that may be a tape's
+    # are looked at again: each kind of a tape's evidence must still be one of them.
+    with pytest.raises(ImportFailure) as caught:
+        detect_format(f"G17 G20\nG0 X1.0000 Y1.0000\n{block}\n".encode())
+    message = str(caught.value)
+    assert "line 1: G17, which the 1704 does not have" in message
+    assert reason in message
+
+
 def test_json_document() -> None:
     program = load(GOLDEN / "copy-offsets-abs")
     result = read_program(document.dumps(program).encode(), "p.json")

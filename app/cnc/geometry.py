@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from decimal import Decimal
 
@@ -34,17 +35,21 @@ def bolt_circle_points(
     Hole k is at centre + R·(−sin θk, −cos θk) with θk = A + k·360°/N, taken clockwise.
     Each coordinate is rounded once to the nanometre.
     """
-    points = []
+    cx, cy = centre
+    return [(cx + dx, cy + dy) for dx, dy in _bolt_offsets(radius, holes, angle_deg)]
+
+
+@functools.lru_cache(maxsize=256)
+def _bolt_offsets(radius: int, holes: int, angle_deg: Decimal) -> tuple[tuple[int, int], ...]:
+    """The holes of a bolt circle from its centre (nm), each rounded to the nanometre: the
+    same for every circle of one radius, count and angle (an imported file's pattern of
+    circles computes them once)."""
     first = float(angle_deg)
+    offsets = []
     for k in range(holes):
         theta = math.radians(first + k * 360.0 / holes)
-        points.append(
-            (
-                centre[0] + round_nm(-radius * math.sin(theta)),
-                centre[1] + round_nm(-radius * math.cos(theta)),
-            )
-        )
-    return points
+        offsets.append((round_nm(-radius * math.sin(theta)), round_nm(-radius * math.cos(theta))))
+    return tuple(offsets)
 
 
 def arc_sweep(

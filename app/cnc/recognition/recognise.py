@@ -64,7 +64,6 @@ from app.cnc.recognition.ops import (
     MillOp,
     Op,
     RoutineOp,
-    Signature,
     anchor,
     close_numbers,
     signature,
@@ -82,6 +81,7 @@ MAX_LOOP_BODY = 32  # operations in one repeated pattern
 MAX_FRAME_CUTS = 400  # a frame routine's passes are fewer cuts than this
 MIN_BOLT_HOLES = 3
 HUNDREDTH: Final = Decimal("0.01")  # a BOLT CIR's angle is in hundredths of a degree
+_BOLT_NOTE: Final = "holes on a circle read as BOLT CIR"  # what every BOLT CIR's note shares
 
 
 # -- pecks through a mill sequence ----------------------------------------------------------
@@ -246,7 +246,8 @@ class RoutineFinder:
         out: list[Op] = []
         i = 0
         while i < len(ops):
-            chain = _two_pass_levels(ops, i, self.tol)
+            # (Most operations of a file are not mill sequences: no call for those.)
+            chain = _two_pass_levels(ops, i, self.tol) if isinstance(ops[i], MillOp) else None
             if chain is not None:
                 found = self.routine(chain, two_pass_only=True)
                 if isinstance(found, RoutineOp):
@@ -264,17 +265,18 @@ class RoutineFinder:
             self.asked[tool] = (diameter, self.rpms.get(tool))
         if diameter is None or op.comp is not Comp.NONE or not op.elements:
             return op
-        cuts = normalise(_f(op.at), _segments(op.elements), self.tol)
-        if not cuts:
-            return op
-        wanted_feed = op.elements[0].feed
-        if any(e.feed != wanted_feed for e in op.elements):
-            return op
         # The same cuts elsewhere (a pattern of pockets) are the same routine: planned once.
+        # The key holds all the cuts are made of, seen from the plunge point, so the cuts
+        # too are the same there (`normalise` compares differences of points alone).
         key = self.key(op, diameter)
         found = self.cache.get(key)
         if found is None:
-            found = self.search(op, cuts, diameter)
+            cuts = normalise(_f(op.at), _segments(op.elements), self.tol)
+            wanted_feed = op.elements[0].feed
+            if not cuts or any(e.feed != wanted_feed for e in op.elements):
+                found = []  # no cuts, or more than one feed: no routine
+            else:
+                found = self.search(op, cuts, diameter)
             self.cache[key] = found
         conflict: tuple[Circle | Frame, MillingMode] | None = None
         for block, offset, milling in found:
@@ -549,6 +551,9 @@ def _collinear(a: Pt, b: Pt, c: Pt, tol: float) -> bool:
 def find_bolt_circles(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
     out: list[Op] = []
     i = 0
+    # Every BOLT CIR is one note, the first one's words and the others' lines (`same`):
+    # once it is made, a circle's own words would be dropped, and are not written.
+    noted = False
     while i < len(ops):
         bolt = _bolt_at(ops, i, tolerance + 2)
         if bolt is None:
@@ -560,11 +565,14 @@ def find_bolt_circles(ops: list[Op], tolerance: int, notes: Notes) -> list[Op]:
         u = op.spec.units
         notes.became(
             op.lines[0],
-            f"{notes.span(op.lines)}: {count} holes equally spaced on a circle: BOLT CIR about "
-            f"X{show(op.centre[0], u)} Y{show(op.centre[1], u)}, radius "
+            ""
+            if noted
+            else f"{notes.span(op.lines)}: {count} holes equally spaced on a circle: BOLT CIR "
+            f"about X{show(op.centre[0], u)} Y{show(op.centre[1], u)}, radius "
             f"{show(op.radius, u)}, first hole at {op.angle}° (clockwise from below)",
-            same="holes on a circle read as BOLT CIR",
+            same=_BOLT_NOTE,
         )
+        noted = True
         if reordered:
             notes.assumed(
                 op.lines[0],
@@ -595,12 +603,15 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
             break
     if len(run) < MIN_BOLT_HOLES:
         return None
-    p = [_f(h.at) for h in run]
-    rough = _circumcentre(p[0], p[1], p[2])
+    # The holes' X and Y as floats, in two lists: a centroid is then one `sum` of a slice.
+    xs = [float(h.at[0]) for h in run]
+    ys = [float(h.at[1]) for h in run]
+    x0, y0, x1, y1 = xs[0], ys[0], xs[1], ys[1]
+    rough = _circumcentre((x0, y0), (x1, y1), (xs[2], ys[2]))
     if rough is None:
         return None
-    a0 = math.atan2(p[0][1] - rough[1], p[0][0] - rough[0])
-    a1 = math.atan2(p[1][1] - rough[1], p[1][0] - rough[0])
+    a0 = math.atan2(y0 - rough[1], x0 - rough[0])
+    a1 = math.atan2(y1 - rough[1], x1 - rough[0])
     delta = math.remainder(a1 - a0, 2 * math.pi)
     if abs(delta) < 1e-9:
         return None
@@ -611,9 +622,9 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
         guess = min(guess, len(run))
         if guess < MIN_BOLT_HOLES:
             break
-        c = (sum(q[0] for q in p[:guess]) / guess, sum(q[1] for q in p[:guess]) / guess)
-        b0 = math.atan2(p[0][1] - c[1], p[0][0] - c[0])
-        b1 = math.atan2(p[1][1] - c[1], p[1][0] - c[0])
+        cx, cy = sum(xs[:guess]) / guess, sum(ys[:guess]) / guess
+        b0 = math.atan2(y0 - cy, x0 - cx)
+        b1 = math.atan2(y1 - cy, x1 - cx)
         step = abs(math.remainder(b1 - b0, 2 * math.pi))
         if step < 1e-9:
             return None
@@ -621,27 +632,32 @@ def _bolt_at(ops: list[Op], i: int, tol: int) -> tuple[BoltOp, int, bool] | None
         if better == guess:
             break
         guess = better
+    # Where the run's stop is (it ends the run): a circle cannot go on past it.
+    stopped = len(run) - 1 if run[-1].stop else len(run)
     tried: set[int] = set()
     for count in (guess, guess - 1, guess + 1, guess - 2, guess + 2, len(run)):
         if count in tried:
             continue
         tried.add(count)
-        if not MIN_BOLT_HOLES <= count <= len(run) or any(h.stop for h in run[: count - 1]):
+        if not MIN_BOLT_HOLES <= count <= len(run) or stopped < count - 1:
             continue
-        found = _bolt_of(run, p, count, tol)
+        found = _bolt_of(run, xs, ys, count, tol)
         if found is not None:
             return found
     return None
 
 
 def _bolt_of(
-    run: list[HoleOpR], p: list[Pt], count: int, tol: int
+    run: list[HoleOpR], xs: list[float], ys: list[float], count: int, tol: int
 ) -> tuple[BoltOp, int, bool] | None:
+    """The first `count` holes of `run` (X and Y in `xs`, `ys`) as one BOLT CIR, if
+    MillBlocks' holes of it are the file's within `tol` (nm)."""
     first = run[0]
-    centre = (sum(q[0] for q in p[:count]) / count, sum(q[1] for q in p[:count]) / count)
-    radius = math.dist(p[0], centre)
-    a0 = math.atan2(p[0][1] - centre[1], p[0][0] - centre[0])
-    a1 = math.atan2(p[1][1] - centre[1], p[1][0] - centre[0])
+    x0, y0 = xs[0], ys[0]
+    centre = (sum(xs[:count]) / count, sum(ys[:count]) / count)
+    radius = math.dist((x0, y0), centre)
+    a0 = math.atan2(y0 - centre[1], x0 - centre[0])
+    a1 = math.atan2(ys[1] - centre[1], xs[1] - centre[0])
     delta = math.remainder(a1 - a0, 2 * math.pi)
     if abs(abs(delta) * count - 2 * math.pi) > 0.01:
         return None
@@ -650,7 +666,7 @@ def _bolt_of(
     rq = quantize_nm(round(radius), units)
     if rq <= 0:
         return None
-    dx, dy = p[0][0] - centre[0], p[0][1] - centre[1]
+    dx, dy = x0 - centre[0], y0 - centre[1]
     theta = math.degrees(math.atan2(-dx, -dy)) % 360
     angle = Decimal(repr(theta)).quantize(HUNDREDTH, rounding=ROUND_HALF_EVEN)
     if angle >= 360:
@@ -659,8 +675,10 @@ def _bolt_of(
     clockwise = delta < 0
     order = made if clockwise else [made[0], *reversed(made[1:])]
     holes = run[:count]
-    if not all(_close(h.at, q, tol) for h, q in zip(holes, order, strict=True)):
-        return None
+    for h, q in zip(holes, order, strict=True):
+        at = h.at
+        if abs(at[0] - q[0]) > tol or abs(at[1] - q[1]) > tol:
+            return None
     lines = sorted({line for h in holes for line in h.lines})
     bolt = BoltOp(lines, cq, first.spec, count, angle, rq, holes[-1].stop, first.message)
     return bolt, count, not clockwise
@@ -706,10 +724,16 @@ class _LoopFinder:
         seen = _Kinds()
         kinds = [seen.of(sig.labels) for sig in sigs]
         anchors = [anchor(op) for op in ops]
+        seen_ops = _Seen(
+            kinds,
+            [a[0] for a in anchors],
+            [a[1] for a in anchors],
+            [sig.numbers for sig in sigs],
+        )
         out: list[Op] = []
         i = 0
         while i < len(ops):
-            found = self.best_run(ops, _Seen(sigs, kinds, anchors), i)
+            found = self.best_run(ops, seen_ops, i)
             if found is None:
                 out.append(ops[i])
                 i += 1
@@ -729,36 +753,60 @@ class _LoopFinder:
         best: tuple[int, int, XY] | None = None
         n = len(ops)
         tol = self.tol
-        kinds, anchors, sigs = seen.kinds, seen.anchors, seen.sigs
+        kinds, xs, ys, numbers = seen.kinds, seen.xs, seen.ys, seen.numbers
+        kind0 = kinds[i]
+        x0, y0 = xs[i], ys[i]
+        units: Units | None = None
+        # Lengths whose every comparison held exactly (no tolerance used), with their count.
+        # A multiple m·L of such a length L, m < count, compares the same operations with
+        # the same differences up to the one where L stopped, so it repeats count // m
+        # times (m·L · count // m <= L · count): it cannot do better, and is not tried.
+        exact: list[tuple[int, int]] = []
         for length in range(1, min(MAX_LOOP_BODY, (n - i) // 2) + 1):
-            a0, a1 = anchors[i], anchors[i + length]
-            raw = (a1[0] - a0[0], a1[1] - a0[1])
+            # A body whose first operation does not come again right after it repeats
+            # nowhere (an int compare, before any arithmetic).
+            if kinds[i + length] != kind0:
+                continue
+            if any(length % base == 0 and length // base < times for base, times in exact):
+                continue
+            raw = (xs[i + length] - x0, ys[i + length] - y0)
             along_x = abs(raw[1]) <= tol and abs(raw[0]) > tol
             along_y = abs(raw[0]) <= tol and abs(raw[1]) > tol
             if not (along_x or along_y):
                 continue
-            units = _units(ops[i])
+            if units is None:
+                units = _units(ops[i])
             step = (quantize_nm(raw[0], units), 0) if along_x else (0, quantize_nm(raw[1], units))
             if step == (0, 0):
                 continue
+            sx, sy = step
             count = 1
+            held = True  # every comparison so far exact
             while i + (count + 1) * length <= n and count <= limits.MAX_REPEAT:
                 base = i + count * length
-                dx, dy = count * step[0], count * step[1]
+                dx, dy = count * sx, count * sy
                 for t in range(length):
                     here, there = base + t, i + t
                     # Same kind first (an int compare): most candidates fail there.
                     if kinds[here] != kinds[there]:
                         break
-                    moved, first = anchors[here], anchors[there]
-                    if abs(moved[0] - first[0] - dx) > tol or abs(moved[1] - first[1] - dy) > tol:
+                    off_x, off_y = xs[here] - xs[there] - dx, ys[here] - ys[there] - dy
+                    if abs(off_x) > tol or abs(off_y) > tol:
                         break
-                    if not close_numbers(sigs[here].numbers, sigs[there].numbers, tol):
-                        break
+                    # (Equal numbers, the usual repetition, without a call.)
+                    shape, first = numbers[here], numbers[there]
+                    if shape != first:
+                        if not close_numbers(shape, first, tol):
+                            break
+                        held = False
+                    if off_x or off_y:
+                        held = False
                 else:
                     count += 1
                     continue
                 break
+            if held:
+                exact.append((length, count))
             if count < 2 or count * length < 3:
                 continue
             if best is None or count * length > best[0] * best[1]:
@@ -789,12 +837,13 @@ class _LoopFinder:
 
 @dataclass(frozen=True)
 class _Seen:
-    """One pass's view of its operations: signatures, their kinds (equal labels, equal
-    kind), anchors."""
+    """One pass's view of its operations, each a list in their order: their kinds (equal
+    labels, equal kind), their anchors' X and Y (nm), their signatures' numbers."""
 
-    sigs: list[Signature]
     kinds: list[int]
-    anchors: list[XY]
+    xs: list[int]
+    ys: list[int]
+    numbers: list[list[int]]
 
 
 class _Kinds:

@@ -28,6 +28,11 @@ _WORD = re.compile(r"([A-Za-z])\s*([+-]?[0-9.]*)")
 _TAPE_G = {0, 1, 2, 3, 4, 20, 30, 50, 80, 81, 82, 83, 84, 85, 86, 87, 88, 89, 90, 91, 94, 98, 99}
 _TAPE_LETTERS = set("NGXYZIJKRFSTM")
 _DIMENSIONS = set("XYZIJKR")
+# What a block holds for `_block_evidence` to find a tape in it: a G word that may be
+# G4, G20, G30 or G50 (G40 or G200 match too: only the full look tells), or a dimension of
+# five digits or more. Once a text has G-code's evidence, a block without either is passed
+# over: it can add nothing (most of a CAM file's blocks).
+_MAY_BE_TAPE = re.compile(r"[Gg]\s*\+?0*(?:4|20|30|50)|[XYZIJKRxyzijkr]\s*[+-]?[0-9]{5}")
 # Why a file with no evidence either way could be both.
 LOOK_ALIKE = (
     "their G codes differ: G00 feeds on a 1704 and rapids in G-code; G20/G30, G50, G94, G98/G99"
@@ -76,6 +81,8 @@ def evidence(text: str) -> Evidence:
             stripped = block.strip()
             if not stripped or stripped.startswith("%"):
                 continue
+            if gcode and not _MAY_BE_TAPE.search(stripped):
+                continue  # only a tape's evidence is still sought, and this has none
             g_reason, t_reason = _block_evidence(stripped)
             if g_reason and not gcode:
                 gcode = f"line {number}: {g_reason}"

@@ -158,6 +158,9 @@ def looks_segmented(parts: Iterable[str]) -> str:
         lines = split_lines(part)
         if part.endswith("\n"):
             lines.pop()  # (the line after this part's last break begins the next part)
+        if "#0" not in part and "$" not in part:
+            number += len(lines)  # no line here can be one (a G-code file's every part)
+            continue
         for raw in lines:
             number += 1
             stripped = raw.strip()

@@ -93,8 +93,9 @@ class Tape:
         for line in check_reader(lines, self.fmt, self.reader_report):
             if isinstance(line, LineRun):
                 texts = line.texts
-                rows += sum(map(len, texts)) + len(texts)
-                if codes.can_encode("".join(texts), code):
+                joined = "".join(texts)
+                rows += len(joined) + len(texts)
+                if codes.can_encode(joined, code):
                     yield line
                     continue
                 self.encodable = False

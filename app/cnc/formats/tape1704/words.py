@@ -237,20 +237,33 @@ class Rounder:
         moved[arcs] = True
         pieces: list[list[tuple[int, int]]] = []
         arc_rows = moving[arcs]
+        # An arc's quadrant ends depend only on where its start and end are from its
+        # centre (exact integers): the arcs of a pattern (one shape in many places) are
+        # split once, each then moved to its centre.
+        shapes: dict[tuple[int, int, int, int, bool, bool], list[tuple[int, int]]] = {}
         # Scalars from lists (not numpy's, one at a time): a CAM file's run has 10^4 arcs.
-        for start, centre, end, clockwise, full_circle in zip(
-            zip(sx[arcs].tolist(), sy[arcs].tolist(), strict=True),
-            zip(cx.tolist(), cy.tolist(), strict=True),
-            zip(x[arcs].tolist(), y[arcs].tolist(), strict=True),
+        for bx, by, ex, ey, ox, oy, clockwise, full_circle in zip(
+            (sx[arcs] - cx).tolist(),
+            (sy[arcs] - cy).tolist(),
+            (x[arcs] - cx).tolist(),
+            (y[arcs] - cy).tolist(),
+            cx.tolist(),
+            cy.tolist(),
             run.clockwise[arc_rows].tolist(),
             run.full[arc_rows].tolist(),
             strict=True,
         ):
-            # split_arc's refusals (a radius past the capacity, none, no sweep) go one by one.
-            radius = round(math.hypot(start[0] - centre[0], start[1] - centre[1]))
-            if radius > limit or radius == 0 or (end == start and not full_circle):
-                return None
-            pieces.append(quadrant_ends(start, end, centre, radius, clockwise, full_circle))
+            key = (bx, by, ex, ey, clockwise, full_circle)
+            shape = shapes.get(key)
+            if shape is None:
+                # split_arc's refusals (a radius past the capacity, none, no sweep) go
+                # one by one.
+                radius = round(math.hypot(bx, by))
+                if radius > limit or radius == 0 or (ex == bx and ey == by and not full_circle):
+                    return None
+                shape = quadrant_ends((bx, by), (ex, ey), (0, 0), radius, clockwise, full_circle)
+                shapes[key] = shape
+            pieces.append([(ox + px, oy + py) for px, py in shape])
         restart = run.restart or self.carry_restart
         if restart and run.kind[0] == DWELL:
             return None  # Words.lines restarts the motion mode on a run's first row only
@@ -827,22 +840,29 @@ class Words:
         squares = dx[:count] ** 2 + dy[:count] ** 2 + dz[:count] ** 2
         length[lines] = np.sqrt(squares[lines].astype(np.float64)) * fmt.digit_nm / fmt.unit_nm
         # The arcs' lengths as `motion_length` has them (the same floats as a block
-        # written alone), from lists: a long CAM file's run has 10^4 arcs.
+        # written alone), from lists: a long CAM file's run has 10^4 arcs. A length
+        # depends only on where the arc's ends are from its centre (exact integers): each
+        # shape of a pattern's arcs is measured once.
         curved = np.flatnonzero(continuous & arc[:count])
         digit_nm, unit_nm = fmt.digit_nm, fmt.unit_nm
-        length[curved] = [
-            arc_length((bx, by), (ax, ay), (cx, cy), cw) * digit_nm / unit_nm
-            for bx, by, ax, ay, cx, cy, cw in zip(
-                sx[curved].tolist(),
-                sy[curved].tolist(),
-                x[curved].tolist(),
-                y[curved].tolist(),
-                run.cx[curved].tolist(),
-                run.cy[curved].tolist(),
-                run.clockwise[curved].tolist(),
-                strict=True,
-            )
-        ]
+        ocx, ocy = run.cx[curved], run.cy[curved]
+        lengths: dict[tuple[int, int, int, int, bool], float] = {}
+        measured: list[float] = []
+        for shape in zip(
+            (sx[curved] - ocx).tolist(),
+            (sy[curved] - ocy).tolist(),
+            (x[curved] - ocx).tolist(),
+            (y[curved] - ocy).tolist(),
+            run.clockwise[curved].tolist(),
+            strict=True,
+        ):
+            known = lengths.get(shape)
+            if known is None:
+                bx, by, ax, ay, cw = shape
+                known = arc_length((bx, by), (ax, ay), (0, 0), cw) * digit_nm / unit_nm
+                lengths[shape] = known
+            measured.append(known)
+        length[curved] = measured
         last = count - 1
         self.g = str(_G_WORDS[gcode[last]])[1:] if moving[last] else None
         motion = int(last_motion[last])

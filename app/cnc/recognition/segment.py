@@ -178,6 +178,10 @@ Batch = Callable[[list[Op], list[Retract], dict[int, ToolUse]], None]
 BATCH_OPS: Final = 8192
 
 
+# Steps the walk goes on between telling the window what it has passed (`StepWindow.release`,
+# which drops steps in batches of DROP_BATCH).
+RELEASE_EVERY: Final = 256
+
 # The kinds of step, as functions with the classes written out: a tuple of classes held in a
 # variable is a Python tuple built and walked on every test once compiled (app.cnc.native),
 # where the classes written out are a test of the type each.
@@ -220,10 +224,11 @@ def _cut_follows(steps: StepWindow, j: int, at: XY) -> bool:
     # Indexing, not `steps[j:]`: a slice copies the rest of the file's steps on every
     # call, which made reading a long file quadratic.
     k = j
-    while steps.has(k):
-        step = steps[k]
+    step = steps.at(k)
+    while step is not None:
         if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
             k += 1
+            step = steps.at(k)
             continue
         return is_cut(step)
     return False
@@ -289,9 +294,16 @@ class _Segmenter:
             )
         i = 0
         steps = self.steps
-        while steps.has(i):
-            steps.release(i)
-            step = steps[i]
+        release_at = 0
+        while True:
+            # One look-up a step (`at`), and the window told to let go of the steps passed
+            # only now and then: this loop runs for every step of the file.
+            step = steps.at(i)
+            if step is None:
+                break
+            if i >= release_at:
+                steps.release(i)
+                release_at = i + RELEASE_EVERY
             if self.ended:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
@@ -300,11 +312,11 @@ class _Segmenter:
                 self.note_spindle_off()
             if isinstance(step, Rapid):
                 self.rapid(step)
-            elif is_cut(step):
-                i = self.feed(i)
-                continue
             elif isinstance(step, Cycle):
                 self.cycle(step)
+            elif isinstance(step, (Feed, Arc)):
+                i = self.feed(i)
+                continue
             elif isinstance(step, Dwell):
                 self.notes.ignored(
                     step.line,
@@ -1029,8 +1041,8 @@ class _Segmenter:
         while True:
             # Feed down (perhaps in several moves) to the next level.
             bottom = self.z
-            while steps.has(j):
-                s = steps[j]
+            while True:
+                s = steps.at(j)
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
                     if s.feed != feed_z and not levels:
                         # Down to a feed height at one rate, into the work at another (a
@@ -1204,8 +1216,10 @@ class _Segmenter:
         elements: list[Element] = []
         sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
-        while steps.has(j):
-            s = steps[j]
+        while True:
+            s = steps.at(j)
+            if s is None:
+                break
             if isinstance(s, Feed):
                 if (s.x, s.y) == (x, y):
                     if s.z is None or s.z == depth:

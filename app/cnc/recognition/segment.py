@@ -110,6 +110,8 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
     89: (HoleOp.BORE, ""),
 }
 
+_OTHER_CYCLE: Final = (HoleOp.DRILL, "")  # (made once: a hole is made for every Cycle)
+
 # An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
 # What an operation's moves look like, where a file's are not what its block makes: the
 # start of the import's refusal (`not_ours`).
@@ -385,7 +387,7 @@ class _Segmenter:
     # -- positioning -------------------------------------------------------------------------
 
     def rapid(self, step: Rapid) -> None:
-        moved = (step.x, step.y) != (self.x, self.y)
+        moved = step.x != self.x or step.y != self.y
         if step.z is not None and self.z is not None and step.z > self.z and not moved:
             self.record_retract(step.line, step.z)
             if self.pending is not None:
@@ -491,7 +493,7 @@ class _Segmenter:
     def feed(self, i: int) -> int:
         step = self.steps[i]
         assert is_cut(step)
-        same_xy = isinstance(step, Feed) and (step.x, step.y) == (self.x, self.y)
+        same_xy = isinstance(step, Feed) and step.x == self.x and step.y == self.y
         if same_xy:
             if step.z is not None and self.z is None and not self.two_axis:
                 raise ImportFailure(
@@ -1355,7 +1357,7 @@ class _Segmenter:
         if pending is not None and pending.rose and self.z is not None and step.r < self.z:
             self.flush_pending()  # across, up, and the cycle goes down again: a POS
         lines = [*self.take_pending(at), step.line]
-        op, how = CYCLE_OPS.get(step.code, (HoleOp.DRILL, ""))
+        op, how = CYCLE_OPS.get(step.code, _OTHER_CYCLE)
         pecks = 1
         if step.peck > 0 and op is HoleOp.DRILL:
             depth = step.r - step.bottom

@@ -500,7 +500,7 @@ class GcodeStream(StreamSource):
         for step in self.steps[:count]:
             if isinstance(step, Rapid):
                 reader.passed_motion = step
-            elif isinstance(step, Feed | Arc):
+            elif isinstance(step, (Feed, Arc)):  # (a tuple: `Feed | Arc` is made each time)
                 reader.passed_motion = step
                 reader.passed_cut = True
                 if not 0 <= step.comp_tool <= top:

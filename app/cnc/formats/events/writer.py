@@ -129,7 +129,8 @@ class Events:
 
     `checks[i]` lists the XY points (nm, as written) event i + 1 puts the tool at, each with
     the block whose tool path must go there. `unchecked` holds blocks whose motion the Plus
-    computes itself (compensated contours, circle and frame routines).
+    computes itself (compensated contours, circle and frame routines) and blocks refused
+    (their error says why; the self-check adds none).
     """
 
     units: Units
@@ -231,6 +232,8 @@ class _Builder:
                 f"{block.title} is not written: {why}, and the Plus is a 2-axis control whose "
                 "events have no Z (seed 003 §2.1); use a G-code target",
             )
+            # Refused, said once: the self-check has no event to compare it with.
+            self.result.unchecked.add(number)
             self.reference = self.resolve(block)
             return
         assert isinstance(block, Pos | Hole)
@@ -286,6 +289,7 @@ class _Builder:
                 "Z with X and Y, and the Plus is a 2-axis control whose events have no Z "
                 "(seed 003 §2.1); use a G-code target, or ENTRY empty (PLUNGE)",
             )
+            self.result.unchecked.update([node.drill + 1, *(i + 1 for i in node.mills)])
             self.reference = start
         elif isinstance(first, Circle | Frame):
             self.routine(node, drill, first, start)

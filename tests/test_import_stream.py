@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -261,6 +262,34 @@ def test_lines_of_a_file_read_a_part_at_a_time_are_the_lines_of_its_bytes(
     ends = sorted({min(cut, len(data)) for cut in cuts})
     parts = [data[a:b] for a, b in zip([0, *ends], [*ends, len(data)], strict=True)]
     assert list(chunk_lines(parts)) == list(byte_lines(data))
+
+
+def _lines_until_refused(lines: Iterator[str]) -> tuple[list[str], bool]:
+    """The lines read before a refusal, and whether there was one."""
+    read: list[str] = []
+    try:
+        read.extend(lines)
+    except ImportFailure:
+        return read, True
+    return read, False
+
+
+@given(
+    st.lists(
+        st.sampled_from([b"a", b"\xc3\xa9", b"\n", b"\r\n", b"\xff", b"G1 X1\n", b"(" * 70_000]),
+        max_size=12,
+    ).map(b"".join),
+    st.lists(st.integers(0, 1_000_000), max_size=4),
+)
+def test_a_file_read_in_parts_gives_its_lines_up_to_a_byte_that_is_not_text(
+    data: bytes, cuts: list[int]
+) -> None:
+    """A file read in parts has, line for line, the lines of its bytes read whole — lines
+    longer than a part, and those before a byte that is not UTF-8 — and is refused at
+    that byte (the parts are decoded many lines at a time where they can be)."""
+    ends = sorted({min(cut, len(data)) for cut in cuts})
+    parts = [data[a:b] for a, b in zip([0, *ends], [*ends, len(data)], strict=True)]
+    assert _lines_until_refused(chunk_lines(parts)) == _lines_until_refused(byte_lines(data))
 
 
 def test_the_command_line_reads_a_long_file_as_its_bytes_read(tmp_path: Path) -> None:

@@ -336,6 +336,20 @@ def _after_boms(data: bytes) -> int:
 def _byte_lines(data: bytes, start: int, n: int, final: bool) -> Iterator[str]:
     """The lines of `data[start:n]`; when not `final`, what follows its last line break
     is not a line (the next part of the file goes on with it)."""
+    if not final and data.find(b"\r", start, n) < 0:
+        # LF only (nearly every file): _SPLIT bytes at a time decoded and split at once,
+        # not a find, slice and decode for each line. (`data[n - 1]` is then an LF.)
+        while start < n:
+            end = data.rfind(b"\n", start, min(n, start + _SPLIT)) + 1
+            if end <= start:  # (a line longer than _SPLIT)
+                end = data.find(b"\n", start, n) + 1
+            try:
+                lines = data[start:end].decode("utf-8").split("\n")
+            except UnicodeDecodeError:
+                break  # line by line below: the lines before the bad byte are read first
+            lines.pop()  # (after the last LF: nothing)
+            yield from lines
+            start = end
     while True:
         lf = data.find(b"\n", start, n)
         cr = data.find(b"\r", start, n if lf < 0 else lf)
@@ -352,6 +366,7 @@ def _byte_lines(data: bytes, start: int, n: int, final: bool) -> Iterator[str]:
 
 
 _BOM: Final = "\ufeff".encode()
+_SPLIT: Final = 1 << 16  # bytes `_byte_lines` decodes at a time
 
 
 def text_lines(text: str) -> Iterator[str]:

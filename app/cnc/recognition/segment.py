@@ -110,6 +110,8 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
     89: (HoleOp.BORE, ""),
 }
 
+_OTHER_CYCLE: Final = (HoleOp.DRILL, "")  # (made once: a hole is made for every Cycle)
+
 # An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
 # What an operation's moves look like, where a file's are not what its block makes: the
 # start of the import's refusal (`not_ours`).
@@ -178,6 +180,10 @@ Batch = Callable[[list[Op], list[Retract], dict[int, ToolUse]], None]
 BATCH_OPS: Final = 8192
 
 
+# Steps the walk goes on between telling the window what it has passed (`StepWindow.release`,
+# which drops steps in batches of DROP_BATCH).
+RELEASE_EVERY: Final = 256
+
 # The kinds of step, as functions with the classes written out: a tuple of classes held in a
 # variable is a Python tuple built and walked on every test once compiled (app.cnc.native),
 # where the classes written out are a test of the type each.
@@ -220,10 +226,11 @@ def _cut_follows(steps: StepWindow, j: int, at: XY) -> bool:
     # Indexing, not `steps[j:]`: a slice copies the rest of the file's steps on every
     # call, which made reading a long file quadratic.
     k = j
-    while steps.has(k):
-        step = steps[k]
+    step = steps.at(k)
+    while step is not None:
         if (isinstance(step, Feed) and (step.x, step.y) == at) or isinstance(step, Coolant):
             k += 1
+            step = steps.at(k)
             continue
         return is_cut(step)
     return False
@@ -289,9 +296,16 @@ class _Segmenter:
             )
         i = 0
         steps = self.steps
-        while steps.has(i):
-            steps.release(i)
-            step = steps[i]
+        release_at = 0
+        while True:
+            # One look-up a step (`at`), and the window told to let go of the steps passed
+            # only now and then: this loop runs for every step of the file.
+            step = steps.at(i)
+            if step is None:
+                break
+            if i >= release_at:
+                steps.release(i)
+                release_at = i + RELEASE_EVERY
             if self.ended:
                 self.notes.ignored(step.line, "after the end of the program: not imported")
                 i += 1
@@ -300,11 +314,11 @@ class _Segmenter:
                 self.note_spindle_off()
             if isinstance(step, Rapid):
                 self.rapid(step)
-            elif is_cut(step):
-                i = self.feed(i)
-                continue
             elif isinstance(step, Cycle):
                 self.cycle(step)
+            elif isinstance(step, (Feed, Arc)):
+                i = self.feed(i)
+                continue
             elif isinstance(step, Dwell):
                 self.notes.ignored(
                     step.line,
@@ -373,7 +387,7 @@ class _Segmenter:
     # -- positioning -------------------------------------------------------------------------
 
     def rapid(self, step: Rapid) -> None:
-        moved = (step.x, step.y) != (self.x, self.y)
+        moved = step.x != self.x or step.y != self.y
         if step.z is not None and self.z is not None and step.z > self.z and not moved:
             self.record_retract(step.line, step.z)
             if self.pending is not None:
@@ -479,7 +493,7 @@ class _Segmenter:
     def feed(self, i: int) -> int:
         step = self.steps[i]
         assert is_cut(step)
-        same_xy = isinstance(step, Feed) and (step.x, step.y) == (self.x, self.y)
+        same_xy = isinstance(step, Feed) and step.x == self.x and step.y == self.y
         if same_xy:
             if step.z is not None and self.z is None and not self.two_axis:
                 raise ImportFailure(
@@ -1029,8 +1043,8 @@ class _Segmenter:
         while True:
             # Feed down (perhaps in several moves) to the next level.
             bottom = self.z
-            while steps.has(j):
-                s = steps[j]
+            while True:
+                s = steps.at(j)
                 if isinstance(s, Feed) and (s.x, s.y) == at and s.z is not None and s.z < bottom:
                     if s.feed != feed_z and not levels:
                         # Down to a feed height at one rate, into the work at another (a
@@ -1204,8 +1218,10 @@ class _Segmenter:
         elements: list[Element] = []
         sides: list[tuple[str, int]] = []  # each cut's compensation (G41/G42) and its D
         x, y = at
-        while steps.has(j):
-            s = steps[j]
+        while True:
+            s = steps.at(j)
+            if s is None:
+                break
             if isinstance(s, Feed):
                 if (s.x, s.y) == (x, y):
                     if s.z is None or s.z == depth:
@@ -1341,7 +1357,7 @@ class _Segmenter:
         if pending is not None and pending.rose and self.z is not None and step.r < self.z:
             self.flush_pending()  # across, up, and the cycle goes down again: a POS
         lines = [*self.take_pending(at), step.line]
-        op, how = CYCLE_OPS.get(step.code, (HoleOp.DRILL, ""))
+        op, how = CYCLE_OPS.get(step.code, _OTHER_CYCLE)
         pecks = 1
         if step.peck > 0 and op is HoleOp.DRILL:
             depth = step.r - step.bottom

@@ -290,6 +290,35 @@ def usual_words(line: str) -> list[str | None] | None:
     return found
 
 
+# Line as read → its USUAL groups (empty: not a USUAL line), `seen_words`' memory: a long
+# file repeats its commonest lines (the retract heights, the plunges, `G80`) thousands of
+# times, and a look-up here is a small part of matching the pattern again. Bounded (about a
+# megabyte): emptied when full, the lines the file repeats come back at once (on the
+# bench's file a memory of 4 096 lines finds 52.6 % of them, one of 65 536 52.7 %).
+_SEEN: Final[dict[str, tuple[str | None, ...]]] = {}
+_SEEN_MAX: Final = 1 << 12
+_NOT_USUAL: Final[tuple[str | None, ...]] = ()
+
+
+def seen_words(raw: str) -> tuple[str | None, ...]:
+    """USUAL's groups of line `raw` (trailing blanks ignored), `_NOT_USUAL` for a line that
+    is not one of its lines, remembered in `_SEEN` for the next time the line comes."""
+    line = raw.rstrip()
+    words: tuple[str | None, ...] = _NOT_USUAL
+    if line:
+        found = usual_words(line) if SCAN_FIRST else None
+        if found is not None:
+            words = tuple(found)
+        else:
+            usual = USUAL.fullmatch(line)
+            if usual is not None:
+                words = usual.groups()
+    if len(_SEEN) >= _SEEN_MAX:
+        _SEEN.clear()
+    _SEEN[raw] = words
+    return words
+
+
 class Word:
     """A letter and its number as written, and the column the letter is in.
 
@@ -410,6 +439,11 @@ class Block:
         return self.other.get(letter)
 
 
+# `lengths_known` of inches and of mm, for the hot loop (each dict lives as long as the
+# process: `text_length` empties it in place when full, never replaces it).
+_INCH_LENGTHS: Final = lengths_known(NM_PER_INCH)
+_MM_LENGTHS: Final = lengths_known(NM_PER_MM)
+
 # Lines a stream reads at a time when the segmenter asks for more.
 STREAM_LINES: Final = 256
 
@@ -452,14 +486,10 @@ class GcodeStream(StreamSource):
     def more(self) -> bool:
         if self.parsed is not None:
             return False
-        read = self.reader.read
-        number = self.number
-        for raw in self.lines:
-            number += 1
-            read(number, raw, True)
-            if number % STREAM_LINES == 0:
-                self.number = number
-                return True
+        number = self.reader.read_lines(self.lines, self.number, STREAM_LINES)
+        if number > self.number + STREAM_LINES - 1:
+            self.number = number
+            return True
         self.number = number
         self.parsed = self.reader.finish()
         return True
@@ -470,7 +500,7 @@ class GcodeStream(StreamSource):
         for step in self.steps[:count]:
             if isinstance(step, Rapid):
                 reader.passed_motion = step
-            elif isinstance(step, Feed | Arc):
+            elif isinstance(step, (Feed, Arc)):  # (a tuple: `Feed | Arc` is made each time)
                 reader.passed_motion = step
                 reader.passed_cut = True
                 if not 0 <= step.comp_tool <= top:
@@ -592,8 +622,7 @@ class _Reader:
                 except StopIteration:
                     break
         else:
-            for number, raw in enumerate(text_lines(self.text), start=1):
-                self.read(number, raw, True)
+            self.read_lines(text_lines(self.text), 0, -1)
         return self.finish()
 
     def made(self) -> int:
@@ -640,6 +669,30 @@ class _Reader:
         is read): the front end's line maps them (`ngc.Line.moved`)."""
         return exc if self.running is None else self.running.moved(exc)
 
+    def read_lines(self, lines: Iterator[str], number: int, count: int) -> int:
+        """Read the next `count` lines of `lines` (all of them when `count` is negative),
+        the first being line `number` + 1; returns the number of the last line read (fewer
+        than `count` read: `lines` has ended).
+
+        `read` of each line, with its commonest case — a line `fast_words` takes — written
+        into the loop: a long file is nearly all such lines, and this loop runs for each
+        of them."""
+        seen = _SEEN
+        stop = number + count if count >= 0 else -1
+        for raw in lines:
+            number += 1
+            if self.percent < 2 and self.ended_at is None:
+                words = seen.get(raw)
+                if words is None:
+                    words = seen_words(raw)
+                if not (words and self.fast_words(number, words)):
+                    self.read_other(number, raw, True)
+            else:
+                self.read(number, raw, True)
+            if number == stop:
+                break
+        return number
+
     def read(self, number: int, raw: str, titles: bool) -> None:
         """Read and execute line `number` (`titles`: a comment alone on it may name the
         program)."""
@@ -648,13 +701,15 @@ class _Reader:
                 where = "the closing %" if self.percent >= 2 else "the program end"
                 self.notes.ignored(number, f"after {where}: not imported")
             return
-        line = raw.rstrip()
-        words = usual_words(line) if SCAN_FIRST and line else None
+        words = _SEEN.get(raw)
         if words is None:
-            usual = USUAL.fullmatch(line) if line else None
-            words = list(usual.groups()) if usual else None
-        if words is not None and self.fast_words(number, words):
-            return
+            words = seen_words(raw)
+        if not (words and self.fast_words(number, words)):
+            self.read_other(number, raw, titles)
+
+    def read_other(self, number: int, raw: str, titles: bool) -> None:
+        """`read` of a line that `fast_words` does not take (before the program's end)."""
+        line = raw.rstrip()
         if SIMPLE.fullmatch(line):
             # Only words (the usual line): one pass of PAIRS reads them all.
             pairs = PAIRS.findall(line)
@@ -758,9 +813,9 @@ class _Reader:
         for word in (n, x, y, z, f):
             if word is not None and len(word) > MAX_DIGITS:
                 return False  # (USUAL's numbers are no longer than this)
-        return self.fast_words(number, [n, g, x, y, z, None, None, f])
+        return self.fast_words(number, (n, g, x, y, z, None, None, f))
 
-    def fast_words(self, number: int, words: list[str | None]) -> bool:
+    def fast_words(self, number: int, words: tuple[str | None, ...]) -> bool:
         """`fast_motion` of USUAL's groups (the numbers as written of N, G, X, Y, Z, I, J
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
@@ -772,24 +827,57 @@ class _Reader:
             return False
         if motion == "80":
             # G80 alone: the cycle ends (set_motion); with any other word, `execute`.
-            if g is None or any(t is not None for t in (x, y, z, i, j, f)):
+            if g is None or not (x is y is z is i is j is f is None):
                 return False
             self.motion = "80"
             self.cycle_drilled = False
             return True
-        per = NM_PER_INCH if units is INCH else NM_PER_MM
+        if units is INCH:
+            per, known = NM_PER_INCH, _INCH_LENGTHS
+        else:
+            per, known = NM_PER_MM, _MM_LENGTHS
         feed = self.feed
         if f is not None:
-            if not is_positive(f):
+            feed = (known.get(f) or text_length(f, per))[0]
+            if feed <= 0 and not is_positive(f):  # (more than 0 nm: more than 0)
                 return False
-            feed = text_nm(f, per)
+        # Where the axis words go, for a line, an arc or a hole alike, as `target` has it
+        # (an axis without a word stays where it is), and the decimal places the file is
+        # then written to; a word out of `length`'s range is `execute`'s to refuse. Written
+        # out axis by axis, here once (not a loop over the three, nor a function returning
+        # a tuple): this runs for nearly every line of a long file. Without a G92 shift the
+        # remembered nm object itself is kept (one int for every repeat of a number).
+        decimals = self.decimals
+        shift = self.shift
+        nx, ny, nz = self.x, self.y, self.z
+        if x is not None:
+            nm, written = known.get(x) or text_length(x, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return False
+            nx = nm + shift[0] if shift[0] else nm
+            if written > decimals:
+                decimals = written
+        if y is not None:
+            nm, written = known.get(y) or text_length(y, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return False
+            ny = nm + shift[1] if shift[1] else nm
+            if written > decimals:
+                decimals = written
+        if z is not None:
+            nm, written = known.get(z) or text_length(z, per)
+            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
+                return False
+            nz = nm + shift[2] if shift[2] else nm
+            if written > decimals:
+                decimals = written
         if i is not None or j is not None:
             # (I/J with no axis word moves nothing: `execute` then only sets the modes.)
             if (motion != "2" and motion != "3") or x is y is z is None:
                 return False
-            return self.fast_arc(number, (x, y, z, i, j), motion, feed, per)
+            return self.fast_arc(number, nx, ny, nz, decimals, i, j, motion, feed, per, known)
         if motion in CYCLES and g is None and z is None and (x is not None or y is not None):
-            return self.fast_hole(number, x, y, feed, per)
+            return self.fast_hole(number, nx, ny, decimals, feed)
         if (motion != "0" and motion != "1") or (g is not None and self.cycle_drilled):
             return False
         if x is None and y is None and z is None:
@@ -797,10 +885,6 @@ class _Reader:
             return True
         if motion == "1" and feed is None:
             return False
-        axes = self.fast_axes(x, y, z, per)
-        if axes is None:
-            return False
-        nx, ny, nz, decimals = axes
         if nx is None or ny is None:
             return False
         self.decimals = decimals
@@ -821,25 +905,26 @@ class _Reader:
     def fast_arc(
         self,
         number: int,
-        words: tuple[str | None, str | None, str | None, str | None, str | None],
+        nx: int | None,
+        ny: int | None,
+        nz: int | None,
+        decimals: int,
+        i: str | None,
+        j: str | None,
         motion: str,
         feed: int | None,
         per: int,
+        known: dict[str, tuple[int, int]],
     ) -> bool:
         """`fast_words` for an arc by its centre (I, J; G90.1 or G91.1) in the XY plane at
-        one depth from a known point: what `execute` and `arc` make of it when they have
-        nothing to report or refuse (`check_arc`'s tests included)."""
-        x, y, z, i, j = words
+        one depth from a known point (to `nx`, `ny`, `nz`, the file then written to
+        `decimals` places; `known`: `lengths_known(per)`): what `execute` and `arc` make of
+        it when they have nothing to report or refuse (`check_arc`'s tests included)."""
         sx, sy = self.x, self.y
         if feed is None or self.plane != "17" or sx is None or sy is None:
             return False
-        axes = self.fast_axes(x, y, z, per)
-        if axes is None:
-            return False
-        nx, ny, nz, decimals = axes
         if nx is None or ny is None or (nz is not None and self.z is not None and nz != self.z):
             return False
-        known = lengths_known(per)
         ci = cj = 0
         if i is not None:
             ci, written = known.get(i) or text_length(i, per)
@@ -874,43 +959,6 @@ class _Reader:
         self.cycle_drilled = False
         return True
 
-    def fast_axes(
-        self, x: str | None, y: str | None, z: str | None, per: int
-    ) -> tuple[int | None, int | None, int | None, int] | None:
-        """Where absolute axis words go, as `target` has it (an axis without a word stays
-        where it is), and the decimal places the file is then written to; None when a word
-        is out of `length`'s range. Changes nothing."""
-        # Written out axis by axis, not a loop over the three: this runs for nearly every
-        # line of a long file, and the loop's tuple, enumerate and list were a third of it.
-        # Without a G92 shift the remembered nm object itself is kept (one int for every
-        # repeat of a number in a long file).
-        known = lengths_known(per)
-        decimals = self.decimals
-        shift = self.shift
-        nx, ny, nz = self.x, self.y, self.z
-        if x is not None:
-            nm, written = known.get(x) or text_length(x, per)
-            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                return None
-            nx = nm + shift[0] if shift[0] else nm
-            if written > decimals:
-                decimals = written
-        if y is not None:
-            nm, written = known.get(y) or text_length(y, per)
-            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                return None
-            ny = nm + shift[1] if shift[1] else nm
-            if written > decimals:
-                decimals = written
-        if z is not None:
-            nm, written = known.get(z) or text_length(z, per)
-            if not -MAX_ABS_NM <= nm <= MAX_ABS_NM:
-                return None
-            nz = nm + shift[2] if shift[2] else nm
-            if written > decimals:
-                decimals = written
-        return nx, ny, nz, decimals
-
     def cycle_clear(self, start_z: int, r: int) -> int:
         """Where a canned cycle's hole retracts to: R (G99), or (G98) the height the tool
         was at before this series of cycles began — not the R a G99 hole before it in the
@@ -920,10 +968,11 @@ class _Reader:
         return max(self.series_z, r) if self.return_initial else r
 
     def fast_hole(
-        self, number: int, x: str | None, y: str | None, feed: int | None, per: int
+        self, number: int, nx: int | None, ny: int | None, decimals: int, feed: int | None
     ) -> bool:
         """`fast_motion` for the next hole of the canned cycle in effect (X/Y, perhaps F,
-        absolute): what `cycle` makes of it when it has nothing to report or refuse."""
+        absolute; at `nx`, `ny`, the file then written to `decimals` places): what `cycle`
+        makes of it when it has nothing to report or refuse."""
         code = self.motion
         r, bottom, start_z = self.cycle_r, self.cycle_z, self.z
         if r is None or bottom is None or start_z is None or feed is None or bottom >= r:
@@ -933,10 +982,6 @@ class _Reader:
         pecking = code == "73" or code == "83"
         if (pecking and not self.cycle_q) or self.out.dropped + len(self.steps) >= MAX_STEPS:
             return False  # (the second: `made() + 1 > MAX_STEPS`, written out for speed)
-        axes = self.fast_axes(x, y, None, per)
-        if axes is None:
-            return False
-        nx, ny, _, decimals = axes
         if nx is None or ny is None:
             return False
         self.decimals = decimals

@@ -21,13 +21,14 @@ from hypothesis import strategies as st
 from app.cnc.blocks import ArcEnd, Comp, Hole, HoleOp, MillArc, MillLine, Program
 from app.cnc.formats.gcode.reader import USUAL, text_nm, usual_words
 from app.cnc.formats.reading import ImportFailure, NoteKind, read_program
+from app.cnc.formats.targets import export
 from app.cnc.interpret import interpret
 from app.cnc.problems import Severity
 from app.cnc.toolpath import Feed
 from app.cnc.units import Units, half_even
 from app.cnc.validate import validate
 from tests.imports.support import describe_all, fixture_text
-from tests.referee import referee_import
+from tests.referee import Motion, referee_import, rs274
 
 
 def gcode(text: str) -> Program:
@@ -748,3 +749,48 @@ def test_an_arc_centre_on_a_rapid_or_a_line_is_an_error() -> None:
     assert failure(text + "G1 X0.5 Y0. J-0.5\n").startswith(
         "line 6, column 13: J with G1: a straight feed has no arc centre"
     )
+
+
+def _lowest_across(motions: list[Motion]) -> dict[tuple[float, float], float]:
+    """Each XY point a rapid goes across to after the first cut, and the lowest height a
+    rapid across to it runs at (a rapid that moves in X/Y; inches, rounded to 0.0001 in).
+    (Before it, rs274 starts both files at its machine zero, Z0.)"""
+    lowest: dict[tuple[float, float], float] = {}
+    at = (0.0, 0.0, 0.0)
+    cut = False
+    for motion in motions:
+        x, y, z = motion.end
+        cut = cut or motion.kind in "FA"
+        if cut and motion.kind == "T" and (x, y) != at[:2]:
+            point = (round(x, 4), round(y, 4))
+            lowest[point] = min(lowest.get(point, math.inf), round(min(at[2], z), 4))
+        at = motion.end
+    return lowest
+
+
+def test_a_rise_before_going_home_is_kept_no_rapid_across_is_lower(tmp_path: Path) -> None:
+    """Found in viktech/IESI `Drill5holes.nc`: each hole is drilled in two levels, the tool
+    rapids back to Z0 ("retract to clean") between them and to Z0.1 after; at the end it rises
+    to Z3 and rapids home. Data Block 0's Z RET came from the first retract (0 above Z UP
+    0): the move home (a POS) ran at Z0, across the top of the stock, where the file goes
+    across at Z3. A rapid across is never lower than the file's now: Z RET is raised to what
+    the highest one needs, and the report says so."""
+    text = (
+        "G20 G90 G17\nT1 M6\nS917 M3 F4\nG0 X0 Y0 Z0.1\nG0 X0.8 Y0.5\nG1 Z-0.125\nG0 Z0\n"
+        "G1 Z-0.25\nG0 Z0\nG0 Z0.1\nG0 X1.6 Y0.75\nG1 Z-0.125\nG0 Z0\nG1 Z-0.25\nG0 Z0\n"
+        "G0 Z0.1\nM5\nG0 Z3\nG0 X0 Y0\nM30\n"
+    )
+    result = referee_import(text.encode(), tmp_path)
+    ours = tmp_path / "ours.ngc"
+    ours.write_bytes(export(result.program, "gcode-linuxcnc", {"spindle-speeds": "by-hand"}).data)
+    theirs = _lowest_across(rs274(tmp_path / "file-original.ngc"))
+    mine = _lowest_across(rs274(ours))
+    assert theirs[(0.0, 0.0)] == 3.0
+    low = {xy: (z, mine.get(xy)) for xy, z in theirs.items() if mine.get(xy, -math.inf) < z}
+    assert not low, f"rapids across lower than the file's (point: file's, ours): {low}"
+    assert result.program.block0.z_retract == D(3)
+    assert (
+        "became: line 19: the tool goes across at Z3 in, 3 in above the operations' Z UP: "
+        "Z RET 3 in (Data Block 0; was 0 in), so that no rapid across is lower than the "
+        "file's: every operation retracts 3 in above its Z UP"
+    ) in [str(n) for n in result.report]

@@ -13,7 +13,7 @@ from app.cnc import limits
 from app.cnc.blocks import Program
 from app.cnc.recognition.build import Builder, SetUp, block0, make_program
 from app.cnc.recognition.common import ImportFailure, Notes, show
-from app.cnc.recognition.ops import HelixOp, LoopOp, Op, PosOp
+from app.cnc.recognition.ops import LoopOp, Op, z_up_of
 from app.cnc.recognition.recognise import (
     RoutineFinder,
     find_bolt_circles,
@@ -123,6 +123,8 @@ class Recognition:
         self.ops: list[Op] = []
         self.batches = 0
         self.z_retract: int | None = None
+        # The highest Z RET a rapid across asks for: (value, the rapid's line, its height).
+        self.across: tuple[int, int, int] | None = None
         self.later = Notes(labels=self.notes.labels, unit=self.notes.unit)
 
     def batch(
@@ -148,13 +150,21 @@ class Recognition:
 
     def retracts(self, retracts: list[Retract], ops: list[Op], notes: Notes) -> None:
         """Data Block 0's Z RET from the heights the tool retracts to after operations
-        (the first), and a note for each that differs."""
+        (the first), and a note for each that differs; and the Z RET the rapids across
+        after operations ask for (the highest: `program` raises Z RET to it)."""
         units = self.parsed.units
         # A retract's Z UP is its operation's: a level of pecks merged into one DRILL
         # retracts above the DRILL's Z UP, not above the level it was re-entered at.
         z_ups = _z_ups(ops)
-        for line, z_up, height in retracts:
+        for line, z_up, height, across_line, next_z_up in retracts:
             z_up = z_ups.get(line, z_up)
+            if across_line:
+                # The blocks go across at Z RET above the higher of the two operations'
+                # Z UPs (or tool zero): never lower than the file's rapid, it must be this.
+                wanted = height - max(z_up, next_z_up, 0)
+                if self.across is None or wanted > self.across[0]:
+                    self.across = (wanted, across_line, height)
+                continue
             value = height - max(z_up, 0)
             if value < 0:
                 continue
@@ -199,6 +209,20 @@ class Recognition:
                 None,
                 f"the tool starts {show(z_retract, units)} above tool zero: Z RET "
                 f"{show(z_retract, units)} (Data Block 0)",
+            )
+        if self.across is not None and self.across[0] > (z_retract or 0):
+            # One Z RET for every operation: the highest a rapid across needs, so that no
+            # rapid across is lower than the file's (a file that rises to go home at its end
+            # makes every operation retract that far).
+            value, line, height = self.across
+            was = "none" if z_retract is None else show(z_retract, units)
+            z_retract = value
+            notes.became(
+                line,
+                f"the tool goes across at Z{show(height, units)}, {show(value, units)} above "
+                f"the operations' Z UP: Z RET {show(value, units)} (Data Block 0; was {was}), "
+                "so that no rapid across is lower than the file's: every operation retracts "
+                f"{show(value, units)} above its Z UP",
             )
         for number, use in sorted(found.tools.items()):
             for line, rpm in use.other_speeds:
@@ -254,10 +278,10 @@ def _z_ups(ops: list[Op]) -> dict[int, int]:
     for op in ops:
         if isinstance(op, LoopOp):
             found |= _z_ups(op.body)
-        elif isinstance(op, HelixOp):
-            found |= dict.fromkeys(op.lines, op.z_up)
-        elif not isinstance(op, PosOp) and op.spec.z_up is not None:
-            found |= dict.fromkeys(op.lines, op.spec.z_up)
+        else:
+            z_up = z_up_of(op)
+            if z_up is not None:
+                found |= dict.fromkeys(op.lines, z_up)
     return found
 
 

@@ -181,6 +181,16 @@ def units_of(op: Op) -> Units:
     return op.spec.units
 
 
+def z_up_of(op: Op) -> int | None:
+    """An operation's Z UP (nm): None for a POS, a LOOP (its body has its own) and a
+    2-axis hole."""
+    if isinstance(op, PosOp | LoopOp):
+        return None
+    if isinstance(op, HelixOp):
+        return op.z_up
+    return op.spec.z_up
+
+
 def tool_of(op: Op) -> int:
     if isinstance(op, PosOp):
         return op.tool

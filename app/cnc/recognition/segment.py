@@ -66,6 +66,7 @@ from app.cnc.recognition.ops import (
     MillOp,
     Op,
     PosOp,
+    z_up_of,
 )
 from app.cnc.recognition.steps import (
     Arc,
@@ -112,7 +113,6 @@ CYCLE_OPS: Final[dict[int, tuple[HoleOp, str]]] = {
 
 _OTHER_CYCLE: Final = (HoleOp.DRILL, "")  # (made once: a hole is made for every Cycle)
 
-# An operation's retract: (its first line, its Z UP, the height the tool rapids up to).
 # What an operation's moves look like, where a file's are not what its block makes: the
 # start of the import's refusal (`not_ours`).
 _NOT_A_HELIX: Final = (
@@ -127,7 +127,12 @@ _NOT_A_FACE: Final = (
     "rows fed along X at one depth (as a FACE cuts them) that are not a MillBlocks FACE"
 )
 
-Retract = tuple[int, int, int]
+# An operation's retract: (its first line, its Z UP, the height the tool rapids up to,
+# 0, 0); or a rapid across after it: (the operation's first line, its Z UP, the lowest
+# height the tool goes across at, the rapid's line, the Z UP the next operation positions
+# for — 0 for a POS —). The retract gives Data Block 0's Z RET; a rapid across may raise it
+# (`Recognition.retracts`), so that the blocks never go across lower than the file.
+Retract = tuple[int, int, int, int, int]
 
 # `Segmenter.hole_spec`'s key: the HoleSpec's fields, its enums by identity.
 SpecKey = tuple[int, int | None, int | None, int | None, int, int, int]
@@ -277,6 +282,10 @@ class _Segmenter:
         self.pending: _Pending | None = None
         self.retracts: list[Retract] = []
         self.awaiting_retract: tuple[int, int] | None = None  # (line, Z UP) of the last op
+        self.last_op: tuple[int, int] | None = None  # (line, Z UP): since the last tool change
+        # A rapid across since the last operation, waiting for the operation it positions
+        # for: (the last op's line, its Z UP, the height across, the rapid's line).
+        self.across: tuple[int, int, int, int] | None = None
         self.spindle_off_line: int | None = None
         self.quill_cycle = False
         self.quill_stop: int | None = None  # 2-axis: a stop that lowers the quill
@@ -406,6 +415,9 @@ class _Segmenter:
         if moved:
             self.awaiting_retract = None
             self.flush_pending()
+            if self.last_op is not None and self.z is not None:
+                low = self.z if step.z is None else min(self.z, step.z)
+                self.across = (*self.last_op, low, step.line)
             self.pending = _Pending(step.line, (step.x, step.y), step.units, self.tool)
         self.x, self.y = step.x, step.y
         if step.z is not None:
@@ -417,10 +429,16 @@ class _Segmenter:
             self.add(HoleOpR([step.line], (step.x, step.y), spec))
             self.notes.became(step.line, "G99 quill cycle at this position: a 2-axis DRILL")
 
+    def operation_done(self, line: int, z_up: int) -> None:
+        """An operation (first line `line`, Z UP `z_up`) has been cut: the tool's next rise
+        is its retract, and its next rapids across are measured from its Z UP."""
+        self.awaiting_retract = (line, z_up)
+        self.last_op = (line, z_up)
+
     def record_retract(self, line: int, height: int) -> None:
         if self.awaiting_retract is not None:
             op_line, z_up = self.awaiting_retract
-            self.retracts.append((op_line, z_up, height))
+            self.retracts.append((op_line, z_up, height, 0, 0))
             self.awaiting_retract = None
 
     def flush_pending(self) -> None:
@@ -481,6 +499,12 @@ class _Segmenter:
                 self.message[0], f"message {op.message!r}: the MESSAGE of the next block"
             )
             self.message = None
+        if self.across is not None:
+            # The rapid across positioned for this operation: the blocks go across at its
+            # retract height or the last one's, whichever is higher.
+            op_line, z_up, height, line = self.across
+            self.retracts.append((op_line, z_up, height, line, max(z_up_of(op) or 0, 0)))
+            self.across = None
         if self.batch is not None and len(self.ops) >= BATCH_OPS:
             # Nothing changes an operation once another follows it (a STOP marks the last).
             self.batch(self.ops, self.retracts, self.tools)
@@ -655,7 +679,7 @@ class _Segmenter:
             units=units,
         )
         self.add(HelixOp(lines, centre, block, start[2]))
-        self.awaiting_retract = (line, start[2])
+        self.operation_done(line, start[2])
         self.x, self.y, self.z = x, y, z
         return j
 
@@ -846,7 +870,7 @@ class _Segmenter:
                     )
         lines = [*self.take_pending(approach0), first.line]
         self.add(HelixOp(lines, centre, block, to_nm(block.z_up, units)))
-        self.awaiting_retract = (first.line, to_nm(block.z_up, units))
+        self.operation_done(first.line, to_nm(block.z_up, units))
         last = seen[-1][2][-1]
         self.x, self.y, self.z = last.x, last.y, last.z
         return j
@@ -1025,7 +1049,7 @@ class _Segmenter:
         start = (plain[0][1], plain[0][0])
         lines = [*self.take_pending(start), first.line]
         self.add(HelixOp(lines, centre, block, z_up))
-        self.awaiting_retract = (first.line, z_up)
+        self.operation_done(first.line, z_up)
         self.x, self.y, self.z = x, y, z
         return j
 
@@ -1192,7 +1216,7 @@ class _Segmenter:
         self.add(HoleOpR(sorted(set(lines)), at, spec))
         if how:
             self.notes.assumed(lines[0], how)
-        self.awaiting_retract = (lines[0], z_up)
+        self.operation_done(lines[0], z_up)
         return j
 
     def mill_sequence(
@@ -1292,7 +1316,7 @@ class _Segmenter:
                 spec = self.hole_spec(HoleOp.DRILL, z_up, part.depth, feed_z, 1, self.tool, units)
                 part_lines = sorted({e.line for e in part.elements})
             self.add(MillOp(part_lines, part.at, spec, part.comp, part.elements))
-        self.awaiting_retract = (lines[0], z_up)
+        self.operation_done(lines[0], z_up)
         return j
 
     def two_axis_sequence(self, i: int) -> int:
@@ -1386,8 +1410,9 @@ class _Segmenter:
         self.add(HoleOpR(lines, at, spec))
         if how:
             self.notes.assumed(step.line, how)
-        self.retracts.append((step.line, step.r, step.clear))
+        self.retracts.append((step.line, step.r, step.clear, 0, 0))
         self.awaiting_retract = None
+        self.last_op = (step.line, step.r)
         self.x, self.y, self.z = step.x, step.y, step.clear
 
     # -- spindle, tools, stops ---------------------------------------------------------------
@@ -1425,6 +1450,10 @@ class _Segmenter:
             self.first_tool = step.tool
         self.tool = step.tool
         self.tools.setdefault(step.tool, ToolUse())
+        # A new tool's Z words are its own (G43): its first rapids are not measured against
+        # the last tool's operation (the export rises at a tool change, as at the start).
+        self.last_op = None
+        self.across = None
         self.spindle_cw = None
 
     def stop(self, i: int) -> int:

@@ -283,6 +283,10 @@ class _Segmenter:
         self.retracts: list[Retract] = []
         self.awaiting_retract: tuple[int, int] | None = None  # (line, Z UP) of the last op
         self.last_op: tuple[int, int] | None = None  # (line, Z UP): since the last tool change
+        # The height the last operation left the tool at (a TAP feeds out above Z UP), once
+        # the next step shows it: the blocks leave from there too.
+        self.left_at: int | None = None
+        self.leaving = False
         # A rapid across since the last operation, waiting for the operation it positions
         # for: (the last op's line, its Z UP, the height across, the rapid's line).
         self.across: tuple[int, int, int, int] | None = None
@@ -397,6 +401,7 @@ class _Segmenter:
 
     def rapid(self, step: Rapid) -> None:
         moved = step.x != self.x or step.y != self.y
+        self.left(self.z)
         if step.z is not None and self.z is not None and step.z > self.z and not moved:
             self.record_retract(step.line, step.z)
             if self.pending is not None:
@@ -415,8 +420,13 @@ class _Segmenter:
         if moved:
             self.awaiting_retract = None
             self.flush_pending()
-            if self.last_op is not None and self.z is not None:
-                low = self.z if step.z is None else min(self.z, step.z)
+            low = self.z if step.z is None or self.z is None else min(self.z, step.z)
+            if (
+                self.last_op is not None
+                and low is not None
+                and (self.left_at is None or low > self.left_at)
+            ):
+                # Across higher than the operation left the tool: the file rose first.
                 self.across = (*self.last_op, low, step.line)
             self.pending = _Pending(step.line, (step.x, step.y), step.units, self.tool)
         self.x, self.y = step.x, step.y
@@ -434,6 +444,12 @@ class _Segmenter:
         is its retract, and its next rapids across are measured from its Z UP."""
         self.awaiting_retract = (line, z_up)
         self.last_op = (line, z_up)
+        self.leaving = True
+
+    def left(self, z: int | None) -> None:
+        """The first move after an operation starts from `z`: where it left the tool."""
+        if self.leaving:
+            self.left_at, self.leaving = z, False
 
     def record_retract(self, line: int, height: int) -> None:
         if self.awaiting_retract is not None:
@@ -536,6 +552,7 @@ class _Segmenter:
                 step.line,
                 f"feed up to Z{show(step.z, step.units)} with no cut: MillBlocks retracts at rapid",
             )
+            self.left(self.z)
             self.record_retract(step.line, step.z)
             self.z = step.z
             return i + 1
@@ -1413,6 +1430,7 @@ class _Segmenter:
         self.retracts.append((step.line, step.r, step.clear, 0, 0))
         self.awaiting_retract = None
         self.last_op = (step.line, step.r)
+        self.left_at, self.leaving = step.clear, False
         self.x, self.y, self.z = step.x, step.y, step.clear
 
     # -- spindle, tools, stops ---------------------------------------------------------------

@@ -938,9 +938,13 @@ def _tape(
     tape = Tape(program, path, get_target("tape-eia").parse_options(options), code, report)
     tape.planner.runs = runs
     with mock.patch.object(plan, "_MIN_RUN_ROWS", fewest):
-        texts = [text for part in tape.image.listing(tape.lines()) for text in part]
+        # The listing's lines as written (a run's blocks come as the lines of one text).
+        texts = "\n".join(text for part in tape.image.listing(tape.lines()) for text in part)
     tape.finish()
-    return texts, [(entry.severity, entry.block, entry.message) for entry in report.entries]
+    entries: list[tuple[object, int | None, str]] = [
+        (entry.severity, entry.block, entry.message) for entry in report.entries
+    ]
+    return texts.split("\n"), entries
 
 
 @settings(max_examples=60, deadline=None)

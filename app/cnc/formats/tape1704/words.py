@@ -909,10 +909,6 @@ class Words:
         return str(value).zfill(self.feed_fill())
 
 
-_POWERS = np.array([10**k for k in range(1, 19)], dtype=np.int64)
-"""10, 100, … 10^18: how many digits a number has is 1 + how many of these it reaches."""
-
-
 def _word_matrix(
     letter: str,
     values: npt.NDArray[np.int64],
@@ -920,35 +916,38 @@ def _word_matrix(
     fill: int,
     joiner: str,
 ) -> npt.NDArray[np.uint8]:
-    """A column of blocks' words as ASCII bytes, a row each: `joiner`, `letter`, a minus
-    sign when the value is negative and its digits, at least `fill` of them (leading zeros
-    up to `fill`, as `Words.digits`), where written; NUL in the gaps (and in a row not
-    written), which `_joined_rows` drops. Made a column of digits at a time, not a string
-    a word."""
+    """A column of blocks' words as ASCII bytes, transposed: a row per character place,
+    a column per block. Each word is `joiner`, `letter`, a minus sign when the value is
+    negative and its digits, at least `fill` of them (leading zeros up to `fill`, as
+    `Words.digits`), where written; NUL in the gaps (and where not written), which
+    `_joined_rows` drops. Made a place at a time, not a string a word (issue 31)."""
     count = len(values)
     size = np.abs(values)
-    # How many digits each word has (none where not written).
-    needed = np.where(
-        written, np.maximum(1 + np.searchsorted(_POWERS, size, side="right"), fill), 0
-    )
-    digits = int(needed.max()) if count else 0
+    top = int(size.max()) if count else 0
+    digits = max(fill, len(str(top)))
+    # Unsigned: numpy divides those by a constant several times faster than by divmod.
+    rest = np.where(written, size, 0).astype(np.uint32 if top < 2**32 else np.uint64)
+    mark = written.view(np.uint8)
     negative = written & (values < 0)
     signed = bool(negative.any())
     head = joiner + letter
     start = len(head) + signed
-    matrix = np.zeros((count, start + digits), dtype=np.uint8)
+    places = np.empty((start + digits, count), dtype=np.uint8)
     for k, character in enumerate(head):
-        matrix[:, k] = written * np.uint8(ord(character))
+        np.multiply(mark, ord(character), out=places[k])
     if signed:
-        matrix[:, len(head)] = negative * np.uint8(ord("-"))
-    rest = size
-    for k in range(digits):  # from the right
-        rest, digit = np.divmod(rest, 10)
-        column = digit.astype(np.uint8)
-        column += ord("0")
-        column *= needed > k
-        matrix[:, -1 - k] = column
-    return matrix
+        np.multiply(negative.view(np.uint8), ord("-"), out=places[len(head)])
+    for k in range(digits):  # from the last digit
+        place = places[start + digits - 1 - k]
+        # A digit is written up to `fill` and while digits are left (a value not written
+        # is 0 here: it has none left after its first, which `mark` leaves out).
+        shown = mark if k < fill else (rest != 0).view(np.uint8)
+        quotient = rest // 10
+        np.subtract(rest, quotient * 10, out=place, casting="unsafe")
+        place += ord("0")
+        place *= shown
+        rest = quotient
+    return places
 
 
 def _joined_rows(
@@ -958,9 +957,9 @@ def _joined_rows(
     string, a newline after each block but the last, each block's `joiner` before its first
     word dropped, `carried` (words after `joiner`) after the first block's words; and where
     each block's text starts in it and its length."""
-    count = len(columns[0])
-    newlines = np.full((count, 1), ord("\n"), dtype=np.uint8)
-    table = np.concatenate([*columns, newlines], axis=1)
+    count = columns[0].shape[1]
+    newlines = np.full((1, count), ord("\n"), dtype=np.uint8)
+    table = np.ascontiguousarray(np.concatenate([*columns, newlines]).T)
     if joiner:
         # The joiner goes between words: drop each block's first (none in an empty block).
         first = np.argmax(table != 0, axis=1)

@@ -243,35 +243,46 @@ class Rounder:
         if z is not None:
             moved |= z != np.concatenate(([pos[2] or 0], z[:-1]))  # pos[2] is known (above)
         moved[arcs] = True
-        pieces: list[list[tuple[int, int]]] = []
         arc_rows = moving[arcs]
         # An arc's quadrant ends depend only on where its start and end are from its
         # centre (exact integers): the arcs of a pattern (one shape in many places) are
         # split once, each then moved to its centre.
-        shapes: dict[tuple[int, int, int, int, bool, bool], list[tuple[int, int]]] = {}
-        # Scalars from lists (not numpy's, one at a time): a CAM file's run has 10^4 arcs.
-        for bx, by, ex, ey, ox, oy, clockwise, full_circle in zip(
-            (sx[arcs] - cx).tolist(),
-            (sy[arcs] - cy).tolist(),
-            (x[arcs] - cx).tolist(),
-            (y[arcs] - cy).tolist(),
-            cx.tolist(),
-            cy.tolist(),
-            run.clockwise[arc_rows].tolist(),
-            run.full[arc_rows].tolist(),
-            strict=True,
-        ):
-            key = (bx, by, ex, ey, clockwise, full_circle)
-            shape = shapes.get(key)
-            if shape is None:
-                # split_arc's refusals (a radius past the capacity, none, no sweep) go
-                # one by one.
-                radius = round(math.hypot(bx, by))
-                if radius > limit or radius == 0 or (ex == bx and ey == by and not full_circle):
-                    return None
-                shape = quadrant_ends((bx, by), (ex, ey), (0, 0), radius, clockwise, full_circle)
-                shapes[key] = shape
-            pieces.append([(ox + px, oy + py) for px, py in shape])
+        shapes, which = np.unique(
+            np.stack(
+                [
+                    sx[arcs] - cx,
+                    sy[arcs] - cy,
+                    x[arcs] - cx,
+                    y[arcs] - cy,
+                    run.clockwise[arc_rows],
+                    run.full[arc_rows],
+                ],
+                axis=1,
+            ),
+            axis=0,
+            return_inverse=True,
+        )
+        split: list[list[tuple[int, int]]] = []
+        for bx, by, ex, ey, clockwise, full_circle in shapes.tolist():
+            # split_arc's refusals (a radius past the capacity, none, no sweep) go one by
+            # one.
+            radius = round(math.hypot(bx, by))
+            if radius > limit or radius == 0 or (ex == bx and ey == by and not full_circle):
+                return None
+            split.append(
+                quadrant_ends(
+                    (bx, by), (ex, ey), (0, 0), radius, bool(clockwise), bool(full_circle)
+                )
+            )
+        # Each arc's points: its shape's, moved to its centre.
+        which = which.reshape(-1)
+        sizes = np.array([len(points) for points in split], dtype=np.int64)
+        per_arc = sizes[which]
+        firsts = np.cumsum(sizes) - sizes
+        to_each = np.cumsum(per_arc) - per_arc
+        taken = np.repeat(firsts[which] - to_each, per_arc) + np.arange(int(per_arc.sum()))
+        points = np.array([point for points in split for point in points], dtype=np.int64)
+        ends = points.reshape(-1, 2)[taken] + np.repeat(np.stack([cx, cy], axis=1), per_arc, axis=0)
         restart = run.restart or self.carry_restart
         if restart and run.kind[0] == DWELL:
             return None  # Words.lines restarts the motion mode on a run's first row only
@@ -288,7 +299,7 @@ class Rounder:
         # The run's rows again, each kept motion once and each arc once a quadrant.
         count = np.ones(len(run), dtype=np.int64)
         count[moving[~moved]] = 0
-        count[arc_rows] = [len(points) for points in pieces]
+        count[arc_rows] = per_arc
         rows = np.repeat(np.arange(len(run)), count)
         out = run.take(rows, restart)
         xs = np.zeros(len(run), dtype=np.int64)
@@ -313,7 +324,6 @@ class Rounder:
             is_arc = np.zeros(len(run), dtype=np.bool_)
             is_arc[arc_rows] = True
             slots = np.flatnonzero(is_arc[rows])
-            ends = np.array([point for points in pieces for point in points], dtype=np.int64)
             at_x, at_y = out.x.copy(), out.y.copy()
             at_x[slots], at_y[slots] = ends[:, 0], ends[:, 1]
             out.x, out.y = at_x, at_y
@@ -845,29 +855,30 @@ class Words:
         squares = dx[:count] ** 2 + dy[:count] ** 2 + dz[:count] ** 2
         length[lines] = np.sqrt(squares[lines].astype(np.float64)) * fmt.digit_nm / fmt.unit_nm
         # The arcs' lengths as `motion_length` has them (the same floats as a block
-        # written alone), from lists: a long CAM file's run has 10^4 arcs. A length
-        # depends only on where the arc's ends are from its centre (exact integers): each
-        # shape of a pattern's arcs is measured once.
+        # written alone). A length depends only on where the arc's ends are from its
+        # centre (exact integers): each shape of a pattern's arcs is measured once.
         curved = np.flatnonzero(continuous & arc[:count])
         digit_nm, unit_nm = fmt.digit_nm, fmt.unit_nm
         ocx, ocy = run.cx[curved], run.cy[curved]
-        lengths: dict[tuple[int, int, int, int, bool], float] = {}
-        measured: list[float] = []
-        for shape in zip(
-            (sx[curved] - ocx).tolist(),
-            (sy[curved] - ocy).tolist(),
-            (x[curved] - ocx).tolist(),
-            (y[curved] - ocy).tolist(),
-            run.clockwise[curved].tolist(),
-            strict=True,
-        ):
-            known = lengths.get(shape)
-            if known is None:
-                bx, by, ax, ay, cw = shape
-                known = arc_length((bx, by), (ax, ay), (0, 0), cw) * digit_nm / unit_nm
-                lengths[shape] = known
-            measured.append(known)
-        length[curved] = measured
+        shapes, which = np.unique(
+            np.stack(
+                [
+                    sx[curved] - ocx,
+                    sy[curved] - ocy,
+                    x[curved] - ocx,
+                    y[curved] - ocy,
+                    run.clockwise[curved],
+                ],
+                axis=1,
+            ),
+            axis=0,
+            return_inverse=True,
+        )
+        measured = [
+            arc_length((bx, by), (ax, ay), (0, 0), bool(cw)) * digit_nm / unit_nm
+            for bx, by, ax, ay, cw in shapes.tolist()
+        ]
+        length[curved] = np.array(measured, dtype=np.float64)[which.reshape(-1)]
         last = count - 1
         self.g = f"{int(gcode[last]):02d}" if moving[last] else None
         motion = int(last_motion[last])

@@ -127,7 +127,7 @@ def test_a_zero_k_in_an_xy_arc_is_reported_and_changes_nothing(tmp_path: Path) -
     result = referee_import(
         text.encode(), tmp_path, as_rs274_reads=text.replace(" K0.000", "").encode()
     )
-    assert "ignored: line 8: K0.000 in an XY (G17) arc: not used" in [str(n) for n in result.report]
+    assert "ignored: line 8: K0.000: no code on the line uses it" in [str(n) for n in result.report]
     assert any(isinstance(b, MillArc) for b in result.program.blocks)
 
 

@@ -1811,14 +1811,12 @@ class _Reader:
         # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
         # block, or a refusal naming the line) is the segmenter's (app.cnc.recognition.segment).
         k = block.get("K")
-        if k is not None:
-            if k.value != 0:
-                raise failure(
-                    line, k.column, f"K{k.text} in an XY (G17) arc: only I and J give its centre"
-                )
-            # FreeCAD's grbl post writes K0.000 in every G17 arc; grbl ignores it, and a
-            # zero changes nothing (rs274 refuses any K here).
-            self.notes.ignored(line, f"K{k.text} in an XY (G17) arc: not used")
+        # FreeCAD's grbl post writes K0.000 in every G17 arc; grbl ignores it, and a zero
+        # changes nothing (rs274 refuses any K here): `unused` reports it.
+        if k is not None and k.value != 0:
+            raise failure(
+                line, k.column, f"K{k.text} in an XY (G17) arc: only I and J give its centre"
+            )
         sx = self.x if self.x is not None else 0
         sy = self.y if self.y is not None else 0
         i_word, j_word, r_word = block.get("I"), block.get("J"), block.get("R")

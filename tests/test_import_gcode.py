@@ -387,6 +387,25 @@ def test_the_one_work_offset_the_file_gives_is_part_zero_on_the_table() -> None:
     )
 
 
+def test_a_feed_past_the_control_s_range_is_cut_at_its_end() -> None:
+    """enier290188/cnc src/mill/240811/square-block-face-4-and-5.nc plunges `G01 Z-1.0
+    F108.0` and feeds across at it: the import said nothing, and the export refused "block
+    5, FEEDR XY: 108.0 ipm is outside the allowed range" — a program held that could not
+    be exported. As pecks past 40 and tools past 24, the feed is brought inside the
+    control's range and reported at its F word; down in Z 108 ipm is within FEEDR Z."""
+    text = "G20\nT1 M6\nS1000 M3\nG0 X6.5 Y1.5 Z0.1\nG01 Z-1.0 F108.0\nY-3.0\nG0 Z1\nM30\n"
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == [
+        "DRILL X6.5 Y1.5 Z0.1/-1 F108 T1",
+        "MILL STD X6.5 Y-3 F100",
+    ]
+    assert (
+        "assumed: line 5: F108.0 (column 11): 108 ipm across is outside FEEDR XY's 0.1 to 100 "
+        "ipm, the control's: cut at 100 ipm"
+    ) in [str(n) for n in result.report]
+    assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
+
+
 def test_two_axis_gcode_stops_are_the_quill() -> None:
     """Z never moves: a 2-axis program. A position where the program stops (M0) is a hole
     made by hand (DRILL without depths); M0, cuts, M0 is a mill sequence with its quill

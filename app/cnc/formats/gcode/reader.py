@@ -22,6 +22,8 @@ stop). Readings where the dialects differ or the seed is vague (docs/imports.md)
   gives: the same, reported); where it does not, that system's first move is refused at
   the G code choosing it (the values are only on the machine's offset table). A G10 L2
   value of the system holding part zero is Data Block 0 X/Y (part zero on the table).
+- **A feed outside FEEDR XY / FEEDR Z** (app.cnc.limits): cut at the nearest end of the
+  range, reported at the F word (`need_feed`).
 - **G28/G30** with axis words: the tool goes to the intermediate point (imported as a
   move); the return on to the machine's home, which the file does not give, is not.
 - **G04 P**: seconds (LinuxCNC); in a Fanuc-style `G04 P800` (two-digit code, no point)
@@ -63,7 +65,9 @@ from app.cnc.recognition.common import (
     arc_end_off,
     check_digits,
     failure,
+    feed_nm,
     show,
+    show_feed,
     split_lines,
     text_lines,
 )
@@ -229,6 +233,11 @@ LINEAR: Final = frozenset({"0", "1"})
 # The G words `fast_words` takes, as written, and their code.
 MOTION_CODES: Final = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
 NO_CODES: dict[str, Word] = {}
+# The control's FEEDR XY and FEEDR Z ranges in nm/min (app.cnc.limits).
+FEEDS_ACROSS: Final = {
+    u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_XY.items()
+}
+FEEDS_DOWN: Final = {u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_Z.items()}
 # The work offsets' codes, systems 1-9 (G10 L2/L20 P1-P9).
 SYSTEM_CODES: Final = ("54", "55", "56", "57", "58", "59", "59.1", "59.2", "59.3")
 # The letters a word may have, either case, to the upper case (O: the careful reader).
@@ -583,6 +592,7 @@ class _Reader:
         self.undecided: tuple[ImportFailure, tuple[int, int] | None] | None = None
         self.return_initial = True
         self.feed: int | None = None
+        self.feed_at = (0, 0, "")  # line, column and number of the F word giving `feed`
         self.speed: int | None = None
         self.spindle: bool | None = None  # True clockwise, False counter-clockwise
         self.selected_tool: int | None = None
@@ -870,6 +880,10 @@ class _Reader:
             feed = (known.get(f) or text_length(f, per))[0]
             if feed <= 0 and not is_positive(f):  # (more than 0 nm: more than 0)
                 return False
+        if feed is not None:
+            low, high = FEEDS_ACROSS[units]
+            if not low <= feed <= high:
+                return False  # (`need_feed` reports it, at the F word's column)
         # Where the axis words go, for a line, an arc or a hole alike, as `target` has it
         # (an axis without a word stays where it is), and the decimal places the file is
         # then written to; a word out of `length`'s range is `execute`'s to refuse. Written
@@ -1151,6 +1165,7 @@ class _Reader:
             if not is_positive(f.text):
                 raise failure(line, f.column, f"F{f.text}: a feed must be more than 0")
             self.feed = self.rate(f)
+            self.feed_at = (line, f.column, f.text)
         s = block.get("S")
         if s is not None:
             self.speed = self.integer(s, block, 0, 100_000)
@@ -1262,6 +1277,7 @@ class _Reader:
             if not is_positive(f.text):
                 raise failure(block.line, f.column, f"F{f.text}: a feed must be more than 0")
             self.feed = self.rate(f)
+            self.feed_at = (block.line, f.column, f.text)
         if codes:
             motion_word = codes.get("0") or codes["1"]
             self.set_motion(block, motion_word, False)
@@ -1909,7 +1925,7 @@ class _Reader:
             self.steps.append(Rapid(line, x, y, z, units))
             self.moves_made = True
         elif motion == "1":
-            feed = self.need_feed(block)
+            feed = self.need_feed(block, (x, y) != (self.x, self.y))
             self.steps.append(Feed(line, x, y, z, feed, units, self.comp, self.comp_tool))
             self.moves_made = True
         else:
@@ -1931,10 +1947,27 @@ class _Reader:
         elif to != at:
             raise error
 
-    def need_feed(self, block: Block) -> int:
-        if self.feed is None:
+    def need_feed(self, block: Block, across: bool = True) -> int:
+        """The feed of a move (nm/min) across X/Y (`across`) or in Z alone, within the
+        control's FEEDR XY or FEEDR Z: one outside is cut at the nearest end of that range
+        (as pecks past 40 are drilled as 40), reported at its F word."""
+        feed = self.feed
+        if feed is None:
             raise failure(block.line, block.words[0].column, "a feed move with no F given yet")
-        return self.feed
+        units = self.current_units()
+        low, high = (FEEDS_ACROSS if across else FEEDS_DOWN)[units]
+        if low <= feed <= high:
+            return feed
+        cut = high if feed > high else low
+        line, column, text = self.feed_at
+        limit = (limits.FEED_XY if across else limits.FEED_Z)[units]
+        self.notes.assumed(
+            line,
+            f"F{text} (column {column}): {show_feed(feed, units)} {'across' if across else 'in Z'}"
+            f" is outside FEEDR {'XY' if across else 'Z'}'s {limit.low} to {limit.high} "
+            f"{units.feed_symbol}, the control's: cut at {show_feed(cut, units)}",
+        )
+        return cut
 
     def arc(self, block: Block, x: int, y: int, z: int | None, clockwise: bool) -> None:
         line = block.line
@@ -2058,7 +2091,7 @@ class _Reader:
         if bottom >= r:
             where = z_word or r_word or block.words[0]
             raise failure(line, where.column, f"G{code}: Z is not below R")
-        feed = self.need_feed(block)
+        feed = self.need_feed(block, False)
         peck = 0
         if code in ("73", "83"):
             if not self.cycle_q:

@@ -1090,16 +1090,26 @@ class _Reader:
             raise failure(number, pos + 1, "an O-word (O number or subroutine) must begin its line")
         if letter not in ALLOWED and letter not in POLAR:
             raise failure(number, pos + 1, f"'{ch}' is not a G-code word letter")
+        end = match.end() if match is not None else pos + 1
+        text = match.group() if match is not None else ""
+        if end < len(line) and line[end] in " \t":
+            # Blanks inside a word mean nothing, as to LinuxCNC (`G3 I -20`, `X 1. 5`):
+            # the word goes on past them while digits (or a first sign) follow.
+            text, end = spaced_number(line, pos + 1)
+            match = NUMBER.fullmatch(text)
         if match is None:
             after = line[pos + 1 : pos + 4]
-            if after[:1] in ("#", "[") and not self.expanding:
+            rest = line[pos + 1 :].lstrip(" \t").lower()
+            if not self.expanding and (
+                rest[:1] in ("#", "[") or any(rest.startswith(f + "[") for f in ngc.FUNCTIONS)
+            ):
                 raise FrontEnd
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
-        if not check_digits(digit_text(match.group())):
-            raise failure(number, pos + 2, f"{letter}{match.group()}: too many digits")
-        words.append(Word(letter, match.group(), pos + 1))
-        return match.end()
+        if not check_digits(digit_text(text)):
+            raise failure(number, pos + 2, f"{letter}{text}: too many digits")
+        words.append(Word(letter, text, pos + 1))
+        return end
 
     def title(self, number: int, comment: str) -> None:
         match = HEADER.match(comment)
@@ -1143,6 +1153,20 @@ class _Reader:
             )
         return int(value)
 
+    def rpm(self, word: Word, block: Block) -> int:
+        """An S word in whole rpm, the control's resolution: a fraction (a CAM's S4696.94)
+        is rounded, as LinuxCNC's spindle takes it, with a note at its line. Raises
+        ImportFailure for a speed outside 0-100000 rpm."""
+        text = word.text
+        if not (text.isdigit() and text.isascii()) and word.value.to_integral_value() != word.value:
+            rounded = word.value.to_integral_value()  # (half even, as Decimal rounds)
+            if 0 <= rounded <= 100_000:
+                self.notes.rounded(
+                    block.line, f"S{text} → S{rounded}: the control's spindle speed is whole rpm"
+                )
+                return int(rounded)
+        return self.integer(word, block, 0, 100_000)
+
     # -- a block ----------------------------------------------------------------------------
 
     def execute(self, block: Block) -> None:
@@ -1168,7 +1192,7 @@ class _Reader:
             self.feed_at = (line, f.column, f.text)
         s = block.get("S")
         if s is not None:
-            self.speed = self.integer(s, block, 0, 100_000)
+            self.speed = self.rpm(s, block)
             if self.spindle is not None and not any(c in ("3", "4", "5") for _, c in m_codes):
                 self.steps.append(SpindleOn(line, self.speed, self.spindle))
         t = block.get("T")
@@ -1984,8 +2008,12 @@ class _Reader:
         # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
         # block, or a refusal naming the line) is the segmenter's (app.cnc.recognition.segment).
         k = block.get("K")
-        if k is not None:
-            raise failure(line, k.column, "K in an XY arc")
+        # FreeCAD's grbl post writes K0.000 in every G17 arc; grbl ignores it, and a zero
+        # changes nothing (rs274 refuses any K here): `unused` reports it.
+        if k is not None and k.value != 0:
+            raise failure(
+                line, k.column, f"K{k.text} in an XY (G17) arc: only I and J give its centre"
+            )
         sx = self.x if self.x is not None else 0
         sy = self.y if self.y is not None else 0
         i_word, j_word, r_word = block.get("I"), block.get("J"), block.get("R")
@@ -2117,6 +2145,27 @@ class _Reader:
         self.x, self.y, self.z = hx, hy, clear
         self.moved = True
         self.cycle_drilled = True
+
+
+def spaced_number(line: str, start: int) -> tuple[str, int]:
+    """The number written from `start` in `line` with the blanks inside it taken out
+    (a sign first, then digits and a point), and where it ends: `(' -2', 1)` of `'I -20'`
+    is `('-20', 5)`. The text may not be a number (`'-'`, `'1.2.'`): the caller checks."""
+    chars: list[str] = []
+    end = start
+    pos = start
+    n = len(line)
+    while pos < n:
+        ch = line[pos]
+        if ch in " \t":
+            pos += 1
+            continue
+        if not (ch in "0123456789." or (ch in "+-" and not chars)):
+            break
+        chars.append(ch)
+        pos += 1
+        end = pos
+    return "".join(chars), end
 
 
 def decimal_nm(text: str, units: Units) -> int:

@@ -318,6 +318,95 @@ def test_set_up_words_fill_data_block_0() -> None:
     )
 
 
+# Work offsets. A fixture program (LinuxCNC's nc_files/mmount.ngc selects G55/G56/G57, one
+# per station; stcline/CNC_Training NC_Files/Writing_A_Program_Example.nc cuts in G55)
+# switches G54-G59.3 between cuts; LinuxCNC's tests/interp/g10/g10-l2-while-active/test.ngc
+# sets the offsets with G10 L2.
+FIXTURES = (
+    "G20 G17 G90 G40 G80\n{setup}T1 M6\nS1000 M3\nG54\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\n"
+    "G1 X1\nG0 Z0.1\nG55\nG0 X0 Y0\nG1 Z-0.1 F5\nG1 X1 Y1\nG0 Z0.1\nM30\n"
+)
+
+
+def test_two_fixtures_whose_offsets_are_not_in_the_file_are_refused() -> None:
+    """A G54 cut, then a G55 cut at the same coordinates: both were read in G54, the first
+    part cut twice and the second not at all (only `G55: coordinates read as part
+    coordinates` said so). Where G55 is from G54 is on the machine's offset table: the
+    G55 is refused, naming it."""
+    assert failure(FIXTURES.format(setup="")) == (
+        "line 9, column 1: G55: a second work offset; part zero is G54's (the moves from "
+        "line 5) and where G55's zero is from it is on the machine's offset table, not in "
+        "the file (give both with G10 L2, or import each fixture's moves on their own)"
+    )
+    # Back in G54 before the next move: nothing is cut in G55, nothing to refuse.
+    assert describe_all(gcode(FIXTURES.format(setup="").replace("G55\n", "G55\nG54\n")))[:2] == [
+        "DRILL X0 Y0 Z0.1/-0.1 F5 T1",
+        "MILL STD X1 Y0 F5",
+    ]
+
+
+def test_fixture_offsets_the_file_gives_are_applied() -> None:
+    """G10 L2 P1/P2 give both fixtures' zeros (G10 L2 was "ignored: G10 with this L/P"): the
+    G55 cut is moved by G55's zero from G54's, where rs274 cuts it (its SET_G5X_OFFSET);
+    G10 L20 (the tool's point made a system's zero) alike."""
+    text = FIXTURES.format(setup="G10 L2 P1 X0 Y0\nG10 L2 P2 X3 Y0.5\n")
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == [
+        "DRILL X0 Y0 Z0.1/-0.1 F5 T1",
+        "MILL STD X1 Y0 F5",
+        "DRILL X3 Y0.5 Z0.1/-0.1 F5 T1",
+        "MILL STD X4 Y1.5 F5",
+    ]
+    assert "assumed: line 11: G55: its Z zero read as G54's (neither is in the file)" in [
+        str(n) for n in result.report
+    ]
+    l20 = (
+        "G20\nT1 M6\nS1000 M3\nG0 X2 Y2 Z0.1\nG10 L20 P1 X0 Y0\nG0 X0 Y0\nG1 Z-0.1 F5\n"
+        "G1 X1 Y0\nG0 Z0.1\nM30\n"
+    )
+    assert describe_all(gcode(l20)) == ["DRILL X2 Y2 Z0.1/-0.1 F5 T1", "MILL STD X3 Y2 F5"]
+
+
+def test_the_one_work_offset_the_file_gives_is_part_zero_on_the_table() -> None:
+    """`G10 L2 P2 X1 Y0.5` then G55 throughout: G55's zero is part zero, on the table at X1
+    Y0.5 (Data Block 0), as G10 L2 P1 for G54; the blocks keep the file's coordinates. A
+    rotated system (G10 L2 R) is refused."""
+    text = (
+        "G20\nT1 M6\nS1000 M3\nG10 L2 P2 X1.0 Y0.5\nG55\nG0 X0 Y0 Z0.1\nG1 Z-0.1 F5\n"
+        "G1 X1 Y0\nG0 Z0.1\nM30\n"
+    )
+    result = read_program(text.encode(), "t", "gcode")
+    db0 = result.program.block0
+    assert (db0.x_offset, db0.y_offset) == (D("1"), D("0.5"))
+    assert describe_all(result.program)[:1] == ["DRILL X0 Y0 Z0.1/-0.1 F5 T1"]
+    assert (
+        "became: line 6: G55 holds part zero: its zero on the table, as the file's G10 gives "
+        "it, is Data Block 0 X, Y"
+    ) in [str(n) for n in result.report]
+    assert failure(text.replace("Y0.5\n", "Y0.5 R45\n")) == (
+        "line 4, column 21: G10 L2 R: a rotated coordinate system is not supported"
+    )
+
+
+def test_a_feed_past_the_control_s_range_is_cut_at_its_end() -> None:
+    """enier290188/cnc src/mill/240811/square-block-face-4-and-5.nc plunges `G01 Z-1.0
+    F108.0` and feeds across at it: the import said nothing, and the export refused "block
+    5, FEEDR XY: 108.0 ipm is outside the allowed range" — a program held that could not
+    be exported. As pecks past 40 and tools past 24, the feed is brought inside the
+    control's range and reported at its F word; down in Z 108 ipm is within FEEDR Z."""
+    text = "G20\nT1 M6\nS1000 M3\nG0 X6.5 Y1.5 Z0.1\nG01 Z-1.0 F108.0\nY-3.0\nG0 Z1\nM30\n"
+    result = read_program(text.encode(), "t", "gcode")
+    assert describe_all(result.program) == [
+        "DRILL X6.5 Y1.5 Z0.1/-1 F108 T1",
+        "MILL STD X6.5 Y-3 F100",
+    ]
+    assert (
+        "assumed: line 5: F108.0 (column 11): 108 ipm across is outside FEEDR XY's 0.1 to 100 "
+        "ipm, the control's: cut at 100 ipm"
+    ) in [str(n) for n in result.report]
+    assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
+
+
 def test_two_axis_gcode_stops_are_the_quill() -> None:
     """Z never moves: a 2-axis program. A position where the program stops (M0) is a hole
     made by hand (DRILL without depths); M0, cuts, M0 is a mill sequence with its quill

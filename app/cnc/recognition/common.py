@@ -262,11 +262,18 @@ def show_feed(nm_per_min: int, units: Units) -> str:
 _CONTROL: Final = re.compile("[\x00-\x08\x0b\x0e-\x1f]")
 
 
+# What may pad a text file's end and is not part of it: an old DOS editor's end-of-file
+# mark (Ctrl-Z, 0x1A) and NULs (a tape's trailer, a transfer's block filled out). Every
+# text import reads the file without them (`text_of`, `byte_lines`, `decode_text`).
+PADDING: Final = b"\x1a\x00"
+
+
 def text_of(data: bytes) -> str | None:
     """`data` decoded, when it is UTF-8 text without NULs or control characters (but
-    tab/CR/LF/FF): a file to read as text, not a punch image; else None."""
+    tab/CR/LF/FF, and the PADDING at its end): a file to read as text, not a punch image;
+    else None."""
     try:
-        text = data.decode("utf-8")
+        text = data.rstrip(PADDING).decode("utf-8")
     except UnicodeDecodeError:
         return None
     # One search in C: testing each character in Python took 0.4 s for 10^5 lines.
@@ -361,7 +368,7 @@ def _byte_lines(data: bytes, start: int, n: int, final: bool) -> Iterator[str]:
             start = lf + 1
         else:
             if final:
-                yield data[start:n].decode("utf-8")
+                yield data[start:n].rstrip(PADDING).decode("utf-8")
             return
 
 
@@ -397,7 +404,7 @@ def decode_text(data: bytes) -> str:
     """The file as text. Raises ImportFailure naming line and column of a byte that is not
     UTF-8."""
     try:
-        return data.decode("utf-8").lstrip("\ufeff")
+        return data.rstrip(PADDING).decode("utf-8").lstrip("\ufeff")
     except UnicodeDecodeError as exc:
         before = data[: exc.start]
         line = before.count(b"\n") + 1

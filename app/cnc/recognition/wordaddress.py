@@ -11,9 +11,10 @@ Only in G-code: lower-case letters, word letters the 1704 lacks (O P Q H D L …
 different G or M codes in one block, G codes the 1704 lacks (G17, G21, G28, G40-G43, G54,
 G92 …), S or T words longer than the 1704's two digits, G4 with P, a decimal point where
 the 1704's 2.4 / 3.3 formats would not put it (the 1704 ignores points, so X1.5 is 0.0015 in
-there), a block-delete slash.
+there), a block-delete slash, words of text after a `;` (a comment).
 Only on a 1704 tape: G50 with axis words, G20/G30 with an arc centre, G04 with F, a
-dimension of five or more digits without a point (10 000 in as G-code).
+dimension of five or more digits without a point (10 000 in as G-code); each in a block
+without words of text.
 """
 
 from __future__ import annotations
@@ -33,6 +34,9 @@ _DIMENSIONS = set("XYZIJKR")
 # five digits or more. Once a text has G-code's evidence, a block without either is passed
 # over: it can add nothing (most of a CAM file's blocks).
 _MAY_BE_TAPE = re.compile(r"[Gg]\s*\+?0*(?:4|20|30|50)|[XYZIJKRxyzijkr]\s*[+-]?[0-9]{5}")
+# Two letters together: words of text (`This`, `if`, `sqrt`), never a 1704 tape's block,
+# whose every letter is followed by its digits (a scan-damaged block has other marks).
+_PROSE = re.compile(r"[A-Za-z]{2}")
 # Why a file with no evidence either way could be both.
 LOOK_ALIKE = (
     "their G codes differ: G00 feeds on a 1704 and rapids in G-code; G20/G30, G50, G94, G98/G99"
@@ -77,13 +81,23 @@ def evidence(text: str) -> Evidence:
     gcode = tape = ""
     lines = text.replace("\r", "\n").split("\n", SNIFF_LINES)[:SNIFF_LINES]
     for number, raw in enumerate(lines, start=1):
-        for block in raw.split(";"):
+        for index, block in enumerate(raw.split(";")):
             stripped = block.strip()
             if not stripped or stripped.startswith("%"):
+                continue
+            if index and _PROSE.search(stripped):
+                # G-code reads what follows a ';' as a comment; on a tape a ';' ends a
+                # block, and this text is none (`; This demonstrates…`).
+                if not gcode:
+                    gcode = f"line {number}: a comment after ';', which a 1704 tape cannot have"
                 continue
             if gcode and not _MAY_BE_TAPE.search(stripped):
                 continue  # only a tape's evidence is still sought, and this has none
             g_reason, t_reason = _block_evidence(stripped)
+            if t_reason and _PROSE.search(stripped):
+                # Letters inside what no tape block can be are not a tape's words (the
+                # `g30` and `if` of `O<tc_at_g30> if [...]`).
+                t_reason = ""
             if g_reason and not gcode:
                 gcode = f"line {number}: {g_reason}"
             if t_reason and not tape:

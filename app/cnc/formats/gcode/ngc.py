@@ -119,7 +119,7 @@ _OPERATIONS: Final = (
     ("lt", _LT),
     ("le", _LE),
 )
-_FUNCTIONS: Final = (
+FUNCTIONS: Final = (
     "abs",
     "acos",
     "asin",
@@ -1233,7 +1233,7 @@ class _Run:
         """A unary function at self.k (interp_read.cc read_unary)."""
         s = self.text.s
         start = self.k
-        name = next((f for f in _FUNCTIONS if s.startswith(f, start)), "")
+        name = next((f for f in FUNCTIONS if s.startswith(f, start)), "")
         if not name:
             end = start
             while end < len(s) and s[end].isalpha():

@@ -16,6 +16,14 @@ stop). Readings where the dialects differ or the seed is vague (docs/imports.md)
   length offset belongs to its tool) — §2.2.6.1 writes T1 on every line, H1, H2, H3.
 - **G92** before any motion says where part zero is (the tool's start); a later one shifts
   the coordinates, and the shift is carried into the imported (part) coordinates.
+- **Work offsets** (G54-G59.3): part zero is the zero of the system in effect at the first
+  move. Where the file gives another system's zero from it (G10 L2 for both, or G10 L20),
+  that system's points are moved by the difference, as rs274 cuts them (a Z zero neither
+  gives: the same, reported); where it does not, that system's first move is refused at
+  the G code choosing it (the values are only on the machine's offset table). A G10 L2
+  value of the system holding part zero is Data Block 0 X/Y (part zero on the table).
+- **A feed outside FEEDR XY / FEEDR Z** (app.cnc.limits): cut at the nearest end of the
+  range, reported at the F word (`need_feed`).
 - **G28/G30** with axis words: the tool goes to the intermediate point (imported as a
   move); the return on to the machine's home, which the file does not give, is not.
 - **G04 P**: seconds (LinuxCNC); in a Fanuc-style `G04 P800` (two-digit code, no point)
@@ -57,7 +65,9 @@ from app.cnc.recognition.common import (
     arc_end_off,
     check_digits,
     failure,
+    feed_nm,
     show,
+    show_feed,
     split_lines,
     text_lines,
 )
@@ -223,6 +233,13 @@ LINEAR: Final = frozenset({"0", "1"})
 # The G words `fast_words` takes, as written, and their code.
 MOTION_CODES: Final = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
 NO_CODES: dict[str, Word] = {}
+# The control's FEEDR XY and FEEDR Z ranges in nm/min (app.cnc.limits).
+FEEDS_ACROSS: Final = {
+    u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_XY.items()
+}
+FEEDS_DOWN: Final = {u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_Z.items()}
+# The work offsets' codes, systems 1-9 (G10 L2/L20 P1-P9).
+SYSTEM_CODES: Final = ("54", "55", "56", "57", "58", "59", "59.1", "59.2", "59.3")
 # The letters a word may have, either case, to the upper case (O: the careful reader).
 LETTERS: Final = {c: c for c in ALLOWED - {"O"}} | {c.lower(): c for c in ALLOWED - {"O"}}
 LETTER_HINT = {
@@ -575,6 +592,7 @@ class _Reader:
         self.undecided: tuple[ImportFailure, tuple[int, int] | None] | None = None
         self.return_initial = True
         self.feed: int | None = None
+        self.feed_at = (0, 0, "")  # line, column and number of the F word giving `feed`
         self.speed: int | None = None
         self.spindle: bool | None = None  # True clockwise, False counter-clockwise
         self.selected_tool: int | None = None
@@ -587,13 +605,28 @@ class _Reader:
         self.x: int | None = None
         self.y: int | None = None
         self.z: int | None = None
-        self.shift = [0, 0, 0]
+        self.shift = [0, 0, 0]  # nm: part coordinates less the file's (G92 and `work`)
+        # Work offsets, G54-G59.3 (systems 1-9; 0 unused): where each system's zero is on
+        # the machine, per axis, as (anchor, nm): nm from where system `anchor`'s zero was on
+        # the machine's offset table when the program began (which the file does not give),
+        # or, anchor 0, from machine zero (a G10 L2 value). Two systems' zeros are a known
+        # distance apart only where their anchors agree.
+        self.systems: list[list[tuple[int, int]]] = [[(n, 0)] * 3 for n in range(10)]
+        self.system = 1
+        self.system_word = (0, 0)  # line and column of the G54-G59.3 or G10 in effect
+        # Part zero: the zero of the system in effect at the first move, then (`frame`).
+        self.frame: list[tuple[int, int]] | None = None
+        self.frame_system = 1
+        self.frame_line = 0
+        self.work = [0, 0, 0]  # nm: the active system's zero from part zero (in `shift`)
+        # A system whose zero is not a known distance from part zero: refused at its move.
+        self.unplaced: ImportFailure | None = None
+        self.placing = True  # `frame` not yet fixed, or `unplaced`: moves go by `target`
         self.cycle_r: int | None = None
         self.cycle_z: int | None = None
         self.cycle_q: int | None = None
         self.cycle_p: Decimal | None = None
         self.decimals = 0
-        self.offsets: tuple[int, int] | None = None
         self.tools: dict[int, ToolData] = {}
         self.tool_names: dict[int, str] = {}
         self.active_length = 0  # nm: the tool length offset in effect (G43 H: the TCAL)
@@ -658,7 +691,7 @@ class _Reader:
             tolerance=tolerance,
             name=self.name or self.fallback_name,
             part_number=self.part_number,
-            offsets=self.offsets,
+            offsets=self.table_zero(),
             tools=self.tools,
             initial_tool=initial_tool,
             start_z=self.start_z,
@@ -820,7 +853,13 @@ class _Reader:
         and F; None: not on the line)."""
         _n, g, x, y, z, i, j, f = words  # (N is the block's number: nothing to do)
         units = self.units
-        if units is None or self.incremental or self.arc_barred or self.undecided is not None:
+        if (
+            units is None
+            or self.incremental
+            or self.arc_barred
+            or self.undecided is not None
+            or self.placing
+        ):
             return False
         motion = self.motion if g is None else MOTION_CODES.get(g)
         if motion is None or (motion == "0" and self.comp):
@@ -841,6 +880,10 @@ class _Reader:
             feed = (known.get(f) or text_length(f, per))[0]
             if feed <= 0 and not is_positive(f):  # (more than 0 nm: more than 0)
                 return False
+        if feed is not None:
+            low, high = FEEDS_ACROSS[units]
+            if not low <= feed <= high:
+                return False  # (`need_feed` reports it, at the F word's column)
         # Where the axis words go, for a line, an arc or a hole alike, as `target` has it
         # (an axis without a word stays where it is), and the decimal places the file is
         # then written to; a word out of `length`'s range is `execute`'s to refuse. Written
@@ -1047,16 +1090,26 @@ class _Reader:
             raise failure(number, pos + 1, "an O-word (O number or subroutine) must begin its line")
         if letter not in ALLOWED and letter not in POLAR:
             raise failure(number, pos + 1, f"'{ch}' is not a G-code word letter")
+        end = match.end() if match is not None else pos + 1
+        text = match.group() if match is not None else ""
+        if end < len(line) and line[end] in " \t":
+            # Blanks inside a word mean nothing, as to LinuxCNC (`G3 I -20`, `X 1. 5`):
+            # the word goes on past them while digits (or a first sign) follow.
+            text, end = spaced_number(line, pos + 1)
+            match = NUMBER.fullmatch(text)
         if match is None:
             after = line[pos + 1 : pos + 4]
-            if after[:1] in ("#", "[") and not self.expanding:
+            rest = line[pos + 1 :].lstrip(" \t").lower()
+            if not self.expanding and (
+                rest[:1] in ("#", "[") or any(rest.startswith(f + "[") for f in ngc.FUNCTIONS)
+            ):
                 raise FrontEnd
             hint = " (the letter O where a zero belongs?)" if after[:1].upper() == "O" else ""
             raise failure(number, pos + 1, f"{letter} needs a number; found {after!r}{hint}")
-        if not check_digits(digit_text(match.group())):
-            raise failure(number, pos + 2, f"{letter}{match.group()}: too many digits")
-        words.append(Word(letter, match.group(), pos + 1))
-        return match.end()
+        if not check_digits(digit_text(text)):
+            raise failure(number, pos + 2, f"{letter}{text}: too many digits")
+        words.append(Word(letter, text, pos + 1))
+        return end
 
     def title(self, number: int, comment: str) -> None:
         match = HEADER.match(comment)
@@ -1100,6 +1153,20 @@ class _Reader:
             )
         return int(value)
 
+    def rpm(self, word: Word, block: Block) -> int:
+        """An S word in whole rpm, the control's resolution: a fraction (a CAM's S4696.94)
+        is rounded, as LinuxCNC's spindle takes it, with a note at its line. Raises
+        ImportFailure for a speed outside 0-100000 rpm."""
+        text = word.text
+        if not (text.isdigit() and text.isascii()) and word.value.to_integral_value() != word.value:
+            rounded = word.value.to_integral_value()  # (half even, as Decimal rounds)
+            if 0 <= rounded <= 100_000:
+                self.notes.rounded(
+                    block.line, f"S{text} → S{rounded}: the control's spindle speed is whole rpm"
+                )
+                return int(rounded)
+        return self.integer(word, block, 0, 100_000)
+
     # -- a block ----------------------------------------------------------------------------
 
     def execute(self, block: Block) -> None:
@@ -1122,9 +1189,10 @@ class _Reader:
             if not is_positive(f.text):
                 raise failure(line, f.column, f"F{f.text}: a feed must be more than 0")
             self.feed = self.rate(f)
+            self.feed_at = (line, f.column, f.text)
         s = block.get("S")
         if s is not None:
-            self.speed = self.integer(s, block, 0, 100_000)
+            self.speed = self.rpm(s, block)
             if self.spindle is not None and not any(c in ("3", "4", "5") for _, c in m_codes):
                 self.steps.append(SpindleOn(line, self.speed, self.spindle))
         t = block.get("T")
@@ -1191,7 +1259,7 @@ class _Reader:
             uses_axes = True
         for code in ("92.1", "92.2"):
             if code in codes:
-                self.shift = [0, 0, 0]
+                self.shift = list(self.work)
                 self.notes.assumed(line, f"G{code}: the G92 shift is cancelled")
         if "92.3" in codes:
             self.notes.ignored(line, "G92.3: restoring a stored G92 shift is not supported")
@@ -1233,6 +1301,7 @@ class _Reader:
             if not is_positive(f.text):
                 raise failure(block.line, f.column, f"F{f.text}: a feed must be more than 0")
             self.feed = self.rate(f)
+            self.feed_at = (block.line, f.column, f.text)
         if codes:
             motion_word = codes.get("0") or codes["1"]
             self.set_motion(block, motion_word, False)
@@ -1290,13 +1359,10 @@ class _Reader:
                 self.apply_length(block.get("H"), block)
         if "49" in codes:
             self.apply_length(None, block)
-        for code in ("55", "56", "57", "58", "59", "59.1", "59.2", "59.3"):
-            if code in codes:
-                self.notes.assumed(
-                    line,
-                    f"G{code}: coordinates read as part coordinates (its offsets are not in "
-                    "the file)",
-                )
+        for n, code in enumerate(SYSTEM_CODES, 1):
+            word = codes.get(code)
+            if word is not None:
+                self.select_system(line, word, n)
         if "90" in codes:
             self.incremental = False
         if "91" in codes:
@@ -1479,12 +1545,9 @@ class _Reader:
         lword, pword = block.get("L"), block.get("P")
         kind = None if lword is None else self.integer(lword, block, 0, 99)
         p = None if pword is None else self.integer(pword, block, 0, 999)
-        if kind == 2 and p in (0, 1):
-            x, y = block.get("X"), block.get("Y")
-            ox = 0 if x is None else self.length(x, block)
-            oy = 0 if y is None else self.length(y, block)
-            self.offsets = (ox, oy)
-            self.notes.became(line, "G10 L2 P1: part zero on the table (Data Block 0 X, Y)")
+        if kind in (2, 20) and p is not None and p <= 9:
+            assert lword is not None
+            self.set_system(block, lword, kind, p)
         elif kind == 1 and p is not None:
             z, r = block.get("Z"), block.get("R")
             tcal = None if z is None else self.length(z, block)
@@ -1495,6 +1558,142 @@ class _Reader:
             )
         else:
             self.notes.ignored(line, "G10 with this L/P: not imported")
+
+    # -- work offsets ---------------------------------------------------------------------------
+
+    def select_system(self, line: int, word: Word, n: int) -> None:
+        """G54-G59.3: the points from here are in system `n`, moved into part coordinates
+        by where its zero is from part zero (`place_work`)."""
+        self.system = n
+        self.system_word = (line, word.column)
+        self.place_work(line, word.column)
+        offsets = self.systems[n]
+        if (
+            offsets[0][0] != 0
+            and offsets[1][0] != 0
+            and n != 1
+            and self.unplaced is None
+            and (self.frame is None or self.frame_system == n)
+        ):
+            self.notes.assumed(
+                line,
+                f"G{SYSTEM_CODES[n - 1]}: coordinates read as part coordinates (its "
+                "offsets are not in the file)",
+            )
+
+    def set_system(self, block: Block, lword: Word, kind: int, p: int) -> None:
+        """G10 L2 (where system P's zero is on the machine) and G10 L20 (where it is such
+        that the tool is now at the given point in it); P0: the system in effect."""
+        line = block.line
+        n = self.system if p == 0 else p
+        r = block.get("R")
+        if r is not None and Decimal(r.text) != 0:
+            raise failure(
+                line, r.column, f"G10 L{kind} R: a rotated coordinate system is not supported"
+            )
+        offsets = self.systems[n]
+        if kind == 20 and self.frame is None:
+            # The tool's position is known before any move only as a G92 gave it, in the
+            # system in effect: that system holds part zero.
+            self.fix_frame(line)
+        for k, axis in enumerate(AXES):
+            word = block.get(axis)
+            if word is None:
+                continue  # (that axis's zero stays where it was)
+            value = self.length(word, block)
+            if kind == 2:
+                offsets[k] = (0, value)
+                continue
+            current = getattr(self, axis.lower())
+            frame = self.frame
+            if current is None or frame is None:
+                raise failure(
+                    line, word.column, f"G10 L20 {axis}: the tool's position is not known"
+                )
+            # The tool is at part zero + `current` on the machine; a G92 shift stays on top
+            # of the new zero, as rs274 keeps it.
+            g92 = self.shift[k] - self.work[k]
+            offsets[k] = (frame[k][0], frame[k][1] + current - g92 - value)
+        code = SYSTEM_CODES[n - 1]
+        if kind == 2 and n == 1 and (self.frame is None or self.frame_system == 1):
+            self.notes.became(line, "G10 L2 P1: part zero on the table (Data Block 0 X, Y)")
+        else:
+            self.notes.became(line, f"G10 L{kind} P{p}: where G{code}'s zero is")
+        if n == self.system:
+            self.system_word = (line, lword.column)
+        self.place_work(line, lword.column)
+
+    def fix_frame(self, line: int) -> None:
+        """Part zero: the zero of the system in effect (at the first move)."""
+        self.frame = list(self.systems[self.system])
+        self.frame_system = self.system
+        self.frame_line = line
+        if self.system != 1 and (self.frame[0][0] == 0 or self.frame[1][0] == 0):
+            self.notes.became(
+                line,
+                f"G{SYSTEM_CODES[self.system - 1]} holds part zero: its zero on the table, "
+                "as the file's G10 gives it, is Data Block 0 X, Y",
+            )
+        self.placing = self.unplaced is not None
+
+    def place(self, line: int) -> None:
+        """Before a move read by `execute` while `placing`: part zero fixed at the first
+        move, or the refusal of a system not placed on it."""
+        if self.unplaced is not None:
+            raise self.unplaced
+        if self.frame is None:
+            self.fix_frame(line)
+
+    def place_work(self, line: int, column: int) -> None:
+        """The active system's zero from part zero into `shift` (the G92 shift kept), or,
+        where the file does not give it, a refusal for the next move (`unplaced`): one part
+        zero cannot hold two fixtures whose zeros are only on the machine's offset table."""
+        frame = self.frame
+        if frame is None:
+            return  # (the first move's system holds part zero)
+        offsets = self.systems[self.system]
+        work = [0, 0, 0]
+        for k in range(3):
+            anchor, nm = offsets[k]
+            if anchor == frame[k][0]:
+                work[k] = nm - frame[k][1]
+            elif k == 2:
+                # Z is measured from each tool's zero (G43), which the fixtures share as
+                # far as the file says.
+                self.notes.assumed(
+                    line,
+                    f"G{SYSTEM_CODES[self.system - 1]}: its Z zero read as "
+                    f"G{SYSTEM_CODES[self.frame_system - 1]}'s (neither is in the file)",
+                )
+            else:
+                here, there = SYSTEM_CODES[self.system - 1], SYSTEM_CODES[self.frame_system - 1]
+                self.unplaced = self.located(
+                    failure(
+                        line,
+                        column,
+                        f"G{here}: a second work offset; part zero is G{there}'s (the moves "
+                        f"from line {self.frame_line}) and where G{here}'s zero is from it "
+                        "is on the machine's offset table, not in the file (give both with "
+                        "G10 L2, or import each fixture's moves on their own)",
+                    )
+                )
+                self.placing = True
+                return
+        self.unplaced = None
+        self.placing = False
+        shift = self.shift
+        for k in range(3):
+            shift[k] += work[k] - self.work[k]
+        self.work = work
+
+    def table_zero(self) -> tuple[int, int] | None:
+        """Data Block 0 X, Y: where part zero is on the table, when the file gives it (G10
+        L2 of the system holding part zero, or MillBlocks' set-up comment)."""
+        frame = self.frame if self.frame is not None else self.systems[self.system]
+        (xa, x), (ya, y) = frame[0], frame[1]
+        if xa != 0 and ya != 0:
+            return None
+        return (x if xa == 0 else 0, y if ya == 0 else 0)
 
     def setup_comment(self, line: int, comment: str) -> None:
         """A MillBlocks set-up comment: part zero, or a tool's diameter and length (TCAL)."""
@@ -1508,7 +1707,10 @@ class _Reader:
         tool = SETUP_TOOL.match(comment)
         units = self.current_units()
         if zero is not None:
-            self.offsets = (decimal_nm(zero.group(1), units), decimal_nm(zero.group(2), units))
+            g54 = self.systems[1]
+            g54[0] = (0, decimal_nm(zero.group(1), units))
+            g54[1] = (0, decimal_nm(zero.group(2), units))
+            self.place_work(line, 0)
             self.notes.became(line, "the set-up comment: part zero (Data Block 0 X, Y)")
         elif tool is not None:
             number = int(tool.group(1))
@@ -1616,7 +1818,9 @@ class _Reader:
         return text_nm(word.text, NM_PER_INCH if units is Units.INCH else NM_PER_MM)
 
     def target(self, block: Block) -> tuple[int, int, int | None]:
-        """Where the axis words go, in part coordinates (G90/G91, G92 shift)."""
+        """Where the axis words go, in part coordinates (G90/G91, G92 shift, work offset)."""
+        if self.placing:
+            self.place(block.line)
         other = block.other
         x_word, y_word, z_word = other.get("X"), other.get("Y"), other.get("Z")
         x, y = self.x, self.y
@@ -1745,7 +1949,7 @@ class _Reader:
             self.steps.append(Rapid(line, x, y, z, units))
             self.moves_made = True
         elif motion == "1":
-            feed = self.need_feed(block)
+            feed = self.need_feed(block, (x, y) != (self.x, self.y))
             self.steps.append(Feed(line, x, y, z, feed, units, self.comp, self.comp_tool))
             self.moves_made = True
         else:
@@ -1767,10 +1971,27 @@ class _Reader:
         elif to != at:
             raise error
 
-    def need_feed(self, block: Block) -> int:
-        if self.feed is None:
+    def need_feed(self, block: Block, across: bool = True) -> int:
+        """The feed of a move (nm/min) across X/Y (`across`) or in Z alone, within the
+        control's FEEDR XY or FEEDR Z: one outside is cut at the nearest end of that range
+        (as pecks past 40 are drilled as 40), reported at its F word."""
+        feed = self.feed
+        if feed is None:
             raise failure(block.line, block.words[0].column, "a feed move with no F given yet")
-        return self.feed
+        units = self.current_units()
+        low, high = (FEEDS_ACROSS if across else FEEDS_DOWN)[units]
+        if low <= feed <= high:
+            return feed
+        cut = high if feed > high else low
+        line, column, text = self.feed_at
+        limit = (limits.FEED_XY if across else limits.FEED_Z)[units]
+        self.notes.assumed(
+            line,
+            f"F{text} (column {column}): {show_feed(feed, units)} {'across' if across else 'in Z'}"
+            f" is outside FEEDR {'XY' if across else 'Z'}'s {limit.low} to {limit.high} "
+            f"{units.feed_symbol}, the control's: cut at {show_feed(cut, units)}",
+        )
+        return cut
 
     def arc(self, block: Block, x: int, y: int, z: int | None, clockwise: bool) -> None:
         line = block.line
@@ -1787,8 +2008,12 @@ class _Reader:
         # An arc with a Z move (a helix) is a step like any arc: what it becomes (a HELIX
         # block, or a refusal naming the line) is the segmenter's (app.cnc.recognition.segment).
         k = block.get("K")
-        if k is not None:
-            raise failure(line, k.column, "K in an XY arc")
+        # FreeCAD's grbl post writes K0.000 in every G17 arc; grbl ignores it, and a zero
+        # changes nothing (rs274 refuses any K here): `unused` reports it.
+        if k is not None and k.value != 0:
+            raise failure(
+                line, k.column, f"K{k.text} in an XY (G17) arc: only I and J give its centre"
+            )
         sx = self.x if self.x is not None else 0
         sy = self.y if self.y is not None else 0
         i_word, j_word, r_word = block.get("I"), block.get("J"), block.get("R")
@@ -1894,7 +2119,7 @@ class _Reader:
         if bottom >= r:
             where = z_word or r_word or block.words[0]
             raise failure(line, where.column, f"G{code}: Z is not below R")
-        feed = self.need_feed(block)
+        feed = self.need_feed(block, False)
         peck = 0
         if code in ("73", "83"):
             if not self.cycle_q:
@@ -1920,6 +2145,27 @@ class _Reader:
         self.x, self.y, self.z = hx, hy, clear
         self.moved = True
         self.cycle_drilled = True
+
+
+def spaced_number(line: str, start: int) -> tuple[str, int]:
+    """The number written from `start` in `line` with the blanks inside it taken out
+    (a sign first, then digits and a point), and where it ends: `(' -2', 1)` of `'I -20'`
+    is `('-20', 5)`. The text may not be a number (`'-'`, `'1.2.'`): the caller checks."""
+    chars: list[str] = []
+    end = start
+    pos = start
+    n = len(line)
+    while pos < n:
+        ch = line[pos]
+        if ch in " \t":
+            pos += 1
+            continue
+        if not (ch in "0123456789." or (ch in "+-" and not chars)):
+            break
+        chars.append(ch)
+        pos += 1
+        end = pos
+    return "".join(chars), end
 
 
 def decimal_nm(text: str, units: Units) -> int:

@@ -18,7 +18,6 @@ from decimal import Decimal as D
 from pathlib import Path
 from unittest import mock
 
-import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -40,7 +39,7 @@ from app.cnc.blocks import (
 from app.cnc.compiler import compile_program
 from app.cnc.copy import resolve_copies
 from app.cnc.formats.tape1704 import codes as tapecode
-from app.cnc.formats.tape1704 import plan, words
+from app.cnc.formats.tape1704 import plan
 from app.cnc.formats.tape1704.codes import TapeCode
 from app.cnc.formats.tape1704.targets import Tape
 from app.cnc.formats.targets import (
@@ -939,28 +938,9 @@ def _tape(
     tape = Tape(program, path, get_target("tape-eia").parse_options(options), code, report)
     tape.planner.runs = runs
     with mock.patch.object(plan, "_MIN_RUN_ROWS", fewest):
-        # The listing's lines as written (a run's blocks come as the lines of one text).
-        texts = "\n".join(text for part in tape.image.listing(tape.lines()) for text in part)
+        texts = [text for part in tape.image.listing(tape.lines()) for text in part]
     tape.finish()
-    entries: list[tuple[object, int | None, str]] = [
-        (entry.severity, entry.block, entry.message) for entry in report.entries
-    ]
-    return texts.split("\n"), entries
-
-
-def test_arc_shapes_that_mix_to_the_same_number_stay_apart() -> None:
-    # The arcs of a run are split and measured once a shape (words._distinct_rows): two
-    # shapes whose mixed numbers are the same must still be two shapes, or an arc would
-    # be punched with another's quadrant ends.
-    mix = words._MIX
-    rows = np.array(
-        [[0, 0, 5, 0, 1, 0], [int(mix[1]), -int(mix[0]), 5, 0, 1, 0], [0, 0, 5, 0, 1, 0]],
-        dtype=np.int64,
-    )
-    assert len(set((rows @ mix[:6]).tolist())) == 1
-    distinct, which = words._distinct_rows(rows)
-    assert len(distinct) == 2
-    assert (distinct[which] == rows).all()
+    return texts, [(entry.severity, entry.block, entry.message) for entry in report.entries]
 
 
 @settings(max_examples=60, deadline=None)

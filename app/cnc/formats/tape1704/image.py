@@ -49,7 +49,7 @@ class TapeImage:
         line."""
         yield [codes.REWIND_STOP_CHAR, *self.header]
         for line in lines:
-            yield [line.text]  # a run's blocks are lines of its text
+            yield line.texts if isinstance(line, LineRun) else [line.text]
 
     def punched(self, lines: Iterable[Line | LineRun]) -> Iterator[tuple[bytes, list[str]]]:
         """The punch image in pieces (one row per byte, channel n in bit n-1), each with

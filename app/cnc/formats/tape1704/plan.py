@@ -44,7 +44,7 @@ from app.cnc.formats.targets import Report
 from app.cnc.formats.text import comment_text
 from app.cnc.geometry import arc_points, chord_step
 from app.cnc.needs import blocks_text
-from app.cnc.path import HOLE, TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move
+from app.cnc.path import TAGS, Chunk, CompiledPath, HoleSpan, Op, as_move
 from app.cnc.sizes import ChordRows
 from app.cnc.toolpath import (
     ArcFeed,
@@ -259,7 +259,7 @@ Piece = Item | Run
 """What the stages pass on: an item, or a run of straight moves."""
 
 
-_SLICE_ROWS = 4096
+_SLICE_ROWS = 1024
 """Rows of a chunk `Planner.planned` turns into Python lists at a time (memory, not speed)."""
 _RUN_ROWS = 4096
 """The most rows `Planner.planned` joins into one run (each stage's arrays and texts for a
@@ -361,7 +361,7 @@ class Planner:
         items: list[Item] = []
         waiting: list[Run] = []
         waiting_rows = 0
-        for chunk in self.chunks():
+        for chunk in path.chunks():
             cycles = self.cycles(chunk)
             cycle_rows = np.array(sorted(cycles), dtype=np.int64)
             rows, strings = chunk.rows, chunk.strings
@@ -582,37 +582,11 @@ class Planner:
             items.append(Aux(stop.block, [("M", "50")]))
         return True
 
-    def fixed_cycles(self) -> bool:
-        """True when a hole may be a fixed-cycle block (the profile has one, Z moves)."""
-        return bool(self.profile.drill_cycle or self.profile.bore_cycle) and not self.two_axis
-
-    def chunks(self) -> Iterator[Chunk]:
-        """The compiled path's chunks, small ones one after another as one where no fixed
-        cycle reads their holes and no row refers to their texts (STOP, MESSAGE): a LOOP
-        of a few holes is a chunk a pattern, and `planned`'s array operations on a chunk
-        cost more than its rows (issue 31)."""
-        gathered: list[Chunk] = []
-        rows = 0
-        merge = not self.fixed_cycles()
-        for chunk in self.path.chunks():
-            if merge and not chunk.strings and len(chunk.rows) < _SLICE_ROWS:
-                gathered.append(chunk)
-                rows += len(chunk.rows)
-                if rows >= _SLICE_ROWS:
-                    yield _gathered(gathered)
-                    gathered, rows = [], 0
-                continue
-            if gathered:
-                yield _gathered(gathered)
-                gathered, rows = [], 0
-            yield chunk
-        if gathered:
-            yield _gathered(gathered)
-
     def cycles(self, chunk: Chunk) -> dict[int, HoleSpan]:
         """The chunk's holes a fixed cycle may make, by the row of their rapid down to Z UP
         (none when the profile has no fixed cycle)."""
-        if not self.fixed_cycles():
+        profile = self.profile
+        if not (profile.drill_cycle or profile.bore_cycle) or self.two_axis:
             return {}
         rows = chunk.rows
         found: dict[int, HoleSpan] = {}
@@ -1044,20 +1018,6 @@ class _Ahead:
             if isinstance(following, Motion) and following.kind is not Kind.RAPID:
                 return following.feed
             k += 1
-
-
-def _gathered(chunks: list[Chunk]) -> Chunk:
-    """Chunks without texts one after another as one, without their holes (`chunks`)."""
-    if len(chunks) == 1:
-        return chunks[0]
-    # Copied into place: numpy's concatenate of record arrays first works out their common
-    # record type, which costs more than the copy.
-    rows = np.empty(sum(len(chunk.rows) for chunk in chunks), dtype=chunks[0].rows.dtype)
-    at = 0
-    for chunk in chunks:
-        rows[at : at + len(chunk.rows)] = chunk.rows
-        at += len(chunk.rows)
-    return Chunk(rows, np.zeros(0, dtype=HOLE), [], ())
 
 
 def _joined(runs: list[Run]) -> Iterator[Piece]:

@@ -92,13 +92,14 @@ class Tape:
         code = self.code
         for line in check_reader(lines, self.fmt, self.reader_report):
             if isinstance(line, LineRun):
-                # Each block's characters and its End of Block (the newlines between them).
-                rows += len(line.text) + 1
-                if codes.can_encode(line.text, code):
+                texts = line.texts
+                joined = "".join(texts)
+                rows += len(joined) + len(texts)
+                if codes.can_encode(joined, code):
                     yield line
                     continue
                 self.encodable = False
-                for k, text in enumerate(line.texts):
+                for k, text in enumerate(texts):
                     if codes.can_encode(text, code):
                         yield line.line(k)
                 continue

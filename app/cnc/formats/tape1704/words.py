@@ -23,7 +23,7 @@ one by one too.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,36 +64,28 @@ class Line:
     leader_after: int = 0
 
 
+_N_WORDS = np.array([f"N{n}" for n in range(1000)], dtype=object)
+"""The N word of each sequence number (`Words.line`: the number modulo 1000)."""
+_G_WORDS = np.array(["" for _ in range(51)], dtype=object)
+"""The G word of each motion code a run's blocks have (G04: its dwells)."""
+for _code in (0, 1, 2, 3, 4, 20, 30, 50):
+    _G_WORDS[_code] = f"G{_code:02d}"
+
+
 @dataclass
 class LineRun:
-    """Blocks one after another (a `Run`'s) as columns: what each one's `Line` holds. The
-    texts are one string, each block's ended by a newline but the last's (the listing's
-    lines as they are written), `starts` and `sizes` where each block's text is in it."""
+    """Blocks one after another (a `Run`'s) as columns: what each one's `Line` holds."""
 
-    text: str
-    starts: npt.NDArray[np.int64]
-    sizes: npt.NDArray[np.int64]
+    texts: list[str]
     block: npt.NDArray[np.int64]
     continuous: npt.NDArray[np.bool_]
     length: npt.NDArray[np.float64]
     feed_start: npt.NDArray[np.int64]
     feed_end: npt.NDArray[np.int64]
 
-    def __len__(self) -> int:
-        return len(self.sizes)
-
-    @property
-    def texts(self) -> list[str]:
-        """Each block's text (no End of Block)."""
-        return self.text.split("\n")
-
-    def text_of(self, k: int) -> str:
-        start = int(self.starts[k])
-        return self.text[start : start + int(self.sizes[k])]
-
     def line(self, k: int) -> Line:
         return Line(
-            self.text_of(k),
+            self.texts[k],
             int(self.block[k]),
             bool(self.continuous[k]),
             float(self.length[k]),
@@ -243,43 +235,35 @@ class Rounder:
         if z is not None:
             moved |= z != np.concatenate(([pos[2] or 0], z[:-1]))  # pos[2] is known (above)
         moved[arcs] = True
+        pieces: list[list[tuple[int, int]]] = []
         arc_rows = moving[arcs]
         # An arc's quadrant ends depend only on where its start and end are from its
         # centre (exact integers): the arcs of a pattern (one shape in many places) are
         # split once, each then moved to its centre.
-        shapes, which = _distinct_rows(
-            np.stack(
-                [
-                    sx[arcs] - cx,
-                    sy[arcs] - cy,
-                    x[arcs] - cx,
-                    y[arcs] - cy,
-                    run.clockwise[arc_rows],
-                    run.full[arc_rows],
-                ],
-                axis=1,
-            )
-        )
-        split: list[list[tuple[int, int]]] = []
-        for bx, by, ex, ey, clockwise, full_circle in shapes.tolist():
-            # split_arc's refusals (a radius past the capacity, none, no sweep) go one by
-            # one.
-            radius = round(math.hypot(bx, by))
-            if radius > limit or radius == 0 or (ex == bx and ey == by and not full_circle):
-                return None
-            split.append(
-                quadrant_ends(
-                    (bx, by), (ex, ey), (0, 0), radius, bool(clockwise), bool(full_circle)
-                )
-            )
-        # Each arc's points: its shape's, moved to its centre.
-        sizes = np.array([len(points) for points in split], dtype=np.int64)
-        per_arc = sizes[which]
-        firsts = np.cumsum(sizes) - sizes
-        to_each = np.cumsum(per_arc) - per_arc
-        taken = np.repeat(firsts[which] - to_each, per_arc) + np.arange(int(per_arc.sum()))
-        points = np.array([point for points in split for point in points], dtype=np.int64)
-        ends = points.reshape(-1, 2)[taken] + np.repeat(np.stack([cx, cy], axis=1), per_arc, axis=0)
+        shapes: dict[tuple[int, int, int, int, bool, bool], list[tuple[int, int]]] = {}
+        # Scalars from lists (not numpy's, one at a time): a CAM file's run has 10^4 arcs.
+        for bx, by, ex, ey, ox, oy, clockwise, full_circle in zip(
+            (sx[arcs] - cx).tolist(),
+            (sy[arcs] - cy).tolist(),
+            (x[arcs] - cx).tolist(),
+            (y[arcs] - cy).tolist(),
+            cx.tolist(),
+            cy.tolist(),
+            run.clockwise[arc_rows].tolist(),
+            run.full[arc_rows].tolist(),
+            strict=True,
+        ):
+            key = (bx, by, ex, ey, clockwise, full_circle)
+            shape = shapes.get(key)
+            if shape is None:
+                # split_arc's refusals (a radius past the capacity, none, no sweep) go
+                # one by one.
+                radius = round(math.hypot(bx, by))
+                if radius > limit or radius == 0 or (ex == bx and ey == by and not full_circle):
+                    return None
+                shape = quadrant_ends((bx, by), (ex, ey), (0, 0), radius, clockwise, full_circle)
+                shapes[key] = shape
+            pieces.append([(ox + px, oy + py) for px, py in shape])
         restart = run.restart or self.carry_restart
         if restart and run.kind[0] == DWELL:
             return None  # Words.lines restarts the motion mode on a run's first row only
@@ -296,7 +280,7 @@ class Rounder:
         # The run's rows again, each kept motion once and each arc once a quadrant.
         count = np.ones(len(run), dtype=np.int64)
         count[moving[~moved]] = 0
-        count[arc_rows] = per_arc
+        count[arc_rows] = [len(points) for points in pieces]
         rows = np.repeat(np.arange(len(run)), count)
         out = run.take(rows, restart)
         xs = np.zeros(len(run), dtype=np.int64)
@@ -321,6 +305,7 @@ class Rounder:
             is_arc = np.zeros(len(run), dtype=np.bool_)
             is_arc[arc_rows] = True
             slots = np.flatnonzero(is_arc[rows])
+            ends = np.array([point for points in pieces for point in points], dtype=np.int64)
             at_x, at_y = out.x.copy(), out.y.copy()
             at_x[slots], at_y[slots] = ends[:, 0], ends[:, 1]
             out.x, out.y = at_x, at_y
@@ -460,27 +445,6 @@ class Rounder:
                 )
             )
         return pieces
-
-
-_MIX = np.array([0x9E3779B97F4A7C15 - (1 << 64) >> k for k in range(8)], dtype=np.int64) | 1
-"""Odd multipliers that mix a row of integers into one (`_distinct_rows`)."""
-
-
-def _distinct_rows(
-    rows: npt.NDArray[np.int64],
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.intp]]:
-    """The distinct rows of `rows` (in no particular order) and which of them each row is:
-    `np.unique(rows, axis=0, return_inverse=True)`, several times faster. The rows are
-    told apart by one integer mixed from each (wrapping), checked against the rows
-    themselves; numpy's own sorting of whole rows is the fallback."""
-    mixed = rows @ _MIX[: rows.shape[1]]
-    _, first, which = np.unique(mixed, return_index=True, return_inverse=True)
-    which = which.reshape(-1)
-    distinct = rows[first]
-    if np.array_equal(distinct[which], rows):
-        return distinct, which
-    distinct, which = np.unique(rows, axis=0, return_inverse=True)
-    return distinct, which.reshape(-1)
 
 
 def _within_30(
@@ -797,13 +761,7 @@ class Words:
             self.ij = [None, None]
             self.g, self.feed = None, None
         pos = self.pos
-        joiner = "\t" if profile.tabs else ""
-        # Each column a matrix of its words' ASCII bytes, a row a block, NUL after a word
-        # and where none is written (`_word_matrix`); the blocks' text is the columns side
-        # by side with the NULs dropped (issue 31: a string per word and a join per block
-        # were most of the tape's time in a long program).
-        columns: list[npt.NDArray[np.uint8]] = []
-        motion_fill = self.motion_fill()
+        columns: list[npt.NDArray[np.object_]] = []
         if profile.sequence:
             numbers = self.number + profile.sequence_increment * np.arange(count, dtype=np.int64)
             over = np.flatnonzero(numbers > 999)
@@ -815,15 +773,16 @@ class Words:
                     "has three digits; a tape search stops at the first match)",
                 )
             self.number += profile.sequence_increment * count
-            every = np.ones(count, dtype=np.bool_)
-            columns.append(_word_matrix("N", numbers % 1000, every, 1, joiner))
+            columns.append(_N_WORDS[numbers % 1000])
         # Each word where it differs from the one before (the state before the run first);
         # a dwell's G04 leaves no motion mode in force.
         g_before = np.empty(count, dtype=np.int64)
         g_before[0] = -1 if self.g is None else int(self.g)
         g_before[1:] = np.where(moving[: count - 1], gcode[:-1], -1)
         written = (gcode != g_before) | ~moving[:count]
-        columns.append(_word_matrix("G", gcode, written, 2, joiner))
+        column = _G_WORDS[gcode]
+        column[~written] = ""
+        columns.append(column)
         straight = moving[:count] & ~arc[:count]
         axes = [("X", x, pos[0], arc), ("Y", y, pos[1], arc)]
         if z is not None:
@@ -833,7 +792,7 @@ class Words:
             if state is not None:
                 written[~had[:count]] = values[:count][~had[:count]] != state
             written = (written & straight) | always[:count]
-            columns.append(_word_matrix(letter, values[:count], written, motion_fill, joiner))
+            columns.append(self.word_column(letter, values[:count], written))
         last_arc = np.maximum.accumulate(np.where(arc, indices, -1))
         arc_before = np.concatenate(([-1], last_arc[:-1]))[:count]
         has_arc = arc_before >= 0
@@ -845,12 +804,11 @@ class Words:
                 written = arc[:count] & (~has_arc | (shown != centre[prior_arc]))
             else:
                 written = arc[:count] & (shown != np.where(has_arc, centre[prior_arc], state))
-            if written.any():
-                columns.append(_word_matrix(letter, shown, written, motion_fill, joiner))
+            columns.append(self.word_column(letter, shown, written))
             if last_arc[count - 1] >= 0:
                 self.ij[axis] = int(centre[last_arc[count - 1]])
         # The feed in force before each row: the last feed or arc's in the run, else the
-        # state's; a dwell's F is its time (the two never in one row: one column of F).
+        # state's; a dwell's F is its time.
         last_feed = np.maximum.accumulate(np.where(feeding, indices, -1))[:count]
         feed_before = np.empty(count, dtype=np.int64)
         feed_before[0] = -1 if self.feed is None else self.feed
@@ -859,13 +817,22 @@ class Words:
         )
         shown_feed = feed[:count]
         written = feeding[:count] & (shown_feed != feed_before)
-        columns.append(_word_matrix("F", shown_feed, written, self.feed_fill(), joiner))
+        column = _distinct_words(shown_feed, written, lambda value: "F" + self.feed_word(value))
         dwells = ~moving[:count]
-        if dwells.any():
-            columns.append(_word_matrix("F", run.tenths[:count], dwells, 1, joiner))
-        carried = "".join(joiner + letter + value for letter, value in self.carried)
-        self.carried = []
-        text, starts, sizes = _joined_rows(columns, joiner, carried)
+        _distinct_words(run.tenths[:count], dwells, lambda tenths: f"F{tenths}", column)
+        columns.append(column)
+        joiner = "\t" if profile.tabs else ""
+        lists = [column.tolist() for column in columns]
+        if joiner:
+            texts = [
+                joiner.join([word for word in row if word]) for row in zip(*lists, strict=True)
+            ]
+        else:
+            texts = list(map("".join, zip(*lists, strict=True)))
+        if self.carried:
+            words = [words[0] for words in lists if words[0]]
+            texts[0] = joiner.join(words + [letter + value for letter, value in self.carried])
+            self.carried = []
         # What the reader limitation needs (check_reader): the G01-G03 blocks' length.
         continuous = (gcode == 1) | (gcode == 2) | (gcode == 3)
         length = np.zeros(count)
@@ -873,30 +840,31 @@ class Words:
         squares = dx[:count] ** 2 + dy[:count] ** 2 + dz[:count] ** 2
         length[lines] = np.sqrt(squares[lines].astype(np.float64)) * fmt.digit_nm / fmt.unit_nm
         # The arcs' lengths as `motion_length` has them (the same floats as a block
-        # written alone). A length depends only on where the arc's ends are from its
-        # centre (exact integers): each shape of a pattern's arcs is measured once.
+        # written alone), from lists: a long CAM file's run has 10^4 arcs. A length
+        # depends only on where the arc's ends are from its centre (exact integers): each
+        # shape of a pattern's arcs is measured once.
         curved = np.flatnonzero(continuous & arc[:count])
         digit_nm, unit_nm = fmt.digit_nm, fmt.unit_nm
         ocx, ocy = run.cx[curved], run.cy[curved]
-        shapes, which = _distinct_rows(
-            np.stack(
-                [
-                    sx[curved] - ocx,
-                    sy[curved] - ocy,
-                    x[curved] - ocx,
-                    y[curved] - ocy,
-                    run.clockwise[curved],
-                ],
-                axis=1,
-            )
-        )
-        measured = [
-            arc_length((bx, by), (ax, ay), (0, 0), bool(cw)) * digit_nm / unit_nm
-            for bx, by, ax, ay, cw in shapes.tolist()
-        ]
-        length[curved] = np.array(measured, dtype=np.float64)[which]
+        lengths: dict[tuple[int, int, int, int, bool], float] = {}
+        measured: list[float] = []
+        for shape in zip(
+            (sx[curved] - ocx).tolist(),
+            (sy[curved] - ocy).tolist(),
+            (x[curved] - ocx).tolist(),
+            (y[curved] - ocy).tolist(),
+            run.clockwise[curved].tolist(),
+            strict=True,
+        ):
+            known = lengths.get(shape)
+            if known is None:
+                bx, by, ax, ay, cw = shape
+                known = arc_length((bx, by), (ax, ay), (0, 0), cw) * digit_nm / unit_nm
+                lengths[shape] = known
+            measured.append(known)
+        length[curved] = measured
         last = count - 1
-        self.g = f"{int(gcode[last]):02d}" if moving[last] else None
+        self.g = str(_G_WORDS[gcode[last]])[1:] if moving[last] else None
         motion = int(last_motion[last])
         if motion >= 0:
             self.pos = [
@@ -907,9 +875,7 @@ class Words:
         if last_feed[last] >= 0:
             self.feed = int(feed[last_feed[last]])
         return LineRun(
-            text,
-            starts,
-            sizes,
+            texts,
             run.block[:count],
             continuous,
             length,
@@ -917,96 +883,44 @@ class Words:
             shown_feed,
         )
 
-    def motion_fill(self) -> int:
-        """The fewest digits a motion word has: every digit of the format with zeros=0,
-        else leading zeros dropped."""
-        return self.fmt.int_digits + self.fmt.frac_digits if self.profile.leading_zeros else 1
-
-    def feed_fill(self) -> int:
-        """The fewest digits an F word has (F3.1: four, F4: four with zeros=0)."""
-        return 4 if self.profile.leading_zeros else 1
+    def word_column(
+        self, letter: str, values: npt.NDArray[np.int64], written: npt.NDArray[np.bool_]
+    ) -> npt.NDArray[np.object_]:
+        """`letter` and `digits` of each value where written, else ''."""
+        if self.profile.leading_zeros:
+            digits = self.digits
+            return _distinct_words(values, written, lambda value: letter + digits(value))
+        # str of a negative int is its sign and digits: `digits` without zeros.
+        return _distinct_words(values, written, lambda value: f"{letter}{value}")
 
     def digits(self, units: int) -> str:
         """A motion word's digits: sign only when negative, no point; leading zeros only
         with zeros=0 (then every digit of the format is punched)."""
-        return ("-" if units < 0 else "") + str(abs(units)).zfill(self.motion_fill())
+        digits = str(abs(units))
+        if self.profile.leading_zeros:
+            digits = digits.zfill(self.fmt.int_digits + self.fmt.frac_digits)
+        return ("-" if units < 0 else "") + digits
 
     def feed_word(self, value: int) -> str:
-        """An F word's digits, leading zeros only with zeros=0 (`feed_fill`)."""
-        return str(value).zfill(self.feed_fill())
+        """An F word's digits (F3.1: four, F4: four), leading zeros only with zeros=0."""
+        return str(value).zfill(4) if self.profile.leading_zeros else str(value)
 
 
-def _word_matrix(
-    letter: str,
+def _distinct_words(
     values: npt.NDArray[np.int64],
     written: npt.NDArray[np.bool_],
-    fill: int,
-    joiner: str,
-) -> npt.NDArray[np.uint8]:
-    """A column of blocks' words as ASCII bytes, transposed: a row per character place,
-    a column per block. Each word is `joiner`, `letter`, a minus sign when the value is
-    negative and its digits, at least `fill` of them (leading zeros up to `fill`, as
-    `Words.digits`), where written; NUL in the gaps (and where not written), which
-    `_joined_rows` drops. Made a place at a time, not a string a word (issue 31)."""
-    count = len(values)
-    size = np.abs(values)
-    top = int(size.max()) if count else 0
-    digits = max(fill, len(str(top)))
-    # Unsigned: numpy divides those by a constant several times faster than by divmod.
-    rest = np.where(written, size, 0).astype(np.uint32 if top < 2**32 else np.uint64)
-    mark = written.view(np.uint8)
-    negative = written & (values < 0)
-    signed = bool(negative.any())
-    head = joiner + letter
-    start = len(head) + signed
-    places = np.empty((start + digits, count), dtype=np.uint8)
-    for k, character in enumerate(head):
-        np.multiply(mark, ord(character), out=places[k])
-    if signed:
-        np.multiply(negative.view(np.uint8), ord("-"), out=places[len(head)])
-    for k in range(digits):  # from the last digit
-        place = places[start + digits - 1 - k]
-        # A digit is written up to `fill` and while digits are left (a value not written
-        # is 0 here: it has none left after its first, which `mark` leaves out).
-        shown = mark if k < fill else (rest != 0).view(np.uint8)
-        quotient = rest // 10
-        np.subtract(rest, quotient * 10, out=place, casting="unsafe")
-        place += ord("0")
-        place *= shown
-        rest = quotient
-    return places
-
-
-def _joined_rows(
-    columns: list[npt.NDArray[np.uint8]], joiner: str, carried: str
-) -> tuple[str, npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """The blocks' texts from their columns (`_word_matrix`, each word after `joiner`): one
-    string, a newline after each block but the last, each block's `joiner` before its first
-    word dropped, `carried` (words after `joiner`) after the first block's words; and where
-    each block's text starts in it and its length."""
-    count = columns[0].shape[1]
-    newlines = np.full((1, count), ord("\n"), dtype=np.uint8)
-    table = np.ascontiguousarray(np.concatenate([*columns, newlines]).T)
-    if joiner:
-        # The joiner goes between words: drop each block's first (none in an empty block).
-        first = np.argmax(table != 0, axis=1)
-        rows = np.arange(count)
-        leading = table[rows, first] == ord(joiner)
-        table[rows[leading], first[leading]] = 0
-    flat = table.reshape(-1)
-    data = flat[flat != 0]
-    breaks = np.flatnonzero(data == ord("\n"))
-    sizes = (np.diff(breaks, prepend=-1) - 1).astype(np.int64)
-    text = data[:-1].tobytes().decode("ascii")
-    if carried:
-        if joiner and sizes[0] == 0:
-            carried = carried[len(joiner) :]
-        head = int(sizes[0])
-        text = text[:head] + carried + text[head:]
-        sizes[0] += len(carried)
-    starts = np.zeros(count, dtype=np.int64)
-    np.cumsum(sizes[:-1] + 1, out=starts[1:])
-    return text, starts, sizes
+    word: Callable[[int], str],
+    column: npt.NDArray[np.object_] | None = None,
+) -> npt.NDArray[np.object_]:
+    """`word(value)` of each of `values` where written, else '' (or what `column` has
+    there). Each distinct value is made once (a run repeats its Z levels, a grid its X and
+    Y, a CAM file its few feeds)."""
+    if column is None:
+        column = np.full(len(values), "", dtype=object)
+    distinct, where = np.unique(values[written], return_inverse=True)
+    words = [word(value) for value in distinct.tolist()]
+    column[written] = np.array(words, dtype=object)[where.reshape(-1)]
+    return column
 
 
 def spindle_words(words: list[tuple[str, str]], s_code: str | None) -> list[tuple[str, str]]:
@@ -1025,7 +939,8 @@ def check_reader(
     previous: Line | None = None
     for line in lines:
         if isinstance(line, LineRun):
-            characters = line.sizes + 1
+            texts = line.texts
+            characters = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts)) + 1
             ahead = line.continuous[:-1] & (line.length[:-1] > 0)
             with np.errstate(divide="ignore", invalid="ignore"):
                 t1 = (
@@ -1042,11 +957,11 @@ def check_reader(
             t2 = 0.010 + (characters[1:] - 1) / 300
             near = np.flatnonzero(ahead & (t2 > t1 * (1 - 1e-9)))
             if previous is not None:
-                _check_read(previous, line.text_of(0), fmt, report)
+                _check_read(previous, texts[0], fmt, report)
             for k in near.tolist():
-                _check_read(line.line(k), line.text_of(k + 1), fmt, report)
+                _check_read(line.line(k), texts[k + 1], fmt, report)
             yield line
-            previous = line.line(len(line) - 1)
+            previous = line.line(len(texts) - 1)
             continue
         if previous is not None and previous.continuous:
             _check_read(previous, line.text, fmt, report)

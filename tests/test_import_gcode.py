@@ -402,9 +402,24 @@ def test_a_feed_past_the_control_s_range_is_cut_at_its_end() -> None:
     ]
     assert (
         "assumed: line 5: F108.0 (column 11): 108 ipm across is outside FEEDR XY's 0.1 to 100 "
-        "ipm, the control's: cut at 100 ipm"
+        "ipm (2 to 2540 mm/min in an mm block), the control's: cut at 100 ipm"
     ) in [str(n) for n in result.report]
     assert [p for p in validate(result.program) if p.severity is Severity.ERROR] == []
+
+
+def test_a_feed_an_mm_block_may_have_is_read_as_written_in_an_inch_file() -> None:
+    """A program in inch with an mm BORE at FEEDR Z 2 mm/min (the slowest an mm block
+    takes) exports as an inch file with F0.0787: within the control's range, so read as
+    written, as rs274 reads it (the referee's round trip found it cut to 0.1 ipm). A feed
+    slower than any block takes is still brought to the range's end, reported."""
+    text = "G20\nT1 M6\nS1000 M3\nG0 X1 Y1 Z0.1\nG1 Z-0.1 F0.0787\nG0 Z1\nM30\n"
+    result = read_program(text.encode(), "t", "gcode")
+    assert not [str(n) for n in result.report if "outside FEEDR" in str(n)]
+    slow = read_program(text.replace("F0.0787", "F0.05").encode(), "t", "gcode")
+    assert (
+        "assumed: line 5: F0.05 (column 10): 0.05 ipm in Z is outside FEEDR Z's 0.1 to 250 "
+        "ipm (2 to 6350 mm/min in an mm block), the control's: cut at 0.0787 ipm"
+    ) in [str(n) for n in slow.report]
 
 
 def test_two_axis_gcode_stops_are_the_quill() -> None:

@@ -233,11 +233,23 @@ LINEAR: Final = frozenset({"0", "1"})
 # The G words `fast_words` takes, as written, and their code.
 MOTION_CODES: Final = {"80": "80"} | {f"{p}{c}": c for c in "0123" for p in ("", "0")}
 NO_CODES: dict[str, Word] = {}
-# The control's FEEDR XY and FEEDR Z ranges in nm/min (app.cnc.limits).
-FEEDS_ACROSS: Final = {
-    u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_XY.items()
-}
-FEEDS_DOWN: Final = {u: (feed_nm(f.low, u), feed_nm(f.high, u)) for u, f in limits.FEED_Z.items()}
+
+
+def widest_feeds(ranges: dict[Units, limits.FeedLimits]) -> tuple[int, int]:
+    """The slowest and fastest feed (nm/min) a block of either unit takes: a file's units
+    need not be the block's (an inch program's mm block at 2 mm/min is written F0.0787)."""
+    return (
+        min(feed_nm(f.low, u) for u, f in ranges.items()),
+        max(feed_nm(f.high, u) for u, f in ranges.items()),
+    )
+
+
+# The control's FEEDR XY and FEEDR Z ranges in nm/min (app.cnc.limits), either unit's.
+FEEDS_ACROSS: Final = widest_feeds(limits.FEED_XY)
+FEEDS_DOWN: Final = widest_feeds(limits.FEED_Z)
+# A feed this close to a range's end is within it: half the last place of a feed written to
+# 0.0001 ipm, as a G-code writer (ours too) writes an mm block's 2 mm/min: F0.0787.
+FEED_SLACK: Final = NM_PER_INCH // 20_000
 # The work offsets' codes, systems 1-9 (G10 L2/L20 P1-P9).
 SYSTEM_CODES: Final = ("54", "55", "56", "57", "58", "59", "59.1", "59.2", "59.3")
 # The letters a word may have, either case, to the upper case (O: the careful reader).
@@ -881,8 +893,8 @@ class _Reader:
             if feed <= 0 and not is_positive(f):  # (more than 0 nm: more than 0)
                 return False
         if feed is not None:
-            low, high = FEEDS_ACROSS[units]
-            if not low <= feed <= high:
+            low, high = FEEDS_ACROSS
+            if not low - FEED_SLACK <= feed <= high + FEED_SLACK:
                 return False  # (`need_feed` reports it, at the F word's column)
         # Where the axis words go, for a line, an arc or a hole alike, as `target` has it
         # (an axis without a word stays where it is), and the decimal places the file is
@@ -1978,18 +1990,21 @@ class _Reader:
         feed = self.feed
         if feed is None:
             raise failure(block.line, block.words[0].column, "a feed move with no F given yet")
-        units = self.current_units()
-        low, high = (FEEDS_ACROSS if across else FEEDS_DOWN)[units]
-        if low <= feed <= high:
+        low, high = FEEDS_ACROSS if across else FEEDS_DOWN
+        if low - FEED_SLACK <= feed <= high + FEED_SLACK:
             return feed
         cut = high if feed > high else low
-        line, column, text = self.feed_at
-        limit = (limits.FEED_XY if across else limits.FEED_Z)[units]
+        units = self.current_units()
+        other = Units.MM if units is Units.INCH else Units.INCH
+        ranges = limits.FEED_XY if across else limits.FEED_Z
+        limit, also = ranges[units], ranges[other]
         self.notes.assumed(
-            line,
-            f"F{text} (column {column}): {show_feed(feed, units)} {'across' if across else 'in Z'}"
-            f" is outside FEEDR {'XY' if across else 'Z'}'s {limit.low} to {limit.high} "
-            f"{units.feed_symbol}, the control's: cut at {show_feed(cut, units)}",
+            self.feed_at[0],
+            f"F{self.feed_at[2]} (column {self.feed_at[1]}): {show_feed(feed, units)} "
+            f"{'across' if across else 'in Z'} is outside FEEDR {'XY' if across else 'Z'}'s "
+            f"{limit.low} to {limit.high} {units.feed_symbol} ({also.low} to {also.high} "
+            f"{other.feed_symbol} in {'an mm' if other is Units.MM else 'an inch'} block), "
+            f"the control's: cut at {show_feed(cut, units)}",
         )
         return cut
 

@@ -29,6 +29,15 @@ timeout = 30
 control_socket = str(instance_dir() / "gunicorn.ctl")
 
 
+def on_starting(server: Any) -> None:
+    """Before gunicorn's master starts a worker: a setting or database no worker can use is
+    said once and gunicorn exits 4 (or 3 for a database that does not answer yet) as the
+    unit expects (app.check_start says why the workers alone cannot be trusted to)."""
+    from app import check_start
+
+    check_start()
+
+
 def post_worker_init(worker: Any) -> None:
     """Once a worker has loaded the app: what exists then (modules, the app, its tables)
     lives as long as the worker, so it is collected once and set aside (`gc.freeze`) rather

@@ -1,5 +1,5 @@
 """The wheel's build: the package, the app's data folders mapped into it, and (behind a
-switch) the G-code importer compiled with mypyc.
+switch) the hot modules of the G-code importer and the 1704 writer compiled with mypyc.
 
 The repository keeps `templates/`, `static/` and `migrations/` at its top level; the wheel
 carries them inside the package as `app/templates`, `app/static`, `app/migrations`, where

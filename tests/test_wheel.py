@@ -288,19 +288,26 @@ def _probe(installed: Installed, files: list[Path], switch: str | None) -> list[
 
 
 def test_compiled_and_sources_import_alike(installed: Installed, tmp_path: Path) -> None:
-    """The installed wheel runs its importer compiled, and gives the same programs, reports
-    and errors as the same wheel's sources (MILLBLOCKS_NATIVE=0), file by file: the build
-    changes the speed, nothing a user sees."""
+    """The installed wheel runs its importer and 1704 writer compiled, and gives the same
+    programs, reports, tapes and errors as the same wheel's sources (MILLBLOCKS_NATIVE=0),
+    file by file: every imported program written as a tape, every golden program written
+    to each tape target and LinuxCNC G-code. The build changes the speed, nothing a user
+    sees."""
     files = _import_files(tmp_path)
     assert len(files) > 80
-    compiled = _probe(installed, files, None)
-    sources = _probe(installed, files, "0")
+    programs = sorted((HERE / "golden").glob("*/program.json"))
+    assert len(programs) > 60
+    arguments = [*files, Path("--export"), *programs]
+    compiled = _probe(installed, arguments, None)
+    sources = _probe(installed, arguments, "0")
     assert compiled[-1] == {"native": dict.fromkeys(native.COMPILED, "compiled")}
     assert sources[-1] == {"native": dict.fromkeys(native.COMPILED, "source")}
-    assert len(compiled) == len(sources) > len(files)
+    assert len(compiled) == len(sources) > len(files) + 5 * len(programs)
     for ours, theirs in zip(compiled[:-1], sources[:-1], strict=True):
         assert ours == theirs, ours["file"]
     assert sum("program" in outcome for outcome in compiled) > 80
+    tapes = [o["tape-eia"] for o in compiled if "tape-eia" in o]
+    assert sum("data" in tape for tape in tapes) > 100  # type: ignore[operator]
 
 
 def test_a_checkout_never_loads_extension_modules(tmp_path: Path) -> None:
@@ -311,14 +318,15 @@ def test_a_checkout_never_loads_extension_modules(tmp_path: Path) -> None:
     )
     (tmp_path / "templates").mkdir()
     suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
-    for name in (*native.COMPILED, "app.cnc.recognition.build", f"app.cnc.{native.GROUP}__mypyc"):
+    stale = ("app.cnc.formats.gcode.ngc", f"app.cnc.{native.GROUP}__mypyc")  # not in COMPILED
+    for name in (*native.COMPILED, *stale):
         source = native.source_path(name, tmp_path)
         source.with_name(source.stem + suffix).write_bytes(b"")
     script = (
         "from app.cnc import native\n"
         "from app.cnc.formats.reading import read_program\n"
         "r = read_program(b'G21 G90\\nG0 X0 Y0 Z5\\nG1 Z-1 F100\\nG0 Z5\\nM30\\n', 'x')\n"
-        "import app.cnc.recognition.build as b\n"
+        "import app.cnc.formats.gcode.ngc as b\n"
         "print(len(r.program.blocks), b.__file__.endswith('.py'), native.status())\n"
     )
     env = {k: v for k, v in os.environ.items() if k != native.SWITCH}

@@ -1,4 +1,5 @@
-"""The G-code importer's hot modules, compiled to C by mypyc in a wheel built for it.
+"""The hot modules of the G-code importer and the 1704 tape writer, compiled to C by
+mypyc in a wheel built for it.
 
 `MILLBLOCKS_MYPYC=1` when the wheel is built (setup.py, `make wheel-native`) compiles the
 modules in `COMPILED` into extension modules that sit beside their sources in the
@@ -27,8 +28,12 @@ from pathlib import Path
 from types import ModuleType
 
 # The G-code import pipeline, from the characters of a file to its operations (the
-# bench's `read_as`): each is strictly typed (mypy --strict on app.cnc), which is what
-# mypyc compiles from. Order does not matter; the group is built as one.
+# bench's `read_as`), the helpers it calls for every operation (units, geometry, routines,
+# the program's build), and the 1704 writer's planner, rounder and words with the compiled
+# path they walk (`millblocks export big.ngc --to tape-eia`, issue 31). Each is strictly
+# typed (mypy --strict on app.cnc), which is what mypyc compiles from. Not app.cnc.places:
+# a generic dataclass compiled by mypyc fails at import ("attribute '__dict__' of 'type'
+# objects is not writable"). Order does not matter; the group is built as one.
 COMPILED = (
     "app.cnc.recognition.common",
     "app.cnc.recognition.steps",
@@ -37,6 +42,14 @@ COMPILED = (
     "app.cnc.recognition.ops",
     "app.cnc.recognition.recognise",
     "app.cnc.recognition.motion",
+    "app.cnc.formats.tape1704.plan",
+    "app.cnc.formats.tape1704.words",
+    "app.cnc.formats.tape1704.image",
+    "app.cnc.units",
+    "app.cnc.geometry",
+    "app.cnc.routines",
+    "app.cnc.recognition.build",
+    "app.cnc.path",
 )
 GROUP = "native_group"  # the group's shared library: app/cnc/native_group__mypyc.*.so
 ROOT = Path(__file__).resolve().parents[2]  # the directory holding `app`

@@ -513,7 +513,6 @@ def exact_ring(
     if n < 3:
         return None
     at = np.array(ring, dtype=np.float64)
-    points: list[Pt] = list(map(tuple, at.tolist()))
     if table is None:
         table = level_table(level, tolerance)
     rows, carriers_of = _carriers_at(at, tolerance, table)
@@ -527,14 +526,25 @@ def exact_ring(
         carrier = level[runs[0][0]]
         if carrier.is_line:
             return None
-        start = carrier.project(_lowest(points))
+        start = carrier.project(_lowest(ring))
         element = Element(block, start, centre=carrier.origin, clockwise=carrier.clockwise, tag=tag)
         path = Path(start, (element,))
-        return _checked(path, at, points, [np.arange(n)], [element], [start], tolerance, [carrier])
+        every = np.arange(n)
+        return _checked(
+            path,
+            at,
+            ring,
+            every,
+            np.zeros(n, dtype=np.intp),
+            [element],
+            [start],
+            tolerance,
+            [carrier],
+        )
     junctions: list[Pt] = []
     for k, (label, first, length) in enumerate(runs):
         nxt_label = runs[(k + 1) % len(runs)][0]
-        last, after = points[(first + length) % n], points[(first + length + 1) % n]
+        last, after = _point(ring, first + length), _point(ring, first + length + 1)
         meet = _junction(level[label], level[nxt_label], last, after, tolerance)
         if meet is None:
             return None
@@ -550,7 +560,7 @@ def exact_ring(
         return None
     elements: list[Element] = []
     element_starts: list[Pt] = []
-    groups: list[IntArray] = []
+    kept: list[tuple[int, int, int]] = []
     used: list[Carrier] = []
     for k, (label, first, length) in enumerate(runs):
         start, end = junctions[k - 1], junctions[k]
@@ -565,14 +575,21 @@ def exact_ring(
             )
         elements.append(element)
         element_starts.append(start)
-        # The run's points that lie on its carrier (in order), found among the pairs.
-        run = (first + np.arange(length + 1)) % n
-        groups.append(run[_has(codes, label * n + run)])
+        kept.append((label, first, length))
         used.append(carrier)
     if not elements:
         return None
+    # Each element's run's points that lie on its carrier (in order), found among the
+    # pairs for every run at once: the rows of `at` and the element of each.
+    on_carrier, firsts, lengths = (
+        np.array(column, dtype=np.intp) for column in zip(*kept, strict=True)
+    )
+    sizes = lengths + 1
+    owner = np.repeat(np.arange(len(kept)), sizes)
+    rows = (firsts[owner] + np.arange(len(owner)) - np.repeat(np.cumsum(sizes) - sizes, sizes)) % n
+    on = _has(codes, on_carrier[owner] * n + rows)
     path = Path(junctions[-1], tuple(elements))
-    return _checked(path, at, points, groups, elements, element_starts, tolerance, used)
+    return _checked(path, at, ring, rows[on], owner[on], elements, element_starts, tolerance, used)
 
 
 def _has(codes: IntArray, wanted: IntArray) -> npt.NDArray[np.bool_]:
@@ -587,8 +604,9 @@ def _has(codes: IntArray, wanted: IntArray) -> npt.NDArray[np.bool_]:
 def _checked(
     path: Path,
     at: npt.NDArray[np.float64],
-    points: list[Pt],
-    groups: list[IntArray],
+    ring: Ring,
+    which: IntArray,
+    owner: IntArray,
     elements: list[Element],
     starts: list[Pt],
     tolerance: float,
@@ -596,24 +614,34 @@ def _checked(
 ) -> ExactRing | None:
     # numpy bounds the exact distance of every point to its element at once (one pass for
     # the ring); only a point whose bounds straddle the limit (beside an arc's end) is
-    # measured exactly. `groups`: each element's points, as rows of `at` (the ring's
-    # points, `points` the same as tuples).
-    which = np.concatenate(groups)
+    # measured exactly. `which`, `owner`: the points of the elements, as rows of `at`
+    # (the ring's points, `ring` the same as tuples), and the element of each.
     if len(which):
-        owner = np.repeat(np.arange(len(groups)), [len(group) for group in groups])
         lower, upper = nearest.pair_bounds(at[which], nearest.table(starts, elements).take(owner))
         if (lower > 2 * tolerance + nearest.MARGIN).any():
             return None
         for i in np.flatnonzero(upper > 2 * tolerance - nearest.MARGIN).tolist():
             k = int(owner[i])
-            if distance_to_element(points[int(which[i])], starts[k], elements[k]) > 2 * tolerance:
+            if (
+                distance_to_element(_point(ring, int(which[i])), starts[k], elements[k])
+                > 2 * tolerance
+            ):
                 return None
     sources = tuple(sorted({s for c in used for s in c.sources}))
     return ExactRing(path, sources)
 
 
-def _lowest(points: list[Pt]) -> Pt:
-    return min(points, key=lambda p: (p[1], p[0]))
+def _point(ring: Ring, i: int) -> Pt:
+    """Point `i` of the closed `ring` (any whole number: taken round the ring) as floats,
+    the numbers numpy reads (a ring's points are made floats only where they are read:
+    a ring has thousands)."""
+    x, y = ring[i % len(ring)]
+    return (float(x), float(y))
+
+
+def _lowest(ring: Ring) -> Pt:
+    x, y = min(ring, key=lambda p: (p[1], p[0]))
+    return (float(x), float(y))
 
 
 def _runs(labels: list[set[int]]) -> list[tuple[int, int, int]]:

@@ -27,8 +27,9 @@ import numpy as np
 import numpy.typing as npt
 import pyclipper
 
-from app.cnc.cutter import offset_element
-from app.cnc.plane import Element, Path, Pt, cross, dot, left_normal, sweep, tangent
+from app.cnc.cutter import offset_directions
+from app.cnc.geometry import arc_sweep
+from app.cnc.plane import Element, Path, Pt, add, cross, dot, left_normal, scale, sweep, tangent
 
 IPt = tuple[int, int]
 Ring = list[IPt]
@@ -195,16 +196,23 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
     turns = corners(contour)
+    # Each element moved d to its left as `cutter.offset_element` moves it (the same
+    # arithmetic, its directions made once for the contour's every level).
+    moves = directions(contour)
     for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
-        moved_start, moved = offset_element(start, element, 1.0, d)
+        at_start, at_end = moves[k]
+        moved_start, moved_end = (
+            add(start, scale(at_start, 1.0 * d)),
+            add(element.end, scale(at_end, 1.0 * d)),
+        )
         c = element.centre
         if c is None:
-            pieces.append([moved_start, moved.end])
+            pieces.append([moved_start, moved_end])
         elif math.dist(moved_start, c) < 1.0:
             pieces.append([c])  # an arc of radius d: its offset is its centre
         else:
             radius = math.dist(moved_start, c)
-            turn = sweep(moved_start, moved)
+            turn = arc_sweep(moved_start, moved_end, c, element.clockwise)
             a0 = math.atan2(moved_start[1] - c[1], moved_start[0] - c[0])
             signed = -turn if element.clockwise else turn
             n = arc_steps(radius, turn, tolerance)
@@ -233,6 +241,17 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
         at = at[:-1]
     found: list[list[int]] = at.tolist()
     return found
+
+
+@functools.lru_cache(maxsize=64)
+def directions(contour: Path) -> tuple[tuple[Pt, Pt], ...]:
+    """Each element's `cutter.offset_directions`: the same at every level, made once for a
+    contour (kept for the last few)."""
+    starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+    return tuple(
+        offset_directions(start, element)
+        for start, element in zip(starts, contour.elements, strict=True)
+    )
 
 
 @functools.lru_cache(maxsize=64)

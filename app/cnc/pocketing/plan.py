@@ -681,7 +681,9 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     # Some sample is within its distance to any element's start (a point of the ring): the
     # nearest of those, so that the search's cells are about as small as the rings are
     # near (the ring's start alone put a whole ring in one cell, every pair measured).
-    reach = _reach(points, ring_starts)
+    # At most `REACH_POINTS` of them, spread along the ring: the cost is the samples'.
+    chosen = np.linspace(0, len(ring_starts) - 1, min(len(ring_starts), REACH_POINTS))
+    reach = _reach(points, [ring_starts[k] for k in np.unique(chosen.astype(np.intp)).tolist()])
     table = nearest.table(ring_starts, ring.elements)
     best: tuple[float, Pt] | None = None
     for i, near in nearest.nearest_pairs(points, table, reach):
@@ -699,19 +701,14 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     return Path(way.start, tuple(replace(e, tag="link") for e in way.elements)), q
 
 
+REACH_POINTS = 64  # ring points a way round measures every sample against, at most
+
+
 def _reach(points: FloatArray, targets: Sequence[Pt]) -> float:
-    """The least distance (nm) from a row of `points` to one of `targets`, as numpy finds
-    it (in passes of a bounded size)."""
+    """The least distance (nm) from a row of `points` to one of `targets` (a few), as
+    numpy finds it."""
     at = np.array(targets, dtype=np.float64).reshape(-1, 2)
-    per = max(1, nearest.PAIRS // len(at))
-    return min(
-        float(
-            np.hypot(
-                points[k : k + per, 0:1] - at[None, :, 0], points[k : k + per, 1:2] - at[None, :, 1]
-            ).min()
-        )
-        for k in range(0, len(points), per)
-    )
+    return float(np.hypot(points[:, 0:1] - at[None, :, 0], points[:, 1:2] - at[None, :, 1]).min())
 
 
 def _up_to(path: Path, point: Pt) -> tuple[Element, ...]:

@@ -674,13 +674,14 @@ def way_round_pairs(monkeypatch: pytest.MonkeyPatch, n: int) -> tuple[int, Pt, P
     measuring every pair exactly chooses) for the way round `comb(n)` raised 0.1 in to
     `comb(n)`, sampled every 1/128 in."""
     counted = [0]
-    real = nearest.bounds
+    real = nearest._bounds
 
-    def bounds(points: object, elements: nearest.Elements) -> object:
-        counted[0] += len(points) * len(elements)  # type: ignore[arg-type]
-        return real(points, elements)  # type: ignore[arg-type]
+    def bounds(px: object, py: object, elements: nearest.Elements) -> object:
+        lower, upper = real(px, py, elements)  # type: ignore[arg-type]
+        counted[0] += lower.size  # (point, element) pairs, in a grid or one by one
+        return lower, upper
 
-    monkeypatch.setattr(nearest, "bounds", bounds)
+    monkeypatch.setattr(nearest, "_bounds", bounds)
     previous, ring, step = comb(n, IN / 10), comb(n), IN / 128
     _, chosen = _way_round(previous, ring, step)
     monkeypatch.undo()

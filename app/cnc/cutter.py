@@ -61,18 +61,26 @@ class Geometry:
 
 def offset_element(start: Pt, element: Element, side: float, r: float) -> tuple[Pt, Element]:
     """The element moved `r` to the left (`side` +1) or right (−1) of its travel."""
+    at_start, at_end = offset_directions(start, element)
+    return add(start, scale(at_start, side * r)), replace(
+        element, end=add(element.end, scale(at_end, side * r))
+    )
+
+
+def offset_directions(start: Pt, element: Element) -> tuple[Pt, Pt]:
+    """The unit directions (left of its travel) in which `offset_element` moves an
+    element's start and end: the same for both ends of a line; for an arc, toward its
+    centre or away. The same whatever the distance: a caller offsetting one contour by
+    many distances makes them once."""
     if element.centre is None:
-        n = scale(left_normal(unit(sub(element.end, start))), side * r)
-        return add(start, n), replace(element, end=add(element.end, n))
+        n = left_normal(unit(sub(element.end, start)))
+        return n, n
     c = element.centre
-
-    def moved(p: Pt) -> Pt:
-        radial = unit(sub(p, c))
-        # Left of a counter-clockwise arc is toward its centre; of a clockwise one, away.
-        toward_left = scale(radial, -1.0) if not element.clockwise else radial
-        return add(p, scale(toward_left, side * r))
-
-    return moved(start), replace(element, end=moved(element.end))
+    # Left of a counter-clockwise arc is toward its centre; of a clockwise one, away.
+    to_start, to_end = unit(sub(start, c)), unit(sub(element.end, c))
+    if element.clockwise:
+        return to_start, to_end
+    return scale(to_start, -1.0), scale(to_end, -1.0)
 
 
 def is_zero_length(start: Pt, element: Element) -> bool:

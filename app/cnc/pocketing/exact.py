@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -77,7 +77,8 @@ class Carrier:
 
     def distances(self, points: npt.NDArray[np.float64], slack: float) -> npt.NDArray[np.float64]:
         """`distance` for every row (x, y) of `points` at once, the same numbers."""
-        return _pair_distances(points, np.zeros(len(points), dtype=np.intp), [self], slack)
+        which = np.zeros(len(points), dtype=np.intp)
+        return _pair_distances(points, which, _columns([self], slack))
 
     def box(self, tolerance: float) -> tuple[float, float, float, float]:
         """A box holding every point within `tolerance` of the carrier's spans (and of their
@@ -191,21 +192,49 @@ _LENGTH_STEP = 1_000.0  # nm: lines, circles the same within 1 nm (a few at 99 i
 
 
 def _keys(carrier: Carrier) -> list[tuple[object, ...]]:
-    """The index buckets a carrier the same as `carrier` can be in (its own first)."""
+    """The index buckets a carrier the same as `carrier` can be in (its own first): of the
+    neighbouring buckets (a step either way in each number), only those the numbers of a
+    carrier within `_same`'s limits of this one round into (one bucket, as a rule, not 9 or
+    27: gathering a level's carriers asked every neighbour, a twentieth of a large pocket's
+    planning). The bucket a same carrier is in is always among them, so the carriers
+    compared, and the one merged into, are the same as when every neighbour was asked."""
     if carrier.direction is not None:
         dx, dy = carrier.direction
-        a = round(math.atan2(dy, dx) / _ANGLE_STEP) % _ANGLES
-        c = round(cross(carrier.direction, carrier.origin) / _LENGTH_STEP)
-        return [("line", (a + i) % _ANGLES, c + j) for i in (0, -1, 1) for j in (0, -1, 1)]
+        angle = math.atan2(dy, dx)
+        a = round(angle / _ANGLE_STEP) % _ANGLES
+        along = cross(carrier.direction, carrier.origin)
+        c = round(along / _LENGTH_STEP)
+        # Same lines: directions within about 1e-9 rad, and numbers `along` within 1 nm
+        # and the turn times the distance from the origin (and rounding) of each other.
+        if abs(angle) + _ANGLE_SLACK < math.pi:
+            low = round((angle - _ANGLE_SLACK) / _ANGLE_STEP) - round(angle / _ANGLE_STEP)
+            high = round((angle + _ANGLE_SLACK) / _ANGLE_STEP) - round(angle / _ANGLE_STEP)
+            turns = [0] + [i for i in (-1, 1) if low <= i <= high]
+        else:  # (where the angle wraps round, every neighbour)
+            turns = [0, -1, 1]
+        slack = 2.0 + 4e-9 * (abs(carrier.origin[0]) + abs(carrier.origin[1]))
+        return [("line", (a + i) % _ANGLES, c + j) for i in turns for j in _steps(along, c, slack)]
     x = round(carrier.origin[0] / _LENGTH_STEP)
     y = round(carrier.origin[1] / _LENGTH_STEP)
     r = round(carrier.radius / _LENGTH_STEP)
+    # Same circles: centres within 1 nm (each coordinate), radii within 1 nm.
     return [
         ("circle", carrier.clockwise, x + i, y + j, r + k)
-        for i in (0, -1, 1)
-        for j in (0, -1, 1)
-        for k in (0, -1, 1)
+        for i in _steps(carrier.origin[0], x, 2.0)
+        for j in _steps(carrier.origin[1], y, 2.0)
+        for k in _steps(carrier.radius, r, 2.0)
     ]
+
+
+_ANGLE_SLACK = 1e-8  # rad: more than the turn between same lines and atan2's rounding
+
+
+def _steps(value: float, bucket: int, slack: float) -> list[int]:
+    """Of the steps 0, -1, 1 from `bucket` (`value`'s), those a number within `slack` of
+    `value` can round into (0 first)."""
+    low = round((value - slack) / _LENGTH_STEP) - bucket
+    high = round((value + slack) / _LENGTH_STEP) - bucket
+    return [0] + [i for i in (-1, 1) if low <= i <= high]
 
 
 class _Level:
@@ -218,21 +247,25 @@ class _Level:
 
     def merge(self, new: Carrier) -> None:
         keys = _keys(new)
-        candidates = sorted({k for key in keys for k in self.buckets.get(key, ())})
+        buckets = self.buckets
+        candidates = sorted({k for key in keys if key in buckets for k in buckets[key]})
         for k in candidates:
             old = self.found[k]
             if not _same(old, new):
                 continue
+            spans = new.spans
             if old.direction is not None:
                 shift = dot(sub(new.origin, old.origin), old.direction)
-                spans = tuple((lo + shift, hi + shift) for lo, hi in new.spans)
-                self.found[k] = replace(
-                    old, spans=old.spans + spans, sources=old.sources + new.sources
-                )
-            else:
-                self.found[k] = replace(
-                    old, spans=old.spans + new.spans, sources=old.sources + new.sources
-                )
+                spans = tuple((lo + shift, hi + shift) for lo, hi in spans)
+            # (made directly: `dataclasses.replace` reads the fields' descriptions each time)
+            self.found[k] = Carrier(
+                old.origin,
+                old.direction,
+                old.radius,
+                old.clockwise,
+                old.spans + spans,
+                old.sources + new.sources,
+            )
             return
         self.buckets.setdefault(keys[0], []).append(len(self.found))
         self.found.append(new)
@@ -241,54 +274,33 @@ class _Level:
 IntArray = npt.NDArray[np.intp]
 
 
-def carrier_boxes(level: Sequence[Carrier], tolerance: float) -> npt.NDArray[np.float64]:
-    """Each carrier's `box(tolerance)` as a row (x0, y0, x1, y1): for `exact_ring`, when a
-    caller asks it of many rings of one level."""
-    return np.array([c.box(tolerance) for c in level], dtype=np.float64).reshape(-1, 4)
+FloatArray = npt.NDArray[np.float64]
 
 
-def _carriers_at(
-    at: npt.NDArray[np.float64],
-    level: Sequence[Carrier],
-    tolerance: float,
-    boxes: npt.NDArray[np.float64],
-) -> tuple[IntArray, IntArray]:
-    """(rows, carriers): every pair of a point (a row of `at`) and a carrier it lies on
-    within `tolerance`, by carrier in the level's order, rows ascending (numpy passes over
-    the (point, carrier) pairs whose carrier's box holds the point: a contour of hundreds
-    of blocks has as many carriers, and one pass per carrier cost more in calls than in
-    arithmetic)."""
-    low, high = at.min(axis=0), at.max(axis=0)
-    x0, y0, x1, y1 = boxes.T
-    meets = np.flatnonzero((x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1]))
-    # The points by x: a carrier's box holds a run of them, found by bisection, and only
-    # that run is compared in y (not every point of the ring for every carrier).
-    by_x = np.argsort(at[:, 0], kind="stable")
-    xs, ys = at[by_x, 0], at[by_x, 1]
-    box = boxes[meets]
-    first = np.searchsorted(xs, box[:, 0], side="left")
-    counts = np.maximum(np.searchsorted(xs, box[:, 2], side="right") - first, 0)
-    owner = np.repeat(np.arange(len(meets)), counts)
-    place = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts) + first[owner]
-    inside = (ys[place] >= box[owner, 1]) & (ys[place] <= box[owner, 3])
-    owner, rows = owner[inside], by_x[place[inside]]
-    order = np.lexsort((rows, owner))  # by carrier, rows ascending
-    rows, found = rows[order], meets[owner[order]]
-    close = _pair_distances(at[rows], found, level, tolerance) <= tolerance
-    return rows[close], found[close]
+@dataclass(frozen=True)
+class _Columns:
+    """Carriers as numpy reads them for `_pair_distances` with one slack: a row per carrier
+    (origin, direction of a line, radius and slack angle of a circle; which are lines,
+    clockwise, full circles) and one per span (`span_of`: its carrier, ascending; `span_a`,
+    `span_b`: a line's from and to with the slack, a circle's start angle and turn with
+    the slack)."""
+
+    ox: FloatArray
+    oy: FloatArray
+    dx: FloatArray
+    dy: FloatArray
+    radius: FloatArray
+    slack_angle: FloatArray
+    line: npt.NDArray[np.bool_]
+    clockwise: npt.NDArray[np.bool_]
+    full: npt.NDArray[np.bool_]
+    span_of: IntArray
+    span_a: FloatArray
+    span_b: FloatArray
 
 
-def _pair_distances(
-    points: npt.NDArray[np.float64], which: IntArray, level: Sequence[Carrier], slack: float
-) -> npt.NDArray[np.float64]:
-    """`Carrier.distance` of each row of `points` to the carrier `which` names beside it
-    (the same numbers as `Carrier.distances`, by the same arithmetic), in numpy passes
-    over every pair at once rather than one pass per carrier."""
-    result = np.full(len(which), math.inf)
-    if not len(which):
-        return result
-    used = np.unique(which).tolist()
-    # The carriers' numbers as columns (by carrier), and their spans one row each.
+def _columns(level: Sequence[Carrier], slack: float) -> _Columns:
+    """The `_Columns` of `level` for `slack` (nm)."""
     ox, oy, dx, dy, radius, slack_angle = (np.zeros(len(level)) for _ in range(6))
     line = np.zeros(len(level), dtype=bool)
     clockwise = np.zeros(len(level), dtype=bool)
@@ -296,8 +308,7 @@ def _pair_distances(
     span_of: list[int] = []
     span_a: list[float] = []
     span_b: list[float] = []
-    for k in used:
-        carrier = level[k]
+    for k, carrier in enumerate(level):
         ox[k], oy[k] = carrier.origin
         if carrier.direction is not None:
             line[k] = True
@@ -317,18 +328,89 @@ def _pair_distances(
             span_of.append(k)
             span_a.append(start)
             span_b.append(turn + angle_slack)
+    return _Columns(
+        ox,
+        oy,
+        dx,
+        dy,
+        radius,
+        slack_angle,
+        line,
+        clockwise,
+        full,
+        np.array(span_of, dtype=np.intp),
+        np.array(span_a, dtype=np.float64),
+        np.array(span_b, dtype=np.float64),
+    )
+
+
+@dataclass(frozen=True)
+class LevelTable:
+    """A level's carriers as `exact_ring` reads them with one tolerance, made once for the
+    level's many rings (they are the same for each): each carrier's `box(tolerance)` as a
+    row (x0, y0, x1, y1), and its numbers for measuring distances to it."""
+
+    boxes: FloatArray
+    columns: _Columns
+
+
+def level_table(level: Sequence[Carrier], tolerance: float) -> LevelTable:
+    """The `LevelTable` of `level` for `tolerance` (nm)."""
+    boxes = np.array([c.box(tolerance) for c in level], dtype=np.float64).reshape(-1, 4)
+    return LevelTable(boxes, _columns(level, tolerance))
+
+
+def _carriers_at(
+    at: npt.NDArray[np.float64], tolerance: float, table: LevelTable
+) -> tuple[IntArray, IntArray]:
+    """(rows, carriers): every pair of a point (a row of `at`) and a carrier it lies on
+    within `tolerance` (`table`'s), by carrier in the level's order, rows ascending (numpy
+    passes over the (point, carrier) pairs whose carrier's box holds the point: a contour
+    of hundreds of blocks has as many carriers, and one pass per carrier cost more in
+    calls than in arithmetic)."""
+    boxes = table.boxes
+    low, high = at.min(axis=0), at.max(axis=0)
+    x0, y0, x1, y1 = boxes.T
+    meets = np.flatnonzero((x0 <= high[0]) & (x1 >= low[0]) & (y0 <= high[1]) & (y1 >= low[1]))
+    # The points by x: a carrier's box holds a run of them, found by bisection, and only
+    # that run is compared in y (not every point of the ring for every carrier).
+    by_x = np.argsort(at[:, 0], kind="stable")
+    xs, ys = at[by_x, 0], at[by_x, 1]
+    box = boxes[meets]
+    first = np.searchsorted(xs, box[:, 0], side="left")
+    counts = np.maximum(np.searchsorted(xs, box[:, 2], side="right") - first, 0)
+    owner = np.repeat(np.arange(len(meets)), counts)
+    place = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts) + first[owner]
+    inside = (ys[place] >= box[owner, 1]) & (ys[place] <= box[owner, 3])
+    owner, rows = owner[inside], by_x[place[inside]]
+    order = np.lexsort((rows, owner))  # by carrier, rows ascending
+    rows, found = rows[order], meets[owner[order]]
+    close = _pair_distances(at[rows], found, table.columns) <= tolerance
+    return rows[close], found[close]
+
+
+def _pair_distances(points: FloatArray, which: IntArray, columns: _Columns) -> FloatArray:
+    """`Carrier.distance` of each row of `points` to the carrier `which` names beside it
+    (the same numbers as `Carrier.distances`, by the same arithmetic), in numpy passes
+    over every pair at once rather than one pass per carrier. `columns`: the carriers'
+    (`_columns`, with the slack of `distance`)."""
+    result = np.full(len(which), math.inf)
+    if not len(which):
+        return result
+    c = columns
+    ox, oy, dx, dy, radius, slack_angle = c.ox, c.oy, c.dx, c.dy, c.radius, c.slack_angle
+    line, clockwise, full = c.line, c.clockwise, c.full
     qx, qy = points[:, 0] - ox[which], points[:, 1] - oy[which]
     is_line = line[which]
     angle = np.arctan2(qy, qx)
-    # Each pair against each span of its carrier: rows of (pair, span).
-    spans_at = np.array(span_of, dtype=np.intp)
-    order = np.argsort(spans_at, kind="stable")
-    starts = np.searchsorted(spans_at[order], which, side="left")
-    counts = np.searchsorted(spans_at[order], which, side="right") - starts
+    # Each pair against each span of its carrier: rows of (pair, span), the spans by
+    # carrier (ascending) as `_columns` made them.
+    starts = np.searchsorted(c.span_of, which, side="left")
+    counts = np.searchsorted(c.span_of, which, side="right") - starts
     pair = np.repeat(np.arange(len(which)), counts)
     first = np.repeat(np.cumsum(counts) - counts, counts)
-    span = order[np.arange(len(pair)) - first + starts[pair]]
-    a, b = np.array(span_a)[span], np.array(span_b)[span]
+    span = np.arange(len(pair)) - first + starts[pair]
+    a, b = c.span_a[span], c.span_b[span]
     k = which[pair]
     along_line = qx[pair] * dx[k] + qy[pair] * dy[k]
     on_line = (a <= along_line) & (along_line <= b)
@@ -363,8 +445,8 @@ def _edge_labels(
     at: npt.NDArray[np.float64],
     rows: IntArray,
     carriers_of: IntArray,
-    level: Sequence[Carrier],
     tolerance: float,
+    table: LevelTable,
 ) -> list[set[int]]:
     """For each edge of the ring (point i to point i + 1), the carriers its two ends and its
     middle lie on within `tolerance` (nm); for an edge across a junction (Clipper kept no
@@ -385,7 +467,7 @@ def _edge_labels(
     found = np.minimum(np.searchsorted(codes, wanted), len(codes) - 1)
     both[last] = codes[found] == wanted
     edges, edge_carriers = rows[both], carriers_of[both]
-    close = _pair_distances(middles[edges], edge_carriers, level, tolerance) <= tolerance
+    close = _pair_distances(middles[edges], edge_carriers, table.columns) <= tolerance
     label_rows, label_carriers = edges[close], edge_carriers[close]
     labels = _sets(label_rows, label_carriers, n)
     unlabelled = np.flatnonzero(np.bincount(label_rows, minlength=n) == 0).tolist()
@@ -417,11 +499,11 @@ def exact_ring(
     tolerance: float,
     block: int,
     tag: str,
-    level_boxes: npt.NDArray[np.float64] | None = None,
+    table: LevelTable | None = None,
 ) -> ExactRing | None:
     """The exact lines and arcs of a Clipper ring (region on its left), or None when the
-    ring cannot be matched to the level's carriers within `tolerance` nm. `level_boxes`:
-    `carrier_boxes(level, tolerance)`, when the caller asks of many rings of one level.
+    ring cannot be matched to the level's carriers within `tolerance` nm. `table`:
+    `level_table(level, tolerance)`, when the caller asks of many rings of one level.
 
     Each edge of the ring (between consecutive points) is labelled with the carriers its
     two ends and its middle lie on; the ring is split into the fewest runs of edges on one
@@ -431,28 +513,38 @@ def exact_ring(
     if n < 3:
         return None
     at = np.array(ring, dtype=np.float64)
-    points: list[Pt] = list(map(tuple, at.tolist()))
-    if level_boxes is None:
-        level_boxes = carrier_boxes(level, tolerance)
-    rows, carriers_of = _carriers_at(at, level, tolerance, level_boxes)
+    if table is None:
+        table = level_table(level, tolerance)
+    rows, carriers_of = _carriers_at(at, tolerance, table)
     if (np.bincount(rows, minlength=n) == 0).any():
         return None
     # The pairs come by carrier, rows ascending: their codes k n + i ascend (`_has`).
     codes = carriers_of * n + rows
-    labels = _edge_labels(at, rows, carriers_of, level, tolerance)
+    labels = _edge_labels(at, rows, carriers_of, tolerance, table)
     runs = _runs(labels)
     if len(runs) == 1:
         carrier = level[runs[0][0]]
         if carrier.is_line:
             return None
-        start = carrier.project(_lowest(points))
+        start = carrier.project(_lowest(ring))
         element = Element(block, start, centre=carrier.origin, clockwise=carrier.clockwise, tag=tag)
         path = Path(start, (element,))
-        return _checked(path, at, points, [np.arange(n)], [element], [start], tolerance, [carrier])
+        every = np.arange(n)
+        return _checked(
+            path,
+            at,
+            ring,
+            every,
+            np.zeros(n, dtype=np.intp),
+            [element],
+            [start],
+            tolerance,
+            [carrier],
+        )
     junctions: list[Pt] = []
     for k, (label, first, length) in enumerate(runs):
         nxt_label = runs[(k + 1) % len(runs)][0]
-        last, after = points[(first + length) % n], points[(first + length + 1) % n]
+        last, after = _point(ring, first + length), _point(ring, first + length + 1)
         meet = _junction(level[label], level[nxt_label], last, after, tolerance)
         if meet is None:
             return None
@@ -468,7 +560,7 @@ def exact_ring(
         return None
     elements: list[Element] = []
     element_starts: list[Pt] = []
-    groups: list[IntArray] = []
+    kept: list[tuple[int, int, int]] = []
     used: list[Carrier] = []
     for k, (label, first, length) in enumerate(runs):
         start, end = junctions[k - 1], junctions[k]
@@ -483,14 +575,21 @@ def exact_ring(
             )
         elements.append(element)
         element_starts.append(start)
-        # The run's points that lie on its carrier (in order), found among the pairs.
-        run = (first + np.arange(length + 1)) % n
-        groups.append(run[_has(codes, label * n + run)])
+        kept.append((label, first, length))
         used.append(carrier)
     if not elements:
         return None
+    # Each element's run's points that lie on its carrier (in order), found among the
+    # pairs for every run at once: the rows of `at` and the element of each.
+    on_carrier, firsts, lengths = (
+        np.array(column, dtype=np.intp) for column in zip(*kept, strict=True)
+    )
+    sizes = lengths + 1
+    owner = np.repeat(np.arange(len(kept)), sizes)
+    rows = (firsts[owner] + np.arange(len(owner)) - np.repeat(np.cumsum(sizes) - sizes, sizes)) % n
+    on = _has(codes, on_carrier[owner] * n + rows)
     path = Path(junctions[-1], tuple(elements))
-    return _checked(path, at, points, groups, elements, element_starts, tolerance, used)
+    return _checked(path, at, ring, rows[on], owner[on], elements, element_starts, tolerance, used)
 
 
 def _has(codes: IntArray, wanted: IntArray) -> npt.NDArray[np.bool_]:
@@ -505,8 +604,9 @@ def _has(codes: IntArray, wanted: IntArray) -> npt.NDArray[np.bool_]:
 def _checked(
     path: Path,
     at: npt.NDArray[np.float64],
-    points: list[Pt],
-    groups: list[IntArray],
+    ring: Ring,
+    which: IntArray,
+    owner: IntArray,
     elements: list[Element],
     starts: list[Pt],
     tolerance: float,
@@ -514,24 +614,34 @@ def _checked(
 ) -> ExactRing | None:
     # numpy bounds the exact distance of every point to its element at once (one pass for
     # the ring); only a point whose bounds straddle the limit (beside an arc's end) is
-    # measured exactly. `groups`: each element's points, as rows of `at` (the ring's
-    # points, `points` the same as tuples).
-    which = np.concatenate(groups)
+    # measured exactly. `which`, `owner`: the points of the elements, as rows of `at`
+    # (the ring's points, `ring` the same as tuples), and the element of each.
     if len(which):
-        owner = np.repeat(np.arange(len(groups)), [len(group) for group in groups])
         lower, upper = nearest.pair_bounds(at[which], nearest.table(starts, elements).take(owner))
         if (lower > 2 * tolerance + nearest.MARGIN).any():
             return None
         for i in np.flatnonzero(upper > 2 * tolerance - nearest.MARGIN).tolist():
             k = int(owner[i])
-            if distance_to_element(points[int(which[i])], starts[k], elements[k]) > 2 * tolerance:
+            if (
+                distance_to_element(_point(ring, int(which[i])), starts[k], elements[k])
+                > 2 * tolerance
+            ):
                 return None
     sources = tuple(sorted({s for c in used for s in c.sources}))
     return ExactRing(path, sources)
 
 
-def _lowest(points: list[Pt]) -> Pt:
-    return min(points, key=lambda p: (p[1], p[0]))
+def _point(ring: Ring, i: int) -> Pt:
+    """Point `i` of the closed `ring` (any whole number: taken round the ring) as floats,
+    the numbers numpy reads (a ring's points are made floats only where they are read:
+    a ring has thousands)."""
+    x, y = ring[i % len(ring)]
+    return (float(x), float(y))
+
+
+def _lowest(ring: Ring) -> Pt:
+    x, y = min(ring, key=lambda p: (p[1], p[0]))
+    return (float(x), float(y))
 
 
 def _runs(labels: list[set[int]]) -> list[tuple[int, int, int]]:

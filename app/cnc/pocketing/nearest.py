@@ -35,7 +35,7 @@ at an arc's end is in the bounds."""
 
 _INSIDE = 1e-9  # rad: an angle this far inside an arc's sweep is on the arc, exactly too
 _OUTSIDE = 1e-5  # rad: this far outside, the exact function takes the nearer end
-_PAIRS = 1 << 20  # (point, element) pairs per numpy pass: about 100 MB of temporaries
+PAIRS = 1 << 20  # (point, element) pairs per numpy pass: about 100 MB of temporaries
 
 
 @dataclass(frozen=True)
@@ -160,9 +160,7 @@ def nearest_pairs(points: Array, elements: Elements, reach: float) -> list[tuple
     low, high = keys.min(axis=0), keys.max(axis=0)
     width = int(high[1] - low[1]) + 1
     codes = (keys[:, 0] - low[0]) * width + (keys[:, 1] - low[1])
-    by_code = np.argsort(codes, kind="stable")
-    cells, first = np.unique(codes[by_code], return_index=True)
-    filed = dict(zip(cells.tolist(), np.split(by_code, first[1:]), strict=True))
+    cells = np.unique(codes)
     spans = np.floor(boxes / cell).astype(np.int64)
     kx0, ky0 = np.maximum(spans[:, 0], low[0]), np.maximum(spans[:, 1], low[1])
     kx1, ky1 = np.minimum(spans[:, 2], high[0]), np.minimum(spans[:, 3], high[1])
@@ -176,33 +174,36 @@ def nearest_pairs(points: Array, elements: Elements, reach: float) -> list[tuple
     )
     there = np.isin(met, cells)
     met, element = met[there], element[there]
+    if not len(met):
+        return []
     by_cell = np.argsort(met, kind="stable")
     met, element = met[by_cell], element[by_cell]
-    starts = np.flatnonzero(np.diff(met)) + 1
-    under: dict[int, npt.NDArray[np.intp]] = {}
-    if len(met):
-        heads = met[np.concatenate(([0], starts))].tolist()
-        under = dict(zip(heads, np.split(element, starts), strict=True))
+    # Each point's elements: the run of `element` under its cell (ascending).
+    firsts = np.concatenate(([0], np.flatnonzero(np.diff(met)) + 1))
+    heads = met[firsts]
+    sizes = np.diff(np.concatenate((firsts, [len(met)])))
+    at = np.minimum(np.searchsorted(heads, codes), len(heads) - 1)
+    point_count = np.where(heads[at] == codes, sizes[at], 0)
+    # Every (point, element) pair of a point's cell, point by point (rows ascending, each
+    # one's elements ascending), bounded in numpy passes over every cell's pairs at once
+    # (a pass per cell was most of the search's time: its arrays are a few dozen long).
+    owner = np.repeat(np.arange(len(points)), point_count)
+    if not len(owner):
+        return []
+    place = np.arange(len(owner)) - np.repeat(np.cumsum(point_count) - point_count, point_count)
+    which = element[firsts[at][owner] + place]
     best = math.inf
-    found: list[tuple[npt.NDArray[np.intp], npt.NDArray[np.intp], Array]] = []
-    for key, rows in filed.items():
-        which = under.get(key)
-        if which is None or not len(which):
-            continue
-        table = elements.take(which)
-        per = max(1, _PAIRS // len(which))  # (memory bounded, however many are near)
-        for k in range(0, len(rows), per):
-            at = rows[k : k + per]
-            low, high = bounds(points[at], table)
-            best = min(best, float(high.min()))
-            found.append((at, which, low))
-    limit = best + MARGIN
-    pairs: list[tuple[int, list[int]]] = []
-    for at, which, low in found:
-        for row in np.flatnonzero(low.min(axis=1) <= limit).tolist():
-            pairs.append((int(at[row]), which[low[row] <= limit].tolist()))
-    pairs.sort()
-    return pairs
+    lows: list[Array] = []
+    for k in range(0, len(owner), PAIRS):  # (memory bounded, however many are near)
+        rows, near = owner[k : k + PAIRS], which[k : k + PAIRS]
+        lower, upper = pair_bounds(points[rows], elements.take(near))
+        best = min(best, float(upper.min()))
+        lows.append(lower)
+    kept = np.concatenate(lows) <= best + MARGIN  # (the best pair's among them)
+    owner, which = owner[kept], which[kept]
+    breaks = np.flatnonzero(np.diff(owner)) + 1
+    rows_ = owner[np.concatenate(([0], breaks))].tolist()
+    return [(row, run.tolist()) for row, run in zip(rows_, np.split(which, breaks), strict=True)]
 
 
 def segment_distances(point: Pt, rings: Sequence[Sequence[tuple[int, int]]]) -> Array:
@@ -298,6 +299,16 @@ def samples(path: Path, step: float) -> Samples:
 def joined(tables: Sequence[Elements]) -> Elements:
     """Several tables as one, in order."""
     return Elements(*(np.concatenate([getattr(t, name) for t in tables]) for name in _NAMES))
+
+
+def spliced(table: Elements, start: int, end: int, rows: Elements) -> Elements:
+    """`table` with its rows `start` to `end` (not included) replaced by `rows`."""
+    return Elements(
+        *(
+            np.concatenate((getattr(table, n)[:start], getattr(rows, n), getattr(table, n)[end:]))
+            for n in _NAMES
+        )
+    )
 
 
 _NAMES = ("sx", "sy", "ex", "ey", "cx", "cy", "arc", "clockwise", "radius", "a0", "turn")

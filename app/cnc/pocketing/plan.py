@@ -50,9 +50,10 @@ from app.cnc.pocketing import nearest, regions
 from app.cnc.pocketing.checks import contour_problems, island_problems, show, starts_of
 from app.cnc.pocketing.exact import (
     Carrier,
-    carrier_boxes,
+    LevelTable,
     carriers,
     exact_ring,
+    level_table,
     matched_sources,
 )
 from app.cnc.pocketing.model import (
@@ -208,6 +209,7 @@ def pass_levels(
 
 Level = tuple[float, list[regions.Ring]]
 FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.intp]
 
 
 @dataclass
@@ -232,14 +234,18 @@ class _Planner:
     passes: list[Pass] = field(default_factory=list)
     position: Pt | None = None
     cleared: regions.SweptIndex | None = None
-    _carriers: dict[int, tuple[list[Carrier], FloatArray]] = field(default_factory=dict)
+    _carriers: dict[int, tuple[list[Carrier], LevelTable]] = field(default_factory=dict)
     _points: dict[Path, list[Pt]] = field(default_factory=dict)
+    # The same by the path's id (kept with it): a pass is asked for many times, and a
+    # path's hash is made again from all its elements each time.
+    _points_by_id: dict[int, tuple[Path, list[Pt]]] = field(default_factory=dict)
     _sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
     # The rings each level's passes were made from (by level): what the passes sweep.
     _cut_rings: dict[int, list[regions.Ring]] = field(default_factory=dict)
     _narrow_sweeps: dict[Path, regions.Swept] = field(default_factory=dict)
     _pieces: dict[tuple[int, int], regions.Swept] = field(default_factory=dict)
     _tables: dict[int, tuple[Path, nearest.Elements]] = field(default_factory=dict)
+    _every: tuple[list[Path], nearest.Elements, IntArray, IntArray] | None = None
 
     _move_boxes: list[regions.Box | None] = field(default_factory=list)
 
@@ -298,8 +304,8 @@ class _Planner:
         d, _ = self.levels[node.level]
         finish = node.level == 0
         tag = "finish" if finish else "rough"
-        level, level_boxes = self._level_carriers(node.level, d)
-        exact = exact_ring(ring, level, self.match, self.block, tag, level_boxes)
+        level, table = self._level_carriers(node.level, d)
+        exact = exact_ring(ring, level, self.match, self.block, tag, table)
         if exact is not None:
             path, sources, is_exact = exact.path, exact.sources, True
         else:
@@ -373,12 +379,12 @@ class _Planner:
             elements.append(Element(self.block, ring.start, tag="link"))
         return Link(kind, Path(along.start, tuple(elements)))
 
-    def _level_carriers(self, k: int, d: float) -> tuple[list[Carrier], FloatArray]:
-        """Level `k`'s carriers and their boxes (`carrier_boxes`), kept: a level has many
+    def _level_carriers(self, k: int, d: float) -> tuple[list[Carrier], LevelTable]:
+        """Level `k`'s carriers and their table (`level_table`), kept: a level has many
         rings."""
         if k not in self._carriers:
             level = carriers(self.contours, d, self.t)
-            self._carriers[k] = (level, carrier_boxes(level, self.match))
+            self._carriers[k] = (level, level_table(level, self.match))
         return self._carriers[k]
 
     # -- areas -------------------------------------------------------------------------------
@@ -386,10 +392,15 @@ class _Planner:
     def _path_points(self, path: Path) -> list[Pt]:
         """The polyline of a path (its start alone when it has no elements), kept: a pass
         is swept and searched several times."""
+        kept = self._points_by_id.get(id(path))
+        if kept is not None and kept[0] is path:
+            return kept[1]
+        # By the path's value too: a link is asked about as a move, then made again equal.
         found = self._points.get(path)
         if found is None:
             found = regions.path_points(path, self.t) if path.elements else [path.start]
             self._points[path] = found
+        self._points_by_id[id(path)] = (path, found)
         return found
 
     def _swept(self, path: Path) -> regions.Swept:
@@ -526,13 +537,11 @@ class _Planner:
         in a straight line; the move's two points, or None. The twelve nearest places on
         the passes are tried, nearest first (`nearest` finds the few that can be among
         them; those are measured exactly)."""
-        tables = [self._table(made.path) for made in self.passes]
-        lower, upper = nearest.bounds(np.array([target], dtype=np.float64), nearest.joined(tables))
-        owners = np.repeat(np.arange(len(tables)), [len(t) for t in tables])
-        firsts = np.cumsum([0] + [len(t) for t in tables])
+        every, owners, firsts = self._every_element()
         count = len(owners)
         if not count:
             return None
+        lower, upper = nearest.bounds(np.array([target], dtype=np.float64), every)
         twelfth = float(np.partition(upper[0], min(11, count - 1))[min(11, count - 1)])
         candidates: list[tuple[float, int, int, Pt]] = []
         for k in np.flatnonzero(lower[0] <= twelfth + nearest.MARGIN).tolist():
@@ -547,8 +556,49 @@ class _Planner:
             if self._inside(q, target):
                 made = self.passes[i]
                 self.passes[i] = replace(made, path=_insert_spike(made.path, j, q, target))
+                self._every_element_changed(i)
                 return [q, target]
         return None
+
+    def _every_element(self) -> tuple[nearest.Elements, IntArray, IntArray]:
+        """The elements of every pass as one table (`_table`s one after another), each
+        row's pass (`owners`), and where each pass's rows begin (`firsts`, and the end
+        after the last): kept between cleanup moves, which change one pass each
+        (`_every_element_changed`), not joined again from every pass for each move."""
+        paths = [made.path for made in self.passes]
+        kept = self._every
+        if (
+            kept is None
+            or len(kept[0]) != len(paths)
+            or any(a is not b for a, b in zip(kept[0], paths, strict=True))
+        ):
+            tables = [self._table(path) for path in paths]
+            sizes_ = [len(t) for t in tables]
+            owners = np.repeat(np.arange(len(tables)), sizes_)
+            firsts = np.cumsum([0, *sizes_])
+            kept = (paths, nearest.joined(tables), owners, firsts)
+            self._every = kept
+        return kept[1], kept[2], kept[3]
+
+    def _every_element_changed(self, i: int) -> None:
+        """`_every_element` after pass `i` was changed: its rows replaced by its new table."""
+        kept = self._every
+        if kept is None:
+            return
+        paths, every, owners, firsts = kept
+        path = self.passes[i].path
+        table = self._table(path)
+        every = nearest.spliced(every, int(firsts[i]), int(firsts[i + 1]), table)
+        grown = len(table) - int(firsts[i + 1] - firsts[i])
+        owners = np.concatenate(
+            (
+                owners[: firsts[i]],
+                np.full(len(table), i, dtype=owners.dtype),
+                owners[firsts[i + 1] :],
+            )
+        )
+        firsts = np.concatenate((firsts[: i + 1], firsts[i + 1 :] + grown))
+        self._every = ([*paths[:i], path, *paths[i + 1 :]], every, owners, firsts)
 
     def _table(self, path: Path) -> nearest.Elements:
         """A pass's elements as `nearest` reads them, kept while the pass is unchanged."""
@@ -628,8 +678,12 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
     # 1e-6 nm, far inside MARGIN), each one measured exactly as `sample` makes it.
     samples = nearest.samples(previous, step)
     points = samples.at
-    # Some sample is within its distance to the ring's start (a point of the ring).
-    reach = float(np.hypot(points[:, 0] - ring.start[0], points[:, 1] - ring.start[1]).min())
+    # Some sample is within its distance to any element's start (a point of the ring): the
+    # nearest of those, so that the search's cells are about as small as the rings are
+    # near (the ring's start alone put a whole ring in one cell, every pair measured).
+    # At most `REACH_POINTS` of them, spread along the ring: the cost is the samples'.
+    chosen = np.linspace(0, len(ring_starts) - 1, min(len(ring_starts), REACH_POINTS))
+    reach = _reach(points, [ring_starts[k] for k in np.unique(chosen.astype(np.intp)).tolist()])
     table = nearest.table(ring_starts, ring.elements)
     best: tuple[float, Pt] | None = None
     for i, near in nearest.nearest_pairs(points, table, reach):
@@ -645,6 +699,16 @@ def _way_round(previous: Path, ring: Path, step: float) -> tuple[Path, Pt]:
         # Backward from the start to q: the forward piece from q to the start, reversed.
         way = reverse(Path(q, _up_to(rotate(previous, q), previous.start)))
     return Path(way.start, tuple(replace(e, tag="link") for e in way.elements)), q
+
+
+REACH_POINTS = 64  # ring points a way round measures every sample against, at most
+
+
+def _reach(points: FloatArray, targets: Sequence[Pt]) -> float:
+    """The least distance (nm) from a row of `points` to one of `targets` (a few), as
+    numpy finds it."""
+    at = np.array(targets, dtype=np.float64).reshape(-1, 2)
+    return float(np.hypot(points[:, 0:1] - at[None, :, 0], points[:, 1:2] - at[None, :, 1]).min())
 
 
 def _up_to(path: Path, point: Pt) -> tuple[Element, ...]:

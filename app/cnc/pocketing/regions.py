@@ -27,8 +27,9 @@ import numpy as np
 import numpy.typing as npt
 import pyclipper
 
-from app.cnc.cutter import offset_element
-from app.cnc.plane import Element, Path, Pt, cross, dot, left_normal, sweep, tangent
+from app.cnc.cutter import offset_directions
+from app.cnc.geometry import arc_sweep
+from app.cnc.plane import Element, Path, Pt, add, cross, dot, left_normal, scale, sweep, tangent
 
 IPt = tuple[int, int]
 Ring = list[IPt]
@@ -195,16 +196,23 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
     elements = contour.elements
     starts = [contour.start] + [e.end for e in elements[:-1]]
     turns = corners(contour)
+    # Each element moved d to its left as `cutter.offset_element` moves it (the same
+    # arithmetic, its directions made once for the contour's every level).
+    moves = directions(contour)
     for k, (start, element) in enumerate(zip(starts, elements, strict=True)):
-        moved_start, moved = offset_element(start, element, 1.0, d)
+        at_start, at_end = moves[k]
+        moved_start, moved_end = (
+            add(start, scale(at_start, 1.0 * d)),
+            add(element.end, scale(at_end, 1.0 * d)),
+        )
         c = element.centre
         if c is None:
-            pieces.append([moved_start, moved.end])
+            pieces.append([moved_start, moved_end])
         elif math.dist(moved_start, c) < 1.0:
             pieces.append([c])  # an arc of radius d: its offset is its centre
         else:
             radius = math.dist(moved_start, c)
-            turn = sweep(moved_start, moved)
+            turn = arc_sweep(moved_start, moved_end, c, element.clockwise)
             a0 = math.atan2(moved_start[1] - c[1], moved_start[0] - c[0])
             signed = -turn if element.clockwise else turn
             n = arc_steps(radius, turn, tolerance)
@@ -233,6 +241,17 @@ def _raw_inset(contour: Path, d: float, tolerance: float) -> list[list[int]]:
         at = at[:-1]
     found: list[list[int]] = at.tolist()
     return found
+
+
+@functools.lru_cache(maxsize=64)
+def directions(contour: Path) -> tuple[tuple[Pt, Pt], ...]:
+    """Each element's `cutter.offset_directions`: the same at every level, made once for a
+    contour (kept for the last few)."""
+    starts = [contour.start] + [e.end for e in contour.elements[:-1]]
+    return tuple(
+        offset_directions(start, element)
+        for start, element in zip(starts, contour.elements, strict=True)
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -646,17 +665,15 @@ def move_covered(
     near = [
         frame[(u_lo <= (k + 1) * chunk + left) & (u_hi >= k * chunk - left)] for k in range(count)
     ]
+    # The stretches' segments one after another (`first`, `sizes`: where each begins, how
+    # many): a point is measured against its stretch's, every point in one numpy pass.
+    sizes = np.array([len(segments) for segments in near], dtype=np.intp)
+    first = np.cumsum(sizes) - sizes
+    near_all = np.concatenate(near)
 
     def far(cu: npt.NDArray[np.float64], cv: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-        found = np.full(len(cu), np.inf)
         which = np.clip((cu // chunk).astype(np.intp), 0, count - 1)
-        for k in np.unique(which).tolist():
-            rows = np.flatnonzero(which == k)
-            segments = near[k]
-            if len(segments):
-                points = np.column_stack((cu[rows], cv[rows]))
-                found[rows] = _nearest_segment(points, segments[:, :2], segments[:, 2:])
-        return found
+        return _nearest_of_runs(cu, cv, near_all, first[which], sizes[which])
 
     fa, fb = far(np.array([0.0, span]), np.zeros(2)).tolist()
     # The round ends of the band lie within `band` of the move's ends.
@@ -693,18 +710,31 @@ def move_covered(
     return None
 
 
-def _nearest_segment(
-    points: npt.NDArray[np.float64], starts: npt.NDArray[np.float64], ends: npt.NDArray[np.float64]
+def _nearest_of_runs(
+    px: npt.NDArray[np.float64],
+    py: npt.NDArray[np.float64],
+    segments: npt.NDArray[np.float64],
+    first: npt.NDArray[np.intp],
+    sizes: npt.NDArray[np.intp],
 ) -> npt.NDArray[np.float64]:
-    """The distance from each row of `points` to the nearest of the segments."""
-    d = ends - starts
-    denom = (d * d).sum(axis=1)
+    """The distance from each point (`px`, `py`) to the nearest of its run of `segments`
+    (rows x0, y0, x1, y1; the run of point i: `sizes[i]` rows from `first[i]`; inf for an
+    empty run), every point and run in one numpy pass: a pass per stretch of a move was
+    most of `move_covered`'s time, its arrays a few dozen long."""
+    found = np.full(len(px), np.inf)
+    owner = np.repeat(np.arange(len(px)), sizes)
+    if not len(owner):
+        return found
+    heads = np.cumsum(sizes) - sizes
+    row = first[owner] + np.arange(len(owner)) - heads[owner]
+    sx, sy = segments[row, 0], segments[row, 1]
+    dx, dy = segments[row, 2] - sx, segments[row, 3] - sy
+    denom = dx * dx + dy * dy
     safe = np.where(denom > 0, denom, 1.0)
-    px = points[:, 0:1] - starts[None, :, 0]
-    py = points[:, 1:2] - starts[None, :, 1]
-    t = np.clip((px * d[None, :, 0] + py * d[None, :, 1]) / safe[None, :], 0.0, 1.0)
-    t = np.where(denom[None, :] > 0, t, 0.0)
-    ex = px - t * d[None, :, 0]
-    ey = py - t * d[None, :, 1]
-    found: npt.NDArray[np.float64] = np.sqrt((ex * ex + ey * ey).min(axis=1))
+    qx, qy = px[owner] - sx, py[owner] - sy
+    t = np.clip((qx * dx + qy * dy) / safe, 0.0, 1.0)
+    t = np.where(denom > 0, t, 0.0)
+    ex, ey = qx - t * dx, qy - t * dy
+    measured = np.flatnonzero(sizes)
+    found[measured] = np.sqrt(np.minimum.reduceat(ex * ex + ey * ey, heads[measured]))
     return found

@@ -323,3 +323,31 @@ def test_two_servers_on_one_host_have_control_sockets_of_their_own(tmp_path: Pat
         str(tmp_path / "first" / "gunicorn.ctl"),
         str(tmp_path / "second" / "gunicorn.ctl"),
     ]
+
+
+def test_a_sqlite_file_another_process_holds_is_a_database_that_does_not_answer(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A library file another process holds locked past the busy timeout (a backup copying
+    it, a long write) is busy, not a setting: DatabaseUnavailable (the command line exits
+    1, gunicorn 3, the unit tries again), not "SQLite cannot open the file … its folder must
+    exist and be writable", which sent the sysadmin to check the folder (exit 2, no
+    restart). The busy timeout shortened to keep the test short."""
+    import sqlite3
+
+    from app.storage import db
+
+    monkeypatch.setattr(db, "SQLITE_BUSY_SECONDS", 0.2)
+    path = tmp_path / "held.db"
+    holder = sqlite3.connect(path, isolation_level=None)
+    holder.execute("CREATE TABLE t (x)")
+    holder.execute("BEGIN EXCLUSIVE")
+    try:
+        with pytest.raises(db.DatabaseUnavailable) as refused:
+            db.open_engine(f"sqlite:///{path}")
+    finally:
+        holder.execute("ROLLBACK")
+        holder.close()
+    said = str(refused.value)
+    assert said.startswith(f"MILLBLOCKS_DATABASE_URL: sqlite:///{path}: the database is busy")
+    assert "database is locked" in said and "folder" not in said

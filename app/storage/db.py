@@ -55,8 +55,9 @@ class DatabaseSettingError(SchemaError):
 
 
 class DatabaseUnavailable(RuntimeError):
-    """The database does not answer (PostgreSQL not started yet, restarting, the network):
-    it may later, so a restart helps (the command line exits 1, the server 3). The message
+    """The database does not answer (PostgreSQL not started yet, restarting, the network; a
+    SQLite file another process holds locked past the busy timeout): it may later, so a
+    restart helps (the command line exits 1, the server 3). The message
     names the variable and never holds the password."""
 
 
@@ -122,6 +123,13 @@ def open_engine(url: str | None = None) -> Engine:
         if damage(exc) is not None:
             raise  # a damaged SQLite file: the command line says what to do (app.cli)
         said = _first_line(exc.orig or exc)
+        if shown.startswith("sqlite") and "locked" in said:
+            # Another process held it past the busy timeout: it may let go (as a server
+            # that does not answer yet), and the folder is not at fault.
+            raise DatabaseUnavailable(
+                f"{variable}: {shown}: the database is busy: another process held it "
+                f"locked for {SQLITE_BUSY_SECONDS} s ({said})"
+            ) from None
         if shown.startswith("sqlite"):
             raise DatabaseSettingError(
                 f"{variable}: {shown}: SQLite cannot open the file ({said}); its folder must "

@@ -338,3 +338,46 @@ def test_a_checkout_never_loads_extension_modules(tmp_path: Path) -> None:
     blocks, from_source, status = done.stdout.split(" ", 2)
     assert int(blocks) >= 1 and from_source == "True"
     assert "compiled" not in status
+
+
+def test_the_compiled_modules_written_inits_take_their_fields() -> None:
+    """A dataclass of a compiled module that writes its `__init__` out (so that mypyc
+    compiles it: app.cnc.recognition.steps) takes the fields the generated one would, in
+    their order with their defaults, and sets each from its parameter; a field made by a
+    default factory starts as a new one. A field added to the class and not to its
+    `__init__` fails here, not as a missing attribute in a compiled import."""
+    import dataclasses
+    import importlib
+    import inspect
+
+    written = []
+    for name in native.COMPILED:
+        module = importlib.import_module(name)
+        for cls in vars(module).values():
+            if not (
+                isinstance(cls, type)
+                and cls.__module__ == name
+                and dataclasses.is_dataclass(cls)
+                and not cls.__dataclass_params__.init  # type: ignore[attr-defined]
+            ):
+                continue
+            written.append(cls.__qualname__)
+            fields = dataclasses.fields(cls)
+            taken = [f for f in fields if f.default_factory is dataclasses.MISSING]
+            parameters = list(inspect.signature(cls.__init__).parameters.values())[1:]
+            assert [p.name for p in parameters] == [f.name for f in taken], cls
+            for parameter, field in zip(parameters, taken, strict=True):
+                default = (
+                    inspect.Parameter.empty
+                    if field.default is dataclasses.MISSING
+                    else field.default
+                )
+                assert parameter.default == default, (cls, field.name)
+            given = {f.name: object() for f in taken}
+            made = cls(**given)
+            for field in fields:
+                expected = given[field.name] if field.name in given else field.default_factory()
+                assert getattr(made, field.name) == expected, (cls, field.name)
+    assert {"Rapid", "Feed", "Arc", "Cycle", "Element", "HoleOpR", "MillOp", "Block"} <= set(
+        written
+    )

@@ -4,6 +4,11 @@ An operation is a positioning, a hole, a mill sequence (a plunge and the cuts at
 bolt circle, a CIRCLE/FRAME routine or a LOOP/REP pattern of operations. Coordinates are
 absolute nanometres as the file gave them; `emit.py` rounds them once into blocks.
 Each operation keeps the source lines it was made from, for the report.
+
+The operations a long file makes one of per line or per cut (a hole, a mill sequence and
+its cuts) write their `__init__` out (`init=False`), as app.cnc.recognition.steps' motions
+do and for the same reason: mypyc compiles a written one, not the one dataclasses makes.
+An `Element` is therefore not frozen either; nothing changes one once it is made.
 """
 
 from __future__ import annotations
@@ -46,7 +51,7 @@ class PosOp:
     message: str = ""
 
 
-@dataclass
+@dataclass(init=False)
 class HoleOpR:
     """One DRILL, BORE or TAP hole."""
 
@@ -56,8 +61,17 @@ class HoleOpR:
     stop: bool = False
     message: str = ""
 
+    def __init__(
+        self, lines: list[int], at: XY, spec: HoleSpec, stop: bool = False, message: str = ""
+    ) -> None:
+        self.lines = lines
+        self.at = at
+        self.spec = spec
+        self.stop = stop
+        self.message = message
 
-@dataclass(frozen=True)
+
+@dataclass(init=False)
 class Element:
     """A cut of a mill sequence: a line to `end`, or an arc about `centre`.
 
@@ -74,8 +88,26 @@ class Element:
     feed: int
     conrad: int | None = None
 
+    def __init__(
+        self,
+        line: int,
+        end: XY,
+        centre: XY | None,
+        clockwise: bool,
+        z_dn: int | None,
+        feed: int,
+        conrad: int | None = None,
+    ) -> None:
+        self.line = line
+        self.end = end
+        self.centre = centre
+        self.clockwise = clockwise
+        self.z_dn = z_dn
+        self.feed = feed
+        self.conrad = conrad
 
-@dataclass
+
+@dataclass(init=False)
 class MillOp:
     """A DRILL at `at` that plunges, then the cuts at depth (a mill sequence)."""
 
@@ -87,6 +119,26 @@ class MillOp:
     stop: bool = False
     quill_stops: int = 0  # 2-axis: how many of the two quill stops the file has
     message: str = ""
+
+    def __init__(
+        self,
+        lines: list[int],
+        at: XY,
+        spec: HoleSpec,
+        comp: Comp,
+        elements: list[Element],
+        stop: bool = False,
+        quill_stops: int = 0,
+        message: str = "",
+    ) -> None:
+        self.lines = lines
+        self.at = at
+        self.spec = spec
+        self.comp = comp
+        self.elements = elements
+        self.stop = stop
+        self.quill_stops = quill_stops
+        self.message = message
 
 
 @dataclass
@@ -213,13 +265,17 @@ def all_lines(op: Op) -> list[int]:
     return op.lines
 
 
-@dataclass
+@dataclass(init=False)
 class Signature:
     """An operation seen from its anchor: `labels` must be equal and `numbers` (nm) close
     for two operations to be the same pattern translated."""
 
     labels: list[Hashable] = field(default_factory=list)
     numbers: list[int] = field(default_factory=list)
+
+    def __init__(self) -> None:
+        self.labels = []
+        self.numbers = []
 
 
 def signature(op: Op) -> Signature:

@@ -241,7 +241,7 @@ def _cut_follows(steps: StepWindow, j: int, at: XY) -> bool:
     return False
 
 
-@dataclass
+@dataclass(init=False)
 class _Pending:
     """A rapid in XY no operation has used yet."""
 
@@ -250,6 +250,13 @@ class _Pending:
     units: Units
     tool: int
     rose: bool = False  # the tool went up after it (and has not come down yet)
+
+    def __init__(self, line: int, at: XY, units: Units, tool: int, rose: bool = False) -> None:
+        self.line = line
+        self.at = at
+        self.units = units
+        self.tool = tool
+        self.rose = rose
 
 
 # A FACE's row as a file cuts it: (y, x from, x to, the line that set the row, feed).

@@ -12,6 +12,9 @@ Toolpath's canonical moves) and `recognise` turns it into blocks. Conventions:
   `dataclasses.replace`). They are not `frozen`: a frozen dataclass sets each field through
   `object.__setattr__`, and a long file makes a step per line — with the importer compiled
   (app.cnc.native) a plain one costs a third as much to make.
+- The motions (a step per line of a long file) write their `__init__` out (`init=False`):
+  mypyc compiles a written one to C, while the one dataclasses makes runs as Python even
+  in a compiled module (mypyc/mypyc#671), at twice the cost. Same parameters, same order.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from app.cnc.recognition.common import XY, Notes
 from app.cnc.units import Units
 
 
-@dataclass(slots=True)
+@dataclass(slots=True, init=False)
 class Rapid:
     """A move at the machine's rapid rate (G0 / tape G50)."""
 
@@ -33,8 +36,15 @@ class Rapid:
     z: int | None
     units: Units
 
+    def __init__(self, line: int, x: int, y: int, z: int | None, units: Units) -> None:
+        self.line = line
+        self.x = x
+        self.y = y
+        self.z = z
+        self.units = units
 
-@dataclass(slots=True)
+
+@dataclass(slots=True, init=False)
 class Feed:
     """A straight move at `feed` (G1; tape G00/G01, which are feed moves on the 1704)."""
 
@@ -47,8 +57,28 @@ class Feed:
     comp: str = ""  # "left"/"right" while G41/G42 is on: the contour, not the tool centre
     comp_tool: int = 0  # the tool whose diameter G41/G42 offsets by (D; 0: the one in use)
 
+    def __init__(
+        self,
+        line: int,
+        x: int,
+        y: int,
+        z: int | None,
+        feed: int,
+        units: Units,
+        comp: str = "",
+        comp_tool: int = 0,
+    ) -> None:
+        self.line = line
+        self.x = x
+        self.y = y
+        self.z = z
+        self.feed = feed
+        self.units = units
+        self.comp = comp
+        self.comp_tool = comp_tool
 
-@dataclass(slots=True)
+
+@dataclass(slots=True, init=False)
 class Arc:
     """A circular move about (cx, cy) in the XY plane to (x, y, z); `clockwise` seen from
     above. An arc that ends where it starts in X/Y is a full circle; one whose `z` differs
@@ -66,8 +96,34 @@ class Arc:
     comp: str = ""
     comp_tool: int = 0
 
+    def __init__(
+        self,
+        line: int,
+        x: int,
+        y: int,
+        z: int | None,
+        cx: int,
+        cy: int,
+        clockwise: bool,
+        feed: int,
+        units: Units,
+        comp: str = "",
+        comp_tool: int = 0,
+    ) -> None:
+        self.line = line
+        self.x = x
+        self.y = y
+        self.z = z
+        self.cx = cx
+        self.cy = cy
+        self.clockwise = clockwise
+        self.feed = feed
+        self.units = units
+        self.comp = comp
+        self.comp_tool = comp_tool
 
-@dataclass(slots=True)
+
+@dataclass(slots=True, init=False)
 class Cycle:
     """One hole of a canned cycle (G73, G81-G89).
 
@@ -87,6 +143,32 @@ class Cycle:
     peck: int
     dwell: Decimal | None
     units: Units
+
+    def __init__(
+        self,
+        line: int,
+        code: int,
+        x: int,
+        y: int,
+        r: int,
+        bottom: int,
+        clear: int,
+        feed: int,
+        peck: int,
+        dwell: Decimal | None,
+        units: Units,
+    ) -> None:
+        self.line = line
+        self.code = code
+        self.x = x
+        self.y = y
+        self.r = r
+        self.bottom = bottom
+        self.clear = clear
+        self.feed = feed
+        self.peck = peck
+        self.dwell = dwell
+        self.units = units
 
 
 @dataclass(slots=True)

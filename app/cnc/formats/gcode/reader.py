@@ -452,14 +452,26 @@ def is_positive(text: str) -> bool:
     return text[0] != "-" and any(ch in "123456789" for ch in text)
 
 
-@dataclass
+@dataclass(init=False)
 class Block:
+    """A line's words: G and M codes in `gs` and `ms`, any other letter in `other`
+    (`make_block` fills them). Its `__init__` written out: mypyc compiles it (the one
+    dataclasses makes runs as Python, app.cnc.recognition.steps)."""
+
     line: int
     words: list[Word]
     comment: str = ""
     gs: list[Word] = field(default_factory=list)
     ms: list[Word] = field(default_factory=list)
     other: dict[str, Word] = field(default_factory=dict)
+
+    def __init__(self, line: int, words: list[Word], comment: str = "") -> None:
+        self.line = line
+        self.words = words
+        self.comment = comment
+        self.gs = []
+        self.ms = []
+        self.other = {}
 
     def has(self, letter: str) -> bool:
         return letter in self.other

@@ -4,11 +4,11 @@ A wheel is built the way `make wheel-native` builds it (the G-code importer comp
 mypyc) and installed with its dependencies into a fresh virtual environment in a temporary
 directory; every command runs from another temporary directory, so what runs is what
 site-packages holds, start-up included. Each figure is the fastest of three runs (two for
-the large files; five for the G-code files up to 10^5 lines, whose commands take turns with
-rs274 reading the same file, so that both meet the same load), wall time of the whole
-process, its CPU time (user + system) and its peak resident size (`wait4`). On a shared
-machine the wall time grows with the load; the CPU time much less, so the start-up rows
-give both.
+the large export; eleven for the G-code files up to 10^5 lines and three for 10^6, whose
+commands take turns with rs274 reading the same file, so that both meet the same load),
+wall time of the whole process, its CPU time (user + system) and its peak resident size
+(`wait4`). On a shared machine the wall time grows with the load; the CPU time much less,
+so the start-up rows give both.
 
 Baselines, measured in the same run: a bare `python -c pass` of that environment for the
 start-up figures; LinuxCNC's `rs274 -g` reading the same G-code file for the large export
@@ -162,7 +162,7 @@ def measure_all(work: Path, sizes: tuple[int, ...], moves: int) -> Result:
             commands["library"] = [millblocks, "import", str(source)]
         if rs274:
             commands["rs274"] = [rs274, "-t", str(table_file), "-g", str(source)]
-        runs = timed_together(commands, here, env, runs=2 if lines > 100_000 else 5)
+        runs = timed_together(commands, here, env, runs=3 if lines > 100_000 else 11)
         case: Result = {"lines": lines, **runs.pop("import").__dict__}
         case.update({name: run.__dict__ for name, run in runs.items()})
         imports.append(case)
@@ -264,9 +264,9 @@ def run(sizes: tuple[int, ...] = IMPORT_SIZES, moves: int = EXPORT_MOVES) -> Sec
             )
     section.lines += [
         "Whole processes of the installed compiled wheel, run from outside the checkout; the",
-        "fastest of 3 runs (2 for the large files; 5 for the G-code files up to 10^5 lines, each",
-        "command of a file taking turns with rs274 reading it); CPU time (user + system) and",
-        "peak resident size from `wait4`.",
+        "fastest of 3 runs (2 for the large export; 11 for the G-code files up to 10^5 lines",
+        "and 3 for 10^6, each command of a file taking turns with rs274 reading it); CPU time",
+        "(user + system) and peak resident size from `wait4`.",
         "",
         *table(["command", "wall", "over bare Python", "CPU", "peak RSS", "notes"], rows),
     ]
